@@ -1,1 +1,6 @@
 //! Writers.
+pub mod atomic;
+pub mod connectivity;
+pub mod geo;
+pub mod gmsh;
+pub mod plot3d;

@@ -1,0 +1,211 @@
+//! Block-to-block connectivity: for every block side its kind (wall, outer boundary,
+//! interface) and, for interfaces, the partner block and side with the index orientation, also
+//! in CGNS 1-to-1 terms (point range, donor range, transform).
+//!
+//! Everything here is derived from the [`BlockLayout`] topology (which edge each side uses and
+//! in which direction) and the node counts of the grids; no coordinates are compared.
+
+use crate::domain::CircleId;
+use crate::layout::{BlockLayout, EdgeKind};
+use crate::mesh::BlockGrid;
+use serde::Serialize;
+
+/// Names of the four sides in index terms, by side number (see [`crate::layout`]).
+pub const SIDE_NAMES: [&str; 4] = ["j_min", "i_max", "j_max", "i_min"];
+
+/// What lies across a block side.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum SideKind {
+    /// The wall of hole `circle`.
+    Wall,
+    /// The bounding circle (the outer boundary of the body-fitted region).
+    Outer,
+    /// Another block.
+    Interface,
+}
+
+/// A block side's partner across an interface.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+pub struct Partner {
+    pub block: usize,
+    pub side: usize,
+    /// True when the partner side's node order runs the same way along the shared edge as
+    /// this side's (then node `p` of this side is node `p` of the partner side); false when
+    /// opposite (node `p` is node `n - p`), the usual case for two counter-clockwise blocks.
+    pub same_direction: bool,
+}
+
+/// CGNS 1-to-1 interface description, 1-based indices as in CGNS `GridConnectivity1to1_t`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+pub struct Cgns1to1 {
+    /// `[[i_begin, j_begin], [i_end, j_end]]` in this block.
+    pub point_range: [[usize; 2]; 2],
+    /// The matching range in the donor block: `point_range[0]` is the same node as
+    /// `point_range_donor[0]`, likewise for the ends.
+    pub point_range_donor: [[usize; 2]; 2],
+    /// CGNS transform: `transform[a] = ±(b + 1)` when a step `+1` along this block's index
+    /// `a` (0 = i, 1 = j) is a step `±1` along the donor's index `b`.
+    pub transform: [i32; 2],
+}
+
+/// Connectivity of one block side.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct SideConnectivity {
+    pub side: usize,
+    pub name: &'static str,
+    pub kind: SideKind,
+    /// For walls and the outer boundary: the circle (`-1` the bounding circle).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub circle: Option<CircleId>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub partner: Option<Partner>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub cgns: Option<Cgns1to1>,
+}
+
+/// Connectivity of one block.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct BlockConnectivity {
+    pub block: usize,
+    /// Node counts `[ni + 1, nj + 1]`.
+    pub dims: [usize; 2],
+    pub sides: [SideConnectivity; 4],
+}
+
+/// Why the layout's topology is not a valid multiblock connectivity.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+pub enum ConnectivityError {
+    #[error("edge {edge} is used by {count} block sides (a wall needs 1, an interface 2)")]
+    EdgeUse { edge: usize, count: usize },
+    #[error("the layout has {layout} blocks but {grids} grids were given")]
+    GridCount { layout: usize, grids: usize },
+    #[error("block side references edge {edge}, which does not exist")]
+    MissingEdge { edge: usize },
+}
+
+/// (axis, sign) of the index direction along side `s` in the side's own direction.
+fn along(s: usize) -> (usize, i32) {
+    [(0, 1), (1, 1), (0, -1), (1, -1)][s]
+}
+
+/// (axis, sign) of the index direction pointing from side `s` into the block.
+fn inward(s: usize) -> (usize, i32) {
+    [(1, 1), (0, -1), (1, -1), (0, 1)][s]
+}
+
+/// 1-based `[i, j]` of node `p` (0-based, in the side's direction) along side `s`.
+fn side_node(s: usize, p: usize, ni: usize, nj: usize) -> [usize; 2] {
+    let (i, j) = match s {
+        0 => (p, 0),
+        1 => (ni, p),
+        2 => (ni - p, nj),
+        _ => (0, nj - p),
+    };
+    [i + 1, j + 1]
+}
+
+/// Compute the connectivity of every block.
+pub fn connectivity(
+    layout: &BlockLayout,
+    grids: &[BlockGrid],
+) -> Result<Vec<BlockConnectivity>, ConnectivityError> {
+    if layout.blocks.len() != grids.len() {
+        return Err(ConnectivityError::GridCount {
+            layout: layout.blocks.len(),
+            grids: grids.len(),
+        });
+    }
+    let mut users: Vec<Vec<(usize, usize)>> = vec![Vec::new(); layout.edges.len()];
+    for (b, block) in layout.blocks.iter().enumerate() {
+        for (s, side) in block.sides.iter().enumerate() {
+            let e = side.edge as usize;
+            users
+                .get_mut(e)
+                .ok_or(ConnectivityError::MissingEdge { edge: e })?
+                .push((b, s));
+        }
+    }
+    let mut out = Vec::with_capacity(layout.blocks.len());
+    for (b, block) in layout.blocks.iter().enumerate() {
+        let g = &grids[b];
+        let sides: Vec<SideConnectivity> = (0..4)
+            .map(|s| {
+                let e = block.sides[s].edge as usize;
+                let edge = &layout.edges[e];
+                let u = &users[e];
+                match edge.kind {
+                    EdgeKind::Wall(c) => {
+                        if u.len() != 1 {
+                            return Err(ConnectivityError::EdgeUse {
+                                edge: e,
+                                count: u.len(),
+                            });
+                        }
+                        Ok(SideConnectivity {
+                            side: s,
+                            name: SIDE_NAMES[s],
+                            kind: if c < 0 {
+                                SideKind::Outer
+                            } else {
+                                SideKind::Wall
+                            },
+                            circle: Some(c),
+                            partner: None,
+                            cgns: None,
+                        })
+                    }
+                    _ => {
+                        if u.len() != 2 {
+                            return Err(ConnectivityError::EdgeUse {
+                                edge: e,
+                                count: u.len(),
+                            });
+                        }
+                        let (pb, ps) = if u[0] == (b, s) { u[1] } else { u[0] };
+                        let same = layout.blocks[pb].sides[ps].reversed == block.sides[s].reversed;
+                        let pg = &grids[pb];
+                        let n = if s % 2 == 0 { g.ni } else { g.nj };
+                        let q = |p: usize| if same { p } else { n - p };
+                        let (aa, sa) = along(s);
+                        let (ab, sb) = along(ps);
+                        let (na, ia) = inward(s);
+                        let (nb, ib) = inward(ps);
+                        let dir = if same { 1 } else { -1 };
+                        let mut transform = [0i32; 2];
+                        transform[aa] = sa * sb * dir * (ab as i32 + 1);
+                        transform[na] = -ia * ib * (nb as i32 + 1);
+                        Ok(SideConnectivity {
+                            side: s,
+                            name: SIDE_NAMES[s],
+                            kind: SideKind::Interface,
+                            circle: None,
+                            partner: Some(Partner {
+                                block: pb,
+                                side: ps,
+                                same_direction: same,
+                            }),
+                            cgns: Some(Cgns1to1 {
+                                point_range: [
+                                    side_node(s, 0, g.ni, g.nj),
+                                    side_node(s, n, g.ni, g.nj),
+                                ],
+                                point_range_donor: [
+                                    side_node(ps, q(0), pg.ni, pg.nj),
+                                    side_node(ps, q(n), pg.ni, pg.nj),
+                                ],
+                                transform,
+                            }),
+                        })
+                    }
+                }
+            })
+            .collect::<Result<_, _>>()?;
+        out.push(BlockConnectivity {
+            block: b,
+            dims: [g.ni + 1, g.nj + 1],
+            sides: [sides[0], sides[1], sides[2], sides[3]],
+        });
+    }
+    Ok(out)
+}
