@@ -18,7 +18,7 @@
 //! Kinds: `wall` (a hole, `circle` its 0-based input index), `outer` (the bounding circle,
 //! `circle` -1), `interface` (another block). CGNS ranges are 1-based.
 
-use super::atomic::write_atomically;
+use super::write_atomic;
 use crate::connectivity::BlockConnectivity;
 use serde::Serialize;
 use std::io::{self, Write};
@@ -41,7 +41,7 @@ struct File<'a> {
 
 /// Write `connectivity.json`.
 pub fn write_json(blocks: &[BlockConnectivity], path: &Path) -> io::Result<()> {
-    write_atomically(path, |w| {
+    write_atomic(path, |w| {
         serde_json::to_writer_pretty(
             &mut *w,
             &File {

@@ -7,7 +7,7 @@
 //! Gmsh's `Circle` needs an arc of less than pi; a wall arc of pi or more is written as a
 //! `Spline` through points on the exact circle (every 1/32 of a turn).
 
-use super::atomic::write_atomically;
+use super::write_atomic;
 use super::gmsh::{PHYSICAL_FLUID, PHYSICAL_INTERFACES, PHYSICAL_OUTER, PHYSICAL_WALL_BASE};
 use crate::layout::{Curve, EdgeKind};
 use crate::mesh::Mesh;
@@ -33,7 +33,7 @@ pub fn write_geo(mesh: &Mesh, path: &Path) -> io::Result<()> {
             cells[side.edge as usize] = if s % 2 == 0 { g.ni } else { g.nj };
         }
     }
-    write_atomically(path, |w| {
+    write_atomic(path, |w| {
         writeln!(w, "// Block layout written by medial-blocks.")?;
         writeln!(
             w,

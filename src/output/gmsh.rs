@@ -6,7 +6,7 @@
 //! - `interfaces` (dimension 1, tag 3): every block-to-block interface;
 //! - `wall_N` (dimension 1, tag 10 + N): the wall of hole `N` (0-based, input order).
 
-use super::atomic::write_atomically;
+use super::write_atomic;
 use crate::layout::EdgeKind;
 use crate::mesh::Mesh;
 use crate::numbering::number_nodes;
@@ -93,7 +93,7 @@ pub fn write_msh(mesh: &Mesh, path: &Path) -> io::Result<()> {
         .iter()
         .any(|e| !matches!(e.kind, EdgeKind::Wall(_)));
 
-    write_atomically(path, |w| {
+    write_atomic(path, |w| {
         writeln!(w, "$MeshFormat\n4.1 0 8\n$EndMeshFormat")?;
         let nphys = 1 + usize::from(has_outer) + usize::from(has_interfaces) + walls.len();
         writeln!(w, "$PhysicalNames\n{nphys}")?;

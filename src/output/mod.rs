@@ -1,5 +1,4 @@
 //! Writers.
-pub mod atomic;
 pub mod connectivity;
 pub mod geo;
 pub mod gmsh;

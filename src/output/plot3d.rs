@@ -9,7 +9,7 @@
 //!   DoublePrecision on) and most structured solvers take.
 //! - `mesh.p3d`: the same numbers as formatted ASCII.
 
-use super::atomic::write_atomically;
+use super::write_atomic;
 use crate::mesh::BlockGrid;
 use std::io::{self, Write};
 use std::path::Path;
@@ -29,7 +29,7 @@ fn dim(n: usize) -> io::Result<i32> {
 
 /// Write the Fortran-unformatted binary form.
 pub fn write_binary(grids: &[BlockGrid], path: &Path) -> io::Result<()> {
-    write_atomically(path, |w| {
+    write_atomic(path, |w| {
         let nblocks = i32::try_from(grids.len())
             .map_err(|_| io::Error::new(io::ErrorKind::InvalidInput, "too many blocks"))?;
         record(w, &nblocks.to_le_bytes())?;
@@ -56,7 +56,7 @@ pub fn write_binary(grids: &[BlockGrid], path: &Path) -> io::Result<()> {
 /// Write the formatted ASCII form (`{:e}` shortest round-trip values, one per line per block
 /// and coordinate, wrapped at 4 values per line).
 pub fn write_ascii(grids: &[BlockGrid], path: &Path) -> io::Result<()> {
-    write_atomically(path, |w| {
+    write_atomic(path, |w| {
         writeln!(w, "{}", grids.len())?;
         for g in grids {
             writeln!(w, "{} {}", dim(g.ni)?, dim(g.nj)?)?;
