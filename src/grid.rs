@@ -320,8 +320,9 @@ fn polyline_equal(pts: &[Point], n: usize) -> Vec<Point> {
 
 /// Transfinite interpolation (Coons patch) of a block from its four sides, each given in the
 /// side's direction (see [`crate::layout`]): `s0` and `s2` have `ni + 1` nodes, `s1` and `s3`
-/// have `nj + 1`; consecutive sides share their corner node. Boundary nodes are copied
-/// exactly from the sides.
+/// have `nj + 1`; consecutive sides should share their corner node (the corners are taken
+/// from `s0` and `s2`; [`build_grids`] guarantees they match bit for bit). Boundary nodes are
+/// copied exactly from the sides.
 ///
 /// Returns `None` when the side lengths are inconsistent (fewer than 2 nodes, or opposite
 /// sides of different lengths).
