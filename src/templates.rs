@@ -1,1 +1,237 @@
-//! (stub)
+//! Block layouts for the cases without a medial vertex: the disk (h = 0) and the annulus
+//! (h = 1). The medial-axis blocking (paper Algorithm 2) needs at least two holes; these two
+//! templates cover the rest.
+//!
+//! Both templates follow the conventions of [`crate::layout`]: corners counter-clockwise with
+//! positive area, side `k` from corner `k` to corner `k + 1`, a wall (if any) on side 0, and
+//! every edge stored once. Arc vertices are computed with the same formula as the arc curve
+//! (`center + radius * (cos a, sin a)`), so they lie on their circle to rounding.
+//!
+//! The templates trust their input geometry: a non-finite or non-positive radius, or a hole not
+//! strictly inside the bounding circle, gives a layout whose grid [`crate::quality`] reports as
+//! degenerate or inverted; they never panic. Validate the [`crate::Domain`] first.
+
+use crate::domain::{Circle, CircleId, BOUNDING};
+use crate::geometry::Point;
+use crate::layout::{Block, BlockLayout, Curve, Edge, EdgeKind, SideRef};
+use std::f64::consts::{FRAC_PI_2, FRAC_PI_4};
+
+/// Size of the disk template's core square: its corners lie at this fraction of the bounding
+/// radius from the center (so its half side is `CORE_FRACTION / sqrt(2)` of the radius).
+pub const CORE_FRACTION: f64 = 0.55;
+
+/// The hole id used by [`annulus`] for its (only) hole.
+pub const ANNULUS_HOLE: CircleId = 0;
+
+fn on_circle(center: Point, radius: f64, angle: f64) -> Point {
+    [
+        center[0] + radius * angle.cos(),
+        center[1] + radius * angle.sin(),
+    ]
+}
+
+fn side(edge: usize, reversed: bool) -> SideRef {
+    SideRef {
+        edge: edge as u32,
+        reversed,
+    }
+}
+
+/// The disk template (h = 0): five blocks, an O-grid.
+///
+/// Block 0..4 are the outer blocks: block `k` has side 0 on the bounding circle (kind
+/// `Wall(-1)`, from the angle `pi/4 + k pi/2` counter-clockwise over a quarter turn), sides 1
+/// and 3 on straight diagonal spokes and side 2 on an edge of the core square. Block 4 is the
+/// core square (no wall), whose corners lie at [`CORE_FRACTION`] of the radius on the
+/// diagonals.
+///
+/// Vertices: `0..4` on the circle, `4..8` the core corners. Edges: `0..4` the wall arcs,
+/// `4..8` the spokes (core corner to circle), `8..12` the core edges.
+pub fn disk(bounding: Circle) -> BlockLayout {
+    let c = bounding.center;
+    let r = bounding.radius;
+    let angles: [f64; 4] = [0, 1, 2, 3].map(|k| FRAC_PI_4 + k as f64 * FRAC_PI_2);
+    let mut vertices = Vec::with_capacity(8);
+    for &a in &angles {
+        vertices.push(on_circle(c, r, a));
+    }
+    for &a in &angles {
+        vertices.push(on_circle(c, CORE_FRACTION * r, a));
+    }
+    let outer = |k: usize| (k % 4) as u32;
+    let inner = |k: usize| (4 + k % 4) as u32;
+
+    let mut edges = Vec::with_capacity(12);
+    // 0..4: wall arcs o_k -> o_{k+1}, counter-clockwise.
+    for (k, &start) in angles.iter().enumerate() {
+        edges.push(Edge {
+            ends: [outer(k), outer(k + 1)],
+            curve: Curve::Arc {
+                center: c,
+                radius: r,
+                start,
+                sweep: FRAC_PI_2,
+            },
+            kind: EdgeKind::Wall(BOUNDING),
+        });
+    }
+    // 4..8: spokes q_k -> o_k.
+    for k in 0..4 {
+        edges.push(Edge {
+            ends: [inner(k), outer(k)],
+            curve: Curve::Segment,
+            kind: EdgeKind::Interface,
+        });
+    }
+    // 8..12: core edges q_k -> q_{k+1}.
+    for k in 0..4 {
+        edges.push(Edge {
+            ends: [inner(k), inner(k + 1)],
+            curve: Curve::Segment,
+            kind: EdgeKind::Interface,
+        });
+    }
+
+    let mut blocks = Vec::with_capacity(5);
+    for k in 0..4 {
+        blocks.push(Block {
+            corners: [outer(k), outer(k + 1), inner(k + 1), inner(k)],
+            sides: [
+                side(k, false),
+                side(4 + (k + 1) % 4, true),
+                side(8 + k, true),
+                side(4 + k, false),
+            ],
+            wall: Some(BOUNDING),
+        });
+    }
+    blocks.push(Block {
+        corners: [inner(0), inner(1), inner(2), inner(3)],
+        sides: [
+            side(8, false),
+            side(9, false),
+            side(10, false),
+            side(11, false),
+        ],
+        wall: None,
+    });
+    BlockLayout {
+        vertices,
+        edges,
+        blocks,
+    }
+}
+
+/// The annulus template (h = 1): a ring of four blocks between the hole (id
+/// [`ANNULUS_HOLE`]) and the bounding circle.
+///
+/// With `phi` the direction from the bounding center to the hole center (0 when concentric),
+/// spoke `k` leaves the hole at angle `theta_k = phi + pi/4 + k pi/2` and runs straight along
+/// the ray from the hole center to the bounding circle, so spokes are orthogonal to the hole's
+/// wall and the narrowest gap lies in the middle of a block, not on a spoke. Both walls are
+/// divided with equal angle steps about their own centers.
+///
+/// Quality: for a concentric annulus the grid is polar (all angles 90 degrees). Off-centre the
+/// cells skew; the worst case is a small hole very close to the bounding circle (a hole of 1%
+/// of the radius with a gap of 1% gives minimum angles of a few degrees, no inverted cells
+/// in the tested range). A four-block ring cannot do much better there.
+///
+/// Block `k` has corners `[a_{k+1}, a_k, b_k, b_{k+1}]` (`a` on the hole, `b` on the bounding
+/// circle): side 0 is the hole arc traversed clockwise (kind `Wall(0)`, stored
+/// counter-clockwise so the side is `reversed`), side 1 the spoke `a_k -> b_k`, side 2 the
+/// bounding arc counter-clockwise (kind `Wall(-1)`), side 3 the spoke `b_{k+1} -> a_{k+1}`.
+///
+/// Vertices: `0..4` on the hole, `4..8` on the bounding circle. Edges: `0..4` hole arcs,
+/// `4..8` bounding arcs, `8..12` spokes (hole to bounding circle, kind `Interface`).
+pub fn annulus(bounding: Circle, hole: Circle) -> BlockLayout {
+    use std::f64::consts::{PI, TAU};
+    let c = bounding.center;
+    let big_r = bounding.radius;
+    let h = hole.center;
+    let r = hole.radius;
+    let d = [h[0] - c[0], h[1] - c[1]];
+    let phi = if d[0] == 0.0 && d[1] == 0.0 {
+        0.0
+    } else {
+        d[1].atan2(d[0])
+    };
+    let angles: [f64; 4] = [0, 1, 2, 3].map(|k| phi + FRAC_PI_4 + k as f64 * FRAC_PI_2);
+    // Where the ray from the hole center at angle t meets the bounding circle, as an angle
+    // about the bounding center, taken within pi of t (so the four are increasing).
+    let dd = d[0] * d[0] + d[1] * d[1];
+    let outer_angles = angles.map(|t| {
+        let u = [t.cos(), t.sin()];
+        let du = d[0] * u[0] + d[1] * u[1];
+        let s = -du + (du * du - dd + big_r * big_r).max(0.0).sqrt();
+        let q = [d[0] + s * u[0], d[1] + s * u[1]];
+        let mut a = q[1].atan2(q[0]);
+        if a < t - PI {
+            a += TAU;
+        } else if a > t + PI {
+            a -= TAU;
+        }
+        a
+    });
+    let mut vertices = Vec::with_capacity(8);
+    for &t in &angles {
+        vertices.push(on_circle(h, r, t));
+    }
+    for &t in &outer_angles {
+        vertices.push(on_circle(c, big_r, t));
+    }
+    let a = |k: usize| (k % 4) as u32;
+    let b = |k: usize| (4 + k % 4) as u32;
+
+    let mut edges = Vec::with_capacity(12);
+    for (k, &start) in angles.iter().enumerate() {
+        edges.push(Edge {
+            ends: [a(k), a(k + 1)],
+            curve: Curve::Arc {
+                center: h,
+                radius: r,
+                start,
+                sweep: FRAC_PI_2,
+            },
+            kind: EdgeKind::Wall(ANNULUS_HOLE),
+        });
+    }
+    for (k, &start) in outer_angles.iter().enumerate() {
+        // The counter-clockwise sweep to the next corner, in (0, 2 pi).
+        let sweep = (outer_angles[(k + 1) % 4] - start).rem_euclid(TAU);
+        edges.push(Edge {
+            ends: [b(k), b(k + 1)],
+            curve: Curve::Arc {
+                center: c,
+                radius: big_r,
+                start,
+                sweep,
+            },
+            kind: EdgeKind::Wall(BOUNDING),
+        });
+    }
+    for k in 0..4 {
+        edges.push(Edge {
+            ends: [a(k), b(k)],
+            curve: Curve::Segment,
+            kind: EdgeKind::Interface,
+        });
+    }
+
+    let blocks = (0..4)
+        .map(|k| Block {
+            corners: [a(k + 1), a(k), b(k), b(k + 1)],
+            sides: [
+                side(k, true),
+                side(8 + k, false),
+                side(4 + k, false),
+                side(8 + (k + 1) % 4, true),
+            ],
+            wall: Some(ANNULUS_HOLE),
+        })
+        .collect();
+    BlockLayout {
+        vertices,
+        edges,
+        blocks,
+    }
+}

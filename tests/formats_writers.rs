@@ -128,9 +128,41 @@ fn node_on_side(g: &BlockGrid, s: usize, p: usize) -> (usize, usize) {
     }
 }
 
+/// The hand-made layout plus the disk and annulus templates gridded by `build_grids`.
+fn meshes() -> Vec<Mesh> {
+    use medial_blocks::domain::Circle;
+    use medial_blocks::grid::build_grids;
+    use medial_blocks::templates::{annulus, disk};
+    let bounding = Circle {
+        center: [0.5, -1.0],
+        radius: 2.0,
+    };
+    let hole = Circle {
+        center: [1.1, -0.7],
+        radius: 0.4,
+    };
+    let mut out = vec![mesh()];
+    for (layout, holes) in [(disk(bounding), 0), (annulus(bounding, hole), 1)] {
+        let grids = build_grids(&layout, 7).expect("template grids");
+        out.push(Mesh {
+            layout,
+            grids,
+            medial_vertices: 0,
+            medial_arcs: 0,
+            holes,
+        });
+    }
+    out
+}
+
 #[test]
 fn connectivity_partners_and_cgns_ranges_match_coordinates() {
-    let m = mesh();
+    for m in meshes() {
+        check_connectivity(&m);
+    }
+}
+
+fn check_connectivity(m: &Mesh) {
     let conn = connectivity(&m.layout, &m.grids).expect("valid layout");
     let mut interfaces = 0;
     for bc in &conn {
@@ -165,10 +197,8 @@ fn connectivity_partners_and_cgns_ranges_match_coordinates() {
                         let here = [b0[0] as i64 + di, b0[1] as i64 + dj];
                         let delta = [di, dj];
                         let mut donor = [d0[0] as i64, d0[1] as i64];
-                        for a in 0..2 {
-                            let tr = c.transform[a];
-                            let b = (tr.unsigned_abs() - 1) as usize;
-                            donor[b] += tr.signum() as i64 * delta[a];
+                        for (tr, d) in c.transform.iter().zip(delta) {
+                            donor[(tr.unsigned_abs() - 1) as usize] += tr.signum() as i64 * d;
                         }
                         let x = g.node(here[0] as usize - 1, here[1] as usize - 1);
                         let y = pg.node(donor[0] as usize - 1, donor[1] as usize - 1);
@@ -177,19 +207,15 @@ fn connectivity_partners_and_cgns_ranges_match_coordinates() {
                     assert_eq!(c.point_range_donor[1].map(|v| v as i64), {
                         let mut donor = [d0[0] as i64, d0[1] as i64];
                         let delta = [b1[0] as i64 - b0[0] as i64, b1[1] as i64 - b0[1] as i64];
-                        for a in 0..2 {
-                            let tr = c.transform[a];
-                            donor[(tr.unsigned_abs() - 1) as usize] +=
-                                tr.signum() as i64 * delta[a];
+                        for (tr, d) in c.transform.iter().zip(delta) {
+                            donor[(tr.unsigned_abs() - 1) as usize] += tr.signum() as i64 * d;
                         }
                         donor
                     });
-                    // The transform also maps "into this block" to "out of the donor": the
-                    // normal step is checked by the determinant of a 2D rotation/reflection
-                    // being -1 times orientation... both blocks are CCW, so det(T) = +1.
+                    // Both blocks are counter-clockwise, so the transform is a rotation:
+                    // det(T) = +1 (a reflection would mean a flipped block).
                     let mut t = [[0i64; 2]; 2];
-                    for a in 0..2 {
-                        let tr = c.transform[a];
+                    for (a, tr) in c.transform.iter().enumerate() {
                         t[(tr.unsigned_abs() - 1) as usize][a] = tr.signum() as i64;
                     }
                     assert_eq!(t[0][0] * t[1][1] - t[0][1] * t[1][0], 1);
@@ -201,8 +227,14 @@ fn connectivity_partners_and_cgns_ranges_match_coordinates() {
             }
         }
     }
-    // 3x2 cells: 3*1 horizontal + 2*2 vertical interior edges, each seen from both sides.
-    assert_eq!(interfaces, 2 * (3 + 4));
+    // Every non-wall edge is seen from both sides.
+    let interface_edges = m
+        .layout
+        .edges
+        .iter()
+        .filter(|e| !matches!(e.kind, EdgeKind::Wall(_)))
+        .count();
+    assert_eq!(interfaces, 2 * interface_edges);
 }
 
 #[test]
@@ -423,6 +455,39 @@ fn read_msh(text: &str) -> Msh {
 }
 
 #[test]
+fn gmsh_msh_merges_shared_nodes_on_templates() {
+    for m in meshes().into_iter().skip(1) {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("mesh.msh");
+        gmsh::write_msh(&m, &path).unwrap();
+        let msh = read_msh(&std::fs::read_to_string(&path).unwrap());
+        let distinct: BTreeSet<(u64, u64)> = m
+            .grids
+            .iter()
+            .flat_map(|g| g.nodes.iter().map(|p| (p[0].to_bits(), p[1].to_bits())))
+            .collect();
+        assert_eq!(msh.nodes.len(), distinct.len());
+        for (_, q) in &msh.quads {
+            let p: Vec<[f64; 2]> = q.iter().map(|t| msh.nodes[t]).collect();
+            let area2: f64 = (0..4)
+                .map(|k| p[k][0] * p[(k + 1) % 4][1] - p[(k + 1) % 4][0] * p[k][1])
+                .sum();
+            assert!(area2 > 0.0);
+        }
+        let outer = msh
+            .lines
+            .iter()
+            .filter(|(c, _)| msh.curve_phys[c] == 2)
+            .count();
+        assert_eq!(
+            outer,
+            4 * 7,
+            "the bounding circle has 4 template arcs of 7 cells"
+        );
+    }
+}
+
+#[test]
 fn gmsh_msh_merges_shared_nodes_and_keeps_every_cell() {
     let m = mesh();
     let dir = tempfile::tempdir().unwrap();
@@ -526,7 +591,7 @@ fn writers_are_deterministic() {
     // No temporary files left behind.
     for entry in std::fs::read_dir(dir.path()).unwrap() {
         let name = entry.unwrap().file_name();
-        assert!(!name.to_string_lossy().ends_with(".partial"));
+        assert!(!name.to_string_lossy().ends_with(".tmp"));
     }
 }
 

@@ -7,8 +7,8 @@
 //! Gmsh's `Circle` needs an arc of less than pi; a wall arc of pi or more is written as a
 //! `Spline` through points on the exact circle (every 1/32 of a turn).
 
-use super::write_atomic;
 use super::gmsh::{PHYSICAL_FLUID, PHYSICAL_INTERFACES, PHYSICAL_OUTER, PHYSICAL_WALL_BASE};
+use super::write_atomic;
 use crate::layout::{Curve, EdgeKind};
 use crate::mesh::Mesh;
 use std::collections::BTreeMap;

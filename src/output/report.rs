@@ -1,0 +1,61 @@
+//! The JSON report: counts and quality figures of a mesh. Other tools read the key names;
+//! do not rename them.
+
+use super::write_atomic;
+use crate::mesh::Mesh;
+use crate::quality::measure;
+use serde::Serialize;
+use std::io::{self, Write};
+use std::path::Path;
+
+/// Summary of a mesh, serialised as `report.json`.
+///
+/// Required keys (exact names): `holes`, `blocks`, `cells`, `min_angle_deg`, `max_angle_deg`,
+/// `mean_min_angle_deg`, `mean_max_angle_deg`, `inverted_cells`, `medial_vertices`,
+/// `medial_arcs`. Angle figures are those of [`crate::quality::Quality`] (0 when there are no
+/// cells); a non-finite figure is written as `null`.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Report {
+    pub holes: usize,
+    pub blocks: usize,
+    pub cells: usize,
+    /// Grid nodes, counted once per block (nodes on shared sides count in each block).
+    pub nodes: usize,
+    pub min_angle_deg: f64,
+    pub max_angle_deg: f64,
+    pub mean_min_angle_deg: f64,
+    pub mean_max_angle_deg: f64,
+    pub inverted_cells: usize,
+    pub min_scaled_jacobian: f64,
+    pub medial_vertices: usize,
+    pub medial_arcs: usize,
+}
+
+impl Report {
+    /// Counts from the mesh, quality from [`measure`] over its grids.
+    pub fn from_mesh(mesh: &Mesh) -> Report {
+        let q = measure(&mesh.grids);
+        Report {
+            holes: mesh.holes,
+            blocks: mesh.layout.blocks.len(),
+            cells: q.cells,
+            nodes: mesh.grids.iter().map(|g| g.nodes.len()).sum(),
+            min_angle_deg: q.min_angle_deg,
+            max_angle_deg: q.max_angle_deg,
+            mean_min_angle_deg: q.mean_min_angle_deg,
+            mean_max_angle_deg: q.mean_max_angle_deg,
+            inverted_cells: q.inverted_cells,
+            min_scaled_jacobian: q.min_scaled_jacobian,
+            medial_vertices: mesh.medial_vertices,
+            medial_arcs: mesh.medial_arcs,
+        }
+    }
+}
+
+/// Write `report` as pretty-printed JSON (with a final newline) to `path`, atomically.
+pub fn write_json(report: &Report, path: &Path) -> io::Result<()> {
+    write_atomic(path, |w| {
+        serde_json::to_writer_pretty(&mut *w, report).map_err(io::Error::other)?;
+        writeln!(w)
+    })
+}
