@@ -1,7 +1,26 @@
-//! The fluid domain: a bounding circle with circular holes (STUB types; validation to come).
+//! The fluid domain: a bounding circle with circular holes strictly inside it, pairwise apart.
+//!
+//! This is the input of Guoy & Erickson's Problem 1 ("Structured Meshes of Circles", paper
+//! section 1). A [`Domain`] can only be obtained through validation ([`Domain::bounded`],
+//! [`Domain::from_json_str`]), so every later stage may rely on these invariants:
+//!
+//! - every coordinate and radius is finite and at most [`Domain::MAX_MAGNITUDE`] in absolute
+//!   value (so differences and squares of coordinates never overflow);
+//! - every radius is `> 0`;
+//! - every hole lies strictly inside the bounding circle: `R - |c - C| - r > tol`;
+//! - holes are pairwise apart: `|c_i - c_j| - r_i - r_j > tol`, with
+//!   `tol = GAP_TOLERANCE * R` (touching counts as overlapping);
+//! - no two holes are identical, and there are at most the configured number of holes
+//!   ([`Domain::MAX_HOLES`] by default).
+//!
+//! Overlap checks use [`HoleIndex`], a k-d tree over hole centres augmented with the largest
+//! radius below each node, so validating `10^5` holes costs `O(n log n)`, not `O(n^2)`.
 
 use crate::geometry::Point;
-use serde::{Deserialize, Serialize};
+use serde::de::{IgnoredAny, SeqAccess, Visitor};
+use serde::{Deserialize, Deserializer, Serialize};
+use std::collections::HashMap;
+use std::fmt;
 
 /// Circle identifier used across the crate: `-1` is the bounding circle, `0..` the holes in
 /// input order.
@@ -12,42 +31,553 @@ pub const BOUNDING: CircleId = -1;
 
 /// A circle given by its center and radius.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct Circle {
     pub center: Point,
     pub radius: f64,
 }
 
-/// Why a domain was refused.
-#[derive(Debug, Clone, PartialEq, thiserror::Error)]
-pub enum DomainError {
-    #[error("invalid domain: {0}")]
-    Invalid(String),
+impl Circle {
+    /// A circle from its centre coordinates and radius.
+    pub const fn new(x: f64, y: f64, radius: f64) -> Self {
+        Circle {
+            center: [x, y],
+            radius,
+        }
+    }
 }
 
-/// A validated domain: a bounding circle and holes strictly inside it, pairwise apart.
+/// A human name for a circle id: `"hole 3"` or `"the bounding circle"`.
+pub fn circle_name(id: CircleId) -> String {
+    if id < 0 {
+        "the bounding circle".to_string()
+    } else {
+        format!("hole {id}")
+    }
+}
+
+/// Why a domain was refused. Holes are named by their 0-based index in the input.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum DomainError {
+    /// The JSON text is malformed, truncated, has wrong types, missing or unknown fields.
+    /// Carries serde's message with line and column.
+    #[error("invalid domain JSON: {0}")]
+    Json(String),
+    /// More holes than the configured limit (checked before any per-hole allocation).
+    #[error("too many holes: {count} given, at most {max} allowed")]
+    TooManyHoles { count: usize, max: usize },
+    /// A coordinate or radius is NaN or infinite.
+    #[error("{} has a non-finite {field}: {value}", circle_name(*circle))]
+    NonFinite {
+        circle: CircleId,
+        field: &'static str,
+        value: f64,
+    },
+    /// A coordinate or radius exceeds [`Domain::MAX_MAGNITUDE`] in absolute value.
+    #[error("{} has {field} = {value:e}, beyond the supported magnitude {max:e}", circle_name(*circle))]
+    OutOfRange {
+        circle: CircleId,
+        field: &'static str,
+        value: f64,
+        max: f64,
+    },
+    /// A radius is zero or negative.
+    #[error("{} has radius {radius}, but a radius must be positive", circle_name(*circle))]
+    NonPositiveRadius { circle: CircleId, radius: f64 },
+    /// A hole is not strictly inside the bounding circle (touching within the tolerance
+    /// counts as not inside). `gap = R - |c - C| - r`.
+    #[error(
+        "hole {hole} is not strictly inside the bounding circle: its gap to the bounding circle \
+         is {gap:e}, it must exceed {tolerance:e}"
+    )]
+    HoleNotInside {
+        hole: usize,
+        gap: f64,
+        tolerance: f64,
+    },
+    /// Two holes are identical (same centre and radius).
+    #[error("hole {second} is a duplicate of hole {first} (same centre and radius)")]
+    DuplicateHole { first: usize, second: usize },
+    /// Two holes overlap or touch: `gap = |c_i - c_j| - r_i - r_j <= tolerance`.
+    #[error(
+        "holes {first} and {second} overlap or touch: the gap between them is {gap:e}, it must \
+         exceed {tolerance:e}"
+    )]
+    HolesOverlap {
+        first: usize,
+        second: usize,
+        gap: f64,
+        tolerance: f64,
+    },
+}
+
+/// A validated domain: a bounding circle and holes strictly inside it, pairwise apart
+/// (see the module documentation for the exact invariants).
 #[derive(Debug, Clone, PartialEq)]
 pub struct Domain {
     bounding: Circle,
     holes: Vec<Circle>,
 }
 
+/// The JSON shape of a domain.
+#[derive(Serialize)]
+struct DomainJsonOut<'a> {
+    bounding: Circle,
+    holes: &'a [Circle],
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct DomainJsonIn {
+    bounding: Circle,
+    holes: LimitedHoles,
+}
+
+/// The `holes` array, read without allocating more than the limit: elements beyond it are
+/// only counted.
+struct LimitedHoles {
+    holes: Vec<Circle>,
+    count: usize,
+}
+
+thread_local! {
+    static JSON_HOLE_LIMIT: std::cell::Cell<usize> = const { std::cell::Cell::new(Domain::MAX_HOLES) };
+}
+
+impl<'de> Deserialize<'de> for LimitedHoles {
+    fn deserialize<D: Deserializer<'de>>(deserializer: D) -> Result<Self, D::Error> {
+        struct V(usize);
+        impl<'de> Visitor<'de> for V {
+            type Value = LimitedHoles;
+            fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
+                f.write_str("an array of circles")
+            }
+            fn visit_seq<A: SeqAccess<'de>>(self, mut seq: A) -> Result<LimitedHoles, A::Error> {
+                let cap = seq.size_hint().unwrap_or(0).min(self.0).min(1 << 16);
+                let mut holes = Vec::with_capacity(cap);
+                let mut count = 0usize;
+                loop {
+                    if count < self.0 {
+                        match seq.next_element::<Circle>()? {
+                            Some(c) => holes.push(c),
+                            None => break,
+                        }
+                    } else if seq.next_element::<IgnoredAny>()?.is_none() {
+                        break;
+                    }
+                    count += 1;
+                }
+                Ok(LimitedHoles { holes, count })
+            }
+        }
+        let limit = JSON_HOLE_LIMIT.with(|l| l.get());
+        deserializer.deserialize_seq(V(limit))
+    }
+}
+
 impl Domain {
-    /// Build and validate a bounded domain.
+    /// Default limit on the number of holes.
+    pub const MAX_HOLES: usize = 1_000_000;
+    /// Relative gap tolerance: two circles closer than `GAP_TOLERANCE * R` (R the bounding
+    /// radius) are considered touching, and refused.
+    pub const GAP_TOLERANCE: f64 = 1e-9;
+    /// Largest accepted absolute value of a coordinate or radius (keeps squares finite).
+    pub const MAX_MAGNITUDE: f64 = 1e100;
+
+    /// Build and validate a bounded domain with the default hole limit [`Self::MAX_HOLES`].
     pub fn bounded(bounding: Circle, holes: Vec<Circle>) -> Result<Self, DomainError> {
+        Self::bounded_with_limit(bounding, holes, Self::MAX_HOLES)
+    }
+
+    /// Build and validate a bounded domain with at most `max_holes` holes.
+    pub fn bounded_with_limit(
+        bounding: Circle,
+        holes: Vec<Circle>,
+        max_holes: usize,
+    ) -> Result<Self, DomainError> {
+        if holes.len() > max_holes {
+            return Err(DomainError::TooManyHoles {
+                count: holes.len(),
+                max: max_holes,
+            });
+        }
+        check_circle(crate::domain::BOUNDING, &bounding)?;
+        for (i, h) in holes.iter().enumerate() {
+            check_circle(i as CircleId, h)?;
+        }
+        let tol = Self::tolerance_for(bounding.radius);
+        for (i, h) in holes.iter().enumerate() {
+            let gap = bounding.radius - dist(h.center, bounding.center) - h.radius;
+            // Every value is finite here, so the gap is not NaN.
+            if gap <= tol {
+                return Err(DomainError::HoleNotInside {
+                    hole: i,
+                    gap,
+                    tolerance: tol,
+                });
+            }
+        }
+        // Duplicates first, in O(n) with a hash map on the exact bits (-0.0 folded into 0.0).
+        let mut seen: HashMap<[u64; 3], usize> = HashMap::with_capacity(holes.len());
+        for (i, h) in holes.iter().enumerate() {
+            let key = [
+                (h.center[0] + 0.0).to_bits(),
+                (h.center[1] + 0.0).to_bits(),
+                (h.radius + 0.0).to_bits(),
+            ];
+            if let Some(&first) = seen.get(&key) {
+                return Err(DomainError::DuplicateHole { first, second: i });
+            }
+            seen.insert(key, i);
+        }
+        drop(seen);
+        // Overlaps: for each hole in input order, its nearest neighbour by gap.
+        let index = HoleIndex::new(&holes);
+        for i in 0..holes.len() {
+            if let Some((j, gap)) = index.nearest_gap(i) {
+                if gap <= tol {
+                    return Err(DomainError::HolesOverlap {
+                        first: i.min(j),
+                        second: i.max(j),
+                        gap,
+                        tolerance: tol,
+                    });
+                }
+            }
+        }
         Ok(Domain { bounding, holes })
     }
+
+    /// Parse and validate a domain from JSON of exactly this shape:
+    /// `{"bounding": {"center": [x, y], "radius": R}, "holes": [{"center": [x, y], "radius": r}, ...]}`.
+    /// Unknown fields are refused. Holes beyond [`Self::MAX_HOLES`] are counted, not stored.
+    pub fn from_json_str(text: &str) -> Result<Self, DomainError> {
+        Self::from_json_str_with_limit(text, Self::MAX_HOLES)
+    }
+
+    /// [`Self::from_json_str`] with a custom hole limit.
+    pub fn from_json_str_with_limit(text: &str, max_holes: usize) -> Result<Self, DomainError> {
+        let previous = JSON_HOLE_LIMIT.with(|l| l.replace(max_holes));
+        let parsed = serde_json::from_str::<DomainJsonIn>(text);
+        JSON_HOLE_LIMIT.with(|l| l.set(previous));
+        let parsed = parsed.map_err(|e| DomainError::Json(e.to_string()))?;
+        if parsed.holes.count > max_holes {
+            return Err(DomainError::TooManyHoles {
+                count: parsed.holes.count,
+                max: max_holes,
+            });
+        }
+        Self::bounded_with_limit(parsed.bounding, parsed.holes.holes, max_holes)
+    }
+
+    /// The domain as JSON, in the shape [`Self::from_json_str`] reads (round-trips exactly:
+    /// serde_json prints shortest round-trip representations of f64).
+    pub fn to_json_string(&self) -> String {
+        serde_json::to_string(&DomainJsonOut {
+            bounding: self.bounding,
+            holes: &self.holes,
+        })
+        .unwrap_or_default()
+    }
+
+    /// The paper's *Hexagon* data (section 5, figure 12), rebuilt: 7 equal holes of radius
+    /// `0.3` in hexagonal packing (one at the origin, six at distance `d = 1` at multiples of
+    /// 60 degrees) inside a bounding circle of radius `2.2` centred at the origin. Gaps: `0.4`
+    /// between neighbouring holes, `0.9` to the bounding circle. Algorithm 2 gives 36 blocks.
+    pub fn hexagon_example() -> Domain {
+        let d = 1.0_f64;
+        let r = 0.3 * d;
+        let s = 0.75_f64.sqrt() * d; // sin 60 degrees, the same bits for all four uses
+        let h = 0.5 * d;
+        let holes = vec![
+            Circle::new(0.0, 0.0, r),
+            Circle::new(d, 0.0, r),
+            Circle::new(h, s, r),
+            Circle::new(-h, s, r),
+            Circle::new(-d, 0.0, r),
+            Circle::new(-h, -s, r),
+            Circle::new(h, -s, r),
+        ];
+        Domain {
+            bounding: Circle::new(0.0, 0.0, 2.2 * d),
+            holes,
+        }
+    }
+
+    /// The absolute gap tolerance for a bounding radius `r`: `GAP_TOLERANCE * r`.
+    pub fn tolerance_for(r: f64) -> f64 {
+        Self::GAP_TOLERANCE * r
+    }
+
+    /// The absolute gap tolerance of this domain.
+    pub fn tolerance(&self) -> f64 {
+        Self::tolerance_for(self.bounding.radius)
+    }
+
+    /// The bounding circle.
     pub fn bounding(&self) -> Circle {
         self.bounding
     }
+    /// The holes, in input order (hole `i` has [`CircleId`] `i`).
     pub fn holes(&self) -> &[Circle] {
         &self.holes
     }
-    /// Circle by id (`-1` the bounding circle).
+    /// Number of holes.
+    pub fn hole_count(&self) -> usize {
+        self.holes.len()
+    }
+    /// Circle by id (`-1` the bounding circle). An id that is neither `-1` nor a hole index
+    /// gives the bounding circle for negative ids; out-of-range hole ids are clamped away by
+    /// returning the bounding circle too (never panics).
     pub fn circle(&self, id: CircleId) -> Circle {
         if id < 0 {
             self.bounding
         } else {
-            self.holes[id as usize]
+            self.holes
+                .get(id as usize)
+                .copied()
+                .unwrap_or(self.bounding)
         }
+    }
+    /// All circle ids: `-1` then `0..h`.
+    pub fn circle_ids(&self) -> impl Iterator<Item = CircleId> {
+        std::iter::once(BOUNDING).chain(0..self.holes.len() as CircleId)
+    }
+    /// The gap of hole `i` to the bounding circle: `R - |c_i - C| - r_i`.
+    pub fn bounding_gap(&self, i: usize) -> f64 {
+        let h = self.holes[i];
+        self.bounding.radius - dist(h.center, self.bounding.center) - h.radius
+    }
+}
+
+/// Check one circle's numbers.
+fn check_circle(id: CircleId, c: &Circle) -> Result<(), DomainError> {
+    let fields = [
+        ("center x", c.center[0]),
+        ("center y", c.center[1]),
+        ("radius", c.radius),
+    ];
+    for (field, value) in fields {
+        if !value.is_finite() {
+            return Err(DomainError::NonFinite {
+                circle: id,
+                field,
+                value,
+            });
+        }
+    }
+    // Finite here, so `<=` is the complete test.
+    if c.radius <= 0.0 {
+        return Err(DomainError::NonPositiveRadius {
+            circle: id,
+            radius: c.radius,
+        });
+    }
+    for (field, value) in fields {
+        if value.abs() > Domain::MAX_MAGNITUDE {
+            return Err(DomainError::OutOfRange {
+                circle: id,
+                field,
+                value,
+                max: Domain::MAX_MAGNITUDE,
+            });
+        }
+    }
+    Ok(())
+}
+
+/// Euclidean distance, symmetric in its arguments and under coordinate negation or swap
+/// (bitwise), so mirror-symmetric layouts get bitwise-equal distances.
+pub fn dist(a: Point, b: Point) -> f64 {
+    let dx = a[0] - b[0];
+    let dy = a[1] - b[1];
+    (dx * dx + dy * dy).sqrt()
+}
+
+/// The gap between two disjoint circles, `|c_a - c_b| - r_a - r_b`.
+pub fn gap(a: &Circle, b: &Circle) -> f64 {
+    dist(a.center, b.center) - a.radius - b.radius
+}
+
+const LEAF: usize = 8;
+
+/// A k-d tree over hole centres, each node augmented with the bounding box of its centres
+/// and the largest radius below it, answering nearest-gap queries by branch and bound:
+/// the gap from hole `i` to any hole of a node is at least
+/// `dist(c_i, box) - r_i - max_radius`.
+#[derive(Debug, Clone)]
+pub struct HoleIndex<'a> {
+    holes: &'a [Circle],
+    order: Vec<u32>,
+    nodes: Vec<Node>,
+}
+
+#[derive(Debug, Clone)]
+struct Node {
+    lo: Point,
+    hi: Point,
+    max_r: f64,
+    start: u32,
+    end: u32,
+    children: Option<(u32, u32)>,
+}
+
+impl<'a> HoleIndex<'a> {
+    /// Build the index over `holes` (finite values assumed; NaN only weakens the pruning).
+    pub fn new(holes: &'a [Circle]) -> Self {
+        let mut idx = HoleIndex {
+            holes,
+            order: (0..holes.len() as u32).collect(),
+            nodes: Vec::with_capacity(2 * holes.len() / LEAF + 1),
+        };
+        if !holes.is_empty() {
+            idx.build(0, holes.len(), 0);
+        }
+        idx
+    }
+
+    fn build(&mut self, start: usize, end: usize, depth: usize) -> u32 {
+        let mut lo = [f64::INFINITY; 2];
+        let mut hi = [f64::NEG_INFINITY; 2];
+        let mut max_r: f64 = 0.0;
+        for &k in &self.order[start..end] {
+            let c = self.holes[k as usize];
+            for a in 0..2 {
+                lo[a] = lo[a].min(c.center[a]);
+                hi[a] = hi[a].max(c.center[a]);
+            }
+            max_r = max_r.max(c.radius);
+        }
+        let id = self.nodes.len() as u32;
+        self.nodes.push(Node {
+            lo,
+            hi,
+            max_r,
+            start: start as u32,
+            end: end as u32,
+            children: None,
+        });
+        if end - start > LEAF && depth < 64 {
+            let axis = if hi[0] - lo[0] >= hi[1] - lo[1] { 0 } else { 1 };
+            let mid = (start + end) / 2;
+            let holes = self.holes;
+            self.order[start..end].select_nth_unstable_by(mid - start, |&p, &q| {
+                holes[p as usize].center[axis].total_cmp(&holes[q as usize].center[axis])
+            });
+            let l = self.build(start, mid, depth + 1);
+            let r = self.build(mid, end, depth + 1);
+            self.nodes[id as usize].children = Some((l, r));
+        }
+        id
+    }
+
+    /// The hole nearest to hole `i` by gap (`|c_i - c_j| - r_i - r_j`, negative when they
+    /// overlap), as `(j, gap)`; ties go to the smaller `j`. `None` when there is no other
+    /// hole. The returned gap is the exact floating-point minimum over all `j != i`.
+    pub fn nearest_gap(&self, i: usize) -> Option<(usize, f64)> {
+        if self.holes.len() < 2 {
+            return None;
+        }
+        let q = self.holes[i];
+        let mut best: Option<(usize, f64)> = None;
+        // Safety margin on the lower bound, so floating-point rounding never prunes the
+        // true minimum.
+        let slack = |v: f64| v.abs() * 1e-12;
+        let mut stack = vec![0u32];
+        while let Some(n) = stack.pop() {
+            let node = &self.nodes[n as usize];
+            let dx = (node.lo[0] - q.center[0])
+                .max(q.center[0] - node.hi[0])
+                .max(0.0);
+            let dy = (node.lo[1] - q.center[1])
+                .max(q.center[1] - node.hi[1])
+                .max(0.0);
+            let lb = (dx * dx + dy * dy).sqrt() - q.radius - node.max_r;
+            let lb = lb - slack(q.radius + node.max_r) - slack(lb);
+            if let Some((_, g)) = best {
+                if lb > g {
+                    continue;
+                }
+            }
+            match node.children {
+                None => {
+                    for &k in &self.order[node.start as usize..node.end as usize] {
+                        let j = k as usize;
+                        if j == i {
+                            continue;
+                        }
+                        let g = gap(&q, &self.holes[j]);
+                        let better = match best {
+                            None => true,
+                            Some((bj, bg)) => g < bg || (g == bg && j < bj),
+                        };
+                        if better {
+                            best = Some((j, g));
+                        }
+                    }
+                }
+                Some((l, r)) => {
+                    // Visit the nearer child first (pushed last).
+                    let dl = box_dist2(&self.nodes[l as usize], q.center);
+                    let dr = box_dist2(&self.nodes[r as usize], q.center);
+                    if dl <= dr {
+                        stack.push(r);
+                        stack.push(l);
+                    } else {
+                        stack.push(l);
+                        stack.push(r);
+                    }
+                }
+            }
+        }
+        best
+    }
+}
+
+fn box_dist2(node: &Node, p: Point) -> f64 {
+    let dx = (node.lo[0] - p[0]).max(p[0] - node.hi[0]).max(0.0);
+    let dy = (node.lo[1] - p[1]).max(p[1] - node.hi[1]).max(0.0);
+    dx * dx + dy * dy
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn nearest_gap_matches_brute_force() {
+        let mut holes = Vec::new();
+        let mut s = 12345u64;
+        let mut rnd = || {
+            s = s
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (s >> 11) as f64 / (1u64 << 53) as f64
+        };
+        for _ in 0..500 {
+            holes.push(Circle::new(rnd() * 10.0, rnd() * 10.0, rnd() * 0.3));
+        }
+        holes.push(Circle::new(5.0, 5.0, 3.0));
+        let idx = HoleIndex::new(&holes);
+        for i in 0..holes.len() {
+            let mut best = (usize::MAX, f64::INFINITY);
+            for j in 0..holes.len() {
+                if j != i {
+                    let g = gap(&holes[i], &holes[j]);
+                    if g < best.1 {
+                        best = (j, g);
+                    }
+                }
+            }
+            assert_eq!(idx.nearest_gap(i), Some(best), "hole {i}");
+        }
+    }
+
+    #[test]
+    fn hexagon_is_valid() {
+        let d = Domain::hexagon_example();
+        let again = Domain::bounded(d.bounding(), d.holes().to_vec()).unwrap();
+        assert_eq!(d, again);
+        assert_eq!(Domain::from_json_str(&d.to_json_string()).unwrap(), d);
     }
 }

@@ -1,1 +1,314 @@
-//! (stub)
+//! Triangle classification and the approximate medial graph (paper section 2, Algorithm 1).
+//!
+//! Triangles of the Delaunay triangulation of the boundary samples are classified
+//! combinatorially, from the circle of each vertex only:
+//! - [`TriangleKind::Hole`]: three vertices on one hole (inside that hole);
+//! - [`TriangleKind::Outside`]: three vertices on the bounding circle (not a triangle of the
+//!   domain; cannot be Delaunay when a hole exists, reported as a sampling violation);
+//! - in the domain: [`TriangleKind::Interior`] (no boundary edge), [`TriangleKind::Boundary`]
+//!   (exactly one), [`TriangleKind::MultiBoundary`] (two or more: a sampling violation).
+//!
+//! A *boundary edge* joins two consecutive samples of one circle.
+//!
+//! Algorithm 1: medial vertices are the interior triangles, placed at their circumcentres;
+//! a medial arc is the chain of boundary triangles met when walking from one interior
+//! triangle through one of its edges until the next interior triangle. Under the sampling
+//! invariants (a)-(c) ([`crate::sampling::check_invariants`]) every walk stays in the domain,
+//! separates exactly two circles (the circles of the two ends of the crossed edges), and ends
+//! at an interior triangle; each arc is found once. For `h >= 2` holes the graph has
+//! `V = 2(h-1)` vertices and `E = 3(h-1)` arcs (Euler's formula on the triangulated domain,
+//! DESIGN section 4).
+
+use crate::domain::CircleId;
+use crate::geometry::{Point, Triangulation};
+use crate::mesher::MeshError;
+use crate::sampling::Samples;
+
+/// The class of one Delaunay triangle (see the module documentation).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum TriangleKind {
+    /// Three vertices on the bounding circle: not in the domain.
+    Outside,
+    /// Three vertices on this hole: inside it.
+    Hole(CircleId),
+    /// In the domain, no boundary edge: a medial vertex.
+    Interior,
+    /// In the domain, exactly one boundary edge, the one opposite vertex `edge` (0..3).
+    Boundary { edge: u8 },
+    /// In the domain with two or more boundary edges (breaks sampling invariant (b)).
+    MultiBoundary,
+}
+
+impl TriangleKind {
+    /// True for triangles of the domain (interior, boundary, or the invalid multi-boundary).
+    pub fn in_domain(self) -> bool {
+        matches!(
+            self,
+            TriangleKind::Interior | TriangleKind::Boundary { .. } | TriangleKind::MultiBoundary
+        )
+    }
+}
+
+/// Classify every triangle of `tri` (a triangulation of `samples.points`).
+pub fn classify(samples: &Samples, tri: &Triangulation) -> Vec<TriangleKind> {
+    (0..tri.len())
+        .map(|t| {
+            let v = tri.triangle(t);
+            let c = v.map(|s| samples.circle_of[s as usize]);
+            if c[0] == c[1] && c[1] == c[2] {
+                // All samples of one circle are (nearly) co-circular; 3 vertices on a hole
+                // means inside it.
+                return if c[0] < 0 {
+                    TriangleKind::Outside
+                } else {
+                    TriangleKind::Hole(c[0])
+                };
+            }
+            let mut count = 0;
+            let mut edge = 0u8;
+            for k in 0..3 {
+                if samples.is_boundary_edge(v[(k + 1) % 3], v[(k + 2) % 3]) {
+                    count += 1;
+                    edge = k as u8;
+                }
+            }
+            match count {
+                0 => TriangleKind::Interior,
+                1 => TriangleKind::Boundary { edge },
+                _ => TriangleKind::MultiBoundary,
+            }
+        })
+        .collect()
+}
+
+/// The circumcentre of triangle `abc`, computed relative to `a` with the determinant from
+/// Shewchuk's adaptive `orient2d` (accurate sign and magnitude even for flat triangles).
+/// Returns `None` for a degenerate (collinear) triangle or a non-finite result.
+pub fn circumcenter(a: Point, b: Point, c: Point) -> Option<Point> {
+    let det = robust::orient2d(
+        robust::Coord { x: a[0], y: a[1] },
+        robust::Coord { x: b[0], y: b[1] },
+        robust::Coord { x: c[0], y: c[1] },
+    );
+    if det == 0.0 {
+        return None;
+    }
+    let (bx, by) = (b[0] - a[0], b[1] - a[1]);
+    let (cx, cy) = (c[0] - a[0], c[1] - a[1]);
+    let b2 = bx * bx + by * by;
+    let c2 = cx * cx + cy * cy;
+    let den = 2.0 * det;
+    let x = a[0] + (cy * b2 - by * c2) / den;
+    let y = a[1] + (bx * c2 - cx * b2) / den;
+    (x.is_finite() && y.is_finite()).then_some([x, y])
+}
+
+/// A medial vertex: an interior triangle.
+#[derive(Debug, Clone, PartialEq)]
+pub struct MedialVertex {
+    /// The interior triangle.
+    pub triangle: u32,
+    /// Its circumcentre.
+    pub position: Point,
+    /// Its three samples (counter-clockwise, as in the triangulation).
+    pub samples: [u32; 3],
+    /// The circles of those samples (three different circles).
+    pub circles: [CircleId; 3],
+}
+
+/// A medial arc: the chain of boundary triangles between two interior triangles.
+///
+/// Orientation (paper Algorithm 2): the arc leaves `ends[0]` through the edge `(a, b)` of its
+/// triangle, `a` on `circles[0]` (the paper's `C1` side) and `b` on `circles[1]` (`C2`).
+/// Walking from `ends[0]` to `ends[1]`, `circles[0]` is on the right and `circles[1]` on the
+/// left.
+#[derive(Debug, Clone, PartialEq)]
+pub struct MedialArc {
+    /// Medial vertex ids of its start and end.
+    pub ends: [u32; 2],
+    /// The slot (vertex index 0..3 opposite the crossed edge) in each end triangle.
+    pub end_slots: [u8; 2],
+    /// The boundary triangles between the ends, in walking order (empty for an arc between
+    /// two adjacent interior triangles).
+    pub triangles: Vec<u32>,
+    /// Circumcentres from `ends[0]` to `ends[1]`, both included.
+    pub polyline: Vec<Point>,
+    /// The two circles it separates: `[C1 side, C2 side]`.
+    pub circles: [CircleId; 2],
+    /// `C1`: samples on `circles[0]` from the start triangle's vertex to the end triangle's.
+    pub c1: Vec<u32>,
+    /// `C2`: samples on `circles[1]` likewise.
+    pub c2: Vec<u32>,
+}
+
+/// The approximate medial axis (paper Algorithm 1).
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct MedialGraph {
+    pub vertices: Vec<MedialVertex>,
+    pub arcs: Vec<MedialArc>,
+}
+
+impl MedialGraph {
+    /// Number of medial vertices (interior triangles).
+    pub fn vertex_count(&self) -> usize {
+        self.vertices.len()
+    }
+    /// Number of medial arcs.
+    pub fn arc_count(&self) -> usize {
+        self.arcs.len()
+    }
+    /// Arcs of zero length (both ends at the same point), from co-circular interior
+    /// triangles (paper section 4.2).
+    pub fn zero_length_arcs(&self) -> usize {
+        self.arcs
+            .iter()
+            .filter(|a| a.polyline.windows(2).all(|w| w[0] == w[1]))
+            .count()
+    }
+}
+
+fn internal(msg: String) -> MeshError {
+    MeshError::Internal(msg)
+}
+
+/// Build the medial graph (paper Algorithm 1, traversed as in Algorithm 2) from a
+/// triangulation of `samples` classified by `kinds` and meeting the sampling invariants.
+/// Arcs are found in a deterministic order: interior triangles by index, then their edge
+/// slots `0, 1, 2`. Errors are [`MeshError::Internal`] (a walk leaving the domain, which the
+/// invariants exclude), never panics.
+pub fn medial_graph(
+    samples: &Samples,
+    tri: &Triangulation,
+    kinds: &[TriangleKind],
+) -> Result<MedialGraph, MeshError> {
+    let n = tri.len();
+    if kinds.len() != n {
+        return Err(internal(format!(
+            "{} triangle kinds for {n} triangles",
+            kinds.len()
+        )));
+    }
+    let mut vertex_of = vec![u32::MAX; n];
+    let mut g = MedialGraph::default();
+    for (t, kind) in kinds.iter().enumerate() {
+        if *kind == TriangleKind::Interior {
+            let v = tri.triangle(t);
+            let p = v.map(|s| samples.points[s as usize]);
+            let position = circumcenter(p[0], p[1], p[2])
+                .ok_or_else(|| internal(format!("interior triangle {t} is degenerate")))?;
+            vertex_of[t] = g.vertices.len() as u32;
+            g.vertices.push(MedialVertex {
+                triangle: t as u32,
+                position,
+                samples: v,
+                circles: v.map(|s| samples.circle_of[s as usize]),
+            });
+        }
+    }
+    let mut visited = vec![[false; 3]; g.vertices.len()];
+    let mut circumcenters: Vec<Option<Point>> = vec![None; n];
+    let mut cc = |t: usize| -> Result<Point, MeshError> {
+        if let Some(p) = circumcenters[t] {
+            return Ok(p);
+        }
+        let v = tri.triangle(t);
+        let p = v.map(|s| samples.points[s as usize]);
+        let c = circumcenter(p[0], p[1], p[2])
+            .ok_or_else(|| internal(format!("triangle {t} is degenerate")))?;
+        circumcenters[t] = Some(c);
+        Ok(c)
+    };
+    for v0 in 0..g.vertices.len() {
+        let t0 = g.vertices[v0].triangle as usize;
+        for k0 in 0..3 {
+            if visited[v0][k0] {
+                continue;
+            }
+            visited[v0][k0] = true;
+            let tv = tri.triangle(t0);
+            let (mut a, mut b) = (tv[(k0 + 1) % 3], tv[(k0 + 2) % 3]);
+            let mut c1 = vec![a];
+            let mut c2 = vec![b];
+            let mut polyline = vec![g.vertices[v0].position];
+            let mut chain = Vec::new();
+            let (mut t, mut slot) = (t0, k0);
+            let mut steps = 0usize;
+            let (v1, k1) = loop {
+                steps += 1;
+                if steps > n + 1 {
+                    return Err(internal(format!(
+                        "medial walk from triangle {t0} does not end"
+                    )));
+                }
+                let nt = tri.neighbors(t)[slot].ok_or_else(|| {
+                    internal(format!(
+                        "medial walk crossed the convex hull at triangle {t} edge {slot}"
+                    ))
+                })? as usize;
+                let w = tri.triangle(nt);
+                // The mirror edge (b, a) in the CCW order of the next triangle: w = (p, b, a)
+                // up to rotation.
+                let kp = (0..3)
+                    .find(|&k| w[(k + 1) % 3] == b && w[(k + 2) % 3] == a)
+                    .ok_or_else(|| {
+                        internal(format!("triangles {t} and {nt} do not share edge {a}-{b}"))
+                    })?;
+                let p = w[kp];
+                polyline.push(cc(nt)?);
+                match kinds[nt] {
+                    TriangleKind::Interior => {
+                        let v1 = vertex_of[nt];
+                        if v1 == u32::MAX {
+                            return Err(internal(format!("triangle {nt} has no medial vertex")));
+                        }
+                        break (v1, kp);
+                    }
+                    TriangleKind::Boundary { edge } => {
+                        // lambda1 = (a, p) is opposite b (slot kp + 1), lambda2 = (p, b)
+                        // is opposite a (slot kp + 2).
+                        let (kb, ka) = ((kp + 1) % 3, (kp + 2) % 3);
+                        if edge as usize == kb {
+                            c1.push(p);
+                            a = p;
+                            slot = ka;
+                        } else if edge as usize == ka {
+                            c2.push(p);
+                            b = p;
+                            slot = kb;
+                        } else {
+                            return Err(internal(format!(
+                                "medial walk entered triangle {nt} through its boundary edge"
+                            )));
+                        }
+                        chain.push(nt as u32);
+                        t = nt;
+                    }
+                    other => {
+                        return Err(internal(format!(
+                            "medial walk from triangle {t0} reached triangle {nt} of kind {other:?}"
+                        )))
+                    }
+                }
+            };
+            if visited[v1 as usize][k1] {
+                return Err(internal(format!(
+                    "medial arc into vertex {v1} slot {k1} found twice"
+                )));
+            }
+            visited[v1 as usize][k1] = true;
+            g.arcs.push(MedialArc {
+                ends: [v0 as u32, v1],
+                end_slots: [k0 as u8, k1 as u8],
+                triangles: chain,
+                polyline,
+                circles: [
+                    samples.circle_of[c1[0] as usize],
+                    samples.circle_of[c2[0] as usize],
+                ],
+                c1,
+                c2,
+            });
+        }
+    }
+    Ok(g)
+}

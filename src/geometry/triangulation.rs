@@ -1,6 +1,10 @@
-//! Bowyer–Watson Delaunay triangulation (STUB: the API the rest of the crate builds against).
+//! The public Delaunay triangulation type.
 
-use super::Point;
+use super::build::Builder;
+use super::predicates::{incircle, orient2d, SAFE_MAX, SAFE_MIN};
+use super::{exact, Point};
+use std::cmp::Ordering;
+use std::collections::HashMap;
 
 /// Why a point set could not be triangulated.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -11,54 +15,375 @@ pub enum TriangulationError {
     TooFewPoints { distinct: usize },
     #[error("all {distinct} distinct points are collinear")]
     AllCollinear { distinct: usize },
+    #[error("too many points: {count} (at most {max})")]
+    TooManyPoints { count: usize, max: usize },
+    #[error("internal error in the triangulation: {message}")]
+    Internal { message: String },
 }
 
-/// A Delaunay triangulation of a point set (finite triangles only).
+/// Largest accepted input size (keeps every internal half-edge id inside `u32`).
+pub const MAX_POINTS: usize = 300_000_000;
+
+const NONE: u32 = u32::MAX;
+
+/// The Delaunay triangulation of a finite planar point set, computed with exact predicates.
+///
+/// # Guarantees
+/// - Every triangle is counter-clockwise (exact `orient2d > 0`) and every interior edge is
+///   locally Delaunay (exact `incircle <= 0` for the opposite vertex); the triangles tile the
+///   convex hull; every distinct input point is a vertex (points on hull edges included).
+/// - In-circle ties (four or more co-circular points) are broken by simulation of simplicity on
+///   the lifted coordinate, keyed to the lexicographic `(x, y)` order of the points. The triangle
+///   set is therefore a function of the point *set*: permuting the input only renumbers it.
+/// - Exact duplicates are removed and reported by [`Self::duplicates`]; triangles always use
+///   the first (smallest) input index of a duplicate group.
+/// - Co-circular configurations are reported by [`Self::cocircular_groups`] and
+///   [`Self::is_cocircular_edge`].
+///
+/// # Example
+/// ```
+/// use medial_blocks::geometry::Triangulation;
+///
+/// // A unit square (4 co-circular points), its centre, and a duplicate of a corner.
+/// let pts = [[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0], [0.5, 0.5], [1.0, 0.0]];
+/// let dt = Triangulation::new(&pts).unwrap();
+/// assert_eq!(dt.len(), 4); // 2n - 2 - h = 2*5 - 2 - 4
+/// assert_eq!(dt.duplicates(), &[(1, 5)]);
+/// for tri in dt.triangles() {
+///     assert!(tri.contains(&4)); // the centre is in every triangle
+/// }
+/// // The centre breaks the square's circle: no co-circular group remains.
+/// assert!(dt.cocircular_groups().is_empty());
+///
+/// let square = Triangulation::new(&pts[..4]).unwrap();
+/// assert_eq!(square.cocircular_groups(), vec![vec![0, 1, 2, 3]]);
+/// ```
 #[derive(Debug, Clone)]
 pub struct Triangulation {
     points: Vec<Point>,
+    tris: Vec<[u32; 3]>,
+    adj: Vec<[u32; 3]>,
+    duplicates: Vec<(u32, u32)>,
+    vertex_tri: Vec<u32>,
+}
+
+/// Power-of-two exponent `s` such that scaling every coordinate by `2^s` keeps all magnitudes in
+/// the adaptive predicates' exact range, if one exists (and is not 0).
+fn safe_shift(points: &[Point]) -> Option<i32> {
+    let mut lo = f64::INFINITY;
+    let mut hi = 0.0f64;
+    for p in points {
+        for &c in p {
+            let a = c.abs();
+            if a != 0.0 {
+                lo = lo.min(a);
+                hi = hi.max(a);
+            }
+        }
+    }
+    if hi == 0.0 || (lo >= SAFE_MIN && hi <= SAFE_MAX) {
+        return None;
+    }
+    // Exponents (floor log2) of the extreme magnitudes.
+    let e_hi = exact_exponent(hi);
+    let e_lo = exact_exponent(lo);
+    // Need e_hi + s <= 199 and e_lo + s >= -150.
+    let (min_s, max_s) = (-150 - e_lo, 199 - e_hi);
+    if min_s > max_s {
+        return None;
+    }
+    Some((min_s + max_s) / 2)
+}
+
+/// `floor(log2(|x|))` for finite non-zero `x` (exact, also for subnormals).
+fn exact_exponent(x: f64) -> i32 {
+    let (m, e) = exact::decompose(x);
+    let bits = 64 - m.unsigned_abs().leading_zeros() as i32;
+    e + bits - 1
+}
+
+/// `x * 2^s`, exact when the result stays normal (`s` may exceed the f64 exponent range).
+fn scale(x: f64, s: i32) -> f64 {
+    let half = s / 2;
+    let pow = |k: i32| f64::from_bits(((1023 + k) as u64) << 52);
+    x * pow(half) * pow(s - half)
 }
 
 impl Triangulation {
     /// Triangulate `points`. Exact duplicates are removed and reported by [`Self::duplicates`].
+    ///
+    /// Errors: a NaN or infinite coordinate, fewer than 3 distinct points, all distinct points
+    /// collinear, or more than [`MAX_POINTS`] points. Never panics.
     pub fn new(points: &[Point]) -> Result<Self, TriangulationError> {
-        let _ = points;
-        todo!("engine")
+        if let Some(index) = points
+            .iter()
+            .position(|p| !(p[0].is_finite() && p[1].is_finite()))
+        {
+            return Err(TriangulationError::NonFinite { index });
+        }
+        if points.len() > MAX_POINTS {
+            return Err(TriangulationError::TooManyPoints {
+                count: points.len(),
+                max: MAX_POINTS,
+            });
+        }
+        let scaled: Vec<Point>;
+        let work: &[Point] = match safe_shift(points) {
+            Some(s) => {
+                scaled = points
+                    .iter()
+                    .map(|p| [scale(p[0], s), scale(p[1], s)])
+                    .collect();
+                &scaled
+            }
+            None => points,
+        };
+        debug_assert!(work.iter().all(|p| p.iter().all(|&c| c.is_finite())));
+        let order = super::order::insertion_order(work);
+        // First vertex, first point distinct from it, first point not collinear with them.
+        let a = match order.first() {
+            Some(&a) => a,
+            None => return Err(TriangulationError::TooFewPoints { distinct: 0 }),
+        };
+        let pa = work[a as usize];
+        let Some(ib) = order.iter().position(|&i| work[i as usize] != pa) else {
+            return Err(TriangulationError::TooFewPoints { distinct: 1 });
+        };
+        let b = order[ib];
+        let pb = work[b as usize];
+        let Some(ic) = order[ib + 1..]
+            .iter()
+            .position(|&i| orient2d(pa, pb, work[i as usize]) != Ordering::Equal)
+            .map(|i| i + ib + 1)
+        else {
+            let distinct = count_distinct(points);
+            return Err(if distinct < 3 {
+                TriangulationError::TooFewPoints { distinct }
+            } else {
+                TriangulationError::AllCollinear { distinct }
+            });
+        };
+        let c = order[ic];
+        let mut builder = Builder::new(work, a, b, c);
+        let internal = |e: super::build::Broken| TriangulationError::Internal { message: e.0 };
+        for (pos, &i) in order.iter().enumerate() {
+            if pos == 0 || pos == ib || pos == ic {
+                continue;
+            }
+            builder.insert(i).map_err(internal)?;
+        }
+        Ok(Self::finish(points, builder))
     }
+
+    /// Compact the builder into finite triangles with input-index vertices.
+    fn finish(points: &[Point], b: Builder<'_>) -> Self {
+        let inf = b.infinite();
+        // Duplicate groups: the smallest input index represents the group.
+        let mut rename: HashMap<u32, u32> = HashMap::new();
+        let mut duplicates = Vec::with_capacity(b.dups.len());
+        if !b.dups.is_empty() {
+            let mut groups: HashMap<u32, Vec<u32>> = HashMap::new();
+            for &(v, d) in &b.dups {
+                groups.entry(v).or_default().push(d);
+            }
+            for (v, mut members) in groups {
+                members.push(v);
+                members.sort_unstable();
+                let first = members[0];
+                if first != v {
+                    rename.insert(v, first);
+                }
+                duplicates.extend(members[1..].iter().map(|&d| (first, d)));
+            }
+            duplicates.sort_unstable();
+        }
+        let mut map = vec![NONE; b.triangle_count()];
+        let mut count = 0u32;
+        for (t, v) in b.tv.iter().enumerate() {
+            if !v.contains(&inf) {
+                map[t] = count;
+                count += 1;
+            }
+        }
+        let mut tris = Vec::with_capacity(count as usize);
+        let mut adj = Vec::with_capacity(count as usize);
+        let mut vertex_tri = vec![NONE; points.len()];
+        for (t, v) in b.tv.iter().enumerate() {
+            if map[t] == NONE {
+                continue;
+            }
+            let v = v.map(|x| rename.get(&x).copied().unwrap_or(x));
+            let nb = [0, 1, 2].map(|k| map[(b.adj[3 * t + k] / 3) as usize]);
+            for &x in &v {
+                vertex_tri[x as usize] = map[t];
+            }
+            tris.push(v);
+            adj.push(nb);
+        }
+        for &(first, d) in &duplicates {
+            vertex_tri[d as usize] = vertex_tri[first as usize];
+        }
+        Triangulation {
+            points: points.to_vec(),
+            tris,
+            adj,
+            duplicates,
+            vertex_tri,
+        }
+    }
+
     /// The input points, as given (indices in triangles refer to these).
     pub fn points(&self) -> &[Point] {
         &self.points
     }
     /// Number of finite triangles.
     pub fn len(&self) -> usize {
-        todo!()
+        self.tris.len()
     }
     /// True when there is no triangle.
     pub fn is_empty(&self) -> bool {
         self.len() == 0
     }
     /// Triangle `t` as three input indices in counter-clockwise order.
+    ///
+    /// # Panics
+    /// When `t >= self.len()`.
     pub fn triangle(&self, t: usize) -> [u32; 3] {
-        let _ = t;
-        todo!()
+        self.tris[t]
     }
     /// All finite triangles, counter-clockwise, as input indices.
     pub fn triangles(&self) -> impl Iterator<Item = [u32; 3]> + '_ {
-        (0..self.len()).map(|t| self.triangle(t))
+        self.tris.iter().copied()
     }
     /// `neighbors(t)[k]` is the triangle across the edge opposite vertex `k` of triangle `t`,
     /// `None` on the convex hull.
+    ///
+    /// # Panics
+    /// When `t >= self.len()`.
     pub fn neighbors(&self, t: usize) -> [Option<u32>; 3] {
-        let _ = t;
-        todo!()
+        self.adj[t].map(|m| (m != NONE).then_some(m))
     }
     /// Exact duplicates as `(first, duplicate)` input index pairs, sorted.
     pub fn duplicates(&self) -> &[(u32, u32)] {
-        todo!()
+        &self.duplicates
+    }
+    /// Number of distinct points (all of them are vertices).
+    pub fn vertex_count(&self) -> usize {
+        self.points.len() - self.duplicates.len()
+    }
+    /// A triangle having input point `v` (or the point it duplicates) as a vertex;
+    /// `None` when `v` is out of range.
+    pub fn vertex_triangle(&self, v: usize) -> Option<usize> {
+        self.vertex_tri
+            .get(v)
+            .and_then(|&t| (t != NONE).then_some(t as usize))
+    }
+    /// Triangles with at least one edge on the convex hull, in increasing order.
+    pub fn hull_triangles(&self) -> Vec<usize> {
+        (0..self.len())
+            .filter(|&t| self.adj[t].contains(&NONE))
+            .collect()
+    }
+    /// Convex hull vertices (input indices) in counter-clockwise order, starting at the smallest
+    /// index; points lying on hull edges are included.
+    pub fn hull(&self) -> Vec<u32> {
+        let mut next: HashMap<u32, u32> = HashMap::new();
+        for (t, v) in self.tris.iter().enumerate() {
+            for k in 0..3 {
+                if self.adj[t][k] == NONE {
+                    next.insert(v[(k + 1) % 3], v[(k + 2) % 3]);
+                }
+            }
+        }
+        let Some(&start) = next.keys().min() else {
+            return Vec::new();
+        };
+        let mut hull = vec![start];
+        let mut v = start;
+        while let Some(&w) = next.get(&v) {
+            if w == start || hull.len() > next.len() {
+                break;
+            }
+            hull.push(w);
+            v = w;
+        }
+        hull
+    }
+    /// The vertex of triangle `m = neighbors(t)[k]` opposite the shared edge, with `m`.
+    fn opposite(&self, t: usize, k: usize) -> Option<(usize, u32)> {
+        let m = *self.adj.get(t)?.get(k)?;
+        if m == NONE {
+            return None;
+        }
+        let m = m as usize;
+        let j = self.adj[m].iter().position(|&x| x as usize == t)?;
+        Some((m, self.tris[m][j]))
+    }
+    /// True when the edge of triangle `t` opposite its vertex `k` is interior and the four points
+    /// of the two triangles sharing it are exactly co-circular (exact in-circle zero). False on
+    /// the hull and for out-of-range arguments.
+    pub fn is_cocircular_edge(&self, t: usize, k: usize) -> bool {
+        let Some((_, d)) = self.opposite(t, k) else {
+            return false;
+        };
+        let [a, b, c] = self.tris[t].map(|v| self.points[v as usize]);
+        incircle(a, b, c, self.points[d as usize]) == Ordering::Equal
     }
     /// Maximal sets of input points whose triangles are joined across edges with exact
-    /// incircle zero; each sorted, the list sorted.
+    /// incircle zero; each sorted, the list sorted. Computed from the final triangulation.
     pub fn cocircular_groups(&self) -> Vec<Vec<u32>> {
-        todo!()
+        let n = self.len();
+        let mut parent: Vec<u32> = (0..n as u32).collect();
+        fn find(parent: &mut [u32], mut x: u32) -> u32 {
+            while parent[x as usize] != x {
+                let up = parent[parent[x as usize] as usize];
+                parent[x as usize] = up;
+                x = up;
+            }
+            x
+        }
+        let mut joined = false;
+        for t in 0..n {
+            for k in 0..3 {
+                let m = self.adj[t][k];
+                if m == NONE || (m as usize) < t || !self.is_cocircular_edge(t, k) {
+                    continue;
+                }
+                let (rt, rm) = (find(&mut parent, t as u32), find(&mut parent, m));
+                if rt != rm {
+                    parent[rt.max(rm) as usize] = rt.min(rm);
+                }
+                joined = true;
+            }
+        }
+        if !joined {
+            return Vec::new();
+        }
+        let mut members: HashMap<u32, Vec<u32>> = HashMap::new();
+        let mut size: HashMap<u32, usize> = HashMap::new();
+        for t in 0..n {
+            let r = find(&mut parent, t as u32);
+            *size.entry(r).or_default() += 1;
+            members.entry(r).or_default().extend(self.tris[t]);
+        }
+        let mut groups: Vec<Vec<u32>> = members
+            .into_iter()
+            .filter(|(r, _)| size[r] > 1)
+            .map(|(_, mut g)| {
+                g.sort_unstable();
+                g.dedup();
+                g
+            })
+            .collect();
+        groups.sort();
+        groups
     }
+}
+
+/// Number of distinct points (error path only).
+fn count_distinct(points: &[Point]) -> usize {
+    let mut v: Vec<Point> = points.iter().map(|p| [p[0] + 0.0, p[1] + 0.0]).collect();
+    v.sort_unstable_by(super::predicates::lex_cmp);
+    v.dedup();
+    v.len()
 }

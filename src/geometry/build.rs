@@ -1,0 +1,352 @@
+//! Bowyer–Watson construction with a vertex at infinity.
+//!
+//! Internal representation (flat arrays, `u32` ids):
+//! - vertex ids are input indices; the infinite vertex is `n = pts.len()`;
+//! - `tv[t]` are the vertices of triangle `t`, counter-clockwise (for an infinite triangle
+//!   `(u, v, ∞)` the outside of the hull edge `u → v` is on its left);
+//! - `adj[3t + k]` is the half-edge `3m + j` across the edge opposite vertex `k` of `t`, i.e.
+//!   triangle `m` sees `t` across its edge opposite vertex `j`.
+//!
+//! Invariant after each insertion: the finite triangles form the Delaunay triangulation of the
+//! inserted points under the SoS-perturbed lifting (see [`super::predicates`]) and the infinite
+//! triangles close the hull, every hull edge carrying exactly one infinite triangle.
+
+use super::predicates::{incircle_sos, lex_cmp, orient2d};
+use super::Point;
+use std::cmp::Ordering;
+
+/// Marks a triangle tested and found not in conflict (ORed with the insertion stamp).
+const OUTSIDE: u32 = 1 << 31;
+
+/// Where a point landed.
+enum Located {
+    /// A triangle in conflict with the point.
+    Triangle(u32),
+    /// The point equals this existing vertex exactly.
+    Duplicate(u32),
+}
+
+/// What went wrong inside the construction (an internal invariant broke; should not happen).
+#[derive(Debug)]
+pub(crate) struct Broken(pub(crate) String);
+
+pub(crate) struct Builder<'a> {
+    pts: &'a [Point],
+    inf: u32,
+    pub(crate) tv: Vec<[u32; 3]>,
+    pub(crate) adj: Vec<u32>,
+    mark: Vec<u32>,
+    stamp: u32,
+    start_at: Vec<u32>,
+    stack: Vec<u32>,
+    cavity: Vec<u32>,
+    boundary: Vec<(u32, u32, u32)>,
+    last: u32,
+    rng: u32,
+    /// `(existing vertex, duplicate input index)` pairs found during insertion.
+    pub(crate) dups: Vec<(u32, u32)>,
+}
+
+#[inline(always)]
+fn next(k: usize) -> usize {
+    if k == 2 {
+        0
+    } else {
+        k + 1
+    }
+}
+
+#[inline(always)]
+fn prev(k: usize) -> usize {
+    if k == 0 {
+        2
+    } else {
+        k - 1
+    }
+}
+
+/// Plain floating-point orientation, used only to guide the walk.
+#[inline(always)]
+fn orient_fast(a: &Point, b: &Point, c: &Point) -> f64 {
+    (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0])
+}
+
+impl<'a> Builder<'a> {
+    /// Start from the triangle `a, b, c` (non-collinear) and its three infinite neighbours.
+    pub(crate) fn new(pts: &'a [Point], a: u32, b: u32, c: u32) -> Self {
+        let n = pts.len();
+        let inf = n as u32;
+        let (b, c) =
+            if orient2d(pts[a as usize], pts[b as usize], pts[c as usize]) == Ordering::Greater {
+                (b, c)
+            } else {
+                (c, b)
+            };
+        let cap = 2 * n + 8;
+        let mut s = Builder {
+            pts,
+            inf,
+            tv: Vec::with_capacity(cap),
+            adj: Vec::with_capacity(3 * cap),
+            mark: Vec::with_capacity(cap),
+            stamp: 0,
+            start_at: vec![0; n + 1],
+            stack: Vec::new(),
+            cavity: Vec::new(),
+            boundary: Vec::new(),
+            last: 0,
+            rng: 0x9e37_79b9,
+            dups: Vec::new(),
+        };
+        s.tv = vec![[a, b, c], [c, b, inf], [a, c, inf], [b, a, inf]];
+        s.adj = vec![u32::MAX; 12];
+        s.mark = vec![0; 4];
+        // Link the four triangles by matching reversed edges.
+        for t in 0..4 {
+            for k in 0..3 {
+                let (u, v) = (s.tv[t][next(k)], s.tv[t][prev(k)]);
+                for m in 0..4 {
+                    for j in 0..3 {
+                        if s.tv[m][next(j)] == v && s.tv[m][prev(j)] == u {
+                            s.adj[3 * t + k] = (3 * m + j) as u32;
+                        }
+                    }
+                }
+            }
+        }
+        s
+    }
+
+    #[inline(always)]
+    fn p(&self, v: u32) -> &Point {
+        &self.pts[v as usize]
+    }
+
+    #[inline(always)]
+    fn is_infinite(&self, t: u32) -> bool {
+        let v = self.tv[t as usize];
+        v[0] == self.inf || v[1] == self.inf || v[2] == self.inf
+    }
+
+    #[inline(always)]
+    fn random3(&mut self) -> usize {
+        self.rng ^= self.rng << 13;
+        self.rng ^= self.rng >> 17;
+        self.rng ^= self.rng << 5;
+        (self.rng % 3) as usize
+    }
+
+    /// The finite triangle across the hull edge of infinite triangle `t`.
+    #[inline]
+    fn finite_neighbor(&self, t: u32) -> u32 {
+        let v = self.tv[t as usize];
+        let k = if v[0] == self.inf {
+            0
+        } else if v[1] == self.inf {
+            1
+        } else {
+            2
+        };
+        self.adj[3 * t as usize + k] / 3
+    }
+
+    /// True when `t` is in conflict with point `q` (finite triangle: `q` inside its circumcircle
+    /// under SoS; infinite triangle: `q` strictly outside its hull edge, or on its open segment).
+    #[inline]
+    fn in_conflict(&self, t: u32, q: &Point) -> bool {
+        let v = self.tv[t as usize];
+        let inf = self.inf;
+        let (u, w) = if v[0] == inf {
+            (v[1], v[2])
+        } else if v[1] == inf {
+            (v[2], v[0])
+        } else if v[2] == inf {
+            (v[0], v[1])
+        } else {
+            return incircle_sos(*self.p(v[0]), *self.p(v[1]), *self.p(v[2]), *q)
+                == Ordering::Greater;
+        };
+        let (pu, pw) = (self.p(u), self.p(w));
+        match orient2d(*pu, *pw, *q) {
+            Ordering::Greater => true,
+            Ordering::Less => false,
+            Ordering::Equal => {
+                // Collinear with the hull edge: inside the open segment iff lexicographically
+                // between its ends.
+                let a = lex_cmp(pu, q);
+                let b = lex_cmp(q, pw);
+                a == b && a != Ordering::Equal
+            }
+        }
+    }
+
+    /// Exact check that the walk ended right: `q` in the closed finite triangle `t`, or strictly
+    /// outside the hull edge of infinite triangle `t`.
+    fn contains_exact(&self, t: u32, q: &Point) -> bool {
+        let v = self.tv[t as usize];
+        let inf = self.inf;
+        if v.contains(&inf) {
+            let (u, w) = if v[0] == inf {
+                (v[1], v[2])
+            } else if v[1] == inf {
+                (v[2], v[0])
+            } else {
+                (v[0], v[1])
+            };
+            return orient2d(*self.p(u), *self.p(w), *q) == Ordering::Greater;
+        }
+        (0..3).all(|k| orient2d(*self.p(v[next(k)]), *self.p(v[prev(k)]), *q) != Ordering::Less)
+    }
+
+    /// Visibility walk towards `q`. `exact` selects exact or plain floating-point orientation.
+    /// Returns the final triangle, or `None` when the step cap was hit.
+    fn walk(&mut self, start: u32, q: &Point, exact: bool, cap: usize) -> Option<u32> {
+        let mut t = start;
+        if self.is_infinite(t) {
+            t = self.finite_neighbor(t);
+        }
+        let mut came_from = u32::MAX;
+        'step: for _ in 0..cap {
+            let v = self.tv[t as usize];
+            let r = self.random3();
+            for i in 0..3 {
+                let k = (r + i) % 3;
+                let h = self.adj[3 * t as usize + k];
+                let m = h / 3;
+                if m == came_from {
+                    continue;
+                }
+                let (a, b) = (self.p(v[next(k)]), self.p(v[prev(k)]));
+                let behind = if exact {
+                    orient2d(*a, *b, *q) == Ordering::Less
+                } else {
+                    orient_fast(a, b, q) < 0.0
+                };
+                if behind {
+                    came_from = t;
+                    t = m;
+                    if self.is_infinite(t) {
+                        return Some(t);
+                    }
+                    continue 'step;
+                }
+            }
+            return Some(t);
+        }
+        None
+    }
+
+    fn locate(&mut self, q: &Point) -> Result<Located, Broken> {
+        let n_tri = self.tv.len();
+        let fast_cap = 64 + 4 * (n_tri as f64).sqrt() as usize;
+        let mut found = self
+            .walk(self.last, q, false, fast_cap)
+            .filter(|&t| self.contains_exact(t, q));
+        if found.is_none() {
+            let from = self.last;
+            found = self
+                .walk(from, q, true, 4 * n_tri + 16)
+                .filter(|&t| self.contains_exact(t, q));
+        }
+        if found.is_none() {
+            found = (0..n_tri as u32).find(|&t| self.contains_exact(t, q));
+        }
+        let t = found.ok_or_else(|| Broken("point location failed".into()))?;
+        for &v in &self.tv[t as usize] {
+            if v != self.inf && self.p(v) == q {
+                return Ok(Located::Duplicate(v));
+            }
+        }
+        Ok(Located::Triangle(t))
+    }
+
+    /// Insert input point `pi` (or record it as a duplicate).
+    pub(crate) fn insert(&mut self, pi: u32) -> Result<(), Broken> {
+        let q = *self.p(pi);
+        let seed = match self.locate(&q)? {
+            Located::Duplicate(v) => {
+                self.dups.push((v, pi));
+                return Ok(());
+            }
+            Located::Triangle(t) => t,
+        };
+        self.stamp += 1;
+        if self.stamp >= OUTSIDE {
+            self.mark.iter_mut().for_each(|m| *m = 0);
+            self.stamp = 1;
+        }
+        let stamp = self.stamp;
+        self.mark[seed as usize] = stamp;
+        self.cavity.clear();
+        self.boundary.clear();
+        self.cavity.push(seed);
+        self.stack.push(seed);
+        while let Some(t) = self.stack.pop() {
+            for k in 0..3 {
+                let h = self.adj[3 * t as usize + k];
+                let m = h / 3;
+                let mk = self.mark[m as usize];
+                if mk == stamp {
+                    continue;
+                }
+                if mk != stamp | OUTSIDE && self.in_conflict(m, &q) {
+                    self.mark[m as usize] = stamp;
+                    self.cavity.push(m);
+                    self.stack.push(m);
+                    continue;
+                }
+                self.mark[m as usize] = stamp | OUTSIDE;
+                let v = self.tv[t as usize];
+                self.boundary.push((v[next(k)], v[prev(k)], h));
+            }
+        }
+        if self.boundary.len() != self.cavity.len() + 2 {
+            return Err(Broken(format!(
+                "cavity of {} triangles has {} boundary edges",
+                self.cavity.len(),
+                self.boundary.len()
+            )));
+        }
+        let mut last = 0;
+        for i in 0..self.boundary.len() {
+            let (u, w, h) = self.boundary[i];
+            let s = if i < self.cavity.len() {
+                self.cavity[i]
+            } else {
+                self.tv.push([0; 3]);
+                self.adj.extend_from_slice(&[u32::MAX; 3]);
+                self.mark.push(0);
+                (self.tv.len() - 1) as u32
+            };
+            self.tv[s as usize] = [u, w, pi];
+            self.adj[3 * s as usize + 2] = h;
+            self.adj[h as usize] = 3 * s + 2;
+            self.start_at[u as usize] = s;
+            if u != self.inf && w != self.inf {
+                last = s;
+            }
+        }
+        for i in 0..self.boundary.len() {
+            let s = if i < self.cavity.len() {
+                self.cavity[i]
+            } else {
+                (self.tv.len() - (self.boundary.len() - i)) as u32
+            };
+            let w = self.tv[s as usize][1];
+            let n = self.start_at[w as usize];
+            self.adj[3 * s as usize] = 3 * n + 1;
+            self.adj[3 * n as usize + 1] = 3 * s;
+        }
+        self.last = last;
+        Ok(())
+    }
+
+    /// Number of triangles including infinite ones.
+    pub(crate) fn triangle_count(&self) -> usize {
+        self.tv.len()
+    }
+
+    pub(crate) fn infinite(&self) -> u32 {
+        self.inf
+    }
+}

@@ -1,0 +1,107 @@
+//! Insertion order: biased randomized insertion order (BRIO) rounds, each round sorted along a
+//! Hilbert curve. Only affects speed: the triangulation itself does not depend on the order.
+//!
+//! Rounds are drawn from a hash of the point's *coordinates*, so exact duplicates share a round
+//! and a Hilbert cell and are ordered by input index: the first occurrence is inserted first.
+
+use super::Point;
+
+const HILBERT_ORDER: u32 = 14;
+const MAX_LEVEL: u32 = 15;
+
+/// Hilbert curve index of cell `(x, y)` on a `2^order` grid.
+fn hilbert(mut x: u32, mut y: u32, order: u32) -> u32 {
+    let n = 1u32 << order;
+    let mut d = 0u32;
+    let mut s = n >> 1;
+    while s > 0 {
+        let rx = u32::from(x & s != 0);
+        let ry = u32::from(y & s != 0);
+        d += s * s * ((3 * rx) ^ ry);
+        if ry == 0 {
+            if rx == 1 {
+                x = n - 1 - x;
+                y = n - 1 - y;
+            }
+            std::mem::swap(&mut x, &mut y);
+        }
+        s >>= 1;
+    }
+    d
+}
+
+fn splitmix(mut z: u64) -> u64 {
+    z = z.wrapping_add(0x9e37_79b9_7f4a_7c15);
+    z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+    z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+    z ^ (z >> 31)
+}
+
+/// Point indices in insertion order. Points must be finite and fewer than 2^32.
+pub(crate) fn insertion_order(pts: &[Point]) -> Vec<u32> {
+    let (mut x0, mut y0, mut x1, mut y1) = (f64::MAX, f64::MAX, f64::MIN, f64::MIN);
+    for p in pts {
+        x0 = x0.min(p[0]);
+        y0 = y0.min(p[1]);
+        x1 = x1.max(p[0]);
+        y1 = y1.max(p[1]);
+    }
+    let cells = f64::from(1u32 << HILBERT_ORDER);
+    let max_cell = (1u32 << HILBERT_ORDER) - 1;
+    // Scale each axis separately; halve first so the extent never overflows.
+    let sx = cells / ((0.5 * x1 - 0.5 * x0) * 2.0).max(f64::MIN_POSITIVE);
+    let sy = cells / ((0.5 * y1 - 0.5 * y0) * 2.0).max(f64::MIN_POSITIVE);
+    let quantize = |v: f64, lo: f64, s: f64| -> u32 {
+        let q = ((0.5 * v - 0.5 * lo) * 2.0 * s).floor();
+        if q.is_finite() && q > 0.0 {
+            (q as u32).min(max_cell)
+        } else {
+            0
+        }
+    };
+    let mut keys: Vec<u64> = pts
+        .iter()
+        .enumerate()
+        .map(|(i, p)| {
+            // `+ 0.0` maps -0.0 to 0.0 so that duplicates hash alike.
+            let h = splitmix((p[0] + 0.0).to_bits() ^ splitmix((p[1] + 0.0).to_bits()));
+            let level = (h.trailing_zeros()).min(MAX_LEVEL);
+            let round = u64::from(MAX_LEVEL - level);
+            let hk = u64::from(hilbert(
+                quantize(p[0], x0, sx),
+                quantize(p[1], y0, sy),
+                HILBERT_ORDER,
+            ));
+            // round (4 bits) | hilbert (28 bits) | index (32 bits)
+            (round << 60) | (hk << 32) | i as u64
+        })
+        .collect();
+    keys.sort_unstable();
+    keys.into_iter().map(|k| k as u32).collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn hilbert_is_a_bijection_on_small_grid() {
+        let mut seen = [false; 64];
+        for x in 0..8 {
+            for y in 0..8 {
+                seen[hilbert(x, y, 3) as usize] = true;
+            }
+        }
+        assert!(seen.iter().all(|&s| s));
+    }
+
+    #[test]
+    fn order_is_a_permutation() {
+        let pts: Vec<Point> = (0..1000)
+            .map(|i| [(i % 37) as f64, (i / 37) as f64])
+            .collect();
+        let mut o = insertion_order(&pts);
+        o.sort_unstable();
+        assert!(o.iter().enumerate().all(|(i, &v)| v as usize == i));
+    }
+}

@@ -1,0 +1,171 @@
+//! Boundary sampling: counts are multiples of 8, samples lie on their circle in
+//! counter-clockwise order, and mirror-symmetric layouts give bitwise mirror-symmetric samples.
+
+use medial_blocks::domain::{Circle, CircleId, Domain};
+use medial_blocks::sampling::{initial_counts, nearest_gaps, sample, Samples, SamplingOptions};
+use proptest::prelude::*;
+
+fn samples_of(d: &Domain, opts: &SamplingOptions) -> Samples {
+    let gaps = nearest_gaps(d);
+    let counts = initial_counts(d, &gaps, opts);
+    sample(d, &counts, &gaps)
+}
+
+/// The id of the circle equal to `c` (exact comparison), bounding included.
+fn find(d: &Domain, c: Circle) -> Option<CircleId> {
+    d.circle_ids().find(|&id| d.circle(id) == c)
+}
+
+/// Check that `map` (a mirror applied to points) maps the samples of every circle onto the
+/// samples of its mirror circle bitwise, with sample `k` going to `mirror_index(k, n)`.
+fn check_mirror(
+    d: &Domain,
+    s: &Samples,
+    map: impl Fn([f64; 2]) -> [f64; 2],
+    mirror_index: impl Fn(u32, u32) -> u32,
+) {
+    for id in d.circle_ids() {
+        let c = d.circle(id);
+        let mc = Circle {
+            center: map(c.center),
+            radius: c.radius,
+        };
+        let mid = find(d, mc).expect("layout is not mirror-symmetric");
+        let (cs, ms) = (s.of_circle(id), s.of_circle(mid));
+        assert_eq!(cs.count, ms.count, "circle {id} vs its mirror {mid}");
+        assert_eq!(cs.gap.to_bits(), ms.gap.to_bits());
+        for k in 0..cs.count {
+            let p = s.points[(cs.first + k) as usize];
+            let q = s.points[(ms.first + mirror_index(k, cs.count)) as usize];
+            let mp = map(p);
+            // Bitwise, up to the sign of zero (`+ 0.0` folds -0.0 into 0.0).
+            assert_eq!(
+                [(mp[0] + 0.0).to_bits(), (mp[1] + 0.0).to_bits()],
+                [(q[0] + 0.0).to_bits(), (q[1] + 0.0).to_bits()],
+                "circle {id} sample {k}: {p:?} mirrors to {mp:?}, found {q:?}"
+            );
+        }
+    }
+}
+
+fn check_basic(d: &Domain, s: &Samples) {
+    for id in d.circle_ids() {
+        let c = d.circle(id);
+        let cs = s.of_circle(id);
+        assert!(cs.count % 8 == 0 && cs.count >= 8);
+        for k in 0..cs.count {
+            let g = (cs.first + k) as usize;
+            assert_eq!(s.circle_of[g], id);
+            assert_eq!(s.index_of[g], k);
+            let p = s.points[g];
+            let (dx, dy) = (p[0] - c.center[0], p[1] - c.center[1]);
+            assert!(((dx * dx + dy * dy).sqrt() - c.radius).abs() <= 1e-12 * d.bounding().radius);
+            // Counter-clockwise: the angle increases by 2 pi / n.
+            let want = std::f64::consts::TAU * k as f64 / cs.count as f64;
+            let got = dy.atan2(dx).rem_euclid(std::f64::consts::TAU);
+            let diff = (got - want).abs();
+            assert!(diff < 1e-9 || (diff - std::f64::consts::TAU).abs() < 1e-9);
+        }
+    }
+}
+
+/// A layout with the full symmetry of the square (mirrors about both axes and both
+/// diagonals).
+fn d4_layout() -> Domain {
+    let mut holes = vec![Circle::new(0.0, 0.0, 0.7)];
+    for (x, y) in [(2.0, 1.0), (1.0, 2.0), (3.1, 0.0), (0.0, 3.1)] {
+        for (sx, sy) in [(1.0, 1.0), (-1.0, 1.0), (1.0, -1.0), (-1.0, -1.0)] {
+            let c = Circle::new(sx * x, sy * y, 0.45);
+            if !holes.contains(&c) {
+                holes.push(c);
+            }
+        }
+    }
+    Domain::bounded(Circle::new(0.0, 0.0, 4.4), holes).unwrap()
+}
+
+#[test]
+fn d4_symmetric_layout_gives_mirrored_samples() {
+    let d = d4_layout();
+    for opts in [
+        SamplingOptions::default(),
+        SamplingOptions {
+            min_per_circle: 8,
+            spacing_per_gap: 0.37,
+            ..SamplingOptions::default()
+        },
+    ] {
+        let s = samples_of(&d, &opts);
+        check_basic(&d, &s);
+        // Mirror about x = 0: angle k -> n/2 - k.
+        check_mirror(&d, &s, |p| [-p[0], p[1]], |k, n| (n / 2 + n - k) % n);
+        // Mirror about y = 0: k -> n - k.
+        check_mirror(&d, &s, |p| [p[0], -p[1]], |k, n| (n - k) % n);
+        // Mirror about y = x: k -> n/4 - k.
+        check_mirror(&d, &s, |p| [p[1], p[0]], |k, n| (n / 4 + n - k) % n);
+        // Mirror about y = -x: k -> 3n/4 - k.
+        check_mirror(&d, &s, |p| [-p[1], -p[0]], |k, n| (3 * n / 4 + n - k) % n);
+    }
+}
+
+#[test]
+fn hexagon_samples_are_mirror_symmetric() {
+    let d = Domain::hexagon_example();
+    let s = samples_of(&d, &SamplingOptions::default());
+    check_basic(&d, &s);
+    check_mirror(&d, &s, |p| [-p[0], p[1]], |k, n| (n / 2 + n - k) % n);
+    check_mirror(&d, &s, |p| [p[0], -p[1]], |k, n| (n - k) % n);
+}
+
+#[test]
+fn density_follows_the_gap() {
+    // Two close holes get many more samples than a lonely one of the same radius.
+    let d = Domain::bounded(
+        Circle::new(0.0, 0.0, 20.0),
+        vec![
+            Circle::new(-1.005, 0.0, 1.0),
+            Circle::new(1.005, 0.0, 1.0),
+            Circle::new(0.0, 10.0, 1.0),
+        ],
+    )
+    .unwrap();
+    let s = samples_of(&d, &SamplingOptions::default());
+    let close = s.of_circle(0).count;
+    let lonely = s.of_circle(2).count;
+    assert_eq!(close, s.of_circle(1).count);
+    assert!(close >= 8 * lonely, "close {close}, lonely {lonely}");
+    // Spacing at most the gap (0.01).
+    assert!(std::f64::consts::TAU / close as f64 <= 0.01 + 1e-12);
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 48, .. ProptestConfig::default() })]
+
+    /// Random layouts mirrored about x = 0 (and holes on the axis) sample bitwise
+    /// symmetrically.
+    #[test]
+    fn random_mirror_layouts(
+        raw in prop::collection::vec((0.05f64..4.0, -4.0f64..4.0, 0.05f64..0.8, any::<bool>()), 1..12),
+        spacing in 0.3f64..2.0,
+    ) {
+        let mut holes: Vec<Circle> = Vec::new();
+        for (x, y, r, on_axis) in raw {
+            let cand: Vec<Circle> = if on_axis {
+                vec![Circle::new(0.0, y, r)]
+            } else {
+                vec![Circle::new(x, y, r), Circle::new(-x, y, r)]
+            };
+            let mut trial = holes.clone();
+            trial.extend(cand);
+            if Domain::bounded(Circle::new(0.0, 0.0, 6.0), trial.clone()).is_ok() {
+                holes = trial;
+            }
+        }
+        prop_assume!(!holes.is_empty());
+        let d = Domain::bounded(Circle::new(0.0, 0.0, 6.0), holes).unwrap();
+        let opts = SamplingOptions { min_per_circle: 16, spacing_per_gap: spacing, max_per_circle: 4096, ..SamplingOptions::default() };
+        let s = samples_of(&d, &opts);
+        check_basic(&d, &s);
+        check_mirror(&d, &s, |p| [-p[0], p[1]], |k, n| (n / 2 + n - k) % n);
+    }
+}
