@@ -2,7 +2,9 @@
 
 use crate::domain::{CircleId, Domain, DomainError};
 use crate::geometry::TriangulationError;
+use crate::grid::{build_grids, GridError};
 use crate::mesh::Mesh;
+use crate::{blocking, templates};
 
 /// Which geometry the blocks are built on.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
@@ -38,6 +40,8 @@ pub enum MeshError {
     Triangulation(#[from] TriangulationError),
     #[error("boundary sampling of circle {circle} did not converge: {message}")]
     Sampling { circle: CircleId, message: String },
+    #[error("grid generation failed: {0}")]
+    Grid(#[from] GridError),
     #[error("invalid options: {0}")]
     Options(String),
     #[error("internal invariant broken (please report this layout): {0}")]
@@ -45,7 +49,43 @@ pub enum MeshError {
 }
 
 /// Mesh `domain` with `options`.
+///
+/// Two or more holes: sampling, exact Delaunay triangulation, medial graph and Blocking2D
+/// ([`crate::blocking`]); no hole (a disk) or one hole (an annulus): the standard templates of
+/// [`crate::templates`]. Then node counts and transfinite interpolation ([`crate::grid`]).
+///
+/// ```
+/// use medial_blocks::{mesh, Domain, Options};
+/// let domain = Domain::hexagon_example();
+/// let mesh = mesh(&domain, &Options::default()).unwrap();
+/// assert_eq!(mesh.layout.blocks.len(), 36); // 6 (h - 1) blocks for h = 7 holes
+/// ```
 pub fn mesh(domain: &Domain, options: &Options) -> Result<Mesh, MeshError> {
-    let _ = (domain, options);
-    todo!("pipeline")
+    if options.cells == 0 {
+        return Err(MeshError::Options(
+            "--cells must be at least 1 (cells along a block side)".into(),
+        ));
+    }
+    let holes = domain.hole_count();
+    let (layout, medial_vertices, medial_arcs) = match holes {
+        0 => (templates::disk(domain.bounding()), 0, 0),
+        1 => (
+            templates::annulus(domain.bounding(), domain.holes()[0]),
+            0,
+            0,
+        ),
+        _ => {
+            let b = blocking::build_layout(domain, options)?;
+            let (v, e) = (b.medial.vertex_count(), b.medial.arc_count());
+            (b.layout, v, e)
+        }
+    };
+    let grids = build_grids(&layout, options.cells)?;
+    Ok(Mesh {
+        layout,
+        grids,
+        medial_vertices,
+        medial_arcs,
+        holes,
+    })
 }
