@@ -3,13 +3,13 @@
 use super::Failure;
 use medial_blocks::connectivity::connectivity;
 use medial_blocks::domain::{Circle, Domain};
-use medial_blocks::output::{connectivity as conn_out, geo, gmsh, plot3d, report, svg, vtk};
+use medial_blocks::output::{connectivity as conn_out, geo, gmsh, plot3d, png, report, svg, vtk};
 use medial_blocks::{mesh, Mesh, Mode, Options};
 use std::collections::BTreeSet;
 use std::path::{Path, PathBuf};
 
 /// The writers `--format` can name.
-pub const FORMATS: [&str; 6] = ["vtk", "plot3d", "gmsh", "svg", "json", "all"];
+pub const FORMATS: [&str; 7] = ["vtk", "plot3d", "gmsh", "svg", "png", "json", "all"];
 const DEFAULT_FORMATS: &str = "vtk,svg,json";
 
 #[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
@@ -29,7 +29,7 @@ Input JSON: {\"bounding\": {\"center\": [x, y], \"radius\": R},
 Input CSV (file name ending in .csv): x,y,r per line (an optional header line is skipped),
   with the bounding circle given by --bounding X,Y,R.
 Files in DIR: mesh.vtm + mesh/*.vts (vtk), mesh.xyz + mesh.p3d (plot3d), mesh.msh + mesh.geo
-  (gmsh), mesh.svg (svg), report.json + connectivity.json (json).
+  (gmsh), mesh.svg (svg), mesh.png (png), report.json + connectivity.json (json).
 Exit codes: 0 success, 1 output could not be written or internal error, 2 bad input.")]
 pub struct Args {
     /// Domain JSON, or a CSV of holes (`x,y,r`); without it, the built-in 7-hole hexagon.
@@ -43,7 +43,7 @@ pub struct Args {
     /// Target number of cells along a block side.
     #[arg(long, default_value_t = 16)]
     pub cells: usize,
-    /// Writers, comma separated: vtk, plot3d, gmsh, svg, json, or all.
+    /// Writers, comma separated: vtk, plot3d, gmsh, svg, png, json, or all.
     #[arg(long, default_value = DEFAULT_FORMATS)]
     pub format: String,
     /// The bounding circle `X,Y,R` for a CSV input.
@@ -59,7 +59,7 @@ pub fn parse_formats(list: &str) -> Result<BTreeSet<&'static str>, Failure> {
     let mut out = BTreeSet::new();
     for item in list.split(',').map(str::trim).filter(|s| !s.is_empty()) {
         match FORMATS.iter().find(|f| **f == item) {
-            Some(&"all") => out.extend(FORMATS[..5].iter().copied()),
+            Some(&"all") => out.extend(FORMATS[..6].iter().copied()),
             Some(f) => {
                 out.insert(*f);
             }
@@ -174,6 +174,9 @@ fn write_all(mesh: &Mesh, dir: &Path, formats: &BTreeSet<&str>) -> std::io::Resu
     }
     if formats.contains("svg") {
         svg::write(mesh, &dir.join("mesh.svg"))?;
+    }
+    if formats.contains("png") {
+        png::write(mesh, &dir.join("mesh.png"))?;
     }
     if formats.contains("json") {
         let conn = connectivity(&mesh.layout, &mesh.grids).map_err(std::io::Error::other)?;

@@ -12,6 +12,7 @@ pub mod connectivity;
 pub mod geo;
 pub mod gmsh;
 pub mod plot3d;
+pub mod png;
 pub mod report;
 pub mod svg;
 pub mod vtk;
