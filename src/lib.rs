@@ -16,17 +16,18 @@
 
 pub mod geometry;
 
-pub mod domain;
-pub mod sampling;
-pub mod medial;
+pub mod apollonius;
 pub mod blocking;
-pub mod templates;
-pub mod layout;
+pub mod domain;
 pub mod grid;
-pub mod quality;
+pub mod layout;
+pub mod medial;
 pub mod mesh;
 pub mod mesher;
 pub mod output;
+pub mod quality;
+pub mod sampling;
+pub mod templates;
 
 pub use domain::{Circle, Domain, DomainError};
 pub use layout::BlockLayout;
