@@ -44,7 +44,7 @@ fn bounding(x: f64, y: f64, r: f64) -> Site {
 /// `F_i = |p - c_i|^2 - (rho + s_i)^2` at the exact root, as `A + B sqrt(D)`, evaluated here from
 /// the components: `(u + v sqrt D)^2 = u^2 + v^2 D + 2 u v sqrt D`.
 fn exact_residual(root: &ExactApollonius, site: &Site) -> (Rational, Rational) {
-    let d = root.d();
+    let d = &root.d();
     let parts = [
         (root.x(), -Rational::from_f64(site.center[0]).unwrap(), 1),
         (root.y(), -Rational::from_f64(site.center[1]).unwrap(), 1),
@@ -54,9 +54,9 @@ fn exact_residual(root: &ExactApollonius, site: &Site) -> (Rational, Rational) {
     let mut b = Rational::new();
     for (v, shift, sgn) in parts {
         let QSqrt { a: va, b: vb } = v;
-        let u = Rational::from(va + &shift);
+        let u = va + &shift;
         let sq_a = Rational::from(u.square_ref()) + Rational::from(vb.square_ref()) * d;
-        let sq_b = Rational::from(&u * vb) * 2u32;
+        let sq_b = Rational::from(&u * &vb) * 2u32;
         if sgn > 0 {
             a += sq_a;
             b += sq_b;
@@ -69,7 +69,7 @@ fn exact_residual(root: &ExactApollonius, site: &Site) -> (Rational, Rational) {
 }
 
 fn assert_exact_root(root: &ExactApollonius) {
-    let d = root.d();
+    let d = &root.d();
     assert!(*d >= 0);
     if *d > 0 {
         // Normalised: a square radicand is folded into the rational part.
@@ -213,8 +213,8 @@ fn integer_triples_with_rational_roots() {
     assert_eq!(ap.radius, 3.0);
     assert_eq!(ap.tangent_points[0], [2.8, 4.4]);
     assert_exact_root(&ap.exact);
-    assert_eq!(*ap.exact.d(), 0); // rational root: D is a square and was folded
-                                  // Same circle with the bounding circle: centre (1, 2) + (3, 4), R = 3 + 5.
+    assert_eq!(ap.exact.d(), 0); // rational root: D is a square and was folded
+                                 // Same circle with the bounding circle: centre (1, 2) + (3, 4), R = 3 + 5.
     let sites = [bounding(4.0, 6.0, 8.0), sites[1], sites[2]];
     let ap = apollonius(sites, Choice::any().near([1.0, 2.0])).unwrap();
     assert_eq!((ap.center, ap.radius), ([1.0, 2.0], 3.0));
@@ -403,7 +403,7 @@ proptest! {
                 prop_assert!(roots.len() <= 2);
                 for r in &roots {
                     assert_exact_root(r);
-                    prop_assert!(r.rho().sign(r.d()) != Sign::Negative);
+                    prop_assert!(r.rho().sign(&r.d()) != Sign::Negative);
                     if let Ok(ap) = r.to_apollonius() {
                         assert_float_root(&ap);
                     }

@@ -321,46 +321,248 @@ fn pow2(k: i64) -> f64 {
 /// The `f64` nearest to the rational `q`, ties to even (IEEE round-to-nearest), with overflow to
 /// `±inf` and gradual underflow. (`rug`'s own `to_f64` truncates.)
 pub fn round_rational(q: &Rational) -> f64 {
-    let negative = q.cmp0() == Ordering::Less;
-    let n = Integer::from(q.numer().abs_ref());
-    let m = q.denom();
+    round_scaled(q.numer(), q.denom(), 0)
+}
+
+/// The `f64` nearest to `num / den * 2^exp` (`den > 0`, the fraction need not be reduced),
+/// ties to even, with overflow to `±inf` and gradual underflow.
+pub fn round_scaled(num: &Integer, den: &Integer, exp: i64) -> f64 {
+    debug_assert!(den.cmp0() == Ordering::Greater);
+    let negative = num.cmp0() == Ordering::Less;
+    let n = Integer::from(num.abs_ref());
     if n.cmp0() == Ordering::Equal {
         return 0.0;
     }
-    // e = floor(log2(n/m)): start from the bit lengths, correct by one.
-    let mut e = i64::from(n.significant_bits()) - i64::from(m.significant_bits());
-    let ge = if e >= 0 {
-        n >= Integer::from(m << (e as u32))
+    // e0 = floor(log2(n/den)): start from the bit lengths, correct by one.
+    let mut e0 = i64::from(n.significant_bits()) - i64::from(den.significant_bits());
+    let ge = if e0 >= 0 {
+        n >= Integer::from(den << (e0 as u32))
     } else {
-        Integer::from(&n << ((-e) as u32)) >= *m
+        Integer::from(&n << ((-e0) as u32)) >= *den
     };
     if !ge {
-        e -= 1;
+        e0 -= 1;
     }
+    let e = e0.saturating_add(exp);
     let mag = if e > 1023 {
         f64::INFINITY
+    } else if e < -1080 {
+        0.0 // below half the smallest subnormal
     } else {
         let e_eff = e.max(-1022);
-        let shift = 52 - e_eff; // m_int = floor(n/m * 2^shift), 2^52 <= m_int < 2^53 when normal
-        let (num, den) = if shift >= 0 {
-            (Integer::from(&n << (shift as u32)), m.clone())
+        // mi = floor(n/den * 2^sh) with 2^52 <= mi < 2^53 when normal.
+        let sh = exp + 52 - e_eff;
+        let (scaled_num, scaled_den) = if sh >= 0 {
+            (n << (sh as u32), den.clone())
         } else {
-            (n, Integer::from(m << ((-shift) as u32)))
+            (n, Integer::from(den << ((-sh) as u32)))
         };
-        let (mut mi, r) = num.div_rem(den.clone());
+        let (mut mi, r) = scaled_num.div_rem(scaled_den.clone());
         let twice_r = r * 2u32;
-        match twice_r.cmp(&den) {
+        match twice_r.cmp(&scaled_den) {
             Ordering::Greater => mi += 1u32,
             Ordering::Equal if mi.is_odd() => mi += 1u32,
             _ => {}
         }
         // mi <= 2^53, exactly representable; the product below is exact unless it overflows.
-        let mf = mi.to_f64();
-        mf * pow2(e_eff - 52)
+        mi.to_f64() * pow2(e_eff - 52)
     };
     if negative {
         -mag
     } else {
         mag
     }
+}
+
+/// The number `a + b sqrt(D)` with integer parts, `D` an integer held by the caller. The solver
+/// works with these over a shared positive denominator, which avoids the gcd of every rational
+/// operation (the dominant cost otherwise).
+#[derive(Debug, Clone, PartialEq, Eq, Hash, Default)]
+pub struct ZSqrt {
+    pub a: Integer,
+    pub b: Integer,
+}
+
+impl ZSqrt {
+    /// `a + b sqrt(D)`.
+    pub fn new(a: Integer, b: Integer) -> ZSqrt {
+        ZSqrt { a, b }
+    }
+
+    /// The integer `a`.
+    pub fn int(a: Integer) -> ZSqrt {
+        ZSqrt {
+            a,
+            b: Integer::new(),
+        }
+    }
+
+    /// Exact sign, as [`QSqrt::sign`].
+    pub fn sign(&self, d: &Integer) -> Sign {
+        let sa: Sign = self.a.cmp0().into();
+        let sb = if d.cmp0() == Ordering::Greater {
+            self.b.cmp0().into()
+        } else {
+            Sign::Zero
+        };
+        match (sa, sb) {
+            (s, Sign::Zero) | (Sign::Zero, s) => s,
+            (x, y) if x == y => x,
+            _ => {
+                let a2 = Integer::from(self.a.square_ref());
+                let b2d = Integer::from(self.b.square_ref()) * d;
+                match a2.cmp(&b2d) {
+                    Ordering::Greater => sa,
+                    Ordering::Less => sb,
+                    Ordering::Equal => Sign::Zero,
+                }
+            }
+        }
+    }
+
+    /// `self * other`.
+    pub fn mul(&self, o: &ZSqrt, d: &Integer) -> ZSqrt {
+        let bb = Integer::from(&self.b * &o.b) * d;
+        ZSqrt {
+            a: Integer::from(&self.a * &o.a) + bb,
+            b: Integer::from(&self.a * &o.b) + Integer::from(&o.a * &self.b),
+        }
+    }
+
+    /// `self^2`.
+    pub fn square(&self, d: &Integer) -> ZSqrt {
+        ZSqrt {
+            a: Integer::from(self.a.square_ref()) + Integer::from(self.b.square_ref()) * d,
+            b: Integer::from(&self.a * &self.b) << 1u32,
+        }
+    }
+
+    /// `k * self` for an integer `k`.
+    pub fn scale(&self, k: &Integer) -> ZSqrt {
+        ZSqrt {
+            a: Integer::from(&self.a * k),
+            b: Integer::from(&self.b * k),
+        }
+    }
+
+    /// `self * 2^k`.
+    pub fn shl(&self, k: u32) -> ZSqrt {
+        ZSqrt {
+            a: Integer::from(&self.a << k),
+            b: Integer::from(&self.b << k),
+        }
+    }
+
+    /// `self + k` for an integer `k`.
+    pub fn add_int(&self, k: &Integer) -> ZSqrt {
+        ZSqrt {
+            a: Integer::from(&self.a + k),
+            b: self.b.clone(),
+        }
+    }
+
+    /// The conjugate `a - b sqrt(D)`.
+    pub fn conj(&self) -> ZSqrt {
+        ZSqrt {
+            a: self.a.clone(),
+            b: Integer::from(-&self.b),
+        }
+    }
+
+    /// The norm `a^2 - b^2 D`.
+    pub fn norm(&self, d: &Integer) -> Integer {
+        Integer::from(self.a.square_ref()) - Integer::from(self.b.square_ref()) * d
+    }
+
+    /// The value `2^exp (a + b sqrt(D)) / den` as a [`QSqrt`] (`den != 0`).
+    pub fn to_qsqrt(&self, den: &Integer, exp: i64) -> QSqrt {
+        let part = |v: &Integer| -> Rational {
+            let q = Rational::from((v.clone(), den.clone()));
+            shift_rational(q, exp)
+        };
+        QSqrt::new(part(&self.a), part(&self.b))
+    }
+
+    /// The `f64` nearest to `2^exp (a + b sqrt(D)) / den` (`den > 0`), ties to even; see
+    /// [`QSqrt::to_f64`] for the bracketing argument and the precision cap.
+    pub fn to_f64(&self, d: &Integer, den: &Integer, exp: i64) -> f64 {
+        if self.b.cmp0() == Ordering::Equal || d.cmp0() != Ordering::Greater {
+            return round_scaled(&self.a, den, exp);
+        }
+        let half = d.significant_bits() / 2;
+        let mut bits = 128u32;
+        loop {
+            // sqrt(D) in [t, t + 1] / 2^k.
+            let k = bits.saturating_sub(half) + 1;
+            let (t, rem) = Integer::from(d << (2 * k)).sqrt_rem(Integer::new());
+            let base = Integer::from(&self.a << k);
+            let lo_t = Integer::from(&base + &self.b * &t);
+            let hi_t = lo_t.clone() + &self.b;
+            let kk = exp - i64::from(k);
+            let fl = round_scaled(&lo_t, den, kk);
+            if rem.cmp0() == Ordering::Equal {
+                return fl; // D is a square: the bracket is exact
+            }
+            let fh = round_scaled(&hi_t, den, kk);
+            if fl == fh || bits >= 1 << 16 {
+                return fl;
+            }
+            bits *= 2;
+        }
+    }
+}
+
+impl Add for &ZSqrt {
+    type Output = ZSqrt;
+    fn add(self, o: &ZSqrt) -> ZSqrt {
+        ZSqrt {
+            a: Integer::from(&self.a + &o.a),
+            b: Integer::from(&self.b + &o.b),
+        }
+    }
+}
+
+impl Sub for &ZSqrt {
+    type Output = ZSqrt;
+    fn sub(self, o: &ZSqrt) -> ZSqrt {
+        ZSqrt {
+            a: Integer::from(&self.a - &o.a),
+            b: Integer::from(&self.b - &o.b),
+        }
+    }
+}
+
+impl Sub<&ZSqrt> for ZSqrt {
+    type Output = ZSqrt;
+    fn sub(self, o: &ZSqrt) -> ZSqrt {
+        &self - o
+    }
+}
+
+/// `q * 2^exp`.
+pub fn shift_rational(q: Rational, exp: i64) -> Rational {
+    if exp >= 0 {
+        q << (exp as u32)
+    } else {
+        q >> ((-exp) as u32)
+    }
+}
+
+/// `v = n * 2^e` with integer `n` (`None` for non-finite `v`).
+pub fn dyadic(v: f64) -> Option<(Integer, i64)> {
+    let q = Rational::from_f64(v)?;
+    let k = i64::from(q.denom().significant_bits()) - 1; // the denominator is 2^k
+    let (n, _) = q.into_numer_denom();
+    Some((n, -k))
+}
+
+/// Bring dyadics `n_i 2^{e_i}` to one scale: integers `N_i` and `E = min e_i` with
+/// `n_i 2^{e_i} = N_i 2^E`.
+pub fn common_scale(vals: &[(Integer, i64)]) -> (Vec<Integer>, i64) {
+    let e = vals.iter().map(|v| v.1).min().unwrap_or(0);
+    let ints = vals
+        .iter()
+        .map(|(n, ei)| Integer::from(n << ((ei - e) as u32)))
+        .collect();
+    (ints, e)
 }

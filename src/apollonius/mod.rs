@@ -39,7 +39,6 @@ pub mod predicate;
 pub mod solve;
 
 use crate::domain::Circle;
-use rug::Rational;
 use serde::{Deserialize, Serialize};
 
 pub use exact::{QSqrt, Sign};
@@ -98,11 +97,5 @@ impl Site {
     /// True when the centre and `s` are finite.
     pub fn is_finite(&self) -> bool {
         self.center[0].is_finite() && self.center[1].is_finite() && self.s.is_finite()
-    }
-
-    /// `[x, y, s]` as exact rationals.
-    pub(crate) fn rationals(&self) -> Result<[Rational; 3], ApolloniusError> {
-        let r = |v: f64| Rational::from_f64(v).ok_or(ApolloniusError::NonFinite);
-        Ok([r(self.center[0])?, r(self.center[1])?, r(self.s)?])
     }
 }

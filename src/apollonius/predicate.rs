@@ -24,11 +24,11 @@
 //! filter never certifies `Zero`. Its relative width is a few ulps of `|p - c_l|^2 + sigma^2`, so
 //! on random input the exact path essentially never runs.
 
-use super::exact::{eq_across, QSqrt, Sign};
+use super::exact::{eq_across, QSqrt, Sign, ZSqrt};
 use super::interval::{next_down, next_up, Interval};
 use super::solve::{apollonius_roots, ApolloniusError, ExactApollonius};
 use super::Site;
-use rug::Rational;
+use rug::Integer;
 
 /// Which evaluation decided a predicate (for tests and statistics).
 #[doc(hidden)]
@@ -89,14 +89,21 @@ pub fn tangency_filter(root: &ExactApollonius, l: &Site) -> Option<Sign> {
 }
 
 /// The exact evaluation in `Q(sqrt D)`, no filter.
+///
+/// In the root's integer frame rescaled to the site's exponent `e`:
+/// `den (p - c_l) / 2^e` and `den sigma / 2^e` are integer `a + b sqrt(disc)`, so
+/// `den^2 f / 4^e` is one too, with the sign of `f` (`den > 0`).
 #[doc(hidden)]
 pub fn tangency_exact(root: &ExactApollonius, l: &Site) -> Result<Sign, ApolloniusError> {
-    let [cx, cy, s] = l.rationals()?;
-    let d = root.d();
-    let dx = root.x().add_rational(&Rational::from(-&cx));
-    let dy = root.y().add_rational(&Rational::from(-&cy));
-    let sigma = root.rho().add_rational(&s);
-    let f = dx.square(d) + &dy.square(d) - &sigma.square(d);
+    let (num, ints, _) = root
+        .rescaled(&[l.center[0], l.center[1], l.s])
+        .ok_or(ApolloniusError::NonFinite)?;
+    let (_, d, den, _) = root.frame();
+    let shifted = |z: &ZSqrt, v: &Integer| z.add_int(&Integer::from(den * v));
+    let dx = shifted(&num[0], &Integer::from(-&ints[0]));
+    let dy = shifted(&num[1], &Integer::from(-&ints[1]));
+    let sigma = shifted(&num[2], &ints[2]);
+    let f = &(&dx.square(d) + &dy.square(d)) - &sigma.square(d);
     Ok(if l.is_bounding() {
         match sigma.sign(d) {
             Sign::Positive => Sign::Negative,
@@ -126,7 +133,8 @@ pub fn cocircular(sites: [Site; 4]) -> Result<bool, ApolloniusError> {
 /// Exact equality of two Apollonius circles, possibly from different triples and quadratic
 /// fields: equal centres and radii as real numbers.
 pub fn same_circle(x: &ExactApollonius, y: &ExactApollonius) -> bool {
-    let eq = |a: &QSqrt, b: &QSqrt| eq_across(a, x.d(), b, y.d());
+    let (dx, dy) = (x.d(), y.d());
+    let eq = |a: &QSqrt, b: &QSqrt| eq_across(a, &dx, b, &dy);
     // Cheap rejection on the rounded values: equal reals round to equal floats (to within one
     // ulp even if a conversion hit its precision cap).
     let near = |a: f64, b: f64| a == b || next_up(a) == b || next_down(a) == b;
@@ -134,7 +142,7 @@ pub fn same_circle(x: &ExactApollonius, y: &ExactApollonius) -> bool {
     near(cx[0], cy[0])
         && near(cx[1], cy[1])
         && near(x.radius_f64(), y.radius_f64())
-        && eq(x.rho(), y.rho())
-        && eq(x.x(), y.x())
-        && eq(x.y(), y.y())
+        && eq(&x.rho(), &y.rho())
+        && eq(&x.x(), &y.x())
+        && eq(&x.y(), &y.y())
 }
