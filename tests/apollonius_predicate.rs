@@ -413,9 +413,9 @@ fn newton(sites: &[Site; 3], p0: [f64; 2], rho0: f64) -> Option<[Integer; 3]> {
 
 /// Clearance sign from the oracle, `None` when the value is within its error (2^-300).
 fn oracle_sign(u: &[Integer; 3], l: &Site) -> Option<Sign> {
-    let dx = Integer::from(&u[0] - fx(l.center[0]));
-    let dy = Integer::from(&u[1] - fx(l.center[1]));
-    let sigma = Integer::from(&u[2] + fx(l.s));
+    let dx = &u[0] - fx(l.center[0]);
+    let dy = &u[1] - fx(l.center[1]);
+    let sigma = &u[2] + fx(l.s);
     let g = fmul(&dx, &dx) + fmul(&dy, &dy) - fmul(&sigma, &sigma);
     let tol = Integer::from(1) << (P - 300);
     if g.clone().abs() <= tol {
