@@ -17,17 +17,17 @@
 pub mod geometry;
 
 pub mod apollonius;
-pub mod blocking;
 pub mod domain;
-pub mod grid;
-pub mod layout;
+pub mod sampling;
 pub mod medial;
+pub mod blocking;
+pub mod templates;
+pub mod layout;
+pub mod grid;
+pub mod quality;
 pub mod mesh;
 pub mod mesher;
 pub mod output;
-pub mod quality;
-pub mod sampling;
-pub mod templates;
 
 pub use domain::{Circle, Domain, DomainError};
 pub use layout::BlockLayout;
