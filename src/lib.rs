@@ -16,6 +16,7 @@
 
 pub mod geometry;
 
+pub mod apollonius;
 pub mod blocking;
 pub mod connectivity;
 pub mod domain;

@@ -1,0 +1,119 @@
+//! Minimal interval arithmetic on `f64` for the predicate's floating-point filter.
+//!
+//! Directed rounding is emulated: every operation is done in round-to-nearest and the result is
+//! widened outwards by one ulp (`next_down` / `next_up`). Round-to-nearest makes an error of at
+//! most half an ulp, so the widened interval contains the exact result of the operation on the
+//! interval endpoints; by induction every interval contains the exact value of the expression.
+//! Overflow gives infinite endpoints (still valid bounds); `inf - inf` gives `NaN`, and an
+//! interval with a `NaN` endpoint decides nothing.
+
+use super::exact::Sign;
+
+/// The next `f64` above `x` (`x` itself for `+inf` and `NaN`).
+pub(crate) fn next_up(x: f64) -> f64 {
+    if x.is_nan() || x == f64::INFINITY {
+        return x;
+    }
+    if x == 0.0 {
+        return f64::from_bits(1);
+    }
+    let bits = x.to_bits();
+    if x > 0.0 {
+        f64::from_bits(bits + 1)
+    } else {
+        f64::from_bits(bits - 1)
+    }
+}
+
+/// The next `f64` below `x`.
+pub(crate) fn next_down(x: f64) -> f64 {
+    -next_up(-x)
+}
+
+/// A closed interval `[lo, hi]` known to contain an exact real value.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct Interval {
+    pub lo: f64,
+    pub hi: f64,
+}
+
+impl Interval {
+    /// The exact value `x` (a point interval).
+    pub fn point(x: f64) -> Interval {
+        Interval { lo: x, hi: x }
+    }
+
+    /// An interval containing every real whose nearest `f64` is `x` (or that `x` brackets within
+    /// one ulp): `[next_down(x), next_up(x)]`.
+    pub fn around(x: f64) -> Interval {
+        Interval {
+            lo: next_down(x),
+            hi: next_up(x),
+        }
+    }
+
+    fn widen(lo: f64, hi: f64) -> Interval {
+        Interval {
+            lo: next_down(lo),
+            hi: next_up(hi),
+        }
+    }
+
+    pub fn add(self, o: Interval) -> Interval {
+        Interval::widen(self.lo + o.lo, self.hi + o.hi)
+    }
+
+    pub fn sub(self, o: Interval) -> Interval {
+        Interval::widen(self.lo - o.hi, self.hi - o.lo)
+    }
+
+    /// `x^2`, which is `>= 0` also when the interval straddles 0.
+    pub fn square(self) -> Interval {
+        let (a, b) = (self.lo.abs(), self.hi.abs());
+        let (small, big) = if a <= b { (a, b) } else { (b, a) };
+        let lo = if self.lo <= 0.0 && self.hi >= 0.0 {
+            0.0
+        } else {
+            next_down(small * small).max(0.0)
+        };
+        Interval {
+            lo,
+            hi: next_up(big * big),
+        }
+    }
+
+    /// The sign when every point of the interval has it; `None` when undecided (contains 0 or
+    /// has a `NaN` endpoint). A zero is never certified by the filter.
+    pub fn sign(self) -> Option<Sign> {
+        if self.lo > 0.0 {
+            Some(Sign::Positive)
+        } else if self.hi < 0.0 {
+            Some(Sign::Negative)
+        } else {
+            None
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn next_up_down() {
+        assert_eq!(next_up(1.0), 1.0 + f64::EPSILON);
+        assert_eq!(next_down(1.0), 1.0 - f64::EPSILON / 2.0);
+        assert_eq!(next_up(-0.0), f64::from_bits(1));
+        assert_eq!(next_down(0.0), -f64::from_bits(1));
+        assert_eq!(next_up(f64::MAX), f64::INFINITY);
+        assert_eq!(next_down(f64::INFINITY), f64::MAX);
+        assert!(next_up(f64::NAN).is_nan());
+    }
+
+    #[test]
+    fn nan_decides_nothing() {
+        let i = Interval::point(f64::INFINITY).sub(Interval::point(f64::INFINITY));
+        assert_eq!(i.sign(), None);
+        assert_eq!(Interval::around(1.0).sign(), Some(Sign::Positive));
+    }
+}

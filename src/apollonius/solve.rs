@@ -1,0 +1,471 @@
+//! The exact Apollonius solve: every circle tangent to three sites with the right senses.
+//!
+//! For sites `(c_i, s_i)`, `i = 0, 1, 2`, the unknowns are `u = (x, y, rho)` and the squared
+//! tangency equations are
+//!
+//! ```text
+//! F_i(u) = (x - x_i)^2 + (y - y_i)^2 - (rho + s_i)^2 = 0.
+//! ```
+//!
+//! `F_j - F_0` is linear: `(x_j - x_0) x + (y_j - y_0) y + (s_j - s_0) rho = (k_j - k_0) / 2` with
+//! `k_i = x_i^2 + y_i^2 - s_i^2`, for `j = 1, 2`: a 2x3 system `M u = h` over the rationals (every
+//! `f64` is an exact dyadic rational). Its rank is decided exactly from the three 2x2 minors:
+//!
+//! - rank 2: pick the first non-zero minor in the order `(x, y)`, `(x, rho)`, `(y, rho)`; those two
+//!   unknowns are affine in the remaining one `t` (`rho` unless the centres are collinear), so
+//!   `u = u0 + t u1`. Substituting into `F_0` gives `A t^2 + B t + C = 0` with rational `A, B, C`;
+//!   the roots lie in `Q(sqrt D)`, `D = B^2 - 4AC` (`D` a rational square is folded into the
+//!   rational part, so a stored `D > 0` is never a square). `A = B = C = 0` is a continuum.
+//! - rank <= 1: either inconsistent (no circle) or a continuum of circles
+//!   ([`ApolloniusError::Continuum`]); this covers coincident sites and three equal circles in a
+//!   row (whose "tangent circles" are the common tangent lines).
+//!
+//! A root is *valid* when `rho >= 0` and for every site `sigma_i = rho + s_i` has the site's sense:
+//! `sigma_i >= 0` for a hole (`|p - c_i| = rho + r_i`, external tangency) and `sigma_i <= 0` for the
+//! bounding circle (`|p - c_0| = R - rho`, internal tangency). All tests are exact.
+//!
+//! Tangent points: `a_i = p + rho (c_i - p) / sigma_i` (the unit vector `(c_i - p) / sigma_i`
+//! points from `p` towards the tangent point, towards `c_i` for a hole and away from `c_0` for the
+//! bounding circle), an element of `Q(sqrt D)` too since `|p - c_i| = |sigma_i|`. It is undefined
+//! when `sigma_i = 0` and `rho > 0`, which for valid input means the circle *is* the bounding
+//! circle. The orientation of a root is the orientation of its three unit vectors (equivalently
+//! of its three tangent points when `rho > 0`): with `u_i = c_i - p` it is
+//! `sign(sigma_0 sigma_1 sigma_2) * sign(sigma_2 u_0 x u_1 + sigma_0 u_1 x u_2 + sigma_1 u_2 x u_0)`,
+//! and `Zero` when some `sigma_i = 0`.
+
+use super::exact::{common_scale, dyadic, QSqrt, Sign, ZSqrt};
+use super::Site;
+use rug::{Integer, Rational};
+use std::cmp::Ordering;
+
+/// Why the Apollonius solve (or a derived query) has no single answer.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, thiserror::Error)]
+pub enum ApolloniusError {
+    /// A site has a non-finite centre coordinate or radius.
+    #[error("a site has a non-finite centre or radius")]
+    NonFinite,
+    /// The three sites admit infinitely many tangent circles (coincident sites, or a degenerate
+    /// configuration such as three concentric or otherwise dependent circles).
+    #[error("the three sites admit a continuum of tangent circles")]
+    Continuum,
+    /// No circle is tangent to the three sites with the required senses (and orientation).
+    #[error("no circle is tangent to the three sites with the required senses")]
+    NoCircle,
+    /// The circle is the bounding circle itself, so its tangent point there is undefined.
+    #[error("tangent point undefined: the circle coincides with the bounding circle")]
+    UndefinedTangentPoint,
+}
+
+/// One exact Apollonius circle of three sites: centre `(x, y)` and radius `rho` in `Q(sqrt D)`.
+///
+/// Stored in a common integer frame: each of `x, y, rho` is `2^exp (a + b sqrt(disc)) / den`
+/// with integers `a, b`, a shared `den > 0` and an integer `disc >= 0` that is `0` or not a
+/// perfect square. Built only by [`apollonius_roots`], so it is always a *valid* root (see the
+/// module docs); the `f64` approximations are the correctly rounded values of the exact ones.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ExactApollonius {
+    sites: [Site; 3],
+    exp: i64,
+    disc: Integer,
+    den: Integer,
+    num: [ZSqrt; 3],
+    approx: [f64; 3],
+    orientation: Sign,
+}
+
+impl ExactApollonius {
+    /// The three sites, in the order they were given.
+    pub fn sites(&self) -> &[Site; 3] {
+        &self.sites
+    }
+    /// The radicand `D >= 0` of [`x`](Self::x), [`y`](Self::y), [`rho`](Self::rho) (`0` when the
+    /// root is rational; otherwise not the square of a rational).
+    pub fn d(&self) -> Rational {
+        Rational::from(&self.disc)
+    }
+    /// Centre x-coordinate, `a + b sqrt(D)`.
+    pub fn x(&self) -> QSqrt {
+        self.num[0].to_qsqrt(&self.den, self.exp)
+    }
+    /// Centre y-coordinate.
+    pub fn y(&self) -> QSqrt {
+        self.num[1].to_qsqrt(&self.den, self.exp)
+    }
+    /// Radius `rho >= 0`.
+    pub fn rho(&self) -> QSqrt {
+        self.num[2].to_qsqrt(&self.den, self.exp)
+    }
+    /// The correctly rounded centre.
+    pub fn center_f64(&self) -> [f64; 2] {
+        [self.approx[0], self.approx[1]]
+    }
+    /// The correctly rounded radius.
+    pub fn radius_f64(&self) -> f64 {
+        self.approx[2]
+    }
+    /// Orientation of the three tangent directions in site order (`Positive`: counter-clockwise
+    /// around the centre); `Zero` when one is undefined.
+    pub fn orientation(&self) -> Sign {
+        self.orientation
+    }
+
+    /// The integer frame: `(exp, disc, den, [x, y, rho] numerators)`.
+    pub(crate) fn frame(&self) -> (i64, &Integer, &Integer, &[ZSqrt; 3]) {
+        (self.exp, &self.disc, &self.den, &self.num)
+    }
+
+    /// Numerators of `x, y, rho` and integers for `extra` values, in one frame of exponent
+    /// `e' <= exp`: every returned number times `2^e' / den` (root) or `2^e'` (extra) is the value.
+    pub(crate) fn rescaled(&self, extra: &[f64]) -> Option<([ZSqrt; 3], Vec<Integer>, i64)> {
+        let vals = extra
+            .iter()
+            .map(|&v| dyadic(v))
+            .collect::<Option<Vec<_>>>()?;
+        let e = vals.iter().map(|v| v.1).fold(self.exp, i64::min);
+        let (ints, _) = common_scale(&[vals, vec![(Integer::new(), e)]].concat());
+        let up = (self.exp - e) as u32;
+        let num = [
+            self.num[0].shl(up),
+            self.num[1].shl(up),
+            self.num[2].shl(up),
+        ];
+        Some((num, ints[..extra.len()].to_vec(), e))
+    }
+
+    /// The tangent point on site `i` as a numerator over `den'` in this root's exponent:
+    /// `a_i = p + rho (c_i - p) / sigma_i`, i.e. with `U = den c_i - P`, `S = R + den s_i`,
+    /// `a_i = 2^exp (P N(S) + R U conj(S)) / (den N(S))`. `None` when undefined.
+    fn tangent_point_frac(&self, i: usize) -> Option<([ZSqrt; 2], Integer)> {
+        let site = self.sites.get(i)?;
+        let (num, ints, e) = self.rescaled(&[site.center[0], site.center[1], site.s])?;
+        let d = &self.disc;
+        let [px, py, r] = num;
+        if r.sign(d) == Sign::Zero {
+            return Some(([px, py], self.den.clone()));
+        }
+        let sig = r.add_int(&Integer::from(&self.den * &ints[2]));
+        let n = sig.norm(d);
+        if n.cmp0() == Ordering::Equal {
+            return None;
+        }
+        let f = r.mul(&sig.conj(), d);
+        let coord = |p: &ZSqrt, c: &Integer| -> ZSqrt {
+            let u = ZSqrt::int(Integer::from(&self.den * c)) - p;
+            &p.scale(&n) + &u.mul(&f, d)
+        };
+        let (mut ax, mut ay) = (coord(&px, &ints[0]), coord(&py, &ints[1]));
+        let mut den = Integer::from(&self.den * &n);
+        if den.cmp0() == Ordering::Less {
+            den = -den;
+            ax = ZSqrt::new(-ax.a, -ax.b);
+            ay = ZSqrt::new(-ay.a, -ay.b);
+        }
+        // The frame exponent e may be below exp: scale the denominator to compensate.
+        let fix = (self.exp - e) as u32;
+        Some(([ax, ay], den << fix))
+    }
+
+    /// The exact tangent point on site `i` (`None` when undefined: the circle is the bounding
+    /// circle). For `rho = 0` it is the centre.
+    pub fn tangent_point_exact(&self, i: usize) -> Option<[QSqrt; 2]> {
+        let ([ax, ay], den) = self.tangent_point_frac(i)?;
+        Some([ax.to_qsqrt(&den, self.exp), ay.to_qsqrt(&den, self.exp)])
+    }
+
+    /// The rounded [`Apollonius`] circle with its tangent points.
+    pub fn to_apollonius(&self) -> Result<Apollonius, ApolloniusError> {
+        let mut tangent_points = [[0.0; 2]; 3];
+        for (i, t) in tangent_points.iter_mut().enumerate() {
+            let ([ax, ay], den) = self
+                .tangent_point_frac(i)
+                .ok_or(ApolloniusError::UndefinedTangentPoint)?;
+            *t = [
+                ax.to_f64(&self.disc, &den, self.exp),
+                ay.to_f64(&self.disc, &den, self.exp),
+            ];
+        }
+        Ok(Apollonius {
+            center: self.center_f64(),
+            radius: self.radius_f64(),
+            tangent_points,
+            exact: self.clone(),
+        })
+    }
+}
+
+/// An Apollonius circle rounded to `f64` (each value correctly rounded from the exact one).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Apollonius {
+    pub center: [f64; 2],
+    pub radius: f64,
+    /// Tangent point on each site, in site order.
+    pub tangent_points: [[f64; 2]; 3],
+    pub exact: ExactApollonius,
+}
+
+/// How to pick one root when the three sites have two valid Apollonius circles.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct Choice {
+    /// Keep only roots whose tangent points, in site order, have this orientation (`Positive`:
+    /// counter-clockwise around the centre, as the vertices of a CCW Delaunay triangle).
+    pub orientation: Option<Sign>,
+    /// Among the remaining roots prefer the one whose centre is nearest to this point (e.g. the
+    /// Delaunay triangle's circumcentre). Compared exactly; ignored if not finite.
+    pub hint: Option<[f64; 2]>,
+}
+
+impl Choice {
+    /// Any valid root; with two, the smaller radius.
+    pub fn any() -> Choice {
+        Choice::default()
+    }
+    /// Tangent points counter-clockwise in site order.
+    pub fn ccw() -> Choice {
+        Choice {
+            orientation: Some(Sign::Positive),
+            hint: None,
+        }
+    }
+    /// Prefer the root nearest `hint`.
+    #[must_use]
+    pub fn near(mut self, hint: [f64; 2]) -> Choice {
+        self.hint = Some(hint);
+        self
+    }
+}
+
+/// 2x2 determinant of two columns.
+fn det(a: [&Integer; 2], b: [&Integer; 2]) -> Integer {
+    Integer::from(a[0] * b[1]) - Integer::from(a[1] * b[0])
+}
+
+/// Lorentz form `<u, v> = u_x v_x + u_y v_y - u_r v_r`.
+fn lorentz(u: &[Integer; 3], v: &[Integer; 3]) -> Integer {
+    Integer::from(&u[0] * &v[0]) + Integer::from(&u[1] * &v[1]) - Integer::from(&u[2] * &v[2])
+}
+
+/// All valid Apollonius circles of three sites (0, 1 or 2), by increasing radius.
+///
+/// Computed in integers: all nine inputs are scaled by one power of two to integers
+/// `X_i, Y_i, S_i`; then `2 (X_j - X_0, Y_j - Y_0, S_j - S_0) . u = K_j - K_0` with minor `m`
+/// gives `m u = U0 + t U1` (integer vectors), and `m^2 F_0 = A t^2 + B t + C` with integers
+/// `A = <U1, U1>`, `B = 2 <E, U1>`, `C = <E, E>`, `E = U0 - m (X_0, Y_0, -S_0)` in the Lorentz
+/// form `<u, v> = u_x v_x + u_y v_y - u_r v_r`. A root `t = (-B ± sqrt(disc)) / 2A` gives
+/// `u = (2A U0 - B U1 ± U1 sqrt(disc)) / (2A m)`.
+pub fn apollonius_roots(sites: &[Site; 3]) -> Result<Vec<ExactApollonius>, ApolloniusError> {
+    let mut vals = Vec::with_capacity(9);
+    for s in sites {
+        for v in [s.center[0], s.center[1], s.s] {
+            vals.push(dyadic(v).ok_or(ApolloniusError::NonFinite)?);
+        }
+    }
+    let (ints, exp) = common_scale(&vals);
+    let q: [[Integer; 3]; 3] = [0, 1, 2].map(|i| [0, 1, 2].map(|c| ints[3 * i + c].clone()));
+    let k = |i: usize| -> Integer {
+        let [x, y, s] = &q[i];
+        Integer::from(x.square_ref()) + Integer::from(y.square_ref())
+            - Integer::from(s.square_ref())
+    };
+    let k0 = k(0);
+    let mut m: [[Integer; 3]; 2] = Default::default();
+    let mut h: [Integer; 2] = Default::default();
+    for j in 0..2 {
+        for c in 0..3 {
+            m[j][c] = Integer::from(&q[j + 1][c] - &q[0][c]) << 1u32;
+        }
+        h[j] = k(j + 1) - &k0;
+    }
+    let col = |c: usize| -> [&Integer; 2] { [&m[0][c], &m[1][c]] };
+    let hcol = [&h[0], &h[1]];
+    let pivot = [(0usize, 1usize, 2usize), (0, 2, 1), (1, 2, 0)]
+        .into_iter()
+        .map(|(p, r, f)| (p, r, f, det(col(p), col(r))))
+        .find(|t| t.3.cmp0() != Ordering::Equal);
+    let Some((pc, qc, fc, minor)) = pivot else {
+        // Rank <= 1: consistent iff every minor of the augmented matrix vanishes.
+        let rows_zero = m.iter().flatten().all(|v| v.cmp0() == Ordering::Equal);
+        let consistent = if rows_zero {
+            h.iter().all(|v| v.cmp0() == Ordering::Equal)
+        } else {
+            (0..3).all(|c| det(col(c), hcol).cmp0() == Ordering::Equal)
+        };
+        return if consistent {
+            Err(ApolloniusError::Continuum)
+        } else {
+            Ok(Vec::new())
+        };
+    };
+    let mut u0: [Integer; 3] = Default::default();
+    let mut u1: [Integer; 3] = Default::default();
+    u0[pc] = det(hcol, col(qc));
+    u1[pc] = -det(col(fc), col(qc));
+    u0[qc] = det(col(pc), hcol);
+    u1[qc] = -det(col(pc), col(fc));
+    u1[fc] = minor.clone();
+    let e = [
+        Integer::from(&u0[0] - &minor * &q[0][0]),
+        Integer::from(&u0[1] - &minor * &q[0][1]),
+        Integer::from(&u0[2] + &minor * &q[0][2]),
+    ];
+    let a = lorentz(&u1, &u1);
+    let b = lorentz(&e, &u1) << 1u32;
+    let c = lorentz(&e, &e);
+    // Candidate roots: (numerators, den, disc) with u = num / den.
+    let combine = |p: &Integer, r: &Integer, i: usize| -> Integer {
+        Integer::from(p * &u0[i]) + Integer::from(r * &u1[i])
+    };
+    let mut cands: Vec<([ZSqrt; 3], Integer, Integer)> = Vec::new();
+    if a.cmp0() == Ordering::Equal {
+        if b.cmp0() == Ordering::Equal {
+            if c.cmp0() == Ordering::Equal {
+                return Err(ApolloniusError::Continuum);
+            }
+        } else {
+            // t = -C/B: u = (B U0 - C U1) / (B m).
+            let nc = Integer::from(-&c);
+            let num = [0, 1, 2].map(|i| ZSqrt::int(combine(&b, &nc, i)));
+            cands.push((num, Integer::from(&b * &minor), Integer::new()));
+        }
+    } else {
+        let disc = Integer::from(b.square_ref()) - Integer::from(&a * &c) * 4u32;
+        let two_a = Integer::from(&a << 1u32);
+        let den = Integer::from(&two_a * &minor);
+        let nb = Integer::from(-&b);
+        match disc.cmp0() {
+            Ordering::Less => {}
+            Ordering::Equal => {
+                let num = [0, 1, 2].map(|i| ZSqrt::int(combine(&two_a, &nb, i)));
+                cands.push((num, den, Integer::new()));
+            }
+            Ordering::Greater => {
+                let (root, rem) = disc.clone().sqrt_rem(Integer::new());
+                if rem.cmp0() == Ordering::Equal {
+                    for r in [Integer::from(&nb - &root), Integer::from(&nb + &root)] {
+                        let num = [0, 1, 2].map(|i| ZSqrt::int(combine(&two_a, &r, i)));
+                        cands.push((num, den.clone(), Integer::new()));
+                    }
+                } else {
+                    for sgn in [-1i32, 1] {
+                        let num = [0, 1, 2].map(|i| {
+                            ZSqrt::new(combine(&two_a, &nb, i), Integer::from(&u1[i] * sgn))
+                        });
+                        cands.push((num, den.clone(), disc.clone()));
+                    }
+                }
+            }
+        }
+    }
+    let mut roots: Vec<ExactApollonius> = cands
+        .into_iter()
+        .filter_map(|(num, den, disc)| build_root(sites, &q, exp, disc, den, num))
+        .collect();
+    // Roots of one solve share den and disc (both positive after normalisation).
+    roots.sort_by(|r1, r2| Ordering::from((&r1.num[2] - &r2.num[2]).sign(&r1.disc)));
+    Ok(roots)
+}
+
+/// Validate a candidate root and compute its orientation and rounded values.
+fn build_root(
+    sites: &[Site; 3],
+    q: &[[Integer; 3]; 3],
+    exp: i64,
+    disc: Integer,
+    mut den: Integer,
+    mut num: [ZSqrt; 3],
+) -> Option<ExactApollonius> {
+    if den.cmp0() == Ordering::Less {
+        den = -den;
+        num = num.map(|z| ZSqrt::new(-z.a, -z.b));
+    }
+    let d = &disc;
+    if num[2].sign(d) == Sign::Negative {
+        return None;
+    }
+    // den sigma_i / 2^exp = R + den S_i.
+    let sig: Vec<ZSqrt> = q
+        .iter()
+        .map(|qi| num[2].add_int(&Integer::from(&den * &qi[2])))
+        .collect();
+    let sig_signs: Vec<Sign> = sig.iter().map(|s| s.sign(d)).collect();
+    for (site, s) in sites.iter().zip(&sig_signs) {
+        let ok = match s {
+            Sign::Zero => true,
+            Sign::Positive => !site.is_bounding(),
+            Sign::Negative => site.is_bounding(),
+        };
+        if !ok {
+            return None;
+        }
+    }
+    let orientation = if sig_signs.contains(&Sign::Zero) {
+        Sign::Zero
+    } else {
+        // den (c_i - p) / 2^exp.
+        let u: Vec<[ZSqrt; 2]> = q
+            .iter()
+            .map(|qi| {
+                [
+                    ZSqrt::int(Integer::from(&den * &qi[0])) - &num[0],
+                    ZSqrt::int(Integer::from(&den * &qi[1])) - &num[1],
+                ]
+            })
+            .collect();
+        let cross =
+            |a: &[ZSqrt; 2], b: &[ZSqrt; 2]| -> ZSqrt { &a[0].mul(&b[1], d) - &a[1].mul(&b[0], d) };
+        let t0 = sig[2].mul(&cross(&u[0], &u[1]), d);
+        let t1 = sig[0].mul(&cross(&u[1], &u[2]), d);
+        let t2 = sig[1].mul(&cross(&u[2], &u[0]), d);
+        let total = &(&t0 + &t1) + &t2;
+        let den_sign = sig_signs[0].times(sig_signs[1]).times(sig_signs[2]);
+        total.sign(d).times(den_sign)
+    };
+    let approx = [0, 1, 2].map(|i| num[i].to_f64(d, &den, exp));
+    Some(ExactApollonius {
+        sites: *sites,
+        exp,
+        disc,
+        den,
+        num,
+        approx,
+        orientation,
+    })
+}
+
+/// Pick one root per `choice`: filter by orientation, then nearest to the hint (exact
+/// comparison of squared distances), then the smaller radius. `None` when no root remains.
+pub fn choose(roots: Vec<ExactApollonius>, choice: Choice) -> Option<ExactApollonius> {
+    let mut kept: Vec<ExactApollonius> = roots
+        .into_iter()
+        .filter(|r| choice.orientation.map_or(true, |o| r.orientation == o))
+        .collect();
+    if kept.len() >= 2 {
+        if let Some(h) = choice.hint {
+            // den^2 |p - h|^2 / 4^e in each root's rescaled frame; roots of one solve share
+            // exp, den and disc, so the frames agree.
+            let dist2 = |r: &ExactApollonius| -> Option<ZSqrt> {
+                let (num, hs, _) = r.rescaled(&h)?;
+                let dx = num[0].add_int(&(-Integer::from(&r.den * &hs[0])));
+                let dy = num[1].add_int(&(-Integer::from(&r.den * &hs[1])));
+                Some(&dx.square(&r.disc) + &dy.square(&r.disc))
+            };
+            let keyed: Option<Vec<ZSqrt>> = kept.iter().map(dist2).collect();
+            if let Some(keys) = keyed {
+                let mut idx: Vec<usize> = (0..kept.len()).collect();
+                let disc = kept[0].disc.clone();
+                // Stable: ties keep the smaller radius first.
+                idx.sort_by(|&i, &j| Ordering::from((&keys[i] - &keys[j]).sign(&disc)));
+                let first = idx[0];
+                return Some(kept.swap_remove(first));
+            }
+        }
+    }
+    kept.into_iter().next()
+}
+
+/// The Apollonius circle of three sites selected by `choice`, rounded, with tangent points.
+pub fn apollonius(sites: [Site; 3], choice: Choice) -> Result<Apollonius, ApolloniusError> {
+    let roots = apollonius_roots(&sites)?;
+    choose(roots, choice)
+        .ok_or(ApolloniusError::NoCircle)?
+        .to_apollonius()
+}
