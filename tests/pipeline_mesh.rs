@@ -38,10 +38,20 @@ fn layout(seed: u64, h: usize, min_gap: f64) -> Domain {
             dd - r - o.radius > min_gap * big_r
         });
         if ok {
-            holes.push(Circle { center: c, radius: r });
+            holes.push(Circle {
+                center: c,
+                radius: r,
+            });
         }
     }
-    Domain::bounded(Circle { center, radius: big_r }, holes).expect("generated layout is valid")
+    Domain::bounded(
+        Circle {
+            center,
+            radius: big_r,
+        },
+        holes,
+    )
+    .expect("generated layout is valid")
 }
 
 fn key(p: [f64; 2]) -> (u64, u64) {
@@ -75,7 +85,14 @@ fn shoelace(p: &[[f64; 2]]) -> f64 {
 
 /// Every check of this file on one domain; returns the mesh.
 fn check(domain: &Domain, cells: usize) -> Mesh {
-    let m = mesh(domain, &Options { cells, ..Options::default() }).expect("mesh");
+    let m = mesh(
+        domain,
+        &Options {
+            cells,
+            ..Options::default()
+        },
+    )
+    .expect("mesh");
     let h = domain.holes().len();
     let big_r = domain.bounding().radius;
     let tol = 1e-12 * big_r.max(1.0) * 16.0;
@@ -102,7 +119,9 @@ fn check(domain: &Domain, cells: usize) -> Mesh {
             by_ends.entry(k).or_default().push((b, s));
         }
     }
-    let circles: Vec<Circle> = std::iter::once(domain.bounding()).chain(domain.holes().iter().copied()).collect();
+    let circles: Vec<Circle> = std::iter::once(domain.bounding())
+        .chain(domain.holes().iter().copied())
+        .collect();
     let mut wall_nodes: Vec<Vec<[f64; 2]>> = vec![Vec::new(); circles.len()];
     for users in by_ends.values() {
         match users.len() {
@@ -113,7 +132,9 @@ fn check(domain: &Domain, cells: usize) -> Mesh {
                 let c = circles
                     .iter()
                     .position(|c| n.iter().all(|&p| on_circle(p, c, tol * (1.0 + c.radius))))
-                    .unwrap_or_else(|| panic!("unpartnered side {s} of block {b} is not on a circle"));
+                    .unwrap_or_else(|| {
+                        panic!("unpartnered side {s} of block {b} is not on a circle")
+                    });
                 wall_nodes[c].extend(n);
             }
             2 => {
@@ -137,7 +158,12 @@ fn check(domain: &Domain, cells: usize) -> Mesh {
     for g in &m.grids {
         for j in 0..g.nj {
             for i in 0..g.ni {
-                let q = [g.node(i, j), g.node(i + 1, j), g.node(i + 1, j + 1), g.node(i, j + 1)];
+                let q = [
+                    g.node(i, j),
+                    g.node(i + 1, j),
+                    g.node(i + 1, j + 1),
+                    g.node(i, j + 1),
+                ];
                 for k in 0..4 {
                     let (p, a, b) = (q[k], q[(k + 1) % 4], q[(k + 3) % 4]);
                     let cross = (a[0] - p[0]) * (b[1] - p[1]) - (a[1] - p[1]) * (b[0] - p[0]);
@@ -163,7 +189,10 @@ fn check(domain: &Domain, cells: usize) -> Mesh {
         expected += if k == 0 { a } else { -a };
     }
     let rel = (cell_area - expected).abs() / expected;
-    assert!(rel < 1e-9, "cells cover {cell_area}, the fluid polygon is {expected}");
+    assert!(
+        rel < 1e-9,
+        "cells cover {cell_area}, the fluid polygon is {expected}"
+    );
     m
 }
 
@@ -199,5 +228,9 @@ proptest! {
 #[ignore]
 fn dump_layouts() {
     std::fs::write("/tmp/l_close.json", layout(0, 2, 0.002).to_json_string()).unwrap();
-    std::fs::write("/tmp/l_rand.json", layout(1867048130587364043, 2, 0.02).to_json_string()).unwrap();
+    std::fs::write(
+        "/tmp/l_rand.json",
+        layout(1867048130587364043, 2, 0.02).to_json_string(),
+    )
+    .unwrap();
 }

@@ -1,15 +1,11 @@
 //! `medial-blocks mesh [INPUT] [-o DIR] [--mode paper] [--cells N] [--format LIST]`.
 
 use super::Failure;
-use medial_blocks::connectivity::connectivity;
 use medial_blocks::domain::{Circle, Domain};
-use medial_blocks::output::{connectivity as conn_out, geo, gmsh, plot3d, png, report, svg, vtk};
-use medial_blocks::{mesh, Mesh, Mode, Options};
-use std::collections::BTreeSet;
-use std::path::{Path, PathBuf};
+use medial_blocks::output::{report, write_files, Format};
+use medial_blocks::{mesh, Mode, Options};
+use std::path::PathBuf;
 
-/// The writers `--format` can name.
-pub const FORMATS: [&str; 7] = ["vtk", "plot3d", "gmsh", "svg", "png", "json", "all"];
 const DEFAULT_FORMATS: &str = "vtk,svg,json";
 
 #[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
@@ -52,29 +48,6 @@ pub struct Args {
     /// Print nothing on success.
     #[arg(short, long)]
     pub quiet: bool,
-}
-
-/// Parse `--format`: a set of writer names, `all` meaning every one.
-pub fn parse_formats(list: &str) -> Result<BTreeSet<&'static str>, Failure> {
-    let mut out = BTreeSet::new();
-    for item in list.split(',').map(str::trim).filter(|s| !s.is_empty()) {
-        match FORMATS.iter().find(|f| **f == item) {
-            Some(&"all") => out.extend(FORMATS[..6].iter().copied()),
-            Some(f) => {
-                out.insert(*f);
-            }
-            None => {
-                return Err(Failure::input(format!(
-                    "unknown format '{item}' in --format (choose from {})",
-                    FORMATS.join(", ")
-                )))
-            }
-        }
-    }
-    if out.is_empty() {
-        return Err(Failure::input("--format names no writer"));
-    }
-    Ok(out)
 }
 
 fn parse_numbers(text: &str, what: &str, count: usize) -> Result<Vec<f64>, String> {
@@ -159,48 +132,21 @@ fn read_domain(args: &Args) -> Result<Domain, Failure> {
     }
 }
 
-fn write_all(mesh: &Mesh, dir: &Path, formats: &BTreeSet<&str>) -> std::io::Result<()> {
-    std::fs::create_dir_all(dir)?;
-    if formats.contains("vtk") {
-        vtk::write_multiblock(mesh, dir)?;
-    }
-    if formats.contains("plot3d") {
-        plot3d::write_binary(&mesh.grids, &dir.join("mesh.xyz"))?;
-        plot3d::write_ascii(&mesh.grids, &dir.join("mesh.p3d"))?;
-    }
-    if formats.contains("gmsh") {
-        gmsh::write_msh(mesh, &dir.join("mesh.msh"))?;
-        geo::write_geo(mesh, &dir.join("mesh.geo"))?;
-    }
-    if formats.contains("svg") {
-        svg::write(mesh, &dir.join("mesh.svg"))?;
-    }
-    if formats.contains("png") {
-        png::write(mesh, &dir.join("mesh.png"))?;
-    }
-    if formats.contains("json") {
-        let conn = connectivity(&mesh.layout, &mesh.grids).map_err(std::io::Error::other)?;
-        conn_out::write_json(&conn, &dir.join("connectivity.json"))?;
-        report::write_json(&report::Report::from_mesh(mesh), &dir.join("report.json"))?;
-    }
-    Ok(())
-}
-
 pub fn run(args: Args) -> Result<(), Failure> {
-    let formats = parse_formats(&args.format)?;
+    let formats =
+        Format::parse_list(&args.format).map_err(|e| Failure::input(format!("--format: {e}")))?;
     let domain = read_domain(&args)?;
     let options = Options {
         mode: match args.mode {
             ModeArg::Paper => Mode::Paper,
         },
         cells: args.cells,
-        ..Options::default()
     };
     let mesh = mesh(&domain, &options).map_err(|e| match e {
         medial_blocks::MeshError::Internal(_) => Failure::output(e.to_string()),
         _ => Failure::input(e.to_string()),
     })?;
-    write_all(&mesh, &args.output, &formats).map_err(|e| {
+    write_files(&mesh, &args.output, &formats).map_err(|e| {
         Failure::output(format!("cannot write into {}: {e}", args.output.display()))
     })?;
     if !args.quiet {

@@ -78,3 +78,94 @@ pub(crate) fn check_mesh(mesh: &Mesh) -> io::Result<()> {
 pub(crate) fn num<W: Write>(w: &mut W, x: f64) -> io::Result<()> {
     write!(w, "{x:?}")
 }
+
+/// A writer the CLI's `--format` can name.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash)]
+pub enum Format {
+    /// `mesh.vtm` + `mesh/block_NNNN.vts` (VTK XML multiblock).
+    Vtk,
+    /// `mesh.xyz` (Plot3D binary) + `mesh.p3d` (Plot3D ASCII).
+    Plot3d,
+    /// `mesh.msh` (Gmsh 4.1) + `mesh.geo` (Gmsh script of the block layout).
+    Gmsh,
+    /// `mesh.svg`.
+    Svg,
+    /// `mesh.png`.
+    Png,
+    /// `report.json` + `connectivity.json`.
+    Json,
+}
+
+impl Format {
+    /// Every format, in writing order.
+    pub const ALL: [Format; 6] = [
+        Format::Vtk,
+        Format::Plot3d,
+        Format::Gmsh,
+        Format::Svg,
+        Format::Png,
+        Format::Json,
+    ];
+    /// The name used by `--format`.
+    pub fn name(self) -> &'static str {
+        match self {
+            Format::Vtk => "vtk",
+            Format::Plot3d => "plot3d",
+            Format::Gmsh => "gmsh",
+            Format::Svg => "svg",
+            Format::Png => "png",
+            Format::Json => "json",
+        }
+    }
+    /// Parse a comma-separated list (`all` = every format); `Err` names the unknown item.
+    pub fn parse_list(list: &str) -> Result<Vec<Format>, String> {
+        let mut out = Vec::new();
+        for item in list.split(',').map(str::trim).filter(|s| !s.is_empty()) {
+            if item == "all" {
+                out.extend(Format::ALL);
+            } else if let Some(f) = Format::ALL.iter().find(|f| f.name() == item) {
+                out.push(*f);
+            } else {
+                let names: Vec<&str> = Format::ALL.iter().map(|f| f.name()).collect();
+                return Err(format!(
+                    "unknown format '{item}' (choose from {}, or all)",
+                    names.join(", ")
+                ));
+            }
+        }
+        if out.is_empty() {
+            return Err("no format named".into());
+        }
+        out.sort_unstable();
+        out.dedup();
+        Ok(out)
+    }
+}
+
+/// Write `mesh` into `dir` (created if missing) in each of `formats`, with the file names of
+/// [`Format`]'s variants.
+pub fn write_files(mesh: &Mesh, dir: &Path, formats: &[Format]) -> io::Result<()> {
+    std::fs::create_dir_all(dir)?;
+    for f in formats {
+        match f {
+            Format::Vtk => vtk::write_multiblock(mesh, dir)?,
+            Format::Plot3d => {
+                plot3d::write_binary(&mesh.grids, &dir.join("mesh.xyz"))?;
+                plot3d::write_ascii(&mesh.grids, &dir.join("mesh.p3d"))?;
+            }
+            Format::Gmsh => {
+                gmsh::write_msh(mesh, &dir.join("mesh.msh"))?;
+                geo::write_geo(mesh, &dir.join("mesh.geo"))?;
+            }
+            Format::Svg => svg::write(mesh, &dir.join("mesh.svg"))?,
+            Format::Png => png::write(mesh, &dir.join("mesh.png"))?,
+            Format::Json => {
+                let conn = crate::connectivity::connectivity(&mesh.layout, &mesh.grids)
+                    .map_err(io::Error::other)?;
+                connectivity::write_json(&conn, &dir.join("connectivity.json"))?;
+                report::write_json(&report::Report::from_mesh(mesh), &dir.join("report.json"))?;
+            }
+        }
+    }
+    Ok(())
+}
