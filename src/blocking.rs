@@ -26,7 +26,7 @@
 use crate::domain::{CircleId, Domain};
 use crate::geometry::Triangulation;
 use crate::layout::{Block, BlockLayout, Curve, Edge, EdgeKind, SideRef};
-use crate::medial::{medial_graph, MedialGraph, TriangleKind};
+use crate::medial::{MedialGraph, TriangleKind};
 use crate::mesher::{MeshError, Options};
 use crate::sampling::{sample_and_triangulate, Samples, SamplingOptions};
 use std::collections::HashMap;
@@ -48,6 +48,11 @@ pub struct Blocking {
     pub kinds: Vec<TriangleKind>,
     /// For each layout vertex, the sample it stands for (`None` for medial vertices).
     pub vertex_samples: Vec<Option<u32>>,
+    /// Resampling rounds the sampling needed.
+    pub rounds: usize,
+    /// Arcs left with a single-sample (zero-length) wall: see
+    /// [`crate::sampling::thin_walls`].
+    pub thin_walls: Vec<crate::sampling::Violation>,
 }
 
 /// Run the front end for a domain with at least two holes: sampling with invariant checks
@@ -77,11 +82,12 @@ pub fn build_layout_with(
         )));
     }
     let sampled = sample_and_triangulate(domain, sampling)?;
-    let medial = medial_graph(&sampled.samples, &sampled.triangulation, &sampled.kinds)?;
-    let (layout, vertex_samples) = blocks(domain, &sampled.samples, &medial)?;
+    let (layout, vertex_samples) = blocks(domain, &sampled.samples, &sampled.medial)?;
     Ok(Blocking {
         layout,
-        medial,
+        medial: sampled.medial,
+        rounds: sampled.rounds,
+        thin_walls: sampled.thin_walls,
         samples: sampled.samples,
         triangulation: sampled.triangulation,
         kinds: sampled.kinds,

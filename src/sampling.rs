@@ -21,7 +21,7 @@
 
 use crate::domain::{circle_name, dist, CircleId, Domain, HoleIndex, BOUNDING};
 use crate::geometry::{Point, Triangulation};
-use crate::medial::{classify, TriangleKind};
+use crate::medial::{classify, medial_graph, MedialGraph, TriangleKind};
 use crate::mesher::MeshError;
 use std::collections::HashSet;
 use std::f64::consts::{FRAC_1_SQRT_2, FRAC_PI_4, TAU};
@@ -251,6 +251,9 @@ pub enum ViolationKind {
     Outside { triangle: u32 },
     /// Two samples coincide exactly (the circle is too small for its coordinates).
     Duplicate { first: u32, duplicate: u32 },
+    /// Soft invariant (d): medial arc `arc` has a single sample on this circle's side, so
+    /// one of its blocks has a zero-length wall.
+    SingleSampleWall { arc: u32 },
 }
 
 /// One invariant violation, blamed on one circle.
@@ -276,6 +279,9 @@ impl Violation {
             }
             ViolationKind::Outside { triangle } => {
                 format!("triangle {triangle} has all three vertices on {who}")
+            }
+            ViolationKind::SingleSampleWall { arc } => {
+                format!("medial arc {arc} has a single sample on {who}")
             }
             ViolationKind::Duplicate { first, duplicate } => format!(
                 "samples {first} and {duplicate} of {who} coincide: the circle is too small \
@@ -363,27 +369,65 @@ pub fn check_invariants(
     out
 }
 
+/// Soft invariant (d): every medial arc with at least one boundary triangle has a wall of at
+/// least one sample step on both sides (`|C1|, |C2| >= 2`), so that every wall corner is shared
+/// by exactly two blocks (paper section 3) and no block has a zero-length wall. An arc between
+/// two adjacent interior triangles (empty chain) breaks it too, unless the two triangles are
+/// exactly co-circular (a true degeneracy of the layout, paper section 4.2, left to arc
+/// collapsing: resampling cannot remove it). Returns one violation per offending side.
+pub fn thin_walls(tri: &Triangulation, medial: &MedialGraph) -> Vec<Violation> {
+    let mut out = Vec::new();
+    for (e, arc) in medial.arcs.iter().enumerate() {
+        if arc.triangles.is_empty() {
+            let Some(v0) = medial.vertices.get(arc.ends[0] as usize) else {
+                continue;
+            };
+            if tri.is_cocircular_edge(v0.triangle as usize, arc.end_slots[0] as usize) {
+                continue;
+            }
+        }
+        for (side, chain) in [&arc.c1, &arc.c2].into_iter().enumerate() {
+            if chain.len() < 2 {
+                out.push(Violation {
+                    circle: arc.circles[side],
+                    kind: ViolationKind::SingleSampleWall { arc: e as u32 },
+                });
+            }
+        }
+    }
+    out
+}
+
 /// The result of [`sample_and_triangulate`]: samples meeting the invariants, their Delaunay
-/// triangulation and its classification.
+/// triangulation, its classification and the medial graph (paper Algorithm 1).
 #[derive(Debug, Clone)]
 pub struct SampledDomain {
     pub samples: Samples,
     pub triangulation: Triangulation,
     pub kinds: Vec<TriangleKind>,
+    pub medial: MedialGraph,
     /// Resampling rounds used (0 when the first sampling was good).
     pub rounds: usize,
+    /// Violations of the soft invariant (d) ([`thin_walls`]) left when the rounds or the
+    /// per-circle limit ran out; their blocks have a zero-length wall.
+    pub thin_walls: Vec<Violation>,
 }
 
 /// Sample, triangulate, check the invariants, and resample offending circles until they
-/// hold.
+/// hold; then build the medial graph.
+///
+/// Hard invariants ((a)-(c) and the in-hole/in-domain dichotomy, [`check_invariants`]) must
+/// hold; the soft invariant (d) ([`thin_walls`]) is pursued with the same resampling while
+/// rounds remain, then accepted as is.
 ///
 /// Resampling rule (keeps mirror symmetry): when circle `c` offends, every circle with the
 /// same radius and nearest gap (bitwise) as `c` doubles its count. This depends only on
 /// geometry, so mirror images are refined together. Errors: [`MeshError::Sampling`] when the
-/// invariants still fail after [`SamplingOptions::max_rounds`] rounds, when an offending
+/// hard invariants still fail after [`SamplingOptions::max_rounds`] rounds or an offending
 /// circle is already at [`SamplingOptions::max_per_circle`], when the total would exceed
 /// [`SamplingOptions::max_total`], or when samples coincide (a circle too small for its
-/// coordinates); [`MeshError::Triangulation`] from the engine.
+/// coordinates); [`MeshError::Triangulation`] from the engine; [`MeshError::Internal`] from
+/// the medial graph (not expected once the invariants hold).
 pub fn sample_and_triangulate(
     domain: &Domain,
     opts: &SamplingOptions,
@@ -416,35 +460,44 @@ pub fn sample_and_triangulate(
         let samples = sample(domain, &counts, &gaps);
         let triangulation = Triangulation::new(&samples.points)?;
         let kinds = classify(&samples, &triangulation);
-        let violations = check_invariants(&samples, &triangulation, &kinds);
-        if violations.is_empty() {
-            return Ok(SampledDomain {
+        let hard = check_invariants(&samples, &triangulation, &kinds);
+        let (violations, soft_result) = if hard.is_empty() {
+            let medial = medial_graph(&samples, &triangulation, &kinds)?;
+            let soft = thin_walls(&triangulation, &medial);
+            let done = SampledDomain {
                 samples,
                 triangulation,
                 kinds,
+                medial,
                 rounds: round,
-            });
-        }
-        if let Some(v) = violations
-            .iter()
-            .find(|v| matches!(v.kind, ViolationKind::Duplicate { .. }))
-        {
-            return Err(MeshError::Sampling {
-                circle: v.circle,
-                message: v.describe(),
-            });
-        }
-        let first = &violations[0];
-        if round >= opts.max_rounds {
-            return Err(MeshError::Sampling {
-                circle: first.circle,
-                message: format!(
-                    "{} ({} invariant violations left after {round} resampling rounds)",
-                    first.describe(),
-                    violations.len()
-                ),
-            });
-        }
+                thin_walls: soft.clone(),
+            };
+            if soft.is_empty() || round >= opts.max_rounds {
+                return Ok(done);
+            }
+            (soft, Some(done))
+        } else {
+            if let Some(v) = hard
+                .iter()
+                .find(|v| matches!(v.kind, ViolationKind::Duplicate { .. }))
+            {
+                return Err(MeshError::Sampling {
+                    circle: v.circle,
+                    message: v.describe(),
+                });
+            }
+            if round >= opts.max_rounds {
+                return Err(MeshError::Sampling {
+                    circle: hard[0].circle,
+                    message: format!(
+                        "{} ({} invariant violations left after {round} resampling rounds)",
+                        hard[0].describe(),
+                        hard.len()
+                    ),
+                });
+            }
+            (hard, None)
+        };
         let keys: HashSet<(u64, u64)> = violations
             .iter()
             .map(|v| {
@@ -452,18 +505,28 @@ pub fn sample_and_triangulate(
                 (radii[slot].to_bits(), gaps[slot].to_bits())
             })
             .collect();
+        let mut refined = false;
         for slot in 0..counts.len() {
             if keys.contains(&(radii[slot].to_bits(), gaps[slot].to_bits())) {
                 if counts[slot] >= cap {
-                    return Err(MeshError::Sampling {
-                        circle: slot as CircleId - 1,
-                        message: format!(
-                            "{} and the circle already has the most samples allowed ({cap})",
-                            first.describe()
-                        ),
-                    });
+                    if soft_result.is_none() {
+                        return Err(MeshError::Sampling {
+                            circle: slot as CircleId - 1,
+                            message: format!(
+                                "{} and the circle already has the most samples allowed ({cap})",
+                                violations[0].describe()
+                            ),
+                        });
+                    }
+                } else {
+                    counts[slot] = (counts[slot] * 2).min(cap);
+                    refined = true;
                 }
-                counts[slot] = (counts[slot] * 2).min(cap);
+            }
+        }
+        if !refined {
+            if let Some(done) = soft_result {
+                return Ok(done);
             }
         }
         round += 1;
