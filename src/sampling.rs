@@ -23,7 +23,7 @@ use crate::domain::{circle_name, dist, CircleId, Domain, HoleIndex, BOUNDING};
 use crate::geometry::{Point, Triangulation};
 use crate::medial::{classify, medial_graph, MedialGraph, TriangleKind};
 use crate::mesher::MeshError;
-use std::collections::HashSet;
+use std::collections::{HashMap, HashSet};
 use std::f64::consts::{FRAC_1_SQRT_2, FRAC_PI_4, TAU};
 
 /// Tuning of the boundary sampling.
@@ -398,6 +398,52 @@ pub fn thin_walls(tri: &Triangulation, medial: &MedialGraph) -> Vec<Violation> {
     out
 }
 
+/// How many doublings (1 to 4, or 0 for "do not refine") circle `circle` with `n` samples needs so that the wall of
+/// `arc` on it spans at least two sample steps: the exact normal feet of the arc's two medial
+/// vertices on the circle are `delta` radians apart (about the circle's centre), and a spacing
+/// of `delta / 2` puts a sample strictly between the spokes. Depends only on the angle, so
+/// mirror images ask for the same factor up to rounding at a power-of-two boundary (and the
+/// group rule of [`sample_and_triangulate`] then takes the larger one for both).
+fn refinement_log2(
+    domain: &Domain,
+    medial: &MedialGraph,
+    arc: u32,
+    circle: CircleId,
+    n: usize,
+) -> u32 {
+    let Some(a) = medial.arcs.get(arc as usize) else {
+        return 1;
+    };
+    let c = domain.circle(circle).center;
+    let angle = |v: u32| {
+        medial
+            .vertices
+            .get(v as usize)
+            .map(|m| (m.position[1] - c[1]).atan2(m.position[0] - c[0]))
+    };
+    let (Some(t0), Some(t1)) = (angle(a.ends[0]), angle(a.ends[1])) else {
+        return 1;
+    };
+    let delta = (t1 - t0).rem_euclid(TAU);
+    let delta = delta.min(TAU - delta);
+    let need = 2.0 * TAU / delta;
+    if need.is_nan() || need > SOFT_MAX_SAMPLES {
+        // A very short arc (nearly co-circular interior triangles): leave it to arc
+        // collapsing rather than flood the circle with samples.
+        return 0;
+    }
+    let mut k = 1;
+    while k < 4 && (n as f64) * f64::from(1u32 << k) < need {
+        k += 1;
+    }
+    k
+}
+
+/// The soft invariant (d) never asks for more samples than this on one circle: arcs whose
+/// normal feet are less than `4 pi / SOFT_MAX_SAMPLES` (about 1.4 degrees) apart are left
+/// with a single-sample wall (they are short arcs, for arc collapsing).
+const SOFT_MAX_SAMPLES: f64 = 512.0;
+
 /// The result of [`sample_and_triangulate`]: samples meeting the invariants, their Delaunay
 /// triangulation, its classification and the medial graph (paper Algorithm 1).
 #[derive(Debug, Clone)]
@@ -498,16 +544,24 @@ pub fn sample_and_triangulate(
             }
             (hard, None)
         };
-        let keys: HashSet<(u64, u64)> = violations
-            .iter()
-            .map(|v| {
-                let slot = (v.circle + 1) as usize;
-                (radii[slot].to_bits(), gaps[slot].to_bits())
-            })
-            .collect();
+        // Refinement factor 2^k per (radius, gap) group, the largest any member needs.
+        let mut keys: HashMap<(u64, u64), u32> = HashMap::new();
+        for v in &violations {
+            let slot = (v.circle + 1) as usize;
+            let k = match (&v.kind, &soft_result) {
+                (ViolationKind::SingleSampleWall { arc }, Some(done)) => {
+                    refinement_log2(domain, &done.medial, *arc, v.circle, counts[slot])
+                }
+                _ => 1,
+            };
+            let e = keys
+                .entry((radii[slot].to_bits(), gaps[slot].to_bits()))
+                .or_insert(k);
+            *e = (*e).max(k);
+        }
         let mut refined = false;
         for slot in 0..counts.len() {
-            if keys.contains(&(radii[slot].to_bits(), gaps[slot].to_bits())) {
+            if let Some(&k) = keys.get(&(radii[slot].to_bits(), gaps[slot].to_bits())) {
                 if counts[slot] >= cap {
                     if soft_result.is_none() {
                         return Err(MeshError::Sampling {
@@ -518,8 +572,8 @@ pub fn sample_and_triangulate(
                             ),
                         });
                     }
-                } else {
-                    counts[slot] = (counts[slot] * 2).min(cap);
+                } else if k > 0 {
+                    counts[slot] = counts[slot].saturating_mul(1 << k).min(cap);
                     refined = true;
                 }
             }
