@@ -193,8 +193,24 @@ pub fn blocks(
     for arc in &medial.arcs {
         let [m0, m1] = arc.ends;
         let [ca, cb] = arc.circles;
-        let (a0, a1) = (arc.c1[0], *arc.c1.last().unwrap_or(&arc.c1[0]));
-        let (b0, b1) = (arc.c2[0], *arc.c2.last().unwrap_or(&arc.c2[0]));
+        let ends = |c: &[u32]| match (c.first(), c.last()) {
+            (Some(&f), Some(&l)) if (f.max(l) as usize) < samples.len() => Ok((f, l)),
+            _ => Err(MeshError::Internal(
+                "medial arc with an empty or out-of-range sample chain".into(),
+            )),
+        };
+        let (a0, a1) = ends(&arc.c1)?;
+        let (b0, b1) = ends(&arc.c2)?;
+        if m0.max(m1) as usize >= medial.vertices.len()
+            || arc
+                .circles
+                .iter()
+                .any(|&c| c < -1 || c >= domain.hole_count() as CircleId)
+        {
+            return Err(MeshError::Internal(
+                "medial arc with an out-of-range vertex or circle".into(),
+            ));
+        }
         let va0 = sample_vertex_of(a0, &mut layout);
         let va1 = sample_vertex_of(a1, &mut layout);
         let vb0 = sample_vertex_of(b0, &mut layout);

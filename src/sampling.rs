@@ -77,6 +77,8 @@ pub struct Samples {
     pub circles: Vec<CircleSamples>,
 }
 
+/// Accessors taking a sample index or circle id panic when it is out of range, like slice
+/// indexing.
 impl Samples {
     /// Number of samples.
     pub fn len(&self) -> usize {
@@ -294,6 +296,9 @@ impl Violation {
 /// Check the sampling invariants (a), (b), (c) and the in-hole/in-domain dichotomy on a
 /// triangulation of `samples` whose triangles are classified by `kinds`
 /// ([`crate::medial::classify`]). Returns every violation found (empty when all hold).
+///
+/// # Panics
+/// When `tri` is not a triangulation of `samples.points` (see [`crate::medial::classify`]).
 pub fn check_invariants(
     samples: &Samples,
     tri: &Triangulation,
