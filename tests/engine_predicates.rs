@@ -73,7 +73,11 @@ fn ulps(x: f64, k: i64) -> f64 {
 fn check_orient(a: Point, b: Point, c: Point, raw_ok: bool) {
     let truth = orient_rug(a, b, c);
     if raw_ok {
-        assert_eq!(sign(robust::orient2d(rc(a), rc(b), rc(c))), truth, "{a:?} {b:?} {c:?}");
+        assert_eq!(
+            sign(robust::orient2d(rc(a), rc(b), rc(c))),
+            truth,
+            "{a:?} {b:?} {c:?}"
+        );
     }
     assert_eq!(orient2d(a, b, c), truth, "{a:?} {b:?} {c:?}");
 }
@@ -135,7 +139,11 @@ fn nearly_cocircular_incircle() {
     let mut r = Rng(2);
     for _ in 0..3000 {
         // Scale by a non-dyadic factor (rounding) or a power of two (exact), then nudge by ulps.
-        let s = if r.below(2) == 0 { 0.1 + r.unit() } else { 2f64.powi(r.below(20) as i32 - 10) };
+        let s = if r.below(2) == 0 {
+            0.1 + r.unit()
+        } else {
+            2f64.powi(r.below(20) as i32 - 10)
+        };
         let (cx, cy) = (r.unit() * 8.0 - 4.0, r.unit() * 8.0 - 4.0);
         let mut pick = || {
             let (x, y) = CIRCLE[r.below(12) as usize];
@@ -162,12 +170,24 @@ fn ulp_grid_incircle() {
 #[test]
 fn extreme_magnitudes_use_the_exact_path() {
     let mut r = Rng(4);
-    let scales = [1e300, 1e-300, 5e-324, 1e-310, 1e200, 1e-200, f64::MAX / 64.0, 1.0];
+    let scales = [
+        1e300,
+        1e-300,
+        5e-324,
+        1e-310,
+        1e200,
+        1e-200,
+        f64::MAX / 64.0,
+        1.0,
+    ];
     for _ in 0..2000 {
         let mut p = || {
             let s = scales[r.below(scales.len() as u64) as usize];
             let k = r.below(5) as i64 - 2;
-            [ulps((r.below(7) as f64 - 3.0) * s, k), ulps((r.below(7) as f64 - 3.0) * s, -k)]
+            [
+                ulps((r.below(7) as f64 - 3.0) * s, k),
+                ulps((r.below(7) as f64 - 3.0) * s, -k),
+            ]
         };
         let (a, b, c, d) = (p(), p(), p(), p());
         check_orient(a, b, c, false);
@@ -208,7 +228,11 @@ impl Poly {
     }
     /// Sign for ε → 0+: the sign of the lowest-degree non-zero coefficient.
     fn sign(&self) -> Ordering {
-        self.0.iter().map(|c| c.cmp0()).find(|s| *s != Ordering::Equal).unwrap_or(Ordering::Equal)
+        self.0
+            .iter()
+            .map(|c| c.cmp0())
+            .find(|s| *s != Ordering::Equal)
+            .unwrap_or(Ordering::Equal)
     }
 }
 
@@ -224,7 +248,10 @@ fn symbolic_incircle(pts: [Point; 4]) -> Ordering {
     }
     let ints: Vec<[Integer; 2]> = rats
         .iter()
-        .map(|r| r.clone().map(|v| Rational::from(v * &den).into_numer_denom().0))
+        .map(|r| {
+            r.clone()
+                .map(|v| Rational::from(v * &den).into_numer_denom().0)
+        })
         .collect();
     let mut rank = [0usize; 4];
     for i in 0..4 {
@@ -298,7 +325,10 @@ fn sos_cofactor_signs_match_symbolic_expansion_on_ties() {
     let mut ties = 0;
     for _ in 0..1500 {
         let s = 2f64.powi(r.below(12) as i32 - 6);
-        let (cx, cy) = ((r.below(64) as f64 - 32.0) * 0.125, (r.below(64) as f64 - 32.0) * 0.5);
+        let (cx, cy) = (
+            (r.below(64) as f64 - 32.0) * 0.125,
+            (r.below(64) as f64 - 32.0) * 0.5,
+        );
         let mut idx: Vec<usize> = (0..12).collect();
         for i in (1..12).rev() {
             idx.swap(i, r.below(i as u64 + 1) as usize);
@@ -307,11 +337,18 @@ fn sos_cofactor_signs_match_symbolic_expansion_on_ties() {
             let (x, y) = CIRCLE[idx[k]];
             [cx + s * x, cy + s * y]
         });
-        assert_eq!(incircle_rug(pts[0], pts[1], pts[2], pts[3]), Ordering::Equal);
+        assert_eq!(
+            incircle_rug(pts[0], pts[1], pts[2], pts[3]),
+            Ordering::Equal
+        );
         ties += 1;
         let expected = symbolic_incircle(pts);
         assert_ne!(expected, Ordering::Equal);
-        assert_eq!(incircle_sos(pts[0], pts[1], pts[2], pts[3]), expected, "{pts:?}");
+        assert_eq!(
+            incircle_sos(pts[0], pts[1], pts[2], pts[3]),
+            expected,
+            "{pts:?}"
+        );
     }
     assert_eq!(ties, 1500);
 }
@@ -327,6 +364,10 @@ fn sos_is_consistent_on_square_grid_ties() {
         if !distinct || orient_rug(pts[0], pts[1], pts[2]) == Ordering::Equal {
             continue;
         }
-        assert_eq!(incircle_sos(pts[0], pts[1], pts[2], pts[3]), symbolic_incircle(pts), "{pts:?}");
+        assert_eq!(
+            incircle_sos(pts[0], pts[1], pts[2], pts[3]),
+            symbolic_incircle(pts),
+            "{pts:?}"
+        );
     }
 }

@@ -67,7 +67,14 @@ fn grid() -> impl Strategy<Value = Vec<Point>> {
 /// inside, and collinear points on a diameter.
 fn cocircular() -> impl Strategy<Value = Vec<Point>> {
     (prop::collection::vec(0usize..24, 3..24), 0usize..4).prop_map(|(pick, inner)| {
-        const C: [(f64, f64); 6] = [(25.0, 0.0), (24.0, 7.0), (20.0, 15.0), (15.0, 20.0), (7.0, 24.0), (0.0, 25.0)];
+        const C: [(f64, f64); 6] = [
+            (25.0, 0.0),
+            (24.0, 7.0),
+            (20.0, 15.0),
+            (15.0, 20.0),
+            (7.0, 24.0),
+            (0.0, 25.0),
+        ];
         let mut v = Vec::new();
         for p in pick {
             let (x, y) = C[p % 6];
@@ -85,7 +92,9 @@ fn cocircular() -> impl Strategy<Value = Vec<Point>> {
 
 fn shuffled(v: Vec<Point>) -> impl Strategy<Value = (Vec<Point>, Vec<Point>)> {
     let original = v.clone();
-    Just(v).prop_shuffle().prop_map(move |s| (original.clone(), s))
+    Just(v)
+        .prop_shuffle()
+        .prop_map(move |s| (original.clone(), s))
 }
 
 fn config() -> ProptestConfig {
