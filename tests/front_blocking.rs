@@ -259,6 +259,10 @@ fn hexagon_gives_36_blocks() {
     assert_eq!(b.layout.blocks.len(), 36);
     assert_eq!(b.medial.vertex_count(), 12);
     assert_eq!(b.medial.arc_count(), 18);
+    // No single-sample wall, no zero-length arc, no resampling needed.
+    assert!(b.thin_walls.is_empty());
+    assert_eq!(b.medial.zero_length_arcs(), 0);
+    assert_eq!(b.rounds, 0);
     // Deterministic.
     let again = build_layout(&d, &Options::default()).unwrap();
     assert_eq!(again.layout, b.layout);
