@@ -248,10 +248,7 @@ fn symbolic_incircle(pts: [Point; 4]) -> Ordering {
     }
     let ints: Vec<[Integer; 2]> = rats
         .iter()
-        .map(|r| {
-            r.clone()
-                .map(|v| Rational::from(v * &den).into_numer_denom().0)
-        })
+        .map(|r| r.clone().map(|v| (v * &den).into_numer_denom().0))
         .collect();
     let mut rank = [0usize; 4];
     for i in 0..4 {
