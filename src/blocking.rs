@@ -26,7 +26,7 @@
 use crate::domain::{CircleId, Domain};
 use crate::geometry::Triangulation;
 use crate::layout::{Block, BlockLayout, Curve, Edge, EdgeKind, SideRef};
-use crate::medial::{medial_graph, MedialGraph, TriangleKind};
+use crate::medial::{MedialGraph, TriangleKind};
 use crate::mesher::{MeshError, Options};
 use crate::sampling::{sample_and_triangulate, Samples, SamplingOptions};
 use std::collections::HashMap;
@@ -48,6 +48,11 @@ pub struct Blocking {
     pub kinds: Vec<TriangleKind>,
     /// For each layout vertex, the sample it stands for (`None` for medial vertices).
     pub vertex_samples: Vec<Option<u32>>,
+    /// Resampling rounds the sampling needed.
+    pub rounds: usize,
+    /// Arcs left with a single-sample (zero-length) wall: see
+    /// [`crate::sampling::thin_walls`].
+    pub thin_walls: Vec<crate::sampling::Violation>,
 }
 
 /// Run the front end for a domain with at least two holes: sampling with invariant checks
@@ -77,11 +82,12 @@ pub fn build_layout_with(
         )));
     }
     let sampled = sample_and_triangulate(domain, sampling)?;
-    let medial = medial_graph(&sampled.samples, &sampled.triangulation, &sampled.kinds)?;
-    let (layout, vertex_samples) = blocks(domain, &sampled.samples, &medial)?;
+    let (layout, vertex_samples) = blocks(domain, &sampled.samples, &sampled.medial)?;
     Ok(Blocking {
         layout,
-        medial,
+        medial: sampled.medial,
+        rounds: sampled.rounds,
+        thin_walls: sampled.thin_walls,
         samples: sampled.samples,
         triangulation: sampled.triangulation,
         kinds: sampled.kinds,
@@ -187,8 +193,24 @@ pub fn blocks(
     for arc in &medial.arcs {
         let [m0, m1] = arc.ends;
         let [ca, cb] = arc.circles;
-        let (a0, a1) = (arc.c1[0], *arc.c1.last().unwrap_or(&arc.c1[0]));
-        let (b0, b1) = (arc.c2[0], *arc.c2.last().unwrap_or(&arc.c2[0]));
+        let ends = |c: &[u32]| match (c.first(), c.last()) {
+            (Some(&f), Some(&l)) if (f.max(l) as usize) < samples.len() => Ok((f, l)),
+            _ => Err(MeshError::Internal(
+                "medial arc with an empty or out-of-range sample chain".into(),
+            )),
+        };
+        let (a0, a1) = ends(&arc.c1)?;
+        let (b0, b1) = ends(&arc.c2)?;
+        if m0.max(m1) as usize >= medial.vertices.len()
+            || arc
+                .circles
+                .iter()
+                .any(|&c| c < -1 || c >= domain.hole_count() as CircleId)
+        {
+            return Err(MeshError::Internal(
+                "medial arc with an out-of-range vertex or circle".into(),
+            ));
+        }
         let va0 = sample_vertex_of(a0, &mut layout);
         let va1 = sample_vertex_of(a1, &mut layout);
         let vb0 = sample_vertex_of(b0, &mut layout);

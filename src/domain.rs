@@ -343,10 +343,11 @@ impl Domain {
     pub fn circle_ids(&self) -> impl Iterator<Item = CircleId> {
         std::iter::once(BOUNDING).chain(0..self.holes.len() as CircleId)
     }
-    /// The gap of hole `i` to the bounding circle: `R - |c_i - C| - r_i`.
-    pub fn bounding_gap(&self, i: usize) -> f64 {
-        let h = self.holes[i];
-        self.bounding.radius - dist(h.center, self.bounding.center) - h.radius
+    /// The gap of hole `i` to the bounding circle: `R - |c_i - C| - r_i` (`None` when there is
+    /// no hole `i`).
+    pub fn bounding_gap(&self, i: usize) -> Option<f64> {
+        let h = self.holes.get(i)?;
+        Some(self.bounding.radius - dist(h.center, self.bounding.center) - h.radius)
     }
 }
 

@@ -50,6 +50,10 @@ impl TriangleKind {
 }
 
 /// Classify every triangle of `tri` (a triangulation of `samples.points`).
+///
+/// # Panics
+/// When `tri` is not a triangulation of `samples.points` (an index out of range); the
+/// pipeline ([`crate::sampling::sample_and_triangulate`]) always passes a matching pair.
 pub fn classify(samples: &Samples, tri: &Triangulation) -> Vec<TriangleKind> {
     (0..tri.len())
         .map(|t| {
@@ -186,6 +190,13 @@ pub fn medial_graph(
         return Err(internal(format!(
             "{} triangle kinds for {n} triangles",
             kinds.len()
+        )));
+    }
+    if samples.len() != tri.points().len() || samples.circle_of.len() != samples.len() {
+        return Err(internal(format!(
+            "{} samples for a triangulation of {} points",
+            samples.len(),
+            tri.points().len()
         )));
     }
     let mut vertex_of = vec![u32::MAX; n];

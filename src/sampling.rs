@@ -21,9 +21,9 @@
 
 use crate::domain::{circle_name, dist, CircleId, Domain, HoleIndex, BOUNDING};
 use crate::geometry::{Point, Triangulation};
-use crate::medial::{classify, TriangleKind};
+use crate::medial::{classify, medial_graph, MedialGraph, TriangleKind};
 use crate::mesher::MeshError;
-use std::collections::HashSet;
+use std::collections::{HashMap, HashSet};
 use std::f64::consts::{FRAC_1_SQRT_2, FRAC_PI_4, TAU};
 
 /// Tuning of the boundary sampling.
@@ -77,6 +77,8 @@ pub struct Samples {
     pub circles: Vec<CircleSamples>,
 }
 
+/// Accessors taking a sample index or circle id panic when it is out of range, like slice
+/// indexing.
 impl Samples {
     /// Number of samples.
     pub fn len(&self) -> usize {
@@ -251,6 +253,9 @@ pub enum ViolationKind {
     Outside { triangle: u32 },
     /// Two samples coincide exactly (the circle is too small for its coordinates).
     Duplicate { first: u32, duplicate: u32 },
+    /// Soft invariant (d): medial arc `arc` has a single sample on this circle's side, so
+    /// one of its blocks has a zero-length wall.
+    SingleSampleWall { arc: u32 },
 }
 
 /// One invariant violation, blamed on one circle.
@@ -277,6 +282,9 @@ impl Violation {
             ViolationKind::Outside { triangle } => {
                 format!("triangle {triangle} has all three vertices on {who}")
             }
+            ViolationKind::SingleSampleWall { arc } => {
+                format!("medial arc {arc} has a single sample on {who}")
+            }
             ViolationKind::Duplicate { first, duplicate } => format!(
                 "samples {first} and {duplicate} of {who} coincide: the circle is too small \
                  for the precision of its coordinates"
@@ -288,6 +296,9 @@ impl Violation {
 /// Check the sampling invariants (a), (b), (c) and the in-hole/in-domain dichotomy on a
 /// triangulation of `samples` whose triangles are classified by `kinds`
 /// ([`crate::medial::classify`]). Returns every violation found (empty when all hold).
+///
+/// # Panics
+/// When `tri` is not a triangulation of `samples.points` (see [`crate::medial::classify`]).
 pub fn check_invariants(
     samples: &Samples,
     tri: &Triangulation,
@@ -363,27 +374,111 @@ pub fn check_invariants(
     out
 }
 
+/// Soft invariant (d): every medial arc with at least one boundary triangle has a wall of at
+/// least one sample step on both sides (`|C1|, |C2| >= 2`), so that every wall corner is shared
+/// by exactly two blocks (paper section 3) and no block has a zero-length wall. An arc between
+/// two adjacent interior triangles (empty chain) breaks it too, unless the two triangles are
+/// exactly co-circular (a true degeneracy of the layout, paper section 4.2, left to arc
+/// collapsing: resampling cannot remove it). Returns one violation per offending side.
+pub fn thin_walls(tri: &Triangulation, medial: &MedialGraph) -> Vec<Violation> {
+    let mut out = Vec::new();
+    for (e, arc) in medial.arcs.iter().enumerate() {
+        if arc.triangles.is_empty() {
+            let Some(v0) = medial.vertices.get(arc.ends[0] as usize) else {
+                continue;
+            };
+            if tri.is_cocircular_edge(v0.triangle as usize, arc.end_slots[0] as usize) {
+                continue;
+            }
+        }
+        for (side, chain) in [&arc.c1, &arc.c2].into_iter().enumerate() {
+            if chain.len() < 2 {
+                out.push(Violation {
+                    circle: arc.circles[side],
+                    kind: ViolationKind::SingleSampleWall { arc: e as u32 },
+                });
+            }
+        }
+    }
+    out
+}
+
+/// How many doublings (1 to 4, or 0 for "do not refine") circle `circle` with `n` samples needs so that the wall of
+/// `arc` on it spans at least two sample steps: the exact normal feet of the arc's two medial
+/// vertices on the circle are `delta` radians apart (about the circle's centre), and a spacing
+/// of `delta / 2` puts a sample strictly between the spokes. Depends only on the angle, so
+/// mirror images ask for the same factor up to rounding at a power-of-two boundary (and the
+/// group rule of [`sample_and_triangulate`] then takes the larger one for both).
+fn refinement_log2(
+    domain: &Domain,
+    medial: &MedialGraph,
+    arc: u32,
+    circle: CircleId,
+    n: usize,
+) -> u32 {
+    let Some(a) = medial.arcs.get(arc as usize) else {
+        return 1;
+    };
+    let c = domain.circle(circle).center;
+    let angle = |v: u32| {
+        medial
+            .vertices
+            .get(v as usize)
+            .map(|m| (m.position[1] - c[1]).atan2(m.position[0] - c[0]))
+    };
+    let (Some(t0), Some(t1)) = (angle(a.ends[0]), angle(a.ends[1])) else {
+        return 1;
+    };
+    let delta = (t1 - t0).rem_euclid(TAU);
+    let delta = delta.min(TAU - delta);
+    let need = 2.0 * TAU / delta;
+    if need.is_nan() || need > SOFT_MAX_SAMPLES {
+        // A very short arc (nearly co-circular interior triangles): leave it to arc
+        // collapsing rather than flood the circle with samples.
+        return 0;
+    }
+    let mut k = 1;
+    while k < 4 && (n as f64) * f64::from(1u32 << k) < need {
+        k += 1;
+    }
+    k
+}
+
+/// The soft invariant (d) never asks for more samples than this on one circle: arcs whose
+/// normal feet are less than `4 pi / SOFT_MAX_SAMPLES` (about 1.4 degrees) apart are left
+/// with a single-sample wall (they are short arcs, for arc collapsing).
+const SOFT_MAX_SAMPLES: f64 = 512.0;
+
 /// The result of [`sample_and_triangulate`]: samples meeting the invariants, their Delaunay
-/// triangulation and its classification.
+/// triangulation, its classification and the medial graph (paper Algorithm 1).
 #[derive(Debug, Clone)]
 pub struct SampledDomain {
     pub samples: Samples,
     pub triangulation: Triangulation,
     pub kinds: Vec<TriangleKind>,
+    pub medial: MedialGraph,
     /// Resampling rounds used (0 when the first sampling was good).
     pub rounds: usize,
+    /// Violations of the soft invariant (d) ([`thin_walls`]) left when the rounds or the
+    /// per-circle limit ran out; their blocks have a zero-length wall.
+    pub thin_walls: Vec<Violation>,
 }
 
 /// Sample, triangulate, check the invariants, and resample offending circles until they
-/// hold.
+/// hold; then build the medial graph.
+///
+/// Hard invariants ((a)-(c) and the in-hole/in-domain dichotomy, [`check_invariants`]) must
+/// hold; the soft invariant (d) ([`thin_walls`]) is pursued with the same resampling while
+/// rounds remain, then accepted as is.
 ///
 /// Resampling rule (keeps mirror symmetry): when circle `c` offends, every circle with the
 /// same radius and nearest gap (bitwise) as `c` doubles its count. This depends only on
 /// geometry, so mirror images are refined together. Errors: [`MeshError::Sampling`] when the
-/// invariants still fail after [`SamplingOptions::max_rounds`] rounds, when an offending
+/// hard invariants still fail after [`SamplingOptions::max_rounds`] rounds or an offending
 /// circle is already at [`SamplingOptions::max_per_circle`], when the total would exceed
 /// [`SamplingOptions::max_total`], or when samples coincide (a circle too small for its
-/// coordinates); [`MeshError::Triangulation`] from the engine.
+/// coordinates); [`MeshError::Triangulation`] from the engine; [`MeshError::Internal`] from
+/// the medial graph (not expected once the invariants hold).
 pub fn sample_and_triangulate(
     domain: &Domain,
     opts: &SamplingOptions,
@@ -416,54 +511,81 @@ pub fn sample_and_triangulate(
         let samples = sample(domain, &counts, &gaps);
         let triangulation = Triangulation::new(&samples.points)?;
         let kinds = classify(&samples, &triangulation);
-        let violations = check_invariants(&samples, &triangulation, &kinds);
-        if violations.is_empty() {
-            return Ok(SampledDomain {
+        let hard = check_invariants(&samples, &triangulation, &kinds);
+        let (violations, soft_result) = if hard.is_empty() {
+            let medial = medial_graph(&samples, &triangulation, &kinds)?;
+            let soft = thin_walls(&triangulation, &medial);
+            let done = SampledDomain {
                 samples,
                 triangulation,
                 kinds,
+                medial,
                 rounds: round,
-            });
-        }
-        if let Some(v) = violations
-            .iter()
-            .find(|v| matches!(v.kind, ViolationKind::Duplicate { .. }))
-        {
-            return Err(MeshError::Sampling {
-                circle: v.circle,
-                message: v.describe(),
-            });
-        }
-        let first = &violations[0];
-        if round >= opts.max_rounds {
-            return Err(MeshError::Sampling {
-                circle: first.circle,
-                message: format!(
-                    "{} ({} invariant violations left after {round} resampling rounds)",
-                    first.describe(),
-                    violations.len()
-                ),
-            });
-        }
-        let keys: HashSet<(u64, u64)> = violations
-            .iter()
-            .map(|v| {
-                let slot = (v.circle + 1) as usize;
-                (radii[slot].to_bits(), gaps[slot].to_bits())
-            })
-            .collect();
-        for slot in 0..counts.len() {
-            if keys.contains(&(radii[slot].to_bits(), gaps[slot].to_bits())) {
-                if counts[slot] >= cap {
-                    return Err(MeshError::Sampling {
-                        circle: slot as CircleId - 1,
-                        message: format!(
-                            "{} and the circle already has the most samples allowed ({cap})",
-                            first.describe()
-                        ),
-                    });
+                thin_walls: soft.clone(),
+            };
+            if soft.is_empty() || round >= opts.max_rounds {
+                return Ok(done);
+            }
+            (soft, Some(done))
+        } else {
+            if let Some(v) = hard
+                .iter()
+                .find(|v| matches!(v.kind, ViolationKind::Duplicate { .. }))
+            {
+                return Err(MeshError::Sampling {
+                    circle: v.circle,
+                    message: v.describe(),
+                });
+            }
+            if round >= opts.max_rounds {
+                return Err(MeshError::Sampling {
+                    circle: hard[0].circle,
+                    message: format!(
+                        "{} ({} invariant violations left after {round} resampling rounds)",
+                        hard[0].describe(),
+                        hard.len()
+                    ),
+                });
+            }
+            (hard, None)
+        };
+        // Refinement factor 2^k per (radius, gap) group, the largest any member needs.
+        let mut keys: HashMap<(u64, u64), u32> = HashMap::new();
+        for v in &violations {
+            let slot = (v.circle + 1) as usize;
+            let k = match (&v.kind, &soft_result) {
+                (ViolationKind::SingleSampleWall { arc }, Some(done)) => {
+                    refinement_log2(domain, &done.medial, *arc, v.circle, counts[slot])
                 }
-                counts[slot] = (counts[slot] * 2).min(cap);
+                _ => 1,
+            };
+            let e = keys
+                .entry((radii[slot].to_bits(), gaps[slot].to_bits()))
+                .or_insert(k);
+            *e = (*e).max(k);
+        }
+        let mut refined = false;
+        for slot in 0..counts.len() {
+            if let Some(&k) = keys.get(&(radii[slot].to_bits(), gaps[slot].to_bits())) {
+                if counts[slot] >= cap {
+                    if soft_result.is_none() {
+                        return Err(MeshError::Sampling {
+                            circle: slot as CircleId - 1,
+                            message: format!(
+                                "{} and the circle already has the most samples allowed ({cap})",
+                                violations[0].describe()
+                            ),
+                        });
+                    }
+                } else if k > 0 {
+                    counts[slot] = counts[slot].saturating_mul(1 << k).min(cap);
+                    refined = true;
+                }
+            }
+        }
+        if !refined {
+            if let Some(done) = soft_result {
+                return Ok(done);
             }
         }
         round += 1;

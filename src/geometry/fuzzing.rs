@@ -129,10 +129,36 @@ pub fn check_bytes(data: &[u8]) -> Result<(), String> {
     check_points(&pts)
 }
 
-/// Triangulate `pts` and check the outcome exactly, also against a shuffled copy.
+/// Triangulate `pts` and check the outcome exactly; on success also check that the reversed
+/// input gives the same triangles (as coordinate triples).
 pub fn check_points(pts: &[Point]) -> Result<(), String> {
-    match Triangulation::new(pts) {
-        Ok(dt) => verify_exact(&dt),
-        Err(e) => verify_error(pts, &e),
+    let dt = match Triangulation::new(pts) {
+        Ok(dt) => dt,
+        Err(e) => return verify_error(pts, &e),
+    };
+    verify_exact(&dt)?;
+    let reversed: Vec<Point> = pts.iter().rev().copied().collect();
+    let rt = Triangulation::new(&reversed).map_err(|e| format!("reversed input failed: {e}"))?;
+    if coordinate_triangles(&dt) != coordinate_triangles(&rt) {
+        return Err("reversed input gives different triangles".into());
     }
+    Ok(())
+}
+
+/// Triangles as sorted coordinate-bit triples, rotated to start at their smallest corner.
+fn coordinate_triangles(dt: &Triangulation) -> Vec<[[u64; 2]; 3]> {
+    let key = |v: u32| {
+        let p = dt.points()[v as usize];
+        [(p[0] + 0.0).to_bits(), (p[1] + 0.0).to_bits()]
+    };
+    let mut v: Vec<[[u64; 2]; 3]> = dt
+        .triangles()
+        .map(|t| {
+            let k = t.map(key);
+            let s = (0..3).min_by_key(|&i| k[i]).unwrap_or(0);
+            [k[s], k[(s + 1) % 3], k[(s + 2) % 3]]
+        })
+        .collect();
+    v.sort_unstable();
+    v
 }

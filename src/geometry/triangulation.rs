@@ -127,34 +127,29 @@ impl Triangulation {
                 max: MAX_POINTS,
             });
         }
-        let scaled: Vec<Point>;
-        let work: &[Point] = match safe_shift(points) {
-            Some(s) => {
-                scaled = points
-                    .iter()
-                    .map(|p| [scale(p[0], s), scale(p[1], s)])
-                    .collect();
-                &scaled
-            }
-            None => points,
-        };
+        let shift = safe_shift(points);
+        let order = super::order::insertion_order(points);
+        // Points in insertion order (vertex ids are positions in it), scaled by 2^shift.
+        let work: Vec<Point> = order
+            .iter()
+            .map(|&i| {
+                let p = points[i as usize];
+                shift.map_or(p, |s| [scale(p[0], s), scale(p[1], s)])
+            })
+            .collect();
         debug_assert!(work.iter().all(|p| p.iter().all(|&c| c.is_finite())));
-        let order = super::order::insertion_order(work);
         // First vertex, first point distinct from it, first point not collinear with them.
-        let a = match order.first() {
-            Some(&a) => a,
-            None => return Err(TriangulationError::TooFewPoints { distinct: 0 }),
+        let Some(&pa) = work.first() else {
+            return Err(TriangulationError::TooFewPoints { distinct: 0 });
         };
-        let pa = work[a as usize];
-        let Some(ib) = order.iter().position(|&i| work[i as usize] != pa) else {
+        let Some(b) = work.iter().position(|&p| p != pa) else {
             return Err(TriangulationError::TooFewPoints { distinct: 1 });
         };
-        let b = order[ib];
-        let pb = work[b as usize];
-        let Some(ic) = order[ib + 1..]
+        let pb = work[b];
+        let Some(c) = work[b + 1..]
             .iter()
-            .position(|&i| orient2d(pa, pb, work[i as usize]) != Ordering::Equal)
-            .map(|i| i + ib + 1)
+            .position(|&p| orient2d(pa, pb, p) != Ordering::Equal)
+            .map(|i| i + b + 1)
         else {
             let distinct = count_distinct(points);
             return Err(if distinct < 3 {
@@ -163,36 +158,35 @@ impl Triangulation {
                 TriangulationError::AllCollinear { distinct }
             });
         };
-        let c = order[ic];
-        let mut builder = Builder::new(work, a, b, c);
-        let internal = |e: super::build::Broken| TriangulationError::Internal { message: e.0 };
-        for (pos, &i) in order.iter().enumerate() {
-            if pos == 0 || pos == ib || pos == ic {
+        let mut builder = Builder::new(&work, 0, b as u32, c as u32);
+        for pos in 1..work.len() {
+            if pos == b || pos == c {
                 continue;
             }
-            builder.insert(i).map_err(internal)?;
+            builder
+                .insert(pos as u32)
+                .map_err(|e| TriangulationError::Internal { message: e.0 })?;
         }
-        Ok(Self::finish(points, builder))
+        Ok(Self::finish(points, &order, builder))
     }
 
     /// Compact the builder into finite triangles with input-index vertices.
-    fn finish(points: &[Point], b: Builder<'_>) -> Self {
+    /// `order[v]` is the input index of builder vertex `v`.
+    fn finish(points: &[Point], order: &[u32], b: Builder<'_>) -> Self {
         let inf = b.infinite();
-        // Duplicate groups: the smallest input index represents the group.
-        let mut rename: HashMap<u32, u32> = HashMap::new();
+        // Input index of each vertex; for a duplicate group, its smallest input index.
+        let mut input: Vec<u32> = order.to_vec();
         let mut duplicates = Vec::with_capacity(b.dups.len());
         if !b.dups.is_empty() {
             let mut groups: HashMap<u32, Vec<u32>> = HashMap::new();
             for &(v, d) in &b.dups {
-                groups.entry(v).or_default().push(d);
+                groups.entry(v).or_default().push(order[d as usize]);
             }
             for (v, mut members) in groups {
-                members.push(v);
+                members.push(order[v as usize]);
                 members.sort_unstable();
                 let first = members[0];
-                if first != v {
-                    rename.insert(v, first);
-                }
+                input[v as usize] = first;
                 duplicates.extend(members[1..].iter().map(|&d| (first, d)));
             }
             duplicates.sort_unstable();
@@ -212,7 +206,7 @@ impl Triangulation {
             if map[t] == NONE {
                 continue;
             }
-            let v = v.map(|x| rename.get(&x).copied().unwrap_or(x));
+            let v = v.map(|x| input[x as usize]);
             let nb = [0, 1, 2].map(|k| map[(b.adj[3 * t + k] / 3) as usize]);
             for &x in &v {
                 vertex_tri[x as usize] = map[t];
