@@ -185,18 +185,32 @@ pub fn edge_classes(layout: &BlockLayout) -> (Vec<usize>, usize) {
     (class, classes)
 }
 
-/// The hook for choosing the cell count of each conformity class. Today every class gets the
-/// target `cells` (the paper: equal counts and equal spacing); a smarter choice (by edge
-/// length, per-circle wall-normal counts, ...) belongs here. Returns one count per class, each
-/// at least 1.
+/// The largest angle one cell may span along a wall arc (15 degrees): a coarse `cells` on a
+/// block whose wall is a long arc (a small hole seen by few blocks, the bounding circle with
+/// few holes) would otherwise make transfinite interpolation fold cells near the wall.
+pub const MAX_ARC_PER_CELL: f64 = std::f64::consts::PI / 12.0;
+
+/// The hook for choosing the cell count of each conformity class. Every class gets the target
+/// `cells` (the paper: equal counts and equal spacing), raised where a class holds a wall arc
+/// that would otherwise span more than [`MAX_ARC_PER_CELL`] per cell. A smarter choice (by
+/// edge length, per-circle wall-normal counts, ...) belongs here. Returns one count per class,
+/// each at least 1.
 pub fn choose_counts(
     layout: &BlockLayout,
     class: &[usize],
     classes: usize,
     cells: usize,
 ) -> Vec<usize> {
-    let _ = (layout, class);
-    vec![cells; classes]
+    let mut counts = vec![cells.max(1); classes];
+    for (edge, &c) in layout.edges.iter().zip(class) {
+        if let Curve::Arc { sweep, .. } = edge.curve {
+            let needed = (sweep.abs() / MAX_ARC_PER_CELL).ceil();
+            if needed.is_finite() && needed > counts[c] as f64 {
+                counts[c] = (needed as usize).min(MAX_CELLS_PER_SIDE);
+            }
+        }
+    }
+    counts
 }
 
 /// Conformity classes and cell counts of every edge, with the limits checked.
