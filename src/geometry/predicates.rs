@@ -72,7 +72,7 @@ pub fn orient2d(a: Point, b: Point, c: Point) -> Ordering {
 ///
 /// Evaluation: a floating-point filter (Shewchuk's first-stage error bound); when it cannot
 /// decide, fixed-width integer arithmetic if the coordinate differences allow it
-/// ([`super::wide`]), else robust's adaptive stages; `rug` outside the safe range.
+/// (module `wide`), else robust's adaptive stages; `rug` outside the safe range.
 #[inline]
 pub fn incircle(a: Point, b: Point, c: Point, d: Point) -> Ordering {
     if !(safe(&a) & safe(&b) & safe(&c) & safe(&d)) {
