@@ -171,13 +171,13 @@ pub fn contract(medial: &MedialGraph, collapse: &[bool]) -> Result<Contracted, M
     let mut id_of_root = vec![u32::MAX; n];
     let mut cluster_of = vec![0u32; n];
     let mut members: Vec<Vec<u32>> = Vec::new();
-    for v in 0..n {
+    for (v, cluster) in cluster_of.iter_mut().enumerate() {
         let r = find(&mut parent, v as u32) as usize;
         if id_of_root[r] == u32::MAX {
             id_of_root[r] = members.len() as u32;
             members.push(Vec::new());
         }
-        cluster_of[v] = id_of_root[r];
+        *cluster = id_of_root[r];
         members[id_of_root[r] as usize].push(v as u32);
     }
     let vertices: Vec<MedialVertex> = members
