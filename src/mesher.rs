@@ -76,8 +76,12 @@ pub enum MeshError {
 
 /// Mesh `domain` with `options`.
 ///
-/// Two or more holes: sampling, exact Delaunay triangulation, medial graph and Blocking2D
-/// ([`crate::blocking`]); no hole (a disk) or one hole (an annulus): the standard templates of
+/// Two or more holes: macro Delaunay refinement ([`crate::refine`], paper Algorithm 3: holes
+/// are inserted while an interior triangle is poor, the paper's strategy of refining angles
+/// below ~15 degrees first), exact Apollonius circles and co-circular groups
+/// ([`crate::cocircular`]), collapse of zero-length and short arcs ([`crate::collapse`]),
+/// Blocking2D ([`crate::blocking::build_mesh_layout`]) and templates in the inserted holes;
+/// no hole (a disk) or one hole (an annulus): the standard templates of
 /// [`crate::templates`]. Then node counts and transfinite interpolation ([`crate::grid`]).
 ///
 /// ```

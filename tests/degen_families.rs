@@ -179,6 +179,21 @@ fn regular_ngons_around_one_empty_circle() {
         // n - 2 triangles, n - 3 zero-length arcs, all collapsed: one vertex of degree n.
         assert_eq!(g.vertices.len(), n - 2);
         assert!(m.collapsed_arcs >= n - 3);
+        // The merged vertex (the layout vertex nearest the centre) has degree n: 2n blocks
+        // meet there.
+        let centre = (0..m.layout.vertices.len())
+            .min_by(|&a, &b| {
+                let d = |v: usize| m.layout.vertices[v][0].hypot(m.layout.vertices[v][1]);
+                d(a).total_cmp(&d(b))
+            })
+            .unwrap() as u32;
+        let around = m
+            .layout
+            .blocks
+            .iter()
+            .filter(|b| b.corners.contains(&centre))
+            .count();
+        assert_eq!(around, 2 * n, "n = {n}");
         println!(
             "ngon {n}: {} blocks, {} collapsed, {} inserted, quality {:?}",
             m.layout.blocks.len(),
@@ -245,5 +260,40 @@ fn nudged_layouts_have_no_exact_group_but_collapse_the_short_arc() {
             .collect();
         assert_eq!(groups, vec![rest]);
         assert!(m.collapsed_arcs >= n - 3);
+    }
+}
+
+/// More than 12 co-circular holes: the fan's smallest angle is below 15 degrees, so macro
+/// Delaunay refinement (default ratio 2) inserts a hole at the common centre first (paper
+/// section 4.2) and the group is gone.
+#[test]
+fn large_ngons_are_refined_not_collapsed() {
+    for n in [13usize, 16] {
+        let r = 0.35 * (std::f64::consts::PI / n as f64).sin() * 2.0;
+        let holes: Vec<Circle> = ngon(n)
+            .into_iter()
+            .map(|c| Circle {
+                center: c,
+                radius: r,
+            })
+            .collect();
+        let d = Domain::bounded(Circle::new(0.0, 0.0, 3.5), holes).unwrap();
+        let m = mesh(&d, &opts()).unwrap();
+        check_mesh(&m);
+        let all: Vec<i32> = (0..n as i32).collect();
+        assert!(m.cocircular_groups.iter().all(|g| g.holes != all));
+        assert!(
+            m.inserted_holes
+                .iter()
+                .any(|c| c.center[0].hypot(c.center[1]) < 1e-9),
+            "n = {n}: {:?}",
+            m.inserted_holes
+        );
+        println!(
+            "ngon {n}: {} inserted, {} blocks, {} collapsed",
+            m.inserted_holes.len(),
+            m.layout.blocks.len(),
+            m.collapsed_arcs
+        );
     }
 }
