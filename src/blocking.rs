@@ -24,7 +24,7 @@
 //! medial vertex `i`), then one per sample used as a corner, in order of first use.
 
 use crate::domain::{CircleId, Domain};
-use crate::geometry::Triangulation;
+use crate::geometry::{Point, Triangulation};
 use crate::layout::{Block, BlockLayout, Curve, Edge, EdgeKind, SideRef};
 use crate::medial::{MedialGraph, TriangleKind};
 use crate::mesher::{MeshError, Options};
@@ -245,4 +245,423 @@ pub fn blocks(
         });
     }
     Ok((layout, vertex_samples))
+}
+
+/// The points of edge `e` along a block side: end vertices exactly, arcs at 8 equal angle
+/// steps, polylines through their points; in the side's direction.
+fn side_points(layout: &BlockLayout, side: SideRef) -> Vec<Point> {
+    let Some(edge) = layout.edges.get(side.edge as usize) else {
+        return Vec::new();
+    };
+    let v = |i: u32| layout.vertices.get(i as usize).copied().unwrap_or([0.0; 2]);
+    let mut pts: Vec<Point> = match &edge.curve {
+        Curve::Segment => vec![v(edge.ends[0]), v(edge.ends[1])],
+        Curve::Arc {
+            center,
+            radius,
+            start,
+            sweep,
+        } => (0..=8)
+            .map(|k| {
+                let a = start + sweep * k as f64 / 8.0;
+                [center[0] + radius * a.cos(), center[1] + radius * a.sin()]
+            })
+            .collect(),
+        Curve::Polyline(p) => p.clone(),
+    };
+    if let Some(first) = pts.first_mut() {
+        *first = v(edge.ends[0]);
+    }
+    if let Some(last) = pts.last_mut() {
+        *last = v(edge.ends[1]);
+    }
+    if side.reversed {
+        pts.reverse();
+    }
+    pts
+}
+
+/// The signed area of block `b`'s outline (its four sides, arcs sampled at 8 steps): positive
+/// for a valid counter-clockwise block, zero for a collapsed one. `0` for a bad index.
+pub fn block_area(layout: &BlockLayout, b: usize) -> f64 {
+    let Some(block) = layout.blocks.get(b) else {
+        return 0.0;
+    };
+    let mut outline: Vec<Point> = Vec::new();
+    for s in block.sides {
+        let pts = side_points(layout, s);
+        outline.extend_from_slice(&pts[..pts.len().saturating_sub(1)]);
+    }
+    let n = outline.len();
+    if n < 3 {
+        return 0.0;
+    }
+    let o = outline[0];
+    let mut twice = 0.0;
+    for k in 1..n - 1 {
+        let (a, c) = (outline[k], outline[k + 1]);
+        twice += (a[0] - o[0]) * (c[1] - o[1]) - (a[1] - o[1]) * (c[0] - o[0]);
+    }
+    0.5 * twice
+}
+
+/// Split edge `e` at the new vertex `v`: `e` keeps `ends[0] -> v`, a new edge `v -> ends[1]`
+/// is appended; returns its id. `first` / `second` are the two curves.
+fn split_edge(layout: &mut BlockLayout, e: usize, v: u32, first: Curve, second: Curve) -> u32 {
+    let end = layout.edges[e].ends[1];
+    let kind = layout.edges[e].kind;
+    layout.edges[e].ends[1] = v;
+    layout.edges[e].curve = first;
+    layout.edges.push(Edge {
+        ends: [v, end],
+        curve: second,
+        kind,
+    });
+    (layout.edges.len() - 1) as u32
+}
+
+/// The side reference running `from -> to` along edge `a` or `b`.
+fn piece(layout: &BlockLayout, a: u32, b: u32, from: u32, to: u32) -> Option<SideRef> {
+    for e in [a, b] {
+        let ends = layout.edges[e as usize].ends;
+        if ends == [from, to] {
+            return Some(SideRef {
+                edge: e,
+                reversed: false,
+            });
+        }
+        if ends == [to, from] {
+            return Some(SideRef {
+                edge: e,
+                reversed: true,
+            });
+        }
+    }
+    None
+}
+
+/// The point at half the length of a polyline, and the two halves (each with both ends).
+fn halve_polyline(pts: &[Point]) -> Option<(Point, Vec<Point>, Vec<Point>)> {
+    let total: f64 = pts
+        .windows(2)
+        .map(|w| (w[1][0] - w[0][0]).hypot(w[1][1] - w[0][1]))
+        .sum();
+    if !(total > 0.0 && total.is_finite()) {
+        return None;
+    }
+    let mut acc = 0.0;
+    for (i, w) in pts.windows(2).enumerate() {
+        let l = (w[1][0] - w[0][0]).hypot(w[1][1] - w[0][1]);
+        if acc + l >= 0.5 * total && l > 0.0 {
+            let t = ((0.5 * total - acc) / l).clamp(0.0, 1.0);
+            let m = [
+                w[0][0] + t * (w[1][0] - w[0][0]),
+                w[0][1] + t * (w[1][1] - w[0][1]),
+            ];
+            let mut a = pts[..=i].to_vec();
+            a.push(m);
+            let mut b = vec![m];
+            b.extend_from_slice(&pts[i + 1..]);
+            return Some((m, a, b));
+        }
+        acc += l;
+    }
+    None
+}
+
+/// The blocks whose side 2 is edge `e`.
+fn blocks_on_medial(layout: &BlockLayout, e: u32) -> Vec<usize> {
+    (0..layout.blocks.len())
+        .filter(|&b| layout.blocks[b].sides[2].edge == e)
+        .collect()
+}
+
+/// Sweep of a block's side-0 arc (`None` when it is not an arc).
+fn wall_sweep(layout: &BlockLayout, b: usize) -> Option<f64> {
+    let e = layout.blocks[b].sides[0].edge as usize;
+    match layout.edges.get(e)?.curve {
+        Curve::Arc { sweep, .. } => Some(sweep),
+        _ => None,
+    }
+}
+
+/// Split the two medial blocks on medial edge `e` (side 2 of both) into four: a new vertex at
+/// half the medial arc's length, one at half of each wall arc's sweep, and a straight spoke
+/// from the first to each of the others. Every other block is unchanged; node counts stay
+/// conforming (the new spokes join the spoke classes of the two circles). `None` (layout
+/// unchanged) when `e` does not have exactly two medial blocks with arc walls, or the medial
+/// arc has zero length.
+pub fn split_block_pair(layout: &mut BlockLayout, e: u32) -> Option<()> {
+    let pair = blocks_on_medial(layout, e);
+    if pair.len() != 2 || pair.iter().any(|&b| wall_sweep(layout, b).is_none()) {
+        return None;
+    }
+    let pts = match &layout.edges.get(e as usize)?.curve {
+        Curve::Polyline(p) => p.clone(),
+        Curve::Segment => {
+            let ends = layout.edges[e as usize].ends;
+            vec![
+                layout.vertices[ends[0] as usize],
+                layout.vertices[ends[1] as usize],
+            ]
+        }
+        Curve::Arc { .. } => return None,
+    };
+    let (m, first, second) = halve_polyline(&pts)?;
+    layout.vertices.push(m);
+    let mv = (layout.vertices.len() - 1) as u32;
+    let e2 = split_edge(
+        layout,
+        e as usize,
+        mv,
+        Curve::Polyline(first),
+        Curve::Polyline(second),
+    );
+    for b in pair {
+        let block = layout.blocks[b].clone();
+        let [c0, c1, c2, c3] = block.corners;
+        let we = block.sides[0].edge as usize;
+        let Curve::Arc {
+            center,
+            radius,
+            start,
+            sweep,
+        } = layout.edges[we].curve
+        else {
+            return None;
+        };
+        let mid = start + 0.5 * sweep;
+        let w = [
+            center[0] + radius * mid.cos(),
+            center[1] + radius * mid.sin(),
+        ];
+        layout.vertices.push(w);
+        let wv = (layout.vertices.len() - 1) as u32;
+        let arc = |start: f64, sweep: f64| Curve::Arc {
+            center,
+            radius,
+            start,
+            sweep,
+        };
+        let w2 = split_edge(
+            layout,
+            we,
+            wv,
+            arc(start, 0.5 * sweep),
+            arc(mid, sweep - 0.5 * sweep),
+        );
+        layout.edges.push(Edge {
+            ends: [mv, wv],
+            curve: Curve::Segment,
+            kind: EdgeKind::Spoke,
+        });
+        let spoke = (layout.edges.len() - 1) as u32;
+        let we = we as u32;
+        let s0a = piece(layout, we, w2, c0, wv)?;
+        let s0b = piece(layout, we, w2, wv, c1)?;
+        let s2a = piece(layout, e, e2, mv, c3)?;
+        let s2b = piece(layout, e, e2, c2, mv)?;
+        layout.blocks[b] = Block {
+            corners: [c0, wv, mv, c3],
+            sides: [
+                s0a,
+                SideRef {
+                    edge: spoke,
+                    reversed: true,
+                },
+                s2a,
+                block.sides[3],
+            ],
+            wall: block.wall,
+        };
+        layout.blocks.push(Block {
+            corners: [wv, c1, c2, mv],
+            sides: [
+                s0b,
+                block.sides[1],
+                s2b,
+                SideRef {
+                    edge: spoke,
+                    reversed: false,
+                },
+            ],
+            wall: block.wall,
+        });
+    }
+    Some(())
+}
+
+/// The largest sweep (radians) an inserted hole's side may have before its block pair is split
+/// (the template's ring block is then far from convex).
+pub const MAX_TEMPLATE_SWEEP: f64 = 2.0 * std::f64::consts::FRAC_PI_3;
+
+/// Make the sides of inserted hole `hole` fit the template: split block pairs (widest side
+/// first) until the hole has an even number of sides, at least 4, none wider than
+/// [`MAX_TEMPLATE_SWEEP`] (bounded effort). Returns the number of splits.
+fn prepare_inserted_hole(layout: &mut BlockLayout, hole: CircleId) -> usize {
+    let mut splits = 0;
+    for _ in 0..16 {
+        let on_hole: Vec<usize> = (0..layout.blocks.len())
+            .filter(|&b| {
+                let e = layout.blocks[b].sides[0].edge as usize;
+                layout.edges.get(e).map(|x| x.kind) == Some(EdgeKind::Wall(hole))
+            })
+            .collect();
+        let k = on_hole.len();
+        let widest = on_hole
+            .iter()
+            .filter_map(|&b| wall_sweep(layout, b).map(|s| s.abs()))
+            .fold(0.0, f64::max);
+        if k % 2 == 0 && k >= 4 && widest <= MAX_TEMPLATE_SWEEP {
+            break;
+        }
+        // Candidates: blocks on the hole whose partner across the medial arc has a non-empty
+        // wall and whose medial arc has a length.
+        let mut best: Option<(f64, u32)> = None;
+        for &b in &on_hole {
+            let e = layout.blocks[b].sides[2].edge;
+            let pair = blocks_on_medial(layout, e);
+            if pair.len() != 2 {
+                continue;
+            }
+            let partner = if pair[0] == b { pair[1] } else { pair[0] };
+            let ok = wall_sweep(layout, partner).is_some_and(|s| s != 0.0);
+            let sweep = wall_sweep(layout, b).map_or(0.0, f64::abs);
+            if ok && best.map_or(true, |(s, _)| sweep > s) {
+                best = Some((sweep, e));
+            }
+        }
+        let Some((_, e)) = best else { break };
+        if split_block_pair(layout, e).is_none() {
+            break;
+        }
+        splits += 1;
+    }
+    splits
+}
+
+/// The result of [`build_mesh_layout`]: the full blocking with degeneracy handling.
+#[derive(Debug, Clone)]
+pub struct MeshLayout {
+    pub layout: BlockLayout,
+    /// The final domain: the input holes, then the inserted ones.
+    pub domain: Domain,
+    /// Medial counts of the final domain before collapse.
+    pub medial_vertices: usize,
+    pub medial_arcs: usize,
+    pub cocircular_groups: Vec<crate::cocircular::CocircularGroup>,
+    pub collapsed_arcs: usize,
+    pub inserted_holes: Vec<crate::domain::Circle>,
+    pub split_arcs: usize,
+    pub template_blocks: usize,
+    /// Minimum gap of the domain per refinement round (non-decreasing, paper Lemma 2).
+    pub min_gaps: Vec<f64>,
+}
+
+/// The full pipeline front end for `h >= 2` holes (paper sections 3 and 4): macro Delaunay
+/// refinement ([`crate::refine`]), exact circles and co-circular groups
+/// ([`crate::cocircular`]), arc collapse ([`crate::collapse`]), Blocking2D on the contracted
+/// graph, then templates in the inserted holes ([`crate::templates::fill_inserted_hole`]),
+/// after splitting block pairs so that each inserted hole has an even number of sides.
+///
+/// Blocks: `6(h + m - 1) - 2 collapsed + 2 splits + template blocks`. Short (non-zero)
+/// collapses that would leave a block with non-positive outline area ([`block_area`]) are
+/// given up (at most 8 retries); zero-length arcs are always collapsed.
+pub fn build_mesh_layout(domain: &Domain, options: &Options) -> Result<MeshLayout, MeshError> {
+    build_mesh_layout_with(domain, options, &SamplingOptions::default())
+}
+
+/// [`build_mesh_layout`] with explicit sampling options.
+pub fn build_mesh_layout_with(
+    domain: &Domain,
+    options: &Options,
+    sampling: &SamplingOptions,
+) -> Result<MeshLayout, MeshError> {
+    use crate::{cocircular, collapse, refine, templates};
+    let h = domain.hole_count();
+    if h < 2 {
+        return Err(MeshError::Options(format!(
+            "medial blocking needs at least 2 holes, the domain has {h} (use the disk/annulus \
+             templates)"
+        )));
+    }
+    if !(options.collapse_fraction.is_finite() && options.collapse_fraction >= 0.0) {
+        return Err(MeshError::Options(format!(
+            "the collapse fraction must be a number >= 0, not {}",
+            options.collapse_fraction
+        )));
+    }
+    let refined = refine::refine(
+        domain,
+        options.refine_ratio,
+        options.max_inserted_holes,
+        sampling,
+    )?;
+    let final_domain = refined.domain;
+    let sampled = refined.sampled;
+    let medial = &sampled.medial;
+    let groups = cocircular::cocircular_groups(medial, &refined.circles);
+    let mut exclude = vec![false; medial.arcs.len()];
+    let mut attempt = 0;
+    let (mut layout, collapsed) = loop {
+        attempt += 1;
+        let chosen = collapse::select(
+            medial,
+            &sampled.triangulation,
+            &refined.circles,
+            &groups,
+            &sampled.samples.points,
+            options.collapse_fraction,
+            &exclude,
+        );
+        let mut flags = vec![false; medial.arcs.len()];
+        for c in &chosen {
+            flags[c.arc as usize] = true;
+        }
+        let contracted = collapse::contract(medial, &flags)?;
+        let (layout, _) = blocks(&final_domain, &sampled.samples, &contracted.graph)?;
+        let nv = contracted.graph.vertices.len() as u32;
+        let mut bad_clusters: Vec<u32> = Vec::new();
+        for b in 0..layout.blocks.len() {
+            if block_area(&layout, b) <= 0.0 {
+                bad_clusters.extend(layout.blocks[b].corners.iter().filter(|&&v| v < nv));
+            }
+        }
+        let mut changed = false;
+        for c in &chosen {
+            let ends = medial.arcs[c.arc as usize].ends;
+            if !c.zero && bad_clusters.contains(&contracted.cluster_of[ends[0] as usize]) {
+                exclude[c.arc as usize] = true;
+                changed = true;
+            }
+        }
+        if !changed || attempt >= 8 {
+            break (layout, chosen.len());
+        }
+    };
+    let mut split_arcs = 0;
+    let before = layout.blocks.len();
+    let mut template_blocks = 0;
+    for (k, &circle) in refined.inserted.iter().enumerate() {
+        let id = (h + k) as CircleId;
+        split_arcs += prepare_inserted_hole(&mut layout, id);
+        template_blocks += templates::fill_inserted_hole(&mut layout, id, circle)
+            .map_err(|e| MeshError::Internal(format!("inserted hole {id}: {e}")))?;
+    }
+    debug_assert_eq!(
+        layout.blocks.len(),
+        before + split_arcs * 2 + template_blocks
+    );
+    Ok(MeshLayout {
+        layout,
+        domain: final_domain,
+        medial_vertices: medial.vertex_count(),
+        medial_arcs: medial.arc_count(),
+        cocircular_groups: groups,
+        collapsed_arcs: collapsed,
+        inserted_holes: refined.inserted,
+        split_arcs,
+        template_blocks,
+        min_gaps: refined.min_gaps,
+    })
 }

@@ -18,6 +18,8 @@ pub mod geometry;
 
 pub mod apollonius;
 pub mod blocking;
+pub mod cocircular;
+pub mod collapse;
 pub mod connectivity;
 pub mod domain;
 pub mod grid;
@@ -28,6 +30,7 @@ pub mod mesher;
 pub mod numbering;
 pub mod output;
 pub mod quality;
+pub mod refine;
 pub mod sampling;
 pub mod templates;
 

@@ -1,5 +1,7 @@
 //! The finished mesh: the layout, a structured grid per block, and what the pipeline learnt.
 
+use crate::cocircular::CocircularGroup;
+use crate::domain::Circle;
 use crate::geometry::Point;
 use crate::layout::BlockLayout;
 
@@ -33,12 +35,45 @@ impl BlockGrid {
 }
 
 /// A multiblock structured mesh.
-#[derive(Debug, Clone)]
+///
+/// Counting identity (`h >= 2` input holes, `m` inserted holes): `medial_vertices =
+/// 2(h + m - 1)`, `medial_arcs = 3(h + m - 1)` (the graph before collapse) and
+/// `layout.blocks.len() = 6(h + m - 1) - 2 collapsed_arcs + 2 split_arcs + template_blocks`.
+/// Build one with [`Mesh::new`] or a struct literal ending in `..Mesh::default()`, so that
+/// fields added later do not break it.
+#[derive(Debug, Clone, Default)]
 pub struct Mesh {
     pub layout: BlockLayout,
     pub grids: Vec<BlockGrid>,
-    /// Number of medial vertices and arcs (0 for the template cases).
+    /// Number of medial vertices and arcs of the final (refined) domain before arc collapse
+    /// (0 for the template cases).
     pub medial_vertices: usize,
     pub medial_arcs: usize,
+    /// Number of holes of the input domain (inserted holes not counted).
     pub holes: usize,
+    /// Co-circular hole groups of the final domain (paper section 4.2), hole ids as in the
+    /// input (`-1` the bounding circle; ids `>= holes` are inserted holes,
+    /// `inserted_holes[id - holes]`).
+    pub cocircular_groups: Vec<CocircularGroup>,
+    /// Medial arcs collapsed (zero-length and short arcs, [`crate::collapse`]).
+    pub collapsed_arcs: usize,
+    /// Holes inserted by macro Delaunay refinement ([`crate::refine`]); they are fluid, filled
+    /// by template blocks ([`crate::templates::fill_inserted_hole`]).
+    pub inserted_holes: Vec<Circle>,
+    /// Medial block pairs split in two to give an inserted hole an even number of sides.
+    pub split_arcs: usize,
+    /// Blocks inside inserted holes.
+    pub template_blocks: usize,
+}
+
+impl Mesh {
+    /// A mesh of `layout` and `grids` for `holes` input holes, with no medial facts.
+    pub fn new(layout: BlockLayout, grids: Vec<BlockGrid>, holes: usize) -> Mesh {
+        Mesh {
+            layout,
+            grids,
+            holes,
+            ..Mesh::default()
+        }
+    }
 }

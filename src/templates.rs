@@ -235,3 +235,143 @@ pub fn annulus(bounding: Circle, hole: Circle) -> BlockLayout {
         blocks,
     }
 }
+
+/// Radius of the core polygon of an inserted-hole template, as a fraction of the hole radius.
+pub const INSERTED_CORE_FRACTION: f64 = 0.5;
+
+/// Fill inserted hole `hole` (a hole added by macro Delaunay refinement, paper Algorithm 3;
+/// it is fluid, not a wall) with template blocks conforming to the blocks around it. Returns
+/// the number of blocks added.
+///
+/// The blocks outside split the hole's circle into `k` arcs (edges of kind `Wall(hole)`).
+/// The template is a generalised O-grid:
+/// - a *ring* of `k` blocks, block `i` between arc `i` (its side 0, the outer edge reversed)
+///   and the chord `q_i q_{i+1}` of a concentric core polygon (side 2) whose vertices `q_i`
+///   lie at [`INSERTED_CORE_FRACTION`] of the radius on the rays through the arc ends `p_i`;
+///   sides 1 and 3 are the radial segments `p_i q_i`;
+/// - the *core* `k`-gon cut into `k/2 - 1` quadrilaterals by the chords `q_j q_{k-1-j}`
+///   (a ladder; for `k = 4` the single core square of the standard O-grid).
+///
+/// Every template edge is a whole block side, so conformity only adds equal-count classes
+/// (arc `i` with core edge `i`, opposite core edges, all radial segments): no node-count
+/// arithmetic is needed. A quadrangulation without boundary Steiner points needs `k` even, so
+/// the caller first splits a block pair outside when `k` is odd
+/// ([`crate::blocking::split_block_pair`]). The hole's arcs become [`EdgeKind::Interface`] and
+/// the outer blocks on them get `wall: None`.
+///
+/// Errors (layout unchanged): fewer than 4 or an odd number of arcs, arcs that do not close
+/// up into one counter-clockwise cycle, or an arc of half a turn or more.
+pub fn fill_inserted_hole(
+    layout: &mut BlockLayout,
+    hole: CircleId,
+    circle: Circle,
+) -> Result<usize, String> {
+    use std::f64::consts::{PI, TAU};
+    // (edge, ccw start angle, ccw sweep, ccw first vertex, ccw last vertex)
+    let mut arcs: Vec<(usize, f64, f64, u32, u32)> = Vec::new();
+    for (e, edge) in layout.edges.iter().enumerate() {
+        if edge.kind != EdgeKind::Wall(hole) {
+            continue;
+        }
+        let Curve::Arc { start, sweep, .. } = edge.curve else {
+            return Err(format!("edge {e} on the hole is not an arc"));
+        };
+        let (a, s, lo, hi) = if sweep < 0.0 {
+            (start + sweep, -sweep, edge.ends[1], edge.ends[0])
+        } else {
+            (start, sweep, edge.ends[0], edge.ends[1])
+        };
+        arcs.push((e, a.rem_euclid(TAU), s, lo, hi));
+    }
+    let k = arcs.len();
+    if k < 4 || k % 2 == 1 {
+        return Err(format!(
+            "{k} arcs around the hole (need an even number >= 4)"
+        ));
+    }
+    arcs.sort_by(|x, y| x.1.total_cmp(&y.1).then(x.0.cmp(&y.0)));
+    let total: f64 = arcs.iter().map(|a| a.2).sum();
+    if (total - TAU).abs() > 1e-6 {
+        return Err(format!("the arcs sweep {total} radians, not a full turn"));
+    }
+    for i in 0..k {
+        if arcs[i].4 != arcs[(i + 1) % k].3 {
+            return Err("the arcs do not form one cycle".into());
+        }
+        if arcs[i].2 >= PI {
+            return Err(format!("an arc sweeps {} radians", arcs[i].2));
+        }
+    }
+    let c = circle.center;
+    let p: Vec<u32> = arcs.iter().map(|a| a.3).collect();
+    let q0 = layout.vertices.len() as u32;
+    for a in &arcs {
+        layout
+            .vertices
+            .push(on_circle(c, INSERTED_CORE_FRACTION * circle.radius, a.1));
+    }
+    let q = |i: usize| q0 + (i % k) as u32;
+    let push_edge = |layout: &mut BlockLayout, ends: [u32; 2]| -> usize {
+        layout.edges.push(Edge {
+            ends,
+            curve: Curve::Segment,
+            kind: EdgeKind::Interface,
+        });
+        layout.edges.len() - 1
+    };
+    let radial: Vec<usize> = (0..k).map(|i| push_edge(layout, [q(i), p[i]])).collect();
+    let core: Vec<usize> = (0..k)
+        .map(|i| push_edge(layout, [q(i), q(i + 1)]))
+        .collect();
+    let first_block = layout.blocks.len();
+    for i in 0..k {
+        let j = (i + 1) % k;
+        let outer = arcs[i].0;
+        let reversed = layout.edges[outer].ends != [p[i], p[j]];
+        layout.blocks.push(Block {
+            corners: [p[i], p[j], q(j), q(i)],
+            sides: [
+                side(outer, reversed),
+                side(radial[j], true),
+                side(core[i], true),
+                side(radial[i], false),
+            ],
+            wall: None,
+        });
+    }
+    // Ladder: chord_j joins q_j and q_{k-1-j}; chord_0 is core edge k-1 (q_{k-1} -> q_0),
+    // chord_{m-1} is core edge m-1 (q_{m-1} -> q_m).
+    let m = k / 2;
+    let mut chord: Vec<(usize, bool)> = vec![(core[k - 1], true)];
+    for j in 1..m - 1 {
+        chord.push((push_edge(layout, [q(j), q(k - 1 - j)]), false));
+    }
+    chord.push((core[m - 1], false));
+    for j in 0..m - 1 {
+        // Side 1 runs q_{j+1} -> q_{k-2-j}; side 3 runs q_{k-1-j} -> q_j.
+        let (c1, _) = chord[j + 1];
+        let (c3, c3_is_core) = chord[j];
+        layout.blocks.push(Block {
+            corners: [q(j), q(j + 1), q(k - 2 - j), q(k - 1 - j)],
+            sides: [
+                side(core[j], false),
+                side(c1, false),
+                side(core[k - 2 - j], false),
+                // A stored chord runs q_j -> q_{k-1-j}: reversed here; chord_0 (core edge
+                // k-1) already runs q_{k-1} -> q_0.
+                side(c3, !c3_is_core),
+            ],
+            wall: None,
+        });
+    }
+    for a in &arcs {
+        layout.edges[a.0].kind = EdgeKind::Interface;
+    }
+    let hole_edges: Vec<u32> = arcs.iter().map(|a| a.0 as u32).collect();
+    for b in layout.blocks[..first_block].iter_mut() {
+        if hole_edges.contains(&b.sides[0].edge) {
+            b.wall = None;
+        }
+    }
+    Ok(layout.blocks.len() - first_block)
+}

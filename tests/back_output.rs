@@ -19,6 +19,7 @@ fn make_mesh(layout: BlockLayout, holes: usize, cells: usize) -> Mesh {
         medial_vertices: 0,
         medial_arcs: 0,
         holes,
+        ..Mesh::default()
     }
 }
 

@@ -115,6 +115,7 @@ fn mesh() -> Mesh {
         medial_vertices: 0,
         medial_arcs: 0,
         holes: 1,
+        ..Mesh::default()
     }
 }
 
@@ -150,6 +151,7 @@ fn meshes() -> Vec<Mesh> {
             medial_vertices: 0,
             medial_arcs: 0,
             holes,
+            ..Mesh::default()
         });
     }
     out

@@ -1,4 +1,5 @@
-//! `medial-blocks mesh [INPUT] [-o DIR] [--mode paper] [--cells N] [--format LIST]`.
+//! `medial-blocks mesh [INPUT] [-o DIR] [--mode paper] [--cells N] [--format LIST]
+//! [--refine-ratio R] [--no-refine] [--collapse-fraction F]`.
 
 use super::Failure;
 use medial_blocks::domain::{Circle, Domain};
@@ -45,6 +46,17 @@ pub struct Args {
     /// The bounding circle `X,Y,R` for a CSV input.
     #[arg(long, allow_hyphen_values = true)]
     pub bounding: Option<String>,
+    /// Macro Delaunay refinement: insert holes while an interior triangle has circumradius /
+    /// shortest edge above R (paper Algorithm 3; 2.0 means smallest angles above ~14.5 deg).
+    #[arg(long, default_value_t = medial_blocks::mesher::DEFAULT_REFINE_RATIO)]
+    pub refine_ratio: f64,
+    /// No macro Delaunay refinement (no inserted holes).
+    #[arg(long)]
+    pub no_refine: bool,
+    /// Collapse medial arcs shorter than F times the local empty-circle radius (0: only
+    /// zero-length arcs, which are always collapsed).
+    #[arg(long, default_value_t = medial_blocks::mesher::DEFAULT_COLLAPSE_FRACTION)]
+    pub collapse_fraction: f64,
     /// Print nothing on success.
     #[arg(short, long)]
     pub quiet: bool,
@@ -141,6 +153,9 @@ pub fn run(args: Args) -> Result<(), Failure> {
             ModeArg::Paper => Mode::Paper,
         },
         cells: args.cells,
+        refine_ratio: (!args.no_refine).then_some(args.refine_ratio),
+        collapse_fraction: args.collapse_fraction,
+        ..Options::default()
     };
     let mesh = mesh(&domain, &options).map_err(|e| match e {
         medial_blocks::MeshError::Internal(_) => Failure::output(e.to_string()),

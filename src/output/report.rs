@@ -2,6 +2,8 @@
 //! do not rename them.
 
 use super::write_atomic;
+use crate::cocircular::CocircularGroup;
+use crate::domain::Circle;
 use crate::mesh::Mesh;
 use crate::quality::measure;
 use serde::Serialize;
@@ -12,7 +14,10 @@ use std::path::Path;
 ///
 /// Required keys (exact names): `holes`, `blocks`, `cells`, `min_angle_deg`, `max_angle_deg`,
 /// `mean_min_angle_deg`, `mean_max_angle_deg`, `inverted_cells`, `medial_vertices`,
-/// `medial_arcs`. Angle figures are those of [`crate::quality::Quality`] (0 when there are no
+/// `medial_arcs`, `cocircular_groups` (`[{"holes": [...], "center": [x, y], "radius": r}]`,
+/// hole ids 0-based as in the input, `-1` the bounding circle, ids from `holes` on the
+/// inserted holes), `collapsed_arcs`, `inserted_holes` (`[{"center": [x, y], "radius": r}]`).
+/// Angle figures are those of [`crate::quality::Quality`] (0 when there are no
 /// cells); a non-finite figure is written as `null`.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct Report {
@@ -29,6 +34,9 @@ pub struct Report {
     pub min_scaled_jacobian: f64,
     pub medial_vertices: usize,
     pub medial_arcs: usize,
+    pub cocircular_groups: Vec<CocircularGroup>,
+    pub collapsed_arcs: usize,
+    pub inserted_holes: Vec<Circle>,
 }
 
 impl Report {
@@ -48,6 +56,9 @@ impl Report {
             min_scaled_jacobian: q.min_scaled_jacobian,
             medial_vertices: mesh.medial_vertices,
             medial_arcs: mesh.medial_arcs,
+            cocircular_groups: mesh.cocircular_groups.clone(),
+            collapsed_arcs: mesh.collapsed_arcs,
+            inserted_holes: mesh.inserted_holes.clone(),
         }
     }
 }

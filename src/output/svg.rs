@@ -193,6 +193,8 @@ fn write_to<W: Write>(w: &mut W, mesh: &Mesh) -> io::Result<()> {
     }
     writeln!(w, "  </g>")?;
 
+    write_degeneracy_marks(w, mesh, &v)?;
+
     writeln!(
         w,
         "  <g font-family=\"sans-serif\" font-size=\"11\" fill=\"#1f4e9c\" text-anchor=\"middle\">"
@@ -208,4 +210,40 @@ fn write_to<W: Write>(w: &mut W, mesh: &Mesh) -> io::Result<()> {
     }
     writeln!(w, "  </g>")?;
     writeln!(w, "</svg>")
+}
+
+/// Marks for paper section 4: each co-circular group's empty circle (dashed, green, class
+/// `cocircular-group`) and each inserted hole (dashed, orange, class `inserted-hole`).
+fn write_degeneracy_marks<W: Write>(w: &mut W, mesh: &Mesh, v: &View) -> io::Result<()> {
+    if mesh.cocircular_groups.is_empty() && mesh.inserted_holes.is_empty() {
+        return Ok(());
+    }
+    writeln!(
+        w,
+        "  <g fill=\"none\" stroke-width=\"1.5\" stroke-dasharray=\"4 3\">"
+    )?;
+    let finite = |c: [f64; 2], r: f64| c[0].is_finite() && c[1].is_finite() && r.is_finite();
+    for g in &mesh.cocircular_groups {
+        if finite(g.center, g.radius) {
+            writeln!(
+                w,
+                "    <circle class=\"cocircular-group\" stroke=\"#2ca02c\" cx=\"{:.3}\" cy=\"{:.3}\" r=\"{:.3}\"/>",
+                v.x(g.center[0]),
+                v.y(g.center[1]),
+                g.radius * v.scale
+            )?;
+        }
+    }
+    for h in &mesh.inserted_holes {
+        if finite(h.center, h.radius) {
+            writeln!(
+                w,
+                "    <circle class=\"inserted-hole\" stroke=\"#ff7f0e\" cx=\"{:.3}\" cy=\"{:.3}\" r=\"{:.3}\"/>",
+                v.x(h.center[0]),
+                v.y(h.center[1]),
+                h.radius * v.scale
+            )?;
+        }
+    }
+    writeln!(w, "  </g>")
 }

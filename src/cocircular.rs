@@ -1,0 +1,211 @@
+//! Exact circle geometry at medial vertices and co-circular hole groups (DESIGN sections 5
+//! and 6, paper section 4.2).
+//!
+//! Every medial vertex is an interior Delaunay triangle whose three samples lie on three
+//! different circles `i, j, k`. Its *exact* position is the Apollonius circle tangent to those
+//! three circles (externally to holes, internally to the bounding circle), computed by
+//! [`crate::apollonius`] in `Q(sqrt D)`. Of the (at most two) valid roots we take the one whose
+//! tangent points turn counter-clockwise in the triangle's vertex order (the triangle's own
+//! orientation) and, if both do, the one nearest the triangle's circumcentre
+//! ([`vertex_circles`]). A vertex whose solve fails (no valid root with that orientation,
+//! which only happens when the sampled combinatorics disagree with the true medial axis) has
+//! `None` and is treated with its sampled circumcircle elsewhere.
+//!
+//! A *co-circular group* is a maximal set of medial vertices joined by medial arcs whose two
+//! Apollonius circles are exactly the same circle ([`crate::apollonius::same_circle`]): `n >= 4`
+//! circles tangent to one empty circle, which the sampled triangulation shows as `n - 2`
+//! interior triangles joined by `n - 3` zero-length (or, after rounding, tiny) arcs. Groups are
+//! reported with their circles (ids as in the input: holes `0..`, the bounding circle `-1`),
+//! and the rounded centre and radius of the common circle ([`cocircular_groups`]).
+//!
+//! A medial arc is *degenerate* (its true length is zero, [`is_zero_length`]) when its ends are
+//! in one group, when all its sampled points coincide, or when it crosses a single Delaunay
+//! edge whose four points are exactly co-circular (the engine's sample-level tie,
+//! [`crate::geometry::Triangulation::is_cocircular_edge`]). Degenerate arcs are always
+//! collapsed ([`crate::collapse`]).
+
+use crate::apollonius::{apollonius, same_circle, Apollonius, Choice, Sign, Site};
+use crate::domain::{CircleId, Domain};
+use crate::geometry::{Point, Triangulation};
+use crate::medial::{MedialArc, MedialGraph};
+use serde::Serialize;
+
+/// The tangency site of circle `id` of `domain` (a hole, or the bounding circle for `-1`).
+pub fn site(domain: &Domain, id: CircleId) -> Site {
+    let c = domain.circle(id);
+    if id < 0 {
+        Site::bounding(c)
+    } else {
+        Site::hole(c)
+    }
+}
+
+/// The exact Apollonius circle of every medial vertex (see the module documentation), or
+/// `None` where no valid root has the triangle's orientation. Circle ids of the graph must
+/// be ids of `domain` (the graph was built from its samples).
+pub fn vertex_circles(domain: &Domain, medial: &MedialGraph) -> Vec<Option<Apollonius>> {
+    let n = domain.hole_count() as CircleId;
+    medial
+        .vertices
+        .iter()
+        .map(|v| {
+            if v.circles.iter().any(|&c| c < -1 || c >= n) {
+                return None;
+            }
+            let sites = v.circles.map(|c| site(domain, c));
+            let choice = Choice {
+                orientation: Some(Sign::Positive),
+                hint: None,
+            }
+            .near(v.position);
+            apollonius(sites, choice).ok()
+        })
+        .collect()
+}
+
+/// `n >= 4` circles tangent to one empty circle (paper section 4.2).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct CocircularGroup {
+    /// The circles, sorted (`-1` the bounding circle, holes by index).
+    pub holes: Vec<CircleId>,
+    /// Centre of the common tangent circle (correctly rounded from the exact value).
+    pub center: Point,
+    /// Its radius (correctly rounded).
+    pub radius: f64,
+    /// The medial vertices (interior triangles) of the group, sorted; `holes.len() - 2` of
+    /// them when the sampled triangulation resolved the group as a fan of triangles.
+    #[serde(skip)]
+    pub vertices: Vec<u32>,
+}
+
+fn find(parent: &mut [u32], mut x: u32) -> u32 {
+    while parent[x as usize] != x {
+        let up = parent[parent[x as usize] as usize];
+        parent[x as usize] = up;
+        x = up;
+    }
+    x
+}
+
+/// For each medial vertex, the index of its group in `groups` (`None` when in no group).
+pub fn group_of(medial: &MedialGraph, groups: &[CocircularGroup]) -> Vec<Option<usize>> {
+    let mut out = vec![None; medial.vertices.len()];
+    for (g, group) in groups.iter().enumerate() {
+        for &v in &group.vertices {
+            if let Some(slot) = out.get_mut(v as usize) {
+                *slot = Some(g);
+            }
+        }
+    }
+    out
+}
+
+/// The co-circular groups of a medial graph with its vertex circles (one per vertex, from
+/// [`vertex_circles`]). Vertices are joined across arcs whose two end circles are exactly the
+/// same ([`same_circle`]); components of two or more vertices are groups. Deterministic:
+/// groups sorted by their circle lists.
+pub fn cocircular_groups(
+    medial: &MedialGraph,
+    circles: &[Option<Apollonius>],
+) -> Vec<CocircularGroup> {
+    let n = medial.vertices.len();
+    if circles.len() != n {
+        return Vec::new();
+    }
+    let mut parent: Vec<u32> = (0..n as u32).collect();
+    for arc in &medial.arcs {
+        let [a, b] = arc.ends;
+        if a == b || a as usize >= n || b as usize >= n {
+            continue;
+        }
+        if let (Some(x), Some(y)) = (&circles[a as usize], &circles[b as usize]) {
+            if same_circle(&x.exact, &y.exact) {
+                let (ra, rb) = (find(&mut parent, a), find(&mut parent, b));
+                if ra != rb {
+                    parent[ra.max(rb) as usize] = ra.min(rb);
+                }
+            }
+        }
+    }
+    let mut members: std::collections::BTreeMap<u32, Vec<u32>> = Default::default();
+    for v in 0..n as u32 {
+        let r = find(&mut parent, v);
+        members.entry(r).or_default().push(v);
+    }
+    let mut groups: Vec<CocircularGroup> = members
+        .into_iter()
+        .filter(|(_, vs)| vs.len() >= 2)
+        .filter_map(|(root, vertices)| {
+            let c = circles[root as usize].as_ref()?;
+            let mut holes: Vec<CircleId> = vertices
+                .iter()
+                .flat_map(|&v| medial.vertices[v as usize].circles)
+                .collect();
+            holes.sort_unstable();
+            holes.dedup();
+            Some(CocircularGroup {
+                holes,
+                center: c.center,
+                radius: c.radius,
+                vertices,
+            })
+        })
+        .collect();
+    groups.sort_by(|a, b| a.holes.cmp(&b.holes));
+    groups
+}
+
+/// True when the true length of `arc` is zero (see the module documentation): both ends in
+/// one co-circular group (`group` from [`group_of`]), all its sampled points equal, or it
+/// crosses one exactly co-circular Delaunay edge.
+pub fn is_zero_length(
+    arc: &MedialArc,
+    medial: &MedialGraph,
+    tri: &Triangulation,
+    group: &[Option<usize>],
+) -> bool {
+    let [a, b] = arc.ends;
+    if let (Some(Some(x)), Some(Some(y))) = (group.get(a as usize), group.get(b as usize)) {
+        if x == y {
+            return true;
+        }
+    }
+    if arc.polyline.windows(2).all(|w| w[0] == w[1]) {
+        return true;
+    }
+    if arc.triangles.is_empty() {
+        if let Some(v) = medial.vertices.get(a as usize) {
+            return tri.is_cocircular_edge(v.triangle as usize, arc.end_slots[0] as usize);
+        }
+    }
+    false
+}
+
+/// Length of the sampled medial arc (its polyline of circumcentres).
+pub fn arc_length(arc: &MedialArc) -> f64 {
+    arc.polyline
+        .windows(2)
+        .map(|w| (w[1][0] - w[0][0]).hypot(w[1][1] - w[0][1]))
+        .sum()
+}
+
+/// The radius of the empty circle at medial vertex `v`: its Apollonius radius, or the
+/// distance from its circumcentre to its first sample when the solve failed.
+pub fn local_radius(
+    medial: &MedialGraph,
+    circles: &[Option<Apollonius>],
+    samples: &[Point],
+    v: u32,
+) -> f64 {
+    if let Some(Some(c)) = circles.get(v as usize) {
+        return c.radius;
+    }
+    medial
+        .vertices
+        .get(v as usize)
+        .and_then(|mv| {
+            let s = samples.get(mv.samples[0] as usize)?;
+            Some((s[0] - mv.position[0]).hypot(s[1] - mv.position[1]))
+        })
+        .unwrap_or(0.0)
+}

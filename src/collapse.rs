@@ -1,0 +1,304 @@
+//! Arc collapse ("zipping", paper section 4.2): contract zero-length and short medial arcs so
+//! that no zero- or near-zero-area block reaches the output.
+//!
+//! Collapsing an arc merges its two medial vertices into one. Over a set of collapsed arcs
+//! the medial vertices fall into *clusters* (trees of collapsed arcs); a cluster of `c`
+//! vertices becomes one vertex of degree `n = c + 2` (each vertex has three arc ends, each
+//! collapsed arc removes two), with `2n` blocks around it, and every collapsed arc removes its
+//! two blocks: `blocks = 6(h - 1) - 2 x collapsed` for `h >= 2` holes.
+//!
+//! Geometry. Around a medial vertex, each circle it touches is reached by one spoke, shared by
+//! the two blocks on that circle meeting there (their *corner*). The two blocks of a collapsed
+//! arc join two corners on each of its circles into a *sector*; a sector's deleted walls form a
+//! run of consecutive samples `S = [x_0, ..., x_L]` from the end of the kept block before it
+//! (on that circle, in wall direction) to the start of the kept block after it. The sector's
+//! spoke goes to the *pivot* sample `x_{L/2}`: the kept block before extends its wall to the
+//! pivot and the one after starts there, so walls still tile every circle and the spoke is
+//! shared by exactly two blocks. For a zero-length arc between two adjacent co-circular
+//! triangles `L = 0` and nothing moves. The merged vertex sits at the mean of its members'
+//! circumcentres; the arcs incident to it have their end points moved there.
+//!
+//! Selection ([`select`]): zero-length arcs ([`crate::cocircular::is_zero_length`]) always,
+//! then arcs whose sampled length is below `fraction` times the smaller empty-circle radius of
+//! its two ends, shortest (relative) first. An arc is skipped when its ends are already in one
+//! cluster (collapsing a cycle would delete every block around a hole) or when another
+//! remaining arc joins the same two clusters (it would become a loop). The blocking checks
+//! the result and gives up short (non-zero) collapses that leave a block with non-positive
+//! area ([`crate::blocking`]).
+
+use crate::apollonius::Apollonius;
+use crate::cocircular::{arc_length, group_of, is_zero_length, local_radius, CocircularGroup};
+use crate::geometry::{Point, Triangulation};
+use crate::medial::{MedialArc, MedialGraph, MedialVertex};
+use crate::mesher::MeshError;
+use std::collections::HashMap;
+
+/// One arc chosen for collapse.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Candidate {
+    /// The arc id in the medial graph.
+    pub arc: u32,
+    /// True for a zero-length arc (always collapsed), false for a short one.
+    pub zero: bool,
+}
+
+fn find(parent: &mut [u32], mut x: u32) -> u32 {
+    while parent[x as usize] != x {
+        let up = parent[parent[x as usize] as usize];
+        parent[x as usize] = up;
+        x = up;
+    }
+    x
+}
+
+/// The arcs to collapse (see the module documentation), in acceptance order. `circles` are
+/// the vertex circles ([`crate::cocircular::vertex_circles`]), `points` the sample
+/// coordinates, `exclude` arcs never to collapse as short arcs (zero-length arcs are always
+/// taken). Deterministic.
+pub fn select(
+    medial: &MedialGraph,
+    tri: &Triangulation,
+    circles: &[Option<Apollonius>],
+    groups: &[CocircularGroup],
+    points: &[Point],
+    fraction: f64,
+    exclude: &[bool],
+) -> Vec<Candidate> {
+    let group = group_of(medial, groups);
+    let mut zero = Vec::new();
+    let mut short: Vec<(f64, u32)> = Vec::new();
+    for (e, arc) in medial.arcs.iter().enumerate() {
+        if is_zero_length(arc, medial, tri, &group) {
+            zero.push(e as u32);
+        } else if fraction > 0.0 && !exclude.get(e).copied().unwrap_or(false) {
+            let r = local_radius(medial, circles, points, arc.ends[0]).min(local_radius(
+                medial,
+                circles,
+                points,
+                arc.ends[1],
+            ));
+            let rel = arc_length(arc) / r;
+            if rel.is_finite() && rel < fraction {
+                short.push((rel, e as u32));
+            }
+        }
+    }
+    short.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+    let order = zero
+        .into_iter()
+        .map(|e| (e, true))
+        .chain(short.into_iter().map(|(_, e)| (e, false)));
+    let n = medial.vertices.len();
+    let mut parent: Vec<u32> = (0..n as u32).collect();
+    let mut taken = vec![false; medial.arcs.len()];
+    let mut out = Vec::new();
+    for (e, is_zero) in order {
+        let [a, b] = medial.arcs[e as usize].ends;
+        if a as usize >= n || b as usize >= n {
+            continue;
+        }
+        let (ra, rb) = (find(&mut parent, a), find(&mut parent, b));
+        if ra == rb {
+            continue;
+        }
+        let parallel = medial.arcs.iter().enumerate().any(|(f, other)| {
+            if f == e as usize || taken[f] {
+                return false;
+            }
+            let [x, y] = other.ends;
+            if x as usize >= n || y as usize >= n {
+                return false;
+            }
+            let (rx, ry) = (find(&mut parent, x), find(&mut parent, y));
+            (rx == ra && ry == rb) || (rx == rb && ry == ra)
+        });
+        if parallel {
+            continue;
+        }
+        parent[ra.max(rb) as usize] = ra.min(rb);
+        taken[e as usize] = true;
+        out.push(Candidate {
+            arc: e,
+            zero: is_zero,
+        });
+    }
+    out
+}
+
+/// The medial graph with the given arcs contracted.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Contracted {
+    /// Vertices are clusters (numbered by their smallest original vertex), arcs the kept arcs
+    /// in their original order with re-targeted ends, extended sample chains and moved
+    /// polyline ends. A merged vertex keeps the triangle, samples and circles of its first
+    /// member (only its position and arcs are meaningful).
+    pub graph: MedialGraph,
+    /// For each original vertex, its vertex in `graph`.
+    pub cluster_of: Vec<u32>,
+    /// For each arc of `graph`, its id in the original graph.
+    pub kept: Vec<u32>,
+    /// Number of original vertices in each vertex of `graph`.
+    pub cluster_size: Vec<u32>,
+}
+
+fn internal(msg: &str) -> MeshError {
+    MeshError::Internal(format!("arc collapse: {msg}"))
+}
+
+/// Contract the arcs marked in `collapse` (one flag per arc; they must form a forest, as
+/// [`select`] guarantees; a cycle or a kept arc with both ends in one cluster is an
+/// [`MeshError::Internal`]).
+pub fn contract(medial: &MedialGraph, collapse: &[bool]) -> Result<Contracted, MeshError> {
+    let n = medial.vertices.len();
+    let m = medial.arcs.len();
+    if collapse.len() != m {
+        return Err(internal("one flag per arc expected"));
+    }
+    let mut parent: Vec<u32> = (0..n as u32).collect();
+    for (e, arc) in medial.arcs.iter().enumerate() {
+        let [a, b] = arc.ends;
+        if a as usize >= n || b as usize >= n || arc.c1.is_empty() || arc.c2.is_empty() {
+            return Err(internal("malformed arc"));
+        }
+        if collapse[e] {
+            let (ra, rb) = (find(&mut parent, a), find(&mut parent, b));
+            if ra == rb {
+                return Err(internal("collapsed arcs form a cycle"));
+            }
+            parent[ra.max(rb) as usize] = ra.min(rb);
+        }
+    }
+    let mut id_of_root = vec![u32::MAX; n];
+    let mut cluster_of = vec![0u32; n];
+    let mut members: Vec<Vec<u32>> = Vec::new();
+    for (v, cluster) in cluster_of.iter_mut().enumerate() {
+        let r = find(&mut parent, v as u32) as usize;
+        if id_of_root[r] == u32::MAX {
+            id_of_root[r] = members.len() as u32;
+            members.push(Vec::new());
+        }
+        *cluster = id_of_root[r];
+        members[id_of_root[r] as usize].push(v as u32);
+    }
+    let vertices: Vec<MedialVertex> = members
+        .iter()
+        .map(|ms| {
+            let mut v = medial.vertices[ms[0] as usize].clone();
+            if ms.len() > 1 {
+                let k = ms.len() as f64;
+                let sx: f64 = ms
+                    .iter()
+                    .map(|&i| medial.vertices[i as usize].position[0])
+                    .sum();
+                let sy: f64 = ms
+                    .iter()
+                    .map(|&i| medial.vertices[i as usize].position[1])
+                    .sum();
+                v.position = [sx / k, sy / k];
+            }
+            v
+        })
+        .collect();
+
+    // Blocks: 2e on C1 (wall c1, from corner (v0, c1[0]) to (v1, c1.last)), 2e + 1 on C2
+    // (wall c2 reversed, from (v1, c2.last) to (v0, c2[0])).
+    let wall = |b: usize| -> Vec<u32> {
+        let arc = &medial.arcs[b / 2];
+        if b % 2 == 0 {
+            arc.c1.clone()
+        } else {
+            arc.c2.iter().rev().copied().collect()
+        }
+    };
+    let corners = |b: usize| -> [(u32, u32); 2] {
+        let arc = &medial.arcs[b / 2];
+        let [v0, v1] = arc.ends;
+        let (c1f, c1l) = (arc.c1[0], arc.c1[arc.c1.len() - 1]);
+        let (c2f, c2l) = (arc.c2[0], arc.c2[arc.c2.len() - 1]);
+        if b % 2 == 0 {
+            [(v0, c1f), (v1, c1l)]
+        } else {
+            [(v1, c2l), (v0, c2f)]
+        }
+    };
+    let mut start_block: HashMap<(u32, u32), usize> = HashMap::new();
+    for b in 0..2 * m {
+        if start_block.insert(corners(b)[0], b).is_some() {
+            return Err(internal("two blocks start at one corner"));
+        }
+    }
+    let mut ext_end: Vec<Vec<u32>> = vec![Vec::new(); 2 * m];
+    let mut ext_start: Vec<Vec<u32>> = vec![Vec::new(); 2 * m];
+    for p in 0..2 * m {
+        if collapse[p / 2] {
+            continue;
+        }
+        let mut corner = corners(p)[1];
+        let mut run = vec![corner.1];
+        let mut steps = 0;
+        let q = loop {
+            let b = *start_block
+                .get(&corner)
+                .ok_or_else(|| internal("no block starts at a corner"))?;
+            if !collapse[b / 2] {
+                break b;
+            }
+            steps += 1;
+            if steps > 2 * m {
+                return Err(internal("a sector does not end"));
+            }
+            run.extend_from_slice(&wall(b)[1..]);
+            corner = corners(b)[1];
+        };
+        if run.len() > 1 {
+            let mid = (run.len() - 1) / 2;
+            ext_end[p] = run[1..=mid].to_vec();
+            ext_start[q] = run[mid..run.len() - 1].to_vec();
+        }
+    }
+
+    let mut arcs = Vec::with_capacity(m);
+    let mut kept = Vec::with_capacity(m);
+    for (e, arc) in medial.arcs.iter().enumerate() {
+        if collapse[e] {
+            continue;
+        }
+        let [v0, v1] = arc.ends.map(|v| cluster_of[v as usize]);
+        if v0 == v1 {
+            return Err(internal("a kept arc became a loop"));
+        }
+        let build = |b: usize| -> Vec<u32> {
+            let mut w = ext_start[b].clone();
+            w.extend(wall(b));
+            w.extend_from_slice(&ext_end[b]);
+            w
+        };
+        let c1 = build(2 * e);
+        let mut c2 = build(2 * e + 1);
+        c2.reverse();
+        let mut polyline = arc.polyline.clone();
+        let last = polyline.len() - 1;
+        if members[v0 as usize].len() > 1 {
+            polyline[0] = vertices[v0 as usize].position;
+        }
+        if members[v1 as usize].len() > 1 {
+            polyline[last] = vertices[v1 as usize].position;
+        }
+        arcs.push(MedialArc {
+            ends: [v0, v1],
+            end_slots: arc.end_slots,
+            triangles: arc.triangles.clone(),
+            polyline,
+            circles: arc.circles,
+            c1,
+            c2,
+        });
+        kept.push(e as u32);
+    }
+    Ok(Contracted {
+        graph: MedialGraph { vertices, arcs },
+        cluster_of,
+        kept,
+        cluster_size: members.iter().map(|m| m.len() as u32).collect(),
+    })
+}
