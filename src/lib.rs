@@ -20,6 +20,7 @@ pub mod apollonius;
 pub mod blocking;
 pub mod connectivity;
 pub mod domain;
+pub mod exact_mode;
 pub mod grid;
 pub mod layout;
 pub mod medial;

@@ -1,32 +1,66 @@
 //! The one call: a validated [`Domain`] and [`Options`] in, a [`Mesh`] or a typed error out.
 
 use crate::domain::{CircleId, Domain, DomainError};
+use crate::exact_mode::Clustering;
 use crate::geometry::TriangulationError;
 use crate::grid::{build_grids, GridError};
 use crate::mesh::Mesh;
-use crate::{blocking, templates};
+use crate::{blocking, exact_mode, templates};
 
 /// Which geometry the blocks are built on.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum Mode {
-    /// The paper exactly as written: circumcenter polylines, equally spaced TFI.
+    /// Exact medial axis (Apollonius vertices, conic arcs) and spoke-aligned grids: every
+    /// wall-normal grid line exactly normal to its wall, no folding ([`crate::exact_mode`]).
     #[default]
+    Exact,
+    /// The paper exactly as written: circumcenter polylines, equally spaced TFI.
     Paper,
 }
 
 /// Options of the pipeline.
+///
+/// Paper mode reads `mode` and `cells` only. Exact mode reads all fields; for the disk and the
+/// annulus (fewer than two holes) both modes use the same templates and equal spacing.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Options {
     pub mode: Mode,
-    /// Target number of cells along a block side (the paper: equal spacing).
+    /// Paper mode: the number of cells along every block side (raised on long wall arcs).
+    /// Exact mode, without `cell_size`: the target size is the median Apollonius radius over
+    /// `cells`, so a typical spoke gets about `cells` cells.
     pub cells: usize,
+    /// Exact mode: the target cell size (overrides `cells`).
+    pub cell_size: Option<f64>,
+    /// Exact mode: wall clustering of every circle without an override.
+    pub clustering: Clustering,
+    /// Exact mode: per-circle clustering overrides (`-1` the bounding circle).
+    pub circle_clustering: Vec<(CircleId, Clustering)>,
+    /// Exact mode: per-circle wall-normal cell counts fixed by the user.
+    pub wall_cells: Vec<(CircleId, usize)>,
+    /// Exact mode: Winslow smoothing sweeps per block (0: none).
+    pub smooth: usize,
 }
 
 impl Default for Options {
     fn default() -> Self {
         Options {
-            mode: Mode::Paper,
+            mode: Mode::Exact,
             cells: 16,
+            cell_size: None,
+            clustering: Clustering::default(),
+            circle_clustering: Vec::new(),
+            wall_cells: Vec::new(),
+            smooth: 0,
+        }
+    }
+}
+
+impl Options {
+    /// The default options in paper mode.
+    pub fn paper() -> Options {
+        Options {
+            mode: Mode::Paper,
+            ..Options::default()
         }
     }
 }
@@ -52,7 +86,9 @@ pub enum MeshError {
 ///
 /// Two or more holes: sampling, exact Delaunay triangulation, medial graph and Blocking2D
 /// ([`crate::blocking`]); no hole (a disk) or one hole (an annulus): the standard templates of
-/// [`crate::templates`]. Then node counts and transfinite interpolation ([`crate::grid`]).
+/// [`crate::templates`]. Then, in paper mode, node counts and transfinite interpolation
+/// ([`crate::grid`]); in exact mode (the default), exact geometry and spoke-aligned grids
+/// ([`crate::exact_mode`]).
 ///
 /// ```
 /// use medial_blocks::{mesh, Domain, Options};
@@ -67,6 +103,21 @@ pub fn mesh(domain: &Domain, options: &Options) -> Result<Mesh, MeshError> {
         ));
     }
     let holes = domain.hole_count();
+    if options.mode == Mode::Exact {
+        exact_mode::validate_options(options)?;
+        if holes >= 2 {
+            let b = blocking::build_layout(domain, options)?;
+            let (v, e) = (b.medial.vertex_count(), b.medial.arc_count());
+            let m = exact_mode::build(domain, &b, options)?;
+            return Ok(Mesh {
+                layout: m.layout,
+                grids: m.grids,
+                medial_vertices: v,
+                medial_arcs: e,
+                holes,
+            });
+        }
+    }
     let (layout, medial_vertices, medial_arcs) = match holes {
         0 => (templates::disk(domain.bounding()), 0, 0),
         1 => (
