@@ -96,7 +96,7 @@ fn check(domain: &Domain, cells: usize, valid: bool) -> Mesh {
         domain,
         &Options {
             cells,
-            ..Options::default()
+            ..Options::paper()
         },
     )
     .expect("mesh");
