@@ -5,6 +5,7 @@ use crate::exact_mode::Clustering;
 use crate::geometry::TriangulationError;
 use crate::grid::{build_grids, GridError};
 use crate::mesh::Mesh;
+use crate::sampling::SamplingOptions;
 use crate::{blocking, exact_mode, templates};
 
 /// Which geometry the blocks are built on.
@@ -17,6 +18,10 @@ pub enum Mode {
     /// The paper exactly as written: circumcenter polylines, equally spaced TFI.
     Paper,
 }
+
+/// Exact mode: how many times sampling is refined (4x each) when the sampled medial graph
+/// disagrees with the exact geometry ([`exact_mode::ExactMesh::inconsistent_arcs`]).
+pub const EXACT_RESAMPLING: usize = 2;
 
 /// Options of the pipeline.
 ///
@@ -106,16 +111,28 @@ pub fn mesh(domain: &Domain, options: &Options) -> Result<Mesh, MeshError> {
     if options.mode == Mode::Exact {
         exact_mode::validate_options(options)?;
         if holes >= 2 {
-            let b = blocking::build_layout(domain, options)?;
-            let (v, e) = (b.medial.vertex_count(), b.medial.arc_count());
-            let m = exact_mode::build(domain, &b, options)?;
-            return Ok(Mesh {
-                layout: m.layout,
-                grids: m.grids,
-                medial_vertices: v,
-                medial_arcs: e,
-                holes,
-            });
+            // The sampled combinatorics must agree with the exact geometry: where nearly
+            // co-circular circles make them disagree, sample 4x and 16x denser before giving
+            // up (and returning the mesh with the inverted blocks that quality reports).
+            let mut sampling = SamplingOptions::default();
+            let mut attempt = 0;
+            loop {
+                let b = blocking::build_layout_with(domain, options, &sampling)?;
+                let (v, e) = (b.medial.vertex_count(), b.medial.arc_count());
+                let m = exact_mode::build(domain, &b, options)?;
+                if m.inconsistent_arcs.is_empty() || attempt == EXACT_RESAMPLING {
+                    return Ok(Mesh {
+                        layout: m.layout,
+                        grids: m.grids,
+                        medial_vertices: v,
+                        medial_arcs: e,
+                        holes,
+                    });
+                }
+                attempt += 1;
+                sampling.min_per_circle = sampling.min_per_circle.saturating_mul(4);
+                sampling.spacing_per_gap *= 0.25;
+            }
         }
     }
     let (layout, medial_vertices, medial_arcs) = match holes {

@@ -381,6 +381,24 @@ pub struct ExactMesh {
     pub counts: Counts,
     /// The target cell size used.
     pub cell_size: f64,
+    /// Arcs whose exact walls run against their block's orientation: the sampled Delaunay
+    /// combinatorics disagree with the exact medial axis there (nearly co-circular circles
+    /// not resolved by the sampling); their blocks are inverted. Empty on a consistent layout.
+    pub inconsistent_arcs: Vec<usize>,
+}
+
+/// Sweeps at most this small (radians) count as zero when checking orientations (a
+/// co-circular group's zero-length arcs, up to rounding).
+pub const ZERO_SWEEP: f64 = 1e-12;
+
+/// The expected sign of a block's wall sweep in its side-0 direction: clockwise (negative)
+/// about a hole, counter-clockwise about the bounding circle (fluid on the left).
+fn expected_sign(c: CircleId) -> f64 {
+    if c < 0 {
+        1.0
+    } else {
+        -1.0
+    }
 }
 
 /// Build the exact-mode layout and grids from the front end's [`Blocking`] (read only).
@@ -413,6 +431,7 @@ pub fn build(
     // Geometry of every arc.
     let mut geoms = Vec::with_capacity(medial.arcs.len());
     let mut targets = Vec::with_capacity(medial.arcs.len());
+    let mut inconsistent_arcs = Vec::new();
     for (e, arc) in medial.arcs.iter().enumerate() {
         let [v0, v1] = arc.ends.map(|v| v as usize);
         let (Some(x0), Some(x1)) = (vertices.get(v0), vertices.get(v1)) else {
@@ -435,6 +454,10 @@ pub fn build(
             .ok_or_else(|| internal(format!("arc {e}: no sampled wall")))?;
         let (s0, w0) = exact_sweep(&walls[0], ends_a[0][0], ends_a[1][0], hint_a);
         let (s1, w1) = exact_sweep(&walls[1], ends_a[0][1], ends_a[1][1], -hint_b);
+        let wrong = |w: f64, c: CircleId| w.abs() > ZERO_SWEEP && w * expected_sign(c) < 0.0;
+        if wrong(w0, arc.circles[0]) || wrong(-w1, arc.circles[1]) {
+            inconsistent_arcs.push(e);
+        }
         let param = if w1.abs() > w0.abs() { 1 } else { 0 };
         let g = ArcGeometry {
             walls,
@@ -652,5 +675,6 @@ pub fn build(
         vertices,
         counts,
         cell_size: h,
+        inconsistent_arcs,
     })
 }
