@@ -177,7 +177,7 @@ pub fn spoke_distances(len: f64, n: usize, first: Option<f64>, growth: f64) -> V
     d.push(len);
     // Guard against rounding making the last interior node reach `len`.
     for j in (1..n).rev() {
-        if !(d[j] < d[j + 1]) {
+        if d[j].partial_cmp(&d[j + 1]) != Some(std::cmp::Ordering::Less) {
             d[j] = 0.5 * (d[j - 1] + d[j + 1]);
         }
     }

@@ -216,11 +216,11 @@ impl CountProblem {
             }
         }
         // Small templates: at least 4 wall cells (2a + 2b with a, b >= 1).
-        for c in 0..nc {
+        for (c, arcs_of_c) in adj.iter().enumerate() {
             if self.is_template(c) {
                 while perimeter(arc, c) < 4 {
                     // Two cells more on its first arc keeps parity.
-                    match adj[c].first() {
+                    match arcs_of_c.first() {
                         Some(&e) => arc[e] += 2,
                         None => return Err(format!("template circle {c} has no arc")),
                     }

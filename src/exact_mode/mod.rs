@@ -573,6 +573,7 @@ pub fn build(
             curve: Curve::Polyline(m_nodes.clone()),
             kind: EdgeKind::Medial,
         });
+        #[allow(clippy::needless_range_loop)] // `side` indexes four parallel arrays
         for side in 0..2 {
             let c = arc.circles[side];
             let nj = counts.circle[cidx(c)];

@@ -64,7 +64,7 @@ pub fn winslow(g: &mut BlockGrid, iterations: usize) -> usize {
         return 0;
     }
     let mut current = min_scaled_jacobian(g);
-    if !(current > 0.0) {
+    if current.is_nan() || current <= 0.0 {
         return 0;
     }
     let mut accepted = 0;
