@@ -679,3 +679,65 @@ pub fn build(
         inconsistent_arcs,
     })
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn hole(x: f64, y: f64, r: f64) -> Wall {
+        Wall { c: [x, y], r, s: r }
+    }
+
+    #[test]
+    fn medial_point_between_equal_holes_is_on_the_bisector() {
+        let (p, q) = (hole(0.0, 0.0, 0.5), hole(3.0, 0.0, 0.5));
+        for k in -5..=5 {
+            let theta = 0.2 * k as f64;
+            let (a, m, rho) = medial_point(&p, &q, theta).unwrap();
+            assert!((m[0] - 1.5).abs() < 1e-12, "{m:?}");
+            assert!((dist(a, m) - rho).abs() < 1e-12);
+            assert!((dist(m, q.c) - q.r - rho).abs() < 1e-12);
+        }
+    }
+
+    #[test]
+    fn medial_point_between_hole_and_bounding_circle_is_on_an_ellipse() {
+        // |m - c_i| - r = R - |m - c_B|: an ellipse with foci c_i, c_B and major axis R + r.
+        let p = hole(1.0, 0.5, 0.3);
+        let b = Wall {
+            c: [0.0, 0.0],
+            r: 3.0,
+            s: -3.0,
+        };
+        for k in 0..12 {
+            let theta = 0.5 * k as f64;
+            let (_, m, rho) = medial_point(&p, &b, theta).unwrap();
+            assert!(((dist(m, p.c) + dist(m, b.c)) - 3.3).abs() < 1e-12);
+            assert!((3.0 - dist(m, b.c) - rho).abs() < 1e-12);
+            // And parametrised from the bounding circle's side.
+            let (a, m2, rho2) = medial_point(&b, &p, theta).unwrap();
+            assert!((dist(a, b.c) - 3.0).abs() < 1e-12);
+            assert!(((dist(m2, p.c) + dist(m2, b.c)) - 3.3).abs() < 1e-12);
+            assert!((dist(m2, p.c) - 0.3 - rho2).abs() < 1e-12);
+        }
+    }
+
+    #[test]
+    fn equidistribution_has_exact_ends_and_is_monotone() {
+        let w = vec![1.0, 0.0, 3.0, 0.5, 0.5];
+        let t = equidistribute(&w, 7);
+        assert_eq!(t.len(), 8);
+        assert_eq!((t[0], t[7]), (0.0, 1.0));
+        assert!(t.windows(2).all(|x| x[0] <= x[1]));
+        assert_eq!(equidistribute(&[0.0; 4], 2), vec![0.0, 0.5, 1.0]);
+    }
+
+    #[test]
+    fn spoke_nodes_end_exactly() {
+        let (a, m) = ([0.1, 0.2], [1.3, -0.7]);
+        let n = spoke_nodes(a, m, 9, Some(1e-3), 1.2);
+        assert_eq!(n.len(), 10);
+        assert_eq!((n[0], n[9]), (a, m));
+        assert!((dist(n[0], n[1]) - 1e-3).abs() < 1e-15);
+    }
+}

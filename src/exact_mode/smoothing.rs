@@ -94,3 +94,51 @@ pub fn winslow(g: &mut BlockGrid, iterations: usize) -> usize {
     }
     accepted
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn perturbed_grid_improves_and_keeps_fixed_nodes() {
+        // A 6 x 6 unit grid with one interior node pushed off.
+        let n = 6;
+        let mut nodes = Vec::new();
+        for j in 0..=n {
+            for i in 0..=n {
+                nodes.push([i as f64, j as f64]);
+            }
+        }
+        nodes[3 + 3 * (n + 1)] = [3.3, 3.2];
+        let mut g = BlockGrid {
+            ni: n,
+            nj: n,
+            nodes,
+        };
+        let before = g.clone();
+        let m0 = min_scaled_jacobian(&g);
+        let done = winslow(&mut g, 50);
+        assert!(done > 0);
+        assert!(min_scaled_jacobian(&g) >= m0);
+        let p = g.node(3, 3);
+        assert!(
+            (p[0] - 3.0).abs() < 0.1 && (p[1] - 3.0).abs() < 0.1,
+            "{p:?}"
+        );
+        for i in 0..=n {
+            for j in [0, 1, n] {
+                assert_eq!(g.node(i, j), before.node(i, j));
+            }
+        }
+    }
+
+    #[test]
+    fn inverted_grids_are_left_alone() {
+        let mut g = BlockGrid {
+            ni: 2,
+            nj: 3,
+            nodes: vec![[0.0, 0.0]; 12],
+        };
+        assert_eq!(winslow(&mut g, 5), 0);
+    }
+}
