@@ -414,3 +414,60 @@ proptest! {
         check(&d, &m);
     }
 }
+
+#[test]
+fn layout_matches_grids() {
+    use medial_blocks::grid::validate_layout;
+    use medial_blocks::layout::{Curve, EdgeKind};
+    let d = layout(3, 10, 0.02);
+    let m = mesh(&d, &exact(4)).unwrap();
+    validate_layout(&m.layout).expect("valid layout");
+    for (b, block) in m.layout.blocks.iter().enumerate() {
+        for s in 0..4 {
+            let nodes = side_nodes(&m, b, s);
+            assert_eq!(
+                key(nodes[0]),
+                key(m.layout.vertices[block.corners[s] as usize])
+            );
+            let edge = &m.layout.edges[block.sides[s].edge as usize];
+            match (s, edge.kind, &edge.curve) {
+                (0, EdgeKind::Wall(_), Curve::Arc { .. }) => {}
+                (2, EdgeKind::Medial, Curve::Polyline(p)) => {
+                    // The polyline is the medial nodes themselves.
+                    let mut p = p.clone();
+                    if block.sides[s].reversed {
+                        p.reverse();
+                    }
+                    let a: Vec<_> = p.into_iter().map(key).collect();
+                    let b: Vec<_> = nodes.into_iter().map(key).collect();
+                    assert_eq!(a, b);
+                }
+                (1 | 3, EdgeKind::Spoke, Curve::Segment) => {}
+                other => panic!("block {b} side {s}: {other:?}"),
+            }
+        }
+    }
+}
+
+#[test]
+fn cocircular_holes_do_not_panic() {
+    // Four equal holes on a square: one empty circle touches all four (a zero-length arc and
+    // two zero-area blocks until arcs are collapsed). A mesh or a typed error, never a panic.
+    let holes = [[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]]
+        .map(|c| Circle {
+            center: c,
+            radius: 0.25,
+        })
+        .to_vec();
+    let d = Domain::bounded(
+        Circle {
+            center: [0.5, 0.5],
+            radius: 3.0,
+        },
+        holes,
+    )
+    .unwrap();
+    if let Ok(m) = mesh(&d, &exact(4)) {
+        assert_eq!(m.grids.len(), 18);
+    }
+}

@@ -1,6 +1,6 @@
 //! `medial-blocks mesh [INPUT] [-o DIR] [--mode exact|paper] [--cells N] [--cell-size H]
 //! [--first-height H | --first-height-rel F] [--growth G] [--circle-clustering ID:FIRST[:G]]
-//! [--wall-cells ID:N] [--smooth N] [--format LIST]`.
+//! [--wall-cells ID:N] [--smooth N] [--compare-modes] [--format LIST]`.
 
 use super::Failure;
 use medial_blocks::domain::{Circle, Domain};
@@ -66,6 +66,10 @@ pub struct Args {
     /// Exact mode: Winslow smoothing sweeps per block (never lowers the min scaled Jacobian).
     #[arg(long, default_value_t = 0)]
     pub smooth: usize,
+    /// Also mesh the domain in the other mode and write both modes' quality figures to
+    /// DIR/modes.json (`{"exact": {...}, "paper": {...}}`).
+    #[arg(long)]
+    pub compare_modes: bool,
     /// Writers, comma separated: vtk, plot3d, gmsh, svg, png, json, or all.
     #[arg(long, default_value = DEFAULT_FORMATS)]
     pub format: String,
@@ -255,6 +259,57 @@ fn exact_options(args: &Args) -> Result<Options, Failure> {
     })
 }
 
+/// `--compare-modes`: figures of both modes into `modes.json`.
+fn compare_modes(
+    domain: &Domain,
+    options: &Options,
+    done: &medial_blocks::Mesh,
+    args: &Args,
+) -> Result<(), Failure> {
+    use medial_blocks::exact_mode::metrics::Figures;
+    let other_mode = match options.mode {
+        Mode::Exact => Mode::Paper,
+        Mode::Paper => Mode::Exact,
+    };
+    let other = mesh(
+        domain,
+        &Options {
+            mode: other_mode,
+            ..options.clone()
+        },
+    )
+    .map_err(|e| Failure::output(format!("the other mode failed: {e}")))?;
+    let (exact, paper) = match options.mode {
+        Mode::Exact => (done, &other),
+        Mode::Paper => (&other, done),
+    };
+    let value = serde_json::json!({
+        "exact": Figures::of(domain, exact),
+        "paper": Figures::of(domain, paper),
+    });
+    let path = args.output.join("modes.json");
+    let text = serde_json::to_string_pretty(&value)
+        .map_err(|e| Failure::output(format!("cannot encode modes.json: {e}")))?;
+    std::fs::write(&path, text + "\n")
+        .map_err(|e| Failure::output(format!("cannot write {}: {e}", path.display())))?;
+    if !args.quiet {
+        for (name, m) in [("exact", exact), ("paper", paper)] {
+            let f = Figures::of(domain, m);
+            println!(
+                "{name}: angles {:.1}..{:.1}, min scaled Jacobian {:.3}, wall orthogonality \
+                 {:.1e} deg, max aspect ratio {:.1}, inverted {}",
+                f.min_angle_deg,
+                f.max_angle_deg,
+                f.min_scaled_jacobian,
+                f.max_wall_orthogonality_deviation_deg,
+                f.max_aspect_ratio,
+                f.inverted_cells
+            );
+        }
+    }
+    Ok(())
+}
+
 pub fn run(args: Args) -> Result<(), Failure> {
     let formats =
         Format::parse_list(&args.format).map_err(|e| Failure::input(format!("--format: {e}")))?;
@@ -282,6 +337,9 @@ pub fn run(args: Args) -> Result<(), Failure> {
             r.inverted_cells
         );
         println!("written to {}/", args.output.display());
+    }
+    if args.compare_modes {
+        compare_modes(&domain, &options, &mesh, &args)?;
     }
     Ok(())
 }
