@@ -665,9 +665,9 @@ pub fn build(
         }
     }
     if options.smooth > 0 {
-        let walls: Vec<bool> = layout.blocks.iter().map(|b| b.wall.is_some()).collect();
-        for (g, _) in grids.iter_mut().zip(walls) {
-            smoothing::winslow(g, options.smooth);
+        for g in grids.iter_mut() {
+            let rows = smoothing::boundary_layer_rows(g);
+            smoothing::winslow(g, options.smooth, rows);
         }
     }
     Ok(ExactMesh {
