@@ -111,28 +111,7 @@ pub fn mesh(domain: &Domain, options: &Options) -> Result<Mesh, MeshError> {
     if options.mode == Mode::Exact {
         exact_mode::validate_options(options)?;
         if holes >= 2 {
-            // The sampled combinatorics must agree with the exact geometry: where nearly
-            // co-circular circles make them disagree, sample 4x and 16x denser before giving
-            // up (and returning the mesh with the inverted blocks that quality reports).
-            let mut sampling = SamplingOptions::default();
-            let mut attempt = 0;
-            loop {
-                let b = blocking::build_layout_with(domain, options, &sampling)?;
-                let (v, e) = (b.medial.vertex_count(), b.medial.arc_count());
-                let m = exact_mode::build(domain, &b, options)?;
-                if m.inconsistent_arcs.is_empty() || attempt == EXACT_RESAMPLING {
-                    return Ok(Mesh {
-                        layout: m.layout,
-                        grids: m.grids,
-                        medial_vertices: v,
-                        medial_arcs: e,
-                        holes,
-                    });
-                }
-                attempt += 1;
-                sampling.min_per_circle = sampling.min_per_circle.saturating_mul(4);
-                sampling.spacing_per_gap *= 0.25;
-            }
+            return mesh_exact(domain, options);
         }
     }
     let (layout, medial_vertices, medial_arcs) = match holes {
@@ -156,4 +135,48 @@ pub fn mesh(domain: &Domain, options: &Options) -> Result<Mesh, MeshError> {
         medial_arcs,
         holes,
     })
+}
+
+/// Exact mode for two or more holes. The sampled combinatorics must agree with the exact
+/// geometry: where nearly co-circular circles make them disagree (an exact arc running
+/// backwards, [`exact_mode::ExactMesh::inconsistent_arcs`], or not existing), the sampling is
+/// refined 4x per attempt, up to [`EXACT_RESAMPLING`] times. When refinement cannot help (the
+/// circles are exactly co-circular, or the finer sampling fails) the last result stands: the
+/// mesh with the inverted blocks that quality reports, or the error.
+fn mesh_exact(domain: &Domain, options: &Options) -> Result<Mesh, MeshError> {
+    let holes = domain.hole_count();
+    let mut sampling = SamplingOptions::default();
+    let mut last: Option<Result<Mesh, MeshError>> = None;
+    for _attempt in 0..=EXACT_RESAMPLING {
+        let b = match blocking::build_layout_with(domain, options, &sampling) {
+            Ok(b) => b,
+            Err(e) => return last.unwrap_or(Err(e)),
+        };
+        let (v, e) = (b.medial.vertex_count(), b.medial.arc_count());
+        match exact_mode::build(domain, &b, options) {
+            Ok(m) => {
+                let consistent = m.inconsistent_arcs.is_empty();
+                let mesh = Mesh {
+                    layout: m.layout,
+                    grids: m.grids,
+                    medial_vertices: v,
+                    medial_arcs: e,
+                    holes,
+                };
+                if consistent {
+                    return Ok(mesh);
+                }
+                last = Some(Ok(mesh));
+            }
+            Err(err @ MeshError::Internal(_)) => {
+                if !matches!(last, Some(Ok(_))) {
+                    last = Some(Err(err));
+                }
+            }
+            Err(err) => return Err(err),
+        }
+        sampling.min_per_circle = sampling.min_per_circle.saturating_mul(4);
+        sampling.spacing_per_gap *= 0.25;
+    }
+    last.unwrap_or_else(|| Err(MeshError::Internal("exact mode made no attempt".into())))
 }
