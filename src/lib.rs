@@ -22,6 +22,7 @@ pub mod cocircular;
 pub mod collapse;
 pub mod connectivity;
 pub mod domain;
+pub mod exact_mode;
 pub mod grid;
 pub mod layout;
 pub mod medial;

@@ -1,24 +1,38 @@
 //! The one call: a validated [`Domain`] and [`Options`] in, a [`Mesh`] or a typed error out.
 
 use crate::domain::{CircleId, Domain, DomainError};
+use crate::exact_mode::Clustering;
 use crate::geometry::TriangulationError;
 use crate::grid::{build_grids, GridError};
 use crate::mesh::Mesh;
-use crate::{blocking, templates};
+use crate::sampling::SamplingOptions;
+use crate::{blocking, exact_mode, templates};
 
 /// Which geometry the blocks are built on.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum Mode {
-    /// The paper exactly as written: circumcenter polylines, equally spaced TFI.
+    /// Exact medial axis (Apollonius vertices, conic arcs) and spoke-aligned grids: every
+    /// wall-normal grid line exactly normal to its wall, no folding ([`crate::exact_mode`]).
     #[default]
+    Exact,
+    /// The paper exactly as written: circumcenter polylines, equally spaced TFI.
     Paper,
 }
 
+/// Exact mode: how many times sampling is refined (4x each) when the sampled medial graph
+/// disagrees with the exact geometry ([`exact_mode::ExactMesh::inconsistent_arcs`]).
+pub const EXACT_RESAMPLING: usize = 2;
+
 /// Options of the pipeline.
+///
+/// Paper mode reads `mode` and `cells` only. Exact mode reads all fields; for the disk and the
+/// annulus (fewer than two holes) both modes use the same templates and equal spacing.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Options {
     pub mode: Mode,
-    /// Target number of cells along a block side (the paper: equal spacing).
+    /// Paper mode: the number of cells along every block side (raised on long wall arcs).
+    /// Exact mode, without `cell_size`: the target size is the median Apollonius radius over
+    /// `cells`, so a typical spoke gets about `cells` cells.
     pub cells: usize,
     /// Macro Delaunay refinement (paper Algorithm 3, [`crate::refine`]): insert a hole while an
     /// interior triangle has circumradius / shortest edge above this ratio. Default
@@ -31,6 +45,16 @@ pub struct Options {
     /// The most holes refinement may insert before [`MeshError::Refinement`]. Default
     /// [`DEFAULT_MAX_INSERTED_HOLES`].
     pub max_inserted_holes: usize,
+    /// Exact mode: the target cell size (overrides `cells`).
+    pub cell_size: Option<f64>,
+    /// Exact mode: wall clustering of every circle without an override.
+    pub clustering: Clustering,
+    /// Exact mode: per-circle clustering overrides (`-1` the bounding circle).
+    pub circle_clustering: Vec<(CircleId, Clustering)>,
+    /// Exact mode: per-circle wall-normal cell counts fixed by the user.
+    pub wall_cells: Vec<(CircleId, usize)>,
+    /// Exact mode: Winslow smoothing sweeps per block (0: none).
+    pub smooth: usize,
 }
 
 /// Default of [`Options::collapse_fraction`].
@@ -43,11 +67,26 @@ pub const DEFAULT_MAX_INSERTED_HOLES: usize = 10_000;
 impl Default for Options {
     fn default() -> Self {
         Options {
-            mode: Mode::Paper,
+            mode: Mode::Exact,
             cells: 16,
             refine_ratio: Some(DEFAULT_REFINE_RATIO),
             collapse_fraction: DEFAULT_COLLAPSE_FRACTION,
             max_inserted_holes: DEFAULT_MAX_INSERTED_HOLES,
+            cell_size: None,
+            clustering: Clustering::default(),
+            circle_clustering: Vec::new(),
+            wall_cells: Vec::new(),
+            smooth: 0,
+        }
+    }
+}
+
+impl Options {
+    /// The default options in paper mode.
+    pub fn paper() -> Options {
+        Options {
+            mode: Mode::Paper,
+            ..Options::default()
         }
     }
 }
@@ -76,6 +115,11 @@ pub enum MeshError {
 
 /// Mesh `domain` with `options`.
 ///
+/// In exact mode (the default) with two or more holes: exact Apollonius vertices, exact
+/// medial arcs and spoke-aligned grids ([`crate::exact_mode`]). Where the exact geometry
+/// disagrees with the sampled combinatorics (co-circular or nearly co-circular holes), the
+/// paper pipeline with its degeneracy handling is used instead:
+///
 /// Two or more holes: macro Delaunay refinement ([`crate::refine`], paper Algorithm 3: holes
 /// are inserted while an interior triangle is poor, the paper's strategy of refining angles
 /// below ~15 degrees first), exact Apollonius circles and co-circular groups
@@ -103,6 +147,14 @@ pub fn mesh(domain: &Domain, options: &Options) -> Result<Mesh, MeshError> {
         )));
     }
     let holes = domain.hole_count();
+    if options.mode == Mode::Exact {
+        exact_mode::validate_options(options)?;
+        if holes >= 2 {
+            if let Some(m) = mesh_exact(domain, options)? {
+                return Ok(m);
+            }
+        }
+    }
     let mut out = Mesh {
         holes,
         ..Mesh::default()
@@ -124,4 +176,55 @@ pub fn mesh(domain: &Domain, options: &Options) -> Result<Mesh, MeshError> {
     };
     out.grids = build_grids(&out.layout, options.cells)?;
     Ok(out)
+}
+
+/// Exact mode for two or more holes. The sampled combinatorics must agree with the exact
+/// geometry: where nearly co-circular circles make them disagree (an exact arc running
+/// backwards, [`exact_mode::ExactMesh::inconsistent_arcs`], or not existing), the sampling is
+/// refined 4x per attempt, up to [`EXACT_RESAMPLING`] times. When refinement cannot help (the
+/// circles are exactly co-circular, or the finer sampling fails) the last result stands: the
+/// mesh with the inverted blocks that quality reports, or the error.
+fn mesh_exact(domain: &Domain, options: &Options) -> Result<Option<Mesh>, MeshError> {
+    let holes = domain.hole_count();
+    let mut sampling = SamplingOptions::default();
+    let mut last: Option<Result<Mesh, MeshError>> = None;
+    for _attempt in 0..=EXACT_RESAMPLING {
+        let b = match blocking::build_layout_with(domain, options, &sampling) {
+            Ok(b) => b,
+            // A finer sampling failed after a coarser one worked: fall back to paper mode.
+            Err(_) if last.is_some() => return Ok(None),
+            Err(e) => return Err(e),
+        };
+        let (v, e) = (b.medial.vertex_count(), b.medial.arc_count());
+        match exact_mode::build(domain, &b, options) {
+            Ok(m) => {
+                let consistent = m.inconsistent_arcs.is_empty()
+                    && crate::quality::measure(&m.grids).inverted_cells == 0;
+                let mesh = Mesh {
+                    layout: m.layout,
+                    grids: m.grids,
+                    medial_vertices: v,
+                    medial_arcs: e,
+                    holes,
+                    ..Mesh::default()
+                };
+                if consistent {
+                    return Ok(Some(mesh));
+                }
+                last = Some(Ok(mesh));
+            }
+            Err(err @ MeshError::Internal(_)) => {
+                if !matches!(last, Some(Ok(_))) {
+                    last = Some(Err(err));
+                }
+            }
+            Err(err) => return Err(err),
+        }
+        sampling.min_per_circle = sampling.min_per_circle.saturating_mul(4);
+        sampling.spacing_per_gap *= 0.25;
+    }
+    // The exact geometry never agreed with the sampled combinatorics: let the paper pipeline
+    // with collapse and refinement mesh it.
+    let _ = last;
+    Ok(None)
 }

@@ -10,7 +10,7 @@ use medial_blocks::{mesh, Mesh, Options};
 fn opts() -> Options {
     Options {
         cells: 3,
-        ..Options::default()
+        ..Options::paper()
     }
 }
 

@@ -34,7 +34,7 @@ fn poor() -> Domain {
 
 #[test]
 fn report_has_groups_collapses_and_inserted_holes() {
-    let m = mesh(&square2(), &Options::default()).unwrap();
+    let m = mesh(&square2(), &Options::paper()).unwrap();
     let v = serde_json::to_value(Report::from_mesh(&m)).unwrap();
     // Correctly rounded from the exact sqrt(1/2) - 3/10 (the f64 expression is one ulp off).
     let rho = 0.40710678118654753;
@@ -49,7 +49,7 @@ fn report_has_groups_collapses_and_inserted_holes() {
         .unwrap()
         .contains("class=\"cocircular-group\""));
 
-    let m = mesh(&poor(), &Options::default()).unwrap();
+    let m = mesh(&poor(), &Options::paper()).unwrap();
     let v = serde_json::to_value(Report::from_mesh(&m)).unwrap();
     let ins = v["inserted_holes"].as_array().unwrap();
     assert_eq!(ins.len(), 1);
@@ -65,7 +65,7 @@ fn run_cli(dir: &std::path::Path, domain: &Domain, extra: &[&str]) -> serde_json
     let out = dir.join("out");
     let status = Command::new(env!("CARGO_BIN_EXE_medial-blocks"))
         .args(["mesh", input.to_str().unwrap(), "-o", out.to_str().unwrap()])
-        .args(["--format", "json", "--cells", "2", "-q"])
+        .args(["--format", "json", "--cells", "2", "-q", "--mode", "paper"])
         .args(extra)
         .output()
         .expect("binary runs");

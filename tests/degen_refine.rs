@@ -159,7 +159,7 @@ fn refinement_inserts_holes_keeps_the_gap_and_removes_poor_triangles() {
         &d,
         &Options {
             cells: 3,
-            ..Options::default()
+            ..Options::paper()
         },
     )
     .unwrap();
@@ -178,7 +178,7 @@ fn refinement_inserts_holes_keeps_the_gap_and_removes_poor_triangles() {
         &Options {
             cells: 3,
             refine_ratio: None,
-            ..Options::default()
+            ..Options::paper()
         },
     )
     .unwrap();
@@ -191,7 +191,7 @@ fn refinement_bound_is_a_typed_error() {
     let d = sliver();
     let o = Options {
         max_inserted_holes: 0,
-        ..Options::default()
+        ..Options::paper()
     };
     assert!(matches!(
         mesh(&d, &o),
@@ -203,12 +203,12 @@ fn refinement_bound_is_a_typed_error() {
     for bad in [0.0, -1.0, f64::NAN, f64::INFINITY] {
         let o = Options {
             refine_ratio: Some(bad),
-            ..Options::default()
+            ..Options::paper()
         };
         assert!(matches!(mesh(&d, &o), Err(MeshError::Options(_))));
         let o = Options {
             collapse_fraction: bad - 1.0,
-            ..Options::default()
+            ..Options::paper()
         };
         assert!(matches!(mesh(&d, &o), Err(MeshError::Options(_))));
     }
@@ -221,7 +221,7 @@ fn deterministic() {
         &d,
         &Options {
             cells: 2,
-            ..Options::default()
+            ..Options::paper()
         },
     )
     .unwrap();
@@ -229,7 +229,7 @@ fn deterministic() {
         &d,
         &Options {
             cells: 2,
-            ..Options::default()
+            ..Options::paper()
         },
     )
     .unwrap();
@@ -251,7 +251,7 @@ proptest! {
     ) {
         let d = layout(seed, h, gap);
         prop_assume!(d.hole_count() >= 2);
-        let o = Options { cells: 2, collapse_fraction: fraction, ..Options::default() };
+        let o = Options { cells: 2, collapse_fraction: fraction, ..Options::paper() };
         let b = build_mesh_layout(&d, &o).unwrap();
         prop_assert!(b.min_gaps.windows(2).all(|w| w[1] >= w[0]));
         let m = mesh(&d, &o).unwrap();

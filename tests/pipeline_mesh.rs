@@ -98,7 +98,7 @@ fn check(domain: &Domain, cells: usize, valid: bool) -> Mesh {
         domain,
         &Options {
             cells,
-            ..Options::default()
+            ..Options::paper()
         },
     )
     .expect("mesh");

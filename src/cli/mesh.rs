@@ -1,8 +1,11 @@
-//! `medial-blocks mesh [INPUT] [-o DIR] [--mode paper] [--cells N] [--format LIST]
-//! [--refine-ratio R] [--no-refine] [--collapse-fraction F]`.
+//! `medial-blocks mesh [INPUT] [-o DIR] [--mode exact|paper] [--cells N] [--cell-size H]
+//! [--first-height H | --first-height-rel F] [--growth G] [--circle-clustering ID:FIRST[:G]]
+//! [--wall-cells ID:N] [--smooth N] [--compare-modes] [--refine-ratio R] [--no-refine]
+//! [--collapse-fraction F] [--format LIST]`.
 
 use super::Failure;
 use medial_blocks::domain::{Circle, Domain};
+use medial_blocks::exact_mode::{Clustering, FirstCell};
 use medial_blocks::output::{report, write_files, Format};
 use medial_blocks::{mesh, Mode, Options};
 use std::path::PathBuf;
@@ -11,6 +14,8 @@ const DEFAULT_FORMATS: &str = "vtk,svg,json";
 
 #[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
 pub enum ModeArg {
+    /// Exact medial axis and spoke-aligned grids (walls exactly orthogonal, no folding).
+    Exact,
     /// The paper as written: circumcenter polylines, equally spaced TFI.
     Paper,
 }
@@ -35,11 +40,37 @@ pub struct Args {
     #[arg(short, long, default_value = "out")]
     pub output: PathBuf,
     /// Geometry of the blocks.
-    #[arg(long, value_enum, default_value_t = ModeArg::Paper)]
+    #[arg(long, value_enum, default_value_t = ModeArg::Exact)]
     pub mode: ModeArg,
-    /// Target number of cells along a block side.
+    /// Target number of cells along a block side (exact mode: along a typical spoke).
     #[arg(long, default_value_t = 16)]
     pub cells: usize,
+    /// Exact mode: target cell size (overrides --cells).
+    #[arg(long)]
+    pub cell_size: Option<f64>,
+    /// Exact mode: first cell height at every wall (absolute length).
+    #[arg(long, conflicts_with = "first_height_rel")]
+    pub first_height: Option<f64>,
+    /// Exact mode: first cell height at every wall, as a fraction of the circle's radius.
+    #[arg(long)]
+    pub first_height_rel: Option<f64>,
+    /// Exact mode: growth ratio of the wall clustering.
+    #[arg(long, default_value_t = 1.2)]
+    pub growth: f64,
+    /// Exact mode: clustering of one circle, `ID:FIRST[:GROWTH]` (ID -1 is the bounding
+    /// circle; FIRST ending in `r` is relative to the radius, e.g. `3:0.01r:1.1`). Repeatable.
+    #[arg(long, allow_hyphen_values = true)]
+    pub circle_clustering: Vec<String>,
+    /// Exact mode: wall-normal cell count of one circle, `ID:N`. Repeatable.
+    #[arg(long, allow_hyphen_values = true)]
+    pub wall_cells: Vec<String>,
+    /// Exact mode: Winslow smoothing sweeps per block (never lowers the min scaled Jacobian).
+    #[arg(long, default_value_t = 0)]
+    pub smooth: usize,
+    /// Also mesh the domain in the other mode and write both modes' quality figures to
+    /// DIR/modes.json (`{"exact": {...}, "paper": {...}}`).
+    #[arg(long)]
+    pub compare_modes: bool,
     /// Writers, comma separated: vtk, plot3d, gmsh, svg, png, json, or all.
     #[arg(long, default_value = DEFAULT_FORMATS)]
     pub format: String,
@@ -144,19 +175,161 @@ fn read_domain(args: &Args) -> Result<Domain, Failure> {
     }
 }
 
+fn parse_first(text: &str) -> Result<FirstCell, String> {
+    let t = text.trim();
+    let (num, rel) = match t.strip_suffix('r') {
+        Some(n) => (n, true),
+        None => (t, false),
+    };
+    let v: f64 = num
+        .parse()
+        .map_err(|_| format!("'{text}' is not a first cell height"))?;
+    Ok(if rel {
+        FirstCell::Relative(v)
+    } else {
+        FirstCell::Absolute(v)
+    })
+}
+
+/// `ID:FIRST[:GROWTH]` for `--circle-clustering`.
+pub fn parse_circle_clustering(text: &str, growth: f64) -> Result<(i32, Clustering), String> {
+    let parts: Vec<&str> = text.split(':').collect();
+    if !(2..=3).contains(&parts.len()) {
+        return Err(format!(
+            "--circle-clustering: expected ID:FIRST[:GROWTH], got '{text}'"
+        ));
+    }
+    let id: i32 = parts[0]
+        .trim()
+        .parse()
+        .map_err(|_| format!("--circle-clustering: '{}' is not a circle id", parts[0]))?;
+    let first = parse_first(parts[1]).map_err(|e| format!("--circle-clustering: {e}"))?;
+    let growth = match parts.get(2) {
+        Some(g) => g
+            .trim()
+            .parse()
+            .map_err(|_| format!("--circle-clustering: '{g}' is not a growth ratio"))?,
+        None => growth,
+    };
+    Ok((
+        id,
+        Clustering {
+            first: Some(first),
+            growth,
+        },
+    ))
+}
+
+/// `ID:N` for `--wall-cells`.
+pub fn parse_wall_cells(text: &str) -> Result<(i32, usize), String> {
+    let (id, n) = text
+        .split_once(':')
+        .ok_or_else(|| format!("--wall-cells: expected ID:N, got '{text}'"))?;
+    let id = id
+        .trim()
+        .parse()
+        .map_err(|_| format!("--wall-cells: '{id}' is not a circle id"))?;
+    let n = n
+        .trim()
+        .parse()
+        .map_err(|_| format!("--wall-cells: '{n}' is not a cell count"))?;
+    Ok((id, n))
+}
+
+fn exact_options(args: &Args) -> Result<Options, Failure> {
+    let first = match (args.first_height, args.first_height_rel) {
+        (Some(h), _) => Some(FirstCell::Absolute(h)),
+        (None, Some(f)) => Some(FirstCell::Relative(f)),
+        (None, None) => None,
+    };
+    let circle_clustering = args
+        .circle_clustering
+        .iter()
+        .map(|t| parse_circle_clustering(t, args.growth))
+        .collect::<Result<Vec<_>, _>>()
+        .map_err(Failure::input)?;
+    let wall_cells = args
+        .wall_cells
+        .iter()
+        .map(|t| parse_wall_cells(t))
+        .collect::<Result<Vec<_>, _>>()
+        .map_err(Failure::input)?;
+    Ok(Options {
+        mode: match args.mode {
+            ModeArg::Exact => Mode::Exact,
+            ModeArg::Paper => Mode::Paper,
+        },
+        cells: args.cells,
+        cell_size: args.cell_size,
+        clustering: Clustering {
+            first,
+            growth: args.growth,
+        },
+        circle_clustering,
+        wall_cells,
+        smooth: args.smooth,
+        refine_ratio: (!args.no_refine).then_some(args.refine_ratio),
+        collapse_fraction: args.collapse_fraction,
+        ..Options::default()
+    })
+}
+
+/// `--compare-modes`: figures of both modes into `modes.json`.
+fn compare_modes(
+    domain: &Domain,
+    options: &Options,
+    done: &medial_blocks::Mesh,
+    args: &Args,
+) -> Result<(), Failure> {
+    use medial_blocks::exact_mode::metrics::Figures;
+    let other_mode = match options.mode {
+        Mode::Exact => Mode::Paper,
+        Mode::Paper => Mode::Exact,
+    };
+    let other = mesh(
+        domain,
+        &Options {
+            mode: other_mode,
+            ..options.clone()
+        },
+    )
+    .map_err(|e| Failure::output(format!("the other mode failed: {e}")))?;
+    let (exact, paper) = match options.mode {
+        Mode::Exact => (done, &other),
+        Mode::Paper => (&other, done),
+    };
+    let value = serde_json::json!({
+        "exact": Figures::of(domain, exact),
+        "paper": Figures::of(domain, paper),
+    });
+    let path = args.output.join("modes.json");
+    let text = serde_json::to_string_pretty(&value)
+        .map_err(|e| Failure::output(format!("cannot encode modes.json: {e}")))?;
+    std::fs::write(&path, text + "\n")
+        .map_err(|e| Failure::output(format!("cannot write {}: {e}", path.display())))?;
+    if !args.quiet {
+        for (name, m) in [("exact", exact), ("paper", paper)] {
+            let f = Figures::of(domain, m);
+            println!(
+                "{name}: angles {:.1}..{:.1}, min scaled Jacobian {:.3}, wall orthogonality \
+                 {:.1e} deg, max aspect ratio {:.1}, inverted {}",
+                f.min_angle_deg,
+                f.max_angle_deg,
+                f.min_scaled_jacobian,
+                f.max_wall_orthogonality_deviation_deg,
+                f.max_aspect_ratio,
+                f.inverted_cells
+            );
+        }
+    }
+    Ok(())
+}
+
 pub fn run(args: Args) -> Result<(), Failure> {
     let formats =
         Format::parse_list(&args.format).map_err(|e| Failure::input(format!("--format: {e}")))?;
     let domain = read_domain(&args)?;
-    let options = Options {
-        mode: match args.mode {
-            ModeArg::Paper => Mode::Paper,
-        },
-        cells: args.cells,
-        refine_ratio: (!args.no_refine).then_some(args.refine_ratio),
-        collapse_fraction: args.collapse_fraction,
-        ..Options::default()
-    };
+    let options = exact_options(&args)?;
     let mesh = mesh(&domain, &options).map_err(|e| match e {
         medial_blocks::MeshError::Internal(_) => Failure::output(e.to_string()),
         _ => Failure::input(e.to_string()),
@@ -179,6 +352,9 @@ pub fn run(args: Args) -> Result<(), Failure> {
             r.inverted_cells
         );
         println!("written to {}/", args.output.display());
+    }
+    if args.compare_modes {
+        compare_modes(&domain, &options, &mesh, &args)?;
     }
     Ok(())
 }

@@ -1,0 +1,282 @@
+//! Node counts of exact mode as one small integer problem.
+//!
+//! Unknowns: a wall-normal count `n_c >= 1` per circle (every block on circle `c` has `n_c`
+//! cells along its spokes: the spokes at a medial vertex are shared by the two blocks on the
+//! same circle, so all blocks around one circle share it) and a count `n_e >= 1` per medial arc
+//! (the arc, and the two walls opposite it, are shared by the arc's two blocks). With the
+//! conformity classes of the blocking these are all the classes, so every shared side matches
+//! by construction once each class has one integer.
+//!
+//! Targets: `tau_c` per circle (from the target cell size and the clustering, see
+//! [`super::clustering::cells_for`]) and, for arc `e` between circles `a, b` with the mean
+//! wall-normal count `nbar = (n_a + n_b) / 2`, `t_e = sum_k max(nbar sq_k, ang_k)`: `sq_k` is the
+//! sub-step's length along the spoke mid-curves divided by the spoke length (cells of
+//! `nbar` rows with `t_e` columns are then square on average), `ang_k` the sub-step's largest
+//! wall angle over 15 degrees (at most 15 degrees of wall per cell).
+//!
+//! Objective: `sum_c (n_c - tau_c)^2 / tau_c + sum_e (n_e - t_e)^2 / t_e`, subject to
+//! `n_e >= ceil(sum_k ang_k)` and, for every circle `c` marked as an *inserted-hole template*
+//! (an O-grid filled into a hole, whose four sides need `2a + 2b` wall cells), an even total
+//! `sum_{e on c} n_e >= 4`.
+//!
+//! Solution: the `n_c` terms are independent of the arcs, so each `n_c` is its rounded target
+//! (exactly optimal); for fixed `n_c` the arc terms separate, so each `n_e` is its rounded target
+//! clamped to its bound (exactly optimal without parity). Parity is then repaired as a
+//! minimum-cost T-join, greedily: each odd template circle is joined by a cheapest path
+//! (Dijkstra over circles, an arc costing the least increase of its term for a `+-1` change)
+//! to another odd template circle or to any non-template circle (which absorbs parity), and
+//! every arc on the path changes by one. Deterministic; not guaranteed globally optimal when
+//! several paths interact, always feasible when every component has a non-template circle or
+//! an even number of odd template circles.
+
+/// One medial arc's data for the count problem.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ArcTarget {
+    /// The two circles' indices into the circle arrays.
+    pub circles: [usize; 2],
+    /// Per sub-step: length along the spoke mid-curves over the spoke length.
+    pub sq: Vec<f64>,
+    /// Per sub-step: the largest wall angle swept, over the 15-degree limit.
+    pub ang: Vec<f64>,
+}
+
+impl ArcTarget {
+    /// The real target `t_e` for a mean wall-normal count `nbar`.
+    pub fn target(&self, nbar: f64) -> f64 {
+        self.sq
+            .iter()
+            .zip(&self.ang)
+            .map(|(s, a)| (nbar * s).max(*a))
+            .sum()
+    }
+    /// The lower bound `ceil(sum ang)` (at least 1).
+    pub fn min_cells(&self) -> usize {
+        let s: f64 = self.ang.iter().sum();
+        if s.is_finite() {
+            ((s - 1e-9).ceil().max(1.0) as usize).min(super::super::grid::MAX_CELLS_PER_SIDE)
+        } else {
+            1
+        }
+    }
+}
+
+/// The integer problem (see the module docs).
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct CountProblem {
+    /// Per circle: the real target `tau_c`.
+    pub circle_target: Vec<f64>,
+    /// Per circle: a count fixed by the user, if any.
+    pub circle_fixed: Vec<Option<usize>>,
+    /// Per circle: true for an inserted-hole template (even perimeter count).
+    pub template: Vec<bool>,
+    pub arcs: Vec<ArcTarget>,
+}
+
+/// The solution: one count per circle and per arc.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Counts {
+    pub circle: Vec<usize>,
+    pub arc: Vec<usize>,
+}
+
+fn round_count(x: f64) -> usize {
+    if x.is_finite() && x > 1.0 {
+        (x.round() as usize).min(super::super::grid::MAX_CELLS_PER_SIDE)
+    } else {
+        1
+    }
+}
+
+fn term(n: usize, t: f64) -> f64 {
+    let t = t.max(1e-9);
+    (n as f64 - t).powi(2) / t
+}
+
+impl CountProblem {
+    /// Solve (see the module docs). `Err` when a template circle's parity cannot be repaired.
+    pub fn solve(&self) -> Result<Counts, String> {
+        let nc = self.circle_target.len();
+        let circle: Vec<usize> = (0..nc)
+            .map(|c| {
+                self.circle_fixed
+                    .get(c)
+                    .copied()
+                    .flatten()
+                    .map(|n| n.clamp(1, super::super::grid::MAX_CELLS_PER_SIDE))
+                    .unwrap_or_else(|| round_count(self.circle_target[c]))
+            })
+            .collect();
+        let mut targets = Vec::with_capacity(self.arcs.len());
+        let mut lower = Vec::with_capacity(self.arcs.len());
+        let mut arc = Vec::with_capacity(self.arcs.len());
+        for a in &self.arcs {
+            if a.circles.iter().any(|&c| c >= nc) {
+                return Err("arc refers to an unknown circle".into());
+            }
+            let nbar = 0.5 * (circle[a.circles[0]] + circle[a.circles[1]]) as f64;
+            let t = a.target(nbar);
+            let lb = a.min_cells();
+            targets.push(t);
+            lower.push(lb);
+            arc.push(round_count(t).max(lb));
+        }
+        self.repair_parity(&mut arc, &targets, &lower)?;
+        Ok(Counts { circle, arc })
+    }
+
+    fn is_template(&self, c: usize) -> bool {
+        self.template.get(c).copied().unwrap_or(false)
+    }
+
+    fn repair_parity(
+        &self,
+        arc: &mut [usize],
+        targets: &[f64],
+        lower: &[usize],
+    ) -> Result<(), String> {
+        let nc = self.circle_target.len();
+        if !(0..nc).any(|c| self.is_template(c)) {
+            return Ok(());
+        }
+        // Adjacency: circle -> arcs.
+        let mut adj: Vec<Vec<usize>> = vec![Vec::new(); nc];
+        for (e, a) in self.arcs.iter().enumerate() {
+            adj[a.circles[0]].push(e);
+            adj[a.circles[1]].push(e);
+        }
+        let perimeter = |arc: &[usize], c: usize| adj[c].iter().map(|&e| arc[e]).sum::<usize>();
+        // Best +-1 change of an arc: (cost, delta).
+        let change = |arc: &[usize], e: usize| -> (f64, i64) {
+            let n = arc[e];
+            let base = term(n, targets[e]);
+            let up = term(n + 1, targets[e]) - base;
+            let down = if n > lower[e].max(1) {
+                term(n - 1, targets[e]) - base
+            } else {
+                f64::INFINITY
+            };
+            if down < up {
+                (down, -1)
+            } else {
+                (up, 1)
+            }
+        };
+        for _round in 0..=nc {
+            let odd: Vec<usize> = (0..nc)
+                .filter(|&c| self.is_template(c) && perimeter(arc, c) % 2 == 1)
+                .collect();
+            let Some(&start) = odd.first() else {
+                break;
+            };
+            // Dijkstra from `start` (deterministic: ties by index).
+            let mut dist = vec![f64::INFINITY; nc];
+            let mut prev: Vec<Option<(usize, usize)>> = vec![None; nc];
+            let mut done = vec![false; nc];
+            dist[start] = 0.0;
+            let mut goal = None;
+            loop {
+                let mut u = None;
+                for c in 0..nc {
+                    if !done[c]
+                        && dist[c].is_finite()
+                        && u.map_or(true, |x: usize| dist[c] < dist[x])
+                    {
+                        u = Some(c);
+                    }
+                }
+                let Some(u) = u else { break };
+                done[u] = true;
+                if u != start && (!self.is_template(u) || odd.contains(&u)) {
+                    goal = Some(u);
+                    break;
+                }
+                for &e in &adj[u] {
+                    let a = &self.arcs[e];
+                    let v = if a.circles[0] == u {
+                        a.circles[1]
+                    } else {
+                        a.circles[0]
+                    };
+                    let w = dist[u] + change(arc, e).0.max(0.0) + 1e-12;
+                    if w < dist[v] {
+                        dist[v] = w;
+                        prev[v] = Some((u, e));
+                    }
+                }
+            }
+            let Some(mut v) = goal else {
+                return Err(format!(
+                    "cannot make the wall count of template circle {start} even"
+                ));
+            };
+            while let Some((u, e)) = prev[v] {
+                let (_, d) = change(arc, e);
+                arc[e] = (arc[e] as i64 + d) as usize;
+                v = u;
+            }
+        }
+        // Small templates: at least 4 wall cells (2a + 2b with a, b >= 1).
+        for (c, arcs_of_c) in adj.iter().enumerate() {
+            if self.is_template(c) {
+                while perimeter(arc, c) < 4 {
+                    // Two cells more on its first arc keeps parity.
+                    match arcs_of_c.first() {
+                        Some(&e) => arc[e] += 2,
+                        None => return Err(format!("template circle {c} has no arc")),
+                    }
+                }
+                if perimeter(arc, c) % 2 == 1 {
+                    return Err(format!("template circle {c} keeps an odd wall count"));
+                }
+            }
+        }
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn arc(a: usize, b: usize, t: f64) -> ArcTarget {
+        ArcTarget {
+            circles: [a, b],
+            sq: vec![t],
+            ang: vec![0.0],
+        }
+    }
+
+    #[test]
+    fn rounding_without_templates() {
+        let p = CountProblem {
+            circle_target: vec![4.4, 7.6],
+            circle_fixed: vec![None, Some(3)],
+            template: vec![false, false],
+            arcs: vec![arc(0, 1, 1.0), arc(0, 1, 2.3)],
+        };
+        let c = p.solve().unwrap();
+        assert_eq!(c.circle, vec![4, 3]);
+        // nbar = 3.5: targets 3.5 and 8.05.
+        assert_eq!(c.arc, vec![4, 8]);
+    }
+
+    #[test]
+    fn template_perimeters_become_even() {
+        // Circle 1 is a template touched by three arcs; circle 0 and 2 are free.
+        let p = CountProblem {
+            circle_target: vec![4.0, 4.0, 4.0],
+            circle_fixed: vec![None; 3],
+            template: vec![false, true, false],
+            arcs: vec![
+                arc(0, 1, 1.0),
+                arc(1, 2, 1.3),
+                arc(0, 1, 0.9),
+                arc(0, 2, 1.0),
+            ],
+        };
+        let c = p.solve().unwrap();
+        let per: usize = [0, 1, 2].iter().map(|&e| c.arc[e]).sum();
+        assert_eq!(per % 2, 0, "{c:?}");
+        assert!(per >= 4);
+    }
+}

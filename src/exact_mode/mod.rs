@@ -1,0 +1,743 @@
+//! Exact mode (the default): blocks on the exact medial axis of the circles, gridded along
+//! spokes (DESIGN.md sections 5 and 7; the paper's section 6 wish, node matching by the
+//! maximal empty circle).
+//!
+//! The *topology* is that of paper mode (the Delaunay triangulation of boundary samples gives
+//! the medial graph and Blocking2D its blocks, [`crate::blocking`]); the *geometry* comes from
+//! the circles themselves:
+//! - medial vertex `v` of circles `(i, j, k)` = the Apollonius circle tangent to all three
+//!   ([`crate::apollonius::apollonius`], the root whose tangent points turn counter-clockwise
+//!   like the triangle's samples, nearest the triangle's circumcentre); its tangent points are
+//!   the block corners on the circles;
+//! - medial arc between circles `p` and `q` from vertex `A` to `B`: the exact bisector
+//!   `|m - c_p| - s_p = |m - c_q| - s_q` (`s = +r` for a hole, `-R` for the bounding circle), a
+//!   hyperbola branch between two holes and an ellipse arc between a hole and the bounding
+//!   circle. It is parametrised by the angle `theta` of the touching point `a = c_p + r_p u`,
+//!   `u = (cos theta, sin theta)`, moving from its value at `A` to its value at `B` (the sweep's
+//!   turn count is taken from the sampled wall of paper mode). With `n` the unit normal into the
+//!   fluid at `a` (`u` for a hole, `-u` for the bounding circle), the medial point is
+//!   `m = a + rho n` where the empty circle's radius `rho` solves `|m - c_q|^2 = (rho + s_q)^2`,
+//!   linear in `rho` after squaring: `rho = (s_q^2 - |d|^2) / (2 (d . n - s_q))`, `d = a - c_q`.
+//!   The touching point on `q` is `c_q + |s_q| (m - c_q) / |m - c_q|`;
+//! - each block (side 0 on a circle, side 2 on the arc) is the ruled surface of the spokes from
+//!   its wall to the arc's nodes: the grid line `i` runs straight from the touching point
+//!   `a(m_i)` to `m_i`, along the circle's normal. All spokes of one circle pass through its
+//!   centre and never cross, so every cell is a convex quadrilateral between two spokes with
+//!   positive Jacobians, and the first grid line off the wall is exactly normal to it;
+//! - nodes along a spoke follow the circle's [`Clustering`]; nodes along the arc equidistribute
+//!   `max(nbar ds / rho, dtheta / 15 deg)` (`ds` along the spoke mid-curves, `nbar` the mean
+//!   wall-normal count of the two circles), so cells are near square on average and no cell
+//!   spans more than about 15 degrees of wall; counts come from [`counts::CountProblem`].
+//!
+//! Shared sides are bitwise identical: each arc's medial nodes and each vertex spoke's nodes
+//! are computed once and copied into both blocks; the ends of every arc are exactly the
+//! rounded Apollonius centres and tangent points.
+
+pub mod benchmarks;
+pub mod clustering;
+pub mod counts;
+pub mod metrics;
+pub mod smoothing;
+
+pub use clustering::{Clustering, FirstCell};
+
+use crate::apollonius::{apollonius, Choice, Site};
+use crate::blocking::Blocking;
+use crate::domain::{CircleId, Domain};
+use crate::geometry::Point;
+use crate::grid::{GridError, MAX_CELLS_PER_SIDE, MAX_TOTAL_NODES};
+use crate::layout::{Block, BlockLayout, Curve, Edge, EdgeKind, SideRef};
+use crate::mesh::BlockGrid;
+use crate::mesher::{MeshError, Options};
+use counts::{ArcTarget, CountProblem, Counts};
+use std::collections::HashMap;
+use std::f64::consts::{PI, TAU};
+
+/// Sub-steps used to sample each medial arc for the node distribution.
+pub const ARC_SUBSTEPS: usize = 256;
+
+/// The largest wall angle one cell should span (15 degrees, as in paper mode).
+pub const MAX_WALL_ANGLE: f64 = PI / 12.0;
+
+/// A medial vertex in exact geometry: the Apollonius circle of its three circles.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ExactVertex {
+    pub center: Point,
+    pub radius: f64,
+    /// The circles, in the order of the interior triangle's samples.
+    pub circles: [CircleId; 3],
+    /// The tangent point on each circle (the spoke ends), same order.
+    pub tangent: [Point; 3],
+}
+
+impl ExactVertex {
+    /// The slot (0..3) of circle `c`.
+    pub fn slot(&self, c: CircleId) -> Option<usize> {
+        self.circles.iter().position(|&x| x == c)
+    }
+}
+
+/// One wall: centre, radius and the tangency sense `s` (`+r` hole, `-R` bounding circle).
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct Wall {
+    c: Point,
+    r: f64,
+    s: f64,
+}
+
+impl Wall {
+    fn of(domain: &Domain, id: CircleId) -> Wall {
+        let circle = domain.circle(id);
+        Wall {
+            c: circle.center,
+            r: circle.radius,
+            s: if id < 0 {
+                -circle.radius
+            } else {
+                circle.radius
+            },
+        }
+    }
+    fn site(&self) -> Site {
+        Site {
+            center: self.c,
+            s: self.s,
+        }
+    }
+    fn angle_of(&self, p: Point) -> f64 {
+        (p[1] - self.c[1]).atan2(p[0] - self.c[0])
+    }
+    /// The touching point of the empty circle centred at `m`.
+    fn project(&self, m: Point) -> Point {
+        let d = [m[0] - self.c[0], m[1] - self.c[1]];
+        let l = d[0].hypot(d[1]);
+        [self.c[0] + self.r * d[0] / l, self.c[1] + self.r * d[1] / l]
+    }
+}
+
+/// The medial point of walls `p` and `q` whose touching point on `p` is at angle `theta`:
+/// `(a, m, rho)` (see the module docs). `None` when it is not finite or `rho < 0`.
+fn medial_point(p: &Wall, q: &Wall, theta: f64) -> Option<(Point, Point, f64)> {
+    let u = [theta.cos(), theta.sin()];
+    let a = [p.c[0] + p.r * u[0], p.c[1] + p.r * u[1]];
+    let n = if p.s < 0.0 { [-u[0], -u[1]] } else { u };
+    let d = [a[0] - q.c[0], a[1] - q.c[1]];
+    let den = 2.0 * (d[0] * n[0] + d[1] * n[1] - q.s);
+    let rho = (q.s * q.s - (d[0] * d[0] + d[1] * d[1])) / den;
+    let m = [a[0] + rho * n[0], a[1] + rho * n[1]];
+    (rho.is_finite() && rho >= 0.0 && m[0].is_finite() && m[1].is_finite()).then_some((a, m, rho))
+}
+
+fn dist(a: Point, b: Point) -> f64 {
+    (a[0] - b[0]).hypot(a[1] - b[1])
+}
+
+fn mid(a: Point, b: Point) -> Point {
+    [0.5 * (a[0] + b[0]), 0.5 * (a[1] + b[1])]
+}
+
+/// The angle from `a - c` to `b - c`, in `(-pi, pi]`.
+fn turn(c: Point, a: Point, b: Point) -> f64 {
+    let u = [a[0] - c[0], a[1] - c[1]];
+    let v = [b[0] - c[0], b[1] - c[1]];
+    (u[0] * v[1] - u[1] * v[0]).atan2(u[0] * v[0] + u[1] * v[1])
+}
+
+fn internal(msg: String) -> MeshError {
+    MeshError::Internal(format!("exact mode: {msg}"))
+}
+
+/// The exact medial vertices of a medial graph: one Apollonius circle per interior triangle.
+/// Errors ([`MeshError::Internal`]) when a triangle's circles are not three different circles
+/// or no tangent circle exists (the sampled combinatorics disagree with the circles).
+pub fn exact_vertices(
+    domain: &Domain,
+    medial: &crate::medial::MedialGraph,
+) -> Result<Vec<ExactVertex>, MeshError> {
+    let nh = domain.hole_count() as CircleId;
+    medial
+        .vertices
+        .iter()
+        .enumerate()
+        .map(|(k, v)| {
+            let c = v.circles;
+            if c.iter().any(|&x| x < -1 || x >= nh) || c[0] == c[1] || c[1] == c[2] || c[0] == c[2]
+            {
+                return Err(internal(format!(
+                    "medial vertex {k} does not touch three different circles: {c:?}"
+                )));
+            }
+            let sites = c.map(|x| Wall::of(domain, x).site());
+            let ap = apollonius(sites, Choice::ccw().near(v.position))
+                .or_else(|_| apollonius(sites, Choice::any().near(v.position)))
+                .map_err(|e| {
+                    internal(format!("no Apollonius circle for medial vertex {k}: {e}"))
+                })?;
+            Ok(ExactVertex {
+                center: ap.center,
+                radius: ap.radius,
+                circles: c,
+                tangent: ap.tangent_points,
+            })
+        })
+        .collect()
+}
+
+/// One medial arc sampled in exact geometry.
+#[derive(Debug, Clone)]
+struct ArcGeometry {
+    /// The walls of `circles[0]` and `circles[1]`.
+    walls: [Wall; 2],
+    /// Which wall is parametrised by its touching angle.
+    param: usize,
+    /// Start angle and sweep (from vertex `A` to `B`) of each wall's touching point.
+    start: [f64; 2],
+    sweep: [f64; 2],
+    /// End vertices, exact: centres and tangent points `[wall 0, wall 1]`.
+    ends_m: [Point; 2],
+    ends_a: [[Point; 2]; 2],
+}
+
+impl ArcGeometry {
+    /// Medial point and both touching points at parameter `t` in `[0, 1]` (exact ends).
+    fn at(&self, t: f64) -> Option<(Point, [Point; 2], f64)> {
+        if t <= 0.0 {
+            return Some((
+                self.ends_m[0],
+                self.ends_a[0],
+                dist(self.ends_m[0], self.ends_a[0][0]),
+            ));
+        }
+        if t >= 1.0 {
+            return Some((
+                self.ends_m[1],
+                self.ends_a[1],
+                dist(self.ends_m[1], self.ends_a[1][0]),
+            ));
+        }
+        let p = self.param;
+        let q = 1 - p;
+        let theta = self.start[p] + t * self.sweep[p];
+        let (a, m, rho) = medial_point(&self.walls[p], &self.walls[q], theta)?;
+        let b = self.walls[q].project(m);
+        if !(b[0].is_finite() && b[1].is_finite()) {
+            return None;
+        }
+        let mut both = [a, a];
+        both[q] = b;
+        Some((m, both, rho))
+    }
+
+    /// Sub-step densities for the count problem: `(sq, ang)` per sub-step.
+    fn densities(&self) -> Option<(Vec<f64>, Vec<f64>)> {
+        let k = ARC_SUBSTEPS;
+        let pts: Option<Vec<(Point, [Point; 2], f64)>> =
+            (0..=k).map(|s| self.at(s as f64 / k as f64)).collect();
+        let pts = pts?;
+        let mut sq = Vec::with_capacity(k);
+        let mut ang = Vec::with_capacity(k);
+        for w in pts.windows(2) {
+            let (m0, a0, r0) = w[0];
+            let (m1, a1, r1) = w[1];
+            let ds =
+                0.5 * (dist(mid(m0, a0[0]), mid(m1, a1[0])) + dist(mid(m0, a0[1]), mid(m1, a1[1])));
+            let rho = 0.5 * (r0 + r1);
+            sq.push(if rho > 0.0 { ds / rho } else { 0.0 });
+            let t0 = turn(self.walls[0].c, a0[0], a1[0]).abs();
+            let t1 = turn(self.walls[1].c, a0[1], a1[1]).abs();
+            ang.push(t0.max(t1) / MAX_WALL_ANGLE);
+        }
+        Some((sq, ang))
+    }
+}
+
+/// Exact sweep of a wall's touching point from `a0` to `a1`, with the turn count from `hint`
+/// (the sampled wall's sweep in the same direction).
+fn exact_sweep(w: &Wall, a0: Point, a1: Point, hint: f64) -> (f64, f64) {
+    let start = w.angle_of(a0);
+    let raw = w.angle_of(a1) - start;
+    let k = ((hint - raw) / TAU).round();
+    (start, raw + k * TAU)
+}
+
+/// The sweep of a block's side-0 wall in the paper layout, in the side's direction.
+fn wall_hint(layout: &BlockLayout, block: usize) -> Option<f64> {
+    let side = layout.blocks.get(block)?.sides[0];
+    match layout.edges.get(side.edge as usize)?.curve {
+        Curve::Arc { sweep, .. } => Some(if side.reversed { -sweep } else { sweep }),
+        _ => None,
+    }
+}
+
+/// Index of circle `id` in per-circle arrays: the bounding circle first.
+fn cidx(id: CircleId) -> usize {
+    (id + 1) as usize
+}
+
+fn median(mut v: Vec<f64>) -> Option<f64> {
+    v.retain(|x| x.is_finite());
+    if v.is_empty() {
+        return None;
+    }
+    v.sort_by(f64::total_cmp);
+    Some(v[v.len() / 2])
+}
+
+/// The clustering of circle `id`: a per-circle override, else the domain's.
+pub fn clustering_of(options: &Options, id: CircleId) -> Clustering {
+    options
+        .circle_clustering
+        .iter()
+        .find(|(c, _)| *c == id)
+        .map(|(_, k)| *k)
+        .unwrap_or(options.clustering)
+}
+
+/// Check the exact-mode options.
+pub fn validate_options(options: &Options) -> Result<(), MeshError> {
+    if let Some(h) = options.cell_size {
+        if !(h.is_finite() && h > 0.0) {
+            return Err(MeshError::Options(format!(
+                "--cell-size must be a positive length, not {h}"
+            )));
+        }
+    }
+    options
+        .clustering
+        .validate()
+        .map_err(|e| MeshError::Options(format!("clustering: {e}")))?;
+    for (c, k) in &options.circle_clustering {
+        k.validate()
+            .map_err(|e| MeshError::Options(format!("clustering of circle {c}: {e}")))?;
+    }
+    for (c, n) in &options.wall_cells {
+        if *n == 0 || *n > MAX_CELLS_PER_SIDE {
+            return Err(MeshError::Options(format!(
+                "wall-normal cells of circle {c} must be in 1..={MAX_CELLS_PER_SIDE}, not {n}"
+            )));
+        }
+    }
+    Ok(())
+}
+
+/// The nodes of one spoke from the wall point `a` (`j = 0`) to the medial point `m`
+/// (`j = n`), `n + 1` nodes with the given clustering; the ends are exactly `a` and `m`.
+fn spoke_nodes(a: Point, m: Point, n: usize, first: Option<f64>, growth: f64) -> Vec<Point> {
+    let len = dist(a, m);
+    let d = clustering::spoke_distances(len, n, first, growth);
+    let mut out: Vec<Point> = d
+        .iter()
+        .map(|&x| {
+            let t = if len > 0.0 { x / len } else { 0.0 };
+            [a[0] + t * (m[0] - a[0]), a[1] + t * (m[1] - a[1])]
+        })
+        .collect();
+    out[0] = a;
+    out[n] = m;
+    out
+}
+
+/// `n + 1` parameters in `[0, 1]` equidistributing the sub-step weights `w` (`t_0 = 0`,
+/// `t_n = 1` exactly; equal steps when the weights vanish).
+fn equidistribute(w: &[f64], n: usize) -> Vec<f64> {
+    let k = w.len();
+    let total: f64 = w.iter().sum();
+    let mut t = Vec::with_capacity(n + 1);
+    if !(total.is_finite() && total > 0.0) || k == 0 {
+        t.extend((0..=n).map(|i| i as f64 / n as f64));
+        t[n] = 1.0;
+        return t;
+    }
+    t.push(0.0);
+    let mut cum = 0.0;
+    let mut s = 0;
+    for i in 1..n {
+        let target = total * (i as f64 / n as f64);
+        while s < k && cum + w[s] < target {
+            cum += w[s];
+            s += 1;
+        }
+        let frac = if s < k && w[s] > 0.0 {
+            ((target - cum) / w[s]).clamp(0.0, 1.0)
+        } else {
+            0.0
+        };
+        let ti = ((s.min(k) as f64 + frac) / k as f64).clamp(0.0, 1.0);
+        let last = t[t.len() - 1];
+        t.push(ti.max(last));
+    }
+    t.push(1.0);
+    t
+}
+
+/// What exact mode built, beyond the mesh.
+#[derive(Debug, Clone)]
+pub struct ExactMesh {
+    pub layout: BlockLayout,
+    pub grids: Vec<BlockGrid>,
+    pub vertices: Vec<ExactVertex>,
+    /// The solved counts: `circle[c + 1]` wall-normal cells of circle `c`, `arc[e]` cells along
+    /// arc `e`.
+    pub counts: Counts,
+    /// The target cell size used.
+    pub cell_size: f64,
+    /// Arcs whose exact walls run against their block's orientation: the sampled Delaunay
+    /// combinatorics disagree with the exact medial axis there (nearly co-circular circles
+    /// not resolved by the sampling); their blocks are inverted. Empty on a consistent layout.
+    pub inconsistent_arcs: Vec<usize>,
+}
+
+/// Sweeps at most this small (radians) count as zero when checking orientations (a
+/// co-circular group's zero-length arcs, up to rounding).
+pub const ZERO_SWEEP: f64 = 1e-12;
+
+/// The expected sign of a block's wall sweep in its side-0 direction: clockwise (negative)
+/// about a hole, counter-clockwise about the bounding circle (fluid on the left).
+fn expected_sign(c: CircleId) -> f64 {
+    if c < 0 {
+        1.0
+    } else {
+        -1.0
+    }
+}
+
+/// Build the exact-mode layout and grids from the front end's [`Blocking`] (read only).
+///
+/// Block `2e` lies on arc `e`'s `circles[0]`, block `2e + 1` on `circles[1]`, with the corner
+/// and side conventions of [`crate::blocking`]. Layout vertices: the `V` Apollonius centres,
+/// then `3V` tangent points (vertex `v`'s slot `k` at `V + 3v + k`). Edges: walls are exact
+/// [`Curve::Arc`]s, spokes [`Curve::Segment`]s, medial arcs [`Curve::Polyline`]s through the
+/// grid's medial nodes.
+///
+/// Errors: [`MeshError::Options`] for bad options, [`MeshError::Grid`] for too many nodes,
+/// [`MeshError::Internal`] when the exact geometry disagrees with the sampled combinatorics.
+/// Never panics.
+pub fn build(
+    domain: &Domain,
+    blocking: &Blocking,
+    options: &Options,
+) -> Result<ExactMesh, MeshError> {
+    validate_options(options)?;
+    let medial = &blocking.medial;
+    let vertices = exact_vertices(domain, medial)?;
+    let nv = vertices.len();
+    let ncirc = domain.hole_count() + 1;
+    if blocking.layout.blocks.len() != 2 * medial.arcs.len() {
+        return Err(internal(
+            "the blocking does not have two blocks per arc".into(),
+        ));
+    }
+
+    // Geometry of every arc.
+    let mut geoms = Vec::with_capacity(medial.arcs.len());
+    let mut targets = Vec::with_capacity(medial.arcs.len());
+    let mut inconsistent_arcs = Vec::new();
+    for (e, arc) in medial.arcs.iter().enumerate() {
+        let [v0, v1] = arc.ends.map(|v| v as usize);
+        let (Some(x0), Some(x1)) = (vertices.get(v0), vertices.get(v1)) else {
+            return Err(internal(format!("arc {e} has an unknown end vertex")));
+        };
+        let walls = arc.circles.map(|c| Wall::of(domain, c));
+        let mut ends_a = [[[0.0; 2]; 2]; 2];
+        for (side, &c) in arc.circles.iter().enumerate() {
+            let (Some(s0), Some(s1)) = (x0.slot(c), x1.slot(c)) else {
+                return Err(internal(format!(
+                    "arc {e}: an end vertex does not touch circle {c}"
+                )));
+            };
+            ends_a[0][side] = x0.tangent[s0];
+            ends_a[1][side] = x1.tangent[s1];
+        }
+        let hint_a = wall_hint(&blocking.layout, 2 * e)
+            .ok_or_else(|| internal(format!("arc {e}: no sampled wall")))?;
+        let hint_b = wall_hint(&blocking.layout, 2 * e + 1)
+            .ok_or_else(|| internal(format!("arc {e}: no sampled wall")))?;
+        let (s0, w0) = exact_sweep(&walls[0], ends_a[0][0], ends_a[1][0], hint_a);
+        let (s1, w1) = exact_sweep(&walls[1], ends_a[0][1], ends_a[1][1], -hint_b);
+        let wrong = |w: f64, c: CircleId| w.abs() > ZERO_SWEEP && w * expected_sign(c) < 0.0;
+        if wrong(w0, arc.circles[0]) || wrong(-w1, arc.circles[1]) {
+            inconsistent_arcs.push(e);
+        }
+        let param = if w1.abs() > w0.abs() { 1 } else { 0 };
+        let g = ArcGeometry {
+            walls,
+            param,
+            start: [s0, s1],
+            sweep: [w0, w1],
+            ends_m: [x0.center, x1.center],
+            ends_a,
+        };
+        let (sq, ang) = g
+            .densities()
+            .ok_or_else(|| internal(format!("arc {e}: the exact medial arc is not defined")))?;
+        targets.push(ArcTarget {
+            circles: arc.circles.map(cidx),
+            sq,
+            ang,
+        });
+        geoms.push(g);
+    }
+
+    // Target size and the count problem.
+    let radii: Vec<f64> = vertices.iter().map(|v| v.radius).collect();
+    let h = match options.cell_size {
+        Some(h) => h,
+        None => median(radii.clone()).unwrap_or(1.0) / options.cells.max(1) as f64,
+    };
+    let mut circle_target = vec![1.0; ncirc];
+    for id in domain.circle_ids() {
+        let near: Vec<f64> = vertices
+            .iter()
+            .filter(|v| v.circles.contains(&id))
+            .map(|v| v.radius)
+            .collect();
+        let len = median(near).unwrap_or(h);
+        let cl = clustering_of(options, id);
+        let first = cl.first_height(domain.circle(id).radius);
+        circle_target[cidx(id)] = clustering::cells_for(len, h, first, cl.growth) as f64;
+    }
+    let mut circle_fixed = vec![None; ncirc];
+    for (c, n) in &options.wall_cells {
+        if *c >= -1 && ((*c + 1) as usize) < ncirc {
+            circle_fixed[cidx(*c)] = Some(*n);
+        }
+    }
+    let problem = CountProblem {
+        circle_target,
+        circle_fixed,
+        template: vec![false; ncirc],
+        arcs: targets,
+    };
+    let counts = problem.solve().map_err(internal)?;
+
+    // Limits before allocating.
+    let mut total: usize = 0;
+    for (e, arc) in medial.arcs.iter().enumerate() {
+        let n = counts.arc[e];
+        for &c in &arc.circles {
+            let nj = counts.circle[cidx(c)];
+            total = total.saturating_add((n + 1).saturating_mul(nj + 1));
+        }
+    }
+    if total > MAX_TOTAL_NODES {
+        return Err(MeshError::Grid(GridError::TooManyNodes {
+            nodes: total,
+            limit: MAX_TOTAL_NODES,
+        }));
+    }
+
+    // Layout skeleton.
+    let mut layout = BlockLayout {
+        vertices: vertices.iter().map(|v| v.center).collect(),
+        edges: Vec::with_capacity(3 * medial.arcs.len() + 3 * nv),
+        blocks: Vec::with_capacity(2 * medial.arcs.len()),
+    };
+    for v in &vertices {
+        layout.vertices.extend_from_slice(&v.tangent);
+    }
+    let tangent_vertex = |v: usize, slot: usize| (nv + 3 * v + slot) as u32;
+
+    // Vertex spokes: nodes computed once per (vertex, slot).
+    let mut spoke_edge: HashMap<(usize, usize), u32> = HashMap::new();
+    let mut spoke_cache: HashMap<(usize, usize), Vec<Point>> = HashMap::new();
+    let mut grids = Vec::with_capacity(2 * medial.arcs.len());
+    for (e, arc) in medial.arcs.iter().enumerate() {
+        let g = &geoms[e];
+        let n = counts.arc[e];
+        // Arc nodes.
+        let weights: Vec<f64> = {
+            let nbar = 0.5
+                * (counts.circle[cidx(arc.circles[0])] + counts.circle[cidx(arc.circles[1])])
+                    as f64;
+            let t = &problem.arcs[e];
+            t.sq.iter()
+                .zip(&t.ang)
+                .map(|(s, a)| (nbar * s).max(*a))
+                .collect()
+        };
+        let params = equidistribute(&weights, n);
+        let mut m_nodes = Vec::with_capacity(n + 1);
+        let mut a_nodes: [Vec<Point>; 2] = [Vec::with_capacity(n + 1), Vec::with_capacity(n + 1)];
+        for &t in &params {
+            let (m, a, _) = g
+                .at(t)
+                .ok_or_else(|| internal(format!("arc {e}: a medial node is not defined")))?;
+            m_nodes.push(m);
+            a_nodes[0].push(a[0]);
+            a_nodes[1].push(a[1]);
+        }
+        let [v0, v1] = arc.ends.map(|v| v as usize);
+        let medial_edge = layout.edges.len() as u32;
+        layout.edges.push(Edge {
+            ends: [v0 as u32, v1 as u32],
+            curve: Curve::Polyline(m_nodes.clone()),
+            kind: EdgeKind::Medial,
+        });
+        #[allow(clippy::needless_range_loop)] // `side` indexes four parallel arrays
+        for side in 0..2 {
+            let c = arc.circles[side];
+            let nj = counts.circle[cidx(c)];
+            let cl = clustering_of(options, c);
+            let first = cl.first_height(domain.circle(c).radius);
+            let s0 = vertices[v0].slot(c).unwrap_or(0);
+            let s1 = vertices[v1].slot(c).unwrap_or(0);
+            // Vertex spokes (shared with the other block on this circle at that vertex).
+            for (v, s) in [(v0, s0), (v1, s1)] {
+                spoke_cache.entry((v, s)).or_insert_with(|| {
+                    spoke_nodes(
+                        vertices[v].tangent[s],
+                        vertices[v].center,
+                        nj,
+                        first,
+                        cl.growth,
+                    )
+                });
+                spoke_edge.entry((v, s)).or_insert_with(|| {
+                    layout.edges.push(Edge {
+                        ends: [v as u32, tangent_vertex(v, s)],
+                        curve: Curve::Segment,
+                        kind: EdgeKind::Spoke,
+                    });
+                    (layout.edges.len() - 1) as u32
+                });
+            }
+            // Wall edge, in the block's side-0 direction.
+            let (t_first, t_last) = if side == 0 {
+                (tangent_vertex(v0, s0), tangent_vertex(v1, s1))
+            } else {
+                (tangent_vertex(v1, s1), tangent_vertex(v0, s0))
+            };
+            let (start, sweep) = if side == 0 {
+                (g.start[0], g.sweep[0])
+            } else {
+                (g.start[1] + g.sweep[1], -g.sweep[1])
+            };
+            let wall_edge = layout.edges.len() as u32;
+            layout.edges.push(Edge {
+                ends: [t_first, t_last],
+                curve: Curve::Arc {
+                    center: g.walls[side].c,
+                    radius: g.walls[side].r,
+                    start,
+                    sweep,
+                },
+                kind: EdgeKind::Wall(c),
+            });
+            // Grid: column i is arc node k = i (side 0) or n - i (side 1).
+            let mut nodes = vec![[0.0; 2]; (n + 1) * (nj + 1)];
+            for i in 0..=n {
+                let k = if side == 0 { i } else { n - i };
+                let col: Vec<Point> = if k == 0 {
+                    spoke_cache[&(v0, s0)].clone()
+                } else if k == n {
+                    spoke_cache[&(v1, s1)].clone()
+                } else {
+                    spoke_nodes(a_nodes[side][k], m_nodes[k], nj, first, cl.growth)
+                };
+                for (j, p) in col.into_iter().enumerate() {
+                    nodes[i + j * (n + 1)] = p;
+                }
+            }
+            grids.push(BlockGrid { ni: n, nj, nodes });
+            let fwd = |edge| SideRef {
+                edge,
+                reversed: false,
+            };
+            let rev = |edge| SideRef {
+                edge,
+                reversed: true,
+            };
+            let sp0 = spoke_edge[&(v0, s0)];
+            let sp1 = spoke_edge[&(v1, s1)];
+            layout.blocks.push(if side == 0 {
+                Block {
+                    corners: [t_first, t_last, v1 as u32, v0 as u32],
+                    sides: [fwd(wall_edge), rev(sp1), rev(medial_edge), fwd(sp0)],
+                    wall: Some(c),
+                }
+            } else {
+                Block {
+                    corners: [t_first, t_last, v0 as u32, v1 as u32],
+                    sides: [fwd(wall_edge), rev(sp0), fwd(medial_edge), fwd(sp1)],
+                    wall: Some(c),
+                }
+            });
+        }
+    }
+    if options.smooth > 0 {
+        for g in grids.iter_mut() {
+            let rows = smoothing::boundary_layer_rows(g);
+            smoothing::winslow(g, options.smooth, rows);
+        }
+    }
+    Ok(ExactMesh {
+        layout,
+        grids,
+        vertices,
+        counts,
+        cell_size: h,
+        inconsistent_arcs,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn hole(x: f64, y: f64, r: f64) -> Wall {
+        Wall { c: [x, y], r, s: r }
+    }
+
+    #[test]
+    fn medial_point_between_equal_holes_is_on_the_bisector() {
+        let (p, q) = (hole(0.0, 0.0, 0.5), hole(3.0, 0.0, 0.5));
+        for k in -5..=5 {
+            let theta = 0.2 * k as f64;
+            let (a, m, rho) = medial_point(&p, &q, theta).unwrap();
+            assert!((m[0] - 1.5).abs() < 1e-12, "{m:?}");
+            assert!((dist(a, m) - rho).abs() < 1e-12);
+            assert!((dist(m, q.c) - q.r - rho).abs() < 1e-12);
+        }
+    }
+
+    #[test]
+    fn medial_point_between_hole_and_bounding_circle_is_on_an_ellipse() {
+        // |m - c_i| - r = R - |m - c_B|: an ellipse with foci c_i, c_B and major axis R + r.
+        let p = hole(1.0, 0.5, 0.3);
+        let b = Wall {
+            c: [0.0, 0.0],
+            r: 3.0,
+            s: -3.0,
+        };
+        for k in 0..12 {
+            let theta = 0.5 * k as f64;
+            let (_, m, rho) = medial_point(&p, &b, theta).unwrap();
+            assert!(((dist(m, p.c) + dist(m, b.c)) - 3.3).abs() < 1e-12);
+            assert!((3.0 - dist(m, b.c) - rho).abs() < 1e-12);
+            // And parametrised from the bounding circle's side.
+            let (a, m2, rho2) = medial_point(&b, &p, theta).unwrap();
+            assert!((dist(a, b.c) - 3.0).abs() < 1e-12);
+            assert!(((dist(m2, p.c) + dist(m2, b.c)) - 3.3).abs() < 1e-12);
+            assert!((dist(m2, p.c) - 0.3 - rho2).abs() < 1e-12);
+        }
+    }
+
+    #[test]
+    fn equidistribution_has_exact_ends_and_is_monotone() {
+        let w = vec![1.0, 0.0, 3.0, 0.5, 0.5];
+        let t = equidistribute(&w, 7);
+        assert_eq!(t.len(), 8);
+        assert_eq!((t[0], t[7]), (0.0, 1.0));
+        assert!(t.windows(2).all(|x| x[0] <= x[1]));
+        assert_eq!(equidistribute(&[0.0; 4], 2), vec![0.0, 0.5, 1.0]);
+    }
+
+    #[test]
+    fn spoke_nodes_end_exactly() {
+        let (a, m) = ([0.1, 0.2], [1.3, -0.7]);
+        let n = spoke_nodes(a, m, 9, Some(1e-3), 1.2);
+        assert_eq!(n.len(), 10);
+        assert_eq!((n[0], n[9]), (a, m));
+        assert!((dist(n[0], n[1]) - 1e-3).abs() < 1e-15);
+    }
+}

@@ -1,0 +1,102 @@
+//! `medial-blocks mesh` in exact mode (the default) and its flags: modes, clustering,
+//! smoothing, `--compare-modes`, and exit code 2 for bad flag values.
+
+use std::process::{Command, Output};
+
+fn run(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_medial-blocks"))
+        .arg("mesh")
+        .args(args)
+        .output()
+        .expect("binary runs")
+}
+
+fn read_json(path: &std::path::Path) -> serde_json::Value {
+    serde_json::from_str(&std::fs::read_to_string(path).expect("file written")).expect("JSON")
+}
+
+#[test]
+fn default_is_exact_and_compare_modes_writes_both() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().to_str().unwrap();
+    let o = run(&[
+        "-o",
+        out,
+        "--format",
+        "json",
+        "--cells",
+        "6",
+        "--compare-modes",
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let modes = read_json(&dir.path().join("modes.json"));
+    let dev = |m: &str| {
+        modes[m]["max_wall_orthogonality_deviation_deg"]
+            .as_f64()
+            .unwrap()
+    };
+    assert!(dev("exact") < 1e-6, "{modes}");
+    assert!(dev("paper") > 1.0, "{modes}");
+    assert_eq!(modes["exact"]["inverted_cells"], 0);
+    // The written mesh is the exact one.
+    let report = read_json(&dir.path().join("report.json"));
+    assert_eq!(report["cells"], modes["exact"]["cells"]);
+}
+
+#[test]
+fn clustering_smoothing_and_paper_mode_run() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().to_str().unwrap();
+    for extra in [
+        vec![
+            "--first-height-rel",
+            "0.01",
+            "--growth",
+            "1.15",
+            "--smooth",
+            "5",
+        ],
+        vec![
+            "--first-height",
+            "0.001",
+            "--circle-clustering",
+            "-1:0.01r:1.1",
+            "--wall-cells",
+            "0:20",
+            "--cell-size",
+            "0.05",
+        ],
+        vec!["--mode", "paper"],
+    ] {
+        let mut args = vec!["-o", out, "--format", "json", "-q"];
+        args.extend(extra.iter().copied());
+        let o = run(&args);
+        assert!(
+            o.status.success(),
+            "{extra:?}: {}",
+            String::from_utf8_lossy(&o.stderr)
+        );
+        let report = read_json(&dir.path().join("report.json"));
+        assert_eq!(report["inverted_cells"], 0, "{extra:?}");
+    }
+}
+
+#[test]
+fn bad_values_are_input_errors() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().to_str().unwrap();
+    for bad in [
+        vec!["--growth", "0.5"],
+        vec!["--first-height", "-1"],
+        vec!["--cell-size", "0"],
+        vec!["--wall-cells", "3"],
+        vec!["--wall-cells", "3:0"],
+        vec!["--circle-clustering", "1:x"],
+        vec!["--mode", "fancy"],
+    ] {
+        let mut args = vec!["-o", out, "--format", "json", "-q"];
+        args.extend(bad.iter().copied());
+        let o = run(&args);
+        assert_eq!(o.status.code(), Some(2), "{bad:?}");
+    }
+}

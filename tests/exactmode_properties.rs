@@ -1,0 +1,477 @@
+//! Exact mode checked without trusting the code: on random layouts (rejection-sampled
+//! non-overlapping holes, h = 2..30) every property is recomputed here from node coordinates:
+//! counting identities, conformity (sides with the same node set are bitwise identical), wall
+//! nodes on their circles, the first grid line off every wall along the circle's normal, and a
+//! positive cross product at every cell corner. Also: clustering gives the requested first
+//! cell height; smoothing never lowers the smallest scaled Jacobian and keeps all of the above.
+
+use medial_blocks::domain::{Circle, Domain};
+use medial_blocks::exact_mode::{Clustering, FirstCell};
+use medial_blocks::{mesh, Mesh, Mode, Options};
+use proptest::prelude::*;
+use std::collections::HashMap;
+
+/// SplitMix64.
+struct Rng(u64);
+impl Rng {
+    fn next(&mut self) -> f64 {
+        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        ((z ^ (z >> 31)) >> 11) as f64 / (1u64 << 53) as f64
+    }
+}
+
+/// Up to `h` random holes with gaps of at least `min_gap * R`.
+fn layout(seed: u64, h: usize, min_gap: f64) -> Domain {
+    let mut rng = Rng(seed);
+    let big_r = 1.0 + 9.0 * rng.next();
+    let center = [rng.next() * 10.0 - 5.0, rng.next() * 10.0 - 5.0];
+    let mut holes: Vec<Circle> = Vec::new();
+    let mut tries = 0;
+    while holes.len() < h && tries < 20_000 {
+        tries += 1;
+        let r = big_r * (0.03 + 0.15 * rng.next());
+        let a = rng.next() * std::f64::consts::TAU;
+        let d = (big_r - r - min_gap * big_r) * rng.next().sqrt();
+        let c = [center[0] + d * a.cos(), center[1] + d * a.sin()];
+        let ok = holes.iter().all(|o| {
+            let dd = (c[0] - o.center[0]).hypot(c[1] - o.center[1]);
+            dd - r - o.radius > min_gap * big_r
+        });
+        if ok {
+            holes.push(Circle {
+                center: c,
+                radius: r,
+            });
+        }
+    }
+    Domain::bounded(
+        Circle {
+            center,
+            radius: big_r,
+        },
+        holes,
+    )
+    .expect("generated layout is valid")
+}
+
+type Key = (u64, u64);
+fn key(p: [f64; 2]) -> Key {
+    (p[0].to_bits(), p[1].to_bits())
+}
+
+fn side_nodes(m: &Mesh, b: usize, s: usize) -> Vec<[f64; 2]> {
+    let g = &m.grids[b];
+    let at = |i: usize, j: usize| g.nodes[i + j * (g.ni + 1)];
+    match s {
+        0 => (0..=g.ni).map(|i| at(i, 0)).collect(),
+        1 => (0..=g.nj).map(|j| at(g.ni, j)).collect(),
+        2 => (0..=g.ni).rev().map(|i| at(i, g.nj)).collect(),
+        _ => (0..=g.nj).rev().map(|j| at(0, j)).collect(),
+    }
+}
+
+fn circles(d: &Domain) -> Vec<Circle> {
+    std::iter::once(d.bounding())
+        .chain(d.holes().iter().copied())
+        .collect()
+}
+
+fn on_circle(p: [f64; 2], c: &Circle, tol: f64) -> bool {
+    ((p[0] - c.center[0]).hypot(p[1] - c.center[1]) - c.radius).abs() <= tol
+}
+
+/// The smallest scaled Jacobian (sine of the corner angle) over every cell corner.
+fn min_scaled_jacobian(m: &Mesh) -> f64 {
+    let mut out = f64::INFINITY;
+    for g in &m.grids {
+        for j in 0..g.nj {
+            for i in 0..g.ni {
+                let q = [
+                    g.node(i, j),
+                    g.node(i + 1, j),
+                    g.node(i + 1, j + 1),
+                    g.node(i, j + 1),
+                ];
+                for k in 0..4 {
+                    let (p, a, b) = (q[k], q[(k + 1) % 4], q[(k + 3) % 4]);
+                    let (ea, eb) = ([a[0] - p[0], a[1] - p[1]], [b[0] - p[0], b[1] - p[1]]);
+                    let cross = ea[0] * eb[1] - ea[1] * eb[0];
+                    let s = cross / (ea[0].hypot(ea[1]) * eb[0].hypot(eb[1]));
+                    out = if s.is_nan() {
+                        f64::NEG_INFINITY
+                    } else {
+                        out.min(s)
+                    };
+                }
+            }
+        }
+    }
+    out
+}
+
+/// Every check of this file; returns the wall circle index (into [`circles`]) of each block.
+fn check(domain: &Domain, m: &Mesh) -> Vec<usize> {
+    let h = domain.holes().len();
+    let blocks = m.grids.len();
+    assert_eq!(m.medial_vertices, 2 * (h - 1));
+    assert_eq!(m.medial_arcs, 3 * (h - 1));
+    assert_eq!(blocks, 6 * (h - 1));
+    assert_eq!(m.layout.blocks.len(), blocks);
+    for g in &m.grids {
+        assert_eq!(g.nodes.len(), (g.ni + 1) * (g.nj + 1));
+        assert!(g.ni >= 1 && g.nj >= 1);
+    }
+    let cs = circles(domain);
+    let scale = domain.bounding().radius
+        + domain.bounding().center[0]
+            .abs()
+            .max(domain.bounding().center[1].abs());
+    let tol = 1e-13 * scale * 16.0;
+
+    // Conformity from coordinates.
+    let mut by_nodes: HashMap<Vec<Key>, Vec<(usize, usize)>> = HashMap::new();
+    for b in 0..blocks {
+        for s in 0..4 {
+            let mut k: Vec<_> = side_nodes(m, b, s).into_iter().map(key).collect();
+            k.sort_unstable();
+            by_nodes.entry(k).or_default().push((b, s));
+        }
+    }
+    let mut wall_of = vec![usize::MAX; blocks];
+    for users in by_nodes.values() {
+        match users.len() {
+            1 => {
+                let (b, s) = users[0];
+                assert_eq!(s, 0, "block {b}: unpartnered side {s} (only walls are)");
+                let n = side_nodes(m, b, s);
+                let c = cs
+                    .iter()
+                    .position(|c| n.iter().all(|&p| on_circle(p, c, tol)))
+                    .unwrap_or_else(|| panic!("wall side of block {b} is not on a circle"));
+                wall_of[b] = c;
+            }
+            2 => {
+                let (a, sa) = users[0];
+                let (b, sb) = users[1];
+                assert!(sa != 0 && sb != 0, "a wall side is shared");
+                let mut na = side_nodes(m, a, sa);
+                let nb = side_nodes(m, b, sb);
+                if key(na[0]) != key(nb[0]) {
+                    na.reverse();
+                }
+                let ka: Vec<_> = na.iter().map(|&p| key(p)).collect();
+                let kb: Vec<_> = nb.iter().map(|&p| key(p)).collect();
+                assert_eq!(ka, kb, "blocks {a}/{b} share a node set but not the order");
+            }
+            k => panic!("{k} block sides have the same nodes"),
+        }
+    }
+    // Every block's wall is side 0.
+    assert!(
+        wall_of.iter().all(|&c| c != usize::MAX),
+        "a block without a wall side"
+    );
+
+    // Wall normality: the line from node (i, 0) to (i, 1) along the circle's normal.
+    for (b, g) in m.grids.iter().enumerate() {
+        let c = cs[wall_of[b]].center;
+        for i in 0..=g.ni {
+            let (p, q) = (g.node(i, 0), g.node(i, 1));
+            let n = [p[0] - c[0], p[1] - c[1]];
+            let t = [q[0] - p[0], q[1] - p[1]];
+            let ang = (n[0] * t[1] - n[1] * t[0])
+                .abs()
+                .atan2((n[0] * t[0] + n[1] * t[1]).abs())
+                .to_degrees();
+            assert!(
+                ang < 1e-6,
+                "block {b} node {i}: {ang} degrees off the wall normal"
+            );
+        }
+    }
+
+    // Positive Jacobians at every cell corner.
+    for (b, g) in m.grids.iter().enumerate() {
+        for j in 0..g.nj {
+            for i in 0..g.ni {
+                let q = [
+                    g.node(i, j),
+                    g.node(i + 1, j),
+                    g.node(i + 1, j + 1),
+                    g.node(i, j + 1),
+                ];
+                for k in 0..4 {
+                    let (p, a, bb) = (q[k], q[(k + 1) % 4], q[(k + 3) % 4]);
+                    let cross = (a[0] - p[0]) * (bb[1] - p[1]) - (a[1] - p[1]) * (bb[0] - p[0]);
+                    assert!(cross > 0.0, "block {b} cell ({i}, {j}) corner {k}: {cross}");
+                }
+            }
+        }
+    }
+    wall_of
+}
+
+fn exact(cells: usize) -> Options {
+    Options {
+        mode: Mode::Exact,
+        cells,
+        ..Options::default()
+    }
+}
+
+#[test]
+fn exact_is_the_default_mode() {
+    assert_eq!(Options::default().mode, Mode::Exact);
+}
+
+#[test]
+fn hexagon_example_is_valid_and_orthogonal() {
+    let d = Domain::hexagon_example();
+    let m = mesh(&d, &exact(8)).expect("mesh");
+    check(&d, &m);
+}
+
+#[test]
+fn first_cell_height_is_as_requested() {
+    let d = Domain::hexagon_example();
+    let first = 1e-3;
+    let opts = Options {
+        clustering: Clustering {
+            first: Some(FirstCell::Absolute(first)),
+            growth: 1.15,
+        },
+        // A relative first height on the centre hole, 1% of its radius (0.3).
+        circle_clustering: vec![(
+            0,
+            Clustering {
+                first: Some(FirstCell::Relative(0.01)),
+                growth: 1.1,
+            },
+        )],
+        // A fixed wall-normal count on hole 3.
+        wall_cells: vec![(3, 30)],
+        ..exact(8)
+    };
+    let m = mesh(&d, &opts).expect("mesh");
+    let wall_of = check(&d, &m);
+    let cs = circles(&d);
+    for (b, g) in m.grids.iter().enumerate() {
+        let want = if wall_of[b] == 1 { 0.01 * 0.3 } else { first };
+        if wall_of[b] == 4 {
+            assert_eq!(g.nj, 30);
+        }
+        for i in 0..=g.ni {
+            let got = {
+                let (p, q) = (g.node(i, 0), g.node(i, 1));
+                (q[0] - p[0]).hypot(q[1] - p[1])
+            };
+            let spoke = {
+                let (p, q) = (g.node(i, 0), g.node(i, g.nj));
+                (q[0] - p[0]).hypot(q[1] - p[1])
+            };
+            if spoke > want * g.nj as f64 {
+                assert!(
+                    ((got - want) / want).abs() < 1e-9,
+                    "block {b} (circle {:?}) spoke {i}: first cell {got}, asked {want}",
+                    cs[wall_of[b]]
+                );
+            }
+        }
+    }
+}
+
+#[test]
+fn smoothing_never_lowers_the_min_scaled_jacobian() {
+    for (seed, h) in [(1u64, 6usize), (7, 12), (11, 3)] {
+        let d = layout(seed, h, 0.02);
+        let plain = mesh(&d, &exact(6)).expect("mesh");
+        let smooth = mesh(
+            &d,
+            &Options {
+                smooth: 20,
+                ..exact(6)
+            },
+        )
+        .expect("mesh");
+        check(&d, &smooth);
+        let (a, b) = (min_scaled_jacobian(&plain), min_scaled_jacobian(&smooth));
+        assert!(
+            b >= a,
+            "smoothing lowered the min scaled Jacobian: {a} -> {b}"
+        );
+        // Walls and the first layer do not move.
+        for (g0, g1) in plain.grids.iter().zip(&smooth.grids) {
+            for i in 0..=g0.ni {
+                assert_eq!(key(g0.node(i, 0)), key(g1.node(i, 0)));
+                assert_eq!(key(g0.node(i, 1)), key(g1.node(i, 1)));
+            }
+        }
+    }
+}
+
+#[test]
+fn options_are_validated() {
+    let d = Domain::hexagon_example();
+    for bad in [
+        Options {
+            cell_size: Some(0.0),
+            ..exact(8)
+        },
+        Options {
+            clustering: Clustering {
+                first: Some(FirstCell::Absolute(-1.0)),
+                growth: 1.2,
+            },
+            ..exact(8)
+        },
+        Options {
+            clustering: Clustering {
+                first: None,
+                growth: 0.5,
+            },
+            ..exact(8)
+        },
+        Options {
+            wall_cells: vec![(0, 0)],
+            ..exact(8)
+        },
+    ] {
+        assert!(matches!(
+            mesh(&d, &bad),
+            Err(medial_blocks::MeshError::Options(_))
+        ));
+    }
+}
+
+#[test]
+fn cell_size_controls_resolution() {
+    let d = Domain::hexagon_example();
+    let coarse = mesh(
+        &d,
+        &Options {
+            cell_size: Some(0.1),
+            ..exact(8)
+        },
+    )
+    .unwrap();
+    let fine = mesh(
+        &d,
+        &Options {
+            cell_size: Some(0.05),
+            ..exact(8)
+        },
+    )
+    .unwrap();
+    let cells = |m: &Mesh| m.grids.iter().map(|g| g.ni * g.nj).sum::<usize>();
+    let ratio = cells(&fine) as f64 / cells(&coarse) as f64;
+    assert!(
+        ratio > 3.0 && ratio < 5.0,
+        "halving the size gave {ratio}x cells"
+    );
+    check(&d, &fine);
+}
+
+#[test]
+fn deterministic() {
+    let d = layout(5, 9, 0.02);
+    let a = mesh(&d, &exact(5)).unwrap();
+    let b = mesh(&d, &exact(5)).unwrap();
+    assert_eq!(a.grids, b.grids);
+    assert_eq!(a.layout, b.layout);
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 24, ..ProptestConfig::default() })]
+    #[test]
+    fn random_layouts_are_valid_orthogonal_and_conforming(seed in any::<u64>(), h in 2usize..30) {
+        let d = layout(seed, h, 0.02);
+        prop_assume!(d.holes().len() >= 2);
+        let m = mesh(&d, &exact(3)).expect("exact mode");
+        check(&d, &m);
+    }
+
+    #[test]
+    fn clustered_and_smoothed_layouts_stay_valid(seed in any::<u64>(), h in 2usize..12) {
+        let d = layout(seed, h, 0.01);
+        prop_assume!(d.holes().len() >= 2);
+        let opts = Options {
+            clustering: Clustering { first: Some(FirstCell::Relative(0.01)), growth: 1.2 },
+            smooth: 5,
+            ..exact(3)
+        };
+        let m = mesh(&d, &opts).expect("exact mode");
+        check(&d, &m);
+    }
+
+    #[test]
+    fn close_holes_still_mesh(seed in any::<u64>(), h in 2usize..12) {
+        let d = layout(seed, h, 0.002);
+        prop_assume!(d.holes().len() >= 2);
+        let m = mesh(&d, &exact(2)).expect("exact mode");
+        check(&d, &m);
+    }
+}
+
+#[test]
+fn layout_matches_grids() {
+    use medial_blocks::grid::validate_layout;
+    use medial_blocks::layout::{Curve, EdgeKind};
+    let d = layout(3, 10, 0.02);
+    let m = mesh(&d, &exact(4)).unwrap();
+    validate_layout(&m.layout).expect("valid layout");
+    for (b, block) in m.layout.blocks.iter().enumerate() {
+        for s in 0..4 {
+            let nodes = side_nodes(&m, b, s);
+            assert_eq!(
+                key(nodes[0]),
+                key(m.layout.vertices[block.corners[s] as usize])
+            );
+            let edge = &m.layout.edges[block.sides[s].edge as usize];
+            match (s, edge.kind, &edge.curve) {
+                (0, EdgeKind::Wall(_), Curve::Arc { .. }) => {}
+                (2, EdgeKind::Medial, Curve::Polyline(p)) => {
+                    // The polyline is the medial nodes themselves.
+                    let mut p = p.clone();
+                    if block.sides[s].reversed {
+                        p.reverse();
+                    }
+                    let a: Vec<_> = p.into_iter().map(key).collect();
+                    let b: Vec<_> = nodes.into_iter().map(key).collect();
+                    assert_eq!(a, b);
+                }
+                (1 | 3, EdgeKind::Spoke, Curve::Segment) => {}
+                other => panic!("block {b} side {s}: {other:?}"),
+            }
+        }
+    }
+}
+
+#[test]
+fn cocircular_holes_do_not_panic() {
+    // Four equal holes on a square: one empty circle touches all four (a zero-length arc and
+    // two zero-area blocks if they were not collapsed).
+    let holes = [[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]]
+        .map(|c| Circle {
+            center: c,
+            radius: 0.25,
+        })
+        .to_vec();
+    let d = Domain::bounded(
+        Circle {
+            center: [0.5, 0.5],
+            radius: 3.0,
+        },
+        holes,
+    )
+    .unwrap();
+    // Exact mode sees the exact geometry disagree with the sampled combinatorics and hands the
+    // layout to the degeneracy handling: one co-circular group, its zero-length arc collapsed.
+    let m = mesh(&d, &exact(4)).expect("co-circular holes mesh");
+    assert_eq!(m.cocircular_groups.len(), 1);
+    assert_eq!(m.collapsed_arcs, 1);
+    assert_eq!(m.grids.len(), 18 - 2);
+    assert_eq!(medial_blocks::quality::measure(&m.grids).inverted_cells, 0);
+}
