@@ -3,7 +3,7 @@
 
 use super::write_atomic;
 use crate::mesh::Mesh;
-use crate::quality::measure;
+use crate::quality::{measure, quality_metrics, QualityMetrics};
 use serde::Serialize;
 use std::io::{self, Write};
 use std::path::Path;
@@ -12,8 +12,16 @@ use std::path::Path;
 ///
 /// Required keys (exact names): `holes`, `blocks`, `cells`, `min_angle_deg`, `max_angle_deg`,
 /// `mean_min_angle_deg`, `mean_max_angle_deg`, `inverted_cells`, `medial_vertices`,
-/// `medial_arcs`. Angle figures are those of [`crate::quality::Quality`] (0 when there are no
-/// cells); a non-finite figure is written as `null`.
+/// `medial_arcs`, `min_scaled_jacobian`, `max_wall_orthogonality_deviation_deg`,
+/// `max_aspect_ratio`, and `quality`: per metric (`angle_deg`, `equiangle_skewness`,
+/// `edge_ratio`, `scaled_jacobian`, `interface_growth_ratio`, `aspect_ratio`) an object
+/// `{"min", "max", "histogram": {"edges", "counts"}, "acceptable": [lo, hi], "outside",
+/// "samples"}` (see [`crate::quality::MetricSummary`]). Angle figures are those of
+/// [`crate::quality::Quality`] (0 when there are no cells); a non-finite figure is written as
+/// `null`.
+///
+/// New keys are added as named fields (serde writes them in declaration order); keep the
+/// existing names.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct Report {
     pub holes: usize,
@@ -29,12 +37,21 @@ pub struct Report {
     pub min_scaled_jacobian: f64,
     pub medial_vertices: usize,
     pub medial_arcs: usize,
+    /// Largest angle (degrees) between a grid line leaving a wall node and the wall's normal
+    /// (`null` without curved walls), see [`QualityMetrics`].
+    pub max_wall_orthogonality_deviation_deg: Option<f64>,
+    /// Largest cell aspect ratio (`null` without cells), see
+    /// [`crate::quality::CellMetrics::aspect_ratio`].
+    pub max_aspect_ratio: Option<f64>,
+    /// The standard metrics with histograms and acceptable ranges.
+    pub quality: QualityMetrics,
 }
 
 impl Report {
     /// Counts from the mesh, quality from [`measure`] over its grids.
     pub fn from_mesh(mesh: &Mesh) -> Report {
         let q = measure(&mesh.grids);
+        let quality = quality_metrics(&mesh.layout, &mesh.grids);
         Report {
             holes: mesh.holes,
             blocks: mesh.layout.blocks.len(),
@@ -48,6 +65,9 @@ impl Report {
             min_scaled_jacobian: q.min_scaled_jacobian,
             medial_vertices: mesh.medial_vertices,
             medial_arcs: mesh.medial_arcs,
+            max_wall_orthogonality_deviation_deg: quality.max_wall_orthogonality_deviation_deg,
+            max_aspect_ratio: quality.aspect_ratio.max,
+            quality,
         }
     }
 }
