@@ -22,6 +22,7 @@ pub mod connectivity;
 pub mod domain;
 pub mod grid;
 pub mod layout;
+pub mod layouts;
 pub mod medial;
 pub mod mesh;
 pub mod mesher;
