@@ -151,7 +151,8 @@ fn progress(global: Global) -> ProgressBar {
 /// Format a figure for the summary table.
 fn fig(x: Option<f64>) -> String {
     match x {
-        Some(v) if v.is_finite() => format!("{v:.3}"),
+        Some(v) if v.is_finite() && v.abs() < 1e5 => format!("{:.3}", v + 0.0),
+        Some(v) if v.is_finite() => format!("{v:.3e}"),
         _ => "-".into(),
     }
 }
