@@ -575,8 +575,9 @@ fn wall_orthogonality(layout: &BlockLayout, grids: &[BlockGrid]) -> Option<f64> 
                 let cross = normal[0] * d[1] - normal[1] * d[0];
                 let dot = normal[0] * d[0] + normal[1] * d[1];
                 let ang = cross.atan2(dot).abs().to_degrees();
+                // NaN-propagating maximum.
                 worst = Some(match worst {
-                    Some(x) if !(ang > x) && !ang.is_nan() => x,
+                    Some(x) if x.is_nan() || ang <= x => x,
                     _ => ang,
                 });
             }
