@@ -532,7 +532,12 @@ fn growth_ratios(layout: &BlockLayout, grids: &[BlockGrid], m: &mut MetricSummar
             if (partner.block, partner.side) < (bc.block, sc.side) {
                 continue;
             }
-            let (ga, gb) = (&grids[bc.block], &grids[partner.block]);
+            let (Some(ga), Some(gb)) = (grids.get(bc.block), grids.get(partner.block)) else {
+                continue;
+            };
+            if !well_formed(ga) || !well_formed(gb) {
+                continue;
+            }
             let n = if sc.side % 2 == 0 { ga.ni } else { ga.nj };
             let nb = if partner.side % 2 == 0 { gb.ni } else { gb.nj };
             if n != nb || n == 0 || ga.ni == 0 || ga.nj == 0 || gb.ni == 0 || gb.nj == 0 {
