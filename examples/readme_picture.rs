@@ -1,5 +1,5 @@
 //! The README's picture: the built-in Hexagon example meshed with 8 cells per block side,
-//! rendered 640 pixels wide into `docs/hexagon.png` (or the path given).
+//! rendered 480 pixels wide into `docs/hexagon.png` (or the path given).
 //!
 //! `cargo run --release --example readme_picture [PATH]`
 
@@ -18,7 +18,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     if let Some(parent) = std::path::Path::new(&path).parent() {
         std::fs::create_dir_all(parent)?;
     }
-    png::write_with_width(&mesh, path.as_ref(), 640)?;
+    png::write_with_width(&mesh, path.as_ref(), 480)?;
     println!("wrote {path}");
     Ok(())
 }
