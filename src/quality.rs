@@ -9,8 +9,11 @@
 //! (so the four angles of a simple counter-clockwise cell sum to 360). A cell is *inverted*
 //! when any corner Jacobian is `<= 0` or not a number.
 
+use crate::connectivity::connectivity;
 use crate::geometry::Point;
+use crate::layout::{BlockLayout, Curve, EdgeKind};
 use crate::mesh::BlockGrid;
+use rayon::prelude::*;
 use serde::Serialize;
 
 /// Angles (degrees) and Jacobians of the four corners of one quadrilateral `[p0, p1, p2, p3]`
@@ -53,6 +56,11 @@ pub struct CellFields {
     pub max_angle_deg: Vec<f64>,
     /// The smallest of the four corner Jacobians (cross products, in squared length units).
     pub min_jacobian: Vec<f64>,
+    /// The figures of [`CellMetrics`], per cell.
+    pub equiangle_skewness: Vec<f64>,
+    pub edge_ratio: Vec<f64>,
+    pub scaled_jacobian: Vec<f64>,
+    pub aspect_ratio: Vec<f64>,
 }
 
 /// True when `grid.nodes` has exactly `(ni + 1) * (nj + 1)` nodes.
@@ -96,6 +104,11 @@ pub fn cell_fields(grid: &BlockGrid) -> CellFields {
                 }
             }
             f.min_jacobian.push(mj);
+            let m = cell_metrics(corners(grid, i, j));
+            f.equiangle_skewness.push(m.equiangle_skewness);
+            f.edge_ratio.push(m.edge_ratio);
+            f.scaled_jacobian.push(m.scaled_jacobian);
+            f.aspect_ratio.push(m.aspect_ratio);
         }
     }
     f
@@ -188,4 +201,409 @@ pub fn measure(grids: &[BlockGrid]) -> Quality {
         q.mean_max_angle_deg = sum_max / q.cells as f64;
     }
     q
+}
+
+// ---------------------------------------------------------------------------------------------
+// Standard quality metrics (equiangle skewness, edge ratio, scaled Jacobian, aspect ratio,
+// growth ratio across block interfaces, wall orthogonality), with histograms and acceptable
+// ranges, as written into `report.json`'s `"quality"` object.
+// ---------------------------------------------------------------------------------------------
+
+/// Every per-cell figure of one quadrilateral `[p0, p1, p2, p3]` (counter-clockwise for a valid
+/// cell; see the module doc).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct CellMetrics {
+    /// The four interior angles, degrees, in `[0, 360)` (see [`cell_corners`]).
+    pub angle_deg: [f64; 4],
+    /// Smallest and largest interior angle, degrees.
+    pub min_angle_deg: f64,
+    pub max_angle_deg: f64,
+    /// Equiangle skewness `max((θmax - 90) / 90, (90 - θmin) / 90)`: 0 for a rectangle, 1 for a
+    /// degenerate cell (an angle of 0 or 180 degrees), above 1 with a reflex corner.
+    pub equiangle_skewness: f64,
+    /// Longest edge over shortest edge (`>= 1`; infinite with a zero-length edge).
+    pub edge_ratio: f64,
+    /// Smallest over the corners of `cross(e1, e2) / (|e1| |e2|)`, the sine of the corner
+    /// angle: 1 for a rectangle, `<= 0` for an inverted cell (0 with a zero-length edge).
+    pub scaled_jacobian: f64,
+    /// Ratio of the cell's mean extents in its two index directions, the larger over the
+    /// smaller: `max(Li, Lj) / min(Li, Lj)` with `Li = (|p0p1| + |p3p2|) / 2` and
+    /// `Lj = (|p1p2| + |p0p3|) / 2` (`>= 1`; 1 for a square, and also for a rhombus).
+    pub aspect_ratio: f64,
+}
+
+fn len(a: Point, b: Point) -> f64 {
+    (b[0] - a[0]).hypot(b[1] - a[1])
+}
+
+/// Ratio `a / b` of two non-negative lengths, `a >= b`: infinite when `b == 0 < a`, 1 when
+/// both are 0.
+fn ratio(a: f64, b: f64) -> f64 {
+    if b > 0.0 {
+        a / b
+    } else if a > 0.0 {
+        f64::INFINITY
+    } else {
+        1.0
+    }
+}
+
+/// Measure one quadrilateral (see [`CellMetrics`]).
+pub fn cell_metrics(p: [Point; 4]) -> CellMetrics {
+    let c = cell_corners(p);
+    let min_angle_deg = fold(c.angle_deg, f64::min);
+    let max_angle_deg = fold(c.angle_deg, f64::max);
+    let edges = [
+        len(p[0], p[1]),
+        len(p[1], p[2]),
+        len(p[2], p[3]),
+        len(p[3], p[0]),
+    ];
+    let mut scaled_jacobian = f64::INFINITY;
+    for k in 0..4 {
+        // Corner k is between edge k (to p[k+1]) and edge k-1 (to p[k-1]).
+        let (la, lb) = (edges[k], edges[(k + 3) % 4]);
+        let s = if la > 0.0 && lb > 0.0 {
+            c.jacobian[k] / (la * lb)
+        } else {
+            0.0
+        };
+        if s.is_nan() || s < scaled_jacobian {
+            scaled_jacobian = s;
+        }
+    }
+    let (lo, hi) = (fold(edges, f64::min), fold(edges, f64::max));
+    let li = 0.5 * (edges[0] + edges[2]);
+    let lj = 0.5 * (edges[1] + edges[3]);
+    CellMetrics {
+        angle_deg: c.angle_deg,
+        min_angle_deg,
+        max_angle_deg,
+        equiangle_skewness: ((max_angle_deg - 90.0) / 90.0).max((90.0 - min_angle_deg) / 90.0),
+        edge_ratio: ratio(hi, lo),
+        scaled_jacobian,
+        aspect_ratio: ratio(li.max(lj), li.min(lj)),
+    }
+}
+
+/// A histogram with fixed bin edges: bin `k` counts the values in `[edges[k], edges[k + 1])`;
+/// values below `edges[0]` count in the first bin, values at or above the last edge and
+/// values that are not a number in the last bin, so the counts add up to the number of values.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Histogram {
+    pub edges: Vec<f64>,
+    pub counts: Vec<u64>,
+}
+
+impl Histogram {
+    /// An empty histogram with the given edges (at least two, increasing).
+    pub fn new(edges: &[f64]) -> Histogram {
+        Histogram {
+            edges: edges.to_vec(),
+            counts: vec![0; edges.len().saturating_sub(1).max(1)],
+        }
+    }
+    /// Count one value.
+    pub fn add(&mut self, x: f64) {
+        let last = self.counts.len() - 1;
+        // First edge above x; NaN compares false everywhere and lands in the last bin.
+        let k = if x.is_nan() {
+            last
+        } else {
+            self.edges[1..].partition_point(|&e| e <= x).min(last)
+        };
+        self.counts[k] += 1;
+    }
+    /// Add the counts of `other` (same edges).
+    fn merge(&mut self, other: &Histogram) {
+        for (a, b) in self.counts.iter_mut().zip(&other.counts) {
+            *a += b;
+        }
+    }
+}
+
+/// One metric over a mesh: extremes, histogram, the conventional acceptable range and how
+/// many cells (or interface faces, for the growth ratio) fall outside it.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct MetricSummary {
+    /// Smallest and largest value (`null` in JSON when there is no value or it is not finite).
+    pub min: Option<f64>,
+    pub max: Option<f64>,
+    pub histogram: Histogram,
+    /// The conventional acceptable range `[lo, hi]` (inclusive).
+    pub acceptable: [f64; 2],
+    /// Cells (for `interface_growth_ratio`: interface faces) with a value outside
+    /// `acceptable` (or not a number). For `angle_deg`: cells with any corner angle outside.
+    pub outside: u64,
+    /// Number of values in the histogram: one per cell, four per cell for `angle_deg` (every
+    /// corner angle), one per pair of cells facing each other across an interface for
+    /// `interface_growth_ratio`.
+    pub samples: u64,
+}
+
+impl MetricSummary {
+    fn new(edges: &[f64], acceptable: [f64; 2]) -> MetricSummary {
+        MetricSummary {
+            min: None,
+            max: None,
+            histogram: Histogram::new(edges),
+            acceptable,
+            outside: 0,
+            samples: 0,
+        }
+    }
+    /// True when `x` is inside the acceptable range.
+    pub fn accepts(&self, x: f64) -> bool {
+        x >= self.acceptable[0] && x <= self.acceptable[1]
+    }
+    /// Count one value, which alone decides whether its cell is outside.
+    fn add(&mut self, x: f64) {
+        self.add_value(x);
+        if !self.accepts(x) {
+            self.outside += 1;
+        }
+    }
+    /// Count one value in the extremes and the histogram only.
+    fn add_value(&mut self, x: f64) {
+        self.samples += 1;
+        self.histogram.add(x);
+        if x.is_finite() {
+            self.min = Some(self.min.map_or(x, |m| m.min(x)));
+            self.max = Some(self.max.map_or(x, |m| m.max(x)));
+        }
+    }
+    fn merge(&mut self, o: &MetricSummary) {
+        self.histogram.merge(&o.histogram);
+        self.outside += o.outside;
+        self.samples += o.samples;
+        for x in [o.min, o.max].into_iter().flatten() {
+            self.min = Some(self.min.map_or(x, |m| m.min(x)));
+            self.max = Some(self.max.map_or(x, |m| m.max(x)));
+        }
+    }
+}
+
+/// Conventional acceptable range of the interior angles, degrees.
+pub const ANGLE_ACCEPTABLE: [f64; 2] = [40.0, 135.0];
+/// Equiangle skewness up to 0.5 ("good" on the usual 0-1 scale).
+pub const SKEWNESS_ACCEPTABLE: [f64; 2] = [0.0, 0.5];
+/// Edge ratio up to 5.
+pub const EDGE_RATIO_ACCEPTABLE: [f64; 2] = [1.0, 5.0];
+/// Scaled Jacobian at least 0.3.
+pub const SCALED_JACOBIAN_ACCEPTABLE: [f64; 2] = [0.3, 1.0];
+/// Size ratio across an interface up to 1.5.
+pub const GROWTH_ACCEPTABLE: [f64; 2] = [1.0, 1.5];
+/// Aspect ratio up to 5.
+pub const ASPECT_ACCEPTABLE: [f64; 2] = [1.0, 5.0];
+
+const ANGLE_EDGES: [f64; 20] = [
+    0.0, 10.0, 20.0, 30.0, 40.0, 50.0, 60.0, 70.0, 80.0, 90.0, 100.0, 110.0, 120.0, 130.0, 135.0,
+    140.0, 150.0, 160.0, 170.0, 180.0,
+];
+const SKEWNESS_EDGES: [f64; 12] = [0.0, 0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8, 0.9, 1.0, 2.0];
+const RATIO_EDGES: [f64; 11] = [1.0, 1.25, 1.5, 2.0, 3.0, 4.0, 5.0, 10.0, 20.0, 50.0, 100.0];
+const JACOBIAN_EDGES: [f64; 12] = [-1.0, 0.0, 0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8, 0.9, 1.0];
+const GROWTH_EDGES: [f64; 11] = [1.0, 1.1, 1.2, 1.3, 1.5, 2.0, 3.0, 5.0, 10.0, 20.0, 100.0];
+
+/// The standard metrics of a whole mesh (serialised as `report.json`'s `"quality"` object,
+/// keys in this order).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct QualityMetrics {
+    /// Every corner angle, degrees (4 samples per cell).
+    pub angle_deg: MetricSummary,
+    pub equiangle_skewness: MetricSummary,
+    pub edge_ratio: MetricSummary,
+    pub scaled_jacobian: MetricSummary,
+    /// For every pair of cells facing each other across a block interface, the ratio of their
+    /// heights normal to the interface (cell area over its edge length on the interface), the
+    /// larger over the smaller.
+    pub interface_growth_ratio: MetricSummary,
+    pub aspect_ratio: MetricSummary,
+    /// Over every node of every wall side (an edge of kind [`EdgeKind::Wall`] that is an arc),
+    /// the angle in degrees between the grid line leaving the wall node into the block and
+    /// the circle's normal into the fluid there (0 for an orthogonal grid; `None` without
+    /// wall arcs).
+    #[serde(skip)]
+    pub max_wall_orthogonality_deviation_deg: Option<f64>,
+}
+
+impl QualityMetrics {
+    fn empty() -> QualityMetrics {
+        QualityMetrics {
+            angle_deg: MetricSummary::new(&ANGLE_EDGES, ANGLE_ACCEPTABLE),
+            equiangle_skewness: MetricSummary::new(&SKEWNESS_EDGES, SKEWNESS_ACCEPTABLE),
+            edge_ratio: MetricSummary::new(&RATIO_EDGES, EDGE_RATIO_ACCEPTABLE),
+            scaled_jacobian: MetricSummary::new(&JACOBIAN_EDGES, SCALED_JACOBIAN_ACCEPTABLE),
+            interface_growth_ratio: MetricSummary::new(&GROWTH_EDGES, GROWTH_ACCEPTABLE),
+            aspect_ratio: MetricSummary::new(&RATIO_EDGES, ASPECT_ACCEPTABLE),
+            max_wall_orthogonality_deviation_deg: None,
+        }
+    }
+
+    /// The metrics in report order, with their `report.json` names.
+    pub fn named(&self) -> [(&'static str, &MetricSummary); 6] {
+        [
+            ("angle_deg", &self.angle_deg),
+            ("equiangle_skewness", &self.equiangle_skewness),
+            ("edge_ratio", &self.edge_ratio),
+            ("scaled_jacobian", &self.scaled_jacobian),
+            ("interface_growth_ratio", &self.interface_growth_ratio),
+            ("aspect_ratio", &self.aspect_ratio),
+        ]
+    }
+
+    fn merge_cells(&mut self, o: &QualityMetrics) {
+        self.angle_deg.merge(&o.angle_deg);
+        self.equiangle_skewness.merge(&o.equiangle_skewness);
+        self.edge_ratio.merge(&o.edge_ratio);
+        self.scaled_jacobian.merge(&o.scaled_jacobian);
+        self.aspect_ratio.merge(&o.aspect_ratio);
+    }
+}
+
+/// The per-cell metrics of one block (a malformed grid contributes nothing).
+fn block_metrics(grid: &BlockGrid) -> QualityMetrics {
+    let mut m = QualityMetrics::empty();
+    if !well_formed(grid) {
+        return m;
+    }
+    for j in 0..grid.nj {
+        for i in 0..grid.ni {
+            let c = cell_metrics(corners(grid, i, j));
+            for a in c.angle_deg {
+                m.angle_deg.add_value(a);
+            }
+            if !(m.angle_deg.accepts(c.min_angle_deg) && m.angle_deg.accepts(c.max_angle_deg)) {
+                m.angle_deg.outside += 1;
+            }
+            m.equiangle_skewness.add(c.equiangle_skewness);
+            m.edge_ratio.add(c.edge_ratio);
+            m.scaled_jacobian.add(c.scaled_jacobian);
+            m.aspect_ratio.add(c.aspect_ratio);
+        }
+    }
+    m
+}
+
+/// Side `s` of `grid`: for position `p` along the side (in the side's direction, see
+/// [`crate::layout`]), the node on the side and its neighbour one step into the block.
+fn side_node_and_inward(grid: &BlockGrid, s: usize, p: usize) -> (Point, Point) {
+    let (ni, nj) = (grid.ni, grid.nj);
+    match s {
+        0 => (grid.node(p, 0), grid.node(p, 1)),
+        1 => (grid.node(ni, p), grid.node(ni - 1, p)),
+        2 => (grid.node(ni - p, nj), grid.node(ni - p, nj - 1)),
+        _ => (grid.node(0, nj - p), grid.node(1, nj - p)),
+    }
+}
+
+/// The cell next to side `s` at cell position `p` along the side (in the side's direction):
+/// its height normal to the side (area over its edge length on the side).
+fn side_cell_height(grid: &BlockGrid, s: usize, p: usize) -> f64 {
+    let (ni, nj) = (grid.ni, grid.nj);
+    let (i, j) = match s {
+        0 => (p, 0),
+        1 => (ni - 1, p),
+        2 => (ni - 1 - p, nj - 1),
+        _ => (0, nj - 1 - p),
+    };
+    let q = corners(grid, i, j);
+    let area = 0.5
+        * ((q[2][0] - q[0][0]) * (q[3][1] - q[1][1]) - (q[2][1] - q[0][1]) * (q[3][0] - q[1][0]));
+    let (a, _) = side_node_and_inward(grid, s, p);
+    let (b, _) = side_node_and_inward(grid, s, p + 1);
+    let l = len(a, b);
+    if l > 0.0 {
+        area.abs() / l
+    } else {
+        f64::NAN
+    }
+}
+
+/// The growth ratios across every interface of the layout (each interface once).
+fn growth_ratios(layout: &BlockLayout, grids: &[BlockGrid], m: &mut MetricSummary) {
+    let Ok(conn) = connectivity(layout, grids) else {
+        return;
+    };
+    for bc in &conn {
+        for sc in &bc.sides {
+            let Some(partner) = sc.partner else { continue };
+            // Each interface once: from the side with the smaller (block, side).
+            if (partner.block, partner.side) < (bc.block, sc.side) {
+                continue;
+            }
+            let (Some(ga), Some(gb)) = (grids.get(bc.block), grids.get(partner.block)) else {
+                continue;
+            };
+            if !well_formed(ga) || !well_formed(gb) {
+                continue;
+            }
+            let n = if sc.side % 2 == 0 { ga.ni } else { ga.nj };
+            let nb = if partner.side % 2 == 0 { gb.ni } else { gb.nj };
+            if n != nb || n == 0 || ga.ni == 0 || ga.nj == 0 || gb.ni == 0 || gb.nj == 0 {
+                continue;
+            }
+            for p in 0..n {
+                let q = if partner.same_direction { p } else { n - 1 - p };
+                let ha = side_cell_height(ga, sc.side, p);
+                let hb = side_cell_height(gb, partner.side, q);
+                m.add(ratio(ha.max(hb), ha.min(hb)));
+            }
+        }
+    }
+}
+
+/// Largest deviation (degrees) from the wall normal of the grid lines leaving wall nodes.
+fn wall_orthogonality(layout: &BlockLayout, grids: &[BlockGrid]) -> Option<f64> {
+    let mut worst: Option<f64> = None;
+    for (block, grid) in layout.blocks.iter().zip(grids) {
+        if !well_formed(grid) || grid.ni == 0 || grid.nj == 0 {
+            continue;
+        }
+        for (s, side) in block.sides.iter().enumerate() {
+            let Some(edge) = layout.edges.get(side.edge as usize) else {
+                continue;
+            };
+            let (EdgeKind::Wall(id), Curve::Arc { center, .. }) = (edge.kind, &edge.curve) else {
+                continue;
+            };
+            let n = if s % 2 == 0 { grid.ni } else { grid.nj };
+            for p in 0..=n {
+                let (w, inner) = side_node_and_inward(grid, s, p);
+                // Into the fluid: away from a hole's center, towards the bounding circle's.
+                let normal = if id < 0 {
+                    [center[0] - w[0], center[1] - w[1]]
+                } else {
+                    [w[0] - center[0], w[1] - center[1]]
+                };
+                let d = [inner[0] - w[0], inner[1] - w[1]];
+                let cross = normal[0] * d[1] - normal[1] * d[0];
+                let dot = normal[0] * d[0] + normal[1] * d[1];
+                let ang = cross.atan2(dot).abs().to_degrees();
+                // NaN-propagating maximum.
+                worst = Some(match worst {
+                    Some(x) if x.is_nan() || ang <= x => x,
+                    _ => ang,
+                });
+            }
+        }
+    }
+    worst
+}
+
+/// The standard metrics of a mesh given by its layout and grids (one grid per block).
+///
+/// Per-cell metrics are computed block by block in parallel (on the current rayon pool) and
+/// merged in block order, so the result does not depend on the number of threads.
+pub fn quality_metrics(layout: &BlockLayout, grids: &[BlockGrid]) -> QualityMetrics {
+    let per_block: Vec<QualityMetrics> = grids.par_iter().map(block_metrics).collect();
+    let mut m = QualityMetrics::empty();
+    for b in &per_block {
+        m.merge_cells(b);
+    }
+    if layout.blocks.len() == grids.len() {
+        growth_ratios(layout, grids, &mut m.interface_growth_ratio);
+        m.max_wall_orthogonality_deviation_deg = wall_orthogonality(layout, grids);
+    }
+    m
 }

@@ -3,12 +3,14 @@
 //! [--wall-cells ID:N] [--smooth N] [--compare-modes] [--refine-ratio R] [--no-refine]
 //! [--collapse-fraction F] [--format LIST]`.
 
-use super::Failure;
+use super::{Failure, Global};
+use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use medial_blocks::domain::{Circle, Domain};
 use medial_blocks::exact_mode::{Clustering, FirstCell};
-use medial_blocks::output::{report, write_files, Format};
+use medial_blocks::output::{report, write_files_with_progress, Format};
 use medial_blocks::{mesh, Mode, Options};
 use std::path::PathBuf;
+use std::time::Duration;
 
 const DEFAULT_FORMATS: &str = "vtk,svg,json";
 
@@ -25,13 +27,15 @@ pub enum ModeArg {
   medial-blocks mesh                         # the built-in 7-hole hexagon example into out/
   medial-blocks mesh layout.json -o run1 --cells 24
   medial-blocks mesh holes.csv --bounding 0,0,10 --format all
+  medial-blocks --threads 2 --quiet mesh layout.json --format vtu,plot3d
 
 Input JSON: {\"bounding\": {\"center\": [x, y], \"radius\": R},
              \"holes\": [{\"center\": [x, y], \"radius\": r}, ...]}
 Input CSV (file name ending in .csv): x,y,r per line (an optional header line is skipped),
   with the bounding circle given by --bounding X,Y,R.
-Files in DIR: mesh.vtm + mesh/*.vts (vtk), mesh.xyz + mesh.p3d (plot3d), mesh.msh + mesh.geo
-  (gmsh), mesh.svg (svg), mesh.png (png), report.json + connectivity.json (json).
+Files in DIR: mesh.vtm + mesh/*.vts (vtk), mesh.vtu (vtu), mesh.xyz + mesh.p3d (plot3d),
+  mesh.msh + mesh.geo (gmsh), mesh.svg (svg), mesh.png (png), report.json +
+  connectivity.json (json), mesh.cgns (cgns: builds with --features cgns only).
 Exit codes: 0 success, 1 output could not be written or internal error, 2 bad input.")]
 pub struct Args {
     /// Domain JSON, or a CSV of holes (`x,y,r`); without it, the built-in 7-hole hexagon.
@@ -71,7 +75,8 @@ pub struct Args {
     /// DIR/modes.json (`{"exact": {...}, "paper": {...}}`).
     #[arg(long)]
     pub compare_modes: bool,
-    /// Writers, comma separated: vtk, plot3d, gmsh, svg, png, json, or all.
+    /// Writers, comma separated: vtk, vtu, plot3d, gmsh, svg, png, json, cgns (with the
+    /// cgns feature), or all.
     #[arg(long, default_value = DEFAULT_FORMATS)]
     pub format: String,
     /// The bounding circle `X,Y,R` for a CSV input.
@@ -88,9 +93,6 @@ pub struct Args {
     /// zero-length arcs, which are always collapsed).
     #[arg(long, default_value_t = medial_blocks::mesher::DEFAULT_COLLAPSE_FRACTION)]
     pub collapse_fraction: f64,
-    /// Print nothing on success.
-    #[arg(short, long)]
-    pub quiet: bool,
 }
 
 fn parse_numbers(text: &str, what: &str, count: usize) -> Result<Vec<f64>, String> {
@@ -280,6 +282,7 @@ fn compare_modes(
     options: &Options,
     done: &medial_blocks::Mesh,
     args: &Args,
+    quiet: bool,
 ) -> Result<(), Failure> {
     use medial_blocks::exact_mode::metrics::Figures;
     let other_mode = match options.mode {
@@ -307,7 +310,7 @@ fn compare_modes(
         .map_err(|e| Failure::output(format!("cannot encode modes.json: {e}")))?;
     std::fs::write(&path, text + "\n")
         .map_err(|e| Failure::output(format!("cannot write {}: {e}", path.display())))?;
-    if !args.quiet {
+    if !quiet {
         for (name, m) in [("exact", exact), ("paper", paper)] {
             let f = Figures::of(domain, m);
             println!(
@@ -325,36 +328,93 @@ fn compare_modes(
     Ok(())
 }
 
-pub fn run(args: Args) -> Result<(), Failure> {
+/// A spinner on stderr, hidden with `--quiet` or when stderr is not a terminal.
+fn progress(global: Global) -> ProgressBar {
+    if global.quiet {
+        return ProgressBar::hidden();
+    }
+    let bar = ProgressBar::with_draw_target(None, ProgressDrawTarget::stderr());
+    bar.set_style(
+        ProgressStyle::with_template("{spinner} {msg} [{elapsed}]")
+            .unwrap_or_else(|_| ProgressStyle::default_spinner()),
+    );
+    bar.enable_steady_tick(Duration::from_millis(120));
+    bar
+}
+
+/// Format a figure for the summary table.
+fn fig(x: Option<f64>) -> String {
+    match x {
+        Some(v) if v.is_finite() && v.abs() < 1e5 => format!("{:.3}", v + 0.0),
+        Some(v) if v.is_finite() => format!("{v:.3e}"),
+        _ => "-".into(),
+    }
+}
+
+/// The short summary printed after meshing.
+pub fn summary(r: &report::Report) -> String {
+    let mut s = format!(
+        "{} holes -> {} blocks, {} cells ({} medial vertices, {} arcs), inverted cells {}\n",
+        r.holes, r.blocks, r.cells, r.medial_vertices, r.medial_arcs, r.inverted_cells
+    );
+    s.push_str(&format!(
+        "mean smallest angle {:.1} deg, mean largest {:.1} deg\n",
+        r.mean_min_angle_deg, r.mean_max_angle_deg
+    ));
+    s.push_str(&format!(
+        "{:<24}{:>10}{:>10}   {:<16}{:>8}\n",
+        "metric", "min", "max", "acceptable", "outside"
+    ));
+    for (name, m) in r.quality.named() {
+        let unit = if name == "interface_growth_ratio" {
+            "faces"
+        } else {
+            "cells"
+        };
+        s.push_str(&format!(
+            "{:<24}{:>10}{:>10}   {:<16}{:>8} {unit}\n",
+            name,
+            fig(m.min),
+            fig(m.max),
+            format!("{} .. {}", m.acceptable[0], m.acceptable[1]),
+            m.outside
+        ));
+    }
+    s.push_str(&format!(
+        "wall orthogonality: largest deviation {} deg\n",
+        fig(r.max_wall_orthogonality_deviation_deg)
+    ));
+    s
+}
+
+pub fn run(args: Args, global: Global) -> Result<(), Failure> {
     let formats =
         Format::parse_list(&args.format).map_err(|e| Failure::input(format!("--format: {e}")))?;
     let domain = read_domain(&args)?;
     let options = exact_options(&args)?;
-    let mesh = mesh(&domain, &options).map_err(|e| match e {
-        medial_blocks::MeshError::Internal(_) => Failure::output(e.to_string()),
-        _ => Failure::input(e.to_string()),
+    let bar = progress(global);
+    bar.set_message(format!("meshing {} holes", domain.hole_count()));
+    let mesh = mesh(&domain, &options).map_err(|e| {
+        bar.finish_and_clear();
+        match e {
+            medial_blocks::MeshError::Internal(_) => Failure::output(e.to_string()),
+            _ => Failure::input(e.to_string()),
+        }
     })?;
-    write_files(&mesh, &args.output, &formats).map_err(|e| {
+    let written = write_files_with_progress(&mesh, &args.output, &formats, |f| {
+        bar.set_message(format!("writing {}", f.name()));
+    });
+    bar.finish_and_clear();
+    written.map_err(|e| {
         Failure::output(format!("cannot write into {}: {e}", args.output.display()))
     })?;
-    if !args.quiet {
+    if !global.quiet {
         let r = report::Report::from_mesh(&mesh);
-        println!(
-            "{} holes -> {} blocks, {} cells ({} medial vertices, {} arcs)",
-            r.holes, r.blocks, r.cells, r.medial_vertices, r.medial_arcs
-        );
-        println!(
-            "angles {:.1}..{:.1} deg (mean smallest {:.1}, mean largest {:.1}), inverted cells {}",
-            r.min_angle_deg,
-            r.max_angle_deg,
-            r.mean_min_angle_deg,
-            r.mean_max_angle_deg,
-            r.inverted_cells
-        );
+        print!("{}", summary(&r));
         println!("written to {}/", args.output.display());
     }
     if args.compare_modes {
-        compare_modes(&domain, &options, &mesh, &args)?;
+        compare_modes(&domain, &options, &mesh, &args, global.quiet)?;
     }
     Ok(())
 }

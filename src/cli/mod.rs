@@ -1,16 +1,35 @@
 //! The command-line interface. Exit codes: 0 success, 1 failure to write output or an internal
-//! error, 2 bad input (unreadable, malformed or invalid).
+//! error, 2 bad input (unreadable, malformed or invalid input, bad flags).
 
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;
 
+mod example;
 mod mesh;
 mod triangulate;
 
 /// Automatic multiblock structured meshes for 2D flow around circular particles.
 #[derive(Parser, Debug)]
-#[command(name = "medial-blocks", version, about)]
+#[command(
+    name = "medial-blocks",
+    version,
+    about,
+    after_help = "Examples:
+  medial-blocks mesh                                  # the built-in 7-hole example into out/
+  medial-blocks example lattice -o lattice.json       # a starting layout
+  medial-blocks mesh lattice.json -o lattice --format all
+  medial-blocks --threads 2 mesh holes.csv --bounding 0,0,10
+
+Exit codes: 0 success, 1 output could not be written or internal error, 2 bad input or flags.
+Errors are printed on stderr."
+)]
 pub struct Cli {
+    /// Print nothing on success (no summary, no progress bar).
+    #[arg(short, long, global = true)]
+    quiet: bool,
+    /// Worker threads for per-block work (default: one per core). Output does not depend on it.
+    #[arg(long, global = true, value_name = "N")]
+    threads: Option<usize>,
     #[command(subcommand)]
     command: Command,
 }
@@ -19,8 +38,17 @@ pub struct Cli {
 enum Command {
     /// Delaunay-triangulate a CSV of points exactly (x,y per line).
     Triangulate(triangulate::Args),
-    /// Mesh a domain of circles (JSON), or the built-in example.
+    /// Mesh a domain of circles (JSON or CSV), or the built-in example.
     Mesh(mesh::Args),
+    /// Write a ready-made domain JSON (hexagon, lattice, bubbles, square-lattice).
+    Example(example::Args),
+}
+
+/// Options every subcommand sees.
+#[derive(Debug, Clone, Copy)]
+pub struct Global {
+    /// `--quiet`.
+    pub quiet: bool,
 }
 
 /// A CLI failure: the message for stderr and the exit code.
@@ -44,12 +72,26 @@ impl Failure {
     }
 }
 
+/// Size rayon's global pool from `--threads`.
+fn set_threads(threads: Option<usize>) -> Result<(), Failure> {
+    let Some(n) = threads else { return Ok(()) };
+    if n == 0 {
+        return Err(Failure::input("--threads must be at least 1"));
+    }
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(n)
+        .build_global()
+        .map_err(|e| Failure::output(format!("cannot start {n} threads: {e}")))
+}
+
 pub fn run() -> ExitCode {
     let cli = Cli::parse();
-    let result = match cli.command {
+    let global = Global { quiet: cli.quiet };
+    let result = set_threads(cli.threads).and_then(|()| match cli.command {
         Command::Triangulate(args) => triangulate::run(args),
-        Command::Mesh(args) => mesh::run(args),
-    };
+        Command::Mesh(args) => mesh::run(args, global),
+        Command::Example(args) => example::run(args, global),
+    });
     match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(f) => {

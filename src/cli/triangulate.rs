@@ -10,6 +10,12 @@ use std::io::Write;
 use std::path::PathBuf;
 
 #[derive(clap::Args, Debug)]
+#[command(after_help = "Examples:
+  medial-blocks triangulate                           # the built-in example, JSON on stdout
+  medial-blocks triangulate points.csv -o tri.json
+
+Output JSON: {\"triangles\": [[i,j,k],...], \"duplicates\": [[first,dup],...],
+              \"cocircular_groups\": [[...],...]} (0-based data-row indices).")]
 pub struct Args {
     /// CSV of `x,y` per line (an optional header line is skipped). Without it, a built-in
     /// example (perturbed grid, one exact co-circular group, one duplicate).

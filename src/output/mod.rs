@@ -1,6 +1,7 @@
 //! Writers: VTK XML multiblock ([`vtk`]), SVG picture ([`svg`]), JSON report ([`report`]),
 //! Plot3D ([`plot3d`]), Gmsh `.msh` ([`gmsh`]) and `.geo` ([`geo`]), block connectivity
-//! ([`connectivity`]).
+//! ([`connectivity`]), VTK unstructured ([`vtu`]), and CGNS (`cgns`, with the cargo feature
+//! `cgns`).
 //!
 //! Every writer is deterministic (same mesh, byte-identical files: floats are written with
 //! Rust's shortest round-trip formatting or a fixed precision, and nothing depends on hash
@@ -16,6 +17,10 @@ pub mod png;
 pub mod report;
 pub mod svg;
 pub mod vtk;
+pub mod vtu;
+
+#[cfg(feature = "cgns")]
+pub mod cgns;
 
 use crate::mesh::Mesh;
 use crate::quality::well_formed;
@@ -84,6 +89,8 @@ pub(crate) fn num<W: Write>(w: &mut W, x: f64) -> io::Result<()> {
 pub enum Format {
     /// `mesh.vtm` + `mesh/block_NNNN.vts` (VTK XML multiblock).
     Vtk,
+    /// `mesh.vtu` (VTK XML unstructured grid, nodes merged across blocks).
+    Vtu,
     /// `mesh.xyz` (Plot3D binary) + `mesh.p3d` (Plot3D ASCII).
     Plot3d,
     /// `mesh.msh` (Gmsh 4.1) + `mesh.geo` (Gmsh script of the block layout).
@@ -94,22 +101,44 @@ pub enum Format {
     Png,
     /// `report.json` + `connectivity.json`.
     Json,
+    /// `mesh.cgns` (needs the cargo feature `cgns`; without it writing fails with
+    /// `Unsupported` and [`Format::parse_list`] refuses the name).
+    Cgns,
 }
 
 impl Format {
-    /// Every format, in writing order.
-    pub const ALL: [Format; 6] = [
+    /// Every format this build can write, in writing order (`cgns` only with the feature).
+    pub const ALL: &'static [Format] = &[
         Format::Vtk,
+        Format::Vtu,
         Format::Plot3d,
         Format::Gmsh,
         Format::Svg,
         Format::Png,
         Format::Json,
+        #[cfg(feature = "cgns")]
+        Format::Cgns,
     ];
+    /// The files (relative to the output directory) this format writes; `mesh/*.vts` stands
+    /// for the block files of the VTK multiblock.
+    pub fn file_names(self) -> &'static [&'static str] {
+        match self {
+            Format::Vtk => &["mesh.vtm", "mesh/*.vts"],
+            Format::Vtu => &["mesh.vtu"],
+            Format::Plot3d => &["mesh.xyz", "mesh.p3d"],
+            Format::Gmsh => &["mesh.msh", "mesh.geo"],
+            Format::Svg => &["mesh.svg"],
+            Format::Png => &["mesh.png"],
+            Format::Json => &["report.json", "connectivity.json"],
+            Format::Cgns => &["mesh.cgns"],
+        }
+    }
     /// The name used by `--format`.
     pub fn name(self) -> &'static str {
         match self {
             Format::Vtk => "vtk",
+            Format::Vtu => "vtu",
+            Format::Cgns => "cgns",
             Format::Plot3d => "plot3d",
             Format::Gmsh => "gmsh",
             Format::Svg => "svg",
@@ -125,6 +154,10 @@ impl Format {
                 out.extend(Format::ALL);
             } else if let Some(f) = Format::ALL.iter().find(|f| f.name() == item) {
                 out.push(*f);
+            } else if item == "cgns" {
+                return Err("format 'cgns' needs a build with the cgns feature: \
+                     apt-get install libcgns-dev, then cargo build --release --features cgns"
+                    .into());
             } else {
                 let names: Vec<&str> = Format::ALL.iter().map(|f| f.name()).collect();
                 return Err(format!(
@@ -145,9 +178,32 @@ impl Format {
 /// Write `mesh` into `dir` (created if missing) in each of `formats`, with the file names of
 /// [`Format`]'s variants.
 pub fn write_files(mesh: &Mesh, dir: &Path, formats: &[Format]) -> io::Result<()> {
+    write_files_with_progress(mesh, dir, formats, |_| {})
+}
+
+/// [`write_files`], calling `progress(format)` before each format is written (for a
+/// progress display).
+pub fn write_files_with_progress(
+    mesh: &Mesh,
+    dir: &Path,
+    formats: &[Format],
+    mut progress: impl FnMut(Format),
+) -> io::Result<()> {
     std::fs::create_dir_all(dir)?;
     for f in formats {
+        progress(*f);
         match f {
+            Format::Vtu => vtu::write_vtu(mesh, &dir.join("mesh.vtu"))?,
+            #[cfg(feature = "cgns")]
+            Format::Cgns => cgns::write_cgns(mesh, &dir.join("mesh.cgns"))?,
+            #[cfg(not(feature = "cgns"))]
+            Format::Cgns => {
+                return Err(io::Error::new(
+                    io::ErrorKind::Unsupported,
+                    "CGNS output needs a build with the cgns feature \
+                     (apt-get install libcgns-dev; cargo build --release --features cgns)",
+                ))
+            }
             Format::Vtk => vtk::write_multiblock(mesh, dir)?,
             Format::Plot3d => {
                 plot3d::write_binary(&mesh.grids, &dir.join("mesh.xyz"))?;

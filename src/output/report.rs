@@ -5,7 +5,7 @@ use super::write_atomic;
 use crate::cocircular::CocircularGroup;
 use crate::domain::Circle;
 use crate::mesh::Mesh;
-use crate::quality::measure;
+use crate::quality::{measure, quality_metrics, QualityMetrics};
 use serde::Serialize;
 use std::io::{self, Write};
 use std::path::Path;
@@ -14,11 +14,19 @@ use std::path::Path;
 ///
 /// Required keys (exact names): `holes`, `blocks`, `cells`, `min_angle_deg`, `max_angle_deg`,
 /// `mean_min_angle_deg`, `mean_max_angle_deg`, `inverted_cells`, `medial_vertices`,
-/// `medial_arcs`, `cocircular_groups` (`[{"holes": [...], "center": [x, y], "radius": r}]`,
-/// hole ids 0-based as in the input, `-1` the bounding circle, ids from `holes` on the
-/// inserted holes), `collapsed_arcs`, `inserted_holes` (`[{"center": [x, y], "radius": r}]`).
-/// Angle figures are those of [`crate::quality::Quality`] (0 when there are no
-/// cells); a non-finite figure is written as `null`.
+/// `medial_arcs`, `min_scaled_jacobian`, `max_wall_orthogonality_deviation_deg`,
+/// `max_aspect_ratio`, `quality` (per metric (`angle_deg`, `equiangle_skewness`,
+/// `edge_ratio`, `scaled_jacobian`, `interface_growth_ratio`, `aspect_ratio`) an object
+/// `{"min", "max", "histogram": {"edges", "counts"}, "acceptable": [lo, hi], "outside",
+/// "samples"}`, see [`crate::quality::MetricSummary`]), `cocircular_groups`
+/// (`[{"holes": [...], "center": [x, y], "radius": r}]`, hole ids 0-based as in the input,
+/// `-1` the bounding circle, ids from `holes` on the inserted holes), `collapsed_arcs`,
+/// `inserted_holes` (`[{"center": [x, y], "radius": r}]`). Angle figures are those of
+/// [`crate::quality::Quality`] (0 when there are no cells); a non-finite figure is written as
+/// `null`.
+///
+/// New keys are added as named fields (serde writes them in declaration order); keep the
+/// existing names.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct Report {
     pub holes: usize,
@@ -37,12 +45,21 @@ pub struct Report {
     pub cocircular_groups: Vec<CocircularGroup>,
     pub collapsed_arcs: usize,
     pub inserted_holes: Vec<Circle>,
+    /// Largest angle (degrees) between a grid line leaving a wall node and the wall's normal
+    /// (`null` without curved walls), see [`QualityMetrics`].
+    pub max_wall_orthogonality_deviation_deg: Option<f64>,
+    /// Largest cell aspect ratio (`null` without cells), see
+    /// [`crate::quality::CellMetrics::aspect_ratio`].
+    pub max_aspect_ratio: Option<f64>,
+    /// The standard metrics with histograms and acceptable ranges.
+    pub quality: QualityMetrics,
 }
 
 impl Report {
     /// Counts from the mesh, quality from [`measure`] over its grids.
     pub fn from_mesh(mesh: &Mesh) -> Report {
         let q = measure(&mesh.grids);
+        let quality = quality_metrics(&mesh.layout, &mesh.grids);
         Report {
             holes: mesh.holes,
             blocks: mesh.layout.blocks.len(),
@@ -59,6 +76,9 @@ impl Report {
             cocircular_groups: mesh.cocircular_groups.clone(),
             collapsed_arcs: mesh.collapsed_arcs,
             inserted_holes: mesh.inserted_holes.clone(),
+            max_wall_orthogonality_deviation_deg: quality.max_wall_orthogonality_deviation_deg,
+            max_aspect_ratio: quality.aspect_ratio.max,
+            quality,
         }
     }
 }

@@ -1,5 +1,6 @@
-//! SVG picture of a mesh: the circles (bounding circle unfilled, holes filled light grey),
-//! light grid lines, block outlines, medial edges highlighted in red, and block numbers.
+//! SVG picture of a mesh: blocks filled in alternating light colours (neighbours across an
+//! interface differ, see [`block_colours`]), the circles (bounding circle unfilled, holes
+//! filled light grey), light grid lines, block outlines, medial edges highlighted in red, and block numbers.
 //!
 //! The y axis is flipped (mathematical orientation on screen). The picture is
 //! [`WIDTH`] pixels wide with a fixed margin; its height follows the aspect ratio of the
@@ -19,6 +20,43 @@ use std::path::Path;
 pub const WIDTH: f64 = 1000.0;
 /// Margin around the mesh, pixels.
 pub const MARGIN: f64 = 20.0;
+
+/// Fill colours of the blocks, indexed by [`block_colours`].
+pub const BLOCK_FILLS: [&str; 6] = [
+    "#dbe9f6", "#fde7c8", "#d9f0d3", "#f3d9ec", "#fff6bf", "#e0e0f5",
+];
+
+/// A colour index (into [`BLOCK_FILLS`]) per block, by a greedy colouring of the block
+/// adjacency in block order: blocks sharing an edge of the layout get different colours
+/// whenever [`BLOCK_FILLS`] has enough colours (then indices wrap around).
+pub fn block_colours(mesh: &Mesh) -> Vec<usize> {
+    let layout = &mesh.layout;
+    let mut users: Vec<Vec<usize>> = vec![Vec::new(); layout.edges.len()];
+    for (b, block) in layout.blocks.iter().enumerate() {
+        for s in &block.sides {
+            if let Some(u) = users.get_mut(s.edge as usize) {
+                u.push(b);
+            }
+        }
+    }
+    let mut colour: Vec<Option<usize>> = vec![None; layout.blocks.len()];
+    for (b, block) in layout.blocks.iter().enumerate() {
+        let mut taken = [false; BLOCK_FILLS.len()];
+        for s in &block.sides {
+            for &n in users.get(s.edge as usize).map_or(&[][..], |u| &u[..]) {
+                if let Some(Some(c)) = colour.get(n).filter(|_| n != b) {
+                    taken[*c] = true;
+                }
+            }
+        }
+        let c = taken
+            .iter()
+            .position(|t| !t)
+            .unwrap_or(b % BLOCK_FILLS.len());
+        colour[b] = Some(c);
+    }
+    colour.into_iter().map(|c| c.unwrap_or(0)).collect()
+}
 
 /// The circles of the mesh, by id, from its wall arcs (first arc of each id wins).
 pub fn circles(mesh: &Mesh) -> BTreeMap<CircleId, (Point, f64)> {
@@ -89,6 +127,25 @@ impl View {
     }
 }
 
+/// The blocks as filled polygons (their four sides' nodes), in alternating colours.
+fn write_block_fills<W: Write>(w: &mut W, mesh: &Mesh, v: &View) -> io::Result<()> {
+    writeln!(w, "  <g stroke=\"none\">")?;
+    for (g, c) in mesh.grids.iter().zip(block_colours(mesh)) {
+        write!(w, "    <path fill=\"{}\" d=\"", BLOCK_FILLS[c])?;
+        let ring = (0..4).flat_map(|k| {
+            let side = g.side(k);
+            let n = side.len().saturating_sub(1);
+            side.into_iter().take(n)
+        });
+        for (k, p) in ring.enumerate() {
+            let cmd = if k == 0 { "M" } else { " L" };
+            write!(w, "{cmd}{:.3} {:.3}", v.x(p[0]), v.y(p[1]))?;
+        }
+        writeln!(w, " Z\"/>")?;
+    }
+    writeln!(w, "  </g>")
+}
+
 fn path<W: Write>(w: &mut W, v: &View, pts: impl Iterator<Item = Point>) -> io::Result<()> {
     write!(w, "    <path d=\"")?;
     for (k, p) in pts.enumerate() {
@@ -131,6 +188,7 @@ fn write_to<W: Write>(w: &mut W, mesh: &Mesh) -> io::Result<()> {
         mesh.grids.iter().map(|g| g.cells()).sum::<usize>()
     )?;
     writeln!(w, "  <rect width=\"100%\" height=\"100%\" fill=\"white\"/>")?;
+    write_block_fills(w, mesh, &v)?;
     writeln!(w, "  <g stroke=\"black\" stroke-width=\"1.5\">")?;
     for (&id, &(c, r)) in &circles {
         let fill = if id < 0 { "none" } else { "#dddddd" };

@@ -2,8 +2,9 @@
 //! `StructuredGrid` per block (`DIR/mesh/block_NNNN.vts`), which ParaView opens directly.
 //!
 //! Each `.vts` has `WholeExtent = Extent = "0 ni 0 nj 0 0"`, points in VTK order (i fastest,
-//! matching [`BlockGrid`]'s node order) with z = 0, and cell data `block_id` (Int32),
-//! `min_angle_deg`, `max_angle_deg` and `min_jacobian` (Float64, see [`crate::quality`]).
+//! matching [`BlockGrid`]'s node order) with z = 0, and cell data `block_id` (Int32) and the
+//! quality figures of [`CELL_ARRAYS`] (Float64, see [`crate::quality::CellFields`]), so
+//! ParaView can colour by block or by quality.
 //! Floats are written with Rust's shortest round-trip formatting.
 //!
 //! The block files are written first and `mesh.vtm` last, each atomically (see
@@ -12,9 +13,34 @@
 
 use super::{check_mesh, num, write_atomic};
 use crate::mesh::{BlockGrid, Mesh};
-use crate::quality::cell_fields;
+use crate::quality::{cell_fields, CellFields};
+use rayon::prelude::*;
 use std::io::{self, Write};
 use std::path::Path;
+
+/// Names of the Float64 cell-data arrays of the `.vts` (and `.vtu`) files, in file order.
+pub const CELL_ARRAYS: [&str; 7] = [
+    "min_angle_deg",
+    "max_angle_deg",
+    "min_jacobian",
+    "equiangle_skewness",
+    "edge_ratio",
+    "scaled_jacobian",
+    "aspect_ratio",
+];
+
+/// The values of cell array `CELL_ARRAYS[k]`.
+pub(crate) fn cell_array(f: &CellFields, k: usize) -> &[f64] {
+    match k {
+        0 => &f.min_angle_deg,
+        1 => &f.max_angle_deg,
+        2 => &f.min_jacobian,
+        3 => &f.equiangle_skewness,
+        4 => &f.edge_ratio,
+        5 => &f.scaled_jacobian,
+        _ => &f.aspect_ratio,
+    }
+}
 
 /// File name (relative to the output directory) of block `b`'s structured grid.
 pub fn block_file_name(b: usize) -> String {
@@ -27,9 +53,15 @@ pub fn block_file_name(b: usize) -> String {
 pub fn write_multiblock(mesh: &Mesh, dir: &Path) -> io::Result<()> {
     check_mesh(mesh)?;
     std::fs::create_dir_all(dir.join("mesh"))?;
-    for (b, grid) in mesh.grids.iter().enumerate() {
-        write_atomic(&dir.join(block_file_name(b)), |w| write_vts(w, b, grid))?;
-    }
+    // Block files in parallel (on the current rayon pool); the first error in block order
+    // is reported, so the outcome does not depend on the number of threads.
+    let results: Vec<io::Result<()>> = mesh
+        .grids
+        .par_iter()
+        .enumerate()
+        .map(|(b, grid)| write_atomic(&dir.join(block_file_name(b)), |w| write_vts(w, b, grid)))
+        .collect();
+    results.into_iter().collect::<io::Result<Vec<()>>>()?;
     write_atomic(&dir.join("mesh.vtm"), |w| {
         writeln!(w, "<?xml version=\"1.0\"?>")?;
         writeln!(
@@ -75,25 +107,12 @@ pub fn write_vts<W: Write>(w: &mut W, block_id: usize, grid: &BlockGrid) -> io::
         }
     }
     writeln!(w, "        </DataArray>")?;
-    for (name, values) in [
-        ("min_angle_deg", &fields.min_angle_deg),
-        ("max_angle_deg", &fields.max_angle_deg),
-        ("min_jacobian", &fields.min_jacobian),
-    ] {
+    for (k, name) in CELL_ARRAYS.iter().enumerate() {
         writeln!(
             w,
             "        <DataArray type=\"Float64\" Name=\"{name}\" format=\"ascii\">"
         )?;
-        for (k, &x) in values.iter().enumerate() {
-            if k % 6 == 0 {
-                write!(w, "         ")?;
-            }
-            write!(w, " ")?;
-            num(w, x)?;
-            if k % 6 == 5 || k + 1 == values.len() {
-                writeln!(w)?;
-            }
-        }
+        super::vtu::floats(w, cell_array(&fields, k).iter().copied())?;
         writeln!(w, "        </DataArray>")?;
     }
     writeln!(w, "      </CellData>")?;
