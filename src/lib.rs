@@ -20,7 +20,10 @@ pub mod apollonius;
 pub mod blocking;
 pub mod connectivity;
 pub mod domain;
+#[doc(hidden)]
+pub mod fuzzing;
 pub mod grid;
+pub mod input;
 pub mod layout;
 pub mod medial;
 pub mod mesh;

@@ -2,6 +2,7 @@
 
 use super::Failure;
 use medial_blocks::domain::{Circle, Domain};
+use medial_blocks::input::{parse_holes_csv, parse_triple};
 use medial_blocks::output::{report, write_files, Format};
 use medial_blocks::{mesh, Mode, Options};
 use std::path::PathBuf;
@@ -50,48 +51,6 @@ pub struct Args {
     pub quiet: bool,
 }
 
-fn parse_numbers(text: &str, what: &str, count: usize) -> Result<Vec<f64>, String> {
-    let values: Vec<&str> = text.split(',').map(str::trim).collect();
-    if values.len() != count {
-        return Err(format!(
-            "{what}: expected {count} comma-separated numbers, found {}",
-            values.len()
-        ));
-    }
-    values
-        .iter()
-        .map(|v| {
-            v.parse::<f64>()
-                .map_err(|_| format!("{what}: '{v}' is not a number"))
-        })
-        .collect()
-}
-
-/// Holes from CSV text: `x,y,r` per line; blank lines skipped; a first line that is not
-/// numeric is a header.
-pub fn parse_holes_csv(text: &str) -> Result<Vec<Circle>, String> {
-    let mut holes = Vec::new();
-    for (n, line) in text.lines().enumerate() {
-        let line = line.trim();
-        if line.is_empty() || line.starts_with('#') {
-            continue;
-        }
-        let first_field = line.split(',').next().unwrap_or("").trim();
-        if holes.is_empty() && n == 0 && first_field.parse::<f64>().is_err() {
-            continue; // header
-        }
-        let v = parse_numbers(line, &format!("line {}", n + 1), 3)?;
-        holes.push(Circle {
-            center: [v[0], v[1]],
-            radius: v[2],
-        });
-    }
-    if holes.is_empty() && text.trim().is_empty() {
-        return Err("the CSV file is empty".into());
-    }
-    Ok(holes)
-}
-
 fn read_domain(args: &Args) -> Result<Domain, Failure> {
     let Some(path) = &args.input else {
         if args.bounding.is_some() {
@@ -109,8 +68,8 @@ fn read_domain(args: &Args) -> Result<Domain, Failure> {
         let b = args.bounding.as_deref().ok_or_else(|| {
             bad("a CSV of holes needs the bounding circle: --bounding X,Y,R".into())
         })?;
-        let b = parse_numbers(b, "--bounding", 3).map_err(Failure::input)?;
-        let holes = parse_holes_csv(&text).map_err(bad)?;
+        let b = parse_triple(b).map_err(|e| Failure::input(format!("--bounding: {e}")))?;
+        let holes = parse_holes_csv(&text).map_err(|e| bad(e.to_string()))?;
         Domain::bounded(
             Circle {
                 center: [b[0], b[1]],
