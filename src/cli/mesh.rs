@@ -38,7 +38,7 @@ pub struct Args {
     #[arg(long, value_enum, default_value_t = ModeArg::Paper)]
     pub mode: ModeArg,
     /// Target number of cells along a block side.
-    #[arg(long, default_value_t = 16)]
+    #[arg(long, default_value_t = 16, allow_negative_numbers = true)]
     pub cells: usize,
     /// Writers, comma separated: vtk, plot3d, gmsh, svg, png, json, or all.
     #[arg(long, default_value = DEFAULT_FORMATS)]
@@ -87,7 +87,17 @@ fn read_domain(args: &Args) -> Result<Domain, Failure> {
         if text.trim().is_empty() {
             return Err(bad("the file is empty".into()));
         }
-        Domain::from_json_str(&text).map_err(|e| bad(e.to_string()))
+        Domain::from_json_str(&text).map_err(|e| {
+            let mut m = e.to_string();
+            if m.contains("number out of range") {
+                // serde_json's wording for 1e999 and the like.
+                m.push_str(
+                    " (a number too large for a 64-bit float, such as 1e999, is refused: \
+                     every number must be finite)",
+                );
+            }
+            bad(m)
+        })
     }
 }
 
