@@ -3,8 +3,9 @@
 #
 #   fuzz/run.sh SECONDS [TARGET...]      (from anywhere; default: every target)
 #
-# Installs cargo-fuzz if it is missing. New corpus entries go to fuzz/corpus/TARGET/ (commit
-# the small interesting ones; `cargo test` replays them through tests/fuzz_replay_*.rs).
+# Installs cargo-fuzz if it is missing. The committed seeds in fuzz/corpus/TARGET/ are read;
+# new corpus entries go to fuzz/work/corpus/TARGET/ (not committed: copy the small interesting
+# ones into fuzz/corpus/TARGET/, which `cargo test` replays through tests/fuzz_replay_*.rs).
 # Crashes go to fuzz/artifacts/TARGET/: turn each into a regression test (copy it into the
 # corpus under a descriptive name, add a named test if the fix needs explaining), then fix.
 # Exit status: 0 if every target ran clean, 1 if any target found a crash.
@@ -36,10 +37,10 @@ fi
 
 failed=()
 for t in "${targets[@]}"; do
-    mkdir -p "fuzz/corpus/$t"
+    mkdir -p "fuzz/corpus/$t" "fuzz/work/corpus/$t"
     echo "== fuzzing $t for ${seconds}s" >&2
     # -rss_limit_mb: the mesher may allocate a few hundred MB on a near-touching layout.
-    if ! cargo +nightly fuzz run "$t" "fuzz/corpus/$t" -- \
+    if ! cargo +nightly fuzz run "$t" "fuzz/work/corpus/$t" "fuzz/corpus/$t" -- \
         -max_total_time="$seconds" -rss_limit_mb=4096 -timeout=120 -print_final_stats=1; then
         failed+=("$t")
     fi
