@@ -456,7 +456,8 @@ pub fn check_mesh_with(domain: &Domain, m: &Mesh, checks: Checks) -> Result<Chec
         expected += if k == 0 { a } else { -a };
     }
     let tol = 1e-9 * abs_area + 64.0 * f64::EPSILON * big_r * big_r * terms as f64;
-    if !((cell_area - expected).abs() <= tol) {
+    let within = (cell_area - expected).abs() <= tol; // false on NaN too
+    if !within {
         return Err(format!(
             "cells cover a signed area of {cell_area:e}, the region between the wall polygons \
              is {expected:e} (tolerance {tol:e})"

@@ -47,8 +47,12 @@ fn variants(cwd: &Path) -> Vec<Vec<&'static str>> {
     v
 }
 
-/// The inputs: (file name, content, extra arguments); `None` is the built-in example.
-fn inputs() -> Vec<(Option<(&'static str, String)>, Vec<&'static str>)> {
+/// One input: an optional (file name, content) (`None`: the built-in example) and extra
+/// arguments.
+type Input = (Option<(&'static str, String)>, Vec<&'static str>);
+
+/// The inputs.
+fn inputs() -> Vec<Input> {
     let ngon: Vec<String> = (0..6)
         .map(|k| {
             let a = std::f64::consts::PI * f64::from(k) / 3.0;
