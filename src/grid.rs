@@ -20,8 +20,9 @@ use crate::mesh::BlockGrid;
 pub const MAX_CELLS_PER_SIDE: usize = 100_000;
 
 /// The largest total number of grid nodes (all blocks, shared nodes counted once per block)
-/// accepted, checked before any allocation: 10 million nodes is 160 MB of coordinates.
-pub const MAX_TOTAL_NODES: usize = 10_000_000;
+/// accepted, checked before any allocation: 400 million nodes is 6.4 GB of coordinates, room
+/// for 100,000 particles at 16 x 16 cells per block (about 1.7e8 nodes) on a 24 GB machine.
+pub const MAX_TOTAL_NODES: usize = 400_000_000;
 
 /// Why no grid was built.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]

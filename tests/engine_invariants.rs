@@ -223,3 +223,36 @@ fn errors_are_typed() {
         TriangulationError::NonFinite { index: 2 }
     );
 }
+
+#[test]
+fn many_sampled_circles_near_ties() {
+    // 625 circles of 32 samples (cos/sin rounding: thousands of near co-circular tests).
+    let mut r = Rng(9);
+    let mut pts = Vec::new();
+    for c in 0..625 {
+        let (cx, cy) = ((c % 25) as f64 + 0.5, (c / 25) as f64 + 0.5);
+        let rad = 0.3 + 0.15 * r.unit();
+        for k in 0..32 {
+            let a = std::f64::consts::TAU * k as f64 / 32.0;
+            pts.push([cx + rad * a.cos(), cy + rad * a.sin()]);
+        }
+    }
+    check(&pts);
+}
+
+#[test]
+fn ulp_perturbed_grid() {
+    // A 40 x 40 grid whose points are moved by a few ulps: nearly every test is a near tie.
+    let mut r = Rng(10);
+    let mut pts = Vec::new();
+    for i in 0..40 {
+        for j in 0..40 {
+            let jitter = |v: f64, r: &mut Rng| f64::from_bits(v.to_bits() + r.next() % 4);
+            pts.push([
+                jitter(1.0 + i as f64 * 0.25, &mut r),
+                jitter(1.0 + j as f64 * 0.25, &mut r),
+            ]);
+        }
+    }
+    check(&pts);
+}

@@ -4,6 +4,8 @@
 //! polygonal fluid region (area identity).
 
 use medial_blocks::domain::{Circle, Domain};
+use medial_blocks::grid::MAX_ARC_PER_CELL;
+use medial_blocks::layout::Curve;
 use medial_blocks::{mesh, Mesh, Options};
 use proptest::prelude::*;
 use std::collections::HashMap;
@@ -113,6 +115,17 @@ fn check(domain: &Domain, cells: usize, valid: bool) -> Mesh {
             assert_eq!(m.medial_vertices, 2 * (h - 1));
             assert_eq!(m.medial_arcs, 3 * (h - 1));
             assert_eq!(blocks, 6 * (h - 1));
+        }
+    }
+
+    // No wall cell spans more than grid::MAX_ARC_PER_CELL of its circle.
+    for (block, g) in m.layout.blocks.iter().zip(&m.grids) {
+        for (s, side) in block.sides.iter().enumerate() {
+            if let Curve::Arc { sweep, .. } = m.layout.edges[side.edge as usize].curve {
+                let n = if s % 2 == 0 { g.ni } else { g.nj };
+                assert!(sweep.abs() / n as f64 <= MAX_ARC_PER_CELL * (1.0 + 1e-12));
+                assert!(n >= cells);
+            }
         }
     }
 

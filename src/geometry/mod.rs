@@ -13,6 +13,7 @@ mod order;
 pub mod predicates;
 pub mod triangulation;
 pub mod verify;
+mod wide;
 
 /// A point in the plane, `[x, y]`.
 pub type Point = [f64; 2];

@@ -69,14 +69,44 @@ pub fn orient2d(a: Point, b: Point, c: Point) -> Ordering {
 /// Exact in-circle test: `Greater` when `d` lies strictly inside the circle through the
 /// counter-clockwise triangle `a, b, c`, `Equal` when the four points are co-circular.
 /// Coordinates must be finite.
+///
+/// Evaluation: a floating-point filter (Shewchuk's first-stage error bound); when it cannot
+/// decide, fixed-width integer arithmetic if the coordinate differences allow it
+/// (module `wide`), else robust's adaptive stages; `rug` outside the safe range.
 #[inline]
 pub fn incircle(a: Point, b: Point, c: Point, d: Point) -> Ordering {
-    if safe(&a) & safe(&b) & safe(&c) & safe(&d) {
-        sign(robust::incircle(coord(a), coord(b), coord(c), coord(d)))
-    } else {
-        incircle_exact(a, b, c, d)
+    if !(safe(&a) & safe(&b) & safe(&c) & safe(&d)) {
+        return incircle_exact(a, b, c, d);
+    }
+    let (adx, ady) = (a[0] - d[0], a[1] - d[1]);
+    let (bdx, bdy) = (b[0] - d[0], b[1] - d[1]);
+    let (cdx, cdy) = (c[0] - d[0], c[1] - d[1]);
+    let (bdxcdy, cdxbdy) = (bdx * cdy, cdx * bdy);
+    let (cdxady, adxcdy) = (cdx * ady, adx * cdy);
+    let (adxbdy, bdxady) = (adx * bdy, bdx * ady);
+    let alift = adx * adx + ady * ady;
+    let blift = bdx * bdx + bdy * bdy;
+    let clift = cdx * cdx + cdy * cdy;
+    let det = alift * (bdxcdy - cdxbdy) + blift * (cdxady - adxcdy) + clift * (adxbdy - bdxady);
+    let permanent = (bdxcdy.abs() + cdxbdy.abs()) * alift
+        + (cdxady.abs() + adxcdy.abs()) * blift
+        + (adxbdy.abs() + bdxady.abs()) * clift;
+    let errbound = ICC_ERRBOUND_A * permanent;
+    if det > errbound {
+        return Ordering::Greater;
+    }
+    if -det > errbound {
+        return Ordering::Less;
+    }
+    match super::wide::incircle_small(a, b, c, d) {
+        Some(s) => s,
+        None => sign(robust::incircle(coord(a), coord(b), coord(c), coord(d))),
     }
 }
+
+/// Shewchuk's first-stage in-circle error bound factor, `(10 + 96 eps) eps`, `eps = 2^-53`.
+const ICC_ERRBOUND_A: f64 = (10.0 + 96.0 * F64_EPS) * F64_EPS;
+const F64_EPS: f64 = 1.0 / 9_007_199_254_740_992.0;
 
 /// Lexicographic `(x, y)` order of two finite points (`-0.0 == 0.0`).
 #[inline]
