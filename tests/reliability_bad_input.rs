@@ -463,7 +463,7 @@ fn absurd_cells() {
         &["mesh", "-o", "out", "-q", "--cells", "100000"],
         s.path(),
         2,
-        &["nodes, more than the limit of 10000000"],
+        &[&format!("nodes, more than the limit of {MAX_TOTAL_NODES}")],
     );
     expect(
         &[
