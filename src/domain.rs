@@ -33,6 +33,7 @@ pub const BOUNDING: CircleId = -1;
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Circle {
+    #[serde(deserialize_with = "deserialize_center")]
     pub center: Point,
     pub radius: f64,
 }
@@ -45,6 +46,36 @@ impl Circle {
             radius,
         }
     }
+}
+
+/// A centre `[x, y]`: exactly two numbers, with a clear error for any other length (serde's
+/// fixed-size arrays report a third element as "trailing characters").
+fn deserialize_center<'de, D: Deserializer<'de>>(deserializer: D) -> Result<Point, D::Error> {
+    use serde::de::Error;
+    struct V;
+    impl<'de> Visitor<'de> for V {
+        type Value = Point;
+        fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
+            f.write_str("a centre [x, y] of two numbers")
+        }
+        fn visit_seq<A: SeqAccess<'de>>(self, mut seq: A) -> Result<Point, A::Error> {
+            let x = seq
+                .next_element::<f64>()?
+                .ok_or_else(|| A::Error::invalid_length(0, &self))?;
+            let y = seq
+                .next_element::<f64>()?
+                .ok_or_else(|| A::Error::invalid_length(1, &self))?;
+            let mut n = 2usize;
+            while seq.next_element::<IgnoredAny>()?.is_some() {
+                n = n.saturating_add(1);
+            }
+            if n != 2 {
+                return Err(A::Error::invalid_length(n, &self));
+            }
+            Ok([x, y])
+        }
+    }
+    deserializer.deserialize_seq(V)
 }
 
 /// A human name for a circle id: `"hole 3"` or `"the bounding circle"`.

@@ -63,7 +63,10 @@ pub mod collapse;
 pub mod connectivity;
 pub mod domain;
 pub mod exact_mode;
+#[doc(hidden)]
+pub mod fuzzing;
 pub mod grid;
+pub mod input;
 pub mod layout;
 pub mod layouts;
 pub mod medial;

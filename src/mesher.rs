@@ -140,6 +140,12 @@ pub fn mesh(domain: &Domain, options: &Options) -> Result<Mesh, MeshError> {
             "--cells must be at least 1 (cells along a block side)".into(),
         ));
     }
+    if options.cells > crate::grid::MAX_CELLS_PER_SIDE {
+        return Err(MeshError::Grid(GridError::TooManyCellsPerSide {
+            cells: options.cells,
+            limit: crate::grid::MAX_CELLS_PER_SIDE,
+        }));
+    }
     if !(options.collapse_fraction.is_finite() && options.collapse_fraction >= 0.0) {
         return Err(MeshError::Options(format!(
             "the collapse fraction must be a number >= 0, not {}",

@@ -7,6 +7,7 @@ use super::{Failure, Global};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use medial_blocks::domain::{Circle, Domain};
 use medial_blocks::exact_mode::{Clustering, FirstCell};
+use medial_blocks::input::{parse_holes_csv, parse_triple};
 use medial_blocks::output::{report, write_files_with_progress, Format};
 use medial_blocks::{mesh, Mode, Options};
 use std::path::PathBuf;
@@ -47,7 +48,7 @@ pub struct Args {
     #[arg(long, value_enum, default_value_t = ModeArg::Exact)]
     pub mode: ModeArg,
     /// Target number of cells along a block side (exact mode: along a typical spoke).
-    #[arg(long, default_value_t = 16)]
+    #[arg(long, default_value_t = 16, allow_negative_numbers = true)]
     pub cells: usize,
     /// Exact mode: target cell size (overrides --cells).
     #[arg(long)]
@@ -95,48 +96,6 @@ pub struct Args {
     pub collapse_fraction: f64,
 }
 
-fn parse_numbers(text: &str, what: &str, count: usize) -> Result<Vec<f64>, String> {
-    let values: Vec<&str> = text.split(',').map(str::trim).collect();
-    if values.len() != count {
-        return Err(format!(
-            "{what}: expected {count} comma-separated numbers, found {}",
-            values.len()
-        ));
-    }
-    values
-        .iter()
-        .map(|v| {
-            v.parse::<f64>()
-                .map_err(|_| format!("{what}: '{v}' is not a number"))
-        })
-        .collect()
-}
-
-/// Holes from CSV text: `x,y,r` per line; blank lines skipped; a first line that is not
-/// numeric is a header.
-pub fn parse_holes_csv(text: &str) -> Result<Vec<Circle>, String> {
-    let mut holes = Vec::new();
-    for (n, line) in text.lines().enumerate() {
-        let line = line.trim();
-        if line.is_empty() || line.starts_with('#') {
-            continue;
-        }
-        let first_field = line.split(',').next().unwrap_or("").trim();
-        if holes.is_empty() && n == 0 && first_field.parse::<f64>().is_err() {
-            continue; // header
-        }
-        let v = parse_numbers(line, &format!("line {}", n + 1), 3)?;
-        holes.push(Circle {
-            center: [v[0], v[1]],
-            radius: v[2],
-        });
-    }
-    if holes.is_empty() && text.trim().is_empty() {
-        return Err("the CSV file is empty".into());
-    }
-    Ok(holes)
-}
-
 fn read_domain(args: &Args) -> Result<Domain, Failure> {
     let Some(path) = &args.input else {
         if args.bounding.is_some() {
@@ -154,8 +113,8 @@ fn read_domain(args: &Args) -> Result<Domain, Failure> {
         let b = args.bounding.as_deref().ok_or_else(|| {
             bad("a CSV of holes needs the bounding circle: --bounding X,Y,R".into())
         })?;
-        let b = parse_numbers(b, "--bounding", 3).map_err(Failure::input)?;
-        let holes = parse_holes_csv(&text).map_err(bad)?;
+        let b = parse_triple(b).map_err(|e| Failure::input(format!("--bounding: {e}")))?;
+        let holes = parse_holes_csv(&text).map_err(|e| bad(e.to_string()))?;
         Domain::bounded(
             Circle {
                 center: [b[0], b[1]],
@@ -173,7 +132,17 @@ fn read_domain(args: &Args) -> Result<Domain, Failure> {
         if text.trim().is_empty() {
             return Err(bad("the file is empty".into()));
         }
-        Domain::from_json_str(&text).map_err(|e| bad(e.to_string()))
+        Domain::from_json_str(&text).map_err(|e| {
+            let mut m = e.to_string();
+            if m.contains("number out of range") {
+                // serde_json's wording for 1e999 and the like.
+                m.push_str(
+                    " (a number too large for a 64-bit float, such as 1e999, is refused: \
+                     every number must be finite)",
+                );
+            }
+            bad(m)
+        })
     }
 }
 

@@ -6,6 +6,7 @@
 
 use super::Failure;
 use medial_blocks::geometry::{Point, Triangulation, TriangulationError};
+use medial_blocks::input::{parse_points_csv, CsvError};
 use std::io::Write;
 use std::path::PathBuf;
 
@@ -32,43 +33,23 @@ struct Output {
     cocircular_groups: Vec<Vec<u32>>,
 }
 
-/// Points of a CSV text and the 1-based line number of each data row.
+/// Points of a CSV text and the 1-based line number of each data row
+/// ([`medial_blocks::input::parse_points_csv`]), with errors phrased for the command line.
 fn parse_csv(text: &str, name: &str) -> Result<(Vec<Point>, Vec<usize>), Failure> {
-    let mut points = Vec::new();
-    let mut lines = Vec::new();
-    let mut first = true;
-    for (i, raw) in text.lines().enumerate() {
-        let line = raw.trim();
-        if line.is_empty() {
-            continue;
-        }
-        let fields: Vec<&str> = line.split(',').map(str::trim).collect();
-        if first {
-            first = false;
-            if fields.iter().all(|f| f.parse::<f64>().is_err()) {
-                continue; // header
+    parse_points_csv(text).map_err(|e| {
+        Failure::input(match e {
+            CsvError::WrongColumnCount { line, found, .. } => {
+                format!("{name}:{line}: expected 2 columns `x,y`, found {found}")
             }
-        }
-        if fields.len() != 2 {
-            return Err(Failure::input(format!(
-                "{name}:{}: expected 2 columns `x,y`, found {}",
-                i + 1,
-                fields.len()
-            )));
-        }
-        let mut xy = [0.0; 2];
-        for (v, f) in xy.iter_mut().zip(&fields) {
-            *v = f
-                .parse()
-                .map_err(|_| Failure::input(format!("{name}:{}: `{f}` is not a number", i + 1)))?;
-        }
-        points.push(xy);
-        lines.push(i + 1);
-    }
-    if points.is_empty() {
-        return Err(Failure::input(format!("{name}: no points")));
-    }
-    Ok((points, lines))
+            CsvError::NotANumber { line, field } => {
+                format!("{name}:{line}: `{field}` is not a number")
+            }
+            CsvError::Empty | CsvError::NoRows { .. } => format!("{name}: no points"),
+            CsvError::TooManyRows { line, max } => {
+                format!("{name}:{line}: more than {max} points")
+            }
+        })
+    })
 }
 
 /// The built-in example: an 8 x 8 grid with small dyadic perturbations, a copy of one of its

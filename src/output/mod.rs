@@ -7,7 +7,9 @@
 //! Rust's shortest round-trip formatting or a fixed precision, and nothing depends on hash
 //! order) and atomic per file: it writes `.NAME.tmp` in the target directory and renames it
 //! onto `NAME` only after a successful flush, so a failed run never leaves a complete-looking
-//! half file (the temporary file is removed on error).
+//! half file (the temporary file is removed on error). [`write_files`] goes further: it writes
+//! every file into a staging directory and moves them into place at the end, `report.json`
+//! last, so a `report.json` marks a complete mesh.
 
 pub mod connectivity;
 pub mod geo;
@@ -175,8 +177,20 @@ impl Format {
     }
 }
 
+/// The staging directory [`write_files`] uses inside the output directory.
+pub fn staging_dir(dir: &Path) -> std::path::PathBuf {
+    dir.join(format!(".medial-blocks-staging-{}", std::process::id()))
+}
+
 /// Write `mesh` into `dir` (created if missing) in each of `formats`, with the file names of
 /// [`Format`]'s variants.
+///
+/// All or nothing, as far as the file system allows: every file is first written into a
+/// staging directory inside `dir` ([`staging_dir`]), then renamed into place, index files
+/// last: the VTK `mesh.vtm` after its block files and `report.json` after everything. So the
+/// presence of `report.json` marks a complete mesh: when `json` is among the formats an older
+/// `report.json` is removed before the first rename, and a run that fails at any point leaves
+/// no `report.json` (and no staging directory; earlier files may have been replaced).
 pub fn write_files(mesh: &Mesh, dir: &Path, formats: &[Format]) -> io::Result<()> {
     write_files_with_progress(mesh, dir, formats, |_| {})
 }
@@ -190,6 +204,72 @@ pub fn write_files_with_progress(
     mut progress: impl FnMut(Format),
 ) -> io::Result<()> {
     std::fs::create_dir_all(dir)?;
+    let staging = staging_dir(dir);
+    if staging.exists() {
+        std::fs::remove_dir_all(&staging)?;
+    }
+    std::fs::create_dir(&staging)?;
+    let result = write_into(mesh, &staging, formats, &mut progress).and_then(|()| {
+        if formats.contains(&Format::Json) {
+            match std::fs::remove_file(dir.join("report.json")) {
+                Err(e) if e.kind() != io::ErrorKind::NotFound => return Err(e),
+                _ => {}
+            }
+        }
+        publish(&staging, dir)
+    });
+    let cleanup = std::fs::remove_dir_all(&staging);
+    result.and(cleanup)
+}
+
+/// Every file under `root`, relative to it, in the order [`write_files`] publishes them:
+/// sorted, then `*.vtm`, then `report.json` last.
+fn staged_files(root: &Path) -> io::Result<Vec<std::path::PathBuf>> {
+    let mut out = Vec::new();
+    let mut stack = vec![std::path::PathBuf::new()];
+    while let Some(rel) = stack.pop() {
+        for entry in std::fs::read_dir(root.join(&rel))? {
+            let entry = entry?;
+            let path = rel.join(entry.file_name());
+            if entry.file_type()?.is_dir() {
+                stack.push(path);
+            } else {
+                out.push(path);
+            }
+        }
+    }
+    let rank = |p: &Path| {
+        if p == Path::new("report.json") {
+            2
+        } else if p.extension().is_some_and(|e| e == "vtm") {
+            1
+        } else {
+            0
+        }
+    };
+    out.sort_by(|a, b| rank(a).cmp(&rank(b)).then_with(|| a.cmp(b)));
+    Ok(out)
+}
+
+/// Rename every staged file into `dir`, creating subdirectories as needed.
+fn publish(staging: &Path, dir: &Path) -> io::Result<()> {
+    for rel in staged_files(staging)? {
+        let target = dir.join(&rel);
+        if let Some(parent) = target.parent() {
+            std::fs::create_dir_all(parent)?;
+        }
+        std::fs::rename(staging.join(&rel), &target)?;
+    }
+    Ok(())
+}
+
+/// Write every format into `dir` (no staging).
+fn write_into(
+    mesh: &Mesh,
+    dir: &Path,
+    formats: &[Format],
+    progress: &mut impl FnMut(Format),
+) -> io::Result<()> {
     for f in formats {
         progress(*f);
         match f {

@@ -1,0 +1,138 @@
+//! Replays every file of the committed `mesh` fuzz corpus (`fuzz/corpus/mesh/`) through the
+//! fuzz target's decode + mesh + invariant check (`medial_blocks::fuzzing::check_layout_bytes`),
+//! so `cargo test` keeps the corpus green without nightly or cargo-fuzz.
+
+use medial_blocks::fuzzing::{check_layout_bytes, CheckReport};
+use std::path::{Path, PathBuf};
+
+fn corpus(name: &str) -> Vec<PathBuf> {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("fuzz/corpus")
+        .join(name);
+    let mut files: Vec<_> = std::fs::read_dir(&dir)
+        .expect("corpus directory")
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| p.is_file())
+        .collect();
+    files.sort();
+    files
+}
+
+#[test]
+fn replay_mesh_corpus() {
+    let files = corpus("mesh");
+    assert!(files.len() >= 20, "corpus has only {} files", files.len());
+    // Near-touching layouts take up to a second or two each: replay on every core.
+    let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
+    let results: Vec<(PathBuf, Result<Option<CheckReport>, String>)> = std::thread::scope(|s| {
+        let handles: Vec<_> = (0..threads)
+            .map(|t| {
+                let files = &files;
+                s.spawn(move || {
+                    files
+                        .iter()
+                        .skip(t)
+                        .step_by(threads)
+                        .map(|f| {
+                            let data = std::fs::read(f).expect("readable corpus file");
+                            (f.clone(), check_layout_bytes(&data))
+                        })
+                        .collect::<Vec<_>>()
+                })
+            })
+            .collect();
+        handles
+            .into_iter()
+            .flat_map(|h| h.join().expect("replay thread"))
+            .collect()
+    });
+    let mut failures = Vec::new();
+    let (mut meshed, mut inverted) = (0, 0);
+    for (f, res) in results {
+        match res {
+            Ok(Some(r)) => {
+                meshed += 1;
+                inverted += usize::from(r.inverted_cells > 0);
+            }
+            Ok(None) => {}
+            Err(e) => failures.push(format!("{}: {e}", f.display())),
+        }
+    }
+    assert!(failures.is_empty(), "{}", failures.join("\n"));
+    // Most seeds are valid layouts (the decoder is not just refusing everything).
+    assert!(
+        meshed * 3 >= files.len() * 2,
+        "only {meshed} of {} files meshed",
+        files.len()
+    );
+    eprintln!(
+        "{meshed} of {} corpus layouts meshed, {inverted} with inverted cells (paper mode)",
+        files.len()
+    );
+}
+
+/// Found by the seed corpus (`near_bounding_tight`, `ngon_5_tight_bound`): a valid domain whose
+/// holes come within `1e-8 R` of the bounding circle (10 gap tolerances) is refused by boundary
+/// sampling ("the circle already has the most samples allowed (16384)"), exit code 2. The
+/// fuzz check accepts this refusal below `SAMPLING_REFUSAL_GAP`; this test states the goal.
+/// Ignored: src/sampling.rs would need local (adaptive) refinement near the close approach.
+#[test]
+#[ignore = "known limitation: sampling cap reached for holes within 1e-8 R of the bounding circle"]
+fn near_touching_bounding_circle_is_meshed() {
+    use medial_blocks::{mesh, Circle, Domain, Options};
+    let r = 0.44;
+    let holes = (0..5)
+        .map(|k| {
+            let a = 2.0 * std::f64::consts::PI * f64::from(k) / 5.0;
+            Circle::new(a.cos(), a.sin(), r)
+        })
+        .collect();
+    let d = Domain::bounded(Circle::new(0.0, 0.0, (1.0 + r) * (1.0 + 1e-8)), holes).unwrap();
+    let m = mesh(&d, &Options::default()).expect("mesh");
+    medial_blocks::fuzzing::check_mesh(&d, &m).unwrap();
+}
+
+/// A cheap stable-toolchain exploration of the `mesh` target (random bytes through the same
+/// decode + mesh + check), for machines without nightly or when libFuzzer with a sanitizer is
+/// too slow: `MESH_FUZZ_SECONDS=60 cargo test --test fuzz_replay_mesh -- --ignored`. A failing
+/// input is printed as hex: save it under `fuzz/corpus/mesh/` as a regression.
+#[test]
+#[ignore = "exploration, run on demand with MESH_FUZZ_SECONDS"]
+fn random_bytes_exploration() {
+    let seconds: u64 = std::env::var("MESH_FUZZ_SECONDS")
+        .ok()
+        .and_then(|s| s.parse().ok())
+        .unwrap_or(10);
+    let seed: u64 = std::env::var("MESH_FUZZ_SEED")
+        .ok()
+        .and_then(|s| s.parse().ok())
+        .unwrap_or(1);
+    let start = std::time::Instant::now();
+    let mut s = seed.wrapping_mul(0x9e37_79b9_7f4a_7c15) | 1;
+    let mut next = || {
+        s ^= s << 13;
+        s ^= s >> 7;
+        s ^= s << 17;
+        s
+    };
+    let (mut runs, mut meshed, mut failures) = (0u64, 0u64, Vec::new());
+    while start.elapsed().as_secs() < seconds {
+        let len = 4 + (next() % 200) as usize;
+        let mut data: Vec<u8> = (0..len).map(|_| next() as u8).collect();
+        data[0] = (runs % 8) as u8;
+        runs += 1;
+        match check_layout_bytes(&data) {
+            Ok(Some(_)) => meshed += 1,
+            Ok(None) => {}
+            Err(e) => {
+                let hex: String = data.iter().map(|b| format!("{b:02x}")).collect();
+                failures.push(format!("{hex}: {e}"));
+            }
+        }
+    }
+    eprintln!(
+        "{runs} inputs, {meshed} meshed, {} failures",
+        failures.len()
+    );
+    assert!(failures.is_empty(), "{}", failures.join("\n"));
+}

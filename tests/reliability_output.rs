@@ -1,0 +1,118 @@
+//! A failed `mesh` run never leaves a complete-looking mesh: `output::write_files` stages every
+//! file in `DIR/.medial-blocks-staging-PID/` and moves them into place at the end,
+//! `report.json` last, removing the staging directory on error.
+
+use medial_blocks::output::{staging_dir, write_files, Format};
+use medial_blocks::{mesh, Domain, Options};
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+fn hexagon_mesh() -> medial_blocks::Mesh {
+    mesh(
+        &Domain::hexagon_example(),
+        &Options {
+            cells: 4,
+            ..Options::default()
+        },
+    )
+    .expect("mesh")
+}
+
+/// Every path under `dir`, relative.
+fn tree(dir: &Path) -> Vec<PathBuf> {
+    let mut out = Vec::new();
+    let mut stack = vec![PathBuf::new()];
+    while let Some(rel) = stack.pop() {
+        let Ok(entries) = std::fs::read_dir(dir.join(&rel)) else {
+            continue;
+        };
+        for e in entries.flatten() {
+            let p = rel.join(e.file_name());
+            if e.file_type().is_ok_and(|t| t.is_dir()) {
+                stack.push(p.clone());
+            }
+            out.push(p);
+        }
+    }
+    out.sort();
+    out
+}
+
+fn assert_no_leftovers(dir: &Path) {
+    for p in tree(dir) {
+        let s = p.to_string_lossy();
+        assert!(
+            !s.contains(".medial-blocks-staging") && !s.ends_with(".tmp"),
+            "left behind: {s}"
+        );
+    }
+}
+
+#[test]
+fn success_publishes_everything_and_leaves_no_staging() {
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("out");
+    write_files(&hexagon_mesh(), &out, &Format::parse_list("all").unwrap()).unwrap();
+    for f in [
+        "report.json",
+        "connectivity.json",
+        "mesh.vtm",
+        "mesh/block_0035.vts",
+        "mesh.xyz",
+        "mesh.p3d",
+        "mesh.msh",
+        "mesh.geo",
+        "mesh.svg",
+        "mesh.png",
+    ] {
+        assert!(out.join(f).is_file(), "{f} missing");
+    }
+    assert!(!staging_dir(&out).exists());
+    assert_no_leftovers(&out);
+}
+
+#[test]
+fn failure_midway_leaves_no_report_and_no_staging() {
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("out");
+    let m = hexagon_mesh();
+    // A first, complete run.
+    write_files(&m, &out, &[Format::Vtk, Format::Json]).unwrap();
+    assert!(out.join("report.json").is_file());
+    // Make `mesh/` a regular file: the VTK block files cannot be moved into place.
+    std::fs::remove_dir_all(out.join("mesh")).unwrap();
+    std::fs::write(out.join("mesh"), "in the way").unwrap();
+    let e = write_files(&m, &out, &[Format::Vtk, Format::Json]);
+    assert!(e.is_err());
+    // The old report (which would now describe files that are not all there) is gone, the new
+    // one was never published, and no staging or temporary file remains.
+    assert!(!out.join("report.json").exists());
+    assert!(!staging_dir(&out).exists());
+    assert_no_leftovers(&out);
+    // A fresh directory with the same obstacle: no report.json at all.
+    let out2 = tmp.path().join("out2");
+    std::fs::create_dir(&out2).unwrap();
+    std::fs::write(out2.join("mesh"), "in the way").unwrap();
+    assert!(write_files(&m, &out2, &Format::parse_list("all").unwrap()).is_err());
+    assert!(!out2.join("report.json").exists());
+    assert_no_leftovers(&out2);
+}
+
+#[test]
+fn cli_failure_midway_exits_1_without_report() {
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("out");
+    std::fs::create_dir(&out).unwrap();
+    std::fs::write(out.join("mesh"), "in the way").unwrap();
+    let o = Command::new(env!("CARGO_BIN_EXE_medial-blocks"))
+        .args(["mesh", "--cells", "4", "--format", "vtk,json", "-q", "-o"])
+        .arg(&out)
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert!(err.contains("cannot write into"), "{err}");
+    assert!(!err.contains("panicked"), "{err}");
+    assert!(!out.join("report.json").exists());
+    assert_no_leftovers(&out);
+}
