@@ -13,7 +13,7 @@
 //!   exactly (to rounding) when the four sides are uniformly divided straight segments.
 
 use crate::geometry::Point;
-use crate::layout::{BlockLayout, Curve};
+use crate::layout::{BlockLayout, Curve, EdgeKind};
 use crate::mesh::BlockGrid;
 
 /// The largest cell count accepted along one edge.
@@ -160,7 +160,8 @@ pub fn validate_layout(layout: &BlockLayout) -> Result<(), GridError> {
     Ok(())
 }
 
-/// The conformity classes of the edges: opposite sides of each block are in one class.
+/// The conformity classes of the edges: opposite sides of each block are in one class, and
+/// so are the two copies of a periodic side ([`EdgeKind::Periodic`]).
 /// Classes are numbered in order of their smallest edge id. Assumes valid edge indices.
 pub fn edge_classes(layout: &BlockLayout) -> (Vec<usize>, usize) {
     let ne = layout.edges.len();
@@ -170,6 +171,14 @@ pub fn edge_classes(layout: &BlockLayout) -> (Vec<usize>, usize) {
         if e.iter().all(|&x| x < ne) {
             dsu.union(e[0], e[2]);
             dsu.union(e[1], e[3]);
+        }
+    }
+    // The two copies of a periodic side have the same count.
+    for (e, edge) in layout.edges.iter().enumerate() {
+        if let EdgeKind::Periodic { partner, .. } = edge.kind {
+            if (partner as usize) < ne {
+                dsu.union(e, partner as usize);
+            }
         }
     }
     let mut id = vec![usize::MAX; ne];
@@ -416,9 +425,30 @@ pub fn build_grids(layout: &BlockLayout, cells: usize) -> Result<Vec<BlockGrid>,
             used[s.edge as usize] = true;
         }
     }
-    let discrete: Vec<Option<Vec<Point>>> = (0..layout.edges.len())
+    let mut discrete: Vec<Option<Vec<Point>>> = (0..layout.edges.len())
         .map(|e| used[e].then(|| discretise(layout, e, counts.cells[e])))
         .collect();
+    // The second copy of a periodic side: the first copy's interior nodes moved by the
+    // translation (its end nodes stay exactly its own end vertices).
+    for e in 0..layout.edges.len() {
+        if let EdgeKind::Periodic {
+            partner,
+            translation,
+        } = layout.edges[e].kind
+        {
+            let p = partner as usize;
+            if p < e {
+                if let (Some(src), Some(dst)) = (discrete[p].clone(), discrete[e].as_mut()) {
+                    if src.len() == dst.len() {
+                        let n = dst.len() - 1;
+                        for i in 1..n {
+                            dst[i] = [src[i][0] - translation.0[0], src[i][1] - translation.0[1]];
+                        }
+                    }
+                }
+            }
+        }
+    }
 
     let mut grids = Vec::with_capacity(layout.blocks.len());
     for (b, block) in layout.blocks.iter().enumerate() {

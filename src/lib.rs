@@ -27,11 +27,13 @@ pub mod mesh;
 pub mod mesher;
 pub mod numbering;
 pub mod output;
+pub mod periodic;
 pub mod quality;
 pub mod sampling;
 pub mod templates;
 
-pub use domain::{Circle, Domain, DomainError};
+pub use domain::{AnyDomain, Circle, Domain, DomainError};
+pub use periodic::{mesh_periodic, PeriodicDomain};
 pub use layout::BlockLayout;
 pub use mesh::{BlockGrid, Mesh};
 pub use mesher::{mesh, MeshError, Mode, Options};
