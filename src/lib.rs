@@ -33,7 +33,7 @@ pub mod sampling;
 pub mod templates;
 
 pub use domain::{AnyDomain, Circle, Domain, DomainError};
-pub use periodic::{mesh_periodic, PeriodicDomain};
 pub use layout::BlockLayout;
 pub use mesh::{BlockGrid, Mesh};
-pub use mesher::{mesh, MeshError, Mode, Options};
+pub use mesher::{mesh, mesh_any, MeshError, Mode, Options};
+pub use periodic::{mesh_periodic, PeriodicDomain};

@@ -8,7 +8,9 @@ use proptest::prelude::*;
 
 /// Deterministic pseudo-random holes (rejection sampling with periodic images).
 fn random_holes(n: usize, size: [f64; 2], rmin: f64, rmax: f64, seed: u64) -> Vec<Circle> {
-    let mut state = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+    let mut state = seed
+        .wrapping_mul(6364136223846793005)
+        .wrapping_add(1442695040888963407);
     let mut next = || {
         state = state
             .wrapping_mul(6364136223846793005)
@@ -69,7 +71,10 @@ fn check(pd: &PeriodicDomain, mesh: &Mesh) {
                 // The partner names this side back with the opposite translation.
                 let back = conn[p.block].sides[p.side];
                 assert_eq!(back.kind, SideKind::Periodic);
-                assert_eq!(back.partner.map(|q| (q.block, q.side)), Some((bc.block, sc.side)));
+                assert_eq!(
+                    back.partner.map(|q| (q.block, q.side)),
+                    Some((bc.block, sc.side))
+                );
                 assert_eq!(back.translation, Some([-t[0], -t[1]]));
                 // Translations are period shifts.
                 for d in 0..2 {
@@ -85,7 +90,12 @@ fn check(pd: &PeriodicDomain, mesh: &Mesh) {
     for g in &mesh.grids {
         for j in 0..g.nj {
             for i in 0..g.ni {
-                let p = [g.node(i, j), g.node(i + 1, j), g.node(i + 1, j + 1), g.node(i, j + 1)];
+                let p = [
+                    g.node(i, j),
+                    g.node(i + 1, j),
+                    g.node(i + 1, j + 1),
+                    g.node(i, j + 1),
+                ];
                 let mut a = 0.0;
                 for k in 0..4 {
                     let (u, v) = (p[k], p[(k + 1) % 4]);
@@ -129,4 +139,131 @@ fn twenty_bubbles_give_120_blocks() {
         q.mean_max_angle_deg,
         q.inverted_cells
     );
+}
+
+#[test]
+fn one_hole_in_a_square_lattice() {
+    // The Voronoi diagram of a square lattice is degenerate (four co-circular neighbours):
+    // every copy must still be triangulated identically.
+    for (size, c) in [
+        ([1.0, 1.0], Circle::new(0.5, 0.5, 0.2)),
+        ([1.0, 1.0], Circle::new(0.0, 0.0, 0.3)),
+        ([2.0, 1.0], Circle::new(1.9, 0.95, 0.25)),
+        ([1.0, 3.0], Circle::new(-0.3, 7.5, 0.1)),
+    ] {
+        let pd = PeriodicDomain::new(size, vec![c]).unwrap();
+        let mesh = mesh_periodic(&pd, &Options::default()).unwrap();
+        check(&pd, &mesh);
+    }
+}
+
+#[test]
+fn holes_crossing_edges_and_corners() {
+    let size = [3.0, 2.0];
+    let holes = vec![
+        Circle::new(0.05, 0.05, 0.3), // a corner
+        Circle::new(1.5, 1.98, 0.25), // the top edge
+        Circle::new(2.9, 1.0, 0.2),   // the right edge
+        Circle::new(1.4, 0.9, 0.35),
+        Circle::new(-0.7, 0.8, 0.15), // outside the box: wrapped
+    ];
+    let pd = PeriodicDomain::new(size, holes).unwrap();
+    for c in pd.holes() {
+        assert!((0.0..size[0]).contains(&c.center[0]) && (0.0..size[1]).contains(&c.center[1]));
+    }
+    let mesh = mesh_periodic(&pd, &Options::default()).unwrap();
+    check(&pd, &mesh);
+}
+
+#[test]
+fn invalid_periodic_domains_are_refused() {
+    let c = Circle::new(0.5, 0.5, 0.2);
+    assert!(matches!(
+        PeriodicDomain::new([0.0, 1.0], vec![c]),
+        Err(DomainError::InvalidPeriod { axis: 0, .. })
+    ));
+    assert!(matches!(
+        PeriodicDomain::new([1.0, f64::NAN], vec![c]),
+        Err(DomainError::InvalidPeriod { axis: 1, .. })
+    ));
+    assert!(matches!(
+        PeriodicDomain::new([1.0, -2.0], vec![c]),
+        Err(DomainError::InvalidPeriod { axis: 1, .. })
+    ));
+    assert_eq!(
+        PeriodicDomain::new([1.0, 1.0], vec![]),
+        Err(DomainError::NoPeriodicHoles)
+    );
+    assert!(matches!(
+        PeriodicDomain::new([1.0, 1.0], vec![Circle::new(0.5, 0.5, 0.5)]),
+        Err(DomainError::HoleWiderThanPeriod { hole: 0, .. })
+    ));
+    // Overlap only through the periodic image (across the right edge).
+    let err = PeriodicDomain::new(
+        [1.0, 1.0],
+        vec![Circle::new(0.1, 0.5, 0.1), Circle::new(0.92, 0.5, 0.1)],
+    )
+    .unwrap_err();
+    assert!(
+        matches!(
+            err,
+            DomainError::HolesOverlap {
+                first: 0,
+                second: 1,
+                ..
+            }
+        ),
+        "{err}"
+    );
+    assert!(matches!(
+        PeriodicDomain::new([1.0, 1.0], vec![Circle::new(0.1, 0.5, -0.1)]),
+        Err(DomainError::NonPositiveRadius { circle: 0, .. })
+    ));
+}
+
+#[test]
+fn json_forms() {
+    let text = r#"{"periodic": {"size": [2, 1]}, "holes": [{"center": [2.5, -0.5], "radius": 0.2},
+        {"center": [1.2, 0.3], "radius": 0.15}]}"#;
+    let AnyDomain::Periodic(pd) = AnyDomain::from_json_str(text).unwrap() else {
+        panic!("not periodic")
+    };
+    assert_eq!(pd.size(), [2.0, 1.0]);
+    assert_eq!(pd.holes()[0].center, [0.5, 0.5]);
+    let again = PeriodicDomain::from_json_str(&pd.to_json_string()).unwrap();
+    assert_eq!(again, pd);
+    let bounded = r#"{"bounding": {"center": [0, 0], "radius": 5}, "holes": []}"#;
+    assert!(matches!(
+        AnyDomain::from_json_str(bounded),
+        Ok(AnyDomain::Bounded(_))
+    ));
+    assert!(matches!(
+        AnyDomain::from_json_str(r#"{"periodic": {"size": [1, 1]}, "holes": [], "x": 1}"#),
+        Err(DomainError::Json(_))
+    ));
+    assert!(matches!(
+        AnyDomain::from_json_str("{\"periodic\": "),
+        Err(DomainError::Json(_))
+    ));
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 24, ..ProptestConfig::default() })]
+
+    /// Random layouts, holes anywhere (crossing edges and corners): six blocks per hole and
+    /// exact periodic matching.
+    #[test]
+    fn random_periodic_layouts(
+        n in 1usize..9,
+        lx in 0.6f64..2.0,
+        ly in 0.6f64..2.0,
+        seed in any::<u64>(),
+    ) {
+        let size = [lx, ly];
+        let m = lx.min(ly);
+        let holes = random_holes(n, size, 0.03 * m, 0.18 * m, seed);
+        let pd = PeriodicDomain::new(size, holes).unwrap();
+        let mesh = mesh_periodic(&pd, &Options { cells: 6, ..Options::default() }).unwrap();
+        check(&pd, &mesh);
+    }
 }

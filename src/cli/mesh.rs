@@ -1,9 +1,10 @@
 //! `medial-blocks mesh [INPUT] [-o DIR] [--mode paper] [--cells N] [--format LIST]`.
 
 use super::Failure;
-use medial_blocks::domain::{Circle, Domain};
+use medial_blocks::domain::{AnyDomain, Circle, Domain};
 use medial_blocks::output::{report, write_files, Format};
-use medial_blocks::{mesh, Mode, Options};
+use medial_blocks::periodic::PeriodicDomain;
+use medial_blocks::{mesh_any, Mode, Options};
 use std::path::PathBuf;
 
 const DEFAULT_FORMATS: &str = "vtk,svg,json";
@@ -19,11 +20,14 @@ pub enum ModeArg {
   medial-blocks mesh                         # the built-in 7-hole hexagon example into out/
   medial-blocks mesh layout.json -o run1 --cells 24
   medial-blocks mesh holes.csv --bounding 0,0,10 --format all
+  medial-blocks mesh bubbles.csv --periodic 1,1   # one period of a periodic layout
 
 Input JSON: {\"bounding\": {\"center\": [x, y], \"radius\": R},
              \"holes\": [{\"center\": [x, y], \"radius\": r}, ...]}
+Periodic JSON: {\"periodic\": {\"size\": [Lx, Ly]}, \"holes\": [...]} (holes may cross the box's
+  edges; the mesh is one period whose zig-zag sides match their partners on the opposite side).
 Input CSV (file name ending in .csv): x,y,r per line (an optional header line is skipped),
-  with the bounding circle given by --bounding X,Y,R.
+  with the bounding circle given by --bounding X,Y,R, or a period by --periodic LX,LY.
 Files in DIR: mesh.vtm + mesh/*.vts (vtk), mesh.xyz + mesh.p3d (plot3d), mesh.msh + mesh.geo
   (gmsh), mesh.svg (svg), mesh.png (png), report.json + connectivity.json (json).
 Exit codes: 0 success, 1 output could not be written or internal error, 2 bad input.")]
@@ -45,6 +49,9 @@ pub struct Args {
     /// The bounding circle `X,Y,R` for a CSV input.
     #[arg(long, allow_hyphen_values = true)]
     pub bounding: Option<String>,
+    /// The period `LX,LY` for a CSV input: mesh one period of a periodic layout.
+    #[arg(long, conflicts_with = "bounding")]
+    pub periodic: Option<String>,
     /// Print nothing on success.
     #[arg(short, long)]
     pub quiet: bool,
@@ -92,12 +99,15 @@ pub fn parse_holes_csv(text: &str) -> Result<Vec<Circle>, String> {
     Ok(holes)
 }
 
-fn read_domain(args: &Args) -> Result<Domain, Failure> {
+fn read_domain(args: &Args) -> Result<AnyDomain, Failure> {
     let Some(path) = &args.input else {
         if args.bounding.is_some() {
             return Err(Failure::input("--bounding needs a CSV input file"));
         }
-        return Ok(Domain::hexagon_example());
+        if args.periodic.is_some() {
+            return Err(Failure::input("--periodic needs a CSV input file"));
+        }
+        return Ok(AnyDomain::Bounded(Domain::hexagon_example()));
     };
     let text = std::fs::read_to_string(path)
         .map_err(|e| Failure::input(format!("cannot read {}: {e}", path.display())))?;
@@ -106,8 +116,15 @@ fn read_domain(args: &Args) -> Result<Domain, Failure> {
         .extension()
         .is_some_and(|e| e.eq_ignore_ascii_case("csv"));
     if is_csv {
+        if let Some(p) = args.periodic.as_deref() {
+            let p = parse_numbers(p, "--periodic", 2).map_err(Failure::input)?;
+            let holes = parse_holes_csv(&text).map_err(bad)?;
+            return PeriodicDomain::new([p[0], p[1]], holes)
+                .map(AnyDomain::Periodic)
+                .map_err(|e| bad(e.to_string()));
+        }
         let b = args.bounding.as_deref().ok_or_else(|| {
-            bad("a CSV of holes needs the bounding circle: --bounding X,Y,R".into())
+            bad("a CSV of holes needs the bounding circle --bounding X,Y,R or a period --periodic LX,LY".into())
         })?;
         let b = parse_numbers(b, "--bounding", 3).map_err(Failure::input)?;
         let holes = parse_holes_csv(&text).map_err(bad)?;
@@ -118,8 +135,15 @@ fn read_domain(args: &Args) -> Result<Domain, Failure> {
             },
             holes,
         )
+        .map(AnyDomain::Bounded)
         .map_err(|e| bad(e.to_string()))
     } else {
+        if args.periodic.is_some() {
+            return Err(bad(
+                "--periodic is for CSV input; a periodic JSON domain has its own \"periodic\""
+                    .into(),
+            ));
+        }
         if args.bounding.is_some() {
             return Err(bad(
                 "--bounding is for CSV input; a JSON domain has its own \"bounding\"".into(),
@@ -128,7 +152,7 @@ fn read_domain(args: &Args) -> Result<Domain, Failure> {
         if text.trim().is_empty() {
             return Err(bad("the file is empty".into()));
         }
-        Domain::from_json_str(&text).map_err(|e| bad(e.to_string()))
+        AnyDomain::from_json_str(&text).map_err(|e| bad(e.to_string()))
     }
 }
 
@@ -142,7 +166,7 @@ pub fn run(args: Args) -> Result<(), Failure> {
         },
         cells: args.cells,
     };
-    let mesh = mesh(&domain, &options).map_err(|e| match e {
+    let mesh = mesh_any(&domain, &options).map_err(|e| match e {
         medial_blocks::MeshError::Internal(_) => Failure::output(e.to_string()),
         _ => Failure::input(e.to_string()),
     })?;

@@ -253,9 +253,9 @@ fn sample_tiling(
         .map(|h| b.radius - crate::domain::dist(h.center, b.center) - h.radius)
         .fold(f64::INFINITY, f64::min);
     let mut slot_gaps = vec![bgap];
-    for k in 0..t.h {
+    for &g in gaps_canonical.iter().take(t.h) {
         for _ in 0..t.n * t.n {
-            slot_gaps.push(gaps_canonical[k]);
+            slot_gaps.push(g);
         }
     }
     let initial = initial_counts(&t.domain, &slot_gaps, opts);
@@ -481,10 +481,7 @@ fn extract(
         ))
     };
     let shift_point = |p: Point, d: (i32, i32)| -> Point {
-        [
-            p[0] + d.0 as f64 * size[0],
-            p[1] + d.1 as f64 * size[1],
-        ]
+        [p[0] + d.0 as f64 * size[0], p[1] + d.1 as f64 * size[1]]
     };
     // Positions of medial vertex instances: orbit representative + shift.
     let mut vpos: HashMap<usize, Point> = HashMap::new();
@@ -535,7 +532,10 @@ fn extract(
                     .get(samples.index_of[s as usize] as usize)
                     .copied()
                     .unwrap_or([a.cos(), a.sin()]);
-                [c.center[0] + c.radius * uk[0], c.center[1] + c.radius * uk[1]]
+                [
+                    c.center[0] + c.radius * uk[0],
+                    c.center[1] + c.radius * uk[1],
+                ]
             };
             layout.vertices.push(p);
             let nv = (layout.vertices.len() - 1) as u32;
@@ -559,7 +559,12 @@ fn extract(
             let (curve, kind, flip, ends) = match edge.kind {
                 EdgeKind::Wall(c) => {
                     let (k, _, _) = t.key(c).ok_or_else(|| inconsistent("bounding wall"))?;
-                    (edge.curve.clone(), EdgeKind::Wall(k as CircleId), false, ends)
+                    (
+                        edge.curve.clone(),
+                        EdgeKind::Wall(k as CircleId),
+                        false,
+                        ends,
+                    )
                 }
                 EdgeKind::Medial => {
                     let e = b / 2;
@@ -670,7 +675,6 @@ fn normalise_triple(c: [CircleKey; 3]) -> [CircleKey; 3] {
         .unwrap_or(c)
 }
 
-
 /// Mesh one period of `pd`: [`periodic_layout`], then node counts and transfinite
 /// interpolation ([`build_grids`]; partners of periodic sides get equal counts and
 /// translated nodes).
@@ -697,10 +701,10 @@ pub fn period_of(layout: &BlockLayout) -> Option<[f64; 2]> {
     let mut out = [f64::INFINITY; 2];
     for e in &layout.edges {
         if let EdgeKind::Periodic { translation, .. } = e.kind {
-            for d in 0..2 {
-                let v = translation.0[d].abs();
-                if v > 0.0 && v < out[d] {
-                    out[d] = v;
+            for (o, t) in out.iter_mut().zip(translation.0) {
+                let v = t.abs();
+                if v > 0.0 && v < *o {
+                    *o = v;
                 }
             }
         }
