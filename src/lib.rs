@@ -30,6 +30,7 @@ pub mod output;
 pub mod periodic;
 pub mod quality;
 pub mod sampling;
+pub mod sequence;
 pub mod templates;
 
 pub use domain::{AnyDomain, Circle, Domain, DomainError};

@@ -5,6 +5,7 @@ use clap::{Parser, Subcommand};
 use std::process::ExitCode;
 
 mod mesh;
+mod sequence;
 mod triangulate;
 
 /// Automatic multiblock structured meshes for 2D flow around circular particles.
@@ -21,6 +22,9 @@ enum Command {
     Triangulate(triangulate::Args),
     /// Mesh a domain of circles (JSON), or the built-in example.
     Mesh(mesh::Args),
+    /// Mesh a sequence of frames (JSON Lines, one domain per line) in parallel, with a
+    /// ParaView time series.
+    MeshSequence(sequence::Args),
 }
 
 /// A CLI failure: the message for stderr and the exit code.
@@ -49,6 +53,7 @@ pub fn run() -> ExitCode {
     let result = match cli.command {
         Command::Triangulate(args) => triangulate::run(args),
         Command::Mesh(args) => mesh::run(args),
+        Command::MeshSequence(args) => sequence::run(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
