@@ -225,6 +225,17 @@ pub fn choose_counts(
 
 /// Conformity classes and cell counts of every edge, with the limits checked.
 pub fn edge_counts(layout: &BlockLayout, cells: usize) -> Result<EdgeCounts, GridError> {
+    edge_counts_forced(layout, cells, &[])
+}
+
+/// [`edge_counts`] with some counts imposed: `forced` lists `(edge, count)`; the edge's whole
+/// conformity class gets that count. Two different counts imposed on one class are an
+/// [`GridError::InvalidLayout`].
+pub fn edge_counts_forced(
+    layout: &BlockLayout,
+    cells: usize,
+    forced: &[(usize, usize)],
+) -> Result<EdgeCounts, GridError> {
     if cells == 0 {
         return Err(GridError::ZeroCells);
     }
@@ -236,7 +247,26 @@ pub fn edge_counts(layout: &BlockLayout, cells: usize) -> Result<EdgeCounts, Gri
     }
     validate_layout(layout)?;
     let (class, classes) = edge_classes(layout);
-    let per_class = choose_counts(layout, &class, classes, cells);
+    let mut per_class = choose_counts(layout, &class, classes, cells);
+    let mut imposed: Vec<Option<usize>> = vec![None; classes];
+    for &(e, n) in forced {
+        let c = *class.get(e).ok_or_else(|| {
+            GridError::InvalidLayout(format!(
+                "a count is imposed on edge {e}, which does not exist"
+            ))
+        })?;
+        match imposed[c] {
+            Some(m) if m != n => {
+                return Err(GridError::InvalidLayout(format!(
+                    "edge {e} must have {n} cells, but its conformity class must have {m}"
+                )))
+            }
+            _ => imposed[c] = Some(n),
+        }
+        if let Some(slot) = per_class.get_mut(c) {
+            *slot = n;
+        }
+    }
     if per_class.len() != classes {
         return Err(GridError::InvalidLayout(
             "choose_counts returned the wrong number of counts".into(),
@@ -402,7 +432,16 @@ pub fn tfi(s0: &[Point], s1: &[Point], s2: &[Point], s3: &[Point]) -> Option<Blo
 /// indices, non-finite coordinates, arcs whose end points are not at their vertices, or block
 /// sides that do not run between the vertices of their edge.
 pub fn build_grids(layout: &BlockLayout, cells: usize) -> Result<Vec<BlockGrid>, GridError> {
-    let counts = edge_counts(layout, cells)?;
+    build_grids_forced(layout, cells, &[])
+}
+
+/// [`build_grids`] with imposed counts (see [`edge_counts_forced`]).
+pub fn build_grids_forced(
+    layout: &BlockLayout,
+    cells: usize,
+    forced: &[(usize, usize)],
+) -> Result<Vec<BlockGrid>, GridError> {
+    let counts = edge_counts_forced(layout, cells, forced)?;
     match total_nodes(layout, &counts) {
         Some(n) if n <= MAX_TOTAL_NODES => {}
         Some(n) => {

@@ -32,6 +32,7 @@ pub mod quality;
 pub mod sampling;
 pub mod sequence;
 pub mod templates;
+pub mod transition;
 
 pub use domain::{AnyDomain, Circle, Domain, DomainError};
 pub use layout::BlockLayout;

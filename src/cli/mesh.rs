@@ -21,6 +21,7 @@ pub enum ModeArg {
   medial-blocks mesh layout.json -o run1 --cells 24
   medial-blocks mesh holes.csv --bounding 0,0,10 --format all
   medial-blocks mesh bubbles.csv --periodic 1,1   # one period of a periodic layout
+  medial-blocks mesh layout.json --transition 0.25  # join a Cartesian grid of spacing 0.25
 
 Input JSON: {\"bounding\": {\"center\": [x, y], \"radius\": R},
              \"holes\": [{\"center\": [x, y], \"radius\": r}, ...]}
@@ -49,6 +50,10 @@ pub struct Args {
     /// The bounding circle `X,Y,R` for a CSV input.
     #[arg(long, allow_hyphen_values = true)]
     pub bounding: Option<String>,
+    /// Add a ring of transition blocks out to a square whose boundary nodes are nodes of a
+    /// Cartesian background grid of this spacing (origin at 0); bounded domains only.
+    #[arg(long)]
+    pub transition: Option<f64>,
     /// The period `LX,LY` for a CSV input: mesh one period of a periodic layout.
     #[arg(long, conflicts_with = "bounding")]
     pub periodic: Option<String>,
@@ -166,7 +171,18 @@ pub fn run(args: Args) -> Result<(), Failure> {
         },
         cells: args.cells,
     };
-    let mesh = mesh_any(&domain, &options).map_err(|e| match e {
+    let result = match (&domain, args.transition) {
+        (AnyDomain::Bounded(d), Some(s)) => {
+            medial_blocks::transition::mesh_with_transition(d, &options, s)
+        }
+        (AnyDomain::Periodic(_), Some(_)) => {
+            return Err(Failure::input(
+                "--transition is for bounded domains (a periodic mesh has no outer boundary)",
+            ))
+        }
+        _ => mesh_any(&domain, &options),
+    };
+    let mesh = result.map_err(|e| match e {
         medial_blocks::MeshError::Internal(_) => Failure::output(e.to_string()),
         _ => Failure::input(e.to_string()),
     })?;
