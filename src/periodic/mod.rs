@@ -555,7 +555,13 @@ fn extract(
                 continue;
             }
             let edge = &aux.edges[side.edge as usize];
-            let ends = [new_vertex[&edge.ends[0]], new_vertex[&edge.ends[1]]];
+            let end = |v: u32| {
+                new_vertex
+                    .get(&v)
+                    .copied()
+                    .ok_or_else(|| inconsistent("an edge end that is not a block corner"))
+            };
+            let ends = [end(edge.ends[0])?, end(edge.ends[1])?];
             let (curve, kind, flip, ends) = match edge.kind {
                 EdgeKind::Wall(c) => {
                     let (k, _, _) = t.key(c).ok_or_else(|| inconsistent("bounding wall"))?;
