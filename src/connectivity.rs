@@ -2,6 +2,11 @@
 //! interface) and, for interfaces, the partner block and side with the index orientation, also
 //! in CGNS 1-to-1 terms (point range, donor range, transform).
 //!
+//! Periodic meshes ([`crate::periodic`]): a side on the period's boundary has kind
+//! [`SideKind::Periodic`], its partner on the opposite boundary and the `translation` that
+//! moves its nodes onto the partner's (the partner's orientation and CGNS terms are as for an
+//! interface, with the periodic shift applied to coordinates).
+//!
 //! Everything here is derived from the [`BlockLayout`] topology (which edge each side uses and
 //! in which direction) and the node counts of the grids; no coordinates are compared.
 
@@ -23,6 +28,9 @@ pub enum SideKind {
     Outer,
     /// Another block.
     Interface,
+    /// The copy of this side on the opposite boundary of a periodic mesh's period: the
+    /// partner side's nodes are this side's plus `translation`.
+    Periodic,
 }
 
 /// A block side's partner across an interface.
@@ -62,6 +70,9 @@ pub struct SideConnectivity {
     pub partner: Option<Partner>,
     #[serde(skip_serializing_if = "Option::is_none")]
     pub cgns: Option<Cgns1to1>,
+    /// For periodic sides: the vector that moves this side's nodes onto the partner's.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub translation: Option<[f64; 2]>,
 }
 
 /// Connectivity of one block.
@@ -153,16 +164,44 @@ pub fn connectivity(
                             circle: Some(c),
                             partner: None,
                             cgns: None,
+                            translation: None,
                         })
                     }
-                    _ => {
-                        if u.len() != 2 {
-                            return Err(ConnectivityError::EdgeUse {
-                                edge: e,
-                                count: u.len(),
-                            });
-                        }
-                        let (pb, ps) = if u[0] == (b, s) { u[1] } else { u[0] };
+                    kind => {
+                        let periodic = match kind {
+                            EdgeKind::Periodic {
+                                partner,
+                                translation,
+                            } => Some((partner as usize, translation.0)),
+                            _ => None,
+                        };
+                        let (pb, ps) = match periodic {
+                            Some((p, _)) => {
+                                let pu = users
+                                    .get(p)
+                                    .ok_or(ConnectivityError::MissingEdge { edge: p })?;
+                                if u.len() != 1 || pu.len() != 1 {
+                                    return Err(ConnectivityError::EdgeUse {
+                                        edge: e,
+                                        count: u.len(),
+                                    });
+                                }
+                                pu[0]
+                            }
+                            None => {
+                                if u.len() != 2 {
+                                    return Err(ConnectivityError::EdgeUse {
+                                        edge: e,
+                                        count: u.len(),
+                                    });
+                                }
+                                if u[0] == (b, s) {
+                                    u[1]
+                                } else {
+                                    u[0]
+                                }
+                            }
+                        };
                         let same = layout.blocks[pb].sides[ps].reversed == block.sides[s].reversed;
                         let pg = &grids[pb];
                         let n = if s % 2 == 0 { g.ni } else { g.nj };
@@ -178,7 +217,11 @@ pub fn connectivity(
                         Ok(SideConnectivity {
                             side: s,
                             name: SIDE_NAMES[s],
-                            kind: SideKind::Interface,
+                            kind: if periodic.is_some() {
+                                SideKind::Periodic
+                            } else {
+                                SideKind::Interface
+                            },
                             circle: None,
                             partner: Some(Partner {
                                 block: pb,
@@ -196,6 +239,7 @@ pub fn connectivity(
                                 ],
                                 transform,
                             }),
+                            translation: periodic.map(|(_, t)| t),
                         })
                     }
                 }

@@ -140,6 +140,23 @@ pub enum DomainError {
         gap: f64,
         tolerance: f64,
     },
+    /// A period length is not finite and positive (or beyond [`Domain::MAX_MAGNITUDE`]);
+    /// `axis` 0 is `Lx`, 1 is `Ly`.
+    #[error("the period {} is {value}, but it must be finite and positive", ["Lx", "Ly"][(*axis).min(1)])]
+    InvalidPeriod { axis: usize, value: f64 },
+    /// A periodic domain without holes (nothing to mesh around).
+    #[error("a periodic domain needs at least one hole")]
+    NoPeriodicHoles,
+    /// A hole of a periodic domain is as wide as the period (it would meet its own image).
+    #[error(
+        "hole {hole} has diameter {diameter}, which must be smaller than the period {period} \
+         (minus the tolerance)"
+    )]
+    HoleWiderThanPeriod {
+        hole: usize,
+        diameter: f64,
+        period: f64,
+    },
 }
 
 /// A validated domain: a bounding circle and holes strictly inside it, pairwise apart
@@ -383,7 +400,7 @@ impl Domain {
 }
 
 /// Check one circle's numbers.
-fn check_circle(id: CircleId, c: &Circle) -> Result<(), DomainError> {
+pub(crate) fn check_circle(id: CircleId, c: &Circle) -> Result<(), DomainError> {
     let fields = [
         ("center x", c.center[0]),
         ("center y", c.center[1]),
@@ -611,5 +628,49 @@ mod tests {
         let again = Domain::bounded(d.bounding(), d.holes().to_vec()).unwrap();
         assert_eq!(d, again);
         assert_eq!(Domain::from_json_str(&d.to_json_string()).unwrap(), d);
+    }
+}
+
+/// Either kind of domain: bounded (a bounding circle) or periodic (a rectangle repeated over
+/// the plane, [`crate::periodic::PeriodicDomain`]).
+#[derive(Debug, Clone, PartialEq)]
+pub enum AnyDomain {
+    Bounded(Domain),
+    Periodic(crate::periodic::PeriodicDomain),
+}
+
+impl AnyDomain {
+    /// Parse either JSON form: `{"bounding": ..., "holes": [...]}` or
+    /// `{"periodic": {"size": [Lx, Ly]}, "holes": [...]}` (told apart by the top-level
+    /// `periodic` key).
+    pub fn from_json_str(text: &str) -> Result<Self, DomainError> {
+        #[derive(Deserialize)]
+        struct Probe {
+            periodic: Option<IgnoredAny>,
+            bounding: Option<IgnoredAny>,
+        }
+        let probe: Result<Probe, _> = serde_json::from_str(text);
+        match probe {
+            Ok(Probe {
+                periodic: Some(_),
+                bounding: Some(_),
+            }) => Err(DomainError::Json(
+                "a domain has either \"bounding\" (a bounding circle) or \"periodic\" (a \
+                 periodic box), not both: unknown field `periodic` next to `bounding`"
+                    .into(),
+            )),
+            Ok(Probe {
+                periodic: Some(_), ..
+            }) => crate::periodic::PeriodicDomain::from_json_str(text).map(AnyDomain::Periodic),
+            _ => Domain::from_json_str(text).map(AnyDomain::Bounded),
+        }
+    }
+
+    /// Number of holes.
+    pub fn hole_count(&self) -> usize {
+        match self {
+            AnyDomain::Bounded(d) => d.hole_count(),
+            AnyDomain::Periodic(d) => d.hole_count(),
+        }
     }
 }

@@ -13,7 +13,7 @@
 //!   exactly (to rounding) when the four sides are uniformly divided straight segments.
 
 use crate::geometry::Point;
-use crate::layout::{BlockLayout, Curve};
+use crate::layout::{BlockLayout, Curve, EdgeKind};
 use crate::mesh::BlockGrid;
 
 /// The largest cell count accepted along one edge.
@@ -160,7 +160,8 @@ pub fn validate_layout(layout: &BlockLayout) -> Result<(), GridError> {
     Ok(())
 }
 
-/// The conformity classes of the edges: opposite sides of each block are in one class.
+/// The conformity classes of the edges: opposite sides of each block are in one class, and
+/// so are the two copies of a periodic side ([`EdgeKind::Periodic`]).
 /// Classes are numbered in order of their smallest edge id. Assumes valid edge indices.
 pub fn edge_classes(layout: &BlockLayout) -> (Vec<usize>, usize) {
     let ne = layout.edges.len();
@@ -170,6 +171,14 @@ pub fn edge_classes(layout: &BlockLayout) -> (Vec<usize>, usize) {
         if e.iter().all(|&x| x < ne) {
             dsu.union(e[0], e[2]);
             dsu.union(e[1], e[3]);
+        }
+    }
+    // The two copies of a periodic side have the same count.
+    for (e, edge) in layout.edges.iter().enumerate() {
+        if let EdgeKind::Periodic { partner, .. } = edge.kind {
+            if (partner as usize) < ne {
+                dsu.union(e, partner as usize);
+            }
         }
     }
     let mut id = vec![usize::MAX; ne];
@@ -216,6 +225,17 @@ pub fn choose_counts(
 
 /// Conformity classes and cell counts of every edge, with the limits checked.
 pub fn edge_counts(layout: &BlockLayout, cells: usize) -> Result<EdgeCounts, GridError> {
+    edge_counts_forced(layout, cells, &[])
+}
+
+/// [`edge_counts`] with some counts imposed: `forced` lists `(edge, count)`; the edge's whole
+/// conformity class gets that count. Two different counts imposed on one class are an
+/// [`GridError::InvalidLayout`].
+pub fn edge_counts_forced(
+    layout: &BlockLayout,
+    cells: usize,
+    forced: &[(usize, usize)],
+) -> Result<EdgeCounts, GridError> {
     if cells == 0 {
         return Err(GridError::ZeroCells);
     }
@@ -227,7 +247,26 @@ pub fn edge_counts(layout: &BlockLayout, cells: usize) -> Result<EdgeCounts, Gri
     }
     validate_layout(layout)?;
     let (class, classes) = edge_classes(layout);
-    let per_class = choose_counts(layout, &class, classes, cells);
+    let mut per_class = choose_counts(layout, &class, classes, cells);
+    let mut imposed: Vec<Option<usize>> = vec![None; classes];
+    for &(e, n) in forced {
+        let c = *class.get(e).ok_or_else(|| {
+            GridError::InvalidLayout(format!(
+                "a count is imposed on edge {e}, which does not exist"
+            ))
+        })?;
+        match imposed[c] {
+            Some(m) if m != n => {
+                return Err(GridError::InvalidLayout(format!(
+                    "edge {e} must have {n} cells, but its conformity class must have {m}"
+                )))
+            }
+            _ => imposed[c] = Some(n),
+        }
+        if let Some(slot) = per_class.get_mut(c) {
+            *slot = n;
+        }
+    }
     if per_class.len() != classes {
         return Err(GridError::InvalidLayout(
             "choose_counts returned the wrong number of counts".into(),
@@ -393,7 +432,16 @@ pub fn tfi(s0: &[Point], s1: &[Point], s2: &[Point], s3: &[Point]) -> Option<Blo
 /// indices, non-finite coordinates, arcs whose end points are not at their vertices, or block
 /// sides that do not run between the vertices of their edge.
 pub fn build_grids(layout: &BlockLayout, cells: usize) -> Result<Vec<BlockGrid>, GridError> {
-    let counts = edge_counts(layout, cells)?;
+    build_grids_forced(layout, cells, &[])
+}
+
+/// [`build_grids`] with imposed counts (see [`edge_counts_forced`]).
+pub fn build_grids_forced(
+    layout: &BlockLayout,
+    cells: usize,
+    forced: &[(usize, usize)],
+) -> Result<Vec<BlockGrid>, GridError> {
+    let counts = edge_counts_forced(layout, cells, forced)?;
     match total_nodes(layout, &counts) {
         Some(n) if n <= MAX_TOTAL_NODES => {}
         Some(n) => {
@@ -416,9 +464,30 @@ pub fn build_grids(layout: &BlockLayout, cells: usize) -> Result<Vec<BlockGrid>,
             used[s.edge as usize] = true;
         }
     }
-    let discrete: Vec<Option<Vec<Point>>> = (0..layout.edges.len())
+    let mut discrete: Vec<Option<Vec<Point>>> = (0..layout.edges.len())
         .map(|e| used[e].then(|| discretise(layout, e, counts.cells[e])))
         .collect();
+    // The second copy of a periodic side: the first copy's interior nodes moved by the
+    // translation (its end nodes stay exactly its own end vertices).
+    for e in 0..layout.edges.len() {
+        if let EdgeKind::Periodic {
+            partner,
+            translation,
+        } = layout.edges[e].kind
+        {
+            let p = partner as usize;
+            if p < e {
+                if let (Some(src), Some(dst)) = (discrete[p].clone(), discrete[e].as_mut()) {
+                    if src.len() == dst.len() {
+                        let n = dst.len() - 1;
+                        for i in 1..n {
+                            dst[i] = [src[i][0] - translation.0[0], src[i][1] - translation.0[1]];
+                        }
+                    }
+                }
+            }
+        }
+    }
 
     let mut grids = Vec::with_capacity(layout.blocks.len());
     for (b, block) in layout.blocks.iter().enumerate() {

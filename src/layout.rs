@@ -46,7 +46,29 @@ pub enum EdgeKind {
     Spoke,
     /// An interior edge of a template (interface).
     Interface,
+    /// A side on the boundary of one period of a periodic mesh (the paper's zig-zag
+    /// boundary), used by one block. Its copy on the opposite boundary is edge `partner`,
+    /// used by another block: the partner's curve is this edge's curve moved by
+    /// `translation`, in the same direction (so its nodes are this edge's nodes plus
+    /// `translation`). The partner's own kind names this edge with the opposite translation.
+    Periodic {
+        partner: u32,
+        translation: Translation,
+    },
 }
+
+/// A translation vector (one period shift) of a periodic mesh. Compared bit for bit, so it
+/// can live in the `Eq` type [`EdgeKind`].
+#[derive(Debug, Clone, Copy)]
+pub struct Translation(pub [f64; 2]);
+
+impl PartialEq for Translation {
+    fn eq(&self, other: &Self) -> bool {
+        self.0[0].to_bits() == other.0[0].to_bits() && self.0[1].to_bits() == other.0[1].to_bits()
+    }
+}
+
+impl Eq for Translation {}
 
 /// An edge of the layout, shared by one (wall) or two (interface) blocks.
 #[derive(Debug, Clone, PartialEq)]

@@ -74,12 +74,16 @@ pub mod mesh;
 pub mod mesher;
 pub mod numbering;
 pub mod output;
+pub mod periodic;
 pub mod quality;
 pub mod refine;
 pub mod sampling;
+pub mod sequence;
 pub mod templates;
+pub mod transition;
 
-pub use domain::{Circle, Domain, DomainError};
+pub use domain::{AnyDomain, Circle, Domain, DomainError};
 pub use layout::BlockLayout;
 pub use mesh::{BlockGrid, Mesh};
-pub use mesher::{mesh, MeshError, Mode, Options};
+pub use mesher::{mesh, mesh_any, MeshError, Mode, Options};
+pub use periodic::{mesh_periodic, PeriodicDomain};

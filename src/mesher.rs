@@ -234,3 +234,12 @@ fn mesh_exact(domain: &Domain, options: &Options) -> Result<Option<Mesh>, MeshEr
     let _ = last;
     Ok(None)
 }
+
+/// Mesh either kind of domain: [`mesh`] for a bounded one, [`crate::periodic::mesh_periodic`]
+/// (one period that tiles the plane) for a periodic one.
+pub fn mesh_any(domain: &crate::domain::AnyDomain, options: &Options) -> Result<Mesh, MeshError> {
+    match domain {
+        crate::domain::AnyDomain::Bounded(d) => mesh(d, options),
+        crate::domain::AnyDomain::Periodic(p) => crate::periodic::mesh_periodic(p, options),
+    }
+}

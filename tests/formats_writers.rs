@@ -222,6 +222,7 @@ fn check_connectivity(m: &Mesh) {
                     }
                     assert_eq!(t[0][0] * t[1][1] - t[0][1] * t[1][0], 1);
                 }
+                SideKind::Periodic => panic!("a bounded mesh has no periodic side"),
                 SideKind::Wall | SideKind::Outer => {
                     assert!(sc.partner.is_none());
                     assert_eq!(sc.kind == SideKind::Outer, sc.circle == Some(-1));

@@ -757,7 +757,7 @@ fn csv_bounding_problems() {
         "1,2,0.5\n",
         &[],
         2,
-        &["needs the bounding circle: --bounding X,Y,R"],
+        &["needs the bounding circle --bounding X,Y,R"],
     );
     s.mesh(
         "h.csv",

@@ -5,11 +5,12 @@
 
 use super::{Failure, Global};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
-use medial_blocks::domain::{Circle, Domain};
+use medial_blocks::domain::{AnyDomain, Circle, Domain};
 use medial_blocks::exact_mode::{Clustering, FirstCell};
 use medial_blocks::input::{parse_holes_csv, parse_triple};
 use medial_blocks::output::{report, write_files_with_progress, Format};
-use medial_blocks::{mesh, Mode, Options};
+use medial_blocks::periodic::PeriodicDomain;
+use medial_blocks::{mesh_any, Mode, Options};
 use std::path::PathBuf;
 use std::time::Duration;
 
@@ -29,11 +30,15 @@ pub enum ModeArg {
   medial-blocks mesh layout.json -o run1 --cells 24
   medial-blocks mesh holes.csv --bounding 0,0,10 --format all
   medial-blocks --threads 2 --quiet mesh layout.json --format vtu,plot3d
+  medial-blocks mesh bubbles.csv --periodic 1,1   # one period of a periodic layout
+  medial-blocks mesh layout.json --transition 0.25  # join a Cartesian grid of spacing 0.25
 
 Input JSON: {\"bounding\": {\"center\": [x, y], \"radius\": R},
              \"holes\": [{\"center\": [x, y], \"radius\": r}, ...]}
+Periodic JSON: {\"periodic\": {\"size\": [Lx, Ly]}, \"holes\": [...]} (holes may cross the box's
+  edges; the mesh is one period whose zig-zag sides match their partners on the opposite side).
 Input CSV (file name ending in .csv): x,y,r per line (an optional header line is skipped),
-  with the bounding circle given by --bounding X,Y,R.
+  with the bounding circle given by --bounding X,Y,R, or a period by --periodic LX,LY.
 Files in DIR: mesh.vtm + mesh/*.vts (vtk), mesh.vtu (vtu), mesh.xyz + mesh.p3d (plot3d),
   mesh.msh + mesh.geo (gmsh), mesh.svg (svg), mesh.png (png), report.json +
   connectivity.json (json), mesh.cgns (cgns: builds with --features cgns only).
@@ -87,6 +92,13 @@ pub struct Args {
     /// shortest edge above R (paper Algorithm 3; 2.0 means smallest angles above ~14.5 deg).
     #[arg(long, default_value_t = medial_blocks::mesher::DEFAULT_REFINE_RATIO)]
     pub refine_ratio: f64,
+    /// Add a ring of transition blocks out to a square whose boundary nodes are nodes of a
+    /// Cartesian background grid of this spacing (origin at 0); bounded domains only.
+    #[arg(long)]
+    pub transition: Option<f64>,
+    /// The period `LX,LY` for a CSV input: mesh one period of a periodic layout.
+    #[arg(long, conflicts_with = "bounding")]
+    pub periodic: Option<String>,
     /// No macro Delaunay refinement (no inserted holes).
     #[arg(long)]
     pub no_refine: bool,
@@ -96,12 +108,15 @@ pub struct Args {
     pub collapse_fraction: f64,
 }
 
-fn read_domain(args: &Args) -> Result<Domain, Failure> {
+fn read_domain(args: &Args) -> Result<AnyDomain, Failure> {
     let Some(path) = &args.input else {
         if args.bounding.is_some() {
             return Err(Failure::input("--bounding needs a CSV input file"));
         }
-        return Ok(Domain::hexagon_example());
+        if args.periodic.is_some() {
+            return Err(Failure::input("--periodic needs a CSV input file"));
+        }
+        return Ok(AnyDomain::Bounded(Domain::hexagon_example()));
     };
     let text = std::fs::read_to_string(path)
         .map_err(|e| Failure::input(format!("cannot read {}: {e}", path.display())))?;
@@ -110,8 +125,29 @@ fn read_domain(args: &Args) -> Result<Domain, Failure> {
         .extension()
         .is_some_and(|e| e.eq_ignore_ascii_case("csv"));
     if is_csv {
+        if let Some(p) = args.periodic.as_deref() {
+            let p: Vec<f64> = p
+                .split(',')
+                .map(|v| v.trim().parse::<f64>())
+                .collect::<Result<_, _>>()
+                .ok()
+                .filter(|v: &Vec<f64>| v.len() == 2)
+                .ok_or_else(|| {
+                    Failure::input(format!(
+                        "--periodic: expected LX,LY (two numbers), got '{p}'"
+                    ))
+                })?;
+            let holes = parse_holes_csv(&text).map_err(|e| bad(e.to_string()))?;
+            return PeriodicDomain::new([p[0], p[1]], holes)
+                .map(AnyDomain::Periodic)
+                .map_err(|e| bad(e.to_string()));
+        }
         let b = args.bounding.as_deref().ok_or_else(|| {
-            bad("a CSV of holes needs the bounding circle: --bounding X,Y,R".into())
+            bad(
+                "a CSV of holes needs the bounding circle --bounding X,Y,R or a period \
+                 --periodic LX,LY"
+                    .into(),
+            )
         })?;
         let b = parse_triple(b).map_err(|e| Failure::input(format!("--bounding: {e}")))?;
         let holes = parse_holes_csv(&text).map_err(|e| bad(e.to_string()))?;
@@ -122,8 +158,15 @@ fn read_domain(args: &Args) -> Result<Domain, Failure> {
             },
             holes,
         )
+        .map(AnyDomain::Bounded)
         .map_err(|e| bad(e.to_string()))
     } else {
+        if args.periodic.is_some() {
+            return Err(bad(
+                "--periodic is for CSV input; a periodic JSON domain has its own \"periodic\""
+                    .into(),
+            ));
+        }
         if args.bounding.is_some() {
             return Err(bad(
                 "--bounding is for CSV input; a JSON domain has its own \"bounding\"".into(),
@@ -132,7 +175,7 @@ fn read_domain(args: &Args) -> Result<Domain, Failure> {
         if text.trim().is_empty() {
             return Err(bad("the file is empty".into()));
         }
-        Domain::from_json_str(&text).map_err(|e| {
+        AnyDomain::from_json_str(&text).map_err(|e| {
             let mut m = e.to_string();
             if m.contains("number out of range") {
                 // serde_json's wording for 1e999 and the like.
@@ -258,7 +301,7 @@ fn compare_modes(
         Mode::Exact => Mode::Paper,
         Mode::Paper => Mode::Exact,
     };
-    let other = mesh(
+    let other = medial_blocks::mesh(
         domain,
         &Options {
             mode: other_mode,
@@ -362,8 +405,23 @@ pub fn run(args: Args, global: Global) -> Result<(), Failure> {
     let domain = read_domain(&args)?;
     let options = exact_options(&args)?;
     let bar = progress(global);
-    bar.set_message(format!("meshing {} holes", domain.hole_count()));
-    let mesh = mesh(&domain, &options).map_err(|e| {
+    let holes = match &domain {
+        AnyDomain::Bounded(d) => d.hole_count(),
+        AnyDomain::Periodic(p) => p.holes().len(),
+    };
+    bar.set_message(format!("meshing {holes} holes"));
+    let result = match (&domain, args.transition) {
+        (AnyDomain::Bounded(d), Some(s)) => {
+            medial_blocks::transition::mesh_with_transition(d, &options, s)
+        }
+        (AnyDomain::Periodic(_), Some(_)) => {
+            return Err(Failure::input(
+                "--transition is for bounded domains (a periodic mesh has no outer boundary)",
+            ))
+        }
+        _ => mesh_any(&domain, &options),
+    };
+    let mesh = result.map_err(|e| {
         bar.finish_and_clear();
         match e {
             medial_blocks::MeshError::Internal(_) => Failure::output(e.to_string()),
@@ -383,7 +441,15 @@ pub fn run(args: Args, global: Global) -> Result<(), Failure> {
         println!("written to {}/", args.output.display());
     }
     if args.compare_modes {
-        compare_modes(&domain, &options, &mesh, &args, global.quiet)?;
+        match &domain {
+            AnyDomain::Bounded(d) => compare_modes(d, &options, &mesh, &args, global.quiet)?,
+            AnyDomain::Periodic(_) => {
+                return Err(Failure::input(
+                    "--compare-modes is for bounded domains (periodic meshes use the paper \
+                     geometry)",
+                ))
+            }
+        }
     }
     Ok(())
 }

@@ -6,6 +6,7 @@ use std::process::ExitCode;
 
 mod example;
 mod mesh;
+mod sequence;
 mod triangulate;
 
 /// Automatic multiblock structured meshes for 2D flow around circular particles.
@@ -42,11 +43,16 @@ enum Command {
     Mesh(mesh::Args),
     /// Write a ready-made domain JSON (hexagon, lattice, bubbles, square-lattice).
     Example(example::Args),
+    /// Mesh a sequence of frames (JSON Lines, one domain per line) in parallel, with a
+    /// ParaView time series.
+    MeshSequence(sequence::Args),
 }
 
 /// Options every subcommand sees.
 #[derive(Debug, Clone, Copy)]
 pub struct Global {
+    /// `--threads` (0: not given, one per core).
+    pub threads: usize,
     /// `--quiet`.
     pub quiet: bool,
 }
@@ -86,11 +92,15 @@ fn set_threads(threads: Option<usize>) -> Result<(), Failure> {
 
 pub fn run() -> ExitCode {
     let cli = Cli::parse();
-    let global = Global { quiet: cli.quiet };
+    let global = Global {
+        threads: cli.threads.unwrap_or(0),
+        quiet: cli.quiet,
+    };
     let result = set_threads(cli.threads).and_then(|()| match cli.command {
         Command::Triangulate(args) => triangulate::run(args),
         Command::Mesh(args) => mesh::run(args, global),
         Command::Example(args) => example::run(args, global),
+        Command::MeshSequence(args) => sequence::run(args, global),
     });
     match result {
         Ok(()) => ExitCode::SUCCESS,

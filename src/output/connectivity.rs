@@ -16,7 +16,9 @@
 //! }
 //! ```
 //! Kinds: `wall` (a hole, `circle` its 0-based input index), `outer` (the bounding circle,
-//! `circle` -1), `interface` (another block). CGNS ranges are 1-based.
+//! `circle` -1), `interface` (another block), `periodic` (periodic meshes: the partner side on
+//! the opposite boundary of the period, with `"translation": [tx, ty]`, the vector moving
+//! this side's nodes onto the partner's). CGNS ranges are 1-based.
 
 use super::write_atomic;
 use crate::connectivity::BlockConnectivity;
@@ -31,7 +33,8 @@ counter-clockwise; side 0 'j_min' runs c0->c1 (j = 0, i increasing), side 1 'i_m
 (i = 0, j decreasing). Medial blocks: side 0 on the wall, side 2 on the medial axis. Node p \
 (0-based, in the side's direction) of a side is node p of the partner side when same_direction \
 is true, else node n - p. CGNS ranges are 1-based (i, j); transform[a] = +-(b+1) maps this \
-block's index a to the donor's index b.";
+block's index a to the donor's index b. Kind 'periodic': the partner is on the opposite \
+boundary of the period and its nodes are this side's plus 'translation'.";
 
 #[derive(Serialize)]
 struct File<'a> {

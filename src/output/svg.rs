@@ -1,6 +1,8 @@
 //! SVG picture of a mesh: blocks filled in alternating light colours (neighbours across an
 //! interface differ, see [`block_colours`]), the circles (bounding circle unfilled, holes
-//! filled light grey), light grid lines, block outlines, medial edges highlighted in red, and block numbers.
+//! filled light grey), light grid lines, block outlines, medial edges highlighted in red, and
+//! block numbers; for a periodic mesh also the period's box `[0, Lx] x [0, Ly]` (dashed
+//! green), with the zig-zag sides drawn as the medial edges they are.
 //!
 //! The y axis is flipped (mathematical orientation on screen). The picture is
 //! [`WIDTH`] pixels wide with a fixed margin; its height follows the aspect ratio of the
@@ -226,7 +228,10 @@ fn write_to<W: Write>(w: &mut W, mesh: &Mesh) -> io::Result<()> {
             if e < drawn.len() && !drawn[e] {
                 drawn[e] = true;
                 let nodes = mesh.grids[b].side(k);
-                if mesh.layout.edges[e].kind == EdgeKind::Medial {
+                if matches!(
+                    mesh.layout.edges[e].kind,
+                    EdgeKind::Medial | EdgeKind::Periodic { .. }
+                ) {
                     medial.push(nodes);
                 } else {
                     outlines.push(nodes);
@@ -252,6 +257,17 @@ fn write_to<W: Write>(w: &mut W, mesh: &Mesh) -> io::Result<()> {
     writeln!(w, "  </g>")?;
 
     write_degeneracy_marks(w, mesh, &v)?;
+    // A periodic mesh: the period's box [0, Lx] x [0, Ly], dashed.
+    if let Some([lx, ly]) = crate::periodic::period_of(&mesh.layout) {
+        writeln!(
+            w,
+            "  <rect x=\"{:.3}\" y=\"{:.3}\" width=\"{:.3}\" height=\"{:.3}\" fill=\"none\" stroke=\"#2ca02c\" stroke-width=\"1.5\" stroke-dasharray=\"6 4\"/>",
+            v.x(0.0),
+            v.y(ly),
+            lx * v.scale,
+            ly * v.scale
+        )?;
+    }
 
     writeln!(
         w,

@@ -1,0 +1,218 @@
+//! The periodic domain: a rectangle `[0, Lx) x [0, Ly)` repeated over the plane, with circular
+//! holes that may cross the rectangle's edges (they wrap).
+//!
+//! A [`PeriodicDomain`] can only be obtained through validation ([`PeriodicDomain::new`],
+//! [`PeriodicDomain::from_json_str`]), which guarantees:
+//!
+//! - `Lx`, `Ly` are finite, positive and at most [`Domain::MAX_MAGNITUDE`];
+//! - every hole centre and radius is finite (magnitudes as for [`Domain`]), every radius `> 0`;
+//! - every hole centre is wrapped into `[0, Lx) x [0, Ly)` (its *canonical copy*);
+//! - every hole's diameter plus the tolerance is below `min(Lx, Ly)`, so a hole never meets
+//!   its own images;
+//! - holes are pairwise apart *including periodic images*: for holes `i`, `j` (also `i = j`
+//!   with a non-zero shift) and every period shift `t`, `|c_i - c_j - t| - r_i - r_j > tol`
+//!   with `tol = `[`PeriodicDomain::tolerance`].
+//!
+//! The overlap check runs a k-d tree ([`HoleIndex`]) over the 3 x 3 tiling of the canonical
+//! copies, `O(h log h)`: with every diameter below the period, the nearest image of a hole is
+//! always in a neighbouring tile.
+
+use crate::domain::{check_circle, Circle, CircleId, Domain, DomainError, HoleIndex};
+use serde::{Deserialize, Serialize};
+
+/// A validated periodic domain (see the module documentation).
+#[derive(Debug, Clone, PartialEq)]
+pub struct PeriodicDomain {
+    size: [f64; 2],
+    holes: Vec<Circle>,
+}
+
+#[derive(Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct PeriodJson {
+    size: [f64; 2],
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct PeriodicJsonIn {
+    periodic: PeriodJson,
+    holes: Vec<Circle>,
+}
+
+#[derive(Serialize)]
+struct PeriodicJsonOut<'a> {
+    periodic: PeriodJson,
+    holes: &'a [Circle],
+}
+
+/// `x` wrapped into `[0, l)` (never returns `l` itself, even after rounding).
+pub fn wrap(x: f64, l: f64) -> f64 {
+    let w = x.rem_euclid(l);
+    if w >= l || w < 0.0 {
+        0.0
+    } else {
+        w
+    }
+}
+
+impl PeriodicDomain {
+    /// Relative gap tolerance: two circles (or a circle and an image) closer than
+    /// `GAP_TOLERANCE * max(Lx, Ly)` count as touching and are refused. It is larger than
+    /// [`Domain::GAP_TOLERANCE`] because the mesher validates an auxiliary bounded domain of
+    /// up to 7 x 7 copies whose bounding radius is below 32 `max(Lx, Ly)`.
+    pub const GAP_TOLERANCE: f64 = 32.0 * Domain::GAP_TOLERANCE;
+
+    /// Validate a periodic domain of period `size = [Lx, Ly]` with `holes` (centres anywhere;
+    /// they are wrapped into the box). Holes are named by their 0-based input index.
+    pub fn new(size: [f64; 2], holes: Vec<Circle>) -> Result<Self, DomainError> {
+        Self::with_limit(size, holes, Domain::MAX_HOLES)
+    }
+
+    /// [`Self::new`] with a custom hole limit.
+    pub fn with_limit(
+        size: [f64; 2],
+        mut holes: Vec<Circle>,
+        max_holes: usize,
+    ) -> Result<Self, DomainError> {
+        if holes.len() > max_holes {
+            return Err(DomainError::TooManyHoles {
+                count: holes.len(),
+                max: max_holes,
+            });
+        }
+        for (axis, &l) in size.iter().enumerate() {
+            if !(l.is_finite() && l > 0.0 && l <= Domain::MAX_MAGNITUDE) {
+                return Err(DomainError::InvalidPeriod { axis, value: l });
+            }
+        }
+        if holes.is_empty() {
+            return Err(DomainError::NoPeriodicHoles);
+        }
+        for (i, h) in holes.iter().enumerate() {
+            check_circle(i as CircleId, h)?;
+        }
+        let tol = Self::tolerance_for(size);
+        let min_l = size[0].min(size[1]);
+        for (i, h) in holes.iter_mut().enumerate() {
+            if 2.0 * h.radius + tol >= min_l {
+                return Err(DomainError::HoleWiderThanPeriod {
+                    hole: i,
+                    diameter: 2.0 * h.radius,
+                    period: min_l,
+                });
+            }
+            h.center = [wrap(h.center[0], size[0]), wrap(h.center[1], size[1])];
+        }
+        // Overlaps with images: a k-d tree over the 3 x 3 tiling, queried for the canonical
+        // copies (tile (0, 0) is stored first, so tiling index i < h is hole i).
+        let h = holes.len();
+        let mut tiling = Vec::with_capacity(9 * h);
+        tiling.extend_from_slice(&holes);
+        for (a, b) in tile_offsets(1).filter(|&o| o != (0, 0)) {
+            for c in &holes {
+                tiling.push(Circle {
+                    center: [
+                        c.center[0] + a as f64 * size[0],
+                        c.center[1] + b as f64 * size[1],
+                    ],
+                    radius: c.radius,
+                });
+            }
+        }
+        let index = HoleIndex::new(&tiling);
+        let mut worst: Option<(usize, usize, f64)> = None;
+        for i in 0..h {
+            if let Some((j, gap)) = index.nearest_gap(i) {
+                if gap <= tol {
+                    let j = j % h;
+                    let pair = (i.min(j), i.max(j), gap);
+                    if worst.map_or(true, |w| (pair.0, pair.1) < (w.0, w.1)) {
+                        worst = Some(pair);
+                    }
+                }
+            }
+        }
+        if let Some((first, second, gap)) = worst {
+            return Err(DomainError::HolesOverlap {
+                first,
+                second,
+                gap,
+                tolerance: tol,
+            });
+        }
+        Ok(PeriodicDomain { size, holes })
+    }
+
+    /// Parse and validate `{"periodic": {"size": [Lx, Ly]}, "holes": [{"center": [x, y],
+    /// "radius": r}, ...]}` (unknown fields refused).
+    pub fn from_json_str(text: &str) -> Result<Self, DomainError> {
+        let raw: PeriodicJsonIn =
+            serde_json::from_str(text).map_err(|e| DomainError::Json(e.to_string()))?;
+        Self::new(raw.periodic.size, raw.holes)
+    }
+
+    /// The JSON form read by [`Self::from_json_str`] (canonical, wrapped centres).
+    pub fn to_json_string(&self) -> String {
+        serde_json::to_string(&PeriodicJsonOut {
+            periodic: PeriodJson { size: self.size },
+            holes: &self.holes,
+        })
+        .unwrap_or_default()
+    }
+
+    /// The tolerance for a period `size`.
+    pub fn tolerance_for(size: [f64; 2]) -> f64 {
+        Self::GAP_TOLERANCE * size[0].max(size[1])
+    }
+
+    /// The gap tolerance of this domain.
+    pub fn tolerance(&self) -> f64 {
+        Self::tolerance_for(self.size)
+    }
+
+    /// The period `[Lx, Ly]`.
+    pub fn size(&self) -> [f64; 2] {
+        self.size
+    }
+
+    /// The holes, centres wrapped into `[0, Lx) x [0, Ly)`, in input order.
+    pub fn holes(&self) -> &[Circle] {
+        &self.holes
+    }
+
+    /// Number of holes.
+    pub fn hole_count(&self) -> usize {
+        self.holes.len()
+    }
+
+    /// Each hole's smallest gap to another hole or to an image (of itself or another hole).
+    pub fn nearest_gaps(&self) -> Vec<f64> {
+        let h = self.holes.len();
+        let mut tiling = self.holes.clone();
+        for (a, b) in tile_offsets(1).filter(|&o| o != (0, 0)) {
+            for c in &self.holes {
+                tiling.push(Circle {
+                    center: [
+                        c.center[0] + a as f64 * self.size[0],
+                        c.center[1] + b as f64 * self.size[1],
+                    ],
+                    radius: c.radius,
+                });
+            }
+        }
+        let index = HoleIndex::new(&tiling);
+        (0..h)
+            .map(|i| {
+                index
+                    .nearest_gap(i)
+                    .map_or(self.size[0].min(self.size[1]), |(_, g)| g)
+            })
+            .collect()
+    }
+}
+
+/// The tile offsets `(a, b)` with `|a|, |b| <= m`, in lexicographic order.
+pub fn tile_offsets(m: i32) -> impl Iterator<Item = (i32, i32)> {
+    (-m..=m).flat_map(move |a| (-m..=m).map(move |b| (a, b)))
+}

@@ -1,0 +1,720 @@
+//! Periodic domains (tracker issue 6): mesh one period of a rectangle `Lx x Ly` repeated
+//! over the plane, so that copies of the mesh tile the plane (paper section 5, Bubble data).
+//!
+//! # Method
+//! 1. Tiling: the canonical copies of the holes (centres in `[0, Lx) x [0, Ly)`) are
+//!    repeated over an `N x N` array of tiles, `N = 2m + 1` (`m = 1` first: the paper's
+//!    three-by-three tiling), inside an auxiliary bounding circle centred on the box and
+//!    enclosing the whole array. Circle `(k, a, b)` is hole `k` moved by `(a Lx, b Ly)`.
+//! 2. Exactly periodic sampling: every copy of hole `k` gets the same number of samples
+//!    (densities and resampling act on whole orbits `{(k, a, b)}`), and the samples of copy
+//!    `(a, b)` are the canonical samples plus `(a Lx', b Ly')`, where the canonical samples
+//!    and `Lx', Ly'` are rounded to a common dyadic quantum (about `2^-50` of the array's
+//!    extent) so that these sums are exact. The exact Delaunay triangulation with its
+//!    translation-invariant symbolic perturbation (lexicographic rank) then triangulates
+//!    every copy of a configuration identically, ties included.
+//! 3. Blocking2D on the tiling, then keep exactly the blocks whose wall is a canonical copy:
+//!    each hole's *cell*. On the torus `V = 2h` medial vertices, `E = 3h` arcs, so the kept
+//!    blocks number `2E = 6h`. Their union is one period with a zig-zag boundary.
+//! 4. Safety check: every Delaunay triangle the kept blocks use (medial vertices and the
+//!    triangles along their arcs) must have its circumcircle inside the array shrunk by the
+//!    largest radius, so that no sample missing from the finite array (or of the auxiliary
+//!    bounding circle) could lie in it: then it is a triangle of the infinite periodic
+//!    triangulation. If not, the array grows (`m = 2`, then `3`); beyond that the domain is
+//!    refused with [`MeshError::Sampling`].
+//! 5. Geometry by orbits: medial vertices and arcs are identified up to translation by their
+//!    sample triples (`(hole, sample index, tile)`, normalised). Every instance's geometry
+//!    is its orbit representative's plus the period shift (in the true `Lx`, `Ly`), so both
+//!    copies of a zig-zag side are translates by construction. A kept medial side whose other
+//!    circle is not canonical becomes an [`EdgeKind::Periodic`] edge naming its partner (the
+//!    same arc seen from the other circle's canonical cell) and the translation; the grid
+//!    stage gives partners equal cell counts and copies the nodes.
+//!
+//! Wall corners are placed on the true circles; only the medial geometry comes from the
+//! quantised samples (an error of the order of `1e-14` of the period).
+
+pub mod domain;
+
+pub use domain::{tile_offsets, wrap, PeriodicDomain};
+
+use crate::blocking;
+use crate::domain::{Circle, CircleId, Domain};
+use crate::geometry::{Point, Triangulation};
+use crate::grid::build_grids;
+use crate::layout::{Block, BlockLayout, Curve, Edge, EdgeKind, SideRef, Translation};
+use crate::medial::{circumcenter, classify, medial_graph, MedialGraph};
+use crate::mesh::Mesh;
+use crate::mesher::{MeshError, Options};
+use crate::sampling::{
+    check_invariants, initial_counts, thin_walls, unit_offsets, CircleSamples, Samples,
+    SamplingOptions, ViolationKind,
+};
+use std::collections::HashMap;
+
+/// Largest half-width `m` of the tiling array tried (`7 x 7` tiles).
+pub const MAX_TILING: i32 = 3;
+
+/// `(hole, sample index, tile a, tile b)`.
+type SampleKey = (u32, u32, i32, i32);
+/// A medial vertex up to nothing: its Delaunay triangle's samples, sorted.
+type VertexKey = [SampleKey; 3];
+/// `(hole, tile a, tile b)`.
+type CircleKey = (u32, i32, i32);
+/// A medial arc: its two circles and two end vertices, each pair sorted.
+type ArcKey = ([CircleKey; 2], [VertexKey; 2]);
+
+fn shift_sample(s: SampleKey, d: (i32, i32)) -> SampleKey {
+    (s.0, s.1, s.2 + d.0, s.3 + d.1)
+}
+
+fn shift_vertex(v: &VertexKey, d: (i32, i32)) -> VertexKey {
+    let mut out = v.map(|s| shift_sample(s, d));
+    out.sort_unstable();
+    out
+}
+
+fn shift_arc(a: &ArcKey, d: (i32, i32)) -> ArcKey {
+    let mut c = a.0.map(|c| (c.0, c.1 + d.0, c.2 + d.1));
+    c.sort_unstable();
+    let mut v = [shift_vertex(&a.1[0], d), shift_vertex(&a.1[1], d)];
+    v.sort_unstable();
+    (c, v)
+}
+
+/// The orbit representative of a vertex key and the shift from it: `key = rep + shift`.
+fn normalise_vertex(v: &VertexKey) -> (VertexKey, (i32, i32)) {
+    v.iter()
+        .map(|s| {
+            let d = (s.2, s.3);
+            (shift_vertex(v, (-d.0, -d.1)), d)
+        })
+        .min()
+        .unwrap_or((*v, (0, 0)))
+}
+
+/// The orbit representative of an arc key and the shift from it.
+fn normalise_arc(a: &ArcKey) -> (ArcKey, (i32, i32)) {
+    a.0.iter()
+        .map(|c| {
+            let d = (c.1, c.2);
+            (shift_arc(a, (-d.0, -d.1)), d)
+        })
+        .min()
+        .unwrap_or((*a, (0, 0)))
+}
+
+/// The auxiliary tiled domain of half-width `m`.
+struct Tiling {
+    m: i32,
+    n: i32,
+    h: usize,
+    size: [f64; 2],
+    domain: Domain,
+    /// Quantum and quantised periods.
+    quantum: f64,
+    lq: [f64; 2],
+}
+
+impl Tiling {
+    fn new(pd: &PeriodicDomain, m: i32) -> Result<Tiling, MeshError> {
+        let size = pd.size();
+        let n = 2 * m + 1;
+        let h = pd.hole_count();
+        let max_l = size[0].max(size[1]);
+        let mut holes = Vec::with_capacity(h * (n * n) as usize);
+        for c in pd.holes() {
+            for (a, b) in tile_offsets(m) {
+                holes.push(Circle {
+                    center: [
+                        c.center[0] + a as f64 * size[0],
+                        c.center[1] + b as f64 * size[1],
+                    ],
+                    radius: c.radius,
+                });
+            }
+        }
+        let half = 0.5 * n as f64 * size[0].hypot(size[1]);
+        let bounding = Circle {
+            center: [0.5 * size[0], 0.5 * size[1]],
+            radius: half + max_l,
+        };
+        let domain = Domain::bounded(bounding, holes).map_err(|e| {
+            MeshError::Internal(format!("the tiled periodic domain is invalid: {e}"))
+        })?;
+        let extent = (m as f64 + 2.0) * max_l + bounding.radius;
+        let e = extent.log2().ceil();
+        let quantum = 2f64.powi(e as i32 - 50);
+        if !(quantum.is_normal() && e.is_finite()) {
+            return Err(MeshError::Options(format!(
+                "the period {size:?} is too small or too large to mesh"
+            )));
+        }
+        let q = |x: f64| (x / quantum).round() * quantum;
+        Ok(Tiling {
+            m,
+            n,
+            h,
+            size,
+            domain,
+            quantum,
+            lq: [q(size[0]), q(size[1])],
+        })
+    }
+
+    fn q(&self, x: f64) -> f64 {
+        (x / self.quantum).round() * self.quantum
+    }
+
+    /// Circle id of copy `(a, b)` of hole `k`.
+    fn id(&self, k: usize, a: i32, b: i32) -> CircleId {
+        (k as i32 * self.n * self.n + (a + self.m) * self.n + (b + self.m)) as CircleId
+    }
+
+    /// `(hole, a, b)` of a hole id of the tiling (`None` for the bounding circle).
+    fn key(&self, id: CircleId) -> Option<CircleKey> {
+        if id < 0 {
+            return None;
+        }
+        let nn = self.n * self.n;
+        let k = id / nn;
+        let r = id % nn;
+        Some((k as u32, r / self.n - self.m, r % self.n - self.m))
+    }
+
+    /// Samples of the tiling: orbit counts `counts[k]` for hole `k`, `bounding_count` for the
+    /// bounding circle.
+    fn samples(&self, counts: &[usize], bounding_count: usize, gaps: &[f64]) -> Samples {
+        let mut s = Samples {
+            points: Vec::new(),
+            circle_of: Vec::new(),
+            index_of: Vec::new(),
+            circles: Vec::new(),
+        };
+        let b = self.domain.bounding();
+        let push_circle = |s: &mut Samples, id: CircleId, pts: Vec<Point>, gap: f64| {
+            s.circles.push(CircleSamples {
+                circle: id,
+                first: s.points.len() as u32,
+                count: pts.len() as u32,
+                gap,
+            });
+            for (i, p) in pts.into_iter().enumerate() {
+                s.points.push(p);
+                s.circle_of.push(id);
+                s.index_of.push(i as u32);
+            }
+        };
+        let bpts = unit_offsets(bounding_count)
+            .into_iter()
+            .map(|u| [b.center[0] + b.radius * u[0], b.center[1] + b.radius * u[1]])
+            .collect();
+        push_circle(&mut s, -1, bpts, gaps.first().copied().unwrap_or(f64::NAN));
+        let canon: Vec<Vec<Point>> = (0..self.h)
+            .map(|k| {
+                let c = self.domain.holes()[self.id(k, 0, 0) as usize];
+                unit_offsets(counts[k])
+                    .into_iter()
+                    .map(|u| {
+                        [
+                            self.q(c.center[0] + c.radius * u[0]),
+                            self.q(c.center[1] + c.radius * u[1]),
+                        ]
+                    })
+                    .collect()
+            })
+            .collect();
+        for (k, pts) in canon.iter().enumerate() {
+            for (a, bb) in tile_offsets(self.m) {
+                let (dx, dy) = (a as f64 * self.lq[0], bb as f64 * self.lq[1]);
+                let moved = pts.iter().map(|p| [p[0] + dx, p[1] + dy]).collect();
+                push_circle(
+                    &mut s,
+                    self.id(k, a, bb),
+                    moved,
+                    gaps.get(k + 1).copied().unwrap_or(f64::NAN),
+                );
+            }
+        }
+        s
+    }
+}
+
+/// Sampling, triangulation and medial graph of the tiling with orbit-uniform densities.
+fn sample_tiling(
+    t: &Tiling,
+    gaps_canonical: &[f64],
+    opts: &SamplingOptions,
+) -> Result<(Samples, Triangulation, MedialGraph), MeshError> {
+    let b = t.domain.bounding();
+    let bgap = t
+        .domain
+        .holes()
+        .iter()
+        .map(|h| b.radius - crate::domain::dist(h.center, b.center) - h.radius)
+        .fold(f64::INFINITY, f64::min);
+    let mut slot_gaps = vec![bgap];
+    for &g in gaps_canonical.iter().take(t.h) {
+        for _ in 0..t.n * t.n {
+            slot_gaps.push(g);
+        }
+    }
+    let initial = initial_counts(&t.domain, &slot_gaps, opts);
+    let per_tile = (t.n * t.n) as usize;
+    let mut counts: Vec<usize> = (0..t.h).map(|k| initial[1 + k * per_tile]).collect();
+    let mut bcount = initial[0];
+    let cap = (opts.max_per_circle / 8 * 8).max(8);
+    let mut gaps = vec![bgap];
+    gaps.extend_from_slice(gaps_canonical);
+    for round in 0..=opts.max_rounds {
+        let total = bcount + counts.iter().sum::<usize>() * per_tile;
+        if total > opts.max_total {
+            return Err(MeshError::Sampling {
+                circle: -1,
+                message: format!(
+                    "the periodic tiling would need {total} samples, more than the limit {}",
+                    opts.max_total
+                ),
+            });
+        }
+        let samples = t.samples(&counts, bcount, &gaps);
+        let tri = Triangulation::new(&samples.points)?;
+        let kinds = classify(&samples, &tri);
+        let hard = check_invariants(&samples, &tri, &kinds);
+        let mut grow_b = false;
+        let mut grow: Vec<bool> = vec![false; t.h];
+        let violations = if hard.is_empty() {
+            let medial = medial_graph(&samples, &tri, &kinds)?;
+            let soft: Vec<_> = thin_walls(&tri, &medial)
+                .into_iter()
+                .filter(|v| match v.kind {
+                    ViolationKind::SingleSampleWall { arc } => medial
+                        .arcs
+                        .get(arc as usize)
+                        .is_some_and(|a| a.circles.iter().any(|&c| is_canonical(t, c))),
+                    _ => false,
+                })
+                .collect();
+            if soft.is_empty() || round == opts.max_rounds {
+                return Ok((samples, tri, medial));
+            }
+            soft
+        } else {
+            if let Some(v) = hard
+                .iter()
+                .find(|v| matches!(v.kind, ViolationKind::Duplicate { .. }))
+            {
+                return Err(MeshError::Sampling {
+                    circle: v.circle,
+                    message: v.describe(),
+                });
+            }
+            hard
+        };
+        for v in &violations {
+            match t.key(v.circle) {
+                None => grow_b = true,
+                Some((k, _, _)) => grow[k as usize] = true,
+            }
+        }
+        let mut refined = false;
+        if grow_b && bcount < cap {
+            bcount = (bcount * 2).min(cap);
+            refined = true;
+        }
+        for k in 0..t.h {
+            if grow[k] && counts[k] < cap {
+                counts[k] = (counts[k] * 2).min(cap);
+                refined = true;
+            }
+        }
+        if !refined {
+            break;
+        }
+    }
+    Err(MeshError::Sampling {
+        circle: -1,
+        message: format!(
+            "the periodic tiling's sampling invariants still fail after {} rounds",
+            opts.max_rounds
+        ),
+    })
+}
+
+fn is_canonical(t: &Tiling, c: CircleId) -> bool {
+    matches!(t.key(c), Some((_, 0, 0)))
+}
+
+/// The result of the periodic layout stage.
+#[derive(Debug, Clone)]
+pub struct PeriodicLayout {
+    /// One period: `6h` blocks in the non-degenerate case. Walls are [`EdgeKind::Wall`] of
+    /// the canonical hole ids; zig-zag sides are [`EdgeKind::Periodic`].
+    pub layout: BlockLayout,
+    /// Medial vertex and arc orbits (on the torus: `2h` and `3h`).
+    pub medial_vertices: usize,
+    pub medial_arcs: usize,
+    /// The half-width `m` of the tiling used (`2m + 1` tiles a side).
+    pub tiling: i32,
+    /// The circle triples of the medial vertex orbits, each as `(hole, tile a, tile b)`
+    /// normalised up to translation, sorted: the medial combinatorics of the period.
+    pub triples: Vec<[CircleKey; 3]>,
+}
+
+/// The block layout of one period of `pd` (see the module documentation).
+pub fn periodic_layout(
+    pd: &PeriodicDomain,
+    options: &Options,
+) -> Result<PeriodicLayout, MeshError> {
+    let _ = options;
+    let gaps = pd.nearest_gaps();
+    let opts = SamplingOptions::default();
+    let mut last = None;
+    for m in 1..=MAX_TILING {
+        let t = Tiling::new(pd, m)?;
+        let (samples, tri, medial) = sample_tiling(&t, &gaps, &opts)?;
+        match extract(pd, &t, &samples, &tri, &medial)? {
+            Some(p) => return Ok(p),
+            None => last = Some(m),
+        }
+    }
+    Err(MeshError::Sampling {
+        circle: -1,
+        message: format!(
+            "the medial axis of the periodic layout reaches beyond a {n} x {n} tiling (empty \
+             regions larger than the period); refused",
+            n = 2 * last.unwrap_or(MAX_TILING) + 1
+        ),
+    })
+}
+
+/// Keep the canonical cells; `Ok(None)` when the tiling is too small (step 4).
+fn extract(
+    pd: &PeriodicDomain,
+    t: &Tiling,
+    samples: &Samples,
+    triangulation: &Triangulation,
+    medial: &MedialGraph,
+) -> Result<Option<PeriodicLayout>, MeshError> {
+    let (aux, vertex_samples) = blocking::blocks(&t.domain, samples, medial)?;
+    let size = t.size;
+    let rmax = pd.holes().iter().map(|c| c.radius).fold(0.0, f64::max);
+    let margin = 1e-6 * size[0].max(size[1]);
+    let lo = [
+        -t.m as f64 * size[0] + rmax + margin,
+        -t.m as f64 * size[1] + rmax + margin,
+    ];
+    let hi = [
+        (t.m + 1) as f64 * size[0] - rmax - margin,
+        (t.m + 1) as f64 * size[1] - rmax - margin,
+    ];
+    let safe = |tri: u32| -> bool {
+        if tri as usize >= triangulation.len() {
+            return false;
+        }
+        let v = triangulation.triangle(tri as usize);
+        let p = v.map(|s| samples.points[s as usize]);
+        match circumcenter(p[0], p[1], p[2]) {
+            Some(c) => {
+                let r = (c[0] - p[0][0]).hypot(c[1] - p[0][1]);
+                c[0] - r > lo[0] && c[0] + r < hi[0] && c[1] - r > lo[1] && c[1] + r < hi[1]
+            }
+            None => false,
+        }
+    };
+    let kept: Vec<usize> = (0..aux.blocks.len())
+        .filter(|&b| aux.blocks[b].wall.is_some_and(|c| is_canonical(t, c)))
+        .collect();
+    // Step 4: every triangle used by a kept block is a triangle of the infinite tiling.
+    for &b in &kept {
+        let arc = &medial.arcs[b / 2];
+        if arc.circles.iter().any(|&c| c < 0) {
+            return Ok(None);
+        }
+        let ends = arc.ends.map(|v| medial.vertices[v as usize].triangle);
+        if !ends.iter().chain(&arc.triangles).all(|&tr| safe(tr)) {
+            return Ok(None);
+        }
+    }
+    // Orbit keys.
+    let sample_key = |s: u32| -> Option<SampleKey> {
+        let (k, a, b) = t.key(samples.circle_of[s as usize])?;
+        Some((k, samples.index_of[s as usize], a, b))
+    };
+    let vertex_key = |v: usize| -> Option<VertexKey> {
+        let mut key = [
+            sample_key(medial.vertices[v].samples[0])?,
+            sample_key(medial.vertices[v].samples[1])?,
+            sample_key(medial.vertices[v].samples[2])?,
+        ];
+        key.sort_unstable();
+        Some(key)
+    };
+    let vkeys: Vec<Option<VertexKey>> = (0..medial.vertices.len()).map(vertex_key).collect();
+    let arc_key = |e: usize| -> Option<ArcKey> {
+        let a = &medial.arcs[e];
+        let mut c = [t.key(a.circles[0])?, t.key(a.circles[1])?];
+        c.sort_unstable();
+        let mut v = [vkeys[a.ends[0] as usize]?, vkeys[a.ends[1] as usize]?];
+        v.sort_unstable();
+        Some((c, v))
+    };
+    let akeys: Vec<Option<ArcKey>> = (0..medial.arcs.len()).map(arc_key).collect();
+    let mut vertex_by_key: HashMap<VertexKey, usize> = HashMap::new();
+    for (v, k) in vkeys.iter().enumerate() {
+        if let Some(k) = k {
+            vertex_by_key.insert(*k, v);
+        }
+    }
+    let mut arc_by_key: HashMap<ArcKey, usize> = HashMap::new();
+    for (e, k) in akeys.iter().enumerate() {
+        if let Some(k) = k {
+            if arc_by_key.insert(*k, e).is_some() {
+                return Err(MeshError::Internal(
+                    "two medial arcs of the periodic tiling have the same key".into(),
+                ));
+            }
+        }
+    }
+    let inconsistent = |what: &str| {
+        MeshError::Internal(format!(
+            "the periodic tiling is not translation-consistent ({what})"
+        ))
+    };
+    let shift_point = |p: Point, d: (i32, i32)| -> Point {
+        [p[0] + d.0 as f64 * size[0], p[1] + d.1 as f64 * size[1]]
+    };
+    // Positions of medial vertex instances: orbit representative + shift.
+    let mut vpos: HashMap<usize, Point> = HashMap::new();
+    let mut vertex_orbits: Vec<VertexKey> = Vec::new();
+    let mut position_of = |v: usize, orbits: &mut Vec<VertexKey>| -> Result<Point, MeshError> {
+        if let Some(p) = vpos.get(&v) {
+            return Ok(*p);
+        }
+        let key = vkeys[v].ok_or_else(|| inconsistent("a kept vertex on the bounding circle"))?;
+        let (rep, d) = normalise_vertex(&key);
+        let r = *vertex_by_key
+            .get(&rep)
+            .ok_or_else(|| inconsistent("a medial vertex without its representative"))?;
+        orbits.push(rep);
+        let p = shift_point(medial.vertices[r].position, d);
+        vpos.insert(v, p);
+        Ok(p)
+    };
+
+    let mut layout = BlockLayout::default();
+    let mut new_vertex: HashMap<u32, u32> = HashMap::new();
+    let mut new_edge: HashMap<u32, (u32, bool)> = HashMap::new();
+    // (new edge, aux arc, offset of the other circle)
+    let mut periodic: Vec<(u32, usize, (i32, i32))> = Vec::new();
+    let mut arc_orbits: Vec<ArcKey> = Vec::new();
+    let nmv = medial.vertices.len() as u32;
+    for &b in &kept {
+        let block = &aux.blocks[b];
+        let mut corners = [0u32; 4];
+        for (i, &v) in block.corners.iter().enumerate() {
+            if let Some(&nv) = new_vertex.get(&v) {
+                corners[i] = nv;
+                continue;
+            }
+            let p = if v < nmv {
+                position_of(v as usize, &mut vertex_orbits)?
+            } else {
+                let s = vertex_samples
+                    .get(v as usize)
+                    .copied()
+                    .flatten()
+                    .ok_or_else(|| MeshError::Internal("a corner without a sample".into()))?;
+                let id = samples.circle_of[s as usize];
+                let c = t.domain.circle(id);
+                let a = samples.angle(s);
+                let u = unit_offsets(samples.count_of(s) as usize);
+                let uk = u
+                    .get(samples.index_of[s as usize] as usize)
+                    .copied()
+                    .unwrap_or([a.cos(), a.sin()]);
+                [
+                    c.center[0] + c.radius * uk[0],
+                    c.center[1] + c.radius * uk[1],
+                ]
+            };
+            layout.vertices.push(p);
+            let nv = (layout.vertices.len() - 1) as u32;
+            new_vertex.insert(v, nv);
+            corners[i] = nv;
+        }
+        let mut sides = [SideRef {
+            edge: 0,
+            reversed: false,
+        }; 4];
+        for (k, side) in block.sides.iter().enumerate() {
+            if let Some(&(ne, flip)) = new_edge.get(&side.edge) {
+                sides[k] = SideRef {
+                    edge: ne,
+                    reversed: side.reversed ^ flip,
+                };
+                continue;
+            }
+            let edge = &aux.edges[side.edge as usize];
+            let end = |v: u32| {
+                new_vertex
+                    .get(&v)
+                    .copied()
+                    .ok_or_else(|| inconsistent("an edge end that is not a block corner"))
+            };
+            let ends = [end(edge.ends[0])?, end(edge.ends[1])?];
+            let (curve, kind, flip, ends) = match edge.kind {
+                EdgeKind::Wall(c) => {
+                    let (k, _, _) = t.key(c).ok_or_else(|| inconsistent("bounding wall"))?;
+                    (
+                        edge.curve.clone(),
+                        EdgeKind::Wall(k as CircleId),
+                        false,
+                        ends,
+                    )
+                }
+                EdgeKind::Medial => {
+                    let e = b / 2;
+                    let key = akeys[e].ok_or_else(|| inconsistent("arc key"))?;
+                    let (rep, d) = normalise_arc(&key);
+                    let r = *arc_by_key
+                        .get(&rep)
+                        .ok_or_else(|| inconsistent("a medial arc without its representative"))?;
+                    arc_orbits.push(rep);
+                    // Orient the edge as the representative: its first end is the instance
+                    // vertex whose key is the representative's first end moved by d.
+                    let rep_first = vkeys[medial.arcs[r].ends[0] as usize]
+                        .ok_or_else(|| inconsistent("arc end key"))?;
+                    let first = shift_vertex(&rep_first, d);
+                    let arc = &medial.arcs[e];
+                    let flip = vkeys[arc.ends[0] as usize] != Some(first);
+                    let ends = if flip { [ends[1], ends[0]] } else { ends };
+                    let mut pts: Vec<Point> = medial.arcs[r]
+                        .polyline
+                        .iter()
+                        .map(|&p| shift_point(p, d))
+                        .collect();
+                    if let Some(f) = pts.first_mut() {
+                        *f = layout.vertices[ends[0] as usize];
+                    }
+                    if let Some(l) = pts.last_mut() {
+                        *l = layout.vertices[ends[1] as usize];
+                    }
+                    let other = arc
+                        .circles
+                        .iter()
+                        .map(|&c| t.key(c))
+                        .find(|c| !matches!(c, Some((_, 0, 0))))
+                        .flatten();
+                    let curve = Curve::Polyline(pts);
+                    match other {
+                        Some((_, a, bb)) if (a, bb) != (0, 0) => {
+                            periodic.push((layout.edges.len() as u32, e, (a, bb)));
+                            (curve, EdgeKind::Medial, flip, ends)
+                        }
+                        _ => (curve, EdgeKind::Medial, flip, ends),
+                    }
+                }
+                kind => (edge.curve.clone(), kind, false, ends),
+            };
+            layout.edges.push(Edge { ends, curve, kind });
+            let ne = (layout.edges.len() - 1) as u32;
+            new_edge.insert(side.edge, (ne, flip));
+            sides[k] = SideRef {
+                edge: ne,
+                reversed: side.reversed ^ flip,
+            };
+        }
+        let wall = block.wall.and_then(|c| t.key(c)).map(|c| c.0 as CircleId);
+        layout.blocks.push(Block {
+            corners,
+            sides,
+            wall,
+        });
+    }
+    // Pair the zig-zag sides.
+    let by_arc: HashMap<usize, u32> = periodic.iter().map(|&(ne, e, _)| (e, ne)).collect();
+    for &(ne, e, o) in &periodic {
+        let key = akeys[e].ok_or_else(|| inconsistent("arc key"))?;
+        let partner_key = shift_arc(&key, (-o.0, -o.1));
+        let pe = *arc_by_key
+            .get(&partner_key)
+            .ok_or_else(|| inconsistent("a zig-zag side without its opposite side"))?;
+        let partner = *by_arc
+            .get(&pe)
+            .ok_or_else(|| inconsistent("a zig-zag side whose opposite side is not kept"))?;
+        let translation = Translation([-(o.0 as f64) * size[0], -(o.1 as f64) * size[1]]);
+        layout.edges[ne as usize].kind = EdgeKind::Periodic {
+            partner,
+            translation,
+        };
+    }
+    vertex_orbits.sort_unstable();
+    vertex_orbits.dedup();
+    arc_orbits.sort_unstable();
+    arc_orbits.dedup();
+    let mut triples: Vec<[CircleKey; 3]> = vertex_orbits
+        .iter()
+        .map(|v| {
+            let mut c = v.map(|s| (s.0, s.2, s.3));
+            c.sort_unstable();
+            normalise_triple(c)
+        })
+        .collect();
+    triples.sort_unstable();
+    Ok(Some(PeriodicLayout {
+        layout,
+        medial_vertices: vertex_orbits.len(),
+        medial_arcs: arc_orbits.len(),
+        tiling: t.m,
+        triples,
+    }))
+}
+
+fn normalise_triple(c: [CircleKey; 3]) -> [CircleKey; 3] {
+    c.iter()
+        .map(|x| {
+            let mut s = c.map(|y| (y.0, y.1 - x.1, y.2 - x.2));
+            s.sort_unstable();
+            s
+        })
+        .min()
+        .unwrap_or(c)
+}
+
+/// Mesh one period of `pd`: [`periodic_layout`], then node counts and transfinite
+/// interpolation ([`build_grids`]; partners of periodic sides get equal counts and
+/// translated nodes).
+pub fn mesh_periodic(pd: &PeriodicDomain, options: &Options) -> Result<Mesh, MeshError> {
+    if options.cells == 0 {
+        return Err(MeshError::Options(
+            "--cells must be at least 1 (cells along a block side)".into(),
+        ));
+    }
+    let p = periodic_layout(pd, options)?;
+    let grids = build_grids(&p.layout, options.cells)?;
+    Ok(Mesh {
+        layout: p.layout,
+        grids,
+        medial_vertices: p.medial_vertices,
+        medial_arcs: p.medial_arcs,
+        holes: pd.hole_count(),
+        ..Mesh::default()
+    })
+}
+
+/// The period `[Lx, Ly]` of a periodic layout, read off its translations (the smallest
+/// non-zero `|tx|` and `|ty|`); `None` for a layout without periodic sides.
+pub fn period_of(layout: &BlockLayout) -> Option<[f64; 2]> {
+    let mut out = [f64::INFINITY; 2];
+    for e in &layout.edges {
+        if let EdgeKind::Periodic { translation, .. } = e.kind {
+            for (o, t) in out.iter_mut().zip(translation.0) {
+                let v = t.abs();
+                if v > 0.0 && v < *o {
+                    *o = v;
+                }
+            }
+        }
+    }
+    (out[0].is_finite() && out[1].is_finite()).then_some(out)
+}
