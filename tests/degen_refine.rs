@@ -258,3 +258,18 @@ proptest! {
         check(&d, &m);
     }
 }
+/// Known bug (open on issue 4): a sample shared by two interior triangles next to an inserted
+/// hole leaves a zero-sweep arc on it, and the inserted-hole template then has a zero-area
+/// ring block. Found by `random_layouts_with_refinement_and_collapse`; run with `--ignored`.
+#[test]
+#[ignore]
+fn regression_zero_sweep_arc_on_inserted_hole() {
+    let d = layout(17649210200229903181, 9, 0.002);
+    let o = Options {
+        cells: 2,
+        collapse_fraction: 0.0,
+        ..Options::paper()
+    };
+    let m = mesh(&d, &o).unwrap();
+    check(&d, &m);
+}
