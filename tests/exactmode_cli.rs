@@ -100,3 +100,24 @@ fn bad_values_are_input_errors() {
         assert_eq!(o.status.code(), Some(2), "{bad:?}");
     }
 }
+
+#[test]
+fn compare_modes_puts_per_mode_figures_in_report_json() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out");
+    let status = std::process::Command::new(env!("CARGO_BIN_EXE_medial-blocks"))
+        .args(["-q", "mesh", "--cells", "4", "--compare-modes", "-o"])
+        .arg(&out)
+        .status()
+        .unwrap();
+    assert!(status.success());
+    let read = |n: &str| -> serde_json::Value {
+        serde_json::from_str(&std::fs::read_to_string(out.join(n)).unwrap()).unwrap()
+    };
+    let report = read("report.json");
+    let modes = read("modes.json");
+    assert_eq!(report["modes"], modes);
+    // The run itself is exact mode (the default): its figures are the top-level ones.
+    assert_eq!(report["min_angle_deg"], modes["exact"]["min_angle_deg"]);
+    assert_eq!(report["holes"], 7);
+}

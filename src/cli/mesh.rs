@@ -322,6 +322,23 @@ fn compare_modes(
         .map_err(|e| Failure::output(format!("cannot encode modes.json: {e}")))?;
     std::fs::write(&path, text + "\n")
         .map_err(|e| Failure::output(format!("cannot write {}: {e}", path.display())))?;
+    // Both modes were run: report.json (when written) gains the per-mode figures too.
+    let report_path = args.output.join("report.json");
+    if let Ok(old) = std::fs::read_to_string(&report_path) {
+        let mut report: serde_json::Value = serde_json::from_str(&old)
+            .map_err(|e| Failure::output(format!("cannot read back report.json: {e}")))?;
+        if let Some(obj) = report.as_object_mut() {
+            obj.insert("modes".into(), value.clone());
+        }
+        let text = serde_json::to_string_pretty(&report)
+            .map_err(|e| Failure::output(format!("cannot encode report.json: {e}")))?;
+        medial_blocks::output::write_atomic(&report_path, |w| {
+            use std::io::Write;
+            w.write_all(text.as_bytes())?;
+            w.write_all(b"\n")
+        })
+        .map_err(|e| Failure::output(format!("cannot write {}: {e}", report_path.display())))?;
+    }
     if !quiet {
         for (name, m) in [("exact", exact), ("paper", paper)] {
             let f = Figures::of(domain, m);
