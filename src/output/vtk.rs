@@ -11,7 +11,7 @@
 //! [`crate::output`]). Block files left over from an earlier run with more blocks are not
 //! removed (the `.vtm` does not reference them).
 
-use super::{check_mesh, num, write_atomic};
+use super::{check_mesh, write_atomic};
 use crate::mesh::{BlockGrid, Mesh};
 use crate::quality::{cell_fields, CellFields};
 use rayon::prelude::*;
@@ -116,20 +116,7 @@ pub fn write_vts<W: Write>(w: &mut W, block_id: usize, grid: &BlockGrid) -> io::
         writeln!(w, "        </DataArray>")?;
     }
     writeln!(w, "      </CellData>")?;
-    writeln!(w, "      <Points>")?;
-    writeln!(
-        w,
-        "        <DataArray type=\"Float64\" Name=\"Points\" NumberOfComponents=\"3\" format=\"ascii\">"
-    )?;
-    for p in &grid.nodes {
-        write!(w, "          ")?;
-        num(w, p[0])?;
-        write!(w, " ")?;
-        num(w, p[1])?;
-        writeln!(w, " 0.0")?;
-    }
-    writeln!(w, "        </DataArray>")?;
-    writeln!(w, "      </Points>")?;
+    super::vtu::points(w, &grid.nodes)?;
     writeln!(w, "    </Piece>")?;
     writeln!(w, "  </StructuredGrid>")?;
     writeln!(w, "</VTKFile>")

@@ -39,20 +39,7 @@ fn write_to<W: Write>(w: &mut W, mesh: &Mesh) -> io::Result<()> {
         "    <Piece NumberOfPoints=\"{}\" NumberOfCells=\"{cells}\">",
         nodes.coords.len()
     )?;
-    writeln!(w, "      <Points>")?;
-    writeln!(
-        w,
-        "        <DataArray type=\"Float64\" Name=\"Points\" NumberOfComponents=\"3\" format=\"ascii\">"
-    )?;
-    for p in &nodes.coords {
-        write!(w, "          ")?;
-        num(w, p[0])?;
-        write!(w, " ")?;
-        num(w, p[1])?;
-        writeln!(w, " 0.0")?;
-    }
-    writeln!(w, "        </DataArray>")?;
-    writeln!(w, "      </Points>")?;
+    points(w, &nodes.coords)?;
     writeln!(w, "      <Cells>")?;
     writeln!(
         w,
@@ -135,6 +122,25 @@ fn ints<W: Write>(w: &mut W, values: impl Iterator<Item = usize>) -> io::Result<
     if k > 0 {
         writeln!(w)?;
     }
+    Ok(())
+}
+
+/// The `<Points>` element of a VTK XML piece (z = 0), shared by the `.vts` and `.vtu` writers.
+pub(crate) fn points<W: Write>(w: &mut W, coords: &[crate::geometry::Point]) -> io::Result<()> {
+    writeln!(w, "      <Points>")?;
+    writeln!(
+        w,
+        "        <DataArray type=\"Float64\" Name=\"Points\" NumberOfComponents=\"3\" format=\"ascii\">"
+    )?;
+    for p in coords {
+        write!(w, "          ")?;
+        num(w, p[0])?;
+        write!(w, " ")?;
+        num(w, p[1])?;
+        writeln!(w, " 0.0")?;
+    }
+    writeln!(w, "        </DataArray>")?;
+    writeln!(w, "      </Points>")?;
     Ok(())
 }
 
