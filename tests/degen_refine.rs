@@ -4,35 +4,24 @@
 
 use medial_blocks::blocking::{block_area, build_mesh_layout};
 use medial_blocks::domain::{Circle, Domain};
+use medial_blocks::layouts::SplitMix64;
 use medial_blocks::refine::{min_gap, refine, vertex_ratio};
 use medial_blocks::sampling::SamplingOptions;
 use medial_blocks::{mesh, Mesh, MeshError, Options};
 use proptest::prelude::*;
 use std::collections::HashMap;
 
-/// SplitMix64 in [0, 1).
-struct Rng(u64);
-impl Rng {
-    fn next(&mut self) -> f64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        ((z ^ (z >> 31)) >> 11) as f64 / (1u64 << 53) as f64
-    }
-}
-
 /// Up to `h` random holes of radii in `[0.03, 0.18] R` with gaps of at least `min_gap R`.
 fn layout(seed: u64, h: usize, min_gap: f64) -> Domain {
-    let mut rng = Rng(seed);
-    let big_r = 1.0 + 4.0 * rng.next();
+    let mut rng = SplitMix64(seed);
+    let big_r = 1.0 + 4.0 * rng.next_f64();
     let mut holes: Vec<Circle> = Vec::new();
     let mut tries = 0;
     while holes.len() < h && tries < 20_000 {
         tries += 1;
-        let r = big_r * (0.03 + 0.15 * rng.next());
-        let a = rng.next() * std::f64::consts::TAU;
-        let d = (big_r - r - min_gap * big_r) * rng.next().sqrt();
+        let r = big_r * (0.03 + 0.15 * rng.next_f64());
+        let a = rng.next_f64() * std::f64::consts::TAU;
+        let d = (big_r - r - min_gap * big_r) * rng.next_f64().sqrt();
         let c = [d * a.cos(), d * a.sin()];
         let ok = holes.iter().all(|o| {
             let dd = (c[0] - o.center[0]).hypot(c[1] - o.center[1]);
