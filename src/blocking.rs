@@ -540,6 +540,100 @@ fn prepare_inserted_hole(layout: &mut BlockLayout, hole: CircleId) -> usize {
     splits
 }
 
+/// The front end of [`build_mesh_layout`] before any block pair is split or any inserted hole
+/// filled: macro Delaunay refinement, co-circular groups, arc collapse and Blocking2D on the
+/// contracted graph (two blocks per kept arc, block `2e` on its `circles[0]`).
+#[derive(Debug, Clone)]
+pub struct CollapsedBlocking {
+    /// Refinement: the final domain, the inserted holes, the sampled medial graph (before
+    /// collapse) and its exact vertex circles.
+    pub refined: crate::refine::Refined,
+    pub groups: Vec<crate::cocircular::CocircularGroup>,
+    /// The contracted medial graph and its clusters.
+    pub contracted: crate::collapse::Contracted,
+    /// Blocking2D on the contracted graph.
+    pub layout: BlockLayout,
+    /// Arcs collapsed.
+    pub collapsed: usize,
+}
+
+/// [`CollapsedBlocking`] of `domain` (see [`build_mesh_layout`] for the collapse retries).
+pub fn collapsed_blocking_with(
+    domain: &Domain,
+    options: &Options,
+    sampling: &SamplingOptions,
+) -> Result<CollapsedBlocking, MeshError> {
+    use crate::{cocircular, collapse, refine};
+    let h = domain.hole_count();
+    if h < 2 {
+        return Err(MeshError::Options(format!(
+            "medial blocking needs at least 2 holes, the domain has {h} (use the disk/annulus \
+             templates)"
+        )));
+    }
+    if !(options.collapse_fraction.is_finite() && options.collapse_fraction >= 0.0) {
+        return Err(MeshError::Options(format!(
+            "the collapse fraction must be a number >= 0, not {}",
+            options.collapse_fraction
+        )));
+    }
+    let refined = refine::refine(
+        domain,
+        options.refine_ratio,
+        options.max_inserted_holes,
+        sampling,
+    )?;
+    let final_domain = &refined.domain;
+    let sampled = &refined.sampled;
+    let medial = &sampled.medial;
+    let groups = cocircular::cocircular_groups(medial, &refined.circles);
+    let mut exclude = vec![false; medial.arcs.len()];
+    let mut attempt = 0;
+    let (layout, collapsed, contracted) = loop {
+        attempt += 1;
+        let chosen = collapse::select(
+            medial,
+            &sampled.triangulation,
+            &refined.circles,
+            &groups,
+            &sampled.samples.points,
+            options.collapse_fraction,
+            &exclude,
+        );
+        let mut flags = vec![false; medial.arcs.len()];
+        for c in &chosen {
+            flags[c.arc as usize] = true;
+        }
+        let contracted = collapse::contract(medial, &flags)?;
+        let (layout, _) = blocks(final_domain, &sampled.samples, &contracted.graph)?;
+        let nv = contracted.graph.vertices.len() as u32;
+        let mut bad_clusters: Vec<u32> = Vec::new();
+        for b in 0..layout.blocks.len() {
+            if block_area(&layout, b) <= 0.0 {
+                bad_clusters.extend(layout.blocks[b].corners.iter().filter(|&&v| v < nv));
+            }
+        }
+        let mut changed = false;
+        for c in &chosen {
+            let ends = medial.arcs[c.arc as usize].ends;
+            if !c.zero && bad_clusters.contains(&contracted.cluster_of[ends[0] as usize]) {
+                exclude[c.arc as usize] = true;
+                changed = true;
+            }
+        }
+        if !changed || attempt >= 8 {
+            break (layout, chosen.len(), contracted);
+        }
+    };
+    Ok(CollapsedBlocking {
+        refined,
+        groups,
+        contracted,
+        layout,
+        collapsed,
+    })
+}
+
 /// The result of [`build_mesh_layout`]: the full blocking with degeneracy handling.
 #[derive(Debug, Clone)]
 pub struct MeshLayout {
@@ -577,68 +671,16 @@ pub fn build_mesh_layout_with(
     options: &Options,
     sampling: &SamplingOptions,
 ) -> Result<MeshLayout, MeshError> {
-    use crate::{cocircular, collapse, refine, templates};
+    use crate::templates;
     let h = domain.hole_count();
-    if h < 2 {
-        return Err(MeshError::Options(format!(
-            "medial blocking needs at least 2 holes, the domain has {h} (use the disk/annulus \
-             templates)"
-        )));
-    }
-    if !(options.collapse_fraction.is_finite() && options.collapse_fraction >= 0.0) {
-        return Err(MeshError::Options(format!(
-            "the collapse fraction must be a number >= 0, not {}",
-            options.collapse_fraction
-        )));
-    }
-    let refined = refine::refine(
-        domain,
-        options.refine_ratio,
-        options.max_inserted_holes,
-        sampling,
-    )?;
-    let final_domain = refined.domain;
-    let sampled = refined.sampled;
-    let medial = &sampled.medial;
-    let groups = cocircular::cocircular_groups(medial, &refined.circles);
-    let mut exclude = vec![false; medial.arcs.len()];
-    let mut attempt = 0;
-    let (mut layout, collapsed) = loop {
-        attempt += 1;
-        let chosen = collapse::select(
-            medial,
-            &sampled.triangulation,
-            &refined.circles,
-            &groups,
-            &sampled.samples.points,
-            options.collapse_fraction,
-            &exclude,
-        );
-        let mut flags = vec![false; medial.arcs.len()];
-        for c in &chosen {
-            flags[c.arc as usize] = true;
-        }
-        let contracted = collapse::contract(medial, &flags)?;
-        let (layout, _) = blocks(&final_domain, &sampled.samples, &contracted.graph)?;
-        let nv = contracted.graph.vertices.len() as u32;
-        let mut bad_clusters: Vec<u32> = Vec::new();
-        for b in 0..layout.blocks.len() {
-            if block_area(&layout, b) <= 0.0 {
-                bad_clusters.extend(layout.blocks[b].corners.iter().filter(|&&v| v < nv));
-            }
-        }
-        let mut changed = false;
-        for c in &chosen {
-            let ends = medial.arcs[c.arc as usize].ends;
-            if !c.zero && bad_clusters.contains(&contracted.cluster_of[ends[0] as usize]) {
-                exclude[c.arc as usize] = true;
-                changed = true;
-            }
-        }
-        if !changed || attempt >= 8 {
-            break (layout, chosen.len());
-        }
-    };
+    let CollapsedBlocking {
+        refined,
+        groups,
+        contracted: _,
+        mut layout,
+        collapsed,
+    } = collapsed_blocking_with(domain, options, sampling)?;
+    let medial = &refined.sampled.medial;
     let mut split_arcs = 0;
     let before = layout.blocks.len();
     let mut template_blocks = 0;
@@ -654,7 +696,7 @@ pub fn build_mesh_layout_with(
     );
     Ok(MeshLayout {
         layout,
-        domain: final_domain,
+        domain: refined.domain.clone(),
         medial_vertices: medial.vertex_count(),
         medial_arcs: medial.arc_count(),
         cocircular_groups: groups,
