@@ -34,6 +34,29 @@ impl BlockGrid {
     }
 }
 
+/// Which geometry a mesh's blocks were built on.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Geometry {
+    /// Paper geometry: circumcentre polylines, sampled walls, equally spaced transfinite
+    /// interpolation (paper mode, the templates of the disk and the annulus, periodic boxes,
+    /// and exact mode's rare fallback, see [`crate::mesher::mesh`]).
+    #[default]
+    Paper,
+    /// Exact geometry: Apollonius vertices, conic medial arcs, spoke-aligned grids
+    /// ([`crate::exact_mode`]).
+    Exact,
+}
+
+impl Geometry {
+    /// The name used in `report.json` (`"geometry"`).
+    pub fn name(self) -> &'static str {
+        match self {
+            Geometry::Paper => "paper",
+            Geometry::Exact => "exact",
+        }
+    }
+}
+
 /// A multiblock structured mesh.
 ///
 /// Counting identity (`h >= 2` input holes, `m` inserted holes): `medial_vertices =
@@ -64,6 +87,9 @@ pub struct Mesh {
     pub split_arcs: usize,
     /// Blocks inside inserted holes.
     pub template_blocks: usize,
+    /// The geometry the blocks were built on (exact mode falls back to paper geometry only
+    /// where the exact geometry disagrees with the sampled combinatorics).
+    pub geometry: Geometry,
 }
 
 impl Mesh {

@@ -4,7 +4,7 @@ use crate::domain::{CircleId, Domain, DomainError};
 use crate::exact_mode::Clustering;
 use crate::geometry::TriangulationError;
 use crate::grid::{build_grids, GridError};
-use crate::mesh::Mesh;
+use crate::mesh::{Geometry, Mesh};
 use crate::sampling::SamplingOptions;
 use crate::{blocking, exact_mode, templates};
 
@@ -115,10 +115,12 @@ pub enum MeshError {
 
 /// Mesh `domain` with `options`.
 ///
-/// In exact mode (the default) with two or more holes: exact Apollonius vertices, exact
-/// medial arcs and spoke-aligned grids ([`crate::exact_mode`]). Where the exact geometry
-/// disagrees with the sampled combinatorics (co-circular or nearly co-circular holes), the
-/// paper pipeline with its degeneracy handling is used instead:
+/// In exact mode (the default) with two or more holes: the degeneracy handling below, then
+/// exact Apollonius vertices (co-circular group circles at collapsed vertices), exact medial
+/// arcs and spoke-aligned grids, inserted holes filled by templates ([`crate::exact_mode`],
+/// [`Mesh::geometry`] is [`Geometry::Exact`]). Only where the exact geometry still disagrees
+/// with the sampled combinatorics after resampling (see `mesh_exact`) is the paper pipeline
+/// used instead ([`Geometry::Paper`]), as it is in paper mode:
 ///
 /// Two or more holes: macro Delaunay refinement ([`crate::refine`], paper Algorithm 3: holes
 /// are inserted while an interior triangle is poor, the paper's strategy of refining angles
@@ -184,54 +186,55 @@ pub fn mesh(domain: &Domain, options: &Options) -> Result<Mesh, MeshError> {
     Ok(out)
 }
 
-/// Exact mode for two or more holes. The sampled combinatorics must agree with the exact
-/// geometry: where nearly co-circular circles make them disagree (an exact arc running
-/// backwards, [`exact_mode::ExactMesh::inconsistent_arcs`], or not existing), the sampling is
-/// refined 4x per attempt, up to [`EXACT_RESAMPLING`] times. When refinement cannot help (the
-/// circles are exactly co-circular, or the finer sampling fails) the last result stands: the
-/// mesh with the inverted blocks that quality reports, or the error.
+/// Exact mode for two or more holes, on the full front end
+/// ([`blocking::collapsed_blocking_with`]: refinement, co-circular groups, collapse) with exact
+/// geometry on collapsed vertices and around inserted holes
+/// ([`exact_mode::collapsed::build_collapsed`]).
+///
+/// The sampled combinatorics must agree with the exact geometry. Where they disagree (nearly
+/// co-circular circles not collapsed and not resolved by the sampling: an exact arc running
+/// backwards, [`exact_mode::ExactMesh::inconsistent_arcs`]; a collapsed vertex with two spokes
+/// to one circle; an exact arc not defined; an inverted cell; a template that does not fit),
+/// the sampling is refined 4x per attempt, up to [`EXACT_RESAMPLING`] times. `Ok(None)` when it
+/// never agreed: the caller falls back to the paper pipeline and reports
+/// [`Geometry::Paper`]. Errors other than [`MeshError::Internal`] are returned at once.
 fn mesh_exact(domain: &Domain, options: &Options) -> Result<Option<Mesh>, MeshError> {
     let holes = domain.hole_count();
     let mut sampling = SamplingOptions::default();
-    let mut last: Option<Result<Mesh, MeshError>> = None;
-    for _attempt in 0..=EXACT_RESAMPLING {
-        let b = match blocking::build_layout_with(domain, options, &sampling) {
+    for attempt in 0..=EXACT_RESAMPLING {
+        let cb = match blocking::collapsed_blocking_with(domain, options, &sampling) {
             Ok(b) => b,
             // A finer sampling failed after a coarser one worked: fall back to paper mode.
-            Err(_) if last.is_some() => return Ok(None),
+            Err(_) if attempt > 0 => return Ok(None),
             Err(e) => return Err(e),
         };
-        let (v, e) = (b.medial.vertex_count(), b.medial.arc_count());
-        match exact_mode::build(domain, &b, options) {
+        match exact_mode::collapsed::build_collapsed(&cb, options) {
             Ok(m) => {
                 let consistent = m.inconsistent_arcs.is_empty()
                     && crate::quality::measure(&m.grids).inverted_cells == 0;
-                let mesh = Mesh {
-                    layout: m.layout,
-                    grids: m.grids,
-                    medial_vertices: v,
-                    medial_arcs: e,
-                    holes,
-                    ..Mesh::default()
-                };
                 if consistent {
-                    return Ok(Some(mesh));
+                    let medial = &cb.refined.sampled.medial;
+                    return Ok(Some(Mesh {
+                        layout: m.layout,
+                        grids: m.grids,
+                        medial_vertices: medial.vertex_count(),
+                        medial_arcs: medial.arc_count(),
+                        holes,
+                        cocircular_groups: cb.groups,
+                        collapsed_arcs: cb.collapsed,
+                        inserted_holes: cb.refined.inserted,
+                        split_arcs: m.split_arcs,
+                        template_blocks: m.template_blocks,
+                        geometry: Geometry::Exact,
+                    }));
                 }
-                last = Some(Ok(mesh));
             }
-            Err(err @ MeshError::Internal(_)) => {
-                if !matches!(last, Some(Ok(_))) {
-                    last = Some(Err(err));
-                }
-            }
+            Err(MeshError::Internal(_)) => {}
             Err(err) => return Err(err),
         }
         sampling.min_per_circle = sampling.min_per_circle.saturating_mul(4);
         sampling.spacing_per_gap *= 0.25;
     }
-    // The exact geometry never agreed with the sampled combinatorics: let the paper pipeline
-    // with collapse and refinement mesh it.
-    let _ = last;
     Ok(None)
 }
 

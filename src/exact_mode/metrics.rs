@@ -181,7 +181,7 @@ impl Figures {
 
 /// The corner angles exact mode cannot beat: at a medial vertex the medial arc between two
 /// circles bisects the angle between their spokes, so the block corners there are half the
-/// angles between consecutive spokes. Returns `(smallest corner angle, 180 - it)` in degrees
+/// angles between consecutive spokes (any number of spokes: collapsed vertices). Returns `(smallest corner angle, 180 - it)` in degrees
 /// over all vertices (`(90, 90)` without vertices): the spoke-aligned grid's cells at those
 /// corners have these angles as the cell count grows.
 pub fn vertex_corner_limit(vertices: &[super::ExactVertex]) -> (f64, f64) {
@@ -193,13 +193,14 @@ pub fn vertex_corner_limit(vertices: &[super::ExactVertex]) -> (f64, f64) {
             .map(|t| (t[1] - v.center[1]).atan2(t[0] - v.center[0]))
             .collect();
         a.sort_by(f64::total_cmp);
-        let gaps = [
-            a[1] - a[0],
-            a[2] - a[1],
-            a[0] + std::f64::consts::TAU - a[2],
-        ];
-        for g in gaps {
-            lo = lo.min(0.5 * g.to_degrees());
+        for (k, &x) in a.iter().enumerate() {
+            let next = a
+                .get(k + 1)
+                .copied()
+                .unwrap_or(a[0] + std::f64::consts::TAU);
+            if a.len() > 1 {
+                lo = lo.min(0.5 * (next - x).to_degrees());
+            }
         }
     }
     (lo, 180.0 - lo)

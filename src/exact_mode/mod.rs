@@ -35,7 +35,9 @@
 
 pub mod benchmarks;
 pub mod clustering;
+pub mod collapsed;
 pub mod counts;
+pub mod inserted;
 pub mod metrics;
 pub mod smoothing;
 
@@ -59,15 +61,18 @@ pub const ARC_SUBSTEPS: usize = 256;
 /// The largest wall angle one cell should span (15 degrees, as in paper mode).
 pub const MAX_WALL_ANGLE: f64 = PI / 12.0;
 
-/// A medial vertex in exact geometry: the Apollonius circle of its three circles.
+/// A medial vertex in exact geometry: the Apollonius circle of its three circles, or for a
+/// collapsed vertex of degree `n` the circle of its co-circular group or the merge of its
+/// members ([`collapsed`]); a split vertex ([`inserted`]) has two circles.
 #[derive(Debug, Clone, PartialEq)]
 pub struct ExactVertex {
     pub center: Point,
     pub radius: f64,
-    /// The circles, in the order of the interior triangle's samples.
-    pub circles: [CircleId; 3],
+    /// The circles (for an Apollonius vertex, in the order of the interior triangle's
+    /// samples).
+    pub circles: Vec<CircleId>,
     /// The tangent point on each circle (the spoke ends), same order.
-    pub tangent: [Point; 3],
+    pub tangent: Vec<Point>,
 }
 
 impl ExactVertex {
@@ -79,7 +84,7 @@ impl ExactVertex {
 
 /// One wall: centre, radius and the tangency sense `s` (`+r` hole, `-R` bounding circle).
 #[derive(Debug, Clone, Copy, PartialEq)]
-struct Wall {
+pub(crate) struct Wall {
     c: Point,
     r: f64,
     s: f64,
@@ -176,8 +181,8 @@ pub fn exact_vertices(
             Ok(ExactVertex {
                 center: ap.center,
                 radius: ap.radius,
-                circles: c,
-                tangent: ap.tangent_points,
+                circles: c.to_vec(),
+                tangent: ap.tangent_points.to_vec(),
             })
         })
         .collect()
@@ -185,7 +190,7 @@ pub fn exact_vertices(
 
 /// One medial arc sampled in exact geometry.
 #[derive(Debug, Clone)]
-struct ArcGeometry {
+pub(crate) struct ArcGeometry {
     /// The walls of `circles[0]` and `circles[1]`.
     walls: [Wall; 2],
     /// Which wall is parametrised by its touching angle.
@@ -199,6 +204,33 @@ struct ArcGeometry {
 }
 
 impl ArcGeometry {
+    /// The arc between the exact ends `ends_m` (centres) with touching points `ends_a[end][wall]`;
+    /// `hints[k]` is the sampled sweep of wall `k` from end 0 to end 1 (its turn count is kept,
+    /// [`exact_sweep`]).
+    fn new(walls: [Wall; 2], ends_m: [Point; 2], ends_a: [[Point; 2]; 2], hints: [f64; 2]) -> Self {
+        let (s0, w0) = exact_sweep(&walls[0], ends_a[0][0], ends_a[1][0], hints[0]);
+        let (s1, w1) = exact_sweep(&walls[1], ends_a[0][1], ends_a[1][1], hints[1]);
+        ArcGeometry {
+            walls,
+            param: if w1.abs() > w0.abs() { 1 } else { 0 },
+            start: [s0, s1],
+            sweep: [w0, w1],
+            ends_m,
+            ends_a,
+        }
+    }
+
+    /// Split at parameter `1/2`: the middle medial point, its touching points and empty-circle
+    /// radius, and the two halves (each exactly the same curve as its part of `self`, since the
+    /// bisector does not depend on the parametrisation). `None` when the middle is undefined.
+    pub(crate) fn split(&self) -> Option<(Point, [Point; 2], f64, ArcGeometry, ArcGeometry)> {
+        let (m, a, rho) = self.at(0.5)?;
+        let half = [0.5 * self.sweep[0], 0.5 * self.sweep[1]];
+        let first = ArcGeometry::new(self.walls, [self.ends_m[0], m], [self.ends_a[0], a], half);
+        let second = ArcGeometry::new(self.walls, [m, self.ends_m[1]], [a, self.ends_a[1]], half);
+        Some((m, a, rho, first, second))
+    }
+
     /// Medial point and both touching points at parameter `t` in `[0, 1]` (exact ends).
     fn at(&self, t: f64) -> Option<(Point, [Point; 2], f64)> {
         if t <= 0.0 {
@@ -375,9 +407,10 @@ fn equidistribute(w: &[f64], n: usize) -> Vec<f64> {
 pub struct ExactMesh {
     pub layout: BlockLayout,
     pub grids: Vec<BlockGrid>,
+    /// The exact vertices: those of the skeleton, then one per split arc.
     pub vertices: Vec<ExactVertex>,
     /// The solved counts: `circle[c + 1]` wall-normal cells of circle `c`, `arc[e]` cells along
-    /// arc `e`.
+    /// arc piece `e` (after the template ties of [`inserted::tie_counts`]).
     pub counts: Counts,
     /// The target cell size used.
     pub cell_size: f64,
@@ -385,6 +418,10 @@ pub struct ExactMesh {
     /// combinatorics disagree with the exact medial axis there (nearly co-circular circles
     /// not resolved by the sampling); their blocks are inverted. Empty on a consistent layout.
     pub inconsistent_arcs: Vec<usize>,
+    /// Arcs split in two so that an inserted hole fits its template ([`inserted::prepare`]).
+    pub split_arcs: usize,
+    /// Blocks inside inserted holes (the last ones of the layout).
+    pub template_blocks: usize,
 }
 
 /// Sweeps at most this small (radians) count as zero when checking orientations (a
@@ -401,13 +438,41 @@ fn expected_sign(c: CircleId) -> f64 {
     }
 }
 
-/// Build the exact-mode layout and grids from the front end's [`Blocking`] (read only).
-///
-/// Block `2e` lies on arc `e`'s `circles[0]`, block `2e + 1` on `circles[1]`, with the corner
-/// and side conventions of [`crate::blocking`]. Layout vertices: the `V` Apollonius centres,
-/// then `3V` tangent points (vertex `v`'s slot `k` at `V + 3v + k`). Edges: walls are exact
-/// [`Curve::Arc`]s, spokes [`Curve::Segment`]s, medial arcs [`Curve::Polyline`]s through the
-/// grid's medial nodes.
+/// One medial arc (or half of a split one) with its exact geometry: its blocks are `2e` (on
+/// `circles[0]`) and `2e + 1` (on `circles[1]`).
+#[derive(Debug, Clone)]
+pub(crate) struct Piece {
+    /// Vertex ids (into the exact vertices) of its start and end.
+    pub ends: [usize; 2],
+    pub circles: [CircleId; 2],
+    pub geom: ArcGeometry,
+}
+
+impl Piece {
+    /// True when both walls run the way their blocks need (see [`expected_sign`]).
+    fn consistent(&self) -> bool {
+        let wrong = |w: f64, c: CircleId| w.abs() > ZERO_SWEEP && w * expected_sign(c) < 0.0;
+        !(wrong(self.geom.sweep[0], self.circles[0]) || wrong(-self.geom.sweep[1], self.circles[1]))
+    }
+}
+
+/// The combinatorics and exact vertices exact mode builds on.
+#[derive(Debug, Clone)]
+pub struct Skeleton<'a> {
+    /// The domain the circle ids refer to (inserted holes appended after the input holes).
+    pub domain: &'a Domain,
+    /// The medial arcs: `ends` index `vertices`, `circles` as in [`crate::medial`].
+    pub arcs: &'a [crate::medial::MedialArc],
+    pub vertices: Vec<ExactVertex>,
+    /// Blocking2D of `arcs` (blocks `2e`, `2e + 1`): only the turn count of each sampled wall
+    /// is read.
+    pub sampled: &'a BlockLayout,
+    /// Inserted holes (fluid): spokes without wall clustering, filled by templates.
+    pub fluid: Vec<CircleId>,
+}
+
+/// Build the exact-mode layout and grids from the front end's [`Blocking`] (read only), without
+/// collapse or inserted holes ([`collapsed::build_collapsed`] handles both).
 ///
 /// Errors: [`MeshError::Options`] for bad options, [`MeshError::Grid`] for too many nodes,
 /// [`MeshError::Internal`] when the exact geometry disagrees with the sampled combinatorics.
@@ -418,25 +483,52 @@ pub fn build(
     options: &Options,
 ) -> Result<ExactMesh, MeshError> {
     validate_options(options)?;
-    let medial = &blocking.medial;
-    let vertices = exact_vertices(domain, medial)?;
-    let nv = vertices.len();
+    let vertices = exact_vertices(domain, &blocking.medial)?;
+    assemble(
+        Skeleton {
+            domain,
+            arcs: &blocking.medial.arcs,
+            vertices,
+            sampled: &blocking.layout,
+            fluid: Vec::new(),
+        },
+        options,
+    )
+}
+
+/// Build the exact-mode layout and grids of a [`Skeleton`].
+///
+/// Block `2e` lies on piece `e`'s `circles[0]`, block `2e + 1` on `circles[1]`, with the corner
+/// and side conventions of [`crate::blocking`]; template blocks of the inserted holes follow.
+/// Layout vertices: the exact vertex centres, then their tangent points (vertex by vertex, in
+/// circle order). Edges: walls are exact [`Curve::Arc`]s, spokes [`Curve::Segment`]s, medial
+/// arcs [`Curve::Polyline`]s through the grid's medial nodes.
+pub fn assemble(sk: Skeleton<'_>, options: &Options) -> Result<ExactMesh, MeshError> {
+    validate_options(options)?;
+    let domain = sk.domain;
+    let mut vertices = sk.vertices;
     let ncirc = domain.hole_count() + 1;
-    if blocking.layout.blocks.len() != 2 * medial.arcs.len() {
+    if sk.sampled.blocks.len() != 2 * sk.arcs.len() {
         return Err(internal(
             "the blocking does not have two blocks per arc".into(),
         ));
     }
+    if let Some(&c) = sk.fluid.iter().find(|&&c| c < 0 || cidx(c) >= ncirc) {
+        return Err(internal(format!("unknown inserted hole {c}")));
+    }
+    let fluid = |c: CircleId| sk.fluid.contains(&c);
 
     // Geometry of every arc.
-    let mut geoms = Vec::with_capacity(medial.arcs.len());
-    let mut targets = Vec::with_capacity(medial.arcs.len());
+    let mut pieces = Vec::with_capacity(sk.arcs.len());
     let mut inconsistent_arcs = Vec::new();
-    for (e, arc) in medial.arcs.iter().enumerate() {
+    for (e, arc) in sk.arcs.iter().enumerate() {
         let [v0, v1] = arc.ends.map(|v| v as usize);
         let (Some(x0), Some(x1)) = (vertices.get(v0), vertices.get(v1)) else {
             return Err(internal(format!("arc {e} has an unknown end vertex")));
         };
+        if arc.circles.iter().any(|&c| c < -1 || cidx(c) >= ncirc) {
+            return Err(internal(format!("arc {e} has an unknown circle")));
+        }
         let walls = arc.circles.map(|c| Wall::of(domain, c));
         let mut ends_a = [[[0.0; 2]; 2]; 2];
         for (side, &c) in arc.circles.iter().enumerate() {
@@ -448,41 +540,50 @@ pub fn build(
             ends_a[0][side] = x0.tangent[s0];
             ends_a[1][side] = x1.tangent[s1];
         }
-        let hint_a = wall_hint(&blocking.layout, 2 * e)
+        let hint_a = wall_hint(sk.sampled, 2 * e)
             .ok_or_else(|| internal(format!("arc {e}: no sampled wall")))?;
-        let hint_b = wall_hint(&blocking.layout, 2 * e + 1)
+        let hint_b = wall_hint(sk.sampled, 2 * e + 1)
             .ok_or_else(|| internal(format!("arc {e}: no sampled wall")))?;
-        let (s0, w0) = exact_sweep(&walls[0], ends_a[0][0], ends_a[1][0], hint_a);
-        let (s1, w1) = exact_sweep(&walls[1], ends_a[0][1], ends_a[1][1], -hint_b);
-        let wrong = |w: f64, c: CircleId| w.abs() > ZERO_SWEEP && w * expected_sign(c) < 0.0;
-        if wrong(w0, arc.circles[0]) || wrong(-w1, arc.circles[1]) {
+        let piece = Piece {
+            ends: [v0, v1],
+            circles: arc.circles,
+            geom: ArcGeometry::new(walls, [x0.center, x1.center], ends_a, [hint_a, -hint_b]),
+        };
+        if !piece.consistent() {
             inconsistent_arcs.push(e);
         }
-        let param = if w1.abs() > w0.abs() { 1 } else { 0 };
-        let g = ArcGeometry {
-            walls,
-            param,
-            start: [s0, s1],
-            sweep: [w0, w1],
-            ends_m: [x0.center, x1.center],
-            ends_a,
-        };
-        let (sq, ang) = g
+        pieces.push(piece);
+    }
+    let mut split_arcs = 0;
+    for &c in &sk.fluid {
+        split_arcs += inserted::prepare(&mut pieces, &mut vertices, c);
+    }
+
+    let mut targets = Vec::with_capacity(pieces.len());
+    for (e, p) in pieces.iter().enumerate() {
+        let (sq, ang) = p
+            .geom
             .densities()
             .ok_or_else(|| internal(format!("arc {e}: the exact medial arc is not defined")))?;
         targets.push(ArcTarget {
-            circles: arc.circles.map(cidx),
+            circles: p.circles.map(cidx),
             sq,
             ang,
         });
-        geoms.push(g);
     }
 
     // Target size and the count problem.
     let radii: Vec<f64> = vertices.iter().map(|v| v.radius).collect();
     let h = match options.cell_size {
         Some(h) => h,
-        None => median(radii.clone()).unwrap_or(1.0) / options.cells.max(1) as f64,
+        None => median(radii).unwrap_or(1.0) / options.cells.max(1) as f64,
+    };
+    let cluster = |id: CircleId| {
+        if fluid(id) {
+            inserted::FLUID_CLUSTERING
+        } else {
+            clustering_of(options, id)
+        }
     };
     let mut circle_target = vec![1.0; ncirc];
     for id in domain.circle_ids() {
@@ -492,106 +593,70 @@ pub fn build(
             .map(|v| v.radius)
             .collect();
         let len = median(near).unwrap_or(h);
-        let cl = clustering_of(options, id);
+        let cl = cluster(id);
         let first = cl.first_height(domain.circle(id).radius);
         circle_target[cidx(id)] = clustering::cells_for(len, h, first, cl.growth) as f64;
     }
     let mut circle_fixed = vec![None; ncirc];
     for (c, n) in &options.wall_cells {
-        if *c >= -1 && ((*c + 1) as usize) < ncirc {
+        if *c >= -1 && ((*c + 1) as usize) < ncirc && !fluid(*c) {
             circle_fixed[cidx(*c)] = Some(*n);
         }
     }
     let problem = CountProblem {
         circle_target,
         circle_fixed,
+        // The templates' ties ([`inserted::tie_counts`]) pair the sides of every inserted
+        // hole, which makes its perimeter even without the parity repair.
         template: vec![false; ncirc],
         arcs: targets,
     };
-    let counts = problem.solve().map_err(internal)?;
+    let mut counts = problem.solve().map_err(internal)?;
 
-    // Limits before allocating.
-    let mut total: usize = 0;
-    for (e, arc) in medial.arcs.iter().enumerate() {
-        let n = counts.arc[e];
-        for &c in &arc.circles {
-            let nj = counts.circle[cidx(c)];
-            total = total.saturating_add((n + 1).saturating_mul(nj + 1));
-        }
-    }
-    if total > MAX_TOTAL_NODES {
-        return Err(MeshError::Grid(GridError::TooManyNodes {
-            nodes: total,
-            limit: MAX_TOTAL_NODES,
-        }));
-    }
-
-    // Layout skeleton.
+    // Layout skeleton: vertices, spokes, walls, medial edges (filled in below), blocks.
+    let nv = vertices.len();
     let mut layout = BlockLayout {
         vertices: vertices.iter().map(|v| v.center).collect(),
-        edges: Vec::with_capacity(3 * medial.arcs.len() + 3 * nv),
-        blocks: Vec::with_capacity(2 * medial.arcs.len()),
+        edges: Vec::with_capacity(3 * pieces.len() + 3 * nv),
+        blocks: Vec::with_capacity(2 * pieces.len()),
     };
+    let mut tangent_base = Vec::with_capacity(nv);
     for v in &vertices {
+        tangent_base.push(layout.vertices.len());
         layout.vertices.extend_from_slice(&v.tangent);
     }
-    let tangent_vertex = |v: usize, slot: usize| (nv + 3 * v + slot) as u32;
-
-    // Vertex spokes: nodes computed once per (vertex, slot).
+    let tangent_vertex = |v: usize, slot: usize| (tangent_base[v] + slot) as u32;
+    let slots = |p: &Piece, side: usize| -> (usize, usize) {
+        let c = p.circles[side];
+        (
+            vertices[p.ends[0]].slot(c).unwrap_or(0),
+            vertices[p.ends[1]].slot(c).unwrap_or(0),
+        )
+    };
     let mut spoke_edge: HashMap<(usize, usize), u32> = HashMap::new();
-    let mut spoke_cache: HashMap<(usize, usize), Vec<Point>> = HashMap::new();
-    let mut grids = Vec::with_capacity(2 * medial.arcs.len());
-    for (e, arc) in medial.arcs.iter().enumerate() {
-        let g = &geoms[e];
-        let n = counts.arc[e];
-        // Arc nodes.
-        let weights: Vec<f64> = {
-            let nbar = 0.5
-                * (counts.circle[cidx(arc.circles[0])] + counts.circle[cidx(arc.circles[1])])
-                    as f64;
-            let t = &problem.arcs[e];
-            t.sq.iter()
-                .zip(&t.ang)
-                .map(|(s, a)| (nbar * s).max(*a))
-                .collect()
-        };
-        let params = equidistribute(&weights, n);
-        let mut m_nodes = Vec::with_capacity(n + 1);
-        let mut a_nodes: [Vec<Point>; 2] = [Vec::with_capacity(n + 1), Vec::with_capacity(n + 1)];
-        for &t in &params {
-            let (m, a, _) = g
-                .at(t)
-                .ok_or_else(|| internal(format!("arc {e}: a medial node is not defined")))?;
-            m_nodes.push(m);
-            a_nodes[0].push(a[0]);
-            a_nodes[1].push(a[1]);
-        }
-        let [v0, v1] = arc.ends.map(|v| v as usize);
+    let mut medial_edges = Vec::with_capacity(pieces.len());
+    let fwd = |edge| SideRef {
+        edge,
+        reversed: false,
+    };
+    let rev = |edge| SideRef {
+        edge,
+        reversed: true,
+    };
+    for p in &pieces {
+        let g = &p.geom;
+        let [v0, v1] = p.ends;
         let medial_edge = layout.edges.len() as u32;
+        medial_edges.push(medial_edge);
         layout.edges.push(Edge {
             ends: [v0 as u32, v1 as u32],
-            curve: Curve::Polyline(m_nodes.clone()),
+            curve: Curve::Polyline(vec![g.ends_m[0], g.ends_m[1]]),
             kind: EdgeKind::Medial,
         });
-        #[allow(clippy::needless_range_loop)] // `side` indexes four parallel arrays
         for side in 0..2 {
-            let c = arc.circles[side];
-            let nj = counts.circle[cidx(c)];
-            let cl = clustering_of(options, c);
-            let first = cl.first_height(domain.circle(c).radius);
-            let s0 = vertices[v0].slot(c).unwrap_or(0);
-            let s1 = vertices[v1].slot(c).unwrap_or(0);
-            // Vertex spokes (shared with the other block on this circle at that vertex).
+            let c = p.circles[side];
+            let (s0, s1) = slots(p, side);
             for (v, s) in [(v0, s0), (v1, s1)] {
-                spoke_cache.entry((v, s)).or_insert_with(|| {
-                    spoke_nodes(
-                        vertices[v].tangent[s],
-                        vertices[v].center,
-                        nj,
-                        first,
-                        cl.growth,
-                    )
-                });
                 spoke_edge.entry((v, s)).or_insert_with(|| {
                     layout.edges.push(Edge {
                         ends: [v as u32, tangent_vertex(v, s)],
@@ -623,30 +688,6 @@ pub fn build(
                 },
                 kind: EdgeKind::Wall(c),
             });
-            // Grid: column i is arc node k = i (side 0) or n - i (side 1).
-            let mut nodes = vec![[0.0; 2]; (n + 1) * (nj + 1)];
-            for i in 0..=n {
-                let k = if side == 0 { i } else { n - i };
-                let col: Vec<Point> = if k == 0 {
-                    spoke_cache[&(v0, s0)].clone()
-                } else if k == n {
-                    spoke_cache[&(v1, s1)].clone()
-                } else {
-                    spoke_nodes(a_nodes[side][k], m_nodes[k], nj, first, cl.growth)
-                };
-                for (j, p) in col.into_iter().enumerate() {
-                    nodes[i + j * (n + 1)] = p;
-                }
-            }
-            grids.push(BlockGrid { ni: n, nj, nodes });
-            let fwd = |edge| SideRef {
-                edge,
-                reversed: false,
-            };
-            let rev = |edge| SideRef {
-                edge,
-                reversed: true,
-            };
             let sp0 = spoke_edge[&(v0, s0)];
             let sp1 = spoke_edge[&(v1, s1)];
             layout.blocks.push(if side == 0 {
@@ -664,11 +705,107 @@ pub fn build(
             });
         }
     }
+
+    // Templates in the inserted holes, and the count ties they bring.
+    let first_template = layout.blocks.len();
+    for &c in &sk.fluid {
+        crate::templates::fill_inserted_hole(&mut layout, c, domain.circle(c))
+            .map_err(|m| internal(format!("inserted hole {c}: {m}")))?;
+    }
+    let template_blocks = layout.blocks.len() - first_template;
+    if template_blocks > 0 {
+        inserted::tie_counts(&layout, &medial_edges, &mut counts.arc);
+    }
+
+    // Limits before allocating.
+    let mut total: usize = 0;
+    for (e, p) in pieces.iter().enumerate() {
+        let n = counts.arc[e];
+        for &c in &p.circles {
+            let nj = counts.circle[cidx(c)];
+            total = total.saturating_add((n + 1).saturating_mul(nj + 1));
+        }
+    }
+    if total > MAX_TOTAL_NODES {
+        return Err(MeshError::Grid(GridError::TooManyNodes {
+            nodes: total,
+            limit: MAX_TOTAL_NODES,
+        }));
+    }
+
+    // Grids of the medial blocks: spoke nodes computed once per (vertex, slot).
+    let mut spoke_cache: HashMap<(usize, usize), Vec<Point>> = HashMap::new();
+    let mut grids = Vec::with_capacity(layout.blocks.len());
+    for (e, p) in pieces.iter().enumerate() {
+        let g = &p.geom;
+        let n = counts.arc[e];
+        let weights: Vec<f64> = {
+            let nbar = 0.5
+                * (counts.circle[cidx(p.circles[0])] + counts.circle[cidx(p.circles[1])]) as f64;
+            let t = &problem.arcs[e];
+            t.sq.iter()
+                .zip(&t.ang)
+                .map(|(s, a)| (nbar * s).max(*a))
+                .collect()
+        };
+        let params = equidistribute(&weights, n);
+        let mut m_nodes = Vec::with_capacity(n + 1);
+        let mut a_nodes: [Vec<Point>; 2] = [Vec::with_capacity(n + 1), Vec::with_capacity(n + 1)];
+        for &t in &params {
+            let (m, a, _) = g
+                .at(t)
+                .ok_or_else(|| internal(format!("arc {e}: a medial node is not defined")))?;
+            m_nodes.push(m);
+            a_nodes[0].push(a[0]);
+            a_nodes[1].push(a[1]);
+        }
+        let [v0, v1] = p.ends;
+        layout.edges[medial_edges[e] as usize].curve = Curve::Polyline(m_nodes.clone());
+        #[allow(clippy::needless_range_loop)] // `side` indexes parallel arrays
+        for side in 0..2 {
+            let c = p.circles[side];
+            let nj = counts.circle[cidx(c)];
+            let cl = cluster(c);
+            let first = cl.first_height(domain.circle(c).radius);
+            let (s0, s1) = slots(p, side);
+            for (v, s) in [(v0, s0), (v1, s1)] {
+                spoke_cache.entry((v, s)).or_insert_with(|| {
+                    spoke_nodes(
+                        vertices[v].tangent[s],
+                        vertices[v].center,
+                        nj,
+                        first,
+                        cl.growth,
+                    )
+                });
+            }
+            // Column i is arc node k = i (side 0) or n - i (side 1).
+            let mut nodes = vec![[0.0; 2]; (n + 1) * (nj + 1)];
+            for i in 0..=n {
+                let k = if side == 0 { i } else { n - i };
+                let col: Vec<Point> = if k == 0 {
+                    spoke_cache[&(v0, s0)].clone()
+                } else if k == n {
+                    spoke_cache[&(v1, s1)].clone()
+                } else {
+                    spoke_nodes(a_nodes[side][k], m_nodes[k], nj, first, cl.growth)
+                };
+                for (j, q) in col.into_iter().enumerate() {
+                    nodes[i + j * (n + 1)] = q;
+                }
+            }
+            grids.push(BlockGrid { ni: n, nj, nodes });
+        }
+    }
     if options.smooth > 0 {
         for g in grids.iter_mut() {
             let rows = smoothing::boundary_layer_rows(g);
             smoothing::winslow(g, options.smooth, rows);
         }
+    }
+    if template_blocks > 0 {
+        let t = inserted::template_grids(&layout, &grids, first_template, h)?;
+        grids.extend(t);
     }
     Ok(ExactMesh {
         layout,
@@ -677,6 +814,8 @@ pub fn build(
         counts,
         cell_size: h,
         inconsistent_arcs,
+        split_arcs,
+        template_blocks,
     })
 }
 

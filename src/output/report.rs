@@ -21,7 +21,8 @@ use std::path::Path;
 /// "samples"}`, see [`crate::quality::MetricSummary`]), `cocircular_groups`
 /// (`[{"holes": [...], "center": [x, y], "radius": r}]`, hole ids 0-based as in the input,
 /// `-1` the bounding circle, ids from `holes` on the inserted holes), `collapsed_arcs`,
-/// `inserted_holes` (`[{"center": [x, y], "radius": r}]`). Angle figures are those of
+/// `inserted_holes` (`[{"center": [x, y], "radius": r}]`), `geometry` (`"exact"` or
+/// `"paper"`). Angle figures are those of
 /// [`crate::quality::Quality`] (0 when there are no cells); a non-finite figure is written as
 /// `null`.
 ///
@@ -53,6 +54,9 @@ pub struct Report {
     pub max_aspect_ratio: Option<f64>,
     /// The standard metrics with histograms and acceptable ranges.
     pub quality: QualityMetrics,
+    /// `"exact"` or `"paper"`: the geometry the blocks were built on ([`crate::mesh::Geometry`];
+    /// `"paper"` in exact mode means it fell back).
+    pub geometry: &'static str,
 }
 
 impl Report {
@@ -79,6 +83,7 @@ impl Report {
             max_wall_orthogonality_deviation_deg: quality.max_wall_orthogonality_deviation_deg,
             max_aspect_ratio: quality.aspect_ratio.max,
             quality,
+            geometry: mesh.geometry.name(),
         }
     }
 }

@@ -1,0 +1,139 @@
+//! Exact mode on the full front end: co-circular groups, collapsed arcs and inserted holes
+//! (issue #4's degeneracy handling with issue #5's geometry).
+//!
+//! The combinatorics are those of [`crate::blocking::collapsed_blocking_with`]: macro Delaunay
+//! refinement, co-circular groups, collapse of zero-length and short arcs and Blocking2D on the
+//! contracted medial graph. The vertex of a cluster of `n - 2` collapsed medial vertices has
+//! degree `n`, one spoke per circle around it, so `2n` blocks meet there. Its exact geometry:
+//! - a single medial vertex: its Apollonius circle (as without collapse);
+//! - a cluster inside one co-circular group ([`crate::cocircular`]): the group's circle,
+//!   exact (every member's Apollonius circle is the same circle, `same_circle`), correctly
+//!   rounded;
+//! - any other cluster (short arcs collapsed, "zipping"): the centre is the mean of the
+//!   members' Apollonius centres and the radius the smallest distance from it to the
+//!   cluster's circles. The arcs were short (below `collapse_fraction` of the local radius), so
+//!   the centre moves by at most that fraction; arcs leave it on the exact bisectors right
+//!   after their end node.
+//!
+//! In every case the tangent point on a circle is the radial projection of the centre, so every
+//! spoke at a collapsed vertex is exactly normal to its wall. Inserted holes are handled by
+//! [`super::inserted`].
+
+use super::{assemble, exact_vertices, internal, ExactMesh, ExactVertex, Skeleton, Wall};
+use crate::blocking::CollapsedBlocking;
+use crate::domain::{CircleId, Domain};
+use crate::geometry::Point;
+use crate::mesher::{MeshError, Options};
+
+/// The exact vertices of the contracted graph of `cb` (see the module docs). A cluster's
+/// circles are those of its kept arcs, each of which must appear on exactly two of them (one
+/// spoke per circle); otherwise [`MeshError::Internal`] (the caller falls back).
+pub fn cluster_vertices(cb: &CollapsedBlocking) -> Result<Vec<ExactVertex>, MeshError> {
+    let domain = &cb.refined.domain;
+    let medial = &cb.refined.sampled.medial;
+    let contracted = &cb.contracted;
+    let single = exact_vertices(domain, medial)?;
+    let nclusters = contracted.graph.vertices.len();
+    let mut members: Vec<Vec<usize>> = vec![Vec::new(); nclusters];
+    for (v, &c) in contracted.cluster_of.iter().enumerate() {
+        members
+            .get_mut(c as usize)
+            .ok_or_else(|| internal(format!("vertex {v} in an unknown cluster {c}")))?
+            .push(v);
+    }
+    // Circles of each cluster from its kept arcs, with how many arcs touch each.
+    let mut around: Vec<Vec<(CircleId, usize)>> = vec![Vec::new(); nclusters];
+    for arc in &contracted.graph.arcs {
+        for &v in &arc.ends {
+            let list = around
+                .get_mut(v as usize)
+                .ok_or_else(|| internal("a kept arc ends at an unknown cluster".into()))?;
+            for &c in &arc.circles {
+                match list.iter_mut().find(|x| x.0 == c) {
+                    Some(x) => x.1 += 1,
+                    None => list.push((c, 1)),
+                }
+            }
+        }
+    }
+    let group_of = crate::cocircular::group_of(medial, &cb.groups);
+    let mut out = Vec::with_capacity(nclusters);
+    for (k, ms) in members.iter().enumerate() {
+        if ms.len() == 1 {
+            out.push(single[ms[0]].clone());
+            continue;
+        }
+        if let Some(&(c, n)) = around[k].iter().find(|x| x.1 != 2) {
+            return Err(internal(format!(
+                "collapsed vertex {k}: circle {c} has {n} spokes there"
+            )));
+        }
+        let circles: Vec<CircleId> = around[k].iter().map(|x| x.0).collect();
+        let group = group_of.get(ms[0]).copied().flatten();
+        let one_group = group.is_some() && ms.iter().all(|&v| group_of.get(v) == Some(&group));
+        let center: Point = match group {
+            Some(g) if one_group => cb.groups[g].center,
+            _ => {
+                let n = ms.len() as f64;
+                let sx: f64 = ms.iter().map(|&v| single[v].center[0]).sum();
+                let sy: f64 = ms.iter().map(|&v| single[v].center[1]).sum();
+                [sx / n, sy / n]
+            }
+        };
+        out.push(merged(domain, center, circles, k)?);
+    }
+    Ok(out)
+}
+
+/// The vertex at `center` touching `circles` by radial projection; radius the smallest gap.
+fn merged(
+    domain: &Domain,
+    center: Point,
+    circles: Vec<CircleId>,
+    k: usize,
+) -> Result<ExactVertex, MeshError> {
+    let mut tangent = Vec::with_capacity(circles.len());
+    let mut radius = f64::INFINITY;
+    for &c in &circles {
+        let w = Wall::of(domain, c);
+        let d = (center[0] - w.c[0]).hypot(center[1] - w.c[1]);
+        let t = w.project(center);
+        if !(d > 0.0 && t[0].is_finite() && t[1].is_finite()) {
+            return Err(internal(format!(
+                "collapsed vertex {k} sits on the centre of circle {c}"
+            )));
+        }
+        radius = radius.min(if c < 0 { w.r - d } else { d - w.r });
+        tangent.push(t);
+    }
+    if !(radius.is_finite() && radius > 0.0) {
+        return Err(internal(format!(
+            "collapsed vertex {k} is not in the fluid (radius {radius})"
+        )));
+    }
+    Ok(ExactVertex {
+        center,
+        radius,
+        circles,
+        tangent,
+    })
+}
+
+/// Exact mode on the full front end (see the module docs): the skeleton of `cb` with its
+/// cluster vertices and inserted holes.
+pub fn build_collapsed(cb: &CollapsedBlocking, options: &Options) -> Result<ExactMesh, MeshError> {
+    let vertices = cluster_vertices(cb)?;
+    let domain = &cb.refined.domain;
+    let h = domain.hole_count() - cb.refined.inserted.len();
+    let fluid: Vec<CircleId> = (h..domain.hole_count()).map(|i| i as CircleId).collect();
+    assemble(
+        Skeleton {
+            domain,
+            arcs: &cb.contracted.graph.arcs,
+            vertices,
+            sampled: &cb.layout,
+            fluid,
+        },
+        options,
+    )
+}

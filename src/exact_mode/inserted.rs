@@ -1,0 +1,193 @@
+//! Inserted holes in exact mode (macro Delaunay refinement, paper Algorithm 3; issue #4).
+//!
+//! An inserted hole is fluid, not a wall. Around it the blocks are built like those of a real
+//! circle (spokes from the exact medial nodes to their touching points on the hole's circle,
+//! exactly radial), but with equal spacing along the spokes ([`FLUID_CLUSTERING`]): there is no
+//! boundary layer to resolve. The hole is then filled by the O-grid / `k`-gon template of
+//! [`crate::templates::fill_inserted_hole`], whose ring blocks take the hole's arcs as their
+//! outer sides, so the template's perimeter nodes *are* the surrounding blocks' wall nodes.
+//!
+//! The template needs an even number `k >= 4` of arcs, none wider than
+//! [`crate::blocking::MAX_TEMPLATE_SWEEP`]; [`prepare`] splits the widest arc on the hole at its
+//! middle (an exact medial point with its two exact spokes) until that holds. Its node counts
+//! tie arcs in pairs (the ladder of the core pairs opposite core edges, each core edge has its
+//! arc's count): [`tie_counts`] gives every class of opposite sides one count, the largest its
+//! arcs asked for, which also makes the hole's perimeter even.
+
+use super::{internal, Clustering, ExactVertex, Piece};
+use crate::blocking::MAX_TEMPLATE_SWEEP;
+use crate::domain::CircleId;
+use crate::geometry::Point;
+use crate::grid::{edge_classes, tfi};
+use crate::layout::{BlockLayout, Curve};
+use crate::mesh::BlockGrid;
+use crate::mesher::MeshError;
+use std::collections::HashMap;
+
+/// Spokes on an inserted hole: equal spacing.
+pub const FLUID_CLUSTERING: Clustering = Clustering {
+    first: None,
+    growth: 1.0,
+};
+
+/// The most arcs split around one inserted hole.
+pub const MAX_SPLITS_PER_HOLE: usize = 16;
+
+/// Split arcs on inserted hole `c` (widest wall first) until it has an even number `k >= 4`
+/// of arcs, none wider than [`MAX_TEMPLATE_SWEEP`] (bounded effort: the template reports what
+/// is still wrong). A split arc's halves replace it (the first keeps its index, the second is
+/// appended) and the middle vertex is appended to `vertices`. Returns the number of splits.
+pub(crate) fn prepare(
+    pieces: &mut Vec<Piece>,
+    vertices: &mut Vec<ExactVertex>,
+    c: CircleId,
+) -> usize {
+    let mut splits = 0;
+    for _ in 0..MAX_SPLITS_PER_HOLE {
+        let on: Vec<(usize, f64)> = pieces
+            .iter()
+            .enumerate()
+            .filter_map(|(e, p)| {
+                let side = p.circles.iter().position(|&x| x == c)?;
+                Some((e, p.geom.sweep[side].abs()))
+            })
+            .collect();
+        let k = on.len();
+        let widest = on.iter().map(|x| x.1).fold(0.0, f64::max);
+        if k % 2 == 0 && k >= 4 && widest <= MAX_TEMPLATE_SWEEP {
+            break;
+        }
+        // The widest arc on the hole whose middle is defined (ties: the smallest index).
+        let mut best: Option<(f64, usize)> = None;
+        for &(e, w) in &on {
+            if w > 0.0 && best.map_or(true, |(bw, _)| w > bw) {
+                best = Some((w, e));
+            }
+        }
+        let Some((_, e)) = best else { break };
+        let Some((m, a, rho, first, second)) = pieces[e].geom.split() else {
+            break;
+        };
+        let v = vertices.len();
+        vertices.push(ExactVertex {
+            center: m,
+            radius: rho,
+            circles: pieces[e].circles.to_vec(),
+            tangent: a.to_vec(),
+        });
+        let end = pieces[e].ends[1];
+        let circles = pieces[e].circles;
+        pieces[e].ends[1] = v;
+        pieces[e].geom = first;
+        pieces.push(Piece {
+            ends: [v, end],
+            circles,
+            geom: second,
+        });
+        splits += 1;
+    }
+    splits
+}
+
+/// Give every conformity class of `layout` ([`edge_classes`]: opposite block sides) one arc
+/// count, the largest of its arcs' (`medial_edge[e]` is the medial edge of arc `e`).
+pub(crate) fn tie_counts(layout: &BlockLayout, medial_edge: &[u32], arc: &mut [usize]) {
+    let (class, n) = edge_classes(layout);
+    let mut best = vec![0usize; n];
+    for (e, &m) in medial_edge.iter().enumerate() {
+        if let (Some(&k), Some(&c)) = (class.get(m as usize), arc.get(e)) {
+            best[k] = best[k].max(c);
+        }
+    }
+    for (e, &m) in medial_edge.iter().enumerate() {
+        if let Some(&k) = class.get(m as usize) {
+            arc[e] = best[k];
+        }
+    }
+}
+
+/// The grids of the template blocks `layout.blocks[first..]`: sides already gridded by the
+/// medial blocks (`grids[b]` for `b < first`) are copied bit for bit, the straight template
+/// edges get equally spaced nodes with their class's count (the gridded member's, else the
+/// longest member's length over `h`, at least 1), and the interior is transfinite
+/// interpolation. Errors when a class gets two different counts (a broken tie).
+pub(crate) fn template_grids(
+    layout: &BlockLayout,
+    grids: &[BlockGrid],
+    first: usize,
+    h: f64,
+) -> Result<Vec<BlockGrid>, MeshError> {
+    let (class, ncls) = edge_classes(layout);
+    let mut known: HashMap<usize, Vec<Point>> = HashMap::new();
+    let mut count: Vec<Option<usize>> = vec![None; ncls];
+    for (b, g) in grids.iter().enumerate().take(first) {
+        for (k, side) in layout.blocks[b].sides.iter().enumerate() {
+            let e = side.edge as usize;
+            let mut nodes = g.side(k);
+            if side.reversed {
+                nodes.reverse();
+            }
+            let n = nodes.len() - 1;
+            match count[class[e]] {
+                Some(m) if m != n => {
+                    return Err(internal(format!(
+                        "template: edge {e} has {n} cells, its class {m}"
+                    )))
+                }
+                _ => count[class[e]] = Some(n),
+            }
+            known.entry(e).or_insert(nodes);
+        }
+    }
+    let vertex = |i: u32| layout.vertices.get(i as usize).copied().unwrap_or([0.0; 2]);
+    let length = |e: usize| {
+        let [a, b] = layout.edges[e].ends.map(vertex);
+        (a[0] - b[0]).hypot(a[1] - b[1])
+    };
+    let mut free = vec![1usize; ncls];
+    for block in &layout.blocks[first..] {
+        for side in block.sides {
+            let e = side.edge as usize;
+            let want = (length(e) / h).round();
+            if want.is_finite() && want >= 1.0 {
+                let want = (want as usize).min(crate::grid::MAX_CELLS_PER_SIDE);
+                free[class[e]] = free[class[e]].max(want);
+            }
+        }
+    }
+    let mut out = Vec::with_capacity(layout.blocks.len() - first);
+    for block in &layout.blocks[first..] {
+        let mut sides: Vec<Vec<Point>> = Vec::with_capacity(4);
+        for side in block.sides {
+            let e = side.edge as usize;
+            let mut nodes = match known.get(&e) {
+                Some(n) => n.clone(),
+                None => {
+                    if !matches!(layout.edges[e].curve, Curve::Segment) {
+                        return Err(internal(format!("template edge {e} is not straight")));
+                    }
+                    let n = count[class[e]].unwrap_or(free[class[e]]);
+                    let [a, b] = layout.edges[e].ends.map(vertex);
+                    let mut pts: Vec<Point> = (0..=n)
+                        .map(|i| {
+                            let t = i as f64 / n as f64;
+                            [a[0] + t * (b[0] - a[0]), a[1] + t * (b[1] - a[1])]
+                        })
+                        .collect();
+                    pts[0] = a;
+                    pts[n] = b;
+                    known.insert(e, pts.clone());
+                    pts
+                }
+            };
+            if side.reversed {
+                nodes.reverse();
+            }
+            sides.push(nodes);
+        }
+        let g = tfi(&sides[0], &sides[1], &sides[2], &sides[3])
+            .ok_or_else(|| internal("template: opposite sides of different counts".into()))?;
+        out.push(g);
+    }
+    Ok(out)
+}
