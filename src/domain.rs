@@ -330,8 +330,13 @@ impl Domain {
 
     /// The paper's *Hexagon* data (section 5, figure 12), rebuilt: 7 equal holes of radius
     /// `0.3` in hexagonal packing (one at the origin, six at distance `d = 1` at multiples of
-    /// 60 degrees) inside a bounding circle of radius `2.2` centred at the origin. Gaps: `0.4`
-    /// between neighbouring holes, `0.9` to the bounding circle. Algorithm 2 gives 36 blocks.
+    /// 60 degrees) inside a bounding circle of radius `sqrt(3) - 0.3` centred at the origin.
+    /// Gaps: `0.4` between neighbouring holes, `sqrt(3) - 1.6 ~ 0.132` to the bounding circle.
+    /// The bounding radius makes the packing's outer medial vertices like its inner ones: the
+    /// empty circle tangent to two neighbouring outer holes and the bounding circle is centred at
+    /// `2 / sqrt(3)` on their bisector (the inner vertices' distance `d / sqrt(3)` from each
+    /// hole centre), and sees its three circles at 120 degrees, so the exact-mode corner limit is
+    /// 60/120 degrees everywhere (issue #5). Algorithm 2 gives 36 blocks.
     pub fn hexagon_example() -> Domain {
         let d = 1.0_f64;
         let r = 0.3 * d;
@@ -347,7 +352,7 @@ impl Domain {
             Circle::new(h, -s, r),
         ];
         Domain {
-            bounding: Circle::new(0.0, 0.0, 2.2 * d),
+            bounding: Circle::new(0.0, 0.0, 3.0_f64.sqrt() * d - r),
             holes,
         }
     }
