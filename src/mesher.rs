@@ -195,47 +195,71 @@ pub fn mesh(domain: &Domain, options: &Options) -> Result<Mesh, MeshError> {
 /// co-circular circles not collapsed and not resolved by the sampling: an exact arc running
 /// backwards, [`exact_mode::ExactMesh::inconsistent_arcs`]; a collapsed vertex with two spokes
 /// to one circle; an exact arc not defined; an inverted cell; a template that does not fit),
-/// the sampling is refined 4x per attempt, up to [`EXACT_RESAMPLING`] times. `Ok(None)` when it
+/// short-arc collapses are given up first (only zero-length arcs collapsed, whose merged
+/// vertex is an exact co-circular group circle), then the sampling is refined 4x per attempt,
+/// up to [`EXACT_RESAMPLING`] times. `Ok(None)` when it
 /// never agreed: the caller falls back to the paper pipeline and reports
 /// [`Geometry::Paper`]. Errors other than [`MeshError::Internal`] are returned at once.
 fn mesh_exact(domain: &Domain, options: &Options) -> Result<Option<Mesh>, MeshError> {
-    let holes = domain.hole_count();
     let mut sampling = SamplingOptions::default();
     for attempt in 0..=EXACT_RESAMPLING {
-        let cb = match blocking::collapsed_blocking_with(domain, options, &sampling) {
-            Ok(b) => b,
+        match exact_attempt(domain, options, &sampling) {
+            Ok(Some(m)) => return Ok(Some(m)),
+            Ok(None) => {}
             // A finer sampling failed after a coarser one worked: fall back to paper mode.
             Err(_) if attempt > 0 => return Ok(None),
             Err(e) => return Err(e),
-        };
-        match exact_mode::collapsed::build_collapsed(&cb, options) {
-            Ok(m) => {
-                let consistent = m.inconsistent_arcs.is_empty()
-                    && crate::quality::measure(&m.grids).inverted_cells == 0;
-                if consistent {
-                    let medial = &cb.refined.sampled.medial;
-                    return Ok(Some(Mesh {
-                        layout: m.layout,
-                        grids: m.grids,
-                        medial_vertices: medial.vertex_count(),
-                        medial_arcs: medial.arc_count(),
-                        holes,
-                        cocircular_groups: cb.groups,
-                        collapsed_arcs: cb.collapsed,
-                        inserted_holes: cb.refined.inserted,
-                        split_arcs: m.split_arcs,
-                        template_blocks: m.template_blocks,
-                        geometry: Geometry::Exact,
-                    }));
-                }
+        }
+        // Short arcs collapsed into a merged vertex can invert cells next to it (the merged
+        // centre is on none of the exact bisectors): keep only the zero-length collapses.
+        if options.collapse_fraction > 0.0 {
+            let zero_only = Options {
+                collapse_fraction: 0.0,
+                ..options.clone()
+            };
+            if let Ok(Some(m)) = exact_attempt(domain, &zero_only, &sampling) {
+                return Ok(Some(m));
             }
-            Err(MeshError::Internal(_)) => {}
-            Err(err) => return Err(err),
         }
         sampling.min_per_circle = sampling.min_per_circle.saturating_mul(4);
         sampling.spacing_per_gap *= 0.25;
     }
     Ok(None)
+}
+
+/// One exact-mode attempt: `Ok(None)` when the exact geometry disagrees with the sampled
+/// combinatorics (see [`mesh_exact`]), `Err` when the front end fails.
+fn exact_attempt(
+    domain: &Domain,
+    options: &Options,
+    sampling: &SamplingOptions,
+) -> Result<Option<Mesh>, MeshError> {
+    let cb = blocking::collapsed_blocking_with(domain, options, sampling)?;
+    match exact_mode::collapsed::build_collapsed(&cb, options) {
+        Ok(m) => {
+            let consistent = m.inconsistent_arcs.is_empty()
+                && crate::quality::measure(&m.grids).inverted_cells == 0;
+            if !consistent {
+                return Ok(None);
+            }
+            let medial = &cb.refined.sampled.medial;
+            Ok(Some(Mesh {
+                layout: m.layout,
+                grids: m.grids,
+                medial_vertices: medial.vertex_count(),
+                medial_arcs: medial.arc_count(),
+                holes: domain.hole_count(),
+                cocircular_groups: cb.groups,
+                collapsed_arcs: cb.collapsed,
+                inserted_holes: cb.refined.inserted,
+                split_arcs: m.split_arcs,
+                template_blocks: m.template_blocks,
+                geometry: Geometry::Exact,
+            }))
+        }
+        Err(MeshError::Internal(_)) => Ok(None),
+        Err(err) => Err(err),
+    }
 }
 
 /// Mesh either kind of domain: [`mesh`] for a bounded one, [`crate::periodic::mesh_periodic`]

@@ -49,7 +49,10 @@ fn check_exact(d: &Domain, m: &Mesh) {
     // No wall on an inserted hole: the template blocks cover it.
     for b in &m.layout.blocks {
         if let Some(c) = b.wall {
-            assert!(c < d.hole_count() as i32, "block with wall on inserted hole {c}");
+            assert!(
+                c < d.hole_count() as i32,
+                "block with wall on inserted hole {c}"
+            );
         }
     }
     for e in &m.layout.edges {
@@ -87,7 +90,10 @@ fn check_inserted_holes_filled(m: &Mesh) {
             for &p in &g.nodes {
                 if on_circle(p) {
                     seen += 1;
-                    assert!(inner.contains(&key(p)), "outer node {p:?} not in a template");
+                    assert!(
+                        inner.contains(&key(p)),
+                        "outer node {p:?} not in a template"
+                    );
                 }
             }
         }
@@ -99,7 +105,10 @@ fn check_inserted_holes_filled(m: &Mesh) {
                 if r <= c.radius * (1.0 + 1e-9) {
                     inside += 1;
                     if on_circle(p) {
-                        assert!(outer.contains(&key(p)), "template node {p:?} not conforming");
+                        assert!(
+                            outer.contains(&key(p)),
+                            "template node {p:?} not conforming"
+                        );
                     }
                 }
             }
