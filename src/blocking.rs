@@ -516,7 +516,7 @@ fn prepare_inserted_hole(layout: &mut BlockLayout, hole: CircleId) -> usize {
             break;
         }
         // Candidates: blocks on the hole whose partner across the medial arc has a non-empty
-        // wall and whose medial arc has a length.
+        // wall (not yet inside a filled template) and whose medial arc has a length.
         let mut best: Option<(f64, u32)> = None;
         for &b in &on_hole {
             let e = layout.blocks[b].sides[2].edge;
@@ -525,7 +525,12 @@ fn prepare_inserted_hole(layout: &mut BlockLayout, hole: CircleId) -> usize {
                 continue;
             }
             let partner = if pair[0] == b { pair[1] } else { pair[0] };
-            let ok = wall_sweep(layout, partner).is_some_and(|s| s != 0.0);
+            // The partner's wall must still be a wall: an `Interface` arc belongs to an
+            // inserted hole whose template is already filled, and splitting it would leave
+            // that template's ring block on a stale edge.
+            let pe = layout.blocks[partner].sides[0].edge as usize;
+            let is_wall = matches!(layout.edges[pe].kind, EdgeKind::Wall(_));
+            let ok = is_wall && wall_sweep(layout, partner).is_some_and(|s| s != 0.0);
             let sweep = wall_sweep(layout, b).map_or(0.0, f64::abs);
             if ok && best.map_or(true, |(s, _)| sweep > s) {
                 best = Some((sweep, e));
@@ -538,6 +543,36 @@ fn prepare_inserted_hole(layout: &mut BlockLayout, hole: CircleId) -> usize {
         splits += 1;
     }
     splits
+}
+
+/// Last-line guard of [`build_mesh_layout`] (issue 4: "no zero-area block ever reaches the
+/// output"): every arc side of every block has a finite non-zero sweep, and every block has a
+/// positive outline area ([`block_area`]). A violation is a [`MeshError::Internal`], never
+/// output.
+pub fn check_blocks(layout: &BlockLayout) -> Result<(), MeshError> {
+    for (b, block) in layout.blocks.iter().enumerate() {
+        for (k, side) in block.sides.iter().enumerate() {
+            let Some(edge) = layout.edges.get(side.edge as usize) else {
+                return Err(MeshError::Internal(format!(
+                    "block {b} side {k} refers to a missing edge"
+                )));
+            };
+            if let Curve::Arc { sweep, .. } = edge.curve {
+                if !(sweep.is_finite() && sweep != 0.0) {
+                    return Err(MeshError::Internal(format!(
+                        "block {b} side {k} is an arc of sweep {sweep} (a zero-length wall)"
+                    )));
+                }
+            }
+        }
+        let area = block_area(layout, b);
+        if area.is_nan() || area <= 0.0 {
+            return Err(MeshError::Internal(format!(
+                "block {b} has outline area {area} (zero or negative)"
+            )));
+        }
+    }
+    Ok(())
 }
 
 /// The result of [`build_mesh_layout`]: the full blocking with degeneracy handling.
@@ -566,7 +601,10 @@ pub struct MeshLayout {
 ///
 /// Blocks: `6(h + m - 1) - 2 collapsed + 2 splits + template blocks`. Short (non-zero)
 /// collapses that would leave a block with non-positive outline area ([`block_area`]) are
-/// given up (at most 8 retries); zero-length arcs are always collapsed.
+/// given up (at most 8 retries); zero-length arcs, and arcs the sampling left with a
+/// single-sample wall ([`crate::sampling::thin_walls`]), are always collapsed. The result
+/// passes [`check_blocks`] (every arc side of positive sweep, every block of positive area) or
+/// is a [`MeshError::Internal`].
 pub fn build_mesh_layout(domain: &Domain, options: &Options) -> Result<MeshLayout, MeshError> {
     build_mesh_layout_with(domain, options, &SamplingOptions::default())
 }
@@ -602,10 +640,20 @@ pub fn build_mesh_layout_with(
     let medial = &sampled.medial;
     let groups = cocircular::cocircular_groups(medial, &refined.circles);
     let mut exclude = vec![false; medial.arcs.len()];
+    // Arcs the sampling left with a single-sample wall: always collapsed (their block on the
+    // thin side would have a zero-sweep wall, and a zero-area ring block in a template).
+    let mut forced = vec![false; medial.arcs.len()];
+    for v in &sampled.thin_walls {
+        if let crate::sampling::ViolationKind::SingleSampleWall { arc } = v.kind {
+            if let Some(f) = forced.get_mut(arc as usize) {
+                *f = true;
+            }
+        }
+    }
     let mut attempt = 0;
     let (mut layout, collapsed) = loop {
         attempt += 1;
-        let chosen = collapse::select(
+        let chosen = collapse::select_forced(
             medial,
             &sampled.triangulation,
             &refined.circles,
@@ -613,6 +661,7 @@ pub fn build_mesh_layout_with(
             &sampled.samples.points,
             options.collapse_fraction,
             &exclude,
+            &forced,
         );
         let mut flags = vec![false; medial.arcs.len()];
         for c in &chosen {
@@ -652,6 +701,7 @@ pub fn build_mesh_layout_with(
         layout.blocks.len(),
         before + split_arcs * 2 + template_blocks
     );
+    check_blocks(&layout)?;
     Ok(MeshLayout {
         layout,
         domain: final_domain,
