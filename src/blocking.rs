@@ -110,7 +110,9 @@ fn wall_curve(
         .first()
         .ok_or_else(|| MeshError::Internal("empty wall chain".into()))?;
     let n = samples.count_of(first) as i64;
+    let grid = samples.grid_count(circle);
     let mut dir = 0i64;
+    let mut grid_steps = 0u64;
     for w in chain.windows(2) {
         let (i, j) = (
             samples.index_of[w[0] as usize] as i64,
@@ -129,18 +131,20 @@ fn wall_curve(
             )));
         }
         dir = step;
+        let (g0, g1) = (samples.grid_index(w[0]), samples.grid_index(w[1]));
+        let (from, to) = if step > 0 { (g0, g1) } else { (g1, g0) };
+        grid_steps += (to % grid + grid - from % grid) % grid;
     }
     if dir != 0 && dir != expected {
         return Err(MeshError::Internal(format!(
             "wall on circle {circle} runs the wrong way round"
         )));
     }
-    let steps = (chain.len() - 1) as f64;
     Ok(Curve::Arc {
         center: c.center,
         radius: c.radius,
         start: samples.angle(first),
-        sweep: dir as f64 * steps * TAU / n as f64,
+        sweep: dir as f64 * grid_steps as f64 * TAU / grid as f64,
     })
 }
 
