@@ -110,7 +110,9 @@ fn wall_curve(
         .first()
         .ok_or_else(|| MeshError::Internal("empty wall chain".into()))?;
     let n = samples.count_of(first) as i64;
+    let grid = samples.grid_count(circle);
     let mut dir = 0i64;
+    let mut grid_steps = 0u64;
     for w in chain.windows(2) {
         let (i, j) = (
             samples.index_of[w[0] as usize] as i64,
@@ -129,18 +131,20 @@ fn wall_curve(
             )));
         }
         dir = step;
+        let (g0, g1) = (samples.grid_index(w[0]), samples.grid_index(w[1]));
+        let (from, to) = if step > 0 { (g0, g1) } else { (g1, g0) };
+        grid_steps += (to % grid + grid - from % grid) % grid;
     }
     if dir != 0 && dir != expected {
         return Err(MeshError::Internal(format!(
             "wall on circle {circle} runs the wrong way round"
         )));
     }
-    let steps = (chain.len() - 1) as f64;
     Ok(Curve::Arc {
         center: c.center,
         radius: c.radius,
         start: samples.angle(first),
-        sweep: dir as f64 * steps * TAU / n as f64,
+        sweep: dir as f64 * grid_steps as f64 * TAU / grid as f64,
     })
 }
 
@@ -516,7 +520,7 @@ fn prepare_inserted_hole(layout: &mut BlockLayout, hole: CircleId) -> usize {
             break;
         }
         // Candidates: blocks on the hole whose partner across the medial arc has a non-empty
-        // wall and whose medial arc has a length.
+        // wall (not yet inside a filled template) and whose medial arc has a length.
         let mut best: Option<(f64, u32)> = None;
         for &b in &on_hole {
             let e = layout.blocks[b].sides[2].edge;
@@ -525,7 +529,12 @@ fn prepare_inserted_hole(layout: &mut BlockLayout, hole: CircleId) -> usize {
                 continue;
             }
             let partner = if pair[0] == b { pair[1] } else { pair[0] };
-            let ok = wall_sweep(layout, partner).is_some_and(|s| s != 0.0);
+            // The partner's wall must still be a wall: an `Interface` arc belongs to an
+            // inserted hole whose template is already filled, and splitting it would leave
+            // that template's ring block on a stale edge.
+            let pe = layout.blocks[partner].sides[0].edge as usize;
+            let is_wall = matches!(layout.edges[pe].kind, EdgeKind::Wall(_));
+            let ok = is_wall && wall_sweep(layout, partner).is_some_and(|s| s != 0.0);
             let sweep = wall_sweep(layout, b).map_or(0.0, f64::abs);
             if ok && best.map_or(true, |(s, _)| sweep > s) {
                 best = Some((sweep, e));
@@ -588,10 +597,20 @@ pub fn collapsed_blocking_with(
     let medial = &sampled.medial;
     let groups = cocircular::cocircular_groups(medial, &refined.circles);
     let mut exclude = vec![false; medial.arcs.len()];
+    // Arcs the sampling left with a single-sample wall: always collapsed (their block on the
+    // thin side would have a zero-sweep wall, and a zero-area ring block in a template).
+    let mut forced = vec![false; medial.arcs.len()];
+    for v in &sampled.thin_walls {
+        if let crate::sampling::ViolationKind::SingleSampleWall { arc } = v.kind {
+            if let Some(f) = forced.get_mut(arc as usize) {
+                *f = true;
+            }
+        }
+    }
     let mut attempt = 0;
     let (layout, collapsed, contracted) = loop {
         attempt += 1;
-        let chosen = collapse::select(
+        let chosen = collapse::select_forced(
             medial,
             &sampled.triangulation,
             &refined.circles,
@@ -599,6 +618,7 @@ pub fn collapsed_blocking_with(
             &sampled.samples.points,
             options.collapse_fraction,
             &exclude,
+            &forced,
         );
         let mut flags = vec![false; medial.arcs.len()];
         for c in &chosen {
@@ -634,6 +654,36 @@ pub fn collapsed_blocking_with(
     })
 }
 
+/// Last-line guard of [`build_mesh_layout`] (issue 4: "no zero-area block ever reaches the
+/// output"): every arc side of every block has a finite non-zero sweep, and every block has a
+/// positive outline area ([`block_area`]). A violation is a [`MeshError::Internal`], never
+/// output.
+pub fn check_blocks(layout: &BlockLayout) -> Result<(), MeshError> {
+    for (b, block) in layout.blocks.iter().enumerate() {
+        for (k, side) in block.sides.iter().enumerate() {
+            let Some(edge) = layout.edges.get(side.edge as usize) else {
+                return Err(MeshError::Internal(format!(
+                    "block {b} side {k} refers to a missing edge"
+                )));
+            };
+            if let Curve::Arc { sweep, .. } = edge.curve {
+                if !(sweep.is_finite() && sweep != 0.0) {
+                    return Err(MeshError::Internal(format!(
+                        "block {b} side {k} is an arc of sweep {sweep} (a zero-length wall)"
+                    )));
+                }
+            }
+        }
+        let area = block_area(layout, b);
+        if area.is_nan() || area <= 0.0 {
+            return Err(MeshError::Internal(format!(
+                "block {b} has outline area {area} (zero or negative)"
+            )));
+        }
+    }
+    Ok(())
+}
+
 /// The result of [`build_mesh_layout`]: the full blocking with degeneracy handling.
 #[derive(Debug, Clone)]
 pub struct MeshLayout {
@@ -660,7 +710,10 @@ pub struct MeshLayout {
 ///
 /// Blocks: `6(h + m - 1) - 2 collapsed + 2 splits + template blocks`. Short (non-zero)
 /// collapses that would leave a block with non-positive outline area ([`block_area`]) are
-/// given up (at most 8 retries); zero-length arcs are always collapsed.
+/// given up (at most 8 retries); zero-length arcs, and arcs the sampling left with a
+/// single-sample wall ([`crate::sampling::thin_walls`]), are always collapsed. The result
+/// passes [`check_blocks`] (every arc side of positive sweep, every block of positive area) or
+/// is a [`MeshError::Internal`].
 pub fn build_mesh_layout(domain: &Domain, options: &Options) -> Result<MeshLayout, MeshError> {
     build_mesh_layout_with(domain, options, &SamplingOptions::default())
 }
@@ -694,6 +747,7 @@ pub fn build_mesh_layout_with(
         layout.blocks.len(),
         before + split_arcs * 2 + template_blocks
     );
+    check_blocks(&layout)?;
     Ok(MeshLayout {
         layout,
         domain: refined.domain.clone(),

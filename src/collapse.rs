@@ -19,7 +19,8 @@
 //! circumcentres; the arcs incident to it have their end points moved there.
 //!
 //! Selection ([`select`]): zero-length arcs ([`crate::cocircular::is_zero_length`]) always,
-//! then arcs whose sampled length is below `fraction` times the smaller empty-circle radius of
+//! then the *forced* arcs of [`select_forced`] (arcs with a single-sample wall that sampling
+//! could not remove) always, then arcs whose sampled length is below `fraction` times the smaller empty-circle radius of
 //! its two ends, shortest (relative) first. An arc is skipped when its ends are already in one
 //! cluster (collapsing a cycle would delete every block around a hole) or when another
 //! remaining arc joins the same two clusters (it would become a loop). The blocking checks
@@ -38,7 +39,9 @@ use std::collections::HashMap;
 pub struct Candidate {
     /// The arc id in the medial graph.
     pub arc: u32,
-    /// True for a zero-length arc (always collapsed), false for a short one.
+    /// True for an arc that is always collapsed: a zero-length arc, or a *forced* one (an arc
+    /// the sampling left with a single-sample wall, [`crate::sampling::thin_walls`]); false
+    /// for a short one (given up when its collapse leaves a block without area).
     pub zero: bool,
 }
 
@@ -64,12 +67,34 @@ pub fn select(
     fraction: f64,
     exclude: &[bool],
 ) -> Vec<Candidate> {
+    select_forced(medial, tri, circles, groups, points, fraction, exclude, &[])
+}
+
+/// [`select`], with the arcs flagged in `forced` (one flag per arc; missing flags are false)
+/// collapsed like zero-length arcs: right after them, shortest sampled length first, ties by
+/// arc id. Used for the arcs with a single-sample (zero-sweep) wall that resampling could not
+/// remove ([`crate::sampling::thin_walls`]): collapsing such an arc moves no wall corner on the
+/// thin side (`L = 0` there), and the blocks left all have walls of positive sweep.
+#[allow(clippy::too_many_arguments)]
+pub fn select_forced(
+    medial: &MedialGraph,
+    tri: &Triangulation,
+    circles: &[Option<Apollonius>],
+    groups: &[CocircularGroup],
+    points: &[Point],
+    fraction: f64,
+    exclude: &[bool],
+    forced: &[bool],
+) -> Vec<Candidate> {
     let group = group_of(medial, groups);
     let mut zero = Vec::new();
+    let mut must: Vec<(f64, u32)> = Vec::new();
     let mut short: Vec<(f64, u32)> = Vec::new();
     for (e, arc) in medial.arcs.iter().enumerate() {
         if is_zero_length(arc, medial, tri, &group) {
             zero.push(e as u32);
+        } else if forced.get(e).copied().unwrap_or(false) {
+            must.push((arc_length(arc), e as u32));
         } else if fraction > 0.0 && !exclude.get(e).copied().unwrap_or(false) {
             let r = local_radius(medial, circles, points, arc.ends[0]).min(local_radius(
                 medial,
@@ -84,9 +109,11 @@ pub fn select(
         }
     }
     short.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+    must.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
     let order = zero
         .into_iter()
         .map(|e| (e, true))
+        .chain(must.into_iter().map(|(_, e)| (e, true)))
         .chain(short.into_iter().map(|(_, e)| (e, false)));
     let n = medial.vertices.len();
     let mut parent: Vec<u32> = (0..n as u32).collect();

@@ -588,6 +588,42 @@ impl<'a> HoleIndex<'a> {
     }
 }
 
+impl HoleIndex<'_> {
+    /// Every hole `j != i` whose gap to hole `i` is below `max_gap`, in increasing order of
+    /// `j` (range query with the same branch and bound as [`HoleIndex::nearest_gap`]).
+    pub fn within_gap(&self, i: usize, max_gap: f64) -> Vec<usize> {
+        let mut out = Vec::new();
+        let Some(&q) = self.holes.get(i) else {
+            return out;
+        };
+        if self.nodes.is_empty() || max_gap.is_nan() {
+            return out;
+        }
+        let mut stack = vec![0u32];
+        while let Some(n) = stack.pop() {
+            let node = &self.nodes[n as usize];
+            let lb = box_dist2(node, q.center).sqrt() - q.radius - node.max_r;
+            if lb - (q.radius + node.max_r + lb.abs()) * 1e-12 >= max_gap {
+                continue;
+            }
+            match node.children {
+                None => out.extend(
+                    self.order[node.start as usize..node.end as usize]
+                        .iter()
+                        .map(|&k| k as usize)
+                        .filter(|&j| j != i && gap(&q, &self.holes[j]) < max_gap),
+                ),
+                Some((l, r)) => {
+                    stack.push(l);
+                    stack.push(r);
+                }
+            }
+        }
+        out.sort_unstable();
+        out
+    }
+}
+
 fn box_dist2(node: &Node, p: Point) -> f64 {
     let dx = (node.lo[0] - p[0]).max(p[0] - node.hi[0]).max(0.0);
     let dy = (node.lo[1] - p[1]).max(p[1] - node.hi[1]).max(0.0);
@@ -624,6 +660,12 @@ mod tests {
                 }
             }
             assert_eq!(idx.nearest_gap(i), Some(best), "hole {i}");
+            for g in [0.0, 0.05, 0.5] {
+                let want: Vec<usize> = (0..holes.len())
+                    .filter(|&j| j != i && gap(&holes[i], &holes[j]) < g)
+                    .collect();
+                assert_eq!(idx.within_gap(i, g), want, "hole {i} gap {g}");
+            }
         }
     }
 

@@ -1,25 +1,28 @@
 //! Boundary sampling (paper section 2; DESIGN section 4).
 //!
-//! Every circle is sampled with `n` points, `n` a multiple of 8, counter-clockwise from angle 0:
-//! sample `k` is `center + r * u_k` with `u_k` the unit vector at angle `2 pi k / n`. The unit
+//! Every circle is sampled on a uniform grid of `N` angles (`N` a multiple of 8): grid point
+//! `k` is `center + r * u_k` with `u_k` the unit vector at angle `2 pi k / N`. The unit
 //! offsets are computed with `cos`/`sin` only in the first octant; the other octants are
-//! exact reflections and swaps (see [`unit_offsets`]), so a layout mirror-symmetric about
-//! `x = 0`, `y = 0` or a diagonal `y = +-x` gets bitwise mirror-symmetric sample coordinates,
-//! and symmetric packings produce exact Delaunay ties (which the engine breaks and reports).
+//! exact reflections and swaps (see [`unit_offsets`], [`unit_offset`]), so a layout
+//! mirror-symmetric about `x = 0`, `y = 0` or a diagonal `y = +-x` gets bitwise
+//! mirror-symmetric sample coordinates, and symmetric packings produce exact Delaunay ties
+//! (which the engine breaks and reports).
 //!
-//! The density of a circle is driven by its gap to its nearest neighbour (another hole or the
-//! bounding circle), found with the k-d tree [`HoleIndex`] (no quadratic loop): the sample
-//! spacing `2 pi r / n` is at most [`SamplingOptions::spacing_per_gap`] times that gap, within
-//! `[min_per_circle, max_per_circle]`.
+//! Density (issue 8, [`sample_adaptive`]): only a subset of the grid is used. Every circle gets
+//! [`SamplingOptions::min_per_circle`] coarse samples; intervals facing a close circle are
+//! bisected until their arc length is at most [`SamplingOptions::spacing_per_gap`] times the
+//! local gap, so points are spent only where circles are close. Close circles come from the
+//! k-d tree [`HoleIndex`] (no quadratic loop). The uniform [`sample`] (one count per circle,
+//! from its nearest gap, [`initial_counts`]) is kept for periodic boxes and tests.
 //!
 //! After triangulation, [`check_invariants`] verifies the three conditions of DESIGN section 4:
 //! (a) consecutive samples of a circle are joined by a Delaunay edge; (b) no in-domain triangle
 //! has two boundary edges; (c) every interior triangle has its three vertices on three
 //! different circles; and also that every triangle lies either inside one hole (three vertices
 //! on it) or in the domain. [`sample_and_triangulate`] resamples offending circles (doubling
-//! their count) until these hold, within bounded rounds and total samples.
+//! their density) until these hold, within bounded rounds and total samples.
 
-use crate::domain::{circle_name, dist, CircleId, Domain, HoleIndex, BOUNDING};
+use crate::domain::{circle_name, dist, Circle, CircleId, Domain, HoleIndex, BOUNDING};
 use crate::geometry::{Point, Triangulation};
 use crate::medial::{classify, medial_graph, MedialGraph, TriangleKind};
 use crate::mesher::MeshError;
@@ -59,7 +62,8 @@ pub struct CircleSamples {
     pub circle: CircleId,
     /// Index of its sample 0 in [`Samples::points`].
     pub first: u32,
-    /// Number of samples (a multiple of 8).
+    /// Number of samples (a multiple of 8 for uniform sampling; any number `>= 8` for
+    /// adaptive sampling).
     pub count: u32,
     /// The gap to its nearest neighbour that drove the density.
     pub gap: f64,
@@ -75,6 +79,14 @@ pub struct Samples {
     pub index_of: Vec<u32>,
     /// Per circle, in slot order: slot 0 the bounding circle, slot `i + 1` hole `i`.
     pub circles: Vec<CircleSamples>,
+    /// Per sample, its index on its circle's uniform grid of `grid_counts[slot]` angles
+    /// (adaptive sampling, [`sample_adaptive`]): sample `s` lies at the grid angle
+    /// `2 pi grid[s] / grid_counts[slot]`. Empty when every circle is sampled uniformly (the
+    /// grid index is then `index_of[s]` and the grid size the circle's count).
+    pub grid: Vec<u64>,
+    /// Per circle (slot order), the size of its uniform grid (a multiple of 8); empty when
+    /// uniform.
+    pub grid_counts: Vec<u64>,
 }
 
 /// Accessors taking a sample index or circle id panic when it is out of range, like slice
@@ -118,9 +130,25 @@ impl Samples {
             && a != b
             && (self.next(a) == b || self.next(b) == a)
     }
-    /// The nominal angle `2 pi k / n` of sample `s` about its circle's centre.
+    /// The index of sample `s` on its circle's uniform grid ([`Samples::grid`]).
+    pub fn grid_index(&self, s: u32) -> u64 {
+        match self.grid.get(s as usize) {
+            Some(&g) => g,
+            None => u64::from(self.index_of[s as usize]),
+        }
+    }
+    /// The size of the uniform grid of circle `id` ([`Samples::grid_counts`]).
+    pub fn grid_count(&self, id: CircleId) -> u64 {
+        match self.grid_counts.get((id + 1) as usize) {
+            Some(&n) if !self.grid.is_empty() => n,
+            _ => u64::from(self.of_circle(id).count),
+        }
+    }
+    /// The nominal angle `2 pi k / N` of sample `s` about its circle's centre (`k` its grid
+    /// index, `N` the grid size; `k = index_of[s]`, `N` the count for uniform sampling).
     pub fn angle(&self, s: u32) -> f64 {
-        TAU * self.index_of[s as usize] as f64 / self.count_of(s) as f64
+        let n = self.grid_count(self.circle_of[s as usize]);
+        TAU * self.grid_index(s) as f64 / n as f64
     }
 }
 
@@ -218,6 +246,8 @@ pub fn sample(domain: &Domain, counts: &[usize], gaps: &[f64]) -> Samples {
         circle_of: Vec::with_capacity(total),
         index_of: Vec::with_capacity(total),
         circles: Vec::with_capacity(counts.len()),
+        grid: Vec::new(),
+        grid_counts: Vec::new(),
     };
     for (slot, (id, &n)) in domain.circle_ids().zip(counts).enumerate() {
         let n = round8(n);
@@ -237,6 +267,254 @@ pub fn sample(domain: &Domain, counts: &[usize], gaps: &[f64]) -> Samples {
         }
     }
     s
+}
+
+/// The unit vector at angle `2 pi k / n` for `n` a positive multiple of 8, bitwise equal to
+/// `unit_offsets(n)[k % n]` but computed alone (so `n` may be far beyond what a table holds).
+/// `[NaN, NaN]` when `n` is not a positive multiple of 8.
+pub fn unit_offset(k: u64, n: u64) -> Point {
+    if n == 0 || n % 8 != 0 {
+        return [f64::NAN; 2];
+    }
+    let k = k % n;
+    let m = n / 8;
+    let first = |j: u64| -> Point {
+        if j == m {
+            [FRAC_1_SQRT_2, FRAC_1_SQRT_2]
+        } else {
+            let t = FRAC_PI_4 * (j as f64 / m as f64);
+            [t.cos(), t.sin()]
+        }
+    };
+    // The table fills `0..=2m` directly and then `u[k] = rot(u[k - 2m])`: so `k > 2m` is
+    // `rot^q(u[r])` with `r` in `1..=2m`.
+    let (r, q) = if k <= 2 * m {
+        (k, 0)
+    } else {
+        let r = (k - 1) % (2 * m) + 1;
+        (r, (k - r) / (2 * m))
+    };
+    let mut u = if r <= m {
+        first(r)
+    } else {
+        let [x, y] = first(2 * m - r);
+        [y, x]
+    };
+    for _ in 0..q {
+        u = [-u[1], u[0]];
+    }
+    u
+}
+
+/// A circle near the one being sampled, as seen from a point `p`: its surface distance is
+/// `|p - center| - radius` (a hole) or `radius - |p - center|` (the bounding circle).
+#[derive(Debug, Clone, Copy)]
+struct Near {
+    center: Point,
+    radius: f64,
+    outer: bool,
+}
+
+impl Near {
+    /// The distance from `p` to this circle (mirror-exact: only `dx * dx + dy * dy`).
+    fn gap(&self, p: Point) -> f64 {
+        let d = dist(p, self.center);
+        if self.outer {
+            self.radius - d
+        } else {
+            d - self.radius
+        }
+    }
+}
+
+/// Most levels of the uniform grid of one circle: its size is at most `8 * 2^MAX_LEVELS`
+/// (grid angles stay exact rationals of `f64`).
+const MAX_LEVELS: u32 = 36;
+
+/// One circle's adaptive samples: `n0` coarse samples (a multiple of 8), then recursive
+/// bisection of every interval whose arc length `L` is too long for the local gap
+/// (`L (1 + f / 2) > f g(mid)`, with `g` 1-Lipschitz this bounds `L <= f g` on the whole
+/// interval). Returns the grid size and the grid indices in increasing order; `Err(())` when
+/// more than `cap` samples would be needed.
+fn adaptive_circle(
+    c: Circle,
+    n0: u64,
+    f: f64,
+    g_nearest: f64,
+    near: &[Near],
+    cap: usize,
+) -> Result<(u64, Vec<u64>), ()> {
+    let coarse = TAU * c.radius / n0 as f64;
+    // Finest level: where even the nearest gap asks for no more.
+    let mut levels = 0;
+    while levels < MAX_LEVELS && coarse / 2f64.powi(levels as i32) * (1.0 + 0.5 * f) > f * g_nearest
+    {
+        levels += 1;
+    }
+    let n = n0 << levels;
+    let step0 = 1u64 << levels;
+    let unit = TAU * c.radius / n as f64;
+    let point = |k: u64| {
+        let u = unit_offset(k, n);
+        [c.center[0] + c.radius * u[0], c.center[1] + c.radius * u[1]]
+    };
+    let mut out: Vec<u64> = Vec::with_capacity(n0 as usize);
+    struct Ctx<'a> {
+        f: f64,
+        unit: f64,
+        cap: usize,
+        point: &'a dyn Fn(u64) -> Point,
+    }
+    fn bisect(ctx: &Ctx, a: u64, step: u64, near: &[Near], out: &mut Vec<u64>) -> Result<(), ()> {
+        if step < 2 || near.is_empty() {
+            return Ok(());
+        }
+        let len = step as f64 * ctx.unit;
+        let x = len * (1.0 + 0.5 * ctx.f) / ctx.f;
+        let mid = a + step / 2;
+        let p = (ctx.point)(mid);
+        let mut g = f64::INFINITY;
+        let mut keep: Vec<Near> = Vec::new();
+        for nb in near {
+            let d = nb.gap(p);
+            g = g.min(d);
+            // Sub-interval midpoints lie within `len / 2` of `p`, and their thresholds are
+            // below `x`: a circle farther than `x + len` never decides there.
+            if d.is_nan() || d < x + len {
+                keep.push(*nb);
+            }
+        }
+        if g.is_nan() || g >= x {
+            return Ok(());
+        }
+        bisect(ctx, a, step / 2, &keep, out)?;
+        out.push(mid);
+        if out.len() > ctx.cap {
+            return Err(());
+        }
+        bisect(ctx, mid, step / 2, &keep, out)
+    }
+    let ctx = Ctx {
+        f,
+        unit,
+        cap,
+        point: &point,
+    };
+    for k in 0..n0 {
+        out.push(k * step0);
+        bisect(&ctx, k * step0, step0, near, &mut out)?;
+        if out.len() > cap {
+            return Err(());
+        }
+    }
+    Ok((n, out))
+}
+
+/// The result of [`sample_adaptive`] when a circle would need more samples than allowed.
+#[derive(Debug, Clone, PartialEq)]
+pub struct TooManySamples {
+    pub circle: CircleId,
+    pub limit: usize,
+}
+
+/// Adaptive sampling (issue 8): every circle gets `round8(min_per_circle)` coarse samples at
+/// angles `2 pi k / n0`, and intervals facing a close circle are bisected until their arc
+/// length is at most `spacing_per_gap / 2^density[slot]` times the local gap (the distance from
+/// the interval to the nearest other circle, 1-Lipschitz along the circle). Samples are points
+/// of a uniform grid of `n0 2^L` angles ([`unit_offset`]), so the mirror symmetry of
+/// [`unit_offsets`] holds: every decision depends only on mirror-exact distances and integer
+/// grid indices. Close circles come from the k-d tree ([`HoleIndex::within_gap`]) for holes
+/// and one linear scan for the bounding circle: no quadratic step. The samples of a circle
+/// are in counter-clockwise (grid) order. `gaps` (slot order) are recorded as
+/// [`CircleSamples::gap`] and bound the finest level.
+pub fn sample_adaptive(
+    domain: &Domain,
+    opts: &SamplingOptions,
+    gaps: &[f64],
+    density: &[u32],
+) -> Result<Samples, TooManySamples> {
+    let holes = domain.holes();
+    let b = domain.bounding();
+    let index = HoleIndex::new(holes);
+    let n0 = round8(opts.min_per_circle) as u64;
+    let cap = (opts.max_per_circle / 8 * 8).max(n0 as usize);
+    let factor = |slot: usize| {
+        opts.spacing_per_gap / 2f64.powi(density.get(slot).copied().unwrap_or(0).min(60) as i32)
+    };
+    // The largest local gap that can ever make circle `slot` bisect: at the coarse level,
+    // `g < x0 = L0 (1 + f/2) / f`; a margin of 2 covers rounding.
+    let reach = |slot: usize, r: f64| {
+        let f = factor(slot);
+        let k = density.get(slot).copied().unwrap_or(0).min(MAX_LEVELS);
+        2.0 * (TAU * r / (n0 << k) as f64) * (1.0 + 0.5 * f) / f
+    };
+    let mut s = Samples {
+        points: Vec::new(),
+        circle_of: Vec::new(),
+        index_of: Vec::new(),
+        circles: Vec::with_capacity(holes.len() + 1),
+        grid: Vec::new(),
+        grid_counts: Vec::with_capacity(holes.len() + 1),
+    };
+    for (slot, id) in domain.circle_ids().enumerate() {
+        let c = domain.circle(id);
+        let g = gaps.get(slot).copied().unwrap_or(f64::NAN);
+        let x = reach(slot, c.radius);
+        let near: Vec<Near> = if id == BOUNDING {
+            holes
+                .iter()
+                .filter(|h| b.radius - dist(h.center, b.center) - h.radius < x)
+                .map(|h| Near {
+                    center: h.center,
+                    radius: h.radius,
+                    outer: false,
+                })
+                .collect()
+        } else {
+            let i = (id) as usize;
+            let mut v: Vec<Near> = index
+                .within_gap(i, x)
+                .into_iter()
+                .map(|j| Near {
+                    center: holes[j].center,
+                    radius: holes[j].radius,
+                    outer: false,
+                })
+                .collect();
+            if b.radius - dist(c.center, b.center) - c.radius < x {
+                v.push(Near {
+                    center: b.center,
+                    radius: b.radius,
+                    outer: true,
+                });
+            }
+            v
+        };
+        // Resampling doubles the density everywhere on the circle: the coarse count too.
+        let k = density.get(slot).copied().unwrap_or(0).min(MAX_LEVELS);
+        let (n, ks) = adaptive_circle(c, n0 << k, factor(slot), g, &near, cap).map_err(|()| {
+            TooManySamples {
+                circle: id,
+                limit: cap,
+            }
+        })?;
+        s.circles.push(CircleSamples {
+            circle: id,
+            first: s.points.len() as u32,
+            count: ks.len() as u32,
+            gap: g,
+        });
+        s.grid_counts.push(n);
+        for (i, &k) in ks.iter().enumerate() {
+            let u = unit_offset(k, n);
+            s.points
+                .push([c.center[0] + c.radius * u[0], c.center[1] + c.radius * u[1]]);
+            s.circle_of.push(id);
+            s.index_of.push(i as u32);
+            s.grid.push(k);
+        }
+    }
+    Ok(s)
 }
 
 /// What broke one of the sampling invariants.
@@ -409,13 +687,8 @@ pub fn thin_walls(tri: &Triangulation, medial: &MedialGraph) -> Vec<Violation> {
 /// of `delta / 2` puts a sample strictly between the spokes. Depends only on the angle, so
 /// mirror images ask for the same factor up to rounding at a power-of-two boundary (and the
 /// group rule of [`sample_and_triangulate`] then takes the larger one for both).
-fn refinement_log2(
-    domain: &Domain,
-    medial: &MedialGraph,
-    arc: u32,
-    circle: CircleId,
-    n: usize,
-) -> u32 {
+fn refinement_log2(domain: &Domain, done: &SampledDomain, arc: u32, circle: CircleId) -> u32 {
+    let medial = &done.medial;
     let Some(a) = medial.arcs.get(arc as usize) else {
         return 1;
     };
@@ -431,6 +704,21 @@ fn refinement_log2(
     };
     let delta = (t1 - t0).rem_euclid(TAU);
     let delta = delta.min(TAU - delta);
+    // The local angular step at the wall: the wider of the two intervals beside its sample.
+    let chain = if a.circles[0] == circle { &a.c1 } else { &a.c2 };
+    let samples = &done.samples;
+    let step = chain.first().map_or(TAU, |&s| {
+        let t = samples.angle(s);
+        let next = (samples.angle(samples.next(s)) - t).rem_euclid(TAU);
+        let prev = (t - samples.angle(samples.prev(s))).rem_euclid(TAU);
+        let w = next.max(prev);
+        if w > 0.0 {
+            w
+        } else {
+            TAU
+        }
+    });
+    let n = TAU / step;
     let need = 2.0 * TAU / delta;
     if need.is_nan() || need > SOFT_MAX_SAMPLES {
         // A very short arc (nearly co-circular interior triangles): leave it to arc
@@ -438,7 +726,7 @@ fn refinement_log2(
         return 0;
     }
     let mut k = 1;
-    while k < 4 && (n as f64) * f64::from(1u32 << k) < need {
+    while k < 4 && n * f64::from(1u32 << k) < need {
         k += 1;
     }
     k
@@ -471,11 +759,12 @@ pub struct SampledDomain {
 /// hold; the soft invariant (d) ([`thin_walls`]) is pursued with the same resampling while
 /// rounds remain, then accepted as is.
 ///
-/// Resampling rule (keeps mirror symmetry): when circle `c` offends, every circle with the
-/// same radius and nearest gap (bitwise) as `c` doubles its count. This depends only on
+/// Sampling is adaptive ([`sample_adaptive`]). Resampling rule (keeps mirror symmetry): when
+/// circle `c` offends, every circle with the same radius and nearest gap (bitwise) as `c`
+/// doubles its density everywhere (coarse count and the spacing-to-gap factor). This depends only on
 /// geometry, so mirror images are refined together. Errors: [`MeshError::Sampling`] when the
-/// hard invariants still fail after [`SamplingOptions::max_rounds`] rounds or an offending
-/// circle is already at [`SamplingOptions::max_per_circle`], when the total would exceed
+/// hard invariants still fail after [`SamplingOptions::max_rounds`] rounds, when a circle would
+/// need more than [`SamplingOptions::max_per_circle`] samples, when the total would exceed
 /// [`SamplingOptions::max_total`], or when samples coincide (a circle too small for its
 /// coordinates); [`MeshError::Triangulation`] from the engine; [`MeshError::Internal`] from
 /// the medial graph (not expected once the invariants hold).
@@ -484,21 +773,30 @@ pub fn sample_and_triangulate(
     opts: &SamplingOptions,
 ) -> Result<SampledDomain, MeshError> {
     let gaps = nearest_gaps(domain);
-    let mut counts = initial_counts(domain, &gaps, opts);
-    let cap = (opts.max_per_circle / 8 * 8).max(round8(opts.min_per_circle));
+    // Per slot, the number of density doublings asked for by resampling.
+    let mut density = vec![0u32; gaps.len()];
     let radii: Vec<f64> = domain
         .circle_ids()
         .map(|c| domain.circle(c).radius)
         .collect();
     let mut round = 0;
     loop {
-        let total: usize = counts.iter().sum();
+        let samples =
+            sample_adaptive(domain, opts, &gaps, &density).map_err(|e| MeshError::Sampling {
+                circle: e.circle,
+                message: format!(
+                    "the circle would need more than the most samples allowed ({}): its gap to \
+                     a neighbour is too small for the sampling",
+                    e.limit
+                ),
+            })?;
+        let total = samples.len();
         if total > opts.max_total {
-            let worst = counts
+            let worst = samples
+                .circles
                 .iter()
-                .enumerate()
-                .max_by_key(|&(_, &n)| n)
-                .map(|(i, _)| i as CircleId - 1)
+                .max_by_key(|c| c.count)
+                .map(|c| c.circle)
                 .unwrap_or(BOUNDING);
             return Err(MeshError::Sampling {
                 circle: worst,
@@ -508,7 +806,6 @@ pub fn sample_and_triangulate(
                 ),
             });
         }
-        let samples = sample(domain, &counts, &gaps);
         let triangulation = Triangulation::new(&samples.points)?;
         let kinds = classify(&samples, &triangulation);
         let hard = check_invariants(&samples, &triangulation, &kinds);
@@ -555,7 +852,7 @@ pub fn sample_and_triangulate(
             let slot = (v.circle + 1) as usize;
             let k = match (&v.kind, &soft_result) {
                 (ViolationKind::SingleSampleWall { arc }, Some(done)) => {
-                    refinement_log2(domain, &done.medial, *arc, v.circle, counts[slot])
+                    refinement_log2(domain, done, *arc, v.circle)
                 }
                 _ => 1,
             };
@@ -565,20 +862,10 @@ pub fn sample_and_triangulate(
             *e = (*e).max(k);
         }
         let mut refined = false;
-        for slot in 0..counts.len() {
+        for slot in 0..density.len() {
             if let Some(&k) = keys.get(&(radii[slot].to_bits(), gaps[slot].to_bits())) {
-                if counts[slot] >= cap {
-                    if soft_result.is_none() {
-                        return Err(MeshError::Sampling {
-                            circle: slot as CircleId - 1,
-                            message: format!(
-                                "{} and the circle already has the most samples allowed ({cap})",
-                                violations[0].describe()
-                            ),
-                        });
-                    }
-                } else if k > 0 {
-                    counts[slot] = counts[slot].saturating_mul(1 << k).min(cap);
+                if k > 0 {
+                    density[slot] += k;
                     refined = true;
                 }
             }
@@ -614,6 +901,22 @@ mod tests {
         }
         assert!(unit_offsets(12).is_empty());
         assert!(unit_offsets(0).is_empty());
+    }
+
+    #[test]
+    fn unit_offset_is_the_table_entry_bitwise() {
+        for n in [8u64, 16, 24, 32, 64, 200, 1024, 4096] {
+            let u = unit_offsets(n as usize);
+            for k in 0..2 * n {
+                let v = unit_offset(k, n);
+                let w = u[(k % n) as usize];
+                assert_eq!(
+                    [v[0].to_bits(), v[1].to_bits()],
+                    [w[0].to_bits(), w[1].to_bits()]
+                );
+            }
+        }
+        assert!(unit_offset(3, 12)[0].is_nan());
     }
 
     #[test]

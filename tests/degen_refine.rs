@@ -247,11 +247,11 @@ proptest! {
         check(&d, &m);
     }
 }
-/// Known bug (open on issue 4): a sample shared by two interior triangles next to an inserted
-/// hole leaves a zero-sweep arc on it, and the inserted-hole template then has a zero-area
-/// ring block. Found by `random_layouts_with_refinement_and_collapse`; run with `--ignored`.
+/// Was a bug (issue 4): a sample shared by two interior triangles next to an inserted hole left
+/// a zero-sweep arc on it (the feet of the two medial vertices are 1.3 degrees apart, too close
+/// for resampling), and the inserted-hole template then had a zero-area ring block. Found by
+/// `random_layouts_with_refinement_and_collapse`. Such arcs are now always collapsed.
 #[test]
-#[ignore]
 fn regression_zero_sweep_arc_on_inserted_hole() {
     let d = layout(17649210200229903181, 9, 0.002);
     let o = Options {
@@ -260,5 +260,60 @@ fn regression_zero_sweep_arc_on_inserted_hole() {
         ..Options::paper()
     };
     let m = mesh(&d, &o).unwrap();
+    check(&d, &m);
+}
+
+/// The random-layout property on many more layouts, with every wall arc of positive sweep
+/// checked too; `DEGEN_CASES=2000 cargo test --release --test degen_refine many_` (runs 16
+/// layouts by default). Layouts come from a fixed seed sequence, so a failure names its seed.
+#[test]
+fn many_random_layouts_have_no_zero_area_block() {
+    let cases: u64 = std::env::var("DEGEN_CASES")
+        .ok()
+        .and_then(|s| s.parse().ok())
+        .unwrap_or(16);
+    let mut rng = SplitMix64(0x5EED_DE6E);
+    for case in 0..cases {
+        let seed = rng.next_u64();
+        let h = 2 + (rng.next_u64() % 14) as usize;
+        let gap = 0.002 + 0.048 * rng.next_f64();
+        let fraction = [0.0, 0.05, 0.3][(rng.next_u64() % 3) as usize];
+        let d = layout(seed, h, gap);
+        if d.hole_count() < 2 {
+            continue;
+        }
+        let o = Options {
+            cells: 2,
+            collapse_fraction: fraction,
+            ..Options::paper()
+        };
+        let m = mesh(&d, &o).unwrap_or_else(|e| {
+            panic!("case {case}: layout({seed}, {h}, {gap}) fraction {fraction}: {e}")
+        });
+        for e in &m.layout.edges {
+            if let medial_blocks::layout::Curve::Arc { sweep, .. } = e.curve {
+                assert!(
+                    sweep != 0.0,
+                    "case {case}: layout({seed}, {h}, {gap}): zero sweep"
+                );
+            }
+        }
+        check(&d, &m);
+    }
+}
+
+/// Was a bug: with several inserted holes, splitting a block pair for a later hole split the
+/// wall of an earlier hole whose template was already filled, leaving a ring block on a stale
+/// edge (grid generation then refused the layout). Found by the loop above (case 142).
+#[test]
+fn regression_split_into_filled_template() {
+    let d = layout(16805322600089750696, 9, 0.01580696281250767);
+    let o = Options {
+        cells: 2,
+        collapse_fraction: 0.0,
+        ..Options::paper()
+    };
+    let m = mesh(&d, &o).unwrap();
+    assert!(m.inserted_holes.len() >= 2);
     check(&d, &m);
 }

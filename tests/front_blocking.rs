@@ -191,7 +191,8 @@ fn check_layout(d: &Domain, b: &Blocking) {
         // E centred at the medial vertex m through the spoke's foot s meets the wall circle
         // in an arc centred on the direction c -> m, with s at one end; both neighbours of s
         // are not strictly inside E, so the angle at the circle's centre c between s and the
-        // exact normal foot c + r (m - c)/|m - c| is at most half the sample spacing.
+        // exact normal foot c + r (m - c)/|m - c| is at most half the wider sample interval
+        // beside s.
         for (k, corner) in [(3usize, 0usize), (1, 1)] {
             let e = &l.edges[blk.sides[k].edge as usize];
             assert_eq!(e.curve, Curve::Segment);
@@ -203,8 +204,12 @@ fn check_layout(d: &Domain, b: &Blocking) {
             let alpha = (u[0] * w[1] - u[1] * w[0])
                 .atan2(u[0] * w[0] + u[1] * w[1])
                 .abs();
-            let n = b.samples.of_circle(c).count as f64;
-            let half = TAU / n / 2.0;
+            // Sampling is adaptive: the spacing is the wider interval beside the sample.
+            let smp = b.vertex_samples[blk.corners[corner] as usize].expect("sample corner");
+            let t = b.samples.angle(smp);
+            let next = (b.samples.angle(b.samples.next(smp)) - t).rem_euclid(TAU);
+            let prev = (t - b.samples.angle(b.samples.prev(smp))).rem_euclid(TAU);
+            let half = next.max(prev) / 2.0;
             assert!(
                 alpha <= half * (1.0 + 1e-9) + 1e-12,
                 "block {bi} spoke {k}: foot {alpha} rad from the normal foot, spacing/2 = {half}"

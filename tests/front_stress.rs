@@ -76,3 +76,26 @@ fn stress() {
         }
     }
 }
+
+/// Sample count and time of the sampling + triangulation on `layouts::bubbles(n, 1)`, for the
+/// record (issue 8): `cargo test --release --test front_stress -- --ignored bubbles --nocapture`.
+/// Asserts only what must hold: every hard invariant, counts of 6(h - 1) blocks' medial graph.
+#[test]
+#[ignore]
+fn bubbles_sampling_cost() {
+    use medial_blocks::sampling::{sample_and_triangulate, SamplingOptions};
+    for n in [1000, 10000] {
+        let d = medial_blocks::layouts::bubbles(n, 1).unwrap();
+        let t = std::time::Instant::now();
+        let s = sample_and_triangulate(&d, &SamplingOptions::default()).unwrap();
+        let h = d.hole_count();
+        assert_eq!(s.medial.vertices.len(), 2 * (h - 1));
+        eprintln!(
+            "bubbles({n}, 1): {} samples, {} rounds, {} thin walls, {:?}",
+            s.samples.len(),
+            s.rounds,
+            s.thin_walls.len(),
+            t.elapsed()
+        );
+    }
+}

@@ -189,6 +189,8 @@ impl Tiling {
             circle_of: Vec::new(),
             index_of: Vec::new(),
             circles: Vec::new(),
+            grid: Vec::new(),
+            grid_counts: Vec::new(),
         };
         let b = self.domain.bounding();
         let push_circle = |s: &mut Samples, id: CircleId, pts: Vec<Point>, gap: f64| {
