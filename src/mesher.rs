@@ -204,8 +204,8 @@ fn mesh_exact(domain: &Domain, options: &Options) -> Result<Option<Mesh>, MeshEr
         let (v, e) = (b.medial.vertex_count(), b.medial.arc_count());
         match exact_mode::build(domain, &b, options) {
             Ok(m) => {
-                let consistent = m.inconsistent_arcs.is_empty()
-                    && crate::quality::measure(&m.grids).inverted_cells == 0;
+                let consistent =
+                    m.inconsistent_arcs.is_empty() && crate::quality::inverted_cells(&m.grids) == 0;
                 let mesh = Mesh {
                     layout: m.layout,
                     grids: m.grids,
