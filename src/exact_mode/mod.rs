@@ -50,6 +50,7 @@ use crate::layout::{Block, BlockLayout, Curve, Edge, EdgeKind, SideRef};
 use crate::mesh::BlockGrid;
 use crate::mesher::{MeshError, Options};
 use counts::{ArcTarget, CountProblem, Counts};
+use rayon::prelude::*;
 use std::collections::HashMap;
 use std::f64::consts::{PI, TAU};
 
@@ -155,9 +156,10 @@ pub fn exact_vertices(
     medial: &crate::medial::MedialGraph,
 ) -> Result<Vec<ExactVertex>, MeshError> {
     let nh = domain.hole_count() as CircleId;
-    medial
+    // In parallel; collected in vertex order so the first error is that of the sequential loop.
+    let all: Vec<Result<ExactVertex, MeshError>> = medial
         .vertices
-        .iter()
+        .par_iter()
         .enumerate()
         .map(|(k, v)| {
             let c = v.circles;
@@ -180,7 +182,8 @@ pub fn exact_vertices(
                 tangent: ap.tangent_points,
             })
         })
-        .collect()
+        .collect();
+    all.into_iter().collect()
 }
 
 /// One medial arc sampled in exact geometry.
@@ -401,6 +404,63 @@ fn expected_sign(c: CircleId) -> f64 {
     }
 }
 
+/// The medial nodes of one arc and its two blocks' node arrays with the interior columns
+/// (spokes from the arc's interior nodes) in place.
+struct ArcNodes {
+    m_nodes: Vec<Point>,
+    grids: [Vec<Point>; 2],
+}
+
+/// [`ArcNodes`] of arc `e` (the arc-node and interior-spoke part of [`build`]).
+fn arc_nodes(
+    e: usize,
+    arc: &crate::medial::MedialArc,
+    g: &ArcGeometry,
+    target: &ArcTarget,
+    counts: &Counts,
+    domain: &Domain,
+    options: &Options,
+) -> Result<ArcNodes, MeshError> {
+    let n = counts.arc[e];
+    let weights: Vec<f64> = {
+        let nbar = 0.5
+            * (counts.circle[cidx(arc.circles[0])] + counts.circle[cidx(arc.circles[1])]) as f64;
+        target
+            .sq
+            .iter()
+            .zip(&target.ang)
+            .map(|(s, a)| (nbar * s).max(*a))
+            .collect()
+    };
+    let params = equidistribute(&weights, n);
+    let mut m_nodes = Vec::with_capacity(n + 1);
+    let mut a_nodes: [Vec<Point>; 2] = [Vec::with_capacity(n + 1), Vec::with_capacity(n + 1)];
+    for &t in &params {
+        let (m, a, _) = g
+            .at(t)
+            .ok_or_else(|| internal(format!("arc {e}: a medial node is not defined")))?;
+        m_nodes.push(m);
+        a_nodes[0].push(a[0]);
+        a_nodes[1].push(a[1]);
+    }
+    let grids = [0, 1].map(|side| {
+        let c = arc.circles[side];
+        let nj = counts.circle[cidx(c)];
+        let cl = clustering_of(options, c);
+        let first = cl.first_height(domain.circle(c).radius);
+        let mut nodes = vec![[0.0; 2]; (n + 1) * (nj + 1)];
+        for i in 1..n {
+            let k = if side == 0 { i } else { n - i };
+            let col = spoke_nodes(a_nodes[side][k], m_nodes[k], nj, first, cl.growth);
+            for (j, p) in col.into_iter().enumerate() {
+                nodes[i + j * (n + 1)] = p;
+            }
+        }
+        nodes
+    });
+    Ok(ArcNodes { m_nodes, grids })
+}
+
 /// Build the exact-mode layout and grids from the front end's [`Blocking`] (read only).
 ///
 /// Block `2e` lies on arc `e`'s `circles[0]`, block `2e + 1` on `circles[1]`, with the corner
@@ -428,53 +488,65 @@ pub fn build(
         ));
     }
 
-    // Geometry of every arc.
+    // Geometry of every arc, in parallel; reduced in arc order (the first error is that of
+    // the sequential loop).
+    let per_arc: Vec<Result<(ArcGeometry, ArcTarget, bool), MeshError>> = medial
+        .arcs
+        .par_iter()
+        .enumerate()
+        .map(|(e, arc)| {
+            let [v0, v1] = arc.ends.map(|v| v as usize);
+            let (Some(x0), Some(x1)) = (vertices.get(v0), vertices.get(v1)) else {
+                return Err(internal(format!("arc {e} has an unknown end vertex")));
+            };
+            let walls = arc.circles.map(|c| Wall::of(domain, c));
+            let mut ends_a = [[[0.0; 2]; 2]; 2];
+            for (side, &c) in arc.circles.iter().enumerate() {
+                let (Some(s0), Some(s1)) = (x0.slot(c), x1.slot(c)) else {
+                    return Err(internal(format!(
+                        "arc {e}: an end vertex does not touch circle {c}"
+                    )));
+                };
+                ends_a[0][side] = x0.tangent[s0];
+                ends_a[1][side] = x1.tangent[s1];
+            }
+            let hint_a = wall_hint(&blocking.layout, 2 * e)
+                .ok_or_else(|| internal(format!("arc {e}: no sampled wall")))?;
+            let hint_b = wall_hint(&blocking.layout, 2 * e + 1)
+                .ok_or_else(|| internal(format!("arc {e}: no sampled wall")))?;
+            let (s0, w0) = exact_sweep(&walls[0], ends_a[0][0], ends_a[1][0], hint_a);
+            let (s1, w1) = exact_sweep(&walls[1], ends_a[0][1], ends_a[1][1], -hint_b);
+            let wrong = |w: f64, c: CircleId| w.abs() > ZERO_SWEEP && w * expected_sign(c) < 0.0;
+            let inconsistent = wrong(w0, arc.circles[0]) || wrong(-w1, arc.circles[1]);
+            let param = if w1.abs() > w0.abs() { 1 } else { 0 };
+            let g = ArcGeometry {
+                walls,
+                param,
+                start: [s0, s1],
+                sweep: [w0, w1],
+                ends_m: [x0.center, x1.center],
+                ends_a,
+            };
+            let (sq, ang) = g
+                .densities()
+                .ok_or_else(|| internal(format!("arc {e}: the exact medial arc is not defined")))?;
+            let target = ArcTarget {
+                circles: arc.circles.map(cidx),
+                sq,
+                ang,
+            };
+            Ok((g, target, inconsistent))
+        })
+        .collect();
     let mut geoms = Vec::with_capacity(medial.arcs.len());
     let mut targets = Vec::with_capacity(medial.arcs.len());
     let mut inconsistent_arcs = Vec::new();
-    for (e, arc) in medial.arcs.iter().enumerate() {
-        let [v0, v1] = arc.ends.map(|v| v as usize);
-        let (Some(x0), Some(x1)) = (vertices.get(v0), vertices.get(v1)) else {
-            return Err(internal(format!("arc {e} has an unknown end vertex")));
-        };
-        let walls = arc.circles.map(|c| Wall::of(domain, c));
-        let mut ends_a = [[[0.0; 2]; 2]; 2];
-        for (side, &c) in arc.circles.iter().enumerate() {
-            let (Some(s0), Some(s1)) = (x0.slot(c), x1.slot(c)) else {
-                return Err(internal(format!(
-                    "arc {e}: an end vertex does not touch circle {c}"
-                )));
-            };
-            ends_a[0][side] = x0.tangent[s0];
-            ends_a[1][side] = x1.tangent[s1];
-        }
-        let hint_a = wall_hint(&blocking.layout, 2 * e)
-            .ok_or_else(|| internal(format!("arc {e}: no sampled wall")))?;
-        let hint_b = wall_hint(&blocking.layout, 2 * e + 1)
-            .ok_or_else(|| internal(format!("arc {e}: no sampled wall")))?;
-        let (s0, w0) = exact_sweep(&walls[0], ends_a[0][0], ends_a[1][0], hint_a);
-        let (s1, w1) = exact_sweep(&walls[1], ends_a[0][1], ends_a[1][1], -hint_b);
-        let wrong = |w: f64, c: CircleId| w.abs() > ZERO_SWEEP && w * expected_sign(c) < 0.0;
-        if wrong(w0, arc.circles[0]) || wrong(-w1, arc.circles[1]) {
+    for (e, r) in per_arc.into_iter().enumerate() {
+        let (g, target, inconsistent) = r?;
+        if inconsistent {
             inconsistent_arcs.push(e);
         }
-        let param = if w1.abs() > w0.abs() { 1 } else { 0 };
-        let g = ArcGeometry {
-            walls,
-            param,
-            start: [s0, s1],
-            sweep: [w0, w1],
-            ends_m: [x0.center, x1.center],
-            ends_a,
-        };
-        let (sq, ang) = g
-            .densities()
-            .ok_or_else(|| internal(format!("arc {e}: the exact medial arc is not defined")))?;
-        targets.push(ArcTarget {
-            circles: arc.circles.map(cidx),
-            sq,
-            ang,
-        });
+        targets.push(target);
         geoms.push(g);
     }
 
@@ -540,32 +612,32 @@ pub fn build(
     // Vertex spokes: nodes computed once per (vertex, slot).
     let mut spoke_edge: HashMap<(usize, usize), u32> = HashMap::new();
     let mut spoke_cache: HashMap<(usize, usize), Vec<Point>> = HashMap::new();
+    // Arc nodes and the grids' interior columns of every arc, in parallel (pure functions of
+    // the geometry and the counts); the vertex spokes are filled in below, in arc order.
+    let per_arc: Vec<Result<ArcNodes, MeshError>> = medial
+        .arcs
+        .par_iter()
+        .enumerate()
+        .map(|(e, arc)| {
+            arc_nodes(
+                e,
+                arc,
+                &geoms[e],
+                &problem.arcs[e],
+                &counts,
+                domain,
+                options,
+            )
+        })
+        .collect();
     let mut grids = Vec::with_capacity(2 * medial.arcs.len());
-    for (e, arc) in medial.arcs.iter().enumerate() {
+    for ((e, arc), nodes_of_arc) in medial.arcs.iter().enumerate().zip(per_arc) {
         let g = &geoms[e];
         let n = counts.arc[e];
-        // Arc nodes.
-        let weights: Vec<f64> = {
-            let nbar = 0.5
-                * (counts.circle[cidx(arc.circles[0])] + counts.circle[cidx(arc.circles[1])])
-                    as f64;
-            let t = &problem.arcs[e];
-            t.sq.iter()
-                .zip(&t.ang)
-                .map(|(s, a)| (nbar * s).max(*a))
-                .collect()
-        };
-        let params = equidistribute(&weights, n);
-        let mut m_nodes = Vec::with_capacity(n + 1);
-        let mut a_nodes: [Vec<Point>; 2] = [Vec::with_capacity(n + 1), Vec::with_capacity(n + 1)];
-        for &t in &params {
-            let (m, a, _) = g
-                .at(t)
-                .ok_or_else(|| internal(format!("arc {e}: a medial node is not defined")))?;
-            m_nodes.push(m);
-            a_nodes[0].push(a[0]);
-            a_nodes[1].push(a[1]);
-        }
+        let ArcNodes {
+            m_nodes,
+            grids: mut side_grids,
+        } = nodes_of_arc?;
         let [v0, v1] = arc.ends.map(|v| v as usize);
         let medial_edge = layout.edges.len() as u32;
         layout.edges.push(Edge {
@@ -623,19 +695,18 @@ pub fn build(
                 },
                 kind: EdgeKind::Wall(c),
             });
-            // Grid: column i is arc node k = i (side 0) or n - i (side 1).
-            let mut nodes = vec![[0.0; 2]; (n + 1) * (nj + 1)];
-            for i in 0..=n {
+            // Grid: column i is arc node k = i (side 0) or n - i (side 1); the interior
+            // columns are in place, the vertex spokes are copied here.
+            let mut nodes = std::mem::take(&mut side_grids[side]);
+            for i in [0, n] {
                 let k = if side == 0 { i } else { n - i };
-                let col: Vec<Point> = if k == 0 {
-                    spoke_cache[&(v0, s0)].clone()
-                } else if k == n {
-                    spoke_cache[&(v1, s1)].clone()
+                let col = if k == 0 {
+                    &spoke_cache[&(v0, s0)]
                 } else {
-                    spoke_nodes(a_nodes[side][k], m_nodes[k], nj, first, cl.growth)
+                    &spoke_cache[&(v1, s1)]
                 };
-                for (j, p) in col.into_iter().enumerate() {
-                    nodes[i + j * (n + 1)] = p;
+                for (j, p) in col.iter().enumerate() {
+                    nodes[i + j * (n + 1)] = *p;
                 }
             }
             grids.push(BlockGrid { ni: n, nj, nodes });
