@@ -238,7 +238,7 @@ fn exact_attempt(
     match exact_mode::collapsed::build_collapsed(&cb, options) {
         Ok(m) => {
             let consistent = m.inconsistent_arcs.is_empty()
-                && crate::quality::measure(&m.grids).inverted_cells == 0;
+                && crate::quality::inverted_cells(&m.grids) == 0;
             if !consistent {
                 return Ok(None);
             }

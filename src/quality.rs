@@ -16,6 +16,8 @@ use crate::mesh::BlockGrid;
 use rayon::prelude::*;
 use serde::Serialize;
 
+mod kernel;
+
 /// Angles (degrees) and Jacobians of the four corners of one quadrilateral `[p0, p1, p2, p3]`
 /// (see the module doc for the conventions).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -81,37 +83,58 @@ fn corners(grid: &BlockGrid, i: usize, j: usize) -> [Point; 4] {
     ]
 }
 
-/// Per-cell figures of one block (empty for a malformed grid, see [`well_formed`]).
+/// Per-cell figures of one block (empty for a malformed grid, see [`well_formed`]); equal to
+/// those of [`cell_corners`] and [`cell_metrics`], computed in one pass.
 pub fn cell_fields(grid: &BlockGrid) -> CellFields {
     let mut f = CellFields::default();
     if !well_formed(grid) {
         return f;
     }
     let n = grid.ni * grid.nj;
-    f.min_angle_deg.reserve(n);
-    f.max_angle_deg.reserve(n);
-    f.min_jacobian.reserve(n);
+    for v in [
+        &mut f.min_angle_deg,
+        &mut f.max_angle_deg,
+        &mut f.min_jacobian,
+        &mut f.equiangle_skewness,
+        &mut f.edge_ratio,
+        &mut f.scaled_jacobian,
+        &mut f.aspect_ratio,
+    ] {
+        v.reserve_exact(n);
+    }
     for j in 0..grid.nj {
         for i in 0..grid.ni {
-            let c = cell_corners(corners(grid, i, j));
-            f.min_angle_deg.push(fold(c.angle_deg, f64::min));
-            f.max_angle_deg.push(fold(c.angle_deg, f64::max));
-            // NaN-propagating minimum: a NaN Jacobian must not look valid.
-            let mut mj = c.jacobian[0];
-            for &x in &c.jacobian[1..] {
-                if x.is_nan() || x < mj {
-                    mj = x;
-                }
-            }
+            let [lo, hi, mj, sk, er, sj, ar] = kernel::cell_field_values(&corners(grid, i, j));
+            f.min_angle_deg.push(lo);
+            f.max_angle_deg.push(hi);
             f.min_jacobian.push(mj);
-            let m = cell_metrics(corners(grid, i, j));
-            f.equiangle_skewness.push(m.equiangle_skewness);
-            f.edge_ratio.push(m.edge_ratio);
-            f.scaled_jacobian.push(m.scaled_jacobian);
-            f.aspect_ratio.push(m.aspect_ratio);
+            f.equiangle_skewness.push(sk);
+            f.edge_ratio.push(er);
+            f.scaled_jacobian.push(sj);
+            f.aspect_ratio.push(ar);
         }
     }
     f
+}
+
+/// Number of inverted cells (a corner Jacobian `<= 0` or not a number) over well-formed grids:
+/// the cheap check of [`Quality::inverted_cells`] (signs of cross products only).
+pub fn inverted_cells(grids: &[BlockGrid]) -> usize {
+    grids
+        .par_iter()
+        .map(|g| {
+            if !well_formed(g) {
+                return 0;
+            }
+            let mut n = 0;
+            for j in 0..g.nj {
+                for i in 0..g.ni {
+                    n += usize::from(kernel::is_inverted(&corners(g, i, j)));
+                }
+            }
+            n
+        })
+        .sum()
 }
 
 fn fold(v: [f64; 4], op: fn(f64, f64) -> f64) -> f64 {
@@ -143,7 +166,24 @@ pub struct Quality {
 }
 
 /// Measure every cell of every grid.
+///
+/// Blocks are measured in parallel (on the current rayon pool) and reduced in block order:
+/// the means are sums of per-block sums, the same for every thread count.
 pub fn measure(grids: &[BlockGrid]) -> Quality {
+    reduce(&block_stats(grids)).0
+}
+
+/// [`measure`] and the cell part of [`quality_metrics`] in one pass over the cells.
+fn block_stats(grids: &[BlockGrid]) -> Vec<kernel::BlockStats> {
+    let tables = kernel::Tables::new();
+    grids
+        .par_iter()
+        .map_init(Vec::new, |buf, g| kernel::block_stats(g, &tables, buf))
+        .collect()
+}
+
+/// Reduce per-block results in block order.
+fn reduce(stats: &[kernel::BlockStats]) -> (Quality, QualityMetrics) {
     let mut q = Quality {
         cells: 0,
         min_angle_deg: f64::INFINITY,
@@ -154,43 +194,26 @@ pub fn measure(grids: &[BlockGrid]) -> Quality {
         min_scaled_jacobian: f64::INFINITY,
         malformed_grids: 0,
     };
+    let mut m = QualityMetrics::empty();
     let (mut sum_min, mut sum_max) = (0.0, 0.0);
-    for grid in grids {
-        if !well_formed(grid) {
+    for s in stats {
+        if s.malformed {
             q.malformed_grids += 1;
             continue;
         }
-        for j in 0..grid.nj {
-            for i in 0..grid.ni {
-                let p = corners(grid, i, j);
-                let c = cell_corners(p);
-                let lo = fold(c.angle_deg, f64::min);
-                let hi = fold(c.angle_deg, f64::max);
-                q.cells += 1;
-                sum_min += lo;
-                sum_max += hi;
-                q.min_angle_deg = q.min_angle_deg.min(lo);
-                q.max_angle_deg = q.max_angle_deg.max(hi);
-                if c.jacobian.iter().any(|&x| x.is_nan() || x <= 0.0) {
-                    q.inverted_cells += 1;
-                }
-                for k in 0..4 {
-                    let o = p[k];
-                    let a = p[(k + 1) % 4];
-                    let b = p[(k + 3) % 4];
-                    let la = (a[0] - o[0]).hypot(a[1] - o[1]);
-                    let lb = (b[0] - o[0]).hypot(b[1] - o[1]);
-                    let s = if la > 0.0 && lb > 0.0 {
-                        c.jacobian[k] / (la * lb)
-                    } else {
-                        0.0
-                    };
-                    if s.is_nan() || s < q.min_scaled_jacobian {
-                        q.min_scaled_jacobian = s;
-                    }
-                }
-            }
+        q.cells += s.cells;
+        sum_min += s.sum_min;
+        sum_max += s.sum_max;
+        q.min_angle_deg = q.min_angle_deg.min(s.min_angle_deg);
+        q.max_angle_deg = q.max_angle_deg.max(s.max_angle_deg);
+        q.inverted_cells += s.inverted;
+        // NaN-sticky minimum, as if every cell were visited in order.
+        if !q.min_scaled_jacobian.is_nan()
+            && (s.min_scaled_jacobian.is_nan() || s.min_scaled_jacobian < q.min_scaled_jacobian)
+        {
+            q.min_scaled_jacobian = s.min_scaled_jacobian;
         }
+        m.merge_cells(&s.metrics);
     }
     if q.cells == 0 {
         q.min_angle_deg = 0.0;
@@ -200,7 +223,7 @@ pub fn measure(grids: &[BlockGrid]) -> Quality {
         q.mean_min_angle_deg = sum_min / q.cells as f64;
         q.mean_max_angle_deg = sum_max / q.cells as f64;
     }
-    q
+    (q, m)
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -461,30 +484,6 @@ impl QualityMetrics {
     }
 }
 
-/// The per-cell metrics of one block (a malformed grid contributes nothing).
-fn block_metrics(grid: &BlockGrid) -> QualityMetrics {
-    let mut m = QualityMetrics::empty();
-    if !well_formed(grid) {
-        return m;
-    }
-    for j in 0..grid.nj {
-        for i in 0..grid.ni {
-            let c = cell_metrics(corners(grid, i, j));
-            for a in c.angle_deg {
-                m.angle_deg.add_value(a);
-            }
-            if !(m.angle_deg.accepts(c.min_angle_deg) && m.angle_deg.accepts(c.max_angle_deg)) {
-                m.angle_deg.outside += 1;
-            }
-            m.equiangle_skewness.add(c.equiangle_skewness);
-            m.edge_ratio.add(c.edge_ratio);
-            m.scaled_jacobian.add(c.scaled_jacobian);
-            m.aspect_ratio.add(c.aspect_ratio);
-        }
-    }
-    m
-}
-
 /// Side `s` of `grid`: for position `p` along the side (in the side's direction, see
 /// [`crate::layout`]), the node on the side and its neighbour one step into the block.
 fn side_node_and_inward(grid: &BlockGrid, s: usize, p: usize) -> (Point, Point) {
@@ -596,14 +595,15 @@ fn wall_orthogonality(layout: &BlockLayout, grids: &[BlockGrid]) -> Option<f64> 
 /// Per-cell metrics are computed block by block in parallel (on the current rayon pool) and
 /// merged in block order, so the result does not depend on the number of threads.
 pub fn quality_metrics(layout: &BlockLayout, grids: &[BlockGrid]) -> QualityMetrics {
-    let per_block: Vec<QualityMetrics> = grids.par_iter().map(block_metrics).collect();
-    let mut m = QualityMetrics::empty();
-    for b in &per_block {
-        m.merge_cells(b);
-    }
+    measure_all(layout, grids).1
+}
+
+/// [`measure`] and [`quality_metrics`] together, with one pass over the cells.
+pub fn measure_all(layout: &BlockLayout, grids: &[BlockGrid]) -> (Quality, QualityMetrics) {
+    let (q, mut m) = reduce(&block_stats(grids));
     if layout.blocks.len() == grids.len() {
         growth_ratios(layout, grids, &mut m.interface_growth_ratio);
         m.max_wall_orthogonality_deviation_deg = wall_orthogonality(layout, grids);
     }
-    m
+    (q, m)
 }

@@ -5,7 +5,7 @@ use super::write_atomic;
 use crate::cocircular::CocircularGroup;
 use crate::domain::Circle;
 use crate::mesh::Mesh;
-use crate::quality::{measure, quality_metrics, QualityMetrics};
+use crate::quality::{measure_all, QualityMetrics};
 use serde::Serialize;
 use std::io::{self, Write};
 use std::path::Path;
@@ -60,10 +60,10 @@ pub struct Report {
 }
 
 impl Report {
-    /// Counts from the mesh, quality from [`measure`] over its grids.
+    /// Counts from the mesh, quality from [`crate::quality::measure`] and
+    /// [`crate::quality::quality_metrics`] over its grids (one pass, [`measure_all`]).
     pub fn from_mesh(mesh: &Mesh) -> Report {
-        let q = measure(&mesh.grids);
-        let quality = quality_metrics(&mesh.layout, &mesh.grids);
+        let (q, quality) = measure_all(&mesh.layout, &mesh.grids);
         Report {
             holes: mesh.holes,
             blocks: mesh.layout.blocks.len(),

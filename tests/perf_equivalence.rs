@@ -1,0 +1,459 @@
+//! The fast paths of issue #8 against independent slow references:
+//! - cell quality: the one-pass kernel (`quality::measure`, `quality_metrics`, `cell_fields`,
+//!   `inverted_cells`) against the original per-corner `atan2` / per-edge `hypot` formulas,
+//!   kept here verbatim, on random quads (degenerate, inverted, tiny, huge and non-finite ones
+//!   included) and on perturbed lattices; every figure bit for bit, the means as sums of
+//!   per-block sums (the documented reduction order);
+//! - the whole pipeline gives identical meshes and files on 1 and 2 threads.
+//!
+//! `PERF_TIMINGS=1 cargo test --release --test perf_equivalence -- --nocapture timings` prints
+//! the triangulation of the pipeline's sample points against spade (no assertion on time).
+
+use medial_blocks::geometry::Point;
+use medial_blocks::layout::BlockLayout;
+use medial_blocks::layouts::SplitMix64;
+use medial_blocks::mesh::BlockGrid;
+use medial_blocks::quality::{
+    cell_fields, inverted_cells, measure, measure_all, quality_metrics, Histogram,
+};
+use proptest::prelude::*;
+
+// ----------------------------------------------------------------------------------------------
+// The reference: the quality formulas before the kernel, verbatim.
+// ----------------------------------------------------------------------------------------------
+
+fn ref_corners(p: [Point; 4]) -> ([f64; 4], [f64; 4]) {
+    let mut angle_deg = [0.0; 4];
+    let mut jacobian = [0.0; 4];
+    for k in 0..4 {
+        let o = p[k];
+        let a = p[(k + 1) % 4];
+        let b = p[(k + 3) % 4];
+        let e1 = [a[0] - o[0], a[1] - o[1]];
+        let e2 = [b[0] - o[0], b[1] - o[1]];
+        let cross = e1[0] * e2[1] - e1[1] * e2[0];
+        let dot = e1[0] * e2[0] + e1[1] * e2[1];
+        let mut ang = cross.atan2(dot).to_degrees();
+        if ang < 0.0 {
+            ang += 360.0;
+        }
+        angle_deg[k] = ang;
+        jacobian[k] = cross;
+    }
+    (angle_deg, jacobian)
+}
+
+fn fold(v: [f64; 4], op: fn(f64, f64) -> f64) -> f64 {
+    op(op(v[0], v[1]), op(v[2], v[3]))
+}
+
+fn len(a: Point, b: Point) -> f64 {
+    (b[0] - a[0]).hypot(b[1] - a[1])
+}
+
+fn ratio(a: f64, b: f64) -> f64 {
+    if b > 0.0 {
+        a / b
+    } else if a > 0.0 {
+        f64::INFINITY
+    } else {
+        1.0
+    }
+}
+
+/// (angles, min, max, skewness, edge ratio, scaled Jacobian, aspect ratio, min Jacobian).
+struct RefCell {
+    angles: [f64; 4],
+    lo: f64,
+    hi: f64,
+    skew: f64,
+    er: f64,
+    sj: f64,
+    ar: f64,
+    min_jac: f64,
+    jac: [f64; 4],
+}
+
+fn ref_cell(p: [Point; 4]) -> RefCell {
+    let (angles, jac) = ref_corners(p);
+    let lo = fold(angles, f64::min);
+    let hi = fold(angles, f64::max);
+    let edges = [
+        len(p[0], p[1]),
+        len(p[1], p[2]),
+        len(p[2], p[3]),
+        len(p[3], p[0]),
+    ];
+    let mut sj = f64::INFINITY;
+    for k in 0..4 {
+        let (la, lb) = (edges[k], edges[(k + 3) % 4]);
+        let s = if la > 0.0 && lb > 0.0 {
+            jac[k] / (la * lb)
+        } else {
+            0.0
+        };
+        if s.is_nan() || s < sj {
+            sj = s;
+        }
+    }
+    let (elo, ehi) = (fold(edges, f64::min), fold(edges, f64::max));
+    let li = 0.5 * (edges[0] + edges[2]);
+    let lj = 0.5 * (edges[1] + edges[3]);
+    let mut min_jac = jac[0];
+    for &x in &jac[1..] {
+        if x.is_nan() || x < min_jac {
+            min_jac = x;
+        }
+    }
+    RefCell {
+        angles,
+        lo,
+        hi,
+        skew: ((hi - 90.0) / 90.0).max((90.0 - lo) / 90.0),
+        er: ratio(ehi, elo),
+        sj,
+        ar: ratio(li.max(lj), li.min(lj)),
+        min_jac,
+        jac,
+    }
+}
+
+fn well_formed(g: &BlockGrid) -> bool {
+    (g.ni + 1).checked_mul(g.nj + 1) == Some(g.nodes.len())
+}
+
+fn cells(g: &BlockGrid) -> Vec<[Point; 4]> {
+    let mut out = Vec::new();
+    for j in 0..g.nj {
+        for i in 0..g.ni {
+            out.push([
+                g.node(i, j),
+                g.node(i + 1, j),
+                g.node(i + 1, j + 1),
+                g.node(i, j + 1),
+            ]);
+        }
+    }
+    out
+}
+
+/// A metric summary of the reference: (min, max, histogram counts, outside, samples).
+#[derive(Debug, PartialEq)]
+struct RefSummary {
+    min: Option<u64>,
+    max: Option<u64>,
+    counts: Vec<u64>,
+    outside: u64,
+    samples: u64,
+}
+
+fn ref_summary(
+    values: &[f64],
+    edges: &[f64],
+    acceptable: [f64; 2],
+    outside: Option<u64>,
+) -> RefSummary {
+    let mut h = Histogram::new(edges);
+    let (mut min, mut max): (Option<f64>, Option<f64>) = (None, None);
+    let mut out = 0;
+    for &x in values {
+        h.add(x);
+        if x.is_finite() {
+            min = Some(min.map_or(x, |m| m.min(x)));
+            max = Some(max.map_or(x, |m| m.max(x)));
+        }
+        if !(x >= acceptable[0] && x <= acceptable[1]) {
+            out += 1;
+        }
+    }
+    RefSummary {
+        min: min.map(f64::to_bits),
+        max: max.map(f64::to_bits),
+        counts: h.counts,
+        outside: outside.unwrap_or(out),
+        samples: values.len() as u64,
+    }
+}
+
+fn summary_of(m: &medial_blocks::quality::MetricSummary) -> RefSummary {
+    RefSummary {
+        min: m.min.map(f64::to_bits),
+        max: m.max.map(f64::to_bits),
+        counts: m.histogram.counts.clone(),
+        outside: m.outside,
+        samples: m.samples,
+    }
+}
+
+fn same(a: f64, b: f64) -> bool {
+    a.to_bits() == b.to_bits() || (a.is_nan() && b.is_nan())
+}
+
+/// Check every figure of `measure`, `quality_metrics`, `cell_fields` and `inverted_cells`
+/// against the reference.
+fn check_grids(grids: &[BlockGrid]) {
+    let q = measure(grids);
+    let (q2, m) = measure_all(&BlockLayout::default(), grids);
+    assert_eq!(format!("{q:?}"), format!("{q2:?}"));
+    assert_eq!(
+        format!("{m:?}"),
+        format!("{:?}", quality_metrics(&BlockLayout::default(), grids))
+    );
+    // Quality, reduced like the documented order: per-block sums, then blocks in order.
+    let (mut n, mut inv, mut malformed) = (0usize, 0usize, 0usize);
+    let (mut lo, mut hi, mut msj) = (f64::INFINITY, f64::NEG_INFINITY, f64::INFINITY);
+    let (mut smin, mut smax) = (0.0, 0.0);
+    let mut all: Vec<RefCell> = Vec::new();
+    for g in grids {
+        if !well_formed(g) {
+            malformed += 1;
+            assert!(cell_fields(g).min_angle_deg.is_empty());
+            continue;
+        }
+        let (mut bmin, mut bmax) = (0.0, 0.0);
+        let fields = cell_fields(g);
+        for (c, p) in cells(g).into_iter().enumerate() {
+            let r = ref_cell(p);
+            n += 1;
+            bmin += r.lo;
+            bmax += r.hi;
+            lo = lo.min(r.lo);
+            hi = hi.max(r.hi);
+            if r.jac.iter().any(|&x| x.is_nan() || x <= 0.0) {
+                inv += 1;
+            }
+            if r.sj.is_nan() || (!msj.is_nan() && r.sj < msj) {
+                msj = r.sj;
+            }
+            let got = [
+                fields.min_angle_deg[c],
+                fields.max_angle_deg[c],
+                fields.min_jacobian[c],
+                fields.equiangle_skewness[c],
+                fields.edge_ratio[c],
+                fields.scaled_jacobian[c],
+                fields.aspect_ratio[c],
+            ];
+            let want = [r.lo, r.hi, r.min_jac, r.skew, r.er, r.sj, r.ar];
+            for (k, (a, b)) in got.iter().zip(&want).enumerate() {
+                assert!(same(*a, *b), "cell field {k} of {p:?}: {a:e} vs {b:e}");
+            }
+            all.push(r);
+        }
+        smin += bmin;
+        smax += bmax;
+    }
+    assert_eq!(q.cells, n);
+    assert_eq!(q.malformed_grids, malformed);
+    assert_eq!(q.inverted_cells, inv);
+    assert_eq!(inverted_cells(grids), inv);
+    if n > 0 {
+        assert!(same(q.min_angle_deg, lo), "{} vs {lo}", q.min_angle_deg);
+        assert!(same(q.max_angle_deg, hi));
+        assert!(
+            same(q.min_scaled_jacobian, msj),
+            "{} vs {msj}",
+            q.min_scaled_jacobian
+        );
+        assert!(same(q.mean_min_angle_deg, smin / n as f64));
+        assert!(same(q.mean_max_angle_deg, smax / n as f64));
+    }
+    use medial_blocks::quality::{
+        ANGLE_ACCEPTABLE, ASPECT_ACCEPTABLE, EDGE_RATIO_ACCEPTABLE, SCALED_JACOBIAN_ACCEPTABLE,
+        SKEWNESS_ACCEPTABLE,
+    };
+    let angles: Vec<f64> = all.iter().flat_map(|r| r.angles).collect();
+    let angle_out = all
+        .iter()
+        .filter(|r| {
+            let ok = |x: f64| x >= ANGLE_ACCEPTABLE[0] && x <= ANGLE_ACCEPTABLE[1];
+            !(ok(r.lo) && ok(r.hi))
+        })
+        .count() as u64;
+    let mut want = ref_summary(
+        &angles,
+        &m.angle_deg.histogram.edges,
+        ANGLE_ACCEPTABLE,
+        None,
+    );
+    want.outside = angle_out;
+    assert_eq!(summary_of(&m.angle_deg), want, "angle_deg");
+    for (name, got, vals, acc) in [
+        (
+            "skewness",
+            &m.equiangle_skewness,
+            all.iter().map(|r| r.skew).collect::<Vec<_>>(),
+            SKEWNESS_ACCEPTABLE,
+        ),
+        (
+            "edge_ratio",
+            &m.edge_ratio,
+            all.iter().map(|r| r.er).collect(),
+            EDGE_RATIO_ACCEPTABLE,
+        ),
+        (
+            "scaled_jacobian",
+            &m.scaled_jacobian,
+            all.iter().map(|r| r.sj).collect(),
+            SCALED_JACOBIAN_ACCEPTABLE,
+        ),
+        (
+            "aspect_ratio",
+            &m.aspect_ratio,
+            all.iter().map(|r| r.ar).collect(),
+            ASPECT_ACCEPTABLE,
+        ),
+    ] {
+        let want = ref_summary(&vals, &got.histogram.edges, acc, None);
+        assert_eq!(summary_of(got), want, "{name}");
+    }
+}
+
+/// A perturbed, sheared, stretched lattice block with random spoilers: a few nodes moved
+/// anywhere, duplicated, scaled to extreme magnitudes or made non-finite.
+fn lattice(rng: &mut SplitMix64, ni: usize, nj: usize, wild: u32) -> BlockGrid {
+    let u = |r: &mut SplitMix64| (r.next_u64() >> 11) as f64 / (1u64 << 53) as f64;
+    let (sx, sy) = (0.01 + 100.0 * u(rng), 0.01 + 3.0 * u(rng));
+    let shear = 2.0 * u(rng) - 1.0;
+    let jitter = 0.45 * u(rng);
+    let mut nodes = Vec::with_capacity((ni + 1) * (nj + 1));
+    for j in 0..=nj {
+        for i in 0..=ni {
+            let x = i as f64 + jitter * (u(rng) - 0.5);
+            let y = j as f64 + jitter * (u(rng) - 0.5);
+            nodes.push([sx * (x + shear * y), sy * y]);
+        }
+    }
+    for _ in 0..wild {
+        let k = (rng.next_u64() % nodes.len() as u64) as usize;
+        let other = (rng.next_u64() % nodes.len() as u64) as usize;
+        nodes[k] = match rng.next_u64() % 9 {
+            0 => nodes[other],
+            1 => [f64::NAN, 0.0],
+            2 => [f64::INFINITY, 1.0],
+            3 => [nodes[k][0] * 1e150, nodes[k][1] * 1e150],
+            4 => [nodes[k][0] * 1e-150, nodes[k][1] * 1e-160],
+            5 => [nodes[other][0], nodes[k][1]],
+            6 => [0.5 * (nodes[k][0] + nodes[other][0]), nodes[other][1]],
+            _ => [100.0 * (u(rng) - 0.5), 100.0 * (u(rng) - 0.5)],
+        };
+    }
+    BlockGrid { ni, nj, nodes }
+}
+
+fn coord() -> impl Strategy<Value = f64> {
+    prop_oneof![
+        8 => -10.0..10.0f64,
+        1 => (-3i32..4).prop_map(f64::from),
+        1 => prop_oneof![Just(0.0), Just(-0.0), Just(1e-170), Just(1e170), Just(f64::NAN)],
+    ]
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(300))]
+
+    /// Single random quads, any shape (degenerate, inverted, non-finite).
+    #[test]
+    fn random_quads_match_the_reference(q in prop::collection::vec(coord(), 8)) {
+        let nodes = vec![[q[0], q[1]], [q[2], q[3]], [q[6], q[7]], [q[4], q[5]]];
+        check_grids(&[BlockGrid { ni: 1, nj: 1, nodes }]);
+    }
+
+    /// Whole blocks (bins, extremes and sums across many cells), some malformed.
+    #[test]
+    fn random_blocks_match_the_reference(seed in any::<u64>(), blocks in 1usize..6) {
+        let mut rng = SplitMix64(seed);
+        let grids: Vec<BlockGrid> = (0..blocks)
+            .map(|_| {
+                let ni = 1 + (rng.next_u64() % 12) as usize;
+                let nj = 1 + (rng.next_u64() % 12) as usize;
+                let wild = (rng.next_u64() % 4) as u32;
+                let mut g = lattice(&mut rng, ni, nj, wild);
+                if rng.next_u64() % 10 == 0 {
+                    g.nodes.pop();
+                }
+                g
+            })
+            .collect();
+        check_grids(&grids);
+    }
+}
+
+/// Exact axis-aligned squares sit on bin edges (angles of exactly 90 degrees, ratios of
+/// exactly 1): every tie-break goes through the exact formulas.
+#[test]
+fn exact_squares_match_the_reference() {
+    let mut nodes = Vec::new();
+    for j in 0..=5 {
+        for i in 0..=7 {
+            nodes.push([i as f64 * 0.25, j as f64 * 0.25]);
+        }
+    }
+    let g = BlockGrid {
+        ni: 7,
+        nj: 5,
+        nodes,
+    };
+    check_grids(&[g.clone()]);
+    let q = measure(&[g]);
+    assert_eq!(q.min_angle_deg, 90.0);
+    assert_eq!(q.max_angle_deg, 90.0);
+}
+
+/// Real meshes (both modes) against the reference.
+#[test]
+fn pipeline_meshes_match_the_reference() {
+    for (domain, opts) in [
+        (
+            medial_blocks::Domain::hexagon_example(),
+            medial_blocks::Options::default(),
+        ),
+        (
+            medial_blocks::Domain::hexagon_example(),
+            medial_blocks::Options::paper(),
+        ),
+    ] {
+        let m = medial_blocks::mesh(&domain, &opts).expect("mesh");
+        check_grids(&m.grids);
+    }
+}
+
+/// The pipeline and its report give identical results on 1 and 2 threads.
+#[test]
+fn one_and_two_threads_agree() {
+    let domain = medial_blocks::layouts::bubbles(40, 7).expect("layout");
+    let run = |threads: usize| {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .expect("pool");
+        pool.install(|| {
+            let mut out = Vec::new();
+            for opts in [
+                medial_blocks::Options::default(),
+                medial_blocks::Options::paper(),
+            ] {
+                let m = medial_blocks::mesh(&domain, &opts).expect("mesh");
+                let r = medial_blocks::output::report::Report::from_mesh(&m);
+                let bits: Vec<u64> = m
+                    .grids
+                    .iter()
+                    .flat_map(|g| {
+                        g.nodes
+                            .iter()
+                            .flat_map(|p| [p[0].to_bits(), p[1].to_bits()])
+                    })
+                    .collect();
+                out.push((serde_json::to_string(&r).expect("json"), bits));
+            }
+            out
+        })
+    };
+    let (a, b) = (run(1), run(2));
+    assert_eq!(a.len(), b.len());
+    for (x, y) in a.iter().zip(&b) {
+        assert_eq!(x.0, y.0);
+        assert!(x.1 == y.1, "grid nodes differ between 1 and 2 threads");
+        assert!(!x.1.is_empty());
+    }
+}
