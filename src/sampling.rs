@@ -483,6 +483,7 @@ pub fn sample_and_triangulate(
     domain: &Domain,
     opts: &SamplingOptions,
 ) -> Result<SampledDomain, MeshError> {
+    let _stage = crate::timings::enter("sampling");
     let gaps = nearest_gaps(domain);
     let mut counts = initial_counts(domain, &gaps, opts);
     let cap = (opts.max_per_circle / 8 * 8).max(round8(opts.min_per_circle));
@@ -509,12 +510,16 @@ pub fn sample_and_triangulate(
             });
         }
         let samples = sample(domain, &counts, &gaps);
-        let triangulation = Triangulation::new(&samples.points)?;
+        let triangulation =
+            crate::timings::span("triangulation", || Triangulation::new(&samples.points))?;
         let kinds = classify(&samples, &triangulation);
         let hard = check_invariants(&samples, &triangulation, &kinds);
         let (violations, soft_result) = if hard.is_empty() {
-            let medial = medial_graph(&samples, &triangulation, &kinds)?;
-            let soft = thin_walls(&triangulation, &medial);
+            let (medial, soft) = crate::timings::span("medial_graph", || {
+                let medial = medial_graph(&samples, &triangulation, &kinds)?;
+                let soft = thin_walls(&triangulation, &medial);
+                Ok::<_, MeshError>((medial, soft))
+            })?;
             let done = SampledDomain {
                 samples,
                 triangulation,

@@ -508,7 +508,11 @@ pub fn build(
         template: vec![false; ncirc],
         arcs: targets,
     };
-    let counts = problem.solve().map_err(internal)?;
+    let counts = crate::timings::span("node_counts", || match options.block_cells {
+        Some(n) => problem.solve_uniform(n),
+        None => problem.solve(),
+    })
+    .map_err(internal)?;
 
     // Limits before allocating.
     let mut total: usize = 0;
@@ -526,7 +530,8 @@ pub fn build(
         }));
     }
 
-    // Layout skeleton.
+    // Layout skeleton and grids (stage "grids" until the end).
+    let _grids = crate::timings::enter("grids");
     let mut layout = BlockLayout {
         vertices: vertices.iter().map(|v| v.center).collect(),
         edges: Vec::with_capacity(3 * medial.arcs.len() + 3 * nv),

@@ -58,6 +58,7 @@ pub struct Report {
 impl Report {
     /// Counts from the mesh, quality from [`measure`] over its grids.
     pub fn from_mesh(mesh: &Mesh) -> Report {
+        let _stage = crate::timings::enter("quality");
         let q = measure(&mesh.grids);
         let quality = quality_metrics(&mesh.layout, &mesh.grids);
         Report {
