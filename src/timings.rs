@@ -58,6 +58,10 @@ pub struct Timings {
     /// Peak resident memory of the process so far (`VmHWM` of `/proc/self/status`), `None`
     /// where unavailable.
     pub peak_memory_bytes: Option<u64>,
+    /// CPU time (user + system, all threads of the process) spent during the recording,
+    /// from `/proc/self/stat` (10 ms resolution); `None` where unavailable. Less sensitive
+    /// than wall time to other processes on a shared machine.
+    pub cpu_seconds: Option<f64>,
 }
 
 impl Timings {
@@ -91,7 +95,8 @@ impl Timings {
         rows
     }
 
-    /// `{"stages": {name: seconds, ...}, "total_seconds": t, "peak_memory_bytes": n|null}`
+    /// `{"stages": {name: seconds, ...}, "total_seconds": t, "cpu_seconds": c|null,
+    /// "peak_memory_bytes": n|null}`
     /// with every row of [`Timings::rows`].
     pub fn to_json(&self) -> serde_json::Value {
         let stages: serde_json::Map<String, serde_json::Value> = self
@@ -102,6 +107,7 @@ impl Timings {
         serde_json::json!({
             "stages": stages,
             "total_seconds": self.total_seconds,
+            "cpu_seconds": self.cpu_seconds,
             "peak_memory_bytes": self.peak_memory_bytes,
         })
     }
@@ -120,6 +126,9 @@ impl Timings {
             s.push_str(&format!("{n:<18}{:>12.2}{share:>7.1}%\n", 1e3 * sec));
         }
         s.push_str(&format!("{:<18}{:>12.2}\n", "total", 1e3 * total));
+        if let Some(c) = self.cpu_seconds {
+            s.push_str(&format!("{:<18}{:>12.2}\n", "cpu (all threads)", 1e3 * c));
+        }
         match self.peak_memory_bytes {
             Some(b) => s.push_str(&format!(
                 "{:<18}{:>12.1} MiB\n",
@@ -137,6 +146,23 @@ impl Timings {
 pub fn peak_memory_bytes() -> Option<u64> {
     let status = std::fs::read_to_string("/proc/self/status").ok()?;
     parse_vm_hwm(&status)
+}
+
+/// CPU time (user + system) of this process so far in seconds: fields 14 and 15 of
+/// `/proc/self/stat` in clock ticks of 1/100 s (Linux's fixed `USER_HZ`); `None` elsewhere.
+pub fn process_cpu_seconds() -> Option<f64> {
+    let stat = std::fs::read_to_string("/proc/self/stat").ok()?;
+    parse_stat_cpu(&stat)
+}
+
+/// User + system seconds of a `/proc/PID/stat` line (fields after the `)` of the name).
+pub fn parse_stat_cpu(stat: &str) -> Option<f64> {
+    let rest = &stat[stat.rfind(')')? + 1..];
+    // rest starts at field 3 (state): utime and stime are fields 14 and 15.
+    let fields: Vec<&str> = rest.split_whitespace().collect();
+    let utime: u64 = fields.get(11)?.parse().ok()?;
+    let stime: u64 = fields.get(12)?.parse().ok()?;
+    Some((utime + stime) as f64 / 100.0)
 }
 
 /// The `VmHWM:  1234 kB` line of a `/proc/PID/status` text, in bytes.
@@ -163,6 +189,7 @@ struct Open {
 struct Recorder {
     id: u64,
     start: Instant,
+    cpu_start: Option<f64>,
     stages: Vec<(Cow<'static, str>, Duration)>,
     stack: Vec<Open>,
 }
@@ -215,6 +242,7 @@ impl Recording {
             a.borrow_mut().replace(Recorder {
                 id,
                 start: Instant::now(),
+                cpu_start: process_cpu_seconds(),
                 stages: Vec::new(),
                 stack: Vec::new(),
             })
@@ -245,6 +273,7 @@ impl Recording {
                 stages: Vec::new(),
                 total_seconds: 0.0,
                 peak_memory_bytes: peak_memory_bytes(),
+                cpu_seconds: None,
             };
         };
         while !r.stack.is_empty() {
@@ -272,6 +301,10 @@ impl Recording {
                 .collect(),
             total_seconds: total.as_secs_f64(),
             peak_memory_bytes: peak_memory_bytes(),
+            cpu_seconds: match (r.cpu_start, process_cpu_seconds()) {
+                (Some(a), Some(b)) => Some((b - a).max(0.0)),
+                _ => None,
+            },
         }
     }
 }
@@ -362,6 +395,17 @@ mod tests {
     }
 
     #[test]
+    fn stat_cpu_is_utime_plus_stime() {
+        // pid (comm with ) and spaces) state ppid ... utime=250 stime=50 ...
+        let s = "42 (a) b c) R 1 2 3 4 5 6 7 8 9 10 250 50 0 0 20 0 1 0 100 200 300";
+        assert_eq!(parse_stat_cpu(s), Some(3.0));
+        assert_eq!(parse_stat_cpu("garbage"), None);
+        if cfg!(target_os = "linux") {
+            assert!(process_cpu_seconds().is_some_and(|c| c >= 0.0));
+        }
+    }
+
+    #[test]
     fn stages_are_exclusive_and_add_up() {
         let rec = Recording::start();
         {
@@ -412,6 +456,7 @@ mod tests {
             stages: vec![("write_vtk".into(), 0.5), ("grids".into(), 0.25)],
             total_seconds: 1.0,
             peak_memory_bytes: None,
+            cpu_seconds: Some(1.5),
         };
         let v = t.to_json();
         for s in STAGES.iter().chain(&["write_vtk", "other"]) {
