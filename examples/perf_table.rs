@@ -158,6 +158,8 @@ struct Row {
     blocks: u64,
     cells: u64,
     stages: serde_json::Value,
+    cpu_stages: serde_json::Value,
+    calls: serde_json::Value,
     total: f64,
     cpu: Option<f64>,
     wall: f64,
@@ -210,6 +212,8 @@ fn run_size(bin: &Path, dir: &Path, n: usize, a: &Args) -> Result<Row, String> {
         cpu: t["cpu_seconds"].as_f64(),
         peak: t["peak_memory_bytes"].as_u64(),
         stages: t["stages"].clone(),
+        cpu_stages: t["cpu_stages"].clone(),
+        calls: t["calls"].clone(),
         wall,
     })
 }
@@ -276,6 +280,34 @@ fn print_table(rows: &[Row]) {
             "\nGrowth exponent 1e3 -> 1e5 (total): {:.2}",
             exponent(a.n, a.total, b.n, b.total)
         );
+    }
+}
+
+/// Process CPU seconds per stage (all threads; less sensitive to a shared machine than wall
+/// time) and how often the sampling loop triangulated.
+fn print_cpu_table(rows: &[Row]) {
+    let mut head = vec!["particles"];
+    head.extend(COLUMNS.iter().map(|c| c.0));
+    head.extend(["writers", "other", "CPU s", "triangulations"]);
+    println!("\nProcess CPU seconds per stage (all threads):\n");
+    println!("| {} |", head.join(" | "));
+    println!("|{}", "---:|".repeat(head.len()));
+    for r in rows {
+        if r.cpu_stages.is_null() {
+            continue;
+        }
+        let mut cells = vec![r.n.to_string()];
+        for (_, keys) in COLUMNS {
+            cells.push(format!("{:.2}", stage_sum(&r.cpu_stages, keys)));
+        }
+        cells.push(format!("{:.2}", writers(&r.cpu_stages)));
+        cells.push(format!(
+            "{:.2}",
+            r.cpu_stages["other"].as_f64().unwrap_or(0.0)
+        ));
+        cells.push(r.cpu.map_or("n/a".into(), |c| format!("{c:.2}")));
+        cells.push(r.calls["triangulation"].as_u64().unwrap_or(0).to_string());
+        println!("| {} |", cells.join(" | "));
     }
 }
 
@@ -398,6 +430,7 @@ fn main() {
         load_average()
     );
     print_table(&rows);
+    print_cpu_table(&rows);
     for n in &notes {
         println!("\n{n}");
     }

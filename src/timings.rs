@@ -51,8 +51,14 @@ pub fn writer_stage(format: &str) -> String {
 /// What a recording measured.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Timings {
-    /// Exclusive wall time (seconds) per stage, in order of first entry.
+    /// Exclusive wall time (seconds) per stage, in order of first closing.
     pub stages: Vec<(String, f64)>,
+    /// Exclusive process CPU time (seconds, all threads, 10 ms resolution) per stage, same
+    /// order; empty where the CPU clock is unavailable.
+    pub cpu: Vec<(String, f64)>,
+    /// How many times each stage was entered (resampling attempts, repeated figures), same
+    /// order.
+    pub calls: Vec<(String, u64)>,
     /// Wall time (seconds) from [`Recording::start`] to [`Recording::finish`].
     pub total_seconds: f64,
     /// Peak resident memory of the process so far (`VmHWM` of `/proc/self/status`), `None`
@@ -95,17 +101,43 @@ impl Timings {
         rows
     }
 
-    /// `{"stages": {name: seconds, ...}, "total_seconds": t, "cpu_seconds": c|null,
-    /// "peak_memory_bytes": n|null}`
-    /// with every row of [`Timings::rows`].
+    /// `{"stages": {name: seconds, ...}, "cpu_stages": {name: seconds, ...} | null,
+    /// "calls": {name: count, ...}, "total_seconds": t, "cpu_seconds": c|null,
+    /// "peak_memory_bytes": n|null}` with every row of [`Timings::rows`] in `stages` (wall
+    /// time; `other` is the unattributed rest) and in `cpu_stages` (process CPU time).
     pub fn to_json(&self) -> serde_json::Value {
         let stages: serde_json::Map<String, serde_json::Value> = self
             .rows()
             .into_iter()
             .map(|(n, s)| (n, serde_json::Value::from(s)))
             .collect();
+        let cpu_stages = self.cpu_seconds.map(|total| {
+            let mut m: serde_json::Map<String, serde_json::Value> = self
+                .rows()
+                .into_iter()
+                .filter(|(n, _)| n != "other")
+                .map(|(n, _)| {
+                    let c = self
+                        .cpu
+                        .iter()
+                        .find(|(k, _)| *k == n)
+                        .map_or(0.0, |(_, c)| *c);
+                    (n, serde_json::Value::from(c))
+                })
+                .collect();
+            let sum: f64 = self.cpu.iter().map(|(_, c)| c).sum();
+            m.insert("other".into(), (total - sum).max(0.0).into());
+            m
+        });
+        let calls: serde_json::Map<String, serde_json::Value> = self
+            .calls
+            .iter()
+            .map(|(n, c)| (n.clone(), serde_json::Value::from(*c)))
+            .collect();
         serde_json::json!({
             "stages": stages,
+            "cpu_stages": cpu_stages,
+            "calls": calls,
             "total_seconds": self.total_seconds,
             "cpu_seconds": self.cpu_seconds,
             "peak_memory_bytes": self.peak_memory_bytes,
@@ -115,7 +147,10 @@ impl Timings {
     /// A plain-text table: stage, milliseconds, share of the total; then the total and the
     /// peak memory.
     pub fn table(&self) -> String {
-        let mut s = format!("{:<18}{:>12}{:>8}\n", "stage", "ms", "share");
+        let mut s = format!(
+            "{:<18}{:>12}{:>8}{:>12}{:>7}\n",
+            "stage", "ms", "share", "cpu ms", "calls"
+        );
         let total = self.total_seconds;
         for (n, sec) in self.rows() {
             let share = if total > 0.0 {
@@ -123,7 +158,20 @@ impl Timings {
             } else {
                 0.0
             };
-            s.push_str(&format!("{n:<18}{:>12.2}{share:>7.1}%\n", 1e3 * sec));
+            let cpu = self
+                .cpu
+                .iter()
+                .find(|(k, _)| *k == n)
+                .map_or("-".to_string(), |(_, c)| format!("{:.0}", 1e3 * c));
+            let calls = self
+                .calls
+                .iter()
+                .find(|(k, _)| *k == n)
+                .map_or("-".to_string(), |(_, c)| c.to_string());
+            s.push_str(&format!(
+                "{n:<18}{:>12.2}{share:>7.1}%{cpu:>12}{calls:>7}\n",
+                1e3 * sec
+            ));
         }
         s.push_str(&format!("{:<18}{:>12.2}\n", "total", 1e3 * total));
         if let Some(c) = self.cpu_seconds {
@@ -179,36 +227,69 @@ pub fn parse_vm_hwm(status: &str) -> Option<u64> {
     value.checked_mul(scale)
 }
 
+/// Wall time and process CPU seconds of a stretch of work.
+#[derive(Debug, Clone, Copy, Default)]
+struct Measure {
+    wall: Duration,
+    cpu: f64,
+}
+
+impl Measure {
+    fn plus(self, o: Measure) -> Measure {
+        Measure {
+            wall: self.wall + o.wall,
+            cpu: self.cpu + o.cpu,
+        }
+    }
+    fn minus(self, o: Measure) -> Measure {
+        Measure {
+            wall: self.wall.saturating_sub(o.wall),
+            cpu: (self.cpu - o.cpu).max(0.0),
+        }
+    }
+}
+
 struct Open {
     name: Cow<'static, str>,
     start: Instant,
+    cpu_start: Option<f64>,
     /// Time spent in stages entered inside this one.
-    children: Duration,
+    children: Measure,
 }
 
 struct Recorder {
     id: u64,
     start: Instant,
     cpu_start: Option<f64>,
-    stages: Vec<(Cow<'static, str>, Duration)>,
+    /// Per stage: exclusive time and number of entries.
+    stages: Vec<(Cow<'static, str>, Measure, u64)>,
     stack: Vec<Open>,
 }
 
 impl Recorder {
-    fn add(&mut self, name: Cow<'static, str>, d: Duration) {
-        match self.stages.iter_mut().find(|(n, _)| *n == name) {
-            Some((_, t)) => *t += d,
-            None => self.stages.push((name, d)),
+    fn add(&mut self, name: Cow<'static, str>, m: Measure, calls: u64) {
+        match self.stages.iter_mut().find(|(n, _, _)| *n == name) {
+            Some((_, t, c)) => {
+                *t = t.plus(m);
+                *c += calls;
+            }
+            None => self.stages.push((name, m, calls)),
         }
     }
 
     /// Close the innermost open stage.
     fn close(&mut self) {
         if let Some(open) = self.stack.pop() {
-            let total = open.start.elapsed();
-            self.add(open.name, total.saturating_sub(open.children));
+            let total = Measure {
+                wall: open.start.elapsed(),
+                cpu: match (open.cpu_start, process_cpu_seconds()) {
+                    (Some(a), Some(b)) => (b - a).max(0.0),
+                    _ => 0.0,
+                },
+            };
+            self.add(open.name, total.minus(open.children), 1);
             if let Some(parent) = self.stack.last_mut() {
-                parent.children += total;
+                parent.children = parent.children.plus(total);
             }
         }
     }
@@ -271,6 +352,8 @@ impl Recording {
         let Some(mut r) = mine else {
             return Timings {
                 stages: Vec::new(),
+                cpu: Vec::new(),
+                calls: Vec::new(),
                 total_seconds: 0.0,
                 peak_memory_bytes: peak_memory_bytes(),
                 cpu_seconds: None,
@@ -283,28 +366,36 @@ impl Recording {
         // Hand the stages on to the outer recording, if any.
         ACTIVE.with(|a| {
             if let Some(o) = a.borrow_mut().as_mut() {
-                let mut sum = Duration::ZERO;
-                for (n, d) in &r.stages {
-                    o.add(n.clone(), *d);
-                    sum += *d;
+                let mut sum = Measure::default();
+                for (n, m, calls) in &r.stages {
+                    o.add(n.clone(), *m, *calls);
+                    sum = sum.plus(*m);
                 }
                 if let Some(parent) = o.stack.last_mut() {
-                    parent.children += sum;
+                    parent.children = parent.children.plus(sum);
                 }
             }
         });
+        let cpu_seconds = match (r.cpu_start, process_cpu_seconds()) {
+            (Some(a), Some(b)) => Some((b - a).max(0.0)),
+            _ => None,
+        };
+        let name = |n: &Cow<'static, str>| n.to_string();
         Timings {
             stages: r
                 .stages
-                .into_iter()
-                .map(|(n, d)| (n.into_owned(), d.as_secs_f64()))
+                .iter()
+                .map(|(n, m, _)| (name(n), m.wall.as_secs_f64()))
                 .collect(),
+            cpu: if cpu_seconds.is_some() {
+                r.stages.iter().map(|(n, m, _)| (name(n), m.cpu)).collect()
+            } else {
+                Vec::new()
+            },
+            calls: r.stages.iter().map(|(n, _, c)| (name(n), *c)).collect(),
             total_seconds: total.as_secs_f64(),
             peak_memory_bytes: peak_memory_bytes(),
-            cpu_seconds: match (r.cpu_start, process_cpu_seconds()) {
-                (Some(a), Some(b)) => Some((b - a).max(0.0)),
-                _ => None,
-            },
+            cpu_seconds,
         }
     }
 }
@@ -357,10 +448,12 @@ pub fn enter(name: impl Into<Cow<'static, str>>) -> Stage {
         let mut a = a.try_borrow_mut().ok()?;
         let r = a.as_mut()?;
         let depth = r.stack.len();
+        let cpu_start = r.cpu_start.and_then(|_| process_cpu_seconds());
         r.stack.push(Open {
             name: name.into(),
             start: Instant::now(),
-            children: Duration::ZERO,
+            cpu_start,
+            children: Measure::default(),
         });
         Some((r.id, depth))
     });
@@ -415,6 +508,8 @@ mod tests {
         }
         span("c", || ());
         let t = rec.finish();
+        let calls: Vec<u64> = t.calls.iter().map(|(_, c)| *c).collect();
+        assert_eq!(calls, [2, 1, 1]);
         let names: Vec<&str> = t.stages.iter().map(|(n, _)| n.as_str()).collect();
         // "b" closes before "a", so it is recorded first.
         assert_eq!(names, ["b", "a", "c"]);
@@ -454,6 +549,8 @@ mod tests {
     fn json_has_every_stage() {
         let t = Timings {
             stages: vec![("write_vtk".into(), 0.5), ("grids".into(), 0.25)],
+            cpu: vec![("write_vtk".into(), 0.75), ("grids".into(), 0.25)],
+            calls: vec![("write_vtk".into(), 1), ("grids".into(), 2)],
             total_seconds: 1.0,
             peak_memory_bytes: None,
             cpu_seconds: Some(1.5),
@@ -463,6 +560,9 @@ mod tests {
             assert!(v["stages"][s].as_f64().is_some(), "{s}");
         }
         assert_eq!(v["stages"]["other"].as_f64(), Some(0.25));
+        assert_eq!(v["cpu_stages"]["other"].as_f64(), Some(0.5));
+        assert_eq!(v["cpu_stages"]["input"].as_f64(), Some(0.0));
+        assert_eq!(v["calls"]["grids"].as_u64(), Some(2));
         assert!(v["peak_memory_bytes"].is_null());
         assert!(t.table().contains("write_vtk"));
     }

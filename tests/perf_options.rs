@@ -368,6 +368,18 @@ fn timings_flag_writes_timings_json_and_nothing_else_changes() {
         "{t}"
     );
     assert!(t["peak_memory_bytes"].is_null() || t["peak_memory_bytes"].as_u64().unwrap() > 0);
+    if !t["cpu_stages"].is_null() {
+        for k in &keys {
+            let x = t["cpu_stages"][k.as_str()].as_f64();
+            assert!(x.is_some_and(|x| x >= 0.0), "cpu stage {k}: {t}");
+        }
+    }
+    // Sampling triangulates at least once per attempt; every stage that ran was entered.
+    assert!(
+        t["calls"]["triangulation"].as_u64().is_some_and(|c| c >= 1),
+        "{t}"
+    );
+    assert!(t["calls"]["write_vtk"].as_u64() == Some(1), "{t}");
     assert_eq!(t["holes"], 25);
     assert_eq!(t["blocks"], report["blocks"]);
     assert_eq!(t["cells"], report["cells"]);
