@@ -32,6 +32,7 @@ pub enum ModeArg {
   medial-blocks --threads 2 --quiet mesh layout.json --format vtu,plot3d
   medial-blocks mesh bubbles.csv --periodic 1,1   # one period of a periodic layout
   medial-blocks mesh layout.json --transition 0.25  # join a Cartesian grid of spacing 0.25
+  medial-blocks mesh bubbles.json --block-cells 16 --timings  # 16x16 per block, stage times
 
 Input JSON: {\"bounding\": {\"center\": [x, y], \"radius\": R},
              \"holes\": [{\"center\": [x, y], \"radius\": r}, ...]}
@@ -41,7 +42,8 @@ Input CSV (file name ending in .csv): x,y,r per line (an optional header line is
   with the bounding circle given by --bounding X,Y,R, or a period by --periodic LX,LY.
 Files in DIR: mesh.vtm + mesh/*.vts (vtk), mesh.vtu (vtu), mesh.xyz + mesh.p3d (plot3d),
   mesh.msh + mesh.geo (gmsh), mesh.svg (svg), mesh.png (png), report.json +
-  connectivity.json (json), mesh.cgns (cgns: builds with --features cgns only).
+  connectivity.json (json), mesh.cgns (cgns: builds with --features cgns only),
+  timings.json (only with --timings: per-stage seconds, CPU seconds, calls, peak memory).
 Exit codes: 0 success, 1 output could not be written or internal error, 2 bad input.")]
 pub struct Args {
     /// Domain JSON, or a CSV of holes (`x,y,r`); without it, the built-in 7-hole hexagon.
