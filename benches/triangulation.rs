@@ -1,9 +1,14 @@
 //! This engine vs spade (`bulk_load`) vs delaunator on the same inputs:
-//! uniform random points and circle-sampled points (non-overlapping circles, 32 samples each).
-//! Sizes 1e4, 1e5, 1e6 (select with e.g. `cargo bench --bench triangulation -- 1000000`).
+//! uniform random points and circle-sampled points (non-overlapping circles, 32 samples each),
+//! sizes 1e4, 1e5, 1e6 (select with e.g. `cargo bench --bench triangulation -- 1000000`); and
+//! the pipeline's own sample points (`triangulate/pipeline/<engine>/<particles>`): the final
+//! boundary samples of `sample_and_triangulate` on `layouts::bubbles(n, 1)` for n = 1e3, 1e4,
+//! 1e5, capped by `MEDIAL_BENCH_MAX` (default `1e4`) as in the pipeline bench.
 
 use criterion::{black_box, criterion_group, criterion_main, BenchmarkId, Criterion};
 use medial_blocks::geometry::{Point, Triangulation};
+use medial_blocks::layouts;
+use medial_blocks::sampling::{sample_and_triangulate, SamplingOptions};
 use spade::{DelaunayTriangulation, Point2, Triangulation as _};
 use std::time::Duration;
 
@@ -40,6 +45,57 @@ fn circles(n: usize) -> Vec<Point> {
     pts
 }
 
+/// `MEDIAL_BENCH_MAX` (`1e4`, `10000`, ...), default 1e4.
+fn max_particles() -> usize {
+    std::env::var("MEDIAL_BENCH_MAX")
+        .ok()
+        .and_then(|v| v.trim().parse::<f64>().ok())
+        .filter(|v| v.is_finite() && *v >= 1.0)
+        .map_or(10_000, |v| v as usize)
+}
+
+/// The three engines on `pts`, in one group, same run.
+fn compare(
+    group: &mut criterion::BenchmarkGroup<criterion::measurement::WallTime>,
+    n: usize,
+    pts: &[Point],
+) {
+    group.bench_with_input(BenchmarkId::new("engine", n), pts, |b, pts| {
+        b.iter(|| Triangulation::new(black_box(pts)).map(|t| t.len()))
+    });
+    let spade_pts: Vec<Point2<f64>> = pts.iter().map(|p| Point2::new(p[0], p[1])).collect();
+    group.bench_with_input(BenchmarkId::new("spade", n), &spade_pts, |b, pts| {
+        b.iter(|| {
+            DelaunayTriangulation::<Point2<f64>>::bulk_load(black_box(pts.clone()))
+                .map(|t| t.num_inner_faces())
+        })
+    });
+    let del_pts: Vec<delaunator::Point> = pts
+        .iter()
+        .map(|p| delaunator::Point { x: p[0], y: p[1] })
+        .collect();
+    group.bench_with_input(BenchmarkId::new("delaunator", n), &del_pts, |b, pts| {
+        b.iter(|| delaunator::triangulate(black_box(pts)).triangles.len())
+    });
+}
+
+/// The pipeline's own sample points: bubbles of 1e3, 1e4, 1e5 particles (capped).
+fn bench_pipeline_points(c: &mut Criterion) {
+    let mut group = c.benchmark_group("triangulate/pipeline");
+    group.sample_size(10);
+    group.measurement_time(Duration::from_secs(5));
+    for n in [1_000usize, 10_000, 100_000] {
+        if n > max_particles() {
+            continue;
+        }
+        let domain = layouts::bubbles(n, 1).expect("bubbles");
+        let sampled =
+            sample_and_triangulate(&domain, &SamplingOptions::default()).expect("sampling");
+        compare(&mut group, n, &sampled.samples.points);
+    }
+    group.finish();
+}
+
 fn bench(c: &mut Criterion) {
     for (name, make) in [
         ("uniform", uniform as fn(usize) -> Vec<Point>),
@@ -55,27 +111,11 @@ fn bench(c: &mut Criterion) {
                 group.sample_size(20);
                 group.measurement_time(Duration::from_secs(4));
             }
-            group.bench_with_input(BenchmarkId::new("engine", n), &pts, |b, pts| {
-                b.iter(|| Triangulation::new(black_box(pts)).map(|t| t.len()))
-            });
-            let spade_pts: Vec<Point2<f64>> = pts.iter().map(|p| Point2::new(p[0], p[1])).collect();
-            group.bench_with_input(BenchmarkId::new("spade", n), &spade_pts, |b, pts| {
-                b.iter(|| {
-                    DelaunayTriangulation::<Point2<f64>>::bulk_load(black_box(pts.clone()))
-                        .map(|t| t.num_inner_faces())
-                })
-            });
-            let del_pts: Vec<delaunator::Point> = pts
-                .iter()
-                .map(|p| delaunator::Point { x: p[0], y: p[1] })
-                .collect();
-            group.bench_with_input(BenchmarkId::new("delaunator", n), &del_pts, |b, pts| {
-                b.iter(|| delaunator::triangulate(black_box(pts)).triangles.len())
-            });
+            compare(&mut group, n, &pts);
         }
         group.finish();
     }
 }
 
-criterion_group!(benches, bench);
+criterion_group!(benches, bench_pipeline_points, bench);
 criterion_main!(benches);

@@ -80,6 +80,7 @@ pub mod refine;
 pub mod sampling;
 pub mod sequence;
 pub mod templates;
+pub mod timings;
 pub mod transition;
 
 pub use domain::{AnyDomain, Circle, Domain, DomainError};

@@ -6,7 +6,7 @@ use crate::geometry::TriangulationError;
 use crate::grid::{build_grids, GridError};
 use crate::mesh::{Geometry, Mesh};
 use crate::sampling::SamplingOptions;
-use crate::{blocking, exact_mode, templates};
+use crate::{blocking, exact_mode, templates, timings};
 
 /// Which geometry the blocks are built on.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
@@ -25,7 +25,7 @@ pub const EXACT_RESAMPLING: usize = 2;
 
 /// Options of the pipeline.
 ///
-/// Paper mode reads `mode` and `cells` only. Exact mode reads all fields; for the disk and the
+/// Paper mode reads `mode` and `cells` only (and `block_cells`, as `cells`). Exact mode reads all fields; for the disk and the
 /// annulus (fewer than two holes) both modes use the same templates and equal spacing.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Options {
@@ -55,6 +55,19 @@ pub struct Options {
     pub wall_cells: Vec<(CircleId, usize)>,
     /// Exact mode: Winslow smoothing sweeps per block (0: none).
     pub smooth: usize,
+    /// Exact mode: a fixed `N x N` grid per block (issue #8's "16x16 grid per block"): every
+    /// circle's wall-normal count is `N` (so every block has `nj = N`) and every medial arc's
+    /// count is `N` (`ni = N`), raised only on an arc whose walls need more than `N` cells of
+    /// at most 15 degrees ([`exact_mode::MAX_WALL_ANGLE`], as [`crate::grid::MAX_ARC_PER_CELL`]
+    /// in paper mode); shared sides match by construction (one count per conformity class,
+    /// [`exact_mode::counts::CountProblem::solve_uniform`]). Replaces the size-driven counts
+    /// of `cells` / `cell_size`; refused together with `cell_size` or `wall_cells`.
+    ///
+    /// The paper pipeline (paper mode, exact mode's fallback, the disk and annulus templates)
+    /// reads it as `cells`: `N` cells along every block side, raised on long wall arcs, which
+    /// is what `cells` already means there. Periodic and transition meshes read `cells` only.
+    /// `N` must be in `1..=`[`crate::grid::MAX_CELLS_PER_SIDE`].
+    pub block_cells: Option<usize>,
 }
 
 /// Default of [`Options::collapse_fraction`].
@@ -77,6 +90,7 @@ impl Default for Options {
             circle_clustering: Vec::new(),
             wall_cells: Vec::new(),
             smooth: 0,
+            block_cells: None,
         }
     }
 }
@@ -148,6 +162,7 @@ pub fn mesh(domain: &Domain, options: &Options) -> Result<Mesh, MeshError> {
             limit: crate::grid::MAX_CELLS_PER_SIDE,
         }));
     }
+    validate_block_cells(options)?;
     if !(options.collapse_fraction.is_finite() && options.collapse_fraction >= 0.0) {
         return Err(MeshError::Options(format!(
             "the collapse fraction must be a number >= 0, not {}",
@@ -171,7 +186,7 @@ pub fn mesh(domain: &Domain, options: &Options) -> Result<Mesh, MeshError> {
         0 => templates::disk(domain.bounding()),
         1 => templates::annulus(domain.bounding(), domain.holes()[0]),
         _ => {
-            let b = blocking::build_mesh_layout(domain, options)?;
+            let b = timings::span("blocking", || blocking::build_mesh_layout(domain, options))?;
             out.medial_vertices = b.medial_vertices;
             out.medial_arcs = b.medial_arcs;
             out.cocircular_groups = b.cocircular_groups;
@@ -182,8 +197,54 @@ pub fn mesh(domain: &Domain, options: &Options) -> Result<Mesh, MeshError> {
             b.layout
         }
     };
-    out.grids = build_grids(&out.layout, options.cells)?;
+    let side_cells = options.block_cells.unwrap_or(options.cells);
+    out.grids = timings::span("grids", || build_grids(&out.layout, side_cells))?;
     Ok(out)
+}
+
+/// [`mesh`], timed: the mesh and the exclusive wall time of each pipeline stage
+/// ([`crate::timings`]; the stage names are [`timings::STAGES`]) with the peak memory. The
+/// mesh is exactly [`mesh`]'s; timing never changes it.
+pub fn mesh_timed(
+    domain: &Domain,
+    options: &Options,
+) -> Result<(Mesh, timings::Timings), MeshError> {
+    let recording = timings::Recording::start();
+    let result = mesh(domain, options);
+    let t = recording.finish();
+    result.map(|m| (m, t))
+}
+
+/// Check [`Options::block_cells`]: `1..=MAX_CELLS_PER_SIDE`, and not with `cell_size` or
+/// `wall_cells` (they choose counts another way).
+pub fn validate_block_cells(options: &Options) -> Result<(), MeshError> {
+    let Some(n) = options.block_cells else {
+        return Ok(());
+    };
+    if n == 0 {
+        return Err(MeshError::Options(
+            "--block-cells must be at least 1 (cells along each direction of a block)".into(),
+        ));
+    }
+    if n > crate::grid::MAX_CELLS_PER_SIDE {
+        return Err(MeshError::Grid(GridError::TooManyCellsPerSide {
+            cells: n,
+            limit: crate::grid::MAX_CELLS_PER_SIDE,
+        }));
+    }
+    if options.cell_size.is_some() {
+        return Err(MeshError::Options(
+            "--block-cells and --cell-size both choose the cell counts; give one of them".into(),
+        ));
+    }
+    if !options.wall_cells.is_empty() {
+        return Err(MeshError::Options(
+            "--block-cells fixes every wall-normal count; it cannot be combined with \
+             --wall-cells"
+                .into(),
+        ));
+    }
+    Ok(())
 }
 
 /// Exact mode for two or more holes, on the full front end
@@ -234,11 +295,16 @@ fn exact_attempt(
     options: &Options,
     sampling: &SamplingOptions,
 ) -> Result<Option<Mesh>, MeshError> {
-    let cb = blocking::collapsed_blocking_with(domain, options, sampling)?;
-    match exact_mode::collapsed::build_collapsed(&cb, options) {
+    let cb = timings::span("blocking", || {
+        blocking::collapsed_blocking_with(domain, options, sampling)
+    })?;
+    match timings::span("exact_geometry", || {
+        exact_mode::collapsed::build_collapsed(&cb, options)
+    }) {
         Ok(m) => {
             let consistent = m.inconsistent_arcs.is_empty()
-                && crate::quality::inverted_cells(&m.grids) == 0;
+                && timings::span("quality_check", || crate::quality::inverted_cells(&m.grids))
+                    == 0;
             if !consistent {
                 return Ok(None);
             }

@@ -772,6 +772,7 @@ pub fn sample_and_triangulate(
     domain: &Domain,
     opts: &SamplingOptions,
 ) -> Result<SampledDomain, MeshError> {
+    let _stage = crate::timings::enter("sampling");
     let gaps = nearest_gaps(domain);
     // Per slot, the number of density doublings asked for by resampling.
     let mut density = vec![0u32; gaps.len()];
@@ -806,12 +807,16 @@ pub fn sample_and_triangulate(
                 ),
             });
         }
-        let triangulation = Triangulation::new(&samples.points)?;
+        let triangulation =
+            crate::timings::span("triangulation", || Triangulation::new(&samples.points))?;
         let kinds = classify(&samples, &triangulation);
         let hard = check_invariants(&samples, &triangulation, &kinds);
         let (violations, soft_result) = if hard.is_empty() {
-            let medial = medial_graph(&samples, &triangulation, &kinds)?;
-            let soft = thin_walls(&triangulation, &medial);
+            let (medial, soft) = crate::timings::span("medial_graph", || {
+                let medial = medial_graph(&samples, &triangulation, &kinds)?;
+                let soft = thin_walls(&triangulation, &medial);
+                Ok::<_, MeshError>((medial, soft))
+            })?;
             let done = SampledDomain {
                 samples,
                 triangulation,

@@ -1,7 +1,7 @@
 //! `medial-blocks mesh [INPUT] [-o DIR] [--mode exact|paper] [--cells N] [--cell-size H]
 //! [--first-height H | --first-height-rel F] [--growth G] [--circle-clustering ID:FIRST[:G]]
 //! [--wall-cells ID:N] [--smooth N] [--compare-modes] [--refine-ratio R] [--no-refine]
-//! [--collapse-fraction F] [--format LIST]`.
+//! [--collapse-fraction F] [--format LIST] [--block-cells N] [--timings]`.
 
 use super::{Failure, Global};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
@@ -10,7 +10,7 @@ use medial_blocks::exact_mode::{Clustering, FirstCell};
 use medial_blocks::input::{parse_holes_csv, parse_triple};
 use medial_blocks::output::{report, write_files_with_progress, Format};
 use medial_blocks::periodic::PeriodicDomain;
-use medial_blocks::{mesh_any, Mode, Options};
+use medial_blocks::{mesh_any, timings, Mode, Options};
 use std::path::PathBuf;
 use std::time::Duration;
 
@@ -32,6 +32,7 @@ pub enum ModeArg {
   medial-blocks --threads 2 --quiet mesh layout.json --format vtu,plot3d
   medial-blocks mesh bubbles.csv --periodic 1,1   # one period of a periodic layout
   medial-blocks mesh layout.json --transition 0.25  # join a Cartesian grid of spacing 0.25
+  medial-blocks mesh bubbles.json --block-cells 16 --timings  # 16x16 per block, stage times
 
 Input JSON: {\"bounding\": {\"center\": [x, y], \"radius\": R},
              \"holes\": [{\"center\": [x, y], \"radius\": r}, ...]}
@@ -41,7 +42,8 @@ Input CSV (file name ending in .csv): x,y,r per line (an optional header line is
   with the bounding circle given by --bounding X,Y,R, or a period by --periodic LX,LY.
 Files in DIR: mesh.vtm + mesh/*.vts (vtk), mesh.vtu (vtu), mesh.xyz + mesh.p3d (plot3d),
   mesh.msh + mesh.geo (gmsh), mesh.svg (svg), mesh.png (png), report.json +
-  connectivity.json (json), mesh.cgns (cgns: builds with --features cgns only).
+  connectivity.json (json), mesh.cgns (cgns: builds with --features cgns only),
+  timings.json (only with --timings: per-stage seconds, CPU seconds, calls, peak memory).
 Exit codes: 0 success, 1 output could not be written or internal error, 2 bad input.")]
 pub struct Args {
     /// Domain JSON, or a CSV of holes (`x,y,r`); without it, the built-in 7-hole hexagon.
@@ -55,6 +57,15 @@ pub struct Args {
     /// Target number of cells along a block side (exact mode: along a typical spoke).
     #[arg(long, default_value_t = 16, allow_negative_numbers = true)]
     pub cells: usize,
+    /// Exact mode: an N x N grid in every block (N cells along the wall and the arc, N along
+    /// the spokes), raised along an arc only where a wall would span more than 15 degrees per
+    /// cell; shared sides always match. Paper mode: the same as --cells N (N per block side).
+    #[arg(long, value_name = "N", conflicts_with_all = ["cells", "cell_size", "wall_cells"])]
+    pub block_cells: Option<usize>,
+    /// Print per-stage wall time and peak memory on stderr (unless --quiet) and write them to
+    /// DIR/timings.json. Nothing else changes: the other files are byte-identical without it.
+    #[arg(long)]
+    pub timings: bool,
     /// Exact mode: target cell size (overrides --cells).
     #[arg(long)]
     pub cell_size: Option<f64>,
@@ -273,7 +284,8 @@ fn exact_options(args: &Args) -> Result<Options, Failure> {
             ModeArg::Exact => Mode::Exact,
             ModeArg::Paper => Mode::Paper,
         },
-        cells: args.cells,
+        cells: args.block_cells.unwrap_or(args.cells),
+        block_cells: args.block_cells,
         cell_size: args.cell_size,
         clustering: Clustering {
             first,
@@ -285,6 +297,11 @@ fn exact_options(args: &Args) -> Result<Options, Failure> {
         refine_ratio: (!args.no_refine).then_some(args.refine_ratio),
         collapse_fraction: args.collapse_fraction,
         ..Options::default()
+    })
+    .and_then(|o| {
+        medial_blocks::mesher::validate_block_cells(&o)
+            .map_err(|e| Failure::input(e.to_string()))?;
+        Ok(o)
     })
 }
 
@@ -416,10 +433,43 @@ pub fn summary(r: &report::Report) -> String {
     s
 }
 
+/// `--timings`: the table on stderr (unless quiet) and `DIR/timings.json` with the mesh's
+/// size, the thread count and [`timings::Timings::to_json`].
+fn report_timings(
+    t: &timings::Timings,
+    mesh: &medial_blocks::Mesh,
+    args: &Args,
+    quiet: bool,
+) -> Result<(), Failure> {
+    let mut value = t.to_json();
+    if let Some(obj) = value.as_object_mut() {
+        obj.insert("holes".into(), mesh.holes.into());
+        obj.insert("blocks".into(), mesh.layout.blocks.len().into());
+        let cells: usize = mesh.grids.iter().map(|g| g.cells()).sum();
+        obj.insert("cells".into(), cells.into());
+        obj.insert("threads".into(), rayon::current_num_threads().into());
+        obj.insert("formats".into(), args.format.clone().into());
+    }
+    let text = serde_json::to_string_pretty(&value)
+        .map_err(|e| Failure::output(format!("cannot encode timings.json: {e}")))?;
+    let path = args.output.join("timings.json");
+    medial_blocks::output::write_atomic(&path, |w| {
+        use std::io::Write;
+        w.write_all(text.as_bytes())?;
+        w.write_all(b"\n")
+    })
+    .map_err(|e| Failure::output(format!("cannot write {}: {e}", path.display())))?;
+    if !quiet {
+        eprint!("{}", t.table());
+    }
+    Ok(())
+}
+
 pub fn run(args: Args, global: Global) -> Result<(), Failure> {
+    let recording = args.timings.then(timings::Recording::start);
     let formats =
         Format::parse_list(&args.format).map_err(|e| Failure::input(format!("--format: {e}")))?;
-    let domain = read_domain(&args)?;
+    let domain = timings::span("input", || read_domain(&args))?;
     let options = exact_options(&args)?;
     let bar = progress(global);
     let holes = match &domain {
@@ -445,8 +495,10 @@ pub fn run(args: Args, global: Global) -> Result<(), Failure> {
             _ => Failure::input(e.to_string()),
         }
     })?;
-    let written = write_files_with_progress(&mesh, &args.output, &formats, |f| {
-        bar.set_message(format!("writing {}", f.name()));
+    let written = timings::span("write", || {
+        write_files_with_progress(&mesh, &args.output, &formats, |f| {
+            bar.set_message(format!("writing {}", f.name()));
+        })
     });
     bar.finish_and_clear();
     written.map_err(|e| {
@@ -458,6 +510,7 @@ pub fn run(args: Args, global: Global) -> Result<(), Failure> {
         println!("written to {}/", args.output.display());
     }
     if args.compare_modes {
+        let _stage = timings::enter("compare_modes");
         match &domain {
             AnyDomain::Bounded(d) => compare_modes(d, &options, &mesh, &args, global.quiet)?,
             AnyDomain::Periodic(_) => {
@@ -467,6 +520,9 @@ pub fn run(args: Args, global: Global) -> Result<(), Failure> {
                 ))
             }
         }
+    }
+    if let Some(r) = recording {
+        report_timings(&r.finish(), &mesh, &args, global.quiet)?;
     }
     Ok(())
 }

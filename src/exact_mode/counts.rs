@@ -124,6 +124,32 @@ impl CountProblem {
         Ok(Counts { circle, arc })
     }
 
+    /// A fixed grid per block (`--block-cells n`, [`crate::mesher::Options::block_cells`]):
+    /// every circle's count is `n` and every arc's count is `n` raised to its lower bound
+    /// [`ArcTarget::min_cells`] (at most 15 degrees of wall per cell); the targets are not
+    /// used. Template parity is repaired as in [`CountProblem::solve`]. Fixed circle counts
+    /// are ignored (the caller refuses them with `block_cells`).
+    pub fn solve_uniform(&self, n: usize) -> Result<Counts, String> {
+        let n = n.clamp(1, super::super::grid::MAX_CELLS_PER_SIDE);
+        let nc = self.circle_target.len();
+        let mut arc = Vec::with_capacity(self.arcs.len());
+        let mut lower = Vec::with_capacity(self.arcs.len());
+        for a in &self.arcs {
+            if a.circles.iter().any(|&c| c >= nc) {
+                return Err("arc refers to an unknown circle".into());
+            }
+            let lb = a.min_cells();
+            lower.push(lb);
+            arc.push(n.max(lb));
+        }
+        let targets: Vec<f64> = arc.iter().map(|&k| k as f64).collect();
+        self.repair_parity(&mut arc, &targets, &lower)?;
+        Ok(Counts {
+            circle: vec![n; nc],
+            arc,
+        })
+    }
+
     fn is_template(&self, c: usize) -> bool {
         self.template.get(c).copied().unwrap_or(false)
     }
@@ -258,6 +284,26 @@ mod tests {
         assert_eq!(c.circle, vec![4, 3]);
         // nbar = 3.5: targets 3.5 and 8.05.
         assert_eq!(c.arc, vec![4, 8]);
+    }
+
+    #[test]
+    fn uniform_counts_are_n_raised_only_by_the_wall_angle() {
+        let mut wide = arc(0, 1, 1.0);
+        wide.ang = vec![3.2, 3.0]; // 6.2 x 15 degrees: at least 7 cells
+        let p = CountProblem {
+            circle_target: vec![4.4, 7.6, 2.0],
+            circle_fixed: vec![None, Some(3), None],
+            template: vec![false; 3],
+            arcs: vec![arc(0, 1, 9.0), wide, arc(1, 2, 0.1)],
+        };
+        assert_eq!(
+            p.solve_uniform(5).unwrap(),
+            Counts {
+                circle: vec![5, 5, 5],
+                arc: vec![5, 7, 5]
+            }
+        );
+        assert_eq!(p.solve_uniform(0).unwrap().circle, vec![1, 1, 1]);
     }
 
     #[test]

@@ -611,9 +611,14 @@ pub fn assemble(sk: Skeleton<'_>, options: &Options) -> Result<ExactMesh, MeshEr
         template: vec![false; ncirc],
         arcs: targets,
     };
-    let mut counts = problem.solve().map_err(internal)?;
+    let mut counts = crate::timings::span("node_counts", || match options.block_cells {
+        Some(n) => problem.solve_uniform(n),
+        None => problem.solve(),
+    })
+    .map_err(internal)?;
 
-    // Layout skeleton: vertices, spokes, walls, medial edges (filled in below), blocks.
+    // Layout skeleton and grids (stage "grids" until the end).
+    let _grids = crate::timings::enter("grids");
     let nv = vertices.len();
     let mut layout = BlockLayout {
         vertices: vertices.iter().map(|v| v.center).collect(),

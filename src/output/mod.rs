@@ -272,6 +272,7 @@ fn write_into(
 ) -> io::Result<()> {
     for f in formats {
         progress(*f);
+        let _stage = crate::timings::enter(crate::timings::writer_stage(f.name()));
         match f {
             Format::Vtu => vtu::write_vtu(mesh, &dir.join("mesh.vtu"))?,
             #[cfg(feature = "cgns")]

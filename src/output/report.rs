@@ -63,6 +63,7 @@ impl Report {
     /// Counts from the mesh, quality from [`crate::quality::measure`] and
     /// [`crate::quality::quality_metrics`] over its grids (one pass, [`measure_all`]).
     pub fn from_mesh(mesh: &Mesh) -> Report {
+        let _stage = crate::timings::enter("quality");
         let (q, quality) = measure_all(&mesh.layout, &mesh.grids);
         Report {
             holes: mesh.holes,

@@ -1,0 +1,438 @@
+//! Whole-program performance table (issue #8), reproducible:
+//!
+//! ```text
+//! cargo run --release --example perf_table -- [--max 1e5] [--seed 1] [--block-cells 16]
+//!     [--format json] [--tri-max N] [--force] [--no-build]
+//! ```
+//!
+//! For n = 1e2, 1e3, 1e4, 1e5 (up to `--max`) it writes `layouts::bubbles(n, seed)` with the
+//! release CLI (`medial-blocks example bubbles`), then meshes it in a child process:
+//! `medial-blocks --quiet mesh IN -o DIR --timings --block-cells 16 --format json` (exact
+//! mode, a 16 x 16 grid per block; `--format json` writes `report.json` and
+//! `connectivity.json`, so the quality figures are computed once). It prints a markdown table
+//! from each run's `timings.json`: per-stage seconds, total, the child's wall time measured
+//! from outside (process start and exit included), its peak resident memory (`VmHWM`), bytes
+//! per particle and the growth exponent `ln(t2 / t1) / ln(n2 / n1)` between sizes.
+//!
+//! Then, in this process, the triangulation engine vs spade (`bulk_load`) vs delaunator on
+//! the pipeline's own final sample points of the same layouts (best of a few runs each,
+//! interleaved), up to `--tri-max` (default: `--max`).
+//!
+//! Before running the largest sizes it projects the peak memory from the previous size's bytes
+//! per particle and skips a size that would not fit in 85% of `MemAvailable` (`--force` runs
+//! it anyway). The release binary is rebuilt first (`cargo build --release`, skipped with
+//! `--no-build` or when `MEDIAL_BLOCKS_BIN` names a binary).
+
+use medial_blocks::geometry::{Point, Triangulation};
+use medial_blocks::layouts;
+use medial_blocks::sampling::{sample_and_triangulate, SamplingOptions};
+use std::path::{Path, PathBuf};
+use std::process::Command;
+use std::time::Instant;
+
+const SIZES: [usize; 4] = [100, 1_000, 10_000, 100_000];
+
+/// Stage columns: (header, stage keys of timings.json summed into it).
+const COLUMNS: &[(&str, &[&str])] = &[
+    ("input", &["input"]),
+    ("sampling", &["sampling"]),
+    ("triangulation", &["triangulation"]),
+    ("medial graph", &["medial_graph"]),
+    ("blocking", &["blocking"]),
+    ("exact geometry", &["exact_geometry"]),
+    ("node counts", &["node_counts"]),
+    ("grids", &["grids"]),
+    ("quality check", &["quality_check"]),
+    ("quality", &["quality"]),
+];
+
+struct Args {
+    max: usize,
+    seed: u64,
+    block_cells: usize,
+    format: String,
+    tri_max: Option<usize>,
+    force: bool,
+    build: bool,
+}
+
+fn parse_size(s: &str) -> Result<usize, String> {
+    s.trim()
+        .parse::<f64>()
+        .ok()
+        .filter(|v| v.is_finite() && *v >= 1.0)
+        .map(|v| v as usize)
+        .ok_or_else(|| format!("'{s}' is not a particle count (e.g. 1e4)"))
+}
+
+fn parse_args() -> Result<Args, String> {
+    let mut a = Args {
+        max: 100_000,
+        seed: 1,
+        block_cells: 16,
+        format: "json".into(),
+        tri_max: None,
+        force: false,
+        build: true,
+    };
+    let mut it = std::env::args().skip(1);
+    while let Some(flag) = it.next() {
+        let mut value = || it.next().ok_or_else(|| format!("{flag} needs a value"));
+        match flag.as_str() {
+            "--max" => a.max = parse_size(&value()?)?,
+            "--seed" => a.seed = value()?.parse().map_err(|e| format!("--seed: {e}"))?,
+            "--block-cells" => {
+                a.block_cells = value()?
+                    .parse()
+                    .map_err(|e| format!("--block-cells: {e}"))?
+            }
+            "--format" => a.format = value()?,
+            "--tri-max" => a.tri_max = Some(parse_size(&value()?)?),
+            "--force" => a.force = true,
+            "--no-build" => a.build = false,
+            "-h" | "--help" => {
+                println!(
+                    "perf_table [--max 1e5] [--seed 1] [--block-cells 16] [--format json] \
+                     [--tri-max N] [--force] [--no-build]"
+                );
+                std::process::exit(0);
+            }
+            other => return Err(format!("unknown argument '{other}' (see --help)")),
+        }
+    }
+    Ok(a)
+}
+
+/// The release CLI binary: `MEDIAL_BLOCKS_BIN`, else `target/release/medial-blocks` next to
+/// this example (rebuilt first unless `--no-build`).
+fn binary(build: bool) -> Result<PathBuf, String> {
+    if let Ok(p) = std::env::var("MEDIAL_BLOCKS_BIN") {
+        return Ok(PathBuf::from(p));
+    }
+    if build {
+        let cargo = std::env::var("CARGO").unwrap_or_else(|_| "cargo".into());
+        let status = Command::new(cargo)
+            .args(["build", "--release", "--quiet", "--bin", "medial-blocks"])
+            .current_dir(env!("CARGO_MANIFEST_DIR"))
+            .status()
+            .map_err(|e| format!("cannot run cargo build: {e}"))?;
+        if !status.success() {
+            return Err("cargo build --release failed".into());
+        }
+    }
+    let exe = std::env::current_exe().map_err(|e| e.to_string())?;
+    // target/release/examples/perf_table -> target/release/medial-blocks
+    let bin = exe
+        .parent()
+        .and_then(Path::parent)
+        .map(|d| d.join(format!("medial-blocks{}", std::env::consts::EXE_SUFFIX)))
+        .ok_or("cannot locate target/release")?;
+    if bin.exists() {
+        Ok(bin)
+    } else {
+        Err(format!(
+            "{} not found: run cargo build --release",
+            bin.display()
+        ))
+    }
+}
+
+/// The 1-minute load average (`/proc/loadavg`), to judge how shared the machine was.
+fn load_average() -> String {
+    std::fs::read_to_string("/proc/loadavg")
+        .ok()
+        .and_then(|t| t.split_whitespace().next().map(str::to_string))
+        .unwrap_or_else(|| "n/a".into())
+}
+
+/// `MemAvailable` of /proc/meminfo in bytes.
+fn mem_available() -> Option<u64> {
+    let text = std::fs::read_to_string("/proc/meminfo").ok()?;
+    let line = text.lines().find(|l| l.starts_with("MemAvailable:"))?;
+    let kb: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    Some(kb * 1024)
+}
+
+struct Row {
+    n: usize,
+    blocks: u64,
+    cells: u64,
+    stages: serde_json::Value,
+    cpu_stages: serde_json::Value,
+    calls: serde_json::Value,
+    total: f64,
+    cpu: Option<f64>,
+    wall: f64,
+    peak: Option<u64>,
+}
+
+fn run_size(bin: &Path, dir: &Path, n: usize, a: &Args) -> Result<Row, String> {
+    let input = dir.join(format!("bubbles_{n}.json"));
+    let out = dir.join(format!("out_{n}"));
+    let st = Command::new(bin)
+        .args(["--quiet", "example", "bubbles", "--holes"])
+        .arg(n.to_string())
+        .arg("--seed")
+        .arg(a.seed.to_string())
+        .arg("-o")
+        .arg(&input)
+        .status()
+        .map_err(|e| format!("cannot run {}: {e}", bin.display()))?;
+    if !st.success() {
+        return Err(format!("example bubbles --holes {n} failed"));
+    }
+    let start = Instant::now();
+    let o = Command::new(bin)
+        .args(["--quiet", "mesh"])
+        .arg(&input)
+        .arg("-o")
+        .arg(&out)
+        .args(["--timings", "--block-cells"])
+        .arg(a.block_cells.to_string())
+        .args(["--format", &a.format])
+        .output()
+        .map_err(|e| format!("cannot run {}: {e}", bin.display()))?;
+    let wall = start.elapsed().as_secs_f64();
+    if !o.status.success() {
+        return Err(format!(
+            "mesh of {n} bubbles failed: {}",
+            String::from_utf8_lossy(&o.stderr)
+        ));
+    }
+    let text = std::fs::read_to_string(out.join("timings.json"))
+        .map_err(|e| format!("timings.json of {n}: {e}"))?;
+    let t: serde_json::Value = serde_json::from_str(&text).map_err(|e| e.to_string())?;
+    let _ = std::fs::remove_dir_all(&out);
+    let _ = std::fs::remove_file(&input);
+    Ok(Row {
+        n,
+        blocks: t["blocks"].as_u64().unwrap_or(0),
+        cells: t["cells"].as_u64().unwrap_or(0),
+        total: t["total_seconds"].as_f64().unwrap_or(f64::NAN),
+        cpu: t["cpu_seconds"].as_f64(),
+        peak: t["peak_memory_bytes"].as_u64(),
+        stages: t["stages"].clone(),
+        cpu_stages: t["cpu_stages"].clone(),
+        calls: t["calls"].clone(),
+        wall,
+    })
+}
+
+fn stage_sum(stages: &serde_json::Value, keys: &[&str]) -> f64 {
+    keys.iter().filter_map(|k| stages[*k].as_f64()).sum()
+}
+
+/// Writers: `write` (staging, publishing) and every `write_<format>`.
+fn writers(stages: &serde_json::Value) -> f64 {
+    stages.as_object().map_or(0.0, |o| {
+        o.iter()
+            .filter(|(k, _)| k.as_str() == "write" || k.starts_with("write_"))
+            .filter_map(|(_, v)| v.as_f64())
+            .sum()
+    })
+}
+
+fn exponent(n0: usize, t0: f64, n1: usize, t1: f64) -> f64 {
+    (t1 / t0).ln() / (n1 as f64 / n0 as f64).ln()
+}
+
+fn print_table(rows: &[Row]) {
+    let mut head = vec!["particles", "blocks", "cells"];
+    head.extend(COLUMNS.iter().map(|c| c.0));
+    head.extend([
+        "writers",
+        "other",
+        "total s",
+        "CPU s",
+        "process s",
+        "peak MiB",
+        "bytes/particle",
+        "growth exp.",
+    ]);
+    println!("| {} |", head.join(" | "));
+    println!("|{}", "---:|".repeat(head.len()));
+    for (i, r) in rows.iter().enumerate() {
+        let mut cells = vec![r.n.to_string(), r.blocks.to_string(), r.cells.to_string()];
+        for (_, keys) in COLUMNS {
+            cells.push(format!("{:.3}", stage_sum(&r.stages, keys)));
+        }
+        cells.push(format!("{:.3}", writers(&r.stages)));
+        cells.push(format!("{:.3}", r.stages["other"].as_f64().unwrap_or(0.0)));
+        cells.push(format!("{:.3}", r.total));
+        cells.push(r.cpu.map_or("n/a".into(), |c| format!("{c:.2}")));
+        cells.push(format!("{:.3}", r.wall));
+        match r.peak {
+            Some(p) => {
+                cells.push(format!("{:.1}", p as f64 / (1024.0 * 1024.0)));
+                cells.push(format!("{:.0}", p as f64 / r.n as f64));
+            }
+            None => cells.extend(["n/a".to_string(), "n/a".to_string()]),
+        }
+        cells.push(match i.checked_sub(1).map(|j| &rows[j]) {
+            Some(p) => format!("{:.2}", exponent(p.n, p.total, r.n, r.total)),
+            None => "-".into(),
+        });
+        println!("| {} |", cells.join(" | "));
+    }
+    let find = |n: usize| rows.iter().find(|r| r.n == n);
+    if let (Some(a), Some(b)) = (find(1_000), find(100_000)) {
+        println!(
+            "\nGrowth exponent 1e3 -> 1e5 (total): {:.2}",
+            exponent(a.n, a.total, b.n, b.total)
+        );
+    }
+}
+
+/// Process CPU seconds per stage (all threads; less sensitive to a shared machine than wall
+/// time) and how often the sampling loop triangulated.
+fn print_cpu_table(rows: &[Row]) {
+    let mut head = vec!["particles"];
+    head.extend(COLUMNS.iter().map(|c| c.0));
+    head.extend(["writers", "other", "CPU s", "triangulations"]);
+    println!("\nProcess CPU seconds per stage (all threads):\n");
+    println!("| {} |", head.join(" | "));
+    println!("|{}", "---:|".repeat(head.len()));
+    for r in rows {
+        if r.cpu_stages.is_null() {
+            continue;
+        }
+        let mut cells = vec![r.n.to_string()];
+        for (_, keys) in COLUMNS {
+            cells.push(format!("{:.2}", stage_sum(&r.cpu_stages, keys)));
+        }
+        cells.push(format!("{:.2}", writers(&r.cpu_stages)));
+        cells.push(format!(
+            "{:.2}",
+            r.cpu_stages["other"].as_f64().unwrap_or(0.0)
+        ));
+        cells.push(r.cpu.map_or("n/a".into(), |c| format!("{c:.2}")));
+        cells.push(r.calls["triangulation"].as_u64().unwrap_or(0).to_string());
+        println!("| {} |", cells.join(" | "));
+    }
+}
+
+/// Best of `reps` wall times (seconds) of `f`.
+fn best<T>(reps: usize, mut f: impl FnMut() -> T) -> f64 {
+    (0..reps.max(1))
+        .map(|_| {
+            let s = Instant::now();
+            std::hint::black_box(f());
+            s.elapsed().as_secs_f64()
+        })
+        .fold(f64::INFINITY, f64::min)
+}
+
+fn triangulation_table(max: usize, seed: u64) {
+    println!(
+        "\n| particles | sample points | engine ms | spade ms | delaunator ms | engine / spade |"
+    );
+    println!("|---:|---:|---:|---:|---:|---:|");
+    for n in SIZES.into_iter().filter(|&n| n <= max) {
+        let Ok(domain) = layouts::bubbles(n, seed) else {
+            continue;
+        };
+        let sampled = match sample_and_triangulate(&domain, &SamplingOptions::default()) {
+            Ok(s) => s,
+            Err(e) => {
+                eprintln!("sampling of {n} bubbles failed: {e}");
+                continue;
+            }
+        };
+        let pts: Vec<Point> = sampled.samples.points.clone();
+        let sp: Vec<spade::Point2<f64>> =
+            pts.iter().map(|p| spade::Point2::new(p[0], p[1])).collect();
+        let dp: Vec<delaunator::Point> = pts
+            .iter()
+            .map(|p| delaunator::Point { x: p[0], y: p[1] })
+            .collect();
+        let reps = if pts.len() <= 200_000 { 5 } else { 3 };
+        let (mut e, mut s, mut d) = (f64::INFINITY, f64::INFINITY, f64::INFINITY);
+        // Interleaved, so that machine load hits all three alike.
+        for _ in 0..reps {
+            e = e.min(best(1, || Triangulation::new(&pts).map(|t| t.len())));
+            s = s.min(best(1, || {
+                use spade::Triangulation as _;
+                spade::DelaunayTriangulation::<spade::Point2<f64>>::bulk_load(sp.clone())
+                    .map(|t| t.num_inner_faces())
+            }));
+            d = d.min(best(1, || delaunator::triangulate(&dp).triangles.len()));
+        }
+        println!(
+            "| {n} | {} | {:.2} | {:.2} | {:.2} | {:.2} |",
+            pts.len(),
+            1e3 * e,
+            1e3 * s,
+            1e3 * d,
+            e / s
+        );
+    }
+}
+
+fn main() {
+    let a = match parse_args() {
+        Ok(a) => a,
+        Err(e) => {
+            eprintln!("error: {e}");
+            std::process::exit(2);
+        }
+    };
+    let bin = match binary(a.build) {
+        Ok(b) => b,
+        Err(e) => {
+            eprintln!("error: {e}");
+            std::process::exit(1);
+        }
+    };
+    let load_before = load_average();
+    let dir = tempfile::tempdir().expect("temporary directory");
+    let mut rows: Vec<Row> = Vec::new();
+    let mut notes: Vec<String> = Vec::new();
+    for n in SIZES.into_iter().filter(|&n| n <= a.max) {
+        if let (Some(prev), Some(avail), false) = (rows.last(), mem_available(), a.force) {
+            if let Some(p) = prev.peak {
+                let projected = p as f64 / prev.n as f64 * n as f64 * 1.15;
+                if projected > 0.85 * avail as f64 {
+                    eprintln!(
+                        "skipping {n} particles: projected peak {:.1} GiB, {:.1} GiB available \
+                         (--force runs it anyway)",
+                        projected / f64::powi(1024.0, 3),
+                        avail as f64 / f64::powi(1024.0, 3)
+                    );
+                    notes.push(format!(
+                        "{n} particles skipped: projected peak {:.1} GiB > 85% of the {:.1} GiB \
+                         available.",
+                        projected / f64::powi(1024.0, 3),
+                        avail as f64 / f64::powi(1024.0, 3)
+                    ));
+                    break;
+                }
+            }
+        }
+        eprintln!("meshing {n} bubbles ...");
+        match run_size(&bin, dir.path(), n, &a) {
+            Ok(r) => {
+                eprintln!("  {:.3} s, {} blocks", r.total, r.blocks);
+                rows.push(r);
+            }
+            Err(e) => {
+                eprintln!("error: {e}");
+                std::process::exit(1);
+            }
+        }
+    }
+    println!(
+        "Exact mode, `--block-cells {}`, `--format {}`, bubbles seed {}, {} threads; load \
+         average {load_before} before, {} after the runs.\n",
+        a.block_cells,
+        a.format,
+        a.seed,
+        std::thread::available_parallelism().map_or(1, |n| n.get()),
+        load_average()
+    );
+    print_table(&rows);
+    print_cpu_table(&rows);
+    for n in &notes {
+        println!("\n{n}");
+    }
+    triangulation_table(a.tri_max.unwrap_or(a.max), a.seed);
+}

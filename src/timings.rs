@@ -1,0 +1,569 @@
+//! Per-stage wall time and peak memory of one run (`medial-blocks mesh --timings`, issue #8).
+//!
+//! A [`Recording`] activates a recorder on the current thread; the pipeline marks its stages
+//! with [`enter`] (a guard) or [`span`] (a closure). Times are *exclusive*: a stage entered
+//! inside another is subtracted from the outer one, so the stages plus the unattributed rest
+//! ([`Timings::other_seconds`]) add up to [`Timings::total_seconds`]. A stage entered twice
+//! (resampling attempts, the report computed twice) accumulates.
+//!
+//! Without an active recording on the thread every call is one thread-local read and does
+//! nothing else. Work done on other threads (rayon workers) is counted in the stage that is
+//! open on the recording thread while it waits. Timings never feed into the mesh or any other
+//! output: they go to `timings.json` and stderr only when asked for.
+
+use std::borrow::Cow;
+use std::cell::RefCell;
+use std::time::{Duration, Instant};
+
+/// The pipeline's stage names, in pipeline order. [`Timings::to_json`] writes every one of
+/// them (0 when the stage did not run); writers add `write_<format>` stages.
+///
+/// - `input`: reading, parsing and validating the domain (the CLI);
+/// - `sampling`: boundary sampling, triangle classes, invariant checks and resampling;
+/// - `triangulation`: the exact Delaunay triangulation of the samples;
+/// - `medial_graph`: the medial graph (Algorithm 1) and the thin-wall check;
+/// - `blocking`: Blocking2D (Algorithm 2), and in the paper pipeline refinement and collapse;
+/// - `exact_geometry`: exact mode's Apollonius vertices, conic arcs and their densities;
+/// - `node_counts`: choosing the cell counts (exact mode's count problem);
+/// - `grids`: grid nodes (exact mode's spoke grids, or node counts + TFI of the paper pipeline);
+/// - `quality_check`: exact mode's inverted-cell check of each attempt;
+/// - `quality`: the quality figures of the report (`report.json`, the summary);
+/// - `write`: creating, staging and publishing the output files (not the writers themselves).
+pub const STAGES: &[&str] = &[
+    "input",
+    "sampling",
+    "triangulation",
+    "medial_graph",
+    "blocking",
+    "exact_geometry",
+    "node_counts",
+    "grids",
+    "quality_check",
+    "quality",
+    "write",
+];
+
+/// The stage name of a writer: `write_<format>`.
+pub fn writer_stage(format: &str) -> String {
+    format!("write_{format}")
+}
+
+/// What a recording measured.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Timings {
+    /// Exclusive wall time (seconds) per stage, in order of first closing.
+    pub stages: Vec<(String, f64)>,
+    /// Exclusive process CPU time (seconds, all threads, 10 ms resolution) per stage, same
+    /// order; empty where the CPU clock is unavailable.
+    pub cpu: Vec<(String, f64)>,
+    /// How many times each stage was entered (resampling attempts, repeated figures), same
+    /// order.
+    pub calls: Vec<(String, u64)>,
+    /// Wall time (seconds) from [`Recording::start`] to [`Recording::finish`].
+    pub total_seconds: f64,
+    /// Peak resident memory of the process so far (`VmHWM` of `/proc/self/status`), `None`
+    /// where unavailable.
+    pub peak_memory_bytes: Option<u64>,
+    /// CPU time (user + system, all threads of the process) spent during the recording,
+    /// from `/proc/self/stat` (10 ms resolution); `None` where unavailable. Less sensitive
+    /// than wall time to other processes on a shared machine.
+    pub cpu_seconds: Option<f64>,
+}
+
+impl Timings {
+    /// Seconds of `stage` (0 when it did not run).
+    pub fn seconds(&self, stage: &str) -> f64 {
+        self.stages
+            .iter()
+            .find(|(n, _)| n == stage)
+            .map_or(0.0, |(_, s)| *s)
+    }
+
+    /// Total time not attributed to any stage (never negative).
+    pub fn other_seconds(&self) -> f64 {
+        let sum: f64 = self.stages.iter().map(|(_, s)| s).sum();
+        (self.total_seconds - sum).max(0.0)
+    }
+
+    /// The stages to report: every one of [`STAGES`], then the others in order of first
+    /// entry, then `other`.
+    pub fn rows(&self) -> Vec<(String, f64)> {
+        let mut rows: Vec<(String, f64)> = STAGES
+            .iter()
+            .map(|s| (s.to_string(), self.seconds(s)))
+            .collect();
+        for (n, s) in &self.stages {
+            if !STAGES.contains(&n.as_str()) {
+                rows.push((n.clone(), *s));
+            }
+        }
+        rows.push(("other".into(), self.other_seconds()));
+        rows
+    }
+
+    /// `{"stages": {name: seconds, ...}, "cpu_stages": {name: seconds, ...} | null,
+    /// "calls": {name: count, ...}, "total_seconds": t, "cpu_seconds": c|null,
+    /// "peak_memory_bytes": n|null}` with every row of [`Timings::rows`] in `stages` (wall
+    /// time; `other` is the unattributed rest) and in `cpu_stages` (process CPU time).
+    pub fn to_json(&self) -> serde_json::Value {
+        let stages: serde_json::Map<String, serde_json::Value> = self
+            .rows()
+            .into_iter()
+            .map(|(n, s)| (n, serde_json::Value::from(s)))
+            .collect();
+        let cpu_stages = self.cpu_seconds.map(|total| {
+            let mut m: serde_json::Map<String, serde_json::Value> = self
+                .rows()
+                .into_iter()
+                .filter(|(n, _)| n != "other")
+                .map(|(n, _)| {
+                    let c = self
+                        .cpu
+                        .iter()
+                        .find(|(k, _)| *k == n)
+                        .map_or(0.0, |(_, c)| *c);
+                    (n, serde_json::Value::from(c))
+                })
+                .collect();
+            let sum: f64 = self.cpu.iter().map(|(_, c)| c).sum();
+            m.insert("other".into(), (total - sum).max(0.0).into());
+            m
+        });
+        let calls: serde_json::Map<String, serde_json::Value> = self
+            .calls
+            .iter()
+            .map(|(n, c)| (n.clone(), serde_json::Value::from(*c)))
+            .collect();
+        serde_json::json!({
+            "stages": stages,
+            "cpu_stages": cpu_stages,
+            "calls": calls,
+            "total_seconds": self.total_seconds,
+            "cpu_seconds": self.cpu_seconds,
+            "peak_memory_bytes": self.peak_memory_bytes,
+        })
+    }
+
+    /// A plain-text table: stage, milliseconds, share of the total; then the total and the
+    /// peak memory.
+    pub fn table(&self) -> String {
+        let mut s = format!(
+            "{:<18}{:>12}{:>8}{:>12}{:>7}\n",
+            "stage", "ms", "share", "cpu ms", "calls"
+        );
+        let total = self.total_seconds;
+        for (n, sec) in self.rows() {
+            let share = if total > 0.0 {
+                100.0 * sec / total
+            } else {
+                0.0
+            };
+            let cpu = self
+                .cpu
+                .iter()
+                .find(|(k, _)| *k == n)
+                .map_or("-".to_string(), |(_, c)| format!("{:.0}", 1e3 * c));
+            let calls = self
+                .calls
+                .iter()
+                .find(|(k, _)| *k == n)
+                .map_or("-".to_string(), |(_, c)| c.to_string());
+            s.push_str(&format!(
+                "{n:<18}{:>12.2}{share:>7.1}%{cpu:>12}{calls:>7}\n",
+                1e3 * sec
+            ));
+        }
+        s.push_str(&format!("{:<18}{:>12.2}\n", "total", 1e3 * total));
+        if let Some(c) = self.cpu_seconds {
+            s.push_str(&format!("{:<18}{:>12.2}\n", "cpu (all threads)", 1e3 * c));
+        }
+        match self.peak_memory_bytes {
+            Some(b) => s.push_str(&format!(
+                "{:<18}{:>12.1} MiB\n",
+                "peak memory",
+                b as f64 / (1024.0 * 1024.0)
+            )),
+            None => s.push_str(&format!("{:<18}{:>12}\n", "peak memory", "n/a")),
+        }
+        s
+    }
+}
+
+/// Peak resident memory of this process in bytes: `VmHWM` from `/proc/self/status` (Linux);
+/// `None` where that file or line is missing.
+pub fn peak_memory_bytes() -> Option<u64> {
+    let status = std::fs::read_to_string("/proc/self/status").ok()?;
+    parse_vm_hwm(&status)
+}
+
+/// CPU time (user + system) of this process so far in seconds: fields 14 and 15 of
+/// `/proc/self/stat` in clock ticks of 1/100 s (Linux's fixed `USER_HZ`); `None` elsewhere.
+pub fn process_cpu_seconds() -> Option<f64> {
+    let stat = std::fs::read_to_string("/proc/self/stat").ok()?;
+    parse_stat_cpu(&stat)
+}
+
+/// User + system seconds of a `/proc/PID/stat` line (fields after the `)` of the name).
+pub fn parse_stat_cpu(stat: &str) -> Option<f64> {
+    let rest = &stat[stat.rfind(')')? + 1..];
+    // rest starts at field 3 (state): utime and stime are fields 14 and 15.
+    let fields: Vec<&str> = rest.split_whitespace().collect();
+    let utime: u64 = fields.get(11)?.parse().ok()?;
+    let stime: u64 = fields.get(12)?.parse().ok()?;
+    Some((utime + stime) as f64 / 100.0)
+}
+
+/// The `VmHWM:  1234 kB` line of a `/proc/PID/status` text, in bytes.
+pub fn parse_vm_hwm(status: &str) -> Option<u64> {
+    let line = status.lines().find(|l| l.starts_with("VmHWM:"))?;
+    let mut parts = line["VmHWM:".len()..].split_whitespace();
+    let value: u64 = parts.next()?.parse().ok()?;
+    let scale = match parts.next() {
+        Some("kB") | Some("KB") | Some("kb") => 1024,
+        Some("mB") | Some("MB") => 1024 * 1024,
+        Some("B") | None => 1,
+        Some(_) => return None,
+    };
+    value.checked_mul(scale)
+}
+
+/// Wall time and process CPU seconds of a stretch of work.
+#[derive(Debug, Clone, Copy, Default)]
+struct Measure {
+    wall: Duration,
+    cpu: f64,
+}
+
+impl Measure {
+    fn plus(self, o: Measure) -> Measure {
+        Measure {
+            wall: self.wall + o.wall,
+            cpu: self.cpu + o.cpu,
+        }
+    }
+    fn minus(self, o: Measure) -> Measure {
+        Measure {
+            wall: self.wall.saturating_sub(o.wall),
+            cpu: (self.cpu - o.cpu).max(0.0),
+        }
+    }
+}
+
+struct Open {
+    name: Cow<'static, str>,
+    start: Instant,
+    cpu_start: Option<f64>,
+    /// Time spent in stages entered inside this one.
+    children: Measure,
+}
+
+struct Recorder {
+    id: u64,
+    start: Instant,
+    cpu_start: Option<f64>,
+    /// Per stage: exclusive time and number of entries.
+    stages: Vec<(Cow<'static, str>, Measure, u64)>,
+    stack: Vec<Open>,
+}
+
+impl Recorder {
+    fn add(&mut self, name: Cow<'static, str>, m: Measure, calls: u64) {
+        match self.stages.iter_mut().find(|(n, _, _)| *n == name) {
+            Some((_, t, c)) => {
+                *t = t.plus(m);
+                *c += calls;
+            }
+            None => self.stages.push((name, m, calls)),
+        }
+    }
+
+    /// Close the innermost open stage.
+    fn close(&mut self) {
+        if let Some(open) = self.stack.pop() {
+            let total = Measure {
+                wall: open.start.elapsed(),
+                cpu: match (open.cpu_start, process_cpu_seconds()) {
+                    (Some(a), Some(b)) => (b - a).max(0.0),
+                    _ => 0.0,
+                },
+            };
+            self.add(open.name, total.minus(open.children), 1);
+            if let Some(parent) = self.stack.last_mut() {
+                parent.children = parent.children.plus(total);
+            }
+        }
+    }
+}
+
+thread_local! {
+    static ACTIVE: RefCell<Option<Recorder>> = const { RefCell::new(None) };
+    static NEXT_ID: std::cell::Cell<u64> = const { std::cell::Cell::new(1) };
+}
+
+/// Records the stages entered on this thread until [`Recording::finish`].
+///
+/// Recordings nest: starting one while another is active sets the outer one aside; finishing
+/// the inner one returns its timings and hands its stages on to the outer one (as if they had
+/// been entered there), so a timed call inside a timed run is counted once.
+#[must_use = "finish() returns the timings"]
+pub struct Recording {
+    id: u64,
+    outer: Option<Recorder>,
+}
+
+impl Recording {
+    /// Start recording on this thread.
+    pub fn start() -> Recording {
+        let id = NEXT_ID.with(|n| {
+            let id = n.get();
+            n.set(id.wrapping_add(1));
+            id
+        });
+        let outer = ACTIVE.with(|a| {
+            a.borrow_mut().replace(Recorder {
+                id,
+                start: Instant::now(),
+                cpu_start: process_cpu_seconds(),
+                stages: Vec::new(),
+                stack: Vec::new(),
+            })
+        });
+        Recording { id, outer }
+    }
+
+    /// Stop recording: the exclusive time of every stage, the total and the peak memory.
+    pub fn finish(mut self) -> Timings {
+        let outer = self.outer.take();
+        let mine = ACTIVE.with(|a| {
+            let mut a = a.borrow_mut();
+            let mine = match a.take() {
+                Some(r) if r.id == self.id => Some(r),
+                other => {
+                    // Not ours (finished out of order): leave it in place.
+                    *a = other;
+                    None
+                }
+            };
+            if mine.is_some() {
+                *a = outer;
+            }
+            mine
+        });
+        let Some(mut r) = mine else {
+            return Timings {
+                stages: Vec::new(),
+                cpu: Vec::new(),
+                calls: Vec::new(),
+                total_seconds: 0.0,
+                peak_memory_bytes: peak_memory_bytes(),
+                cpu_seconds: None,
+            };
+        };
+        while !r.stack.is_empty() {
+            r.close();
+        }
+        let total = r.start.elapsed();
+        // Hand the stages on to the outer recording, if any.
+        ACTIVE.with(|a| {
+            if let Some(o) = a.borrow_mut().as_mut() {
+                let mut sum = Measure::default();
+                for (n, m, calls) in &r.stages {
+                    o.add(n.clone(), *m, *calls);
+                    sum = sum.plus(*m);
+                }
+                if let Some(parent) = o.stack.last_mut() {
+                    parent.children = parent.children.plus(sum);
+                }
+            }
+        });
+        let cpu_seconds = match (r.cpu_start, process_cpu_seconds()) {
+            (Some(a), Some(b)) => Some((b - a).max(0.0)),
+            _ => None,
+        };
+        let name = |n: &Cow<'static, str>| n.to_string();
+        Timings {
+            stages: r
+                .stages
+                .iter()
+                .map(|(n, m, _)| (name(n), m.wall.as_secs_f64()))
+                .collect(),
+            cpu: if cpu_seconds.is_some() {
+                r.stages.iter().map(|(n, m, _)| (name(n), m.cpu)).collect()
+            } else {
+                Vec::new()
+            },
+            calls: r.stages.iter().map(|(n, _, c)| (name(n), *c)).collect(),
+            total_seconds: total.as_secs_f64(),
+            peak_memory_bytes: peak_memory_bytes(),
+            cpu_seconds,
+        }
+    }
+}
+
+impl Drop for Recording {
+    /// A recording dropped without [`Recording::finish`] stops without reporting.
+    fn drop(&mut self) {
+        let outer = self.outer.take();
+        let id = self.id;
+        ACTIVE.with(|a| {
+            if let Ok(mut a) = a.try_borrow_mut() {
+                if a.as_ref().is_some_and(|r| r.id == id) {
+                    *a = outer;
+                }
+            }
+        });
+    }
+}
+
+/// An open stage; it closes when dropped.
+#[must_use = "the stage closes when this guard is dropped"]
+pub struct Stage {
+    /// `(recording id, stack depth)` when a recording was active.
+    at: Option<(u64, usize)>,
+    _not_send: std::marker::PhantomData<*const ()>,
+}
+
+impl Drop for Stage {
+    fn drop(&mut self) {
+        let Some((id, depth)) = self.at else { return };
+        ACTIVE.with(|a| {
+            if let Ok(mut a) = a.try_borrow_mut() {
+                if let Some(r) = a.as_mut() {
+                    // Close this stage and anything left open inside it.
+                    if r.id == id {
+                        while r.stack.len() > depth {
+                            r.close();
+                        }
+                    }
+                }
+            }
+        });
+    }
+}
+
+/// Enter stage `name` until the returned guard is dropped (a no-op without an active
+/// [`Recording`] on this thread).
+pub fn enter(name: impl Into<Cow<'static, str>>) -> Stage {
+    let at = ACTIVE.with(|a| {
+        let mut a = a.try_borrow_mut().ok()?;
+        let r = a.as_mut()?;
+        let depth = r.stack.len();
+        let cpu_start = r.cpu_start.and_then(|_| process_cpu_seconds());
+        r.stack.push(Open {
+            name: name.into(),
+            start: Instant::now(),
+            cpu_start,
+            children: Measure::default(),
+        });
+        Some((r.id, depth))
+    });
+    Stage {
+        at,
+        _not_send: std::marker::PhantomData,
+    }
+}
+
+/// Run `f` as stage `name`.
+pub fn span<T>(name: &'static str, f: impl FnOnce() -> T) -> T {
+    let _stage = enter(name);
+    f()
+}
+
+/// Whether a recording is active on this thread.
+pub fn is_recording() -> bool {
+    ACTIVE.with(|a| a.try_borrow().map(|a| a.is_some()).unwrap_or(false))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn vm_hwm_is_parsed_in_bytes() {
+        let s = "Name:\tx\nVmPeak:\t  2000 kB\nVmHWM:\t    1234 kB\nVmRSS:\t 99 kB\n";
+        assert_eq!(parse_vm_hwm(s), Some(1234 * 1024));
+        assert_eq!(parse_vm_hwm("VmRSS: 1 kB\n"), None);
+        assert_eq!(parse_vm_hwm("VmHWM: x kB\n"), None);
+        assert_eq!(parse_vm_hwm("VmHWM: 5 parsecs\n"), None);
+    }
+
+    #[test]
+    fn stat_cpu_is_utime_plus_stime() {
+        // pid (comm with ) and spaces) state ppid ... utime=250 stime=50 ...
+        let s = "42 (a) b c) R 1 2 3 4 5 6 7 8 9 10 250 50 0 0 20 0 1 0 100 200 300";
+        assert_eq!(parse_stat_cpu(s), Some(3.0));
+        assert_eq!(parse_stat_cpu("garbage"), None);
+        if cfg!(target_os = "linux") {
+            assert!(process_cpu_seconds().is_some_and(|c| c >= 0.0));
+        }
+    }
+
+    #[test]
+    fn stages_are_exclusive_and_add_up() {
+        let rec = Recording::start();
+        {
+            let _a = enter("a");
+            span("b", || std::hint::black_box((0..10_000u64).sum::<u64>()));
+            span("b", || ());
+        }
+        span("c", || ());
+        let t = rec.finish();
+        let calls: Vec<u64> = t.calls.iter().map(|(_, c)| *c).collect();
+        assert_eq!(calls, [2, 1, 1]);
+        let names: Vec<&str> = t.stages.iter().map(|(n, _)| n.as_str()).collect();
+        // "b" closes before "a", so it is recorded first.
+        assert_eq!(names, ["b", "a", "c"]);
+        assert!(t.stages.iter().all(|(_, s)| *s >= 0.0));
+        let sum: f64 = t.stages.iter().map(|(_, s)| s).sum();
+        assert!(sum <= t.total_seconds + 1e-9, "{t:?}");
+        assert!(!is_recording());
+    }
+
+    #[test]
+    fn nothing_is_recorded_without_a_recording() {
+        assert!(!is_recording());
+        let g = enter("x");
+        assert!(g.at.is_none());
+        drop(g);
+        let rec = Recording::start();
+        let t = rec.finish();
+        assert!(t.stages.is_empty());
+        assert!(t.rows().iter().any(|(n, _)| n == "other"));
+    }
+
+    #[test]
+    fn nested_recordings_hand_their_stages_on() {
+        let outer = Recording::start();
+        let _s = enter("outer_stage");
+        let inner = Recording::start();
+        span("inner_stage", || ());
+        let ti = inner.finish();
+        assert_eq!(ti.stages.len(), 1);
+        drop(_s);
+        let to = outer.finish();
+        let names: Vec<&str> = to.stages.iter().map(|(n, _)| n.as_str()).collect();
+        assert_eq!(names, ["inner_stage", "outer_stage"]);
+    }
+
+    #[test]
+    fn json_has_every_stage() {
+        let t = Timings {
+            stages: vec![("write_vtk".into(), 0.5), ("grids".into(), 0.25)],
+            cpu: vec![("write_vtk".into(), 0.75), ("grids".into(), 0.25)],
+            calls: vec![("write_vtk".into(), 1), ("grids".into(), 2)],
+            total_seconds: 1.0,
+            peak_memory_bytes: None,
+            cpu_seconds: Some(1.5),
+        };
+        let v = t.to_json();
+        for s in STAGES.iter().chain(&["write_vtk", "other"]) {
+            assert!(v["stages"][s].as_f64().is_some(), "{s}");
+        }
+        assert_eq!(v["stages"]["other"].as_f64(), Some(0.25));
+        assert_eq!(v["cpu_stages"]["other"].as_f64(), Some(0.5));
+        assert_eq!(v["cpu_stages"]["input"].as_f64(), Some(0.0));
+        assert_eq!(v["calls"]["grids"].as_u64(), Some(2));
+        assert!(v["peak_memory_bytes"].is_null());
+        assert!(t.table().contains("write_vtk"));
+    }
+}
