@@ -37,6 +37,7 @@ pub mod benchmarks;
 pub mod clustering;
 pub mod counts;
 pub mod metrics;
+pub mod periodic;
 pub mod smoothing;
 
 pub use clustering::{Clustering, FirstCell};
