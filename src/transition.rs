@@ -91,7 +91,7 @@ impl Rect {
             .min(center[1] - r - lo_y)
             .min(hi_x - center[0] - r)
             .min(hi_y - center[1] - r);
-        if !(room >= spacing) {
+        if room.is_nan() || room < spacing {
             return Err(MeshError::Options(format!(
                 "--transition-rect: the rectangle [{lo_x}, {hi_x}] x [{lo_y}, {hi_y}] must \
                  enclose the bounding circle (centre {center:?}, radius {r}) with at least one \
