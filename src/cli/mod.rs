@@ -40,7 +40,7 @@ enum Command {
     /// Delaunay-triangulate a CSV of points exactly (x,y per line).
     Triangulate(triangulate::Args),
     /// Mesh a domain of circles (JSON or CSV), or the built-in example.
-    Mesh(mesh::Args),
+    Mesh(Box<mesh::Args>),
     /// Write a ready-made domain JSON (hexagon, lattice, bubbles, square-lattice).
     Example(example::Args),
     /// Mesh a sequence of frames (JSON Lines, one domain per line) in parallel, with a
@@ -98,7 +98,7 @@ pub fn run() -> ExitCode {
     };
     let result = set_threads(cli.threads).and_then(|()| match cli.command {
         Command::Triangulate(args) => triangulate::run(args),
-        Command::Mesh(args) => mesh::run(args, global),
+        Command::Mesh(args) => mesh::run(*args, global),
         Command::Example(args) => example::run(args, global),
         Command::MeshSequence(args) => sequence::run(args, global),
     });
