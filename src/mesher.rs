@@ -55,6 +55,10 @@ pub struct Options {
     pub wall_cells: Vec<(CircleId, usize)>,
     /// Exact mode: Winslow smoothing sweeps per block (0: none).
     pub smooth: usize,
+    /// Exact mode: node counts imposed by block key (sequences keep the counts of the first
+    /// frame of a run with the same combinatorics, [`crate::sequence`]); used only when every
+    /// block's key is known and the counts are consistent. Default `None`.
+    pub imposed_counts: Option<std::sync::Arc<exact_mode::imposed::ImposedCounts>>,
 }
 
 /// Default of [`Options::collapse_fraction`].
@@ -77,6 +81,7 @@ impl Default for Options {
             circle_clustering: Vec::new(),
             wall_cells: Vec::new(),
             smooth: 0,
+            imposed_counts: None,
         }
     }
 }

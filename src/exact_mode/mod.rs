@@ -36,6 +36,7 @@
 pub mod benchmarks;
 pub mod clustering;
 pub mod counts;
+pub mod imposed;
 pub mod metrics;
 pub mod periodic;
 pub mod smoothing;
@@ -509,7 +510,16 @@ pub fn build(
         template: vec![false; ncirc],
         arcs: targets,
     };
-    let counts = problem.solve().map_err(internal)?;
+    let mut counts = problem.solve().map_err(internal)?;
+    // Counts imposed by a sequence (issue 6): all or nothing.
+    if let Some(imp) = &options.imposed_counts {
+        let arcs: Vec<[usize; 2]> = medial.arcs.iter().map(|a| a.circles.map(cidx)).collect();
+        if let Some((circle, arc)) = imposed::bounded_keys(&vertices, medial)
+            .and_then(|keys| imp.counts_for(&keys, &arcs, ncirc))
+        {
+            counts = Counts { circle, arc };
+        }
+    }
 
     // Limits before allocating.
     let mut total: usize = 0;

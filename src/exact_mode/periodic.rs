@@ -21,6 +21,7 @@
 //! so every interior side is bitwise shared.
 
 use super::counts::{ArcTarget, CountProblem, Counts};
+use super::imposed::{vertex_cycle, BlockKey, CircleTag};
 use super::{
     clustering, clustering_of, equidistribute, exact_sweep, expected_sign, internal, median,
     spoke_nodes, validate_options, ArcGeometry, Wall, ZERO_SWEEP,
@@ -85,6 +86,8 @@ pub struct PeriodicExact {
     /// Arc orbits whose exact walls run against their blocks (see
     /// [`super::ExactMesh::inconsistent_arcs`]).
     pub inconsistent_arcs: Vec<usize>,
+    /// The key of each block ([`super::imposed`]), in block order.
+    pub keys: Vec<BlockKey>,
 }
 
 /// `p + (a Lx, b Ly)`: the one formula every translated copy uses.
@@ -239,7 +242,18 @@ pub fn build(pb: &PeriodicBlocking, options: &Options) -> Result<PeriodicExact, 
         template: vec![false; ncirc],
         arcs: targets,
     };
-    let counts = problem.solve().map_err(internal)?;
+    let mut counts = problem.solve().map_err(internal)?;
+    let keys = block_keys(pb, &verts);
+    if let Some(imp) = &options.imposed_counts {
+        let arcs: Vec<[usize; 2]> = pb
+            .arcs
+            .iter()
+            .map(|a| a.circles.map(|c| c.0 as usize + 1))
+            .collect();
+        if let Some((circle, arc)) = imp.counts_for(&keys, &arcs, ncirc) {
+            counts = Counts { circle, arc };
+        }
+    }
     let mut total: usize = 0;
     for (o, arc) in pb.arcs.iter().enumerate() {
         for c in arc.circles {
@@ -407,7 +421,41 @@ pub fn build(pb: &PeriodicBlocking, options: &Options) -> Result<PeriodicExact, 
         counts,
         cell_size: cell,
         inconsistent_arcs,
+        keys,
     })
+}
+
+/// The key ([`BlockKey`]) of block `2o + s` (side `s` of arc orbit `o`), in the frame where
+/// its wall is the canonical copy.
+fn block_keys(pb: &PeriodicBlocking, verts: &[Vertex]) -> Vec<BlockKey> {
+    let cycle = |w: usize, s: Shift| -> Vec<CircleTag> {
+        let Some(v) = verts.get(w) else {
+            return Vec::new();
+        };
+        let touching: Vec<(CircleTag, Point)> = v
+            .circles
+            .iter()
+            .zip(&v.tangent)
+            .map(|(c, &p)| ((c.0 as i64, (c.1 + s.0) as i64, (c.2 + s.1) as i64), p))
+            .collect();
+        vertex_cycle(v.center, &touching)
+    };
+    let mut keys = Vec::with_capacity(2 * pb.arcs.len());
+    for arc in &pb.arcs {
+        for side in 0..2 {
+            let c = arc.circles[side];
+            let d = (-c.1, -c.2);
+            let [(w0, e0), (w1, e1)] = arc.ends;
+            let (a, b) = (cycle(w0, add(e0, d)), cycle(w1, add(e1, d)));
+            let wall = (c.0 as i64, 0, 0);
+            keys.push(if side == 0 {
+                (wall, a, b)
+            } else {
+                (wall, b, a)
+            });
+        }
+    }
+    keys
 }
 
 /// A vertex instance: orbit and shift.

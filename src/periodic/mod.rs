@@ -40,6 +40,7 @@ pub use domain::{tile_offsets, wrap, PeriodicDomain};
 use crate::blocking;
 use crate::domain::{Circle, CircleId, Domain};
 use crate::exact_mode;
+use crate::exact_mode::imposed::BlockKey;
 use crate::exact_mode::periodic::{PeriodicArc, PeriodicBlocking, PeriodicVertex};
 use crate::geometry::{Point, Triangulation};
 use crate::grid::build_grids;
@@ -798,14 +799,25 @@ pub type Triples = Vec<[CircleKey; 3]>;
 /// mode is used. Paper mode: node counts and transfinite interpolation ([`build_grids`];
 /// partners of periodic sides get equal counts and translated nodes).
 pub fn mesh_periodic(pd: &PeriodicDomain, options: &Options) -> Result<Mesh, MeshError> {
-    mesh_periodic_frame(pd, options).map(|(m, _)| m)
+    mesh_periodic_frame(pd, options).map(|f| f.mesh)
+}
+
+/// A periodic mesh with its combinatorics.
+#[derive(Debug, Clone)]
+pub struct PeriodicFrame {
+    pub mesh: Mesh,
+    /// The medial combinatorics ([`PeriodicLayout::triples`]).
+    pub triples: Triples,
+    /// Exact mode: the key of each block ([`crate::exact_mode::imposed`]); `None` in paper
+    /// mode.
+    pub keys: Option<Vec<BlockKey>>,
 }
 
 /// [`mesh_periodic`] and the medial combinatorics of the mesh made.
 pub fn mesh_periodic_frame(
     pd: &PeriodicDomain,
     options: &Options,
-) -> Result<(Mesh, Triples), MeshError> {
+) -> Result<PeriodicFrame, MeshError> {
     if options.cells == 0 {
         return Err(MeshError::Options(
             "--cells must be at least 1 (cells along a block side)".into(),
@@ -827,8 +839,8 @@ pub fn mesh_periodic_frame(
     }
     let p = periodic_layout(pd, options)?;
     let grids = build_grids(&p.layout, options.cells)?;
-    Ok((
-        Mesh {
+    Ok(PeriodicFrame {
+        mesh: Mesh {
             layout: p.layout,
             grids,
             medial_vertices: p.medial_vertices,
@@ -836,15 +848,16 @@ pub fn mesh_periodic_frame(
             holes: pd.hole_count(),
             ..Mesh::default()
         },
-        p.triples,
-    ))
+        triples: p.triples,
+        keys: None,
+    })
 }
 
 /// Exact mode with resampling; `Ok(None)`: use paper mode.
 fn mesh_periodic_exact(
     pd: &PeriodicDomain,
     options: &Options,
-) -> Result<Option<(Mesh, Triples)>, MeshError> {
+) -> Result<Option<PeriodicFrame>, MeshError> {
     let mut sampling = SamplingOptions::default();
     for attempt in 0..=EXACT_RESAMPLING {
         let p = match periodic_layout_with(pd, options, &sampling) {
@@ -865,7 +878,11 @@ fn mesh_periodic_exact(
                         holes: pd.hole_count(),
                         ..Mesh::default()
                     };
-                    return Ok(Some((mesh, p.triples)));
+                    return Ok(Some(PeriodicFrame {
+                        mesh,
+                        triples: p.triples,
+                        keys: Some(x.keys),
+                    }));
                 }
             }
             Err(MeshError::Internal(_)) => {}
