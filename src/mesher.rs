@@ -68,6 +68,10 @@ pub struct Options {
     /// is what `cells` already means there. Periodic and transition meshes read `cells` only.
     /// `N` must be in `1..=`[`crate::grid::MAX_CELLS_PER_SIDE`].
     pub block_cells: Option<usize>,
+    /// Exact mode: node counts imposed by block key (sequences keep the counts of the first
+    /// frame of a run with the same combinatorics, [`crate::sequence`]); used only when every
+    /// block's key is known and the counts are consistent. Default `None`.
+    pub imposed_counts: Option<std::sync::Arc<exact_mode::imposed::ImposedCounts>>,
 }
 
 /// Default of [`Options::collapse_fraction`].
@@ -91,6 +95,7 @@ impl Default for Options {
             wall_cells: Vec::new(),
             smooth: 0,
             block_cells: None,
+            imposed_counts: None,
         }
     }
 }

@@ -8,21 +8,26 @@
 //! assembled in frame order afterwards, so the files are byte-identical for any thread count
 //! and identical to meshing each frame alone.
 //!
-//! # Same combinatorics
+//! # Same combinatorics, same blocks, same node counts
 //! The medial combinatorics of a frame is the sorted list of circle triples of its medial
 //! vertices (for a periodic frame: the orbits of the triples, each circle as `(hole, tile)`
 //! normalised up to a period shift). When a frame's list equals the previous frame's, the
-//! summary says so (`same_combinatorics_as_previous`). To let a solver map its fields, the
-//! blocks of every frame are numbered canonically, by a key that depends on the combinatorics
-//! only: `(wall circle, circles around corner 3, circles around corner 2)` (the circles
-//! around a corner are the wall circles of the blocks meeting there). Two frames with the
-//! same combinatorics therefore list the same blocks in the same order; whether their node
-//! counts also agree (the counts only depend on the combinatorics except where a long wall
-//! arc raises a count, see [`crate::grid::choose_counts`]) is reported as
-//! `same_block_structure_as_previous` (same keys, same `ni x nj` per block). No information
-//! flows from one frame to the next, so this reuse can never change a result.
+//! summary says so (`same_combinatorics_as_previous`). The blocks of every frame are numbered
+//! canonically by a key that depends on the combinatorics only
+//! ([`crate::exact_mode::imposed::BlockKey`]: the wall circle and the counter-clockwise cycles
+//! of circles at the two medial corners), so frames with the same combinatorics list the same
+//! blocks in the same order (`same_block_structure_as_previous`).
+//!
+//! Exact mode sizes cells from the geometry, so two such frames need not have the same node
+//! counts on their own. [`run_sequence`] therefore meshes in two passes: every frame with its
+//! own counts, then every later frame of a run of equal combinatorics again with the counts
+//! of the run's first frame imposed by key; the result is kept when it has those counts and
+//! no inverted cell (`same_node_counts_as_previous`, `node_counts_from_frame`), else the
+//! frame keeps its own counts (`node_counts_not_kept` says why). Every decision depends on the
+//! frames only, never on scheduling: the files are byte-identical for any thread count.
 
 use crate::domain::{AnyDomain, CircleId};
+use crate::exact_mode::imposed::{vertex_cycle, BlockKey, ImposedCounts};
 use crate::layout::BlockLayout;
 use crate::mesh::Mesh;
 use crate::mesher::{mesh, MeshError, Options};
@@ -34,7 +39,7 @@ use std::io::{self, Write};
 use std::path::{Path, PathBuf};
 
 /// A circle in a combinatorial key: `(hole or -1, tile a, tile b)` (tiles `0` when bounded).
-pub type CircleTag = (i64, i64, i64);
+pub use crate::exact_mode::imposed::CircleTag;
 
 /// A meshed frame and its medial combinatorics.
 #[derive(Debug, Clone)]
@@ -42,48 +47,87 @@ pub struct FrameMesh {
     pub mesh: Mesh,
     /// Sorted circle triples of the medial vertices.
     pub combinatorics: Vec<[CircleTag; 3]>,
+    /// The key of each block, in block order ([`crate::exact_mode::imposed`]); `None` for a
+    /// periodic mesh in paper mode (its keys would not tell the tiles apart).
+    pub keys: Option<Vec<BlockKey>>,
+}
+
+impl FrameMesh {
+    /// `(key, [ni, nj])` per block, in block order, when the keys are known and unique
+    /// (then node counts can be imposed by key).
+    pub fn structure(&self) -> Option<Vec<(BlockKey, [usize; 2])>> {
+        let keys = self.keys.as_ref()?;
+        if keys.len() != self.mesh.grids.len() || keys.windows(2).any(|w| w[0] >= w[1]) {
+            return None;
+        }
+        Some(
+            keys.iter()
+                .cloned()
+                .zip(self.mesh.grids.iter().map(|g| [g.ni, g.nj]))
+                .collect(),
+        )
+    }
 }
 
 /// Mesh one frame (bounded or periodic), with canonically numbered blocks (see the module
 /// documentation).
 pub fn mesh_frame(domain: &AnyDomain, options: &Options) -> Result<FrameMesh, MeshError> {
-    let (mut m, combinatorics) = match domain {
+    let (mut m, combinatorics, keys) = match domain {
         AnyDomain::Bounded(d) => {
             let m = mesh(d, options)?;
             let c = bounded_triples(&m.layout);
-            (m, c)
+            let k = layout_keys(&m.layout);
+            (m, c, Some(k))
         }
         AnyDomain::Periodic(p) => {
-            if options.cells == 0 {
-                return Err(MeshError::Options(
-                    "--cells must be at least 1 (cells along a block side)".into(),
-                ));
-            }
-            let pl = crate::periodic::periodic_layout(p, options)?;
-            let grids = crate::grid::build_grids(&pl.layout, options.cells)?;
-            let c = pl
+            let f = crate::periodic::mesh_periodic_frame(p, options)?;
+            let c = f
                 .triples
                 .iter()
                 .map(|t| t.map(|(k, a, b)| (k as i64, a as i64, b as i64)))
                 .collect();
-            (
-                Mesh {
-                    layout: pl.layout,
-                    grids,
-                    medial_vertices: pl.medial_vertices,
-                    medial_arcs: pl.medial_arcs,
-                    holes: p.hole_count(),
-                    ..Mesh::default()
-                },
-                c,
-            )
+            (f.mesh, c, f.keys)
         }
     };
-    canonical_order(&mut m);
+    let keys = canonical_order(&mut m, keys);
     Ok(FrameMesh {
         mesh: m,
         combinatorics,
+        keys,
     })
+}
+
+/// The key of each block of a bounded layout, read from its geometry: at a medial corner,
+/// the wall circles of the blocks meeting there, ordered by the angle of their wall corner
+/// ([`vertex_cycle`]); blocks without a wall (templates) get the tag `(-2, 0, 0)`.
+pub fn layout_keys(layout: &BlockLayout) -> Vec<BlockKey> {
+    let pos = |v: u32| layout.vertices.get(v as usize).copied().unwrap_or([0.0; 2]);
+    let mut touching: Vec<Vec<(CircleTag, crate::geometry::Point)>> =
+        vec![Vec::new(); layout.vertices.len()];
+    for b in &layout.blocks {
+        if let Some(w) = b.wall {
+            let tag = (w as i64, 0, 0);
+            for (corner, wall_corner) in [(3, 0), (2, 1)] {
+                if let Some(t) = touching.get_mut(b.corners[corner] as usize) {
+                    t.push((tag, pos(b.corners[wall_corner])));
+                }
+            }
+        }
+    }
+    let cycles: Vec<Vec<CircleTag>> = touching
+        .iter()
+        .enumerate()
+        .map(|(v, t)| vertex_cycle(pos(v as u32), t))
+        .collect();
+    let cycle = |v: u32| cycles.get(v as usize).cloned().unwrap_or_default();
+    layout
+        .blocks
+        .iter()
+        .map(|b| {
+            let wall = b.wall.map_or((-2, 0, 0), |w| (w as i64, 0, 0));
+            (wall, cycle(b.corners[3]), cycle(b.corners[2]))
+        })
+        .collect()
 }
 
 /// The wall circles of the blocks meeting at each layout vertex, sorted and deduplicated.
@@ -129,18 +173,24 @@ fn block_keys(layout: &BlockLayout) -> Vec<(Option<CircleId>, Vec<CircleId>, Vec
         .collect()
 }
 
-/// Renumber the blocks (and their grids) by their combinatorial key (stable).
-fn canonical_order(m: &mut Mesh) {
-    let keys = block_keys(&m.layout);
-    let mut order: Vec<usize> = (0..keys.len()).collect();
-    order.sort_by(|&a, &b| keys[a].cmp(&keys[b]));
-    if order.len() != m.grids.len() {
-        return;
+/// Renumber the blocks (and their grids) by their key (stable): the [`BlockKey`]s when
+/// known, else the coarser [`block_keys`]. Returns the keys in the new order.
+fn canonical_order(m: &mut Mesh, keys: Option<Vec<BlockKey>>) -> Option<Vec<BlockKey>> {
+    let n = m.layout.blocks.len();
+    if m.grids.len() != n || keys.as_ref().is_some_and(|k| k.len() != n) {
+        return keys;
     }
-    let blocks = order.iter().map(|&i| m.layout.blocks[i].clone()).collect();
-    let grids = order.iter().map(|&i| m.grids[i].clone()).collect();
-    m.layout.blocks = blocks;
-    m.grids = grids;
+    let mut order: Vec<usize> = (0..n).collect();
+    match &keys {
+        Some(k) => order.sort_by(|&a, &b| k[a].cmp(&k[b])),
+        None => {
+            let k = block_keys(&m.layout);
+            order.sort_by(|&a, &b| k[a].cmp(&k[b]));
+        }
+    }
+    m.layout.blocks = order.iter().map(|&i| m.layout.blocks[i].clone()).collect();
+    m.grids = order.iter().map(|&i| m.grids[i].clone()).collect();
+    keys.map(|k| order.iter().map(|&i| k[i].clone()).collect())
 }
 
 /// One frame's line of the summary.
@@ -158,8 +208,19 @@ pub struct FrameSummary {
     /// The same circle triples form the medial vertices as in the previous frame (false for
     /// the first frame and next to a failed frame).
     pub same_combinatorics_as_previous: bool,
-    /// Same canonical block keys and node counts as the previous frame.
+    /// The same blocks (the same canonical block keys, in the same order) as the previous
+    /// frame.
     pub same_block_structure_as_previous: bool,
+    /// The same blocks with the same `ni x nj` each as the previous frame: a solver can map
+    /// its fields node for node.
+    pub same_node_counts_as_previous: bool,
+    /// The frame whose node counts this frame uses: the first frame of its run of frames with
+    /// the same combinatorics (absent when the frame uses its own counts).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub node_counts_from_frame: Option<usize>,
+    /// Why the run's node counts could not be kept (the frame then uses its own).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub node_counts_not_kept: Option<String>,
 }
 
 /// The whole run.
@@ -184,20 +245,20 @@ pub fn frame_dir(dir: &Path, index: usize) -> PathBuf {
     dir.join(format!("frame_{index:05}"))
 }
 
+/// `(key, [ni, nj])` per block in block order.
+type Structure = Vec<(BlockKey, [usize; 2])>;
+
 struct Done {
     summary: FrameSummary,
     combinatorics: Option<Vec<[CircleTag; 3]>>,
-    structure: Option<Vec<(String, [usize; 2])>>,
+    /// Keys and counts (unique keys only).
+    structure: Option<Structure>,
+    /// Block keys in order (also when not unique), to compare structures.
+    keys: Option<Vec<String>>,
 }
 
-fn run_frame(
-    index: usize,
-    frame: &Result<AnyDomain, String>,
-    options: &Options,
-    formats: &[Format],
-    dir: &Path,
-) -> Done {
-    let fail = |error: String| Done {
+fn failed(index: usize, error: String) -> Done {
+    Done {
         summary: FrameSummary {
             index,
             ok: false,
@@ -209,27 +270,47 @@ fn run_frame(
             inverted_cells: 0,
             same_combinatorics_as_previous: false,
             same_block_structure_as_previous: false,
+            same_node_counts_as_previous: false,
+            node_counts_from_frame: None,
+            node_counts_not_kept: None,
         },
         combinatorics: None,
         structure: None,
-    };
+        keys: None,
+    }
+}
+
+/// Mesh frame `index` (with `options`, which may impose counts) and write it.
+fn run_frame(
+    index: usize,
+    frame: &Result<AnyDomain, String>,
+    options: &Options,
+    formats: &[Format],
+    dir: &Path,
+) -> Done {
     let domain = match frame {
         Ok(d) => d,
-        Err(e) => return fail(e.clone()),
+        Err(e) => return failed(index, e.clone()),
     };
     let fm = match mesh_frame(domain, options) {
         Ok(fm) => fm,
-        Err(e) => return fail(e.to_string()),
+        Err(e) => return failed(index, e.to_string()),
     };
+    finish(index, fm, formats, dir)
+}
+
+fn finish(index: usize, fm: FrameMesh, formats: &[Format], dir: &Path) -> Done {
     if let Err(e) = write_files(&fm.mesh, &frame_dir(dir, index), formats) {
-        return fail(format!("cannot write frame {index}: {e}"));
+        return failed(index, format!("cannot write frame {index}: {e}"));
     }
     let q = measure(&fm.mesh.grids);
-    let structure = block_keys(&fm.mesh.layout)
-        .into_iter()
-        .zip(&fm.mesh.grids)
-        .map(|(k, g)| (format!("{k:?}"), [g.ni, g.nj]))
-        .collect();
+    let keys = match &fm.keys {
+        Some(k) => k.iter().map(|k| format!("{k:?}")).collect(),
+        None => block_keys(&fm.mesh.layout)
+            .iter()
+            .map(|k| format!("{k:?}"))
+            .collect(),
+    };
     Done {
         summary: FrameSummary {
             index,
@@ -242,17 +323,43 @@ fn run_frame(
             inverted_cells: q.inverted_cells,
             same_combinatorics_as_previous: false,
             same_block_structure_as_previous: false,
+            same_node_counts_as_previous: false,
+            node_counts_from_frame: None,
+            node_counts_not_kept: None,
         },
+        structure: fm.structure(),
         combinatorics: Some(fm.combinatorics),
-        structure: Some(structure),
+        keys: Some(keys),
     }
 }
 
+/// Frames `i - 1` and `i` are in one run: both meshed, the same combinatorics and the same
+/// unique block keys.
+fn linked(a: &Done, b: &Done) -> bool {
+    let same_keys = match (&a.structure, &b.structure) {
+        (Some(x), Some(y)) => x.len() == y.len() && x.iter().zip(y).all(|(p, q)| p.0 == q.0),
+        _ => false,
+    };
+    a.summary.ok
+        && b.summary.ok
+        && a.combinatorics.is_some()
+        && a.combinatorics == b.combinatorics
+        && same_keys
+}
+
 /// Mesh every frame into `dir/frame_NNNNN/` with `formats`, on `threads` threads (0: rayon's
-/// default), calling `progress` once per finished frame; then write `dir/mesh.pvd` (when
-/// `formats` has VTK) and `dir/summary.json`. A frame that fails is reported in the summary
-/// and does not stop the others. Errors: only failures to create `dir` or write the
+/// default), calling `progress` once per frame of the first pass; then write `dir/mesh.pvd`
+/// (when `formats` has VTK) and `dir/summary.json`. A frame that fails is reported in the
+/// summary and does not stop the others. Errors: only failures to create `dir` or write the
 /// summary files.
+///
+/// Node counts (issue 6): pass 1 meshes every frame with its own counts. Consecutive frames
+/// with the same combinatorics and the same unique block keys form a *run*; every later
+/// frame of a run is meshed again in pass 2 with the counts of the run's first frame imposed
+/// by key ([`Options::imposed_counts`]). The result is kept if it has exactly those keys and
+/// counts and no inverted cell, else the frame keeps its own counts and the summary says why
+/// (`node_counts_not_kept`). Both passes depend only on the frames, so the output is the
+/// same for any thread count and any scheduling.
 pub fn run_sequence(
     frames: &[Result<AnyDomain, String>],
     options: &Options,
@@ -266,7 +373,7 @@ pub fn run_sequence(
         .num_threads(threads)
         .build()
         .map_err(io::Error::other)?;
-    let done: Vec<Done> = pool.install(|| {
+    let mut done: Vec<Done> = pool.install(|| {
         frames
             .par_iter()
             .enumerate()
@@ -277,14 +384,49 @@ pub fn run_sequence(
             })
             .collect()
     });
+    // Runs: the first frame of each frame's run.
+    let mut start: Vec<usize> = (0..done.len()).collect();
+    for i in 1..done.len() {
+        if linked(&done[i - 1], &done[i]) {
+            start[i] = start[i - 1];
+        }
+    }
+    let redo: Vec<(usize, Structure)> = (0..done.len())
+        .filter(|&i| start[i] != i)
+        .filter_map(|i| {
+            let want = done[start[i]].structure.clone()?;
+            (done[i].structure.as_ref() != Some(&want)).then_some((i, want))
+        })
+        .collect();
+    let redone: Vec<(usize, Result<Done, String>)> = pool.install(|| {
+        redo.par_iter()
+            .map(|(i, want)| {
+                (
+                    *i,
+                    reuse_counts(*i, &frames[*i], want, options, formats, dir),
+                )
+            })
+            .collect()
+    });
+    for (i, r) in redone {
+        match r {
+            Ok(d) => done[i] = d,
+            Err(why) => done[i].summary.node_counts_not_kept = Some(why),
+        }
+    }
     let mut out = Vec::with_capacity(done.len());
     for i in 0..done.len() {
         let mut s = done[i].summary.clone();
+        if start[i] != i && s.node_counts_not_kept.is_none() {
+            s.node_counts_from_frame = Some(start[i]);
+        }
         if i > 0 {
             let (a, b) = (&done[i - 1], &done[i]);
             s.same_combinatorics_as_previous =
                 a.combinatorics.is_some() && a.combinatorics == b.combinatorics;
-            s.same_block_structure_as_previous = s.same_combinatorics_as_previous
+            s.same_block_structure_as_previous =
+                s.same_combinatorics_as_previous && a.keys.is_some() && a.keys == b.keys;
+            s.same_node_counts_as_previous = s.same_block_structure_as_previous
                 && a.structure.is_some()
                 && a.structure == b.structure;
         }
@@ -302,6 +444,42 @@ pub fn run_sequence(
         writeln!(w)
     })?;
     Ok(summary)
+}
+
+/// Pass 2 for frame `index`: mesh it with the counts `want` imposed; `Err` (why) when the
+/// result does not have exactly those keys and counts or has an inverted cell (nothing is
+/// written then).
+fn reuse_counts(
+    index: usize,
+    frame: &Result<AnyDomain, String>,
+    want: &Structure,
+    options: &Options,
+    formats: &[Format],
+    dir: &Path,
+) -> Result<Done, String> {
+    let domain = frame.as_ref().map_err(|e| e.clone())?;
+    let imposed = ImposedCounts(want.iter().cloned().collect());
+    let opts = Options {
+        imposed_counts: Some(std::sync::Arc::new(imposed)),
+        ..options.clone()
+    };
+    let fm = mesh_frame(domain, &opts)
+        .map_err(|e| format!("meshing with the run's counts failed: {e}"))?;
+    if fm.structure().as_ref() != Some(want) {
+        return Err("the run's node counts do not fit this frame's blocks".into());
+    }
+    let inverted = measure(&fm.mesh.grids).inverted_cells;
+    if inverted > 0 {
+        return Err(format!(
+            "the run's node counts give {inverted} inverted cells in this frame"
+        ));
+    }
+    let d = finish(index, fm, formats, dir);
+    if d.summary.ok {
+        Ok(d)
+    } else {
+        Err(d.summary.error.unwrap_or_default())
+    }
 }
 
 /// Write the ParaView collection of the successful frames (`timestep` = frame index).

@@ -28,54 +28,122 @@ use crate::mesh::Mesh;
 use crate::mesher::{mesh, MeshError, Options};
 use std::collections::HashMap;
 
-/// The background-aligned square: lattice nodes `i0..=i0 + n` by `j0..=j0 + n`.
+/// The background-aligned rectangle: lattice nodes `i0..=i0 + nx` by `j0..=j0 + ny`.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Square {
+pub struct Rect {
     pub spacing: f64,
     pub i0: i64,
     pub j0: i64,
-    pub n: i64,
+    pub nx: i64,
+    pub ny: i64,
 }
 
-impl Square {
+/// The earlier name: the default transition is a square [`Rect`].
+pub type Square = Rect;
+
+fn check_spacing(spacing: f64) -> Result<(), MeshError> {
+    if spacing.is_finite() && spacing > 0.0 {
+        Ok(())
+    } else {
+        Err(MeshError::Options(format!(
+            "--transition: the background spacing must be finite and positive, got {spacing}"
+        )))
+    }
+}
+
+impl Rect {
     /// The smallest lattice-aligned square enclosing the circle `(center, r)` grown by the
     /// margin `max(r / 4, 2 spacing)`.
-    pub fn around(center: Point, r: f64, spacing: f64) -> Result<Square, MeshError> {
-        if !(spacing.is_finite() && spacing > 0.0) {
-            return Err(MeshError::Options(format!(
-                "--transition: the background spacing must be finite and positive, got {spacing}"
-            )));
-        }
+    pub fn around(center: Point, r: f64, spacing: f64) -> Result<Rect, MeshError> {
+        check_spacing(spacing)?;
         let h = r + (0.25 * r).max(2.0 * spacing);
-        let lim = 4.0 * MAX_CELLS_PER_SIDE as f64;
         let f = |x: f64| x / spacing;
         let (a0, a1) = (f(center[0] - h).floor(), f(center[0] + h).ceil());
         let (b0, b1) = (f(center[1] - h).floor(), f(center[1] + h).ceil());
         let n = (a1 - a0).max(b1 - b0);
-        if !(n.is_finite() && n <= lim && a0.abs() < 1e15 && b0.abs() < 1e15) {
+        Rect::checked(spacing, a0, b0, n, n, r)
+    }
+
+    /// The lattice rectangle `[xmin, xmax] x [ymin, ymax]` grown outwards to the nearest
+    /// lattice lines (so its corners are lattice nodes). It must enclose the bounding circle
+    /// `(center, r)` with at least one lattice interval to spare on every side.
+    pub fn from_bounds(
+        bounds: [f64; 4],
+        spacing: f64,
+        center: Point,
+        r: f64,
+    ) -> Result<Rect, MeshError> {
+        check_spacing(spacing)?;
+        let [x0, y0, x1, y1] = bounds;
+        if !(bounds.iter().all(|v| v.is_finite()) && x0 < x1 && y0 < y1) {
+            return Err(MeshError::Options(format!(
+                "--transition-rect: expected XMIN,YMIN,XMAX,YMAX with XMIN < XMAX and YMIN < \
+                 YMAX, got {bounds:?}"
+            )));
+        }
+        let f = |x: f64| x / spacing;
+        let (a0, a1) = (f(x0).floor(), f(x1).ceil());
+        let (b0, b1) = (f(y0).floor(), f(y1).ceil());
+        let rect = Rect::checked(spacing, a0, b0, a1 - a0, b1 - b0, r)?;
+        let [lo_x, lo_y] = rect.point((rect.i0, rect.j0));
+        let [hi_x, hi_y] = rect.point((rect.i0 + rect.nx, rect.j0 + rect.ny));
+        let room = (center[0] - r - lo_x)
+            .min(center[1] - r - lo_y)
+            .min(hi_x - center[0] - r)
+            .min(hi_y - center[1] - r);
+        if room.is_nan() || room < spacing {
+            return Err(MeshError::Options(format!(
+                "--transition-rect: the rectangle [{lo_x}, {hi_x}] x [{lo_y}, {hi_y}] must \
+                 enclose the bounding circle (centre {center:?}, radius {r}) with at least one \
+                 background interval ({spacing}) to spare on every side"
+            )));
+        }
+        Ok(rect)
+    }
+
+    fn checked(
+        spacing: f64,
+        a0: f64,
+        b0: f64,
+        nx: f64,
+        ny: f64,
+        r: f64,
+    ) -> Result<Rect, MeshError> {
+        let lim = 4.0 * MAX_CELLS_PER_SIDE as f64;
+        let ok = |x: f64| x.is_finite() && x >= 1.0 && x <= lim;
+        if !(ok(nx) && ok(ny) && a0.abs() < 1e15 && b0.abs() < 1e15) {
             return Err(MeshError::Options(format!(
                 "--transition: a spacing of {spacing} needs too many background intervals \
                  around a bounding circle of radius {r}"
             )));
         }
-        Ok(Square {
+        Ok(Rect {
             spacing,
             i0: a0 as i64,
             j0: b0 as i64,
-            n: n as i64,
+            nx: nx as i64,
+            ny: ny as i64,
         })
     }
 
+    /// Lattice intervals around the perimeter.
+    pub fn perimeter_len(&self) -> i64 {
+        2 * (self.nx + self.ny)
+    }
+
     /// Perimeter lattice node `p` (counter-clockwise from the lower-left corner, taken mod
-    /// `4n`), as `(i, j)`.
+    /// the perimeter), as `(i, j)`.
     pub fn node(&self, p: i64) -> (i64, i64) {
-        let n = self.n;
-        let p = p.rem_euclid(4 * n);
-        match p / n {
-            0 => (self.i0 + p, self.j0),
-            1 => (self.i0 + n, self.j0 + (p - n)),
-            2 => (self.i0 + n - (p - 2 * n), self.j0 + n),
-            _ => (self.i0, self.j0 + n - (p - 3 * n)),
+        let (nx, ny) = (self.nx, self.ny);
+        let p = p.rem_euclid(self.perimeter_len());
+        if p < nx {
+            (self.i0 + p, self.j0)
+        } else if p < nx + ny {
+            (self.i0 + nx, self.j0 + (p - nx))
+        } else if p < 2 * nx + ny {
+            (self.i0 + nx - (p - nx - ny), self.j0 + ny)
+        } else {
+            (self.i0, self.j0 + ny - (p - 2 * nx - ny))
         }
     }
 
@@ -85,12 +153,12 @@ impl Square {
     }
 
     /// Continuous perimeter coordinate (in intervals, from the lower-left corner) of the ray
-    /// from `c` at angle `theta`.
+    /// from `c` (inside) at angle `theta`.
     fn perimeter(&self, c: Point, theta: f64) -> f64 {
         let s = self.spacing;
-        let n = self.n as f64;
+        let (nx, ny) = (self.nx as f64, self.ny as f64);
         let (x0, y0) = (self.i0 as f64 * s, self.j0 as f64 * s);
-        let (x1, y1) = (x0 + n * s, y0 + n * s);
+        let (x1, y1) = (x0 + nx * s, y0 + ny * s);
         let (dx, dy) = (theta.cos(), theta.sin());
         let tx = if dx > 0.0 {
             (x1 - c[0]) / dx
@@ -110,14 +178,14 @@ impl Square {
         let (x, y) = (c[0] + t * dx, c[1] + t * dy);
         if tx < ty {
             if dx > 0.0 {
-                n + (y - y0) / s
+                nx + (y - y0) / s
             } else {
-                3.0 * n + (y1 - y) / s
+                2.0 * nx + ny + (y1 - y) / s
             }
         } else if dy < 0.0 {
             (x - x0) / s
         } else {
-            2.0 * n + (x1 - x) / s
+            nx + ny + (x1 - x) / s
         }
     }
 }
@@ -126,7 +194,7 @@ impl Square {
 #[derive(Debug, Clone)]
 pub struct Transition {
     pub layout: BlockLayout,
-    pub square: Square,
+    pub square: Rect,
     /// `(edge, cells)` to impose.
     pub counts: Vec<(usize, usize)>,
     /// Per transition block: its id and the lattice nodes of its side 0, in order.
@@ -141,7 +209,17 @@ pub fn add_transition(
     spacing: f64,
 ) -> Result<Transition, MeshError> {
     let b = domain.bounding();
-    let sq = Square::around(b.center, b.radius, spacing)?;
+    add_transition_rect(layout, domain, Rect::around(b.center, b.radius, spacing)?)
+}
+
+/// [`add_transition`] out to a given lattice rectangle (see [`Rect::from_bounds`]).
+pub fn add_transition_rect(
+    layout: &BlockLayout,
+    domain: &Domain,
+    sq: Rect,
+) -> Result<Transition, MeshError> {
+    let spacing = sq.spacing;
+    let b = domain.bounding();
     let mut out = layout.clone();
     // The bounding wall edges, chained counter-clockwise.
     let walls: Vec<usize> = (0..layout.edges.len())
@@ -187,7 +265,7 @@ pub fn add_transition(
         ));
     }
     // Snap the chain's vertices to perimeter nodes, strictly increasing.
-    let total = 4 * sq.n;
+    let total = sq.perimeter_len();
     let mut ps: Vec<i64> = Vec::with_capacity(chain.len());
     let mut prev_t = f64::NEG_INFINITY;
     for &e in &chain {
@@ -287,8 +365,18 @@ pub fn mesh_with_transition(
     options: &Options,
     spacing: f64,
 ) -> Result<Mesh, MeshError> {
+    let b = domain.bounding();
+    mesh_with_transition_rect(domain, options, Rect::around(b.center, b.radius, spacing)?)
+}
+
+/// [`mesh_with_transition`] out to the lattice rectangle `rect` ([`Rect::from_bounds`]).
+pub fn mesh_with_transition_rect(
+    domain: &Domain,
+    options: &Options,
+    rect: Rect,
+) -> Result<Mesh, MeshError> {
     let base = mesh(domain, options)?;
-    let t = add_transition(&base.layout, domain, spacing)?;
+    let t = add_transition_rect(&base.layout, domain, rect)?;
     let mut grids = build_grids_forced(&t.layout, options.cells, &t.counts)?;
     for (b, nodes) in &t.outer {
         let g = grids

@@ -33,6 +33,7 @@ pub enum ModeArg {
   medial-blocks mesh bubbles.csv --periodic 1,1   # one period of a periodic layout
   medial-blocks mesh layout.json --transition 0.25  # join a Cartesian grid of spacing 0.25
   medial-blocks mesh bubbles.json --block-cells 16 --timings  # 16x16 per block, stage times
+  medial-blocks mesh --transition 0.2 --transition-rect=-6,-3,6,3  # ... out to a rectangle
 
 Input JSON: {\"bounding\": {\"center\": [x, y], \"radius\": R},
              \"holes\": [{\"center\": [x, y], \"radius\": r}, ...]}
@@ -107,6 +108,12 @@ pub struct Args {
     /// Cartesian background grid of this spacing (origin at 0); bounded domains only.
     #[arg(long)]
     pub transition: Option<f64>,
+    /// With --transition: transition out to this rectangle instead of the square,
+    /// `XMIN,YMIN,XMAX,YMAX`, grown outwards to the nearest background grid lines (its corners
+    /// are background nodes); it must enclose the bounding circle with one background interval
+    /// to spare on every side. Aspect ratios up to about 3 give valid blocks.
+    #[arg(long, requires = "transition", value_name = "XMIN,YMIN,XMAX,YMAX")]
+    pub transition_rect: Option<String>,
     /// The period `LX,LY` for a CSV input: mesh one period of a periodic layout.
     #[arg(long, conflicts_with = "bounding")]
     pub periodic: Option<String>,
@@ -478,9 +485,31 @@ pub fn run(args: Args, global: Global) -> Result<(), Failure> {
     };
     bar.set_message(format!("meshing {holes} holes"));
     let result = match (&domain, args.transition) {
-        (AnyDomain::Bounded(d), Some(s)) => {
-            medial_blocks::transition::mesh_with_transition(d, &options, s)
-        }
+        (AnyDomain::Bounded(d), Some(s)) => match args.transition_rect.as_deref() {
+            None => medial_blocks::transition::mesh_with_transition(d, &options, s),
+            Some(text) => {
+                let v: Vec<f64> = text
+                    .split(',')
+                    .map(|x| x.trim().parse::<f64>())
+                    .collect::<Result<_, _>>()
+                    .ok()
+                    .filter(|v: &Vec<f64>| v.len() == 4)
+                    .ok_or_else(|| {
+                        Failure::input(format!(
+                            "--transition-rect: expected XMIN,YMIN,XMAX,YMAX (four numbers), \
+                             got '{text}'"
+                        ))
+                    })?;
+                let b = d.bounding();
+                medial_blocks::transition::Rect::from_bounds(
+                    [v[0], v[1], v[2], v[3]],
+                    s,
+                    b.center,
+                    b.radius,
+                )
+                .and_then(|r| medial_blocks::transition::mesh_with_transition_rect(d, &options, r))
+            }
+        },
         (AnyDomain::Periodic(_), Some(_)) => {
             return Err(Failure::input(
                 "--transition is for bounded domains (a periodic mesh has no outer boundary)",
@@ -514,10 +543,7 @@ pub fn run(args: Args, global: Global) -> Result<(), Failure> {
         match &domain {
             AnyDomain::Bounded(d) => compare_modes(d, &options, &mesh, &args, global.quiet)?,
             AnyDomain::Periodic(_) => {
-                return Err(Failure::input(
-                    "--compare-modes is for bounded domains (periodic meshes use the paper \
-                     geometry)",
-                ))
+                return Err(Failure::input("--compare-modes is for bounded domains"))
             }
         }
     }

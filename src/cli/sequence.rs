@@ -13,7 +13,11 @@ use std::path::PathBuf;
 Output in DIR: frame_00000/, frame_00001/, ... (the mesh of each frame, with --format's files),
   mesh.pvd (ParaView time series of the frames' mesh.vtm; open it to play the sequence) and
   summary.json (per frame: ok or its error, blocks, cells, angles, inverted cells, and whether
-  the medial combinatorics and the block structure are those of the previous frame).
+  the medial combinatorics, the blocks and their node counts are those of the previous frame).
+Node counts: consecutive frames with the same medial combinatorics form a run; every frame of
+  a run is meshed with the node counts of the run's first frame (same blocks, same ni x nj, so
+  a solver can map its fields), unless they do not fit the frame (then its own counts are used
+  and summary.json says why in node_counts_not_kept).
 Frames are meshed in parallel; the output does not depend on --threads. A frame that fails
   (e.g. overlapping holes) is reported and the others are still meshed.
 Exit codes: 0 every frame meshed, 2 some frame failed or bad input, 1 output not written."
@@ -87,7 +91,7 @@ pub fn run(args: Args, global: Global) -> Result<(), Failure> {
                 f.max_angle_deg,
                 f.inverted_cells,
                 if f.same_combinatorics_as_previous {
-                    if f.same_block_structure_as_previous {
+                    if f.same_node_counts_as_previous {
                         "yes (same blocks and node counts)"
                     } else {
                         "yes (node counts differ)"

@@ -37,8 +37,10 @@ pub mod benchmarks;
 pub mod clustering;
 pub mod collapsed;
 pub mod counts;
+pub mod imposed;
 pub mod inserted;
 pub mod metrics;
+pub mod periodic;
 pub mod smoothing;
 
 pub use clustering::{Clustering, FirstCell};
@@ -616,6 +618,17 @@ pub fn assemble(sk: Skeleton<'_>, options: &Options) -> Result<ExactMesh, MeshEr
         None => problem.solve(),
     })
     .map_err(internal)?;
+    // Counts imposed by a sequence (issue 6): all or nothing.
+    if let Some(imp) = &options.imposed_counts {
+        let ends: Vec<([usize; 2], [CircleId; 2])> =
+            pieces.iter().map(|p| (p.ends, p.circles)).collect();
+        let arcs: Vec<[usize; 2]> = pieces.iter().map(|p| p.circles.map(cidx)).collect();
+        if let Some((circle, arc)) = imposed::bounded_keys(&vertices, &ends)
+            .and_then(|keys| imp.counts_for(&keys, &arcs, ncirc))
+        {
+            counts = Counts { circle, arc };
+        }
+    }
 
     // Layout skeleton and grids (stage "grids" until the end).
     let _grids = crate::timings::enter("grids");

@@ -39,12 +39,15 @@ pub use domain::{tile_offsets, wrap, PeriodicDomain};
 
 use crate::blocking;
 use crate::domain::{Circle, CircleId, Domain};
+use crate::exact_mode;
+use crate::exact_mode::imposed::BlockKey;
+use crate::exact_mode::periodic::{PeriodicArc, PeriodicBlocking, PeriodicVertex};
 use crate::geometry::{Point, Triangulation};
 use crate::grid::build_grids;
 use crate::layout::{Block, BlockLayout, Curve, Edge, EdgeKind, SideRef, Translation};
 use crate::medial::{circumcenter, classify, medial_graph, MedialGraph};
 use crate::mesh::Mesh;
-use crate::mesher::{MeshError, Options};
+use crate::mesher::{MeshError, Mode, Options, EXACT_RESAMPLING};
 use crate::sampling::{
     check_invariants, initial_counts, thin_walls, unit_offsets, CircleSamples, Samples,
     SamplingOptions, ViolationKind,
@@ -360,6 +363,8 @@ pub struct PeriodicLayout {
     /// The circle triples of the medial vertex orbits, each as `(hole, tile a, tile b)`
     /// normalised up to translation, sorted: the medial combinatorics of the period.
     pub triples: Vec<[CircleKey; 3]>,
+    /// The same blocks as orbits, for exact mode ([`crate::exact_mode::periodic::build`]).
+    pub blocking: PeriodicBlocking,
 }
 
 /// The block layout of one period of `pd` (see the module documentation).
@@ -367,9 +372,18 @@ pub fn periodic_layout(
     pd: &PeriodicDomain,
     options: &Options,
 ) -> Result<PeriodicLayout, MeshError> {
+    periodic_layout_with(pd, options, &SamplingOptions::default())
+}
+
+/// [`periodic_layout`] with explicit sampling options.
+pub fn periodic_layout_with(
+    pd: &PeriodicDomain,
+    options: &Options,
+    sampling: &SamplingOptions,
+) -> Result<PeriodicLayout, MeshError> {
     let _ = options;
     let gaps = pd.nearest_gaps();
-    let opts = SamplingOptions::default();
+    let opts = sampling.clone();
     let mut last = None;
     for m in 1..=MAX_TILING {
         let t = Tiling::new(pd, m)?;
@@ -654,6 +668,17 @@ fn extract(
     vertex_orbits.dedup();
     arc_orbits.sort_unstable();
     arc_orbits.dedup();
+    let blocking = exact_input(
+        pd,
+        t,
+        medial,
+        &aux,
+        &vkeys,
+        &vertex_orbits,
+        &arc_orbits,
+        &vertex_by_key,
+        &arc_by_key,
+    )?;
     let mut triples: Vec<[CircleKey; 3]> = vertex_orbits
         .iter()
         .map(|v| {
@@ -669,7 +694,86 @@ fn extract(
         medial_arcs: arc_orbits.len(),
         tiling: t.m,
         triples,
+        blocking,
     }))
+}
+
+/// The sampled sweep of block `b`'s side-0 wall, in the side's direction.
+fn wall_sweep(layout: &BlockLayout, b: usize) -> Option<f64> {
+    let side = layout.blocks.get(b)?.sides[0];
+    match layout.edges.get(side.edge as usize)?.curve {
+        Curve::Arc { sweep, .. } => Some(if side.reversed { -sweep } else { sweep }),
+        _ => None,
+    }
+}
+
+/// The orbits of the kept blocks for exact mode ([`crate::exact_mode::periodic`]): vertex
+/// orbits `vertex_orbits` and arc orbits `arc_orbits` (sorted representatives), each with
+/// its representative's circles and end vertices.
+#[allow(clippy::too_many_arguments)]
+fn exact_input(
+    pd: &PeriodicDomain,
+    t: &Tiling,
+    medial: &MedialGraph,
+    aux: &BlockLayout,
+    vkeys: &[Option<VertexKey>],
+    vertex_orbits: &[VertexKey],
+    arc_orbits: &[ArcKey],
+    vertex_by_key: &HashMap<VertexKey, usize>,
+    arc_by_key: &HashMap<ArcKey, usize>,
+) -> Result<PeriodicBlocking, MeshError> {
+    let bad = |what: &str| {
+        MeshError::Internal(format!(
+            "the periodic tiling is not translation-consistent ({what})"
+        ))
+    };
+    let tag = |c: CircleId| {
+        t.key(c)
+            .ok_or_else(|| bad("a kept orbit on the bounding circle"))
+    };
+    let index: HashMap<&VertexKey, usize> = vertex_orbits
+        .iter()
+        .enumerate()
+        .map(|(i, k)| (k, i))
+        .collect();
+    let mut vertices = Vec::with_capacity(vertex_orbits.len());
+    for key in vertex_orbits {
+        let v = &medial.vertices[*vertex_by_key.get(key).ok_or_else(|| bad("vertex orbit"))?];
+        vertices.push(PeriodicVertex {
+            circles: [tag(v.circles[0])?, tag(v.circles[1])?, tag(v.circles[2])?],
+            near: v.position,
+        });
+    }
+    let mut arcs = Vec::with_capacity(arc_orbits.len());
+    for key in arc_orbits {
+        let r = *arc_by_key.get(key).ok_or_else(|| bad("arc orbit"))?;
+        let arc = &medial.arcs[r];
+        let mut ends = [(0usize, (0i32, 0i32)); 2];
+        for (j, &v) in arc.ends.iter().enumerate() {
+            let k = vkeys
+                .get(v as usize)
+                .copied()
+                .flatten()
+                .ok_or_else(|| bad("arc end key"))?;
+            let (rep, d) = normalise_vertex(&k);
+            ends[j] = (*index.get(&rep).ok_or_else(|| bad("arc end orbit"))?, d);
+        }
+        let hint = [
+            wall_sweep(aux, 2 * r).ok_or_else(|| bad("sampled wall"))?,
+            wall_sweep(aux, 2 * r + 1).ok_or_else(|| bad("sampled wall"))?,
+        ];
+        arcs.push(PeriodicArc {
+            circles: [tag(arc.circles[0])?, tag(arc.circles[1])?],
+            ends,
+            hint,
+        });
+    }
+    Ok(PeriodicBlocking {
+        size: pd.size(),
+        holes: pd.holes().to_vec(),
+        vertices,
+        arcs,
+    })
 }
 
 fn normalise_triple(c: [CircleKey; 3]) -> [CircleKey; 3] {
@@ -683,25 +787,113 @@ fn normalise_triple(c: [CircleKey; 3]) -> [CircleKey; 3] {
         .unwrap_or(c)
 }
 
-/// Mesh one period of `pd`: [`periodic_layout`], then node counts and transfinite
-/// interpolation ([`build_grids`]; partners of periodic sides get equal counts and
-/// translated nodes).
+/// The medial combinatorics of a period: the circle triples of its vertex orbits
+/// ([`PeriodicLayout::triples`]).
+pub type Triples = Vec<[CircleKey; 3]>;
+
+/// Mesh one period of `pd`.
+///
+/// Exact mode (the default): [`periodic_layout`], then the exact geometry of every orbit
+/// computed once and translated ([`crate::exact_mode::periodic::build`]). As for bounded
+/// domains ([`crate::mesher::mesh`]), when the exact geometry disagrees with the sampled
+/// combinatorics (an arc running backwards, a missing Apollonius circle, an inverted cell)
+/// the sampling is refined 4x per attempt, up to [`EXACT_RESAMPLING`] times, and then paper
+/// mode is used. Paper mode: node counts and transfinite interpolation ([`build_grids`];
+/// partners of periodic sides get equal counts and translated nodes).
 pub fn mesh_periodic(pd: &PeriodicDomain, options: &Options) -> Result<Mesh, MeshError> {
+    mesh_periodic_frame(pd, options).map(|f| f.mesh)
+}
+
+/// A periodic mesh with its combinatorics.
+#[derive(Debug, Clone)]
+pub struct PeriodicFrame {
+    pub mesh: Mesh,
+    /// The medial combinatorics ([`PeriodicLayout::triples`]).
+    pub triples: Triples,
+    /// Exact mode: the key of each block ([`crate::exact_mode::imposed`]); `None` in paper
+    /// mode.
+    pub keys: Option<Vec<BlockKey>>,
+}
+
+/// [`mesh_periodic`] and the medial combinatorics of the mesh made.
+pub fn mesh_periodic_frame(
+    pd: &PeriodicDomain,
+    options: &Options,
+) -> Result<PeriodicFrame, MeshError> {
     if options.cells == 0 {
         return Err(MeshError::Options(
             "--cells must be at least 1 (cells along a block side)".into(),
         ));
     }
+    if options.cells > crate::grid::MAX_CELLS_PER_SIDE {
+        return Err(MeshError::Grid(
+            crate::grid::GridError::TooManyCellsPerSide {
+                cells: options.cells,
+                limit: crate::grid::MAX_CELLS_PER_SIDE,
+            },
+        ));
+    }
+    if options.mode == Mode::Exact {
+        exact_mode::validate_options(options)?;
+        if let Some(done) = mesh_periodic_exact(pd, options)? {
+            return Ok(done);
+        }
+    }
     let p = periodic_layout(pd, options)?;
     let grids = build_grids(&p.layout, options.cells)?;
-    Ok(Mesh {
-        layout: p.layout,
-        grids,
-        medial_vertices: p.medial_vertices,
-        medial_arcs: p.medial_arcs,
-        holes: pd.hole_count(),
-        ..Mesh::default()
+    Ok(PeriodicFrame {
+        mesh: Mesh {
+            layout: p.layout,
+            grids,
+            medial_vertices: p.medial_vertices,
+            medial_arcs: p.medial_arcs,
+            holes: pd.hole_count(),
+            ..Mesh::default()
+        },
+        triples: p.triples,
+        keys: None,
     })
+}
+
+/// Exact mode with resampling; `Ok(None)`: use paper mode.
+fn mesh_periodic_exact(
+    pd: &PeriodicDomain,
+    options: &Options,
+) -> Result<Option<PeriodicFrame>, MeshError> {
+    let mut sampling = SamplingOptions::default();
+    for attempt in 0..=EXACT_RESAMPLING {
+        let p = match periodic_layout_with(pd, options, &sampling) {
+            Ok(p) => p,
+            Err(_) if attempt > 0 => return Ok(None),
+            Err(e) => return Err(e),
+        };
+        match exact_mode::periodic::build(&p.blocking, options) {
+            Ok(x) => {
+                if x.inconsistent_arcs.is_empty()
+                    && crate::quality::measure(&x.grids).inverted_cells == 0
+                {
+                    let mesh = Mesh {
+                        layout: x.layout,
+                        grids: x.grids,
+                        medial_vertices: p.medial_vertices,
+                        medial_arcs: p.medial_arcs,
+                        holes: pd.hole_count(),
+                        ..Mesh::default()
+                    };
+                    return Ok(Some(PeriodicFrame {
+                        mesh,
+                        triples: p.triples,
+                        keys: Some(x.keys),
+                    }));
+                }
+            }
+            Err(MeshError::Internal(_)) => {}
+            Err(e) => return Err(e),
+        }
+        sampling.min_per_circle = sampling.min_per_circle.saturating_mul(4);
+        sampling.spacing_per_gap *= 0.25;
+    }
+    Ok(None)
 }
 
 /// The period `[Lx, Ly]` of a periodic layout, read off its translations (the smallest

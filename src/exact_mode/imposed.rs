@@ -1,0 +1,104 @@
+//! Node counts imposed by block key (tracker issue 6, sequences): a solver maps its fields
+//! from one frame to the next when consecutive frames with the same medial combinatorics
+//! have the same blocks with the same `ni x nj` ([`crate::sequence`]).
+//!
+//! A block's key depends on the combinatorics only: its wall circle and, at its two medial
+//! corners (corner 3 and corner 2), the circles around that medial vertex in
+//! counter-clockwise order of their touching points, rotated to start at the smallest (so the
+//! two vertices of three circles, mirror images, have different keys). Circles are
+//! [`CircleTag`]s `(id, a, b)`: a bounded domain's circle id with `a = b = 0`, or a periodic
+//! domain's hole moved by `(a Lx, b Ly)` in the frame where the block's wall is the canonical
+//! copy.
+
+use crate::geometry::Point;
+use std::collections::BTreeMap;
+
+/// A circle: `(id, a, b)` (see the module documentation).
+pub type CircleTag = (i64, i64, i64);
+
+/// `(wall, circles around corner 3, circles around corner 2)`.
+pub type BlockKey = (CircleTag, Vec<CircleTag>, Vec<CircleTag>);
+
+/// Counts imposed on blocks by key: `[ni, nj]` (cells along the wall, cells along the spokes).
+#[derive(Debug, Clone, PartialEq, Eq, Default)]
+pub struct ImposedCounts(pub BTreeMap<BlockKey, [usize; 2]>);
+
+/// The circles around a medial vertex at `center`, each with its touching point, as the
+/// rotation-normalised counter-clockwise cycle (duplicates of one tag counted once).
+pub fn vertex_cycle(center: Point, touching: &[(CircleTag, Point)]) -> Vec<CircleTag> {
+    let mut v: Vec<(f64, CircleTag)> = touching
+        .iter()
+        .map(|(t, p)| ((p[1] - center[1]).atan2(p[0] - center[0]), *t))
+        .collect();
+    v.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+    v.dedup_by(|a, b| a.1 == b.1);
+    let tags: Vec<CircleTag> = v.into_iter().map(|x| x.1).collect();
+    let n = tags.len();
+    (0..n)
+        .map(|r| (0..n).map(|i| tags[(i + r) % n]).collect::<Vec<_>>())
+        .min()
+        .unwrap_or_default()
+}
+
+impl ImposedCounts {
+    /// The counts for a build whose block `2e + s` (side `s` of arc `e`) has key
+    /// `keys[2e + s]`, arc `e` joins the count indices `arc_circles[e]` and there are
+    /// `ncirc` circle counts: `Some((circle, arc))` when every key is known and the imposed
+    /// counts are consistent (both blocks of an arc the same `ni`, all blocks on a circle the
+    /// same `nj`), else `None` (the build keeps its own counts).
+    pub fn counts_for(
+        &self,
+        keys: &[BlockKey],
+        arc_circles: &[[usize; 2]],
+        ncirc: usize,
+    ) -> Option<(Vec<usize>, Vec<usize>)> {
+        if keys.len() != 2 * arc_circles.len() || self.0.len() != keys.len() {
+            return None;
+        }
+        let mut circle: Vec<Option<usize>> = vec![None; ncirc];
+        let mut arc = Vec::with_capacity(arc_circles.len());
+        for (e, cs) in arc_circles.iter().enumerate() {
+            let a = self.0.get(&keys[2 * e])?;
+            let b = self.0.get(&keys[2 * e + 1])?;
+            if a[0] != b[0] || a[0] == 0 {
+                return None;
+            }
+            arc.push(a[0]);
+            for (c, nj) in [(cs[0], a[1]), (cs[1], b[1])] {
+                let slot = circle.get_mut(c)?;
+                match *slot {
+                    Some(m) if m != nj => return None,
+                    _ if nj == 0 => return None,
+                    _ => *slot = Some(nj),
+                }
+            }
+        }
+        let circle = circle.into_iter().map(|c| c.unwrap_or(1)).collect();
+        Some((circle, arc))
+    }
+}
+
+/// The key of every block of a bounded exact build (block `2e + s`: side `s` of arc `e`);
+/// `arcs[e]` is `(end vertices, circles)` of arc (or arc piece) `e`.
+pub(super) fn bounded_keys(
+    vertices: &[super::ExactVertex],
+    arcs: &[([usize; 2], [crate::domain::CircleId; 2])],
+) -> Option<Vec<BlockKey>> {
+    let cycle = |v: usize| -> Option<Vec<CircleTag>> {
+        let x = vertices.get(v)?;
+        let touching: Vec<(CircleTag, Point)> = x
+            .circles
+            .iter()
+            .zip(&x.tangent)
+            .map(|(&c, &p)| ((c as i64, 0, 0), p))
+            .collect();
+        Some(vertex_cycle(x.center, &touching))
+    };
+    let mut keys = Vec::with_capacity(2 * arcs.len());
+    for (ends, circles) in arcs {
+        let [c0, c1] = [cycle(ends[0])?, cycle(ends[1])?];
+        keys.push(((circles[0] as i64, 0, 0), c0.clone(), c1.clone()));
+        keys.push(((circles[1] as i64, 0, 0), c1, c0));
+    }
+    Some(keys)
+}

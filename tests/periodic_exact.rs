@@ -1,0 +1,260 @@
+//! Periodic domains in exact mode (issue 6): every check reads node coordinates only.
+//!
+//! - six blocks per hole;
+//! - every block side is a wall (nodes on a hole's circle), bitwise shared with another side,
+//!   or a zig-zag side whose nodes equal another side's plus a non-zero period shift within
+//!   `1e-12` of the period (found by search over shifts, not read from the connectivity);
+//! - every cell is counter-clockwise at all four corners;
+//! - the first grid line off every wall is normal to it within 0.5 degrees;
+//! - wall clustering: the first cell height is the requested one;
+//! - the cells' area is the period's minus the holes'.
+
+use medial_blocks::exact_mode::{Clustering, FirstCell};
+use medial_blocks::layouts::SplitMix64;
+use medial_blocks::periodic::{mesh_periodic, periodic_layout, PeriodicDomain};
+use medial_blocks::{Circle, Mesh, Options};
+use proptest::prelude::*;
+
+type P = [f64; 2];
+
+/// Holes at random positions with their periodic images apart; when `cross`, the first hole
+/// sits on the box's corner and the second on its left edge.
+fn holes(n: usize, size: P, seed: u64, cross: bool) -> Vec<Circle> {
+    let mut rng = SplitMix64(seed);
+    let m = size[0].min(size[1]);
+    let mut out: Vec<Circle> = Vec::new();
+    let mut tries = 0;
+    while out.len() < n && tries < 20_000 {
+        tries += 1;
+        let r = m * (0.04 + 0.14 * rng.next_f64());
+        let mut c = [rng.next_f64() * size[0], rng.next_f64() * size[1]];
+        if cross && out.is_empty() {
+            c = [0.3 * r * rng.next_f64(), -0.3 * r * rng.next_f64()];
+        } else if cross && out.len() == 1 {
+            c[0] = 0.5 * r * (rng.next_f64() - 0.5);
+        }
+        let apart = out.iter().all(|o| {
+            (-1..=1).all(|a| {
+                (-1..=1).all(|b| {
+                    let dx = c[0] - o.center[0] + a as f64 * size[0];
+                    let dy = c[1] - o.center[1] + b as f64 * size[1];
+                    dx.hypot(dy) > r + o.radius + 0.03 * m
+                })
+            })
+        });
+        if apart {
+            out.push(Circle::new(c[0], c[1], r));
+        }
+    }
+    out
+}
+
+fn cross(o: P, a: P, b: P) -> f64 {
+    (a[0] - o[0]) * (b[1] - o[1]) - (a[1] - o[1]) * (b[0] - o[0])
+}
+
+/// The hole whose circle carries all of `nodes` (relative 1e-9), if any.
+fn wall_of(pd: &PeriodicDomain, nodes: &[P]) -> Option<usize> {
+    pd.holes().iter().position(|c| {
+        nodes.iter().all(|p| {
+            ((p[0] - c.center[0]).hypot(p[1] - c.center[1]) - c.radius).abs() <= 1e-9 * c.radius
+        })
+    })
+}
+
+fn matches(a: &[P], b: &[P], t: P, tol: f64) -> bool {
+    a.len() == b.len()
+        && a.iter()
+            .zip(b)
+            .all(|(p, q)| (p[0] + t[0] - q[0]).hypot(p[1] + t[1] - q[1]) <= tol)
+}
+
+/// All the coordinate checks; `first`: the requested relative first cell height.
+fn check(pd: &PeriodicDomain, mesh: &Mesh, first: Option<f64>) {
+    let h = pd.hole_count();
+    let size = pd.size();
+    let l = size[0].max(size[1]);
+    assert_eq!(mesh.layout.blocks.len(), 6 * h, "six blocks per hole");
+    assert_eq!(mesh.grids.len(), 6 * h);
+    let sides: Vec<(usize, usize, Vec<P>)> = (0..mesh.grids.len())
+        .flat_map(|b| (0..4).map(move |k| (b, k)))
+        .map(|(b, k)| (b, k, mesh.grids[b].side(k)))
+        .collect();
+    let mut zigzag = 0;
+    for (b, k, nodes) in &sides {
+        if *k == 0 {
+            assert!(wall_of(pd, nodes).is_some(), "block {b}: side 0 is a wall");
+            continue;
+        }
+        let rev: Vec<P> = nodes.iter().rev().copied().collect();
+        let others = sides.iter().filter(|(b2, k2, _)| (b2, k2) != (b, k));
+        let shared = others.clone().any(|(_, _, o)| *o == *nodes || *o == rev);
+        if shared {
+            continue;
+        }
+        let mut found = false;
+        'search: for (_, k2, o) in others {
+            if *k2 == 0 {
+                continue;
+            }
+            for a in -2i32..=2 {
+                for bb in -2i32..=2 {
+                    if (a, bb) == (0, 0) {
+                        continue;
+                    }
+                    let t = [a as f64 * size[0], bb as f64 * size[1]];
+                    if matches(nodes, o, t, 1e-12 * l) || matches(&rev, o, t, 1e-12 * l) {
+                        found = true;
+                        break 'search;
+                    }
+                }
+            }
+        }
+        assert!(
+            found,
+            "block {b} side {k}: neither shared nor a periodic copy"
+        );
+        zigzag += 1;
+    }
+    assert!(zigzag > 0, "one period has a zig-zag boundary");
+    let mut area = 0.0;
+    for (b, g) in mesh.grids.iter().enumerate() {
+        for j in 0..g.nj {
+            for i in 0..g.ni {
+                let q = [
+                    g.node(i, j),
+                    g.node(i + 1, j),
+                    g.node(i + 1, j + 1),
+                    g.node(i, j + 1),
+                ];
+                for c in 0..4 {
+                    let z = cross(q[c], q[(c + 1) % 4], q[(c + 3) % 4]);
+                    assert!(z > 0.0, "block {b} cell ({i}, {j}) corner {c}: {z:e}");
+                }
+                area += 0.5 * (cross(q[0], q[1], q[2]) + cross(q[0], q[2], q[3]));
+            }
+        }
+        // The first grid line off the wall is normal to it.
+        let w = wall_of(pd, &g.side(0)).expect("wall");
+        let c = pd.holes()[w];
+        for i in 0..=g.ni {
+            let (p, q) = (g.node(i, 0), g.node(i, 1));
+            let u = [p[0] - c.center[0], p[1] - c.center[1]];
+            let v = [q[0] - p[0], q[1] - p[1]];
+            let ang = cross([0.0, 0.0], u, v)
+                .atan2(u[0] * v[0] + u[1] * v[1])
+                .to_degrees()
+                .abs();
+            assert!(ang < 0.5, "block {b} node {i}: wall angle off by {ang} deg");
+            if let Some(f) = first {
+                let len = (g.node(i, g.nj)[0] - p[0]).hypot(g.node(i, g.nj)[1] - p[1]);
+                let want = f * c.radius;
+                if g.nj > 1 && (g.nj as f64) * want < len {
+                    let got = v[0].hypot(v[1]);
+                    assert!(
+                        (got - want).abs() <= 1e-6 * want,
+                        "first cell {got} vs {want}"
+                    );
+                }
+            }
+        }
+    }
+    let holes: f64 = pd
+        .holes()
+        .iter()
+        .map(|c| std::f64::consts::PI * c.radius * c.radius)
+        .sum();
+    let want = size[0] * size[1] - holes;
+    assert!(
+        (area - want).abs() < 0.01 * size[0] * size[1],
+        "period area {area} vs {want}"
+    );
+}
+
+#[test]
+fn exact_mode_is_the_default_for_periodic_domains() {
+    let size = [3.0, 2.0];
+    let hs = vec![
+        Circle::new(0.05, 0.05, 0.3),
+        Circle::new(1.5, 1.98, 0.25),
+        Circle::new(2.9, 1.0, 0.2),
+        Circle::new(1.4, 0.9, 0.35),
+        Circle::new(-0.7, 0.8, 0.15),
+    ];
+    let pd = PeriodicDomain::new(size, hs).unwrap();
+    let mesh = mesh_periodic(&pd, &Options::default()).unwrap();
+    check(&pd, &mesh, None);
+    // One hole in a square box: a degenerate (co-circular) periodic Voronoi diagram.
+    let pd = PeriodicDomain::new([1.0, 1.0], vec![Circle::new(0.5, 0.5, 0.2)]).unwrap();
+    let mesh = mesh_periodic(&pd, &Options::default()).unwrap();
+    assert_eq!(mesh.layout.blocks.len(), 6);
+}
+
+#[test]
+fn paper_mode_keeps_the_paper_geometry() {
+    let pd = PeriodicDomain::new(
+        [2.0, 1.5],
+        vec![Circle::new(0.3, 0.4, 0.2), Circle::new(1.3, 1.0, 0.3)],
+    )
+    .unwrap();
+    let opts = Options {
+        cells: 6,
+        ..Options::paper()
+    };
+    let mesh = mesh_periodic(&pd, &opts).unwrap();
+    let p = periodic_layout(&pd, &opts).unwrap();
+    let grids = medial_blocks::grid::build_grids(&p.layout, 6).unwrap();
+    assert_eq!(
+        mesh.grids, grids,
+        "--mode paper: equal spacing TFI as before"
+    );
+    assert!(mesh.grids.iter().all(|g| g.ni >= 6));
+}
+
+#[test]
+fn clustering_on_hole_walls() {
+    let size = [2.0, 2.0];
+    let pd = PeriodicDomain::new(size, holes(6, size, 11, true)).unwrap();
+    let opts = Options {
+        cells: 8,
+        clustering: Clustering {
+            first: Some(FirstCell::Relative(0.01)),
+            growth: 1.2,
+        },
+        ..Options::default()
+    };
+    let mesh = mesh_periodic(&pd, &opts).unwrap();
+    check(&pd, &mesh, Some(0.01));
+}
+
+#[test]
+fn exact_periodic_meshes_are_deterministic() {
+    let size = [1.5, 1.0];
+    let pd = PeriodicDomain::new(size, holes(5, size, 3, true)).unwrap();
+    let a = mesh_periodic(&pd, &Options::default()).unwrap();
+    let b = mesh_periodic(&pd, &Options::default()).unwrap();
+    assert_eq!(a.grids, b.grids);
+    assert_eq!(a.layout, b.layout);
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 20, ..ProptestConfig::default() })]
+
+    /// Random layouts, with holes across the box's corner and edge. (One hole is left out:
+    /// on a rectangular lattice four images are always co-circular, so exact mode falls back
+    /// to paper mode there, as for co-circular bounded layouts.)
+    #[test]
+    fn random_exact_periodic_layouts(
+        n in 2usize..8,
+        lx in 0.6f64..2.0,
+        ly in 0.6f64..2.0,
+        seed in any::<u64>(),
+        crossing in any::<bool>(),
+    ) {
+        let size = [lx, ly];
+        let hs = holes(n, size, seed, crossing);
+        let pd = PeriodicDomain::new(size, hs).unwrap();
+        let mesh = mesh_periodic(&pd, &Options { cells: 6, ..Options::default() }).unwrap();
+        check(&pd, &mesh, None);
+    }
+}

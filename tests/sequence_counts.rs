@@ -1,0 +1,220 @@
+//! Sequences keep block structure and node counts over runs of equal combinatorics (issue 6).
+//! Node counts are read back from the written connectivity.json (`dims` per block).
+
+use medial_blocks::exact_mode::imposed::ImposedCounts;
+use medial_blocks::sequence::{mesh_frame, parse_frames, run_sequence, SequenceSummary};
+use medial_blocks::{AnyDomain, Options};
+use std::path::Path;
+use std::sync::Arc;
+
+/// Three holes in a circle, one moving by `step` per frame; `bad` frames have overlapping
+/// holes.
+fn bounded_frames(n: usize, step: f64, bad: &[usize]) -> String {
+    (0..n)
+        .map(|k| {
+            if bad.contains(&k) {
+                return r#"{"bounding": {"center": [0, 0], "radius": 5}, "holes": [{"center": [0, 0], "radius": 1}, {"center": [0.5, 0], "radius": 1}]}"#.to_string();
+            }
+            format!(
+                r#"{{"bounding": {{"center": [0, 0], "radius": 5}}, "holes": [{{"center": [{}, {}], "radius": 1}}, {{"center": [2.5, 0.3], "radius": 0.8}}, {{"center": [0.2, 2.6], "radius": 0.9}}, {{"center": [-0.4, -2.7], "radius": 0.6}}]}}"#,
+                -2.0 + step * k as f64,
+                0.5 * step * k as f64
+            )
+        })
+        .collect::<Vec<_>>()
+        .join("\n")
+}
+
+fn periodic_frames(n: usize, step: f64) -> String {
+    (0..n)
+        .map(|k| {
+            let x = step * k as f64;
+            format!(
+                r#"{{"periodic": {{"size": [4, 3]}}, "holes": [{{"center": [{}, 0.5], "radius": 0.6}}, {{"center": [2.2, {}], "radius": 0.8}}, {{"center": [3.4, 0.2], "radius": 0.3}}]}}"#,
+                0.5 + x,
+                1.9 - x
+            )
+        })
+        .collect::<Vec<_>>()
+        .join("\n")
+}
+
+fn run(text: &str, dir: &Path, threads: usize) -> SequenceSummary {
+    let frames = parse_frames(text);
+    let opts = Options {
+        cells: 6,
+        ..Options::default()
+    };
+    run_sequence(
+        &frames,
+        &opts,
+        &[medial_blocks::output::Format::Json],
+        dir,
+        threads,
+        &|| {},
+    )
+    .unwrap()
+}
+
+/// `[ni, nj]` per block from `frame_NNNNN/connectivity.json`.
+fn dims(dir: &Path, k: usize) -> Vec<[u64; 2]> {
+    let path = dir.join(format!("frame_{k:05}/connectivity.json"));
+    let v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap();
+    v["blocks"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|b| {
+            let d = b["dims"].as_array().unwrap();
+            [d[0].as_u64().unwrap(), d[1].as_u64().unwrap()]
+        })
+        .collect()
+}
+
+fn tree(dir: &Path) -> Vec<(String, Vec<u8>)> {
+    let mut out = Vec::new();
+    let mut stack = vec![dir.to_path_buf()];
+    while let Some(d) = stack.pop() {
+        for e in std::fs::read_dir(&d).unwrap() {
+            let p = e.unwrap().path();
+            if p.is_dir() {
+                stack.push(p);
+            } else {
+                let rel = p.strip_prefix(dir).unwrap().display().to_string();
+                out.push((rel, std::fs::read(&p).unwrap()));
+            }
+        }
+    }
+    out.sort();
+    out
+}
+
+fn check_run(text: &str, n: usize) {
+    // On their own, some frames have other node counts than frame 0 (exact mode sizes cells
+    // from the geometry), so the run really re-meshes them.
+    let frames = parse_frames(text);
+    let opts = Options {
+        cells: 6,
+        ..Options::default()
+    };
+    let own: Vec<_> = frames
+        .iter()
+        .map(|f| mesh_frame(f.as_ref().unwrap(), &opts).unwrap().structure())
+        .collect();
+    assert!(
+        own.iter().any(|s| s != &own[0]),
+        "a motion that changes counts"
+    );
+    let dir = tempfile::tempdir().unwrap();
+    let s = run(text, dir.path(), 2);
+    assert_eq!(s.failed, 0);
+    let first = dims(dir.path(), 0);
+    for k in 1..n {
+        let f = &s.frames[k];
+        assert!(f.same_combinatorics_as_previous, "frame {k}: {f:?}");
+        assert!(f.same_block_structure_as_previous, "frame {k}");
+        assert!(f.same_node_counts_as_previous, "frame {k}: {f:?}");
+        assert_eq!(f.node_counts_from_frame, Some(0), "frame {k}");
+        assert_eq!(dims(dir.path(), k), first, "frame {k}: ni, nj per block");
+        assert_eq!(f.inverted_cells, 0);
+    }
+}
+
+#[test]
+fn small_motions_keep_blocks_and_node_counts() {
+    check_run(&bounded_frames(6, 0.01, &[]), 6);
+}
+
+#[test]
+fn periodic_small_motions_keep_blocks_and_node_counts() {
+    check_run(&periodic_frames(5, 0.01), 5);
+}
+
+#[test]
+fn reused_counts_are_the_first_frames_and_byte_identical_for_1_and_2_threads() {
+    let text = bounded_frames(7, 0.02, &[4]);
+    let dir = tempfile::tempdir().unwrap();
+    let (a, b) = (dir.path().join("a"), dir.path().join("b"));
+    let s1 = run(&text, &a, 1);
+    let s2 = run(&text, &b, 2);
+    assert_eq!(s1, s2);
+    assert!(
+        tree(&a) == tree(&b),
+        "outputs differ between 1 and 2 threads"
+    );
+    // The failed frame is reported, the others meshed; the run restarts after it.
+    assert_eq!(s1.failed, 1);
+    assert!(!s1.frames[4].ok && s1.frames[4].error.is_some());
+    assert!(s1.frames.iter().enumerate().all(|(k, f)| f.ok == (k != 4)));
+    assert_eq!(s1.frames[5].node_counts_from_frame, None);
+    assert!(!s1.frames[5].same_combinatorics_as_previous);
+    assert_eq!(s1.frames[6].node_counts_from_frame, Some(5));
+    assert_eq!(dims(&a, 6), dims(&a, 5));
+    assert_eq!(dims(&a, 3), dims(&a, 0));
+    // Oracle: frame 2 is exactly frame 2 meshed alone with frame 0's counts imposed.
+    let frames = parse_frames(&text);
+    let opts = Options {
+        cells: 6,
+        ..Options::default()
+    };
+    let f0 = mesh_frame(frames[0].as_ref().unwrap(), &opts).unwrap();
+    let want = f0.structure().unwrap();
+    let imposed = Options {
+        imposed_counts: Some(Arc::new(ImposedCounts(want.iter().cloned().collect()))),
+        ..opts.clone()
+    };
+    let f2 = mesh_frame(frames[2].as_ref().unwrap(), &imposed).unwrap();
+    assert_eq!(f2.structure().unwrap(), want);
+    let single = dir.path().join("single");
+    let alone = run(
+        &format!(
+            "{}\n{}",
+            text.lines().next().unwrap(),
+            text.lines().nth(2).unwrap()
+        ),
+        &single,
+        1,
+    );
+    assert_eq!(alone.frames[1].node_counts_from_frame, Some(0));
+    assert!(tree(&single.join("frame_00001")) == tree(&a.join("frame_00002")));
+    assert!(tree(&single.join("frame_00000")) == tree(&a.join("frame_00000")));
+}
+
+#[test]
+fn counts_that_do_not_fit_are_ignored() {
+    // Imposed counts for another domain's blocks: the frame keeps its own counts.
+    let frames = parse_frames(&bounded_frames(1, 0.0, &[]));
+    let other = parse_frames(&periodic_frames(1, 0.0));
+    let opts = Options {
+        cells: 6,
+        ..Options::default()
+    };
+    let own = mesh_frame(frames[0].as_ref().unwrap(), &opts).unwrap();
+    let foreign = mesh_frame(other[0].as_ref().unwrap(), &opts).unwrap();
+    let imposed = Options {
+        imposed_counts: Some(Arc::new(ImposedCounts(
+            foreign.structure().unwrap().into_iter().collect(),
+        ))),
+        ..opts.clone()
+    };
+    let again = mesh_frame(frames[0].as_ref().unwrap(), &imposed).unwrap();
+    assert_eq!(again.mesh.grids, own.mesh.grids);
+    // Partial counts (one block missing) are not used either.
+    let mut partial: Vec<_> = own.structure().unwrap();
+    partial.pop();
+    let mut doubled = ImposedCounts(partial.into_iter().collect());
+    for v in doubled.0.values_mut() {
+        *v = [2 * v[0], 2 * v[1]];
+    }
+    let again = mesh_frame(
+        frames[0].as_ref().unwrap(),
+        &Options {
+            imposed_counts: Some(Arc::new(doubled)),
+            ..opts.clone()
+        },
+    )
+    .unwrap();
+    assert_eq!(again.mesh.grids, own.mesh.grids);
+    assert!(matches!(&other[0], Ok(AnyDomain::Periodic(_))));
+}
