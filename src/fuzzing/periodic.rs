@@ -395,7 +395,8 @@ pub fn check_periodic_mesh(
         .fold(big, |a, c| a.max(c.center[0].abs() + c.center[1].abs()))
         + big;
     let tol = 1e-9 * abs_area + 64.0 * f64::EPSILON * far * far * terms as f64;
-    if !((area - expected_area).abs() <= tol) {
+    let within = (area - expected_area).abs() <= tol;
+    if !within {
         return Err(format!(
             "cells cover a signed area of {area:e}, the period minus the wall polygons is \
              {expected_area:e} (tolerance {tol:e})"

@@ -37,7 +37,10 @@ pub mod domain;
 
 pub use domain::{tile_offsets, wrap, PeriodicDomain};
 
+use crate::apollonius::{same_circle, Apollonius};
 use crate::blocking;
+use crate::cocircular::{self, CocircularGroup};
+use crate::collapse;
 use crate::domain::{Circle, CircleId, Domain};
 use crate::geometry::{Point, Triangulation};
 use crate::grid::build_grids;
@@ -358,6 +361,10 @@ pub struct PeriodicLayout {
     /// The circle triples of the medial vertex orbits, each as `(hole, tile a, tile b)`
     /// normalised up to translation, sorted: the medial combinatorics of the period.
     pub triples: Vec<[CircleKey; 3]>,
+    /// Zero-length medial arc orbits collapsed (blocks: `6h - 2 collapsed_arcs`).
+    pub collapsed_arcs: usize,
+    /// The co-circular groups, one per orbit (see [`periodic_groups`]).
+    pub cocircular_groups: Vec<CocircularGroup>,
 }
 
 /// The block layout of one period of `pd` (see the module documentation).
@@ -387,7 +394,97 @@ pub fn periodic_layout(
     })
 }
 
+/// A contracted medial vertex (a cluster of collapsed vertices) up to nothing: the samples of
+/// all its members' Delaunay triangles, sorted and deduplicated (three samples for a vertex
+/// that was not collapsed).
+type ClusterKey = Vec<SampleKey>;
+
+/// The orbit representative of a cluster key and the shift from it: `key = rep + shift`.
+fn normalise_cluster(key: &[SampleKey]) -> (ClusterKey, (i32, i32)) {
+    key.iter()
+        .map(|s| {
+            let d = (s.2, s.3);
+            let mut k: ClusterKey = key.iter().map(|x| shift_sample(*x, (-d.0, -d.1))).collect();
+            k.sort_unstable();
+            (k, d)
+        })
+        .min()
+        .unwrap_or_else(|| (key.to_vec(), (0, 0)))
+}
+
+/// The exact Apollonius circles of the medial vertices `vs` of the tiling (see
+/// [`cocircular::vertex_circles`]).
+fn circles_of(
+    domain: &Domain,
+    medial: &MedialGraph,
+    vs: &[u32],
+) -> HashMap<u32, Option<Apollonius>> {
+    let sub = MedialGraph {
+        vertices: vs
+            .iter()
+            .map(|&v| medial.vertices[v as usize].clone())
+            .collect(),
+        arcs: Vec::new(),
+    };
+    vs.iter()
+        .copied()
+        .zip(cocircular::vertex_circles(domain, &sub))
+        .collect()
+}
+
+/// Zero-length arcs of the tiling, decided once per arc orbit on the orbit's representative
+/// instance and given to every instance, so that the selection is translation-invariant
+/// (the copies of a hole are float translates of it, not exact ones, so exact tests on
+/// different copies could disagree). An arc is zero-length when the exact Apollonius
+/// circles of its two ends are the same circle ([`same_circle`]: both ends in one
+/// co-circular group), or by the sample-level criteria of [`cocircular::is_zero_length`]
+/// (all sampled points equal, or one exactly co-circular Delaunay edge crossed). Arcs
+/// without a representative in the tiling (near its bounding circle) are never collapsed.
+fn zero_length_arcs(
+    domain: &Domain,
+    tri: &Triangulation,
+    medial: &MedialGraph,
+    akeys: &[Option<ArcKey>],
+    arc_by_key: &HashMap<ArcKey, usize>,
+) -> Vec<bool> {
+    let rep_of: Vec<Option<usize>> = akeys
+        .iter()
+        .map(|k| k.and_then(|k| arc_by_key.get(&normalise_arc(&k).0).copied()))
+        .collect();
+    let mut reps: Vec<usize> = rep_of.iter().flatten().copied().collect();
+    reps.sort_unstable();
+    reps.dedup();
+    let mut ends: Vec<u32> = reps.iter().flat_map(|&r| medial.arcs[r].ends).collect();
+    ends.sort_unstable();
+    ends.dedup();
+    let circles = circles_of(domain, medial, &ends);
+    let zero_rep: HashMap<usize, bool> = reps
+        .iter()
+        .map(|&r| {
+            let arc = &medial.arcs[r];
+            let [a, b] = arc.ends;
+            let same = match (circles.get(&a), circles.get(&b)) {
+                (Some(Some(x)), Some(Some(y))) => same_circle(&x.exact, &y.exact),
+                _ => false,
+            };
+            let zero = a != b && (same || cocircular::is_zero_length(arc, medial, tri, &[]));
+            (r, zero)
+        })
+        .collect();
+    rep_of
+        .iter()
+        .map(|r| r.is_some_and(|r| zero_rep.get(&r).copied().unwrap_or(false)))
+        .collect()
+}
+
 /// Keep the canonical cells; `Ok(None)` when the tiling is too small (step 4).
+///
+/// Zero-length medial arcs (co-circular hole groups, e.g. every corner of a square lattice)
+/// are collapsed ([`zero_length_arcs`], [`collapse::contract`]) before Blocking2D, the same
+/// arcs in every copy. A contracted vertex is identified up to translation by its
+/// [`ClusterKey`], so its instances are its orbit representative plus the period shift like
+/// any other vertex. A kept block with a non-positive outline area is an
+/// [`MeshError::Internal`].
 fn extract(
     pd: &PeriodicDomain,
     t: &Tiling,
@@ -395,8 +492,80 @@ fn extract(
     triangulation: &Triangulation,
     medial: &MedialGraph,
 ) -> Result<Option<PeriodicLayout>, MeshError> {
-    let (aux, vertex_samples) = blocking::blocks(&t.domain, samples, medial)?;
     let size = t.size;
+    // Orbit keys of the original medial graph.
+    let sample_key = |s: u32| -> Option<SampleKey> {
+        let (k, a, b) = t.key(samples.circle_of[s as usize])?;
+        Some((k, samples.index_of[s as usize], a, b))
+    };
+    let vertex_key = |v: usize| -> Option<VertexKey> {
+        let mut key = [
+            sample_key(medial.vertices[v].samples[0])?,
+            sample_key(medial.vertices[v].samples[1])?,
+            sample_key(medial.vertices[v].samples[2])?,
+        ];
+        key.sort_unstable();
+        Some(key)
+    };
+    let vkeys: Vec<Option<VertexKey>> = (0..medial.vertices.len()).map(vertex_key).collect();
+    let arc_key = |e: usize| -> Option<ArcKey> {
+        let a = &medial.arcs[e];
+        let mut c = [t.key(a.circles[0])?, t.key(a.circles[1])?];
+        c.sort_unstable();
+        let mut v = [vkeys[a.ends[0] as usize]?, vkeys[a.ends[1] as usize]?];
+        v.sort_unstable();
+        Some((c, v))
+    };
+    let akeys: Vec<Option<ArcKey>> = (0..medial.arcs.len()).map(arc_key).collect();
+    let mut arc_by_key: HashMap<ArcKey, usize> = HashMap::new();
+    for (e, k) in akeys.iter().enumerate() {
+        if let Some(k) = k {
+            if arc_by_key.insert(*k, e).is_some() {
+                return Err(MeshError::Internal(
+                    "two medial arcs of the periodic tiling have the same key".into(),
+                ));
+            }
+        }
+    }
+    let inconsistent = |what: &str| {
+        MeshError::Internal(format!(
+            "the periodic tiling is not translation-consistent ({what})"
+        ))
+    };
+
+    // Collapse the zero-length arcs, identically in every copy.
+    let collapse_flags = zero_length_arcs(&t.domain, triangulation, medial, &akeys, &arc_by_key);
+    let contracted = collapse::contract(medial, &collapse_flags)?;
+    let graph = &contracted.graph;
+    let mut members: Vec<Vec<u32>> = vec![Vec::new(); graph.vertices.len()];
+    for (v, &c) in contracted.cluster_of.iter().enumerate() {
+        members[c as usize].push(v as u32);
+    }
+    let mut collapsed_at: Vec<Vec<usize>> = vec![Vec::new(); graph.vertices.len()];
+    for (e, &f) in collapse_flags.iter().enumerate() {
+        if f {
+            let c = contracted.cluster_of[medial.arcs[e].ends[0] as usize];
+            collapsed_at[c as usize].push(e);
+        }
+    }
+    let cluster_key = |c: usize| -> Option<ClusterKey> {
+        let mut key = Vec::with_capacity(3 * members[c].len());
+        for &v in &members[c] {
+            key.extend_from_slice(&vkeys[v as usize]?);
+        }
+        key.sort_unstable();
+        key.dedup();
+        Some(key)
+    };
+    let ckeys: Vec<Option<ClusterKey>> = (0..graph.vertices.len()).map(cluster_key).collect();
+    let mut cluster_by_key: HashMap<ClusterKey, usize> = HashMap::new();
+    for (c, k) in ckeys.iter().enumerate() {
+        if let Some(k) = k {
+            cluster_by_key.insert(k.clone(), c);
+        }
+    }
+
+    let (aux, vertex_samples) = blocking::blocks(&t.domain, samples, graph)?;
     let rmax = pd.holes().iter().map(|c| c.radius).fold(0.0, f64::max);
     let margin = 1e-6 * size[0].max(size[1]);
     let lo = [
@@ -426,88 +595,67 @@ fn extract(
         .collect();
     // Step 4: every triangle used by a kept block is a triangle of the infinite tiling.
     for &b in &kept {
-        let arc = &medial.arcs[b / 2];
+        let e = contracted.kept[b / 2] as usize;
+        let arc = &medial.arcs[e];
         if arc.circles.iter().any(|&c| c < 0) {
             return Ok(None);
         }
-        let ends = arc.ends.map(|v| medial.vertices[v as usize].triangle);
-        if !ends.iter().chain(&arc.triangles).all(|&tr| safe(tr)) {
+        let ends = arc
+            .ends
+            .iter()
+            .flat_map(|&v| &members[contracted.cluster_of[v as usize] as usize])
+            .map(|&v| medial.vertices[v as usize].triangle);
+        if !ends.chain(arc.triangles.iter().copied()).all(safe) {
             return Ok(None);
         }
     }
-    // Orbit keys.
-    let sample_key = |s: u32| -> Option<SampleKey> {
-        let (k, a, b) = t.key(samples.circle_of[s as usize])?;
-        Some((k, samples.index_of[s as usize], a, b))
-    };
-    let vertex_key = |v: usize| -> Option<VertexKey> {
-        let mut key = [
-            sample_key(medial.vertices[v].samples[0])?,
-            sample_key(medial.vertices[v].samples[1])?,
-            sample_key(medial.vertices[v].samples[2])?,
-        ];
-        key.sort_unstable();
-        Some(key)
-    };
-    let vkeys: Vec<Option<VertexKey>> = (0..medial.vertices.len()).map(vertex_key).collect();
-    let arc_key = |e: usize| -> Option<ArcKey> {
-        let a = &medial.arcs[e];
-        let mut c = [t.key(a.circles[0])?, t.key(a.circles[1])?];
-        c.sort_unstable();
-        let mut v = [vkeys[a.ends[0] as usize]?, vkeys[a.ends[1] as usize]?];
-        v.sort_unstable();
-        Some((c, v))
-    };
-    let akeys: Vec<Option<ArcKey>> = (0..medial.arcs.len()).map(arc_key).collect();
-    let mut vertex_by_key: HashMap<VertexKey, usize> = HashMap::new();
-    for (v, k) in vkeys.iter().enumerate() {
-        if let Some(k) = k {
-            vertex_by_key.insert(*k, v);
-        }
-    }
-    let mut arc_by_key: HashMap<ArcKey, usize> = HashMap::new();
-    for (e, k) in akeys.iter().enumerate() {
-        if let Some(k) = k {
-            if arc_by_key.insert(*k, e).is_some() {
-                return Err(MeshError::Internal(
-                    "two medial arcs of the periodic tiling have the same key".into(),
-                ));
-            }
-        }
-    }
-    let inconsistent = |what: &str| {
-        MeshError::Internal(format!(
-            "the periodic tiling is not translation-consistent ({what})"
-        ))
-    };
     let shift_point = |p: Point, d: (i32, i32)| -> Point {
         [p[0] + d.0 as f64 * size[0], p[1] + d.1 as f64 * size[1]]
     };
-    // Positions of medial vertex instances: orbit representative + shift.
+    // Positions of contracted vertex instances: orbit representative + shift. The orbits of
+    // their members and collapsed arcs are recorded for the torus counts.
     let mut vpos: HashMap<usize, Point> = HashMap::new();
     let mut vertex_orbits: Vec<VertexKey> = Vec::new();
-    let mut position_of = |v: usize, orbits: &mut Vec<VertexKey>| -> Result<Point, MeshError> {
-        if let Some(p) = vpos.get(&v) {
+    let mut collapsed_orbits: Vec<ArcKey> = Vec::new();
+    let mut cluster_orbits: Vec<usize> = Vec::new();
+    let mut position_of = |c: usize,
+                           vorbits: &mut Vec<VertexKey>,
+                           corbits: &mut Vec<ArcKey>|
+     -> Result<Point, MeshError> {
+        if let Some(p) = vpos.get(&c) {
             return Ok(*p);
         }
-        let key = vkeys[v].ok_or_else(|| inconsistent("a kept vertex on the bounding circle"))?;
-        let (rep, d) = normalise_vertex(&key);
-        let r = *vertex_by_key
+        let key = ckeys[c]
+            .as_ref()
+            .ok_or_else(|| inconsistent("a kept vertex on the bounding circle"))?;
+        let (rep, d) = normalise_cluster(key);
+        let r = *cluster_by_key
             .get(&rep)
             .ok_or_else(|| inconsistent("a medial vertex without its representative"))?;
-        orbits.push(rep);
-        let p = shift_point(medial.vertices[r].position, d);
-        vpos.insert(v, p);
+        if members[r].len() != members[c].len() {
+            return Err(inconsistent("a collapsed vertex unlike its representative"));
+        }
+        for &v in &members[c] {
+            let k = vkeys[v as usize].ok_or_else(|| inconsistent("vertex key"))?;
+            vorbits.push(normalise_vertex(&k).0);
+        }
+        for &e in &collapsed_at[c] {
+            let k = akeys[e].ok_or_else(|| inconsistent("collapsed arc key"))?;
+            corbits.push(normalise_arc(&k).0);
+        }
+        cluster_orbits.push(r);
+        let p = shift_point(graph.vertices[r].position, d);
+        vpos.insert(c, p);
         Ok(p)
     };
 
     let mut layout = BlockLayout::default();
     let mut new_vertex: HashMap<u32, u32> = HashMap::new();
     let mut new_edge: HashMap<u32, (u32, bool)> = HashMap::new();
-    // (new edge, aux arc, offset of the other circle)
+    // (new edge, original arc, offset of the other circle)
     let mut periodic: Vec<(u32, usize, (i32, i32))> = Vec::new();
     let mut arc_orbits: Vec<ArcKey> = Vec::new();
-    let nmv = medial.vertices.len() as u32;
+    let nmv = graph.vertices.len() as u32;
     for &b in &kept {
         let block = &aux.blocks[b];
         let mut corners = [0u32; 4];
@@ -517,7 +665,7 @@ fn extract(
                 continue;
             }
             let p = if v < nmv {
-                position_of(v as usize, &mut vertex_orbits)?
+                position_of(v as usize, &mut vertex_orbits, &mut collapsed_orbits)?
             } else {
                 let s = vertex_samples
                     .get(v as usize)
@@ -573,7 +721,7 @@ fn extract(
                     )
                 }
                 EdgeKind::Medial => {
-                    let e = b / 2;
+                    let e = contracted.kept[b / 2] as usize;
                     let key = akeys[e].ok_or_else(|| inconsistent("arc key"))?;
                     let (rep, d) = normalise_arc(&key);
                     let r = *arc_by_key
@@ -648,10 +796,32 @@ fn extract(
             translation,
         };
     }
+    // No block with zero or negative area leaves this stage.
+    for b in 0..layout.blocks.len() {
+        let a = blocking::block_area(&layout, b);
+        let positive = a > 0.0;
+        if !positive {
+            return Err(MeshError::Internal(format!(
+                "periodic block {b} has a non-positive area {a:e} (a degenerate medial arc \
+                 that was not collapsed)"
+            )));
+        }
+    }
     vertex_orbits.sort_unstable();
     vertex_orbits.dedup();
     arc_orbits.sort_unstable();
     arc_orbits.dedup();
+    collapsed_orbits.sort_unstable();
+    collapsed_orbits.dedup();
+    if arc_orbits
+        .iter()
+        .any(|a| collapsed_orbits.binary_search(a).is_ok())
+    {
+        return Err(inconsistent("an arc orbit both collapsed and kept"));
+    }
+    cluster_orbits.sort_unstable();
+    cluster_orbits.dedup();
+    let groups = periodic_groups(t, medial, &members, &cluster_orbits);
     let mut triples: Vec<[CircleKey; 3]> = vertex_orbits
         .iter()
         .map(|v| {
@@ -664,10 +834,71 @@ fn extract(
     Ok(Some(PeriodicLayout {
         layout,
         medial_vertices: vertex_orbits.len(),
-        medial_arcs: arc_orbits.len(),
+        medial_arcs: arc_orbits.len() + collapsed_orbits.len(),
         tiling: t.m,
         triples,
+        collapsed_arcs: collapsed_orbits.len(),
+        cocircular_groups: groups,
     }))
+}
+
+/// The co-circular groups of one period: one per orbit of contracted vertices of two or more
+/// members whose exact Apollonius circles are all the same circle. `clusters` are the orbit
+/// representatives (contracted vertex ids). Holes are the canonical ids of the group's
+/// circles, one entry per tangent circle (a hole tangent to the empty circle with several
+/// images appears that many times), sorted; the centre is wrapped into the box. `vertices`
+/// is left empty (tiling vertex ids mean nothing outside this stage).
+fn periodic_groups(
+    t: &Tiling,
+    medial: &MedialGraph,
+    members: &[Vec<u32>],
+    clusters: &[usize],
+) -> Vec<CocircularGroup> {
+    let mut out = Vec::new();
+    for &c in clusters {
+        let ms = &members[c];
+        if ms.len() < 2 {
+            continue;
+        }
+        let circles = circles_of(&t.domain, medial, ms);
+        let Some(Some(first)) = circles.get(&ms[0]) else {
+            continue;
+        };
+        let all_same = ms.iter().all(|v| match circles.get(v) {
+            Some(Some(x)) => same_circle(&first.exact, &x.exact),
+            _ => false,
+        });
+        if !all_same {
+            continue;
+        }
+        let mut ids: Vec<CircleId> = ms
+            .iter()
+            .flat_map(|&v| medial.vertices[v as usize].circles)
+            .collect();
+        ids.sort_unstable();
+        ids.dedup();
+        let mut holes: Vec<CircleId> = ids
+            .iter()
+            .filter_map(|&id| t.key(id).map(|k| k.0 as CircleId))
+            .collect();
+        holes.sort_unstable();
+        out.push(CocircularGroup {
+            holes,
+            center: [
+                wrap(first.center[0], t.size[0]),
+                wrap(first.center[1], t.size[1]),
+            ],
+            radius: first.radius,
+            vertices: Vec::new(),
+        });
+    }
+    out.sort_by(|a, b| {
+        a.holes
+            .cmp(&b.holes)
+            .then(a.center[0].total_cmp(&b.center[0]))
+            .then(a.center[1].total_cmp(&b.center[1]))
+    });
+    out
 }
 
 fn normalise_triple(c: [CircleKey; 3]) -> [CircleKey; 3] {
@@ -698,6 +929,8 @@ pub fn mesh_periodic(pd: &PeriodicDomain, options: &Options) -> Result<Mesh, Mes
         medial_vertices: p.medial_vertices,
         medial_arcs: p.medial_arcs,
         holes: pd.hole_count(),
+        collapsed_arcs: p.collapsed_arcs,
+        cocircular_groups: p.cocircular_groups,
         ..Mesh::default()
     })
 }
