@@ -61,6 +61,8 @@ pub const MAX_TILING: i32 = 3;
 type SampleKey = (u32, u32, i32, i32);
 /// A medial vertex up to nothing: its Delaunay triangle's samples, sorted.
 type VertexKey = [SampleKey; 3];
+/// An arc orbit's two ends: `(vertex orbit, shift)`.
+type OrbitEnds = [(usize, (i32, i32)); 2];
 /// `(hole, tile a, tile b)`.
 type CircleKey = (u32, i32, i32);
 /// A medial arc: its two circles and two end vertices, each pair sorted.
@@ -372,14 +374,19 @@ pub fn periodic_layout(
     pd: &PeriodicDomain,
     options: &Options,
 ) -> Result<PeriodicLayout, MeshError> {
-    let _ = options;
+    if !(options.collapse_fraction.is_finite() && options.collapse_fraction >= 0.0) {
+        return Err(MeshError::Options(format!(
+            "the collapse fraction must be a number >= 0, not {}",
+            options.collapse_fraction
+        )));
+    }
     let gaps = pd.nearest_gaps();
     let opts = SamplingOptions::default();
     let mut last = None;
     for m in 1..=MAX_TILING {
         let t = Tiling::new(pd, m)?;
         let (samples, tri, medial) = sample_tiling(&t, &gaps, &opts)?;
-        match extract(pd, &t, &samples, &tri, &medial)? {
+        match extract(pd, &t, &samples, &tri, &medial, options.collapse_fraction)? {
             Some(p) => return Ok(p),
             None => last = Some(m),
         }
@@ -432,21 +439,65 @@ fn circles_of(
         .collect()
 }
 
-/// Zero-length arcs of the tiling, decided once per arc orbit on the orbit's representative
-/// instance and given to every instance, so that the selection is translation-invariant
-/// (the copies of a hole are float translates of it, not exact ones, so exact tests on
-/// different copies could disagree). An arc is zero-length when the exact Apollonius
-/// circles of its two ends are the same circle ([`same_circle`]: both ends in one
-/// co-circular group), or by the sample-level criteria of [`cocircular::is_zero_length`]
-/// (all sampled points equal, or one exactly co-circular Delaunay edge crossed). Arcs
-/// without a representative in the tiling (near its bounding circle) are never collapsed.
-fn zero_length_arcs(
+/// The arcs of the tiling chosen for collapse (see [`select_collapse`]).
+struct Selection {
+    /// One flag per tiling arc.
+    flags: Vec<bool>,
+    /// One flag per tiling arc: collapsed as a short (not zero-length) arc.
+    short: Vec<bool>,
+    /// The orbit representative (a tiling arc) of each tiling arc, when in the tiling.
+    rep_of: Vec<Option<usize>>,
+}
+
+/// Union-find over vertex orbits with translations: the instance of orbit `x` at shift `s`
+/// lies in the plane cluster `(root, s + offset)` where `find(x) = (root, offset)`.
+struct OrbitForest {
+    parent: Vec<usize>,
+    link: Vec<(i32, i32)>,
+}
+
+impl OrbitForest {
+    fn find(&self, mut x: usize) -> (usize, (i32, i32)) {
+        let mut off = (0, 0);
+        while self.parent[x] != x {
+            off = (off.0 + self.link[x].0, off.1 + self.link[x].1);
+            x = self.parent[x];
+        }
+        (x, off)
+    }
+}
+
+/// The arcs to collapse, chosen on the torus so that the choice is translation-invariant:
+/// every decision is made once per arc orbit, on its representative instance, and given to
+/// every instance (the copies of a hole are float translates of it, not exact ones, so exact
+/// tests on different copies could disagree).
+///
+/// - Zero-length arcs, always: the exact Apollonius circles of the two ends are the same
+///   circle ([`same_circle`]: both ends in one co-circular group), or the sample-level
+///   criteria of [`cocircular::is_zero_length`] hold (all sampled points equal, or one exactly
+///   co-circular Delaunay edge crossed).
+/// - Then arcs shorter than `fraction` times the smaller empty-circle radius of their ends
+///   ([`cocircular::arc_length`], [`cocircular::local_radius`]), shortest (relative) first,
+///   except the representatives in `exclude`.
+///
+/// As in [`collapse::select`], an arc orbit is skipped when its ends are already in one
+/// cluster or when another remaining arc joins the same two clusters of the plane; clusters
+/// are tracked on the torus with translations ([`OrbitForest`]), so that an orbit closing a
+/// cycle of the torus (contractible or not) is never taken and every cluster of the plane is
+/// a finite tree. Arcs without a representative in the tiling (near its bounding circle) are
+/// never collapsed.
+#[allow(clippy::too_many_arguments)]
+fn select_collapse(
     domain: &Domain,
     tri: &Triangulation,
+    points: &[Point],
     medial: &MedialGraph,
+    vkeys: &[Option<VertexKey>],
     akeys: &[Option<ArcKey>],
     arc_by_key: &HashMap<ArcKey, usize>,
-) -> Vec<bool> {
+    fraction: f64,
+    exclude: &[usize],
+) -> Selection {
     let rep_of: Vec<Option<usize>> = akeys
         .iter()
         .map(|k| k.and_then(|k| arc_by_key.get(&normalise_arc(&k).0).copied()))
@@ -458,30 +509,111 @@ fn zero_length_arcs(
     ends.sort_unstable();
     ends.dedup();
     let circles = circles_of(domain, medial, &ends);
-    let zero_rep: HashMap<usize, bool> = reps
-        .iter()
-        .map(|&r| {
-            let arc = &medial.arcs[r];
-            let [a, b] = arc.ends;
-            let same = match (circles.get(&a), circles.get(&b)) {
-                (Some(Some(x)), Some(Some(y))) => same_circle(&x.exact, &y.exact),
-                _ => false,
-            };
-            let zero = a != b && (same || cocircular::is_zero_length(arc, medial, tri, &[]));
-            (r, zero)
-        })
+    // Vertex orbits of the representatives' ends, with the ends' shifts.
+    let mut orbit_index: HashMap<VertexKey, usize> = HashMap::new();
+    let mut orbit_ends: HashMap<usize, OrbitEnds> = HashMap::new();
+    for &r in &reps {
+        let mut out = [(0, (0, 0)); 2];
+        let mut ok = true;
+        for (k, &v) in medial.arcs[r].ends.iter().enumerate() {
+            match vkeys[v as usize] {
+                Some(key) => {
+                    let (rep, d) = normalise_vertex(&key);
+                    let n = orbit_index.len();
+                    out[k] = (*orbit_index.entry(rep).or_insert(n), d);
+                }
+                None => ok = false,
+            }
+        }
+        if ok {
+            orbit_ends.insert(r, out);
+        }
+    }
+    let radius = |v: u32| match circles.get(&v) {
+        Some(Some(c)) => c.radius,
+        _ => cocircular::local_radius(medial, &[], points, v),
+    };
+    let mut zero: Vec<usize> = Vec::new();
+    let mut short: Vec<(f64, usize)> = Vec::new();
+    for &r in reps.iter().filter(|r| orbit_ends.contains_key(r)) {
+        let arc = &medial.arcs[r];
+        let [a, b] = arc.ends;
+        let same = match (circles.get(&a), circles.get(&b)) {
+            (Some(Some(x)), Some(Some(y))) => same_circle(&x.exact, &y.exact),
+            _ => false,
+        };
+        if a != b && (same || cocircular::is_zero_length(arc, medial, tri, &[])) {
+            zero.push(r);
+        } else if fraction > 0.0 && !exclude.contains(&r) {
+            let rel = cocircular::arc_length(arc) / radius(a).min(radius(b));
+            if rel.is_finite() && rel < fraction {
+                short.push((rel, r));
+            }
+        }
+    }
+    short.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+    let order: Vec<(usize, bool)> = zero
+        .into_iter()
+        .map(|r| (r, true))
+        .chain(short.into_iter().map(|(_, r)| (r, false)))
         .collect();
-    rep_of
+    let n = orbit_index.len();
+    let mut forest = OrbitForest {
+        parent: (0..n).collect(),
+        link: vec![(0, 0); n],
+    };
+    // The two plane clusters an arc orbit joins, as (root, shift) pairs.
+    let clusters = |forest: &OrbitForest, r: usize| {
+        orbit_ends[&r].map(|(x, s)| {
+            let (root, off) = forest.find(x);
+            (root, (s.0 + off.0, s.1 + off.1))
+        })
+    };
+    let rel = |c: OrbitEnds| (c[1].1 .0 - c[0].1 .0, c[1].1 .1 - c[0].1 .1);
+    let mut taken: HashMap<usize, bool> = HashMap::new();
+    for &(r, is_zero) in &order {
+        let c = clusters(&forest, r);
+        if c[0].0 == c[1].0 {
+            continue;
+        }
+        let parallel = orbit_ends.keys().any(|&f| {
+            if f == r || taken.contains_key(&f) {
+                return false;
+            }
+            let g = clusters(&forest, f);
+            let (d, e) = (rel(c), rel(g));
+            (g[0].0 == c[0].0 && g[1].0 == c[1].0 && d == e)
+                || (g[0].0 == c[1].0 && g[1].0 == c[0].0 && d == (-e.0, -e.1))
+        });
+        if parallel {
+            continue;
+        }
+        // Merge root c[1] into root c[0]: (c1.root, c1.shift) ~ (c0.root, c0.shift).
+        let (x, y) = (c[0].0, c[1].0);
+        forest.parent[y] = x;
+        forest.link[y] = (c[0].1 .0 - c[1].1 .0, c[0].1 .1 - c[1].1 .1);
+        taken.insert(r, is_zero);
+    }
+    let flags: Vec<bool> = rep_of
         .iter()
-        .map(|r| r.is_some_and(|r| zero_rep.get(&r).copied().unwrap_or(false)))
-        .collect()
+        .map(|r| r.is_some_and(|r| taken.contains_key(&r)))
+        .collect();
+    let short = rep_of
+        .iter()
+        .map(|r| r.is_some_and(|r| taken.get(&r) == Some(&false)))
+        .collect();
+    Selection {
+        flags,
+        short,
+        rep_of,
+    }
 }
 
 /// Keep the canonical cells; `Ok(None)` when the tiling is too small (step 4).
 ///
 /// Zero-length medial arcs (co-circular hole groups, e.g. every corner of a square lattice)
-/// are collapsed ([`zero_length_arcs`], [`collapse::contract`]) before Blocking2D, the same
-/// arcs in every copy. A contracted vertex is identified up to translation by its
+/// and arcs shorter than `fraction` of the local radius are collapsed ([`select_collapse`],
+/// [`collapse::contract`]) before Blocking2D, the same arcs in every copy. A contracted vertex is identified up to translation by its
 /// [`ClusterKey`], so its instances are its orbit representative plus the period shift like
 /// any other vertex. A kept block with a non-positive outline area is an
 /// [`MeshError::Internal`].
@@ -491,6 +623,7 @@ fn extract(
     samples: &Samples,
     triangulation: &Triangulation,
     medial: &MedialGraph,
+    fraction: f64,
 ) -> Result<Option<PeriodicLayout>, MeshError> {
     let size = t.size;
     // Orbit keys of the original medial graph.
@@ -533,9 +666,51 @@ fn extract(
         ))
     };
 
-    // Collapse the zero-length arcs, identically in every copy.
-    let collapse_flags = zero_length_arcs(&t.domain, triangulation, medial, &akeys, &arc_by_key);
-    let contracted = collapse::contract(medial, &collapse_flags)?;
+    // Collapse zero-length (always) and short arcs, identically in every copy. As in the
+    // bounded pipeline, short collapses that leave a kept block with a non-positive outline
+    // area are given up (at most 8 attempts); zero-length ones never are.
+    let mut exclude: Vec<usize> = Vec::new();
+    let mut attempt = 0;
+    let (selection, contracted, aux, vertex_samples) = loop {
+        attempt += 1;
+        let sel = select_collapse(
+            &t.domain,
+            triangulation,
+            &samples.points,
+            medial,
+            &vkeys,
+            &akeys,
+            &arc_by_key,
+            fraction,
+            &exclude,
+        );
+        let contracted = collapse::contract(medial, &sel.flags)?;
+        let (aux, vertex_samples) = blocking::blocks(&t.domain, samples, &contracted.graph)?;
+        let nv = contracted.graph.vertices.len() as u32;
+        let mut bad: Vec<u32> = Vec::new();
+        for (b, block) in aux.blocks.iter().enumerate() {
+            let canonical = block.wall.is_some_and(|c| is_canonical(t, c));
+            if canonical && blocking::block_area(&aux, b) <= 0.0 {
+                bad.extend(block.corners.iter().filter(|&&v| v < nv));
+            }
+        }
+        let mut changed = false;
+        for (e, arc) in medial.arcs.iter().enumerate() {
+            let c = contracted.cluster_of[arc.ends[0] as usize];
+            if sel.short[e] && bad.contains(&c) {
+                if let Some(r) = sel.rep_of[e] {
+                    if !exclude.contains(&r) {
+                        exclude.push(r);
+                        changed = true;
+                    }
+                }
+            }
+        }
+        if !changed || attempt >= 8 {
+            break (sel, contracted, aux, vertex_samples);
+        }
+    };
+    let collapse_flags = selection.flags;
     let graph = &contracted.graph;
     let mut members: Vec<Vec<u32>> = vec![Vec::new(); graph.vertices.len()];
     for (v, &c) in contracted.cluster_of.iter().enumerate() {
@@ -565,7 +740,6 @@ fn extract(
         }
     }
 
-    let (aux, vertex_samples) = blocking::blocks(&t.domain, samples, graph)?;
     let rmax = pd.holes().iter().map(|c| c.radius).fold(0.0, f64::max);
     let margin = 1e-6 * size[0].max(size[1]);
     let lo = [
