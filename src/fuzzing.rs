@@ -5,7 +5,7 @@
 //! - [`decode_case`] / [`decode_layout`]: bytes to a circle layout from degenerate generators
 //!   (lattices, regular polygons of holes around an empty circle, hexagonal packings,
 //!   near-touching pairs, co-circular groups, ulp-nudged copies, random layouts), bounded
-//!   domains only for now (periodic boxes arrive with the periodic issue);
+//!   domains; [`periodic`] has the periodic boxes;
 //! - [`check_mesh`]: invariants of a finished mesh (counting identities that survive arc
 //!   collapse, conformity by node coordinates, wall nodes on their circles, the signed-area
 //!   identity, optionally no inverted cell);
@@ -21,6 +21,9 @@ use crate::mesh::Mesh;
 use crate::mesher::{mesh, MeshError, Options};
 use std::collections::HashMap;
 use std::f64::consts::PI;
+
+pub mod periodic;
+pub use periodic::{check_periodic_bytes, check_periodic_mesh, decode_periodic_case};
 
 /// A little-endian byte reader that yields zeros when the input runs out.
 struct Bytes<'a> {

@@ -37,7 +37,10 @@ pub mod domain;
 
 pub use domain::{tile_offsets, wrap, PeriodicDomain};
 
+use crate::apollonius::{same_circle, Apollonius};
 use crate::blocking;
+use crate::cocircular::{self, CocircularGroup};
+use crate::collapse;
 use crate::domain::{Circle, CircleId, Domain};
 use crate::exact_mode;
 use crate::exact_mode::imposed::BlockKey;
@@ -61,6 +64,8 @@ pub const MAX_TILING: i32 = 3;
 type SampleKey = (u32, u32, i32, i32);
 /// A medial vertex up to nothing: its Delaunay triangle's samples, sorted.
 type VertexKey = [SampleKey; 3];
+/// An arc orbit's two ends: `(vertex orbit, shift)`.
+type OrbitEnds = [(usize, (i32, i32)); 2];
 /// `(hole, tile a, tile b)`.
 type CircleKey = (u32, i32, i32);
 /// A medial arc: its two circles and two end vertices, each pair sorted.
@@ -363,8 +368,13 @@ pub struct PeriodicLayout {
     /// The circle triples of the medial vertex orbits, each as `(hole, tile a, tile b)`
     /// normalised up to translation, sorted: the medial combinatorics of the period.
     pub triples: Vec<[CircleKey; 3]>,
-    /// The same blocks as orbits, for exact mode ([`crate::exact_mode::periodic::build`]).
-    pub blocking: PeriodicBlocking,
+    /// The same blocks as orbits, for exact mode ([`crate::exact_mode::periodic::build`]);
+    /// `None` when arcs were collapsed (exact mode then falls back to this paper layout).
+    pub blocking: Option<PeriodicBlocking>,
+    /// Zero-length medial arc orbits collapsed (blocks: `6h - 2 collapsed_arcs`).
+    pub collapsed_arcs: usize,
+    /// The co-circular groups, one per orbit (see [`periodic_groups`]).
+    pub cocircular_groups: Vec<CocircularGroup>,
 }
 
 /// The block layout of one period of `pd` (see the module documentation).
@@ -381,14 +391,19 @@ pub fn periodic_layout_with(
     options: &Options,
     sampling: &SamplingOptions,
 ) -> Result<PeriodicLayout, MeshError> {
-    let _ = options;
+    if !(options.collapse_fraction.is_finite() && options.collapse_fraction >= 0.0) {
+        return Err(MeshError::Options(format!(
+            "the collapse fraction must be a number >= 0, not {}",
+            options.collapse_fraction
+        )));
+    }
     let gaps = pd.nearest_gaps();
     let opts = sampling.clone();
     let mut last = None;
     for m in 1..=MAX_TILING {
         let t = Tiling::new(pd, m)?;
         let (samples, tri, medial) = sample_tiling(&t, &gaps, &opts)?;
-        match extract(pd, &t, &samples, &tri, &medial)? {
+        match extract(pd, &t, &samples, &tri, &medial, options.collapse_fraction)? {
             Some(p) => return Ok(p),
             None => last = Some(m),
         }
@@ -403,16 +418,345 @@ pub fn periodic_layout_with(
     })
 }
 
+/// A contracted medial vertex (a cluster of collapsed vertices) up to nothing: the samples of
+/// all its members' Delaunay triangles, sorted and deduplicated (three samples for a vertex
+/// that was not collapsed).
+type ClusterKey = Vec<SampleKey>;
+
+/// The orbit representative of a cluster key and the shift from it: `key = rep + shift`.
+fn normalise_cluster(key: &[SampleKey]) -> (ClusterKey, (i32, i32)) {
+    key.iter()
+        .map(|s| {
+            let d = (s.2, s.3);
+            let mut k: ClusterKey = key.iter().map(|x| shift_sample(*x, (-d.0, -d.1))).collect();
+            k.sort_unstable();
+            (k, d)
+        })
+        .min()
+        .unwrap_or_else(|| (key.to_vec(), (0, 0)))
+}
+
+/// The exact Apollonius circles of the medial vertices `vs` of the tiling (see
+/// [`cocircular::vertex_circles`]).
+fn circles_of(
+    domain: &Domain,
+    medial: &MedialGraph,
+    vs: &[u32],
+) -> HashMap<u32, Option<Apollonius>> {
+    let sub = MedialGraph {
+        vertices: vs
+            .iter()
+            .map(|&v| medial.vertices[v as usize].clone())
+            .collect(),
+        arcs: Vec::new(),
+    };
+    vs.iter()
+        .copied()
+        .zip(cocircular::vertex_circles(domain, &sub))
+        .collect()
+}
+
+/// The arcs of the tiling chosen for collapse (see [`select_collapse`]).
+struct Selection {
+    /// One flag per tiling arc.
+    flags: Vec<bool>,
+    /// One flag per tiling arc: collapsed as a short (not zero-length) arc.
+    short: Vec<bool>,
+    /// The orbit representative (a tiling arc) of each tiling arc, when in the tiling.
+    rep_of: Vec<Option<usize>>,
+}
+
+/// Union-find over vertex orbits with translations: the instance of orbit `x` at shift `s`
+/// lies in the plane cluster `(root, s + offset)` where `find(x) = (root, offset)`.
+struct OrbitForest {
+    parent: Vec<usize>,
+    link: Vec<(i32, i32)>,
+}
+
+impl OrbitForest {
+    fn find(&self, mut x: usize) -> (usize, (i32, i32)) {
+        let mut off = (0, 0);
+        while self.parent[x] != x {
+            off = (off.0 + self.link[x].0, off.1 + self.link[x].1);
+            x = self.parent[x];
+        }
+        (x, off)
+    }
+}
+
+/// The arcs to collapse, chosen on the torus so that the choice is translation-invariant:
+/// every decision is made once per arc orbit, on its representative instance, and given to
+/// every instance (the copies of a hole are float translates of it, not exact ones, so exact
+/// tests on different copies could disagree).
+///
+/// - Zero-length arcs, always: the exact Apollonius circles of the two ends are the same
+///   circle ([`same_circle`]: both ends in one co-circular group), or the sample-level
+///   criteria of [`cocircular::is_zero_length`] hold (all sampled points equal, or one exactly
+///   co-circular Delaunay edge crossed).
+/// - Then arcs shorter than `fraction` times the smaller empty-circle radius of their ends
+///   ([`cocircular::arc_length`], [`cocircular::local_radius`]), shortest (relative) first,
+///   except the representatives in `exclude`.
+///
+/// As in [`collapse::select`], an arc orbit is skipped when its ends are already in one
+/// cluster or when another remaining arc joins the same two clusters of the plane; clusters
+/// are tracked on the torus with translations ([`OrbitForest`]), so that an orbit closing a
+/// cycle of the torus (contractible or not) is never taken and every cluster of the plane is
+/// a finite tree. Arcs without a representative in the tiling (near its bounding circle) are
+/// never collapsed.
+#[allow(clippy::too_many_arguments)]
+fn select_collapse(
+    domain: &Domain,
+    tri: &Triangulation,
+    points: &[Point],
+    medial: &MedialGraph,
+    vkeys: &[Option<VertexKey>],
+    akeys: &[Option<ArcKey>],
+    arc_by_key: &HashMap<ArcKey, usize>,
+    fraction: f64,
+    exclude: &[usize],
+) -> Selection {
+    let rep_of: Vec<Option<usize>> = akeys
+        .iter()
+        .map(|k| k.and_then(|k| arc_by_key.get(&normalise_arc(&k).0).copied()))
+        .collect();
+    let mut reps: Vec<usize> = rep_of.iter().flatten().copied().collect();
+    reps.sort_unstable();
+    reps.dedup();
+    let mut ends: Vec<u32> = reps.iter().flat_map(|&r| medial.arcs[r].ends).collect();
+    ends.sort_unstable();
+    ends.dedup();
+    let circles = circles_of(domain, medial, &ends);
+    // Vertex orbits of the representatives' ends, with the ends' shifts.
+    let mut orbit_index: HashMap<VertexKey, usize> = HashMap::new();
+    let mut orbit_ends: HashMap<usize, OrbitEnds> = HashMap::new();
+    for &r in &reps {
+        let mut out = [(0, (0, 0)); 2];
+        let mut ok = true;
+        for (k, &v) in medial.arcs[r].ends.iter().enumerate() {
+            match vkeys[v as usize] {
+                Some(key) => {
+                    let (rep, d) = normalise_vertex(&key);
+                    let n = orbit_index.len();
+                    out[k] = (*orbit_index.entry(rep).or_insert(n), d);
+                }
+                None => ok = false,
+            }
+        }
+        if ok {
+            orbit_ends.insert(r, out);
+        }
+    }
+    let radius = |v: u32| match circles.get(&v) {
+        Some(Some(c)) => c.radius,
+        _ => cocircular::local_radius(medial, &[], points, v),
+    };
+    let mut zero: Vec<usize> = Vec::new();
+    let mut short: Vec<(f64, usize)> = Vec::new();
+    for &r in reps.iter().filter(|r| orbit_ends.contains_key(r)) {
+        let arc = &medial.arcs[r];
+        let [a, b] = arc.ends;
+        let same = match (circles.get(&a), circles.get(&b)) {
+            (Some(Some(x)), Some(Some(y))) => same_circle(&x.exact, &y.exact),
+            _ => false,
+        };
+        if a != b && (same || cocircular::is_zero_length(arc, medial, tri, &[])) {
+            zero.push(r);
+        } else if fraction > 0.0 && !exclude.contains(&r) {
+            let rel = cocircular::arc_length(arc) / radius(a).min(radius(b));
+            if rel.is_finite() && rel < fraction {
+                short.push((rel, r));
+            }
+        }
+    }
+    short.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+    let order: Vec<(usize, bool)> = zero
+        .into_iter()
+        .map(|r| (r, true))
+        .chain(short.into_iter().map(|(_, r)| (r, false)))
+        .collect();
+    let n = orbit_index.len();
+    let mut forest = OrbitForest {
+        parent: (0..n).collect(),
+        link: vec![(0, 0); n],
+    };
+    // The two plane clusters an arc orbit joins, as (root, shift) pairs.
+    let clusters = |forest: &OrbitForest, r: usize| {
+        orbit_ends[&r].map(|(x, s)| {
+            let (root, off) = forest.find(x);
+            (root, (s.0 + off.0, s.1 + off.1))
+        })
+    };
+    let rel = |c: OrbitEnds| (c[1].1 .0 - c[0].1 .0, c[1].1 .1 - c[0].1 .1);
+    let mut taken: HashMap<usize, bool> = HashMap::new();
+    for &(r, is_zero) in &order {
+        let c = clusters(&forest, r);
+        if c[0].0 == c[1].0 {
+            continue;
+        }
+        let parallel = orbit_ends.keys().any(|&f| {
+            if f == r || taken.contains_key(&f) {
+                return false;
+            }
+            let g = clusters(&forest, f);
+            let (d, e) = (rel(c), rel(g));
+            (g[0].0 == c[0].0 && g[1].0 == c[1].0 && d == e)
+                || (g[0].0 == c[1].0 && g[1].0 == c[0].0 && d == (-e.0, -e.1))
+        });
+        if parallel {
+            continue;
+        }
+        // Merge root c[1] into root c[0]: (c1.root, c1.shift) ~ (c0.root, c0.shift).
+        let (x, y) = (c[0].0, c[1].0);
+        forest.parent[y] = x;
+        forest.link[y] = (c[0].1 .0 - c[1].1 .0, c[0].1 .1 - c[1].1 .1);
+        taken.insert(r, is_zero);
+    }
+    let flags: Vec<bool> = rep_of
+        .iter()
+        .map(|r| r.is_some_and(|r| taken.contains_key(&r)))
+        .collect();
+    let short = rep_of
+        .iter()
+        .map(|r| r.is_some_and(|r| taken.get(&r) == Some(&false)))
+        .collect();
+    Selection {
+        flags,
+        short,
+        rep_of,
+    }
+}
+
 /// Keep the canonical cells; `Ok(None)` when the tiling is too small (step 4).
+///
+/// Zero-length medial arcs (co-circular hole groups, e.g. every corner of a square lattice)
+/// and arcs shorter than `fraction` of the local radius are collapsed ([`select_collapse`],
+/// [`collapse::contract`]) before Blocking2D, the same arcs in every copy. A contracted vertex is identified up to translation by its
+/// [`ClusterKey`], so its instances are its orbit representative plus the period shift like
+/// any other vertex. A kept block with a non-positive outline area is an
+/// [`MeshError::Internal`].
 fn extract(
     pd: &PeriodicDomain,
     t: &Tiling,
     samples: &Samples,
     triangulation: &Triangulation,
     medial: &MedialGraph,
+    fraction: f64,
 ) -> Result<Option<PeriodicLayout>, MeshError> {
-    let (aux, vertex_samples) = blocking::blocks(&t.domain, samples, medial)?;
     let size = t.size;
+    // Orbit keys of the original medial graph.
+    let sample_key = |s: u32| -> Option<SampleKey> {
+        let (k, a, b) = t.key(samples.circle_of[s as usize])?;
+        Some((k, samples.index_of[s as usize], a, b))
+    };
+    let vertex_key = |v: usize| -> Option<VertexKey> {
+        let mut key = [
+            sample_key(medial.vertices[v].samples[0])?,
+            sample_key(medial.vertices[v].samples[1])?,
+            sample_key(medial.vertices[v].samples[2])?,
+        ];
+        key.sort_unstable();
+        Some(key)
+    };
+    let vkeys: Vec<Option<VertexKey>> = (0..medial.vertices.len()).map(vertex_key).collect();
+    let arc_key = |e: usize| -> Option<ArcKey> {
+        let a = &medial.arcs[e];
+        let mut c = [t.key(a.circles[0])?, t.key(a.circles[1])?];
+        c.sort_unstable();
+        let mut v = [vkeys[a.ends[0] as usize]?, vkeys[a.ends[1] as usize]?];
+        v.sort_unstable();
+        Some((c, v))
+    };
+    let akeys: Vec<Option<ArcKey>> = (0..medial.arcs.len()).map(arc_key).collect();
+    let mut arc_by_key: HashMap<ArcKey, usize> = HashMap::new();
+    for (e, k) in akeys.iter().enumerate() {
+        if let Some(k) = k {
+            if arc_by_key.insert(*k, e).is_some() {
+                return Err(MeshError::Internal(
+                    "two medial arcs of the periodic tiling have the same key".into(),
+                ));
+            }
+        }
+    }
+    let inconsistent = |what: &str| {
+        MeshError::Internal(format!(
+            "the periodic tiling is not translation-consistent ({what})"
+        ))
+    };
+
+    // Collapse zero-length (always) and short arcs, identically in every copy. As in the
+    // bounded pipeline, short collapses that leave a kept block with a non-positive outline
+    // area are given up (at most 8 attempts); zero-length ones never are.
+    let mut exclude: Vec<usize> = Vec::new();
+    let mut attempt = 0;
+    let (selection, contracted, aux, vertex_samples) = loop {
+        attempt += 1;
+        let sel = select_collapse(
+            &t.domain,
+            triangulation,
+            &samples.points,
+            medial,
+            &vkeys,
+            &akeys,
+            &arc_by_key,
+            fraction,
+            &exclude,
+        );
+        let contracted = collapse::contract(medial, &sel.flags)?;
+        let (aux, vertex_samples) = blocking::blocks(&t.domain, samples, &contracted.graph)?;
+        let nv = contracted.graph.vertices.len() as u32;
+        let mut bad: Vec<u32> = Vec::new();
+        for (b, block) in aux.blocks.iter().enumerate() {
+            let canonical = block.wall.is_some_and(|c| is_canonical(t, c));
+            if canonical && blocking::block_area(&aux, b) <= 0.0 {
+                bad.extend(block.corners.iter().filter(|&&v| v < nv));
+            }
+        }
+        let mut changed = false;
+        for (e, arc) in medial.arcs.iter().enumerate() {
+            let c = contracted.cluster_of[arc.ends[0] as usize];
+            if sel.short[e] && bad.contains(&c) {
+                if let Some(r) = sel.rep_of[e] {
+                    if !exclude.contains(&r) {
+                        exclude.push(r);
+                        changed = true;
+                    }
+                }
+            }
+        }
+        if !changed || attempt >= 8 {
+            break (sel, contracted, aux, vertex_samples);
+        }
+    };
+    let collapse_flags = selection.flags;
+    let graph = &contracted.graph;
+    let mut members: Vec<Vec<u32>> = vec![Vec::new(); graph.vertices.len()];
+    for (v, &c) in contracted.cluster_of.iter().enumerate() {
+        members[c as usize].push(v as u32);
+    }
+    let mut collapsed_at: Vec<Vec<usize>> = vec![Vec::new(); graph.vertices.len()];
+    for (e, &f) in collapse_flags.iter().enumerate() {
+        if f {
+            let c = contracted.cluster_of[medial.arcs[e].ends[0] as usize];
+            collapsed_at[c as usize].push(e);
+        }
+    }
+    let cluster_key = |c: usize| -> Option<ClusterKey> {
+        let mut key = Vec::with_capacity(3 * members[c].len());
+        for &v in &members[c] {
+            key.extend_from_slice(&vkeys[v as usize]?);
+        }
+        key.sort_unstable();
+        key.dedup();
+        Some(key)
+    };
+    let ckeys: Vec<Option<ClusterKey>> = (0..graph.vertices.len()).map(cluster_key).collect();
+    let mut cluster_by_key: HashMap<ClusterKey, usize> = HashMap::new();
+    for (c, k) in ckeys.iter().enumerate() {
+        if let Some(k) = k {
+            cluster_by_key.insert(k.clone(), c);
+        }
+    }
+
     let rmax = pd.holes().iter().map(|c| c.radius).fold(0.0, f64::max);
     let margin = 1e-6 * size[0].max(size[1]);
     let lo = [
@@ -442,88 +786,67 @@ fn extract(
         .collect();
     // Step 4: every triangle used by a kept block is a triangle of the infinite tiling.
     for &b in &kept {
-        let arc = &medial.arcs[b / 2];
+        let e = contracted.kept[b / 2] as usize;
+        let arc = &medial.arcs[e];
         if arc.circles.iter().any(|&c| c < 0) {
             return Ok(None);
         }
-        let ends = arc.ends.map(|v| medial.vertices[v as usize].triangle);
-        if !ends.iter().chain(&arc.triangles).all(|&tr| safe(tr)) {
+        let ends = arc
+            .ends
+            .iter()
+            .flat_map(|&v| &members[contracted.cluster_of[v as usize] as usize])
+            .map(|&v| medial.vertices[v as usize].triangle);
+        if !ends.chain(arc.triangles.iter().copied()).all(safe) {
             return Ok(None);
         }
     }
-    // Orbit keys.
-    let sample_key = |s: u32| -> Option<SampleKey> {
-        let (k, a, b) = t.key(samples.circle_of[s as usize])?;
-        Some((k, samples.index_of[s as usize], a, b))
-    };
-    let vertex_key = |v: usize| -> Option<VertexKey> {
-        let mut key = [
-            sample_key(medial.vertices[v].samples[0])?,
-            sample_key(medial.vertices[v].samples[1])?,
-            sample_key(medial.vertices[v].samples[2])?,
-        ];
-        key.sort_unstable();
-        Some(key)
-    };
-    let vkeys: Vec<Option<VertexKey>> = (0..medial.vertices.len()).map(vertex_key).collect();
-    let arc_key = |e: usize| -> Option<ArcKey> {
-        let a = &medial.arcs[e];
-        let mut c = [t.key(a.circles[0])?, t.key(a.circles[1])?];
-        c.sort_unstable();
-        let mut v = [vkeys[a.ends[0] as usize]?, vkeys[a.ends[1] as usize]?];
-        v.sort_unstable();
-        Some((c, v))
-    };
-    let akeys: Vec<Option<ArcKey>> = (0..medial.arcs.len()).map(arc_key).collect();
-    let mut vertex_by_key: HashMap<VertexKey, usize> = HashMap::new();
-    for (v, k) in vkeys.iter().enumerate() {
-        if let Some(k) = k {
-            vertex_by_key.insert(*k, v);
-        }
-    }
-    let mut arc_by_key: HashMap<ArcKey, usize> = HashMap::new();
-    for (e, k) in akeys.iter().enumerate() {
-        if let Some(k) = k {
-            if arc_by_key.insert(*k, e).is_some() {
-                return Err(MeshError::Internal(
-                    "two medial arcs of the periodic tiling have the same key".into(),
-                ));
-            }
-        }
-    }
-    let inconsistent = |what: &str| {
-        MeshError::Internal(format!(
-            "the periodic tiling is not translation-consistent ({what})"
-        ))
-    };
     let shift_point = |p: Point, d: (i32, i32)| -> Point {
         [p[0] + d.0 as f64 * size[0], p[1] + d.1 as f64 * size[1]]
     };
-    // Positions of medial vertex instances: orbit representative + shift.
+    // Positions of contracted vertex instances: orbit representative + shift. The orbits of
+    // their members and collapsed arcs are recorded for the torus counts.
     let mut vpos: HashMap<usize, Point> = HashMap::new();
     let mut vertex_orbits: Vec<VertexKey> = Vec::new();
-    let mut position_of = |v: usize, orbits: &mut Vec<VertexKey>| -> Result<Point, MeshError> {
-        if let Some(p) = vpos.get(&v) {
+    let mut collapsed_orbits: Vec<ArcKey> = Vec::new();
+    let mut cluster_orbits: Vec<usize> = Vec::new();
+    let mut position_of = |c: usize,
+                           vorbits: &mut Vec<VertexKey>,
+                           corbits: &mut Vec<ArcKey>|
+     -> Result<Point, MeshError> {
+        if let Some(p) = vpos.get(&c) {
             return Ok(*p);
         }
-        let key = vkeys[v].ok_or_else(|| inconsistent("a kept vertex on the bounding circle"))?;
-        let (rep, d) = normalise_vertex(&key);
-        let r = *vertex_by_key
+        let key = ckeys[c]
+            .as_ref()
+            .ok_or_else(|| inconsistent("a kept vertex on the bounding circle"))?;
+        let (rep, d) = normalise_cluster(key);
+        let r = *cluster_by_key
             .get(&rep)
             .ok_or_else(|| inconsistent("a medial vertex without its representative"))?;
-        orbits.push(rep);
-        let p = shift_point(medial.vertices[r].position, d);
-        vpos.insert(v, p);
+        if members[r].len() != members[c].len() {
+            return Err(inconsistent("a collapsed vertex unlike its representative"));
+        }
+        for &v in &members[c] {
+            let k = vkeys[v as usize].ok_or_else(|| inconsistent("vertex key"))?;
+            vorbits.push(normalise_vertex(&k).0);
+        }
+        for &e in &collapsed_at[c] {
+            let k = akeys[e].ok_or_else(|| inconsistent("collapsed arc key"))?;
+            corbits.push(normalise_arc(&k).0);
+        }
+        cluster_orbits.push(r);
+        let p = shift_point(graph.vertices[r].position, d);
+        vpos.insert(c, p);
         Ok(p)
     };
 
     let mut layout = BlockLayout::default();
     let mut new_vertex: HashMap<u32, u32> = HashMap::new();
     let mut new_edge: HashMap<u32, (u32, bool)> = HashMap::new();
-    // (new edge, aux arc, offset of the other circle)
+    // (new edge, original arc, offset of the other circle)
     let mut periodic: Vec<(u32, usize, (i32, i32))> = Vec::new();
     let mut arc_orbits: Vec<ArcKey> = Vec::new();
-    let nmv = medial.vertices.len() as u32;
+    let nmv = graph.vertices.len() as u32;
     for &b in &kept {
         let block = &aux.blocks[b];
         let mut corners = [0u32; 4];
@@ -533,7 +856,7 @@ fn extract(
                 continue;
             }
             let p = if v < nmv {
-                position_of(v as usize, &mut vertex_orbits)?
+                position_of(v as usize, &mut vertex_orbits, &mut collapsed_orbits)?
             } else {
                 let s = vertex_samples
                     .get(v as usize)
@@ -589,7 +912,7 @@ fn extract(
                     )
                 }
                 EdgeKind::Medial => {
-                    let e = b / 2;
+                    let e = contracted.kept[b / 2] as usize;
                     let key = akeys[e].ok_or_else(|| inconsistent("arc key"))?;
                     let (rep, d) = normalise_arc(&key);
                     let r = *arc_by_key
@@ -664,11 +987,39 @@ fn extract(
             translation,
         };
     }
+    // No block with zero or negative area leaves this stage.
+    for b in 0..layout.blocks.len() {
+        let a = blocking::block_area(&layout, b);
+        let positive = a > 0.0;
+        if !positive {
+            return Err(MeshError::Internal(format!(
+                "periodic block {b} has a non-positive area {a:e} (a degenerate medial arc \
+                 that was not collapsed)"
+            )));
+        }
+    }
     vertex_orbits.sort_unstable();
     vertex_orbits.dedup();
     arc_orbits.sort_unstable();
     arc_orbits.dedup();
-    let blocking = exact_input(
+    collapsed_orbits.sort_unstable();
+    collapsed_orbits.dedup();
+    if arc_orbits
+        .iter()
+        .any(|a| collapsed_orbits.binary_search(a).is_ok())
+    {
+        return Err(inconsistent("an arc orbit both collapsed and kept"));
+    }
+    cluster_orbits.sort_unstable();
+    cluster_orbits.dedup();
+    let groups = periodic_groups(t, medial, &members, &cluster_orbits);
+    let blocking = if collapsed_orbits.is_empty() && contracted.kept.len() == medial.arcs.len() {
+        let vertex_by_key: HashMap<VertexKey, usize> = vkeys
+            .iter()
+            .enumerate()
+            .filter_map(|(v, k)| k.map(|k| (k, v)))
+            .collect();
+        Some(exact_input(
         pd,
         t,
         medial,
@@ -678,7 +1029,10 @@ fn extract(
         &arc_orbits,
         &vertex_by_key,
         &arc_by_key,
-    )?;
+    )?)
+    } else {
+        None
+    };
     let mut triples: Vec<[CircleKey; 3]> = vertex_orbits
         .iter()
         .map(|v| {
@@ -691,9 +1045,11 @@ fn extract(
     Ok(Some(PeriodicLayout {
         layout,
         medial_vertices: vertex_orbits.len(),
-        medial_arcs: arc_orbits.len(),
+        medial_arcs: arc_orbits.len() + collapsed_orbits.len(),
         tiling: t.m,
         triples,
+        collapsed_arcs: collapsed_orbits.len(),
+        cocircular_groups: groups,
         blocking,
     }))
 }
@@ -776,6 +1132,65 @@ fn exact_input(
     })
 }
 
+/// The co-circular groups of one period: one per orbit of contracted vertices of two or more
+/// members whose exact Apollonius circles are all the same circle. `clusters` are the orbit
+/// representatives (contracted vertex ids). Holes are the canonical ids of the group's
+/// circles, one entry per tangent circle (a hole tangent to the empty circle with several
+/// images appears that many times), sorted; the centre is wrapped into the box. `vertices`
+/// is left empty (tiling vertex ids mean nothing outside this stage).
+fn periodic_groups(
+    t: &Tiling,
+    medial: &MedialGraph,
+    members: &[Vec<u32>],
+    clusters: &[usize],
+) -> Vec<CocircularGroup> {
+    let mut out = Vec::new();
+    for &c in clusters {
+        let ms = &members[c];
+        if ms.len() < 2 {
+            continue;
+        }
+        let circles = circles_of(&t.domain, medial, ms);
+        let Some(Some(first)) = circles.get(&ms[0]) else {
+            continue;
+        };
+        let all_same = ms.iter().all(|v| match circles.get(v) {
+            Some(Some(x)) => same_circle(&first.exact, &x.exact),
+            _ => false,
+        });
+        if !all_same {
+            continue;
+        }
+        let mut ids: Vec<CircleId> = ms
+            .iter()
+            .flat_map(|&v| medial.vertices[v as usize].circles)
+            .collect();
+        ids.sort_unstable();
+        ids.dedup();
+        let mut holes: Vec<CircleId> = ids
+            .iter()
+            .filter_map(|&id| t.key(id).map(|k| k.0 as CircleId))
+            .collect();
+        holes.sort_unstable();
+        out.push(CocircularGroup {
+            holes,
+            center: [
+                wrap(first.center[0], t.size[0]),
+                wrap(first.center[1], t.size[1]),
+            ],
+            radius: first.radius,
+            vertices: Vec::new(),
+        });
+    }
+    out.sort_by(|a, b| {
+        a.holes
+            .cmp(&b.holes)
+            .then(a.center[0].total_cmp(&b.center[0]))
+            .then(a.center[1].total_cmp(&b.center[1]))
+    });
+    out
+}
+
 fn normalise_triple(c: [CircleKey; 3]) -> [CircleKey; 3] {
     c.iter()
         .map(|x| {
@@ -848,6 +1263,8 @@ pub fn mesh_periodic_frame(
             medial_vertices: p.medial_vertices,
             medial_arcs: p.medial_arcs,
             holes: pd.hole_count(),
+            collapsed_arcs: p.collapsed_arcs,
+            cocircular_groups: p.cocircular_groups,
             ..Mesh::default()
         },
         triples: p.triples,
@@ -867,7 +1284,11 @@ fn mesh_periodic_exact(
             Err(_) if attempt > 0 => return Ok(None),
             Err(e) => return Err(e),
         };
-        match exact_mode::periodic::build(&p.blocking, options) {
+        // Collapsed arcs: exact periodic geometry needs degree-3 vertices; paper mode.
+        let Some(pb) = &p.blocking else {
+            return Ok(None);
+        };
+        match exact_mode::periodic::build(pb, options) {
             Ok(x) => {
                 if x.inconsistent_arcs.is_empty()
                     && crate::quality::measure(&x.grids).inverted_cells == 0
