@@ -340,7 +340,7 @@ fn key(p: Point) -> Key {
 }
 
 /// Invariants of a mesh of `domain`:
-/// - one well-formed grid per block, every node finite;
+/// - one well-formed grid per block, every node finite, every block side of positive length;
 /// - counting identities that survive the collapse of co-circular arcs (`h >= 2`): the medial
 ///   graph of the refined domain (h counting inserted holes) has `V = 2 (h - 1)`,
 ///   `E = 3 (h - 1)`, and there are `6 (h - 1) - 2 collapsed + 2 split + template` blocks; the
@@ -378,6 +378,7 @@ pub fn check_mesh_with(domain: &Domain, m: &Mesh, checks: Checks) -> Result<Chec
             return Err(format!("grid {b} has a non-finite node {p:?}"));
         }
     }
+    check_sides(m)?;
     check_counts(h, m)?;
     let wall_of = check_topology(m)?;
     check_conformity(m, &wall_of)?;
@@ -514,6 +515,23 @@ fn check_counts(h: usize, m: &Mesh) -> Result<(), String> {
             Ok(())
         }
     }
+}
+
+/// Every block side has positive length (its nodes are not all one point): a zero-length
+/// medial arc must have been collapsed, and no wall arc may have zero sweep.
+fn check_sides(m: &Mesh) -> Result<(), String> {
+    for (b, g) in m.grids.iter().enumerate() {
+        for s in 0..4 {
+            let side = g.side(s);
+            if side.iter().all(|p| p == &side[0]) {
+                return Err(format!(
+                    "block {b} side {s} has zero length (an uncollapsed zero-length arc or a \
+                     zero-sweep wall arc)"
+                ));
+            }
+        }
+    }
+    Ok(())
 }
 
 /// Every edge used by one wall side or two interface sides; returns the wall sides

@@ -233,15 +233,8 @@ pub fn check_periodic_mesh(
         {
             return Err(format!("grid {b} has a non-finite node {p:?}"));
         }
-        for s in 0..4 {
-            let side = g.side(s);
-            if side.iter().all(|p| p == &side[0]) {
-                return Err(format!(
-                    "block {b} side {s} has zero length (an uncollapsed zero-length arc)"
-                ));
-            }
-        }
     }
+    super::check_sides(m)?;
     let h = pd.hole_count() + m.inserted_holes.len();
     let (v, e) = (m.medial_vertices, m.medial_arcs);
     if v != 2 * h || e != 3 * h {
@@ -395,7 +388,7 @@ pub fn check_periodic_mesh(
         .fold(big, |a, c| a.max(c.center[0].abs() + c.center[1].abs()))
         + big;
     let tol = 1e-9 * abs_area + 64.0 * f64::EPSILON * far * far * terms as f64;
-    let within = (area - expected_area).abs() <= tol;
+    let within = (area - expected_area).abs() <= tol; // false on NaN too
     if !within {
         return Err(format!(
             "cells cover a signed area of {area:e}, the period minus the wall polygons is \
