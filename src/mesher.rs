@@ -308,8 +308,7 @@ fn exact_attempt(
     }) {
         Ok(m) => {
             let consistent = m.inconsistent_arcs.is_empty()
-                && timings::span("quality_check", || crate::quality::inverted_cells(&m.grids))
-                    == 0;
+                && timings::span("quality_check", || crate::quality::inverted_cells(&m.grids)) == 0;
             if !consistent {
                 return Ok(None);
             }

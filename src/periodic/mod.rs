@@ -1020,16 +1020,16 @@ fn extract(
             .filter_map(|(v, k)| k.map(|k| (k, v)))
             .collect();
         Some(exact_input(
-        pd,
-        t,
-        medial,
-        &aux,
-        &vkeys,
-        &vertex_orbits,
-        &arc_orbits,
-        &vertex_by_key,
-        &arc_by_key,
-    )?)
+            pd,
+            t,
+            medial,
+            &aux,
+            &vkeys,
+            &vertex_orbits,
+            &arc_orbits,
+            &vertex_by_key,
+            &arc_by_key,
+        )?)
     } else {
         None
     };
