@@ -21,12 +21,17 @@
 //!   formula as the background grid's.
 
 use crate::domain::{Domain, BOUNDING};
+use crate::exact_mode::imposed::{BlockKey, ImposedCounts};
 use crate::geometry::Point;
+use crate::grid::tfi;
 use crate::grid::{build_grids_forced, MAX_CELLS_PER_SIDE};
 use crate::layout::{Block, BlockLayout, Curve, Edge, EdgeKind, SideRef};
 use crate::mesh::Mesh;
-use crate::mesher::{mesh, MeshError, Options};
+use crate::mesher::{mesh, MeshError, Mode, Options};
+use crate::sequence::layout_keys;
+use std::collections::BTreeMap;
 use std::collections::HashMap;
+use std::sync::Arc;
 
 /// The background-aligned rectangle: lattice nodes `i0..=i0 + nx` by `j0..=j0 + ny`.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -376,6 +381,11 @@ pub fn mesh_with_transition_rect(
     rect: Rect,
 ) -> Result<Mesh, MeshError> {
     let base = mesh(domain, options)?;
+    if options.mode == Mode::Exact && domain.hole_count() >= 2 {
+        if let Some(m) = exact_transition(domain, options, rect, &base)? {
+            return Ok(m);
+        }
+    }
     let t = add_transition_rect(&base.layout, domain, rect)?;
     let mut grids = build_grids_forced(&t.layout, options.cells, &t.counts)?;
     for (b, nodes) in &t.outer {
@@ -396,4 +406,108 @@ pub fn mesh_with_transition_rect(
         grids,
         ..base
     })
+}
+
+/// Exact mode: keep the spoke-aligned grids. The bounding-circle arcs get as many cells as
+/// their lattice runs have intervals (imposed by block key, [`Options::imposed_counts`]; the
+/// snapping only depends on the layout's vertices, which counts do not move), then only the
+/// transition blocks are interpolated: side 2 is the medial block's wall nodes, side 0 the
+/// lattice nodes, sides 1 and 3 equally spaced radial segments shared by neighbours.
+/// `Ok(None)` when the counts could not be imposed (the caller interpolates everything).
+fn exact_transition(
+    domain: &Domain,
+    options: &Options,
+    rect: Rect,
+    base: &Mesh,
+) -> Result<Option<Mesh>, MeshError> {
+    let t = add_transition_rect(&base.layout, domain, rect)?;
+    let keys = layout_keys(&base.layout);
+    let mut want: BTreeMap<BlockKey, [usize; 2]> = keys
+        .iter()
+        .cloned()
+        .zip(base.grids.iter().map(|g| [g.ni, g.nj]))
+        .collect();
+    if want.len() != keys.len() || base.grids.len() != base.layout.blocks.len() {
+        return Ok(None);
+    }
+    let wall_cells: HashMap<usize, usize> = t.counts.iter().skip(1).copied().collect();
+    let blocks = &base.layout.blocks;
+    for b in blocks {
+        if let Some(&n) = wall_cells.get(&(b.sides[0].edge as usize)) {
+            for (b2, other) in blocks.iter().enumerate() {
+                if other.sides[2].edge == b.sides[2].edge {
+                    if let Some(w) = want.get_mut(&keys[b2]) {
+                        w[0] = n;
+                    }
+                }
+            }
+        }
+    }
+    let opts = Options {
+        imposed_counts: Some(Arc::new(ImposedCounts(want.clone()))),
+        ..options.clone()
+    };
+    let m = mesh(domain, &opts)?;
+    let got: BTreeMap<BlockKey, [usize; 2]> = layout_keys(&m.layout)
+        .into_iter()
+        .zip(m.grids.iter().map(|g| [g.ni, g.nj]))
+        .collect();
+    if got != want {
+        return Ok(None);
+    }
+    let t = add_transition_rect(&m.layout, domain, rect)?;
+    let nbase = m.layout.blocks.len();
+    let mut radial_nodes: HashMap<u32, Vec<Point>> = HashMap::new();
+    let radial_cells = t.counts.first().map_or(1, |c| c.1);
+    let mut grids = m.grids.clone();
+    for (b, nodes) in &t.outer {
+        let block = &t.layout.blocks[*b];
+        let wall_edge = block.sides[2].edge;
+        let Some(inner) = (0..nbase).find(|&k| m.layout.blocks[k].sides[0].edge == wall_edge)
+        else {
+            return Ok(None);
+        };
+        let mut s2 = m.grids[inner].side(0);
+        s2.reverse();
+        if s2.len() != nodes.len() {
+            return Ok(None);
+        }
+        let s0: Vec<Point> = nodes.iter().map(|&n| t.square.point(n)).collect();
+        let mut radial = |side: SideRef| -> Vec<Point> {
+            let e = side.edge;
+            let mut pts = radial_nodes
+                .entry(e)
+                .or_insert_with(|| {
+                    let [a, c] = t.layout.edges[e as usize]
+                        .ends
+                        .map(|v| t.layout.vertices[v as usize]);
+                    let mut v: Vec<Point> = (0..=radial_cells)
+                        .map(|i| {
+                            let s = i as f64 / radial_cells as f64;
+                            [a[0] + s * (c[0] - a[0]), a[1] + s * (c[1] - a[1])]
+                        })
+                        .collect();
+                    v[0] = a;
+                    v[radial_cells] = c;
+                    v
+                })
+                .clone();
+            if side.reversed {
+                pts.reverse();
+            }
+            pts
+        };
+        let (s1, s3) = (radial(block.sides[1]), radial(block.sides[3]));
+        let g = tfi(&s0, &s1, &s2, &s3)
+            .ok_or_else(|| MeshError::Internal("transition block side counts differ".into()))?;
+        grids.push(g);
+    }
+    if grids.len() != t.layout.blocks.len() {
+        return Ok(None);
+    }
+    Ok(Some(Mesh {
+        layout: t.layout,
+        grids,
+        ..m
+    }))
 }

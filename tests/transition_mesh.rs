@@ -283,3 +283,43 @@ fn cli_transition_rect_flag() {
     assert_eq!(bad.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&bad.stderr).contains("XMIN,YMIN,XMAX,YMAX"));
 }
+
+/// Exact mode keeps its spoke-aligned grids inside the transition ring: on every block whose
+/// side 0 lies on a hole, the first grid line off the wall is normal to it (transfinite
+/// interpolation of the whole layout would not give that).
+#[test]
+fn exact_mode_grids_are_kept_inside_the_ring() {
+    let d = Domain::hexagon_example();
+    let b = d.bounding();
+    for (bounds, s) in [
+        ([-3.0, -3.0, 3.0, 3.0], 0.25),
+        ([-7.5, -2.5, 7.5, 2.5], 0.25),
+    ] {
+        let rect = Rect::from_bounds(bounds, s, b.center, b.radius).unwrap();
+        let mesh = mesh_with_transition_rect(&d, &Options::default(), rect).unwrap();
+        let mut walls = 0;
+        for g in &mesh.grids {
+            let side = g.side(0);
+            let Some(c) = d.holes().iter().find(|c| {
+                side.iter().all(|p| {
+                    ((p[0] - c.center[0]).hypot(p[1] - c.center[1]) - c.radius).abs() < 1e-9
+                })
+            }) else {
+                continue;
+            };
+            walls += 1;
+            for i in 0..=g.ni {
+                let (p, q) = (g.node(i, 0), g.node(i, 1));
+                let u = [p[0] - c.center[0], p[1] - c.center[1]];
+                let v = [q[0] - p[0], q[1] - p[1]];
+                let ang = (u[0] * v[1] - u[1] * v[0])
+                    .atan2(u[0] * v[0] + u[1] * v[1])
+                    .to_degrees()
+                    .abs();
+                assert!(ang < 0.5, "wall angle off by {ang} deg");
+            }
+        }
+        assert!(walls >= 6 * 5, "the hole blocks are there");
+        check_rect(&d, bounds, s, &Options::default());
+    }
+}

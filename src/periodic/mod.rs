@@ -31,7 +31,10 @@
 //!    stage gives partners equal cell counts and copies the nodes.
 //!
 //! Wall corners are placed on the true circles; only the medial geometry comes from the
-//! quantised samples (an error of the order of `1e-14` of the period).
+//! quantised samples (an error of the order of `1e-14` of the period). That is paper mode
+//! (`--mode paper`). In exact mode (the default) the same orbits are handed to
+//! [`crate::exact_mode::periodic`] as a [`PeriodicBlocking`]: exact geometry per orbit,
+//! computed once and translated; see [`mesh_periodic`] for the fallback rule.
 
 pub mod domain;
 
