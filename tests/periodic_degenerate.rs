@@ -64,9 +64,9 @@ fn assert_groups(m: &Mesh, size: [f64; 2], cell: [f64; 2], offset: [f64; 2], r: 
             "radius {} vs {rho}",
             g.radius
         );
-        for d in 0..2 {
+        for (d, &l) in size.iter().enumerate() {
             assert!(
-                (0.0..size[d]).contains(&g.center[d]),
+                (0.0..l).contains(&g.center[d]),
                 "centre {:?} outside the box",
                 g.center
             );
@@ -181,12 +181,9 @@ fn hexagonal_packing_has_no_group() {
     }
 }
 
+/// `x > 0` moved by `ulps` units in the last place.
 fn nudge(x: f64, ulps: i64) -> f64 {
-    let mut y = x;
-    for _ in 0..ulps.unsigned_abs() {
-        y = if ulps > 0 { y.next_up() } else { y.next_down() };
-    }
-    y
+    f64::from_bits((x.to_bits() as i64 + ulps) as u64)
 }
 
 #[test]

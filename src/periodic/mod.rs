@@ -32,6 +32,18 @@
 //!
 //! Wall corners are placed on the true circles; only the medial geometry comes from the
 //! quantised samples (an error of the order of `1e-14` of the period).
+//!
+//! # Degeneracy (issue 4 on the torus)
+//! Co-circular hole groups are the rule here (one hole in a box, square lattices, holes on
+//! the box's edges): before Blocking2D the zero-length medial arcs, and arcs shorter than
+//! [`Options::collapse_fraction`] of the local radius, are collapsed ([`collapse::contract`])
+//! in every copy alike. Arcs are chosen per orbit on the torus (`select_collapse`: exact
+//! geometry of the orbit representative decides, clusters are tracked with translations so
+//! that no cycle of the torus is contracted), and a contracted vertex is identified up to
+//! translation by the samples of its members, so its instances are again the orbit
+//! representative plus a period shift. Blocks: `6h - 2 collapsed`; [`Mesh::collapsed_arcs`]
+//! counts collapsed arc orbits and [`Mesh::cocircular_groups`] lists one group per orbit
+//! (canonical hole ids, one entry per tangent image; centre wrapped into the box).
 
 pub mod domain;
 
@@ -365,7 +377,8 @@ pub struct PeriodicLayout {
     pub triples: Vec<[CircleKey; 3]>,
     /// Zero-length medial arc orbits collapsed (blocks: `6h - 2 collapsed_arcs`).
     pub collapsed_arcs: usize,
-    /// The co-circular groups, one per orbit (see [`periodic_groups`]).
+    /// The co-circular groups, one per orbit: canonical hole ids (one entry per tangent
+    /// image, sorted), the empty circle's centre wrapped into the box, its radius.
     pub cocircular_groups: Vec<CocircularGroup>,
 }
 
