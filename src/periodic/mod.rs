@@ -1029,8 +1029,8 @@ fn extract(
     }))
 }
 
-/// The co-circular groups of one period: one per orbit of contracted vertices of two or more
-/// members whose exact Apollonius circles are all the same circle. `clusters` are the orbit
+/// The co-circular groups of one period: within each orbit of contracted vertices, each set
+/// of two or more members whose exact Apollonius circles are the same circle. `clusters` are the orbit
 /// representatives (contracted vertex ids). Holes are the canonical ids of the group's
 /// circles, one entry per tangent circle (a hole tangent to the empty circle with several
 /// images appears that many times), sorted; the centre is wrapped into the box. `vertices`
@@ -1048,36 +1048,24 @@ fn periodic_groups(
             continue;
         }
         let circles = circles_of(&t.domain, medial, ms);
-        let Some(Some(first)) = circles.get(&ms[0]) else {
-            continue;
-        };
-        let all_same = ms.iter().all(|v| match circles.get(v) {
-            Some(Some(x)) => same_circle(&first.exact, &x.exact),
-            _ => false,
-        });
-        if !all_same {
-            continue;
+        // Members with exactly the same empty circle (a cluster that also took short arcs
+        // may hold several groups, or none).
+        let mut classes: Vec<(&Apollonius, Vec<u32>)> = Vec::new();
+        for &v in ms {
+            let Some(Some(x)) = circles.get(&v) else {
+                continue;
+            };
+            match classes
+                .iter_mut()
+                .find(|(y, _)| same_circle(&y.exact, &x.exact))
+            {
+                Some((_, vs)) => vs.push(v),
+                None => classes.push((x, vec![v])),
+            }
         }
-        let mut ids: Vec<CircleId> = ms
-            .iter()
-            .flat_map(|&v| medial.vertices[v as usize].circles)
-            .collect();
-        ids.sort_unstable();
-        ids.dedup();
-        let mut holes: Vec<CircleId> = ids
-            .iter()
-            .filter_map(|&id| t.key(id).map(|k| k.0 as CircleId))
-            .collect();
-        holes.sort_unstable();
-        out.push(CocircularGroup {
-            holes,
-            center: [
-                wrap(first.center[0], t.size[0]),
-                wrap(first.center[1], t.size[1]),
-            ],
-            radius: first.radius,
-            vertices: Vec::new(),
-        });
+        for (first, vs) in classes.into_iter().filter(|(_, vs)| vs.len() >= 2) {
+            out.push(group_of_members(t, medial, first, &vs));
+        }
     }
     out.sort_by(|a, b| {
         a.holes
@@ -1086,6 +1074,35 @@ fn periodic_groups(
             .then(a.center[1].total_cmp(&b.center[1]))
     });
     out
+}
+
+/// The reported group of the medial vertices `ms` of the tiling sharing the circle `first`.
+fn group_of_members(
+    t: &Tiling,
+    medial: &MedialGraph,
+    first: &Apollonius,
+    ms: &[u32],
+) -> CocircularGroup {
+    let mut ids: Vec<CircleId> = ms
+        .iter()
+        .flat_map(|&v| medial.vertices[v as usize].circles)
+        .collect();
+    ids.sort_unstable();
+    ids.dedup();
+    let mut holes: Vec<CircleId> = ids
+        .iter()
+        .filter_map(|&id| t.key(id).map(|k| k.0 as CircleId))
+        .collect();
+    holes.sort_unstable();
+    CocircularGroup {
+        holes,
+        center: [
+            wrap(first.center[0], t.size[0]),
+            wrap(first.center[1], t.size[1]),
+        ],
+        radius: first.radius,
+        vertices: Vec::new(),
+    }
 }
 
 fn normalise_triple(c: [CircleKey; 3]) -> [CircleKey; 3] {
