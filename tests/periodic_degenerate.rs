@@ -64,9 +64,9 @@ fn assert_groups(m: &Mesh, size: [f64; 2], cell: [f64; 2], offset: [f64; 2], r: 
             "radius {} vs {rho}",
             g.radius
         );
-        for d in 0..2 {
+        for (d, &l) in size.iter().enumerate() {
             assert!(
-                (0.0..size[d]).contains(&g.center[d]),
+                (0.0..l).contains(&g.center[d]),
                 "centre {:?} outside the box",
                 g.center
             );
@@ -135,7 +135,9 @@ fn square_lattices_collapse_one_arc_per_cell() {
     // n x n holes in an n x n box: n^2 empty circles on the torus, each touching 4 holes
     // (2 interior triangles, 1 zero-length arc): collapsed = n^2, blocks = 6n^2 - 2n^2.
     for n in 1..=4usize {
-        for offset in [[0.5, 0.5], [0.0, 0.0], [0.5, 0.0]] {
+        // Offsets on cell centres, corners, edges, and ones whose copies are inexact float
+        // sums (the groups stay exact rectangles of equal circles).
+        for offset in [[0.5, 0.5], [0.0, 0.0], [0.5, 0.0], [0.1, 0.7]] {
             for (r, opts) in [(0.3, zero_only()), (0.2, Options::default())] {
                 let size = [n as f64, n as f64];
                 let (_, m) = mesh(size, square_lattice(n, r, offset), &opts);
@@ -181,12 +183,9 @@ fn hexagonal_packing_has_no_group() {
     }
 }
 
+/// `x > 0` moved by `ulps` units in the last place.
 fn nudge(x: f64, ulps: i64) -> f64 {
-    let mut y = x;
-    for _ in 0..ulps.unsigned_abs() {
-        y = if ulps > 0 { y.next_up() } else { y.next_down() };
-    }
-    y
+    f64::from_bits((x.to_bits() as i64 + ulps) as u64)
 }
 
 #[test]
@@ -218,4 +217,23 @@ fn shifted_by_whole_periods_is_the_same_mesh_up_to_translation() {
     assert_eq!(a.layout.blocks.len(), b.layout.blocks.len());
     assert_eq!(a.collapsed_arcs, b.collapsed_arcs);
     assert_eq!(a.cocircular_groups, b.cocircular_groups);
+}
+
+#[test]
+fn invalid_collapse_fraction_is_refused() {
+    let pd = PeriodicDomain::new([1.0, 1.0], vec![Circle::new(0.5, 0.5, 0.25)]).unwrap();
+    for f in [-0.1, f64::NAN, f64::INFINITY] {
+        let e = mesh_periodic(
+            &pd,
+            &Options {
+                collapse_fraction: f,
+                ..Options::default()
+            },
+        )
+        .expect_err("refused");
+        assert!(
+            matches!(e, medial_blocks::MeshError::Options(_)),
+            "{f}: {e}"
+        );
+    }
 }

@@ -35,6 +35,18 @@
 //! (`--mode paper`). In exact mode (the default) the same orbits are handed to
 //! [`crate::exact_mode::periodic`] as a [`PeriodicBlocking`]: exact geometry per orbit,
 //! computed once and translated; see [`mesh_periodic`] for the fallback rule.
+//!
+//! # Degeneracy (issue 4 on the torus)
+//! Co-circular hole groups are the rule here (one hole in a box, square lattices, holes on
+//! the box's edges): before Blocking2D the zero-length medial arcs, and arcs shorter than
+//! [`Options::collapse_fraction`] of the local radius, are collapsed ([`collapse::contract`])
+//! in every copy alike. Arcs are chosen per orbit on the torus (`select_collapse`: exact
+//! geometry of the orbit representative decides, clusters are tracked with translations so
+//! that no cycle of the torus is contracted), and a contracted vertex is identified up to
+//! translation by the samples of its members, so its instances are again the orbit
+//! representative plus a period shift. Blocks: `6h - 2 collapsed`; [`Mesh::collapsed_arcs`]
+//! counts collapsed arc orbits and [`Mesh::cocircular_groups`] lists one group per orbit
+//! (canonical hole ids, one entry per tangent image; centre wrapped into the box).
 
 pub mod domain;
 
@@ -376,7 +388,8 @@ pub struct PeriodicLayout {
     pub blocking: Option<PeriodicBlocking>,
     /// Zero-length medial arc orbits collapsed (blocks: `6h - 2 collapsed_arcs`).
     pub collapsed_arcs: usize,
-    /// The co-circular groups, one per orbit (see [`periodic_groups`]).
+    /// The co-circular groups, one per orbit: canonical hole ids (one entry per tangent
+    /// image, sorted), the empty circle's centre wrapped into the box, its radius.
     pub cocircular_groups: Vec<CocircularGroup>,
 }
 
@@ -1135,8 +1148,8 @@ fn exact_input(
     })
 }
 
-/// The co-circular groups of one period: one per orbit of contracted vertices of two or more
-/// members whose exact Apollonius circles are all the same circle. `clusters` are the orbit
+/// The co-circular groups of one period: within each orbit of contracted vertices, each set
+/// of two or more members whose exact Apollonius circles are the same circle. `clusters` are the orbit
 /// representatives (contracted vertex ids). Holes are the canonical ids of the group's
 /// circles, one entry per tangent circle (a hole tangent to the empty circle with several
 /// images appears that many times), sorted; the centre is wrapped into the box. `vertices`
@@ -1154,36 +1167,24 @@ fn periodic_groups(
             continue;
         }
         let circles = circles_of(&t.domain, medial, ms);
-        let Some(Some(first)) = circles.get(&ms[0]) else {
-            continue;
-        };
-        let all_same = ms.iter().all(|v| match circles.get(v) {
-            Some(Some(x)) => same_circle(&first.exact, &x.exact),
-            _ => false,
-        });
-        if !all_same {
-            continue;
+        // Members with exactly the same empty circle (a cluster that also took short arcs
+        // may hold several groups, or none).
+        let mut classes: Vec<(&Apollonius, Vec<u32>)> = Vec::new();
+        for &v in ms {
+            let Some(Some(x)) = circles.get(&v) else {
+                continue;
+            };
+            match classes
+                .iter_mut()
+                .find(|(y, _)| same_circle(&y.exact, &x.exact))
+            {
+                Some((_, vs)) => vs.push(v),
+                None => classes.push((x, vec![v])),
+            }
         }
-        let mut ids: Vec<CircleId> = ms
-            .iter()
-            .flat_map(|&v| medial.vertices[v as usize].circles)
-            .collect();
-        ids.sort_unstable();
-        ids.dedup();
-        let mut holes: Vec<CircleId> = ids
-            .iter()
-            .filter_map(|&id| t.key(id).map(|k| k.0 as CircleId))
-            .collect();
-        holes.sort_unstable();
-        out.push(CocircularGroup {
-            holes,
-            center: [
-                wrap(first.center[0], t.size[0]),
-                wrap(first.center[1], t.size[1]),
-            ],
-            radius: first.radius,
-            vertices: Vec::new(),
-        });
+        for (first, vs) in classes.into_iter().filter(|(_, vs)| vs.len() >= 2) {
+            out.push(group_of_members(t, medial, first, &vs));
+        }
     }
     out.sort_by(|a, b| {
         a.holes
@@ -1192,6 +1193,35 @@ fn periodic_groups(
             .then(a.center[1].total_cmp(&b.center[1]))
     });
     out
+}
+
+/// The reported group of the medial vertices `ms` of the tiling sharing the circle `first`.
+fn group_of_members(
+    t: &Tiling,
+    medial: &MedialGraph,
+    first: &Apollonius,
+    ms: &[u32],
+) -> CocircularGroup {
+    let mut ids: Vec<CircleId> = ms
+        .iter()
+        .flat_map(|&v| medial.vertices[v as usize].circles)
+        .collect();
+    ids.sort_unstable();
+    ids.dedup();
+    let mut holes: Vec<CircleId> = ids
+        .iter()
+        .filter_map(|&id| t.key(id).map(|k| k.0 as CircleId))
+        .collect();
+    holes.sort_unstable();
+    CocircularGroup {
+        holes,
+        center: [
+            wrap(first.center[0], t.size[0]),
+            wrap(first.center[1], t.size[1]),
+        ],
+        radius: first.radius,
+        vertices: Vec::new(),
+    }
 }
 
 fn normalise_triple(c: [CircleKey; 3]) -> [CircleKey; 3] {
@@ -1281,8 +1311,14 @@ fn mesh_periodic_exact(
     options: &Options,
 ) -> Result<Option<PeriodicFrame>, MeshError> {
     let mut sampling = SamplingOptions::default();
+    // Exact periodic geometry needs degree-3 vertices: collapse only zero-length arcs here
+    // (any collapse means the paper layout with its collapsed vertices is used instead).
+    let zero_only = Options {
+        collapse_fraction: 0.0,
+        ..options.clone()
+    };
     for attempt in 0..=EXACT_RESAMPLING {
-        let p = match periodic_layout_with(pd, options, &sampling) {
+        let p = match periodic_layout_with(pd, &zero_only, &sampling) {
             Ok(p) => p,
             Err(_) if attempt > 0 => return Ok(None),
             Err(e) => return Err(e),
