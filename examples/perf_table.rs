@@ -415,8 +415,10 @@ fn main() {
                 rows.push(r);
             }
             Err(e) => {
+                // A size the pipeline cannot mesh is a result too: report it, stop growing.
                 eprintln!("error: {e}");
-                std::process::exit(1);
+                notes.push(format!("{n} particles: {}", e.trim()));
+                break;
             }
         }
     }
@@ -432,7 +434,7 @@ fn main() {
     print_table(&rows);
     print_cpu_table(&rows);
     for n in &notes {
-        println!("\n{n}");
+        println!("\n{}", n.replace('\n', " "));
     }
     triangulation_table(a.tri_max.unwrap_or(a.max), a.seed);
 }
