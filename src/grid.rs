@@ -15,6 +15,7 @@
 use crate::geometry::Point;
 use crate::layout::{BlockLayout, Curve, EdgeKind};
 use crate::mesh::BlockGrid;
+use rayon::prelude::*;
 
 /// The largest cell count accepted along one edge.
 pub const MAX_CELLS_PER_SIDE: usize = 100_000;
@@ -464,7 +465,9 @@ pub fn build_grids_forced(
             used[s.edge as usize] = true;
         }
     }
+    // In parallel (each edge on its own; collected in edge order).
     let mut discrete: Vec<Option<Vec<Point>>> = (0..layout.edges.len())
+        .into_par_iter()
         .map(|e| used[e].then(|| discretise(layout, e, counts.cells[e])))
         .collect();
     // The second copy of a periodic side: the first copy's interior nodes moved by the
@@ -489,23 +492,25 @@ pub fn build_grids_forced(
         }
     }
 
-    let mut grids = Vec::with_capacity(layout.blocks.len());
-    for (b, block) in layout.blocks.iter().enumerate() {
-        let sides: Vec<Vec<Point>> = block
-            .sides
-            .iter()
-            .map(|s| {
+    // Blocks in parallel (on the current rayon pool), collected in block order; the first
+    // error in block order is reported, so nothing depends on the thread count.
+    let grids: Vec<Result<BlockGrid, GridError>> = layout
+        .blocks
+        .par_iter()
+        .enumerate()
+        .map(|(b, block)| {
+            let side = |k: usize| {
+                let s = &block.sides[k];
                 let mut v = discrete[s.edge as usize].clone().unwrap_or_default();
                 if s.reversed {
                     v.reverse();
                 }
                 v
+            };
+            tfi(&side(0), &side(1), &side(2), &side(3)).ok_or_else(|| {
+                GridError::InvalidLayout(format!("block {b}: inconsistent side node counts"))
             })
-            .collect();
-        let grid = tfi(&sides[0], &sides[1], &sides[2], &sides[3]).ok_or_else(|| {
-            GridError::InvalidLayout(format!("block {b}: inconsistent side node counts"))
-        })?;
-        grids.push(grid);
-    }
-    Ok(grids)
+        })
+        .collect();
+    grids.into_iter().collect()
 }

@@ -173,17 +173,31 @@ pub fn measure(grids: &[BlockGrid]) -> Quality {
     reduce(&block_stats(grids)).0
 }
 
-/// [`measure`] and the cell part of [`quality_metrics`] in one pass over the cells.
-fn block_stats(grids: &[BlockGrid]) -> Vec<kernel::BlockStats> {
+/// Blocks per chunk of [`block_stats`]: a fixed number, so that nothing depends on the
+/// thread count.
+const CHUNK: usize = 64;
+
+/// [`measure`] and the cell part of [`quality_metrics`] in one pass over the cells: the
+/// figures of every block, and the metrics of every chunk of [`CHUNK`] blocks.
+fn block_stats(grids: &[BlockGrid]) -> Vec<(Vec<kernel::BlockFigures>, QualityMetrics)> {
     let tables = kernel::Tables::new();
     grids
-        .par_iter()
-        .map_init(Vec::new, |buf, g| kernel::block_stats(g, &tables, buf))
+        .par_chunks(CHUNK)
+        .map_init(Vec::new, |buf, chunk| {
+            let mut metrics = QualityMetrics::empty();
+            let mut figs = Vec::with_capacity(chunk.len());
+            for g in chunk {
+                let s = kernel::block_stats(g, &tables, buf, metrics);
+                metrics = s.metrics;
+                figs.push(s.fig);
+            }
+            (figs, metrics)
+        })
         .collect()
 }
 
 /// Reduce per-block results in block order.
-fn reduce(stats: &[kernel::BlockStats]) -> (Quality, QualityMetrics) {
+fn reduce(stats: &[(Vec<kernel::BlockFigures>, QualityMetrics)]) -> (Quality, QualityMetrics) {
     let mut q = Quality {
         cells: 0,
         min_angle_deg: f64::INFINITY,
@@ -196,24 +210,26 @@ fn reduce(stats: &[kernel::BlockStats]) -> (Quality, QualityMetrics) {
     };
     let mut m = QualityMetrics::empty();
     let (mut sum_min, mut sum_max) = (0.0, 0.0);
-    for s in stats {
-        if s.malformed {
-            q.malformed_grids += 1;
-            continue;
+    for (figs, metrics) in stats {
+        m.merge_cells(metrics);
+        for s in figs {
+            if s.malformed {
+                q.malformed_grids += 1;
+                continue;
+            }
+            q.cells += s.cells;
+            sum_min += s.sum_min;
+            sum_max += s.sum_max;
+            q.min_angle_deg = q.min_angle_deg.min(s.min_angle_deg);
+            q.max_angle_deg = q.max_angle_deg.max(s.max_angle_deg);
+            q.inverted_cells += s.inverted;
+            // NaN-sticky minimum, as if every cell were visited in order.
+            if !q.min_scaled_jacobian.is_nan()
+                && (s.min_scaled_jacobian.is_nan() || s.min_scaled_jacobian < q.min_scaled_jacobian)
+            {
+                q.min_scaled_jacobian = s.min_scaled_jacobian;
+            }
         }
-        q.cells += s.cells;
-        sum_min += s.sum_min;
-        sum_max += s.sum_max;
-        q.min_angle_deg = q.min_angle_deg.min(s.min_angle_deg);
-        q.max_angle_deg = q.max_angle_deg.max(s.max_angle_deg);
-        q.inverted_cells += s.inverted;
-        // NaN-sticky minimum, as if every cell were visited in order.
-        if !q.min_scaled_jacobian.is_nan()
-            && (s.min_scaled_jacobian.is_nan() || s.min_scaled_jacobian < q.min_scaled_jacobian)
-        {
-            q.min_scaled_jacobian = s.min_scaled_jacobian;
-        }
-        m.merge_cells(&s.metrics);
     }
     if q.cells == 0 {
         q.min_angle_deg = 0.0;

@@ -266,7 +266,7 @@ fn check_grids(grids: &[BlockGrid]) {
     let angle_out = all
         .iter()
         .filter(|r| {
-            let ok = |x: f64| x >= ANGLE_ACCEPTABLE[0] && x <= ANGLE_ACCEPTABLE[1];
+            let ok = |x: f64| (ANGLE_ACCEPTABLE[0]..=ANGLE_ACCEPTABLE[1]).contains(&x);
             !(ok(r.lo) && ok(r.hi))
         })
         .count() as u64;
@@ -394,7 +394,7 @@ fn exact_squares_match_the_reference() {
         nj: 5,
         nodes,
     };
-    check_grids(&[g.clone()]);
+    check_grids(std::slice::from_ref(&g));
     let q = measure(&[g]);
     assert_eq!(q.min_angle_deg, 90.0);
     assert_eq!(q.max_angle_deg, 90.0);
@@ -455,5 +455,64 @@ fn one_and_two_threads_agree() {
         assert_eq!(x.0, y.0);
         assert!(x.1 == y.1, "grid nodes differ between 1 and 2 threads");
         assert!(!x.1.is_empty());
+    }
+}
+
+/// Triangulation of the pipeline's own sample points (random bubbles, final sampling) by this
+/// engine and by spade on the same points, best of 3 runs each. Printed only, with
+/// `PERF_TIMINGS=1` (sizes from `PERF_HOLES`, default `1000,10000`); the assertion is that both
+/// give the same number of triangles (a function of the point set for points in general
+/// position; ties may differ, so only when no co-circular group is reported).
+#[test]
+fn timings_triangulation_vs_spade() {
+    use spade::Triangulation as _;
+    if std::env::var_os("PERF_TIMINGS").is_none() {
+        return;
+    }
+    let sizes = std::env::var("PERF_HOLES").unwrap_or_else(|_| "1000,10000".into());
+    for holes in sizes
+        .split(',')
+        .filter_map(|s| s.trim().parse::<usize>().ok())
+    {
+        let domain = medial_blocks::layouts::bubbles(holes, 1).expect("layout");
+        let sampled = medial_blocks::sampling::sample_and_triangulate(
+            &domain,
+            &medial_blocks::sampling::SamplingOptions::default(),
+        )
+        .expect("sampling");
+        let pts = sampled.samples.points.clone();
+        let best = |f: &dyn Fn() -> usize| {
+            let mut t = f64::INFINITY;
+            let mut n = 0;
+            for _ in 0..3 {
+                let s = std::time::Instant::now();
+                n = f();
+                t = t.min(s.elapsed().as_secs_f64());
+            }
+            (t, n)
+        };
+        let (te, ne) = best(&|| {
+            medial_blocks::geometry::Triangulation::new(&pts)
+                .expect("triangulate")
+                .len()
+        });
+        let (ts, ns) = best(&|| {
+            let v: Vec<spade::Point2<f64>> =
+                pts.iter().map(|p| spade::Point2::new(p[0], p[1])).collect();
+            spade::DelaunayTriangulation::<spade::Point2<f64>>::bulk_load(v)
+                .expect("spade")
+                .num_inner_faces()
+        });
+        println!(
+            "{holes} holes, {} points: engine {:.1} ms ({ne} triangles), spade bulk_load {:.1} ms \
+             ({ns} triangles), ratio {:.2}",
+            pts.len(),
+            te * 1e3,
+            ts * 1e3,
+            te / ts
+        );
+        if sampled.triangulation.cocircular_groups().is_empty() {
+            assert_eq!(ne, ns);
+        }
     }
 }

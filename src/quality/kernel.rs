@@ -338,9 +338,10 @@ fn extremes(m: &mut MetricSummary, x: f64) {
     m.max = Some(m.max.map_or(x, |a| a.max(x)));
 }
 
-/// Per-block partial results of [`super::measure`] and [`super::quality_metrics`].
-#[derive(Debug, Clone)]
-pub(super) struct BlockStats {
+/// Per-block partial results of [`super::measure`] (small; the metrics of
+/// [`super::quality_metrics`] are accumulated per chunk of blocks, see [`BlockStats`]).
+#[derive(Debug, Clone, Copy)]
+pub(super) struct BlockFigures {
     /// The grid's node count does not match `ni`, `nj` (no cell measured).
     pub malformed: bool,
     pub cells: usize,
@@ -351,6 +352,13 @@ pub(super) struct BlockStats {
     pub inverted: usize,
     /// NaN-sticky minimum of the cells' scaled Jacobians.
     pub min_scaled_jacobian: f64,
+}
+
+/// One block's figures, and the metrics it was counted into (shared by a chunk of blocks:
+/// counts and extremes do not depend on how blocks are grouped).
+#[derive(Debug, Clone)]
+pub(super) struct BlockStats {
+    pub fig: BlockFigures,
     pub metrics: QualityMetrics,
 }
 
@@ -364,26 +372,28 @@ pub(super) struct Pending {
 }
 
 impl BlockStats {
-    fn new() -> BlockStats {
+    fn new(metrics: QualityMetrics) -> BlockStats {
         BlockStats {
-            malformed: false,
-            cells: 0,
-            sum_min: 0.0,
-            sum_max: 0.0,
-            min_angle_deg: f64::INFINITY,
-            max_angle_deg: f64::NEG_INFINITY,
-            inverted: 0,
-            min_scaled_jacobian: f64::INFINITY,
-            metrics: QualityMetrics::empty(),
+            fig: BlockFigures {
+                malformed: false,
+                cells: 0,
+                sum_min: 0.0,
+                sum_max: 0.0,
+                min_angle_deg: f64::INFINITY,
+                max_angle_deg: f64::NEG_INFINITY,
+                inverted: 0,
+                min_scaled_jacobian: f64::INFINITY,
+            },
+            metrics,
         }
     }
 
     fn add_angles_common(&mut self, lo: f64, hi: f64) {
-        self.cells += 1;
-        self.sum_min += lo;
-        self.sum_max += hi;
-        self.min_angle_deg = self.min_angle_deg.min(lo);
-        self.max_angle_deg = self.max_angle_deg.max(hi);
+        self.fig.cells += 1;
+        self.fig.sum_min += lo;
+        self.fig.sum_max += hi;
+        self.fig.min_angle_deg = self.fig.min_angle_deg.min(lo);
+        self.fig.max_angle_deg = self.fig.max_angle_deg.max(hi);
         let a = &mut self.metrics.angle_deg;
         if !(a.accepts(lo) && a.accepts(hi)) {
             a.outside += 1;
@@ -391,8 +401,8 @@ impl BlockStats {
     }
 
     fn min_sj(&mut self, sj: f64) {
-        if sj.is_nan() || sj < self.min_scaled_jacobian {
-            self.min_scaled_jacobian = sj;
+        if sj.is_nan() || sj < self.fig.min_scaled_jacobian {
+            self.fig.min_scaled_jacobian = sj;
         }
     }
 
@@ -402,7 +412,7 @@ impl BlockStats {
         let jacobian = cell_corners(*p).jacobian;
         self.add_angles_common(c.min_angle_deg, c.max_angle_deg);
         if jacobian.iter().any(|&x| x.is_nan() || x <= 0.0) {
-            self.inverted += 1;
+            self.fig.inverted += 1;
         }
         self.min_sj(c.scaled_jacobian);
         let m = &mut self.metrics;
@@ -426,7 +436,7 @@ impl BlockStats {
         let (lo, hi) = (f.min_angle_deg, f.max_angle_deg);
         self.add_angles_common(lo, hi);
         if f.cross.iter().any(|&x| x <= 0.0) {
-            self.inverted += 1;
+            self.fig.inverted += 1;
         }
         let m = &mut self.metrics;
         {
@@ -479,12 +489,17 @@ impl BlockStats {
     }
 }
 
-/// The partial results of one block (a malformed grid contributes no cell). `pending` is
-/// scratch space.
-pub(super) fn block_stats(grid: &BlockGrid, t: &Tables, pending: &mut Vec<Pending>) -> BlockStats {
-    let mut s = BlockStats::new();
+/// The partial results of one block (a malformed grid contributes no cell), counted into
+/// `metrics`. `pending` is scratch space.
+pub(super) fn block_stats(
+    grid: &BlockGrid,
+    t: &Tables,
+    pending: &mut Vec<Pending>,
+    metrics: QualityMetrics,
+) -> BlockStats {
+    let mut s = BlockStats::new(metrics);
     if !super::well_formed(grid) {
-        s.malformed = true;
+        s.fig.malformed = true;
         return s;
     }
     pending.clear();
