@@ -34,7 +34,10 @@ use std::f64::consts::{FRAC_1_SQRT_2, FRAC_PI_4, TAU};
 pub struct SamplingOptions {
     /// Fewest samples on a circle (rounded up to a multiple of 8, at least 8).
     pub min_per_circle: usize,
-    /// Most samples on a circle (rounded down to a multiple of 8).
+    /// Most samples on a circle (rounded down to a multiple of 8). Adaptive sampling spends
+    /// them only near close circles (about `pi sqrt(2 rho / g)` for a gap `g` between circles
+    /// of reduced radius `rho`), so the default is large; [`SamplingOptions::max_total`] is
+    /// the resource limit.
     pub max_per_circle: usize,
     /// Target sample spacing as a multiple of the circle's nearest gap.
     pub spacing_per_gap: f64,
@@ -48,7 +51,7 @@ impl Default for SamplingOptions {
     fn default() -> Self {
         SamplingOptions {
             min_per_circle: 32,
-            max_per_circle: 1 << 14,
+            max_per_circle: 1 << 20,
             spacing_per_gap: 1.0,
             max_total: 8_000_000,
             max_rounds: 4,
@@ -347,7 +350,14 @@ fn adaptive_circle(
     let coarse = TAU * c.radius / n0 as f64;
     // Finest level: where even the nearest gap asks for no more.
     let mut levels = 0;
-    while levels < MAX_LEVELS && coarse / 2f64.powi(levels as i32) * (1.0 + 0.5 * f) > f * g_nearest
+    // Precision floor: the grid spacing stays above `r / 2^22`, where consecutive samples
+    // still bulge off their chord by about 30 ulps of the radius (`s^2 / 8r`), so rounded
+    // samples keep the circle's convex position. Closer circles get a spacing above their gap
+    // there (the Delaunay edges between consecutive samples survive in exact arithmetic).
+    let floor = c.radius / 4_194_304.0;
+    while levels < MAX_LEVELS
+        && coarse / 2f64.powi(levels as i32) * (1.0 + 0.5 * f) > f * g_nearest
+        && coarse / 2f64.powi(levels as i32 + 1) >= floor
     {
         levels += 1;
     }
