@@ -355,3 +355,31 @@ mod adaptive {
         }
     }
 }
+
+/// Absurd sampling options are typed errors, never an abort on a huge allocation: the total
+/// budget bounds every circle, and a coarse count beyond the caps is refused.
+#[test]
+fn sampling_budgets_are_typed_errors() {
+    use medial_blocks::sampling::sample_and_triangulate;
+    use medial_blocks::MeshError;
+    let d = Domain::hexagon_example();
+    for opts in [
+        SamplingOptions {
+            min_per_circle: usize::MAX,
+            ..SamplingOptions::default()
+        },
+        SamplingOptions {
+            max_total: 100,
+            ..SamplingOptions::default()
+        },
+        SamplingOptions {
+            spacing_per_gap: 1e-12,
+            ..SamplingOptions::default()
+        },
+    ] {
+        match sample_and_triangulate(&d, &opts) {
+            Err(MeshError::Sampling { message, .. }) => assert!(!message.is_empty()),
+            other => panic!("{opts:?}: {other:?}"),
+        }
+    }
+}
