@@ -353,11 +353,13 @@ fn adaptive_circle(
     let coarse = TAU * c.radius / n0 as f64;
     // Finest level: where even the nearest gap asks for no more.
     let mut levels = 0;
-    // Precision floor: the grid spacing stays above `r / 2^22`, where consecutive samples
-    // still bulge off their chord by about 30 ulps of the radius (`s^2 / 8r`), so rounded
-    // samples keep the circle's convex position. Closer circles get a spacing above their gap
-    // there (the Delaunay edges between consecutive samples survive in exact arithmetic).
-    let floor = c.radius / 4_194_304.0;
+    // Precision floor: consecutive samples must bulge off their chord (`s^2 / 8r`) by at
+    // least 32 ulps of the coordinates (`eps (r + max |centre coordinate|)`), so that rounded
+    // samples keep the circle's convex position: `s >= sqrt(256 eps r (r + |c|))`, about
+    // `r / 2^22` for a circle at the origin. Closer circles get a spacing above their gap there
+    // (the Delaunay edges between consecutive samples survive in exact arithmetic).
+    let reach = c.radius + c.center[0].abs().max(c.center[1].abs());
+    let floor = (256.0 * f64::EPSILON * c.radius * reach).sqrt();
     while levels < MAX_LEVELS
         && coarse / 2f64.powi(levels as i32) * (1.0 + 0.5 * f) > f * g_nearest
         && coarse / 2f64.powi(levels as i32 + 1) >= floor

@@ -81,14 +81,22 @@ fn replay_mesh_corpus() {
 fn near_touching_bounding_circle_is_meshed() {
     use medial_blocks::{mesh, Circle, Domain, Options};
     let r = 0.44;
-    for (eps, options) in [(1e-8, Options::default()), (2e-9, Options::paper())] {
+    // (gap / R, centre offset, options): far from the origin the precision floor of the
+    // sample spacing is far above the gap.
+    let cases = [
+        (1e-8, 0.0, Options::default()),
+        (2e-9, 0.0, Options::paper()),
+        (2e-9, 1e3, Options::paper()),
+        (2e-9, 1e5, Options::paper()),
+    ];
+    for (eps, off, options) in cases {
         let holes = (0..5)
             .map(|k| {
                 let a = 2.0 * std::f64::consts::PI * f64::from(k) / 5.0;
-                Circle::new(a.cos(), a.sin(), r)
+                Circle::new(off + a.cos(), a.sin(), r)
             })
             .collect();
-        let d = Domain::bounded(Circle::new(0.0, 0.0, (1.0 + r) * (1.0 + eps)), holes).unwrap();
+        let d = Domain::bounded(Circle::new(off, 0.0, (1.0 + r) * (1.0 + eps)), holes).unwrap();
         let m = mesh(&d, &options).unwrap_or_else(|e| panic!("gap {eps} R: {e}"));
         medial_blocks::fuzzing::check_mesh(&d, &m).unwrap();
     }
