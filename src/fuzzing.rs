@@ -624,10 +624,12 @@ fn check_conformity(m: &Mesh, walls: &HashMap<(usize, usize), CircleId>) -> Resu
 }
 
 /// Gaps (to a neighbour hole or the bounding circle) below this fraction of the bounding radius
-/// may be refused by boundary sampling, which stops at its sample cap (see
-/// `tests/fuzz_replay_mesh.rs::near_touching_bounding_circle_is_meshed`, ignored: measured,
-/// a hole `1e-8 R` from the bounding circle is refused, `1e-7 R` is meshed).
-pub const SAMPLING_REFUSAL_GAP: f64 = 1e-7;
+/// may be refused by boundary sampling. Adaptive sampling (bisection near close circles, with
+/// a precision floor on the spacing) meshes holes down to the validation tolerance
+/// (`tests/fuzz_replay_mesh.rs::near_touching_bounding_circle_is_meshed`: `1e-8 R` and
+/// `2e-9 R` from the bounding circle), so this equals [`Domain::GAP_TOLERANCE`]: a sampling
+/// refusal of any valid domain counts as a bug.
+pub const SAMPLING_REFUSAL_GAP: f64 = Domain::GAP_TOLERANCE;
 
 /// Whether a mesher error on a valid domain is an accepted refusal (a resource limit), not a
 /// bug: too many cells or nodes, or sampling that reached its cap on a layout with a gap below

@@ -34,7 +34,10 @@ use std::f64::consts::{FRAC_1_SQRT_2, FRAC_PI_4, TAU};
 pub struct SamplingOptions {
     /// Fewest samples on a circle (rounded up to a multiple of 8, at least 8).
     pub min_per_circle: usize,
-    /// Most samples on a circle (rounded down to a multiple of 8).
+    /// Most samples on a circle (rounded down to a multiple of 8). Adaptive sampling spends
+    /// them only near close circles (about `pi sqrt(2 rho / g)` for a gap `g` between circles
+    /// of reduced radius `rho`), so the default is large; [`SamplingOptions::max_total`] is
+    /// the resource limit.
     pub max_per_circle: usize,
     /// Target sample spacing as a multiple of the circle's nearest gap.
     pub spacing_per_gap: f64,
@@ -48,7 +51,7 @@ impl Default for SamplingOptions {
     fn default() -> Self {
         SamplingOptions {
             min_per_circle: 32,
-            max_per_circle: 1 << 14,
+            max_per_circle: 1 << 20,
             spacing_per_gap: 1.0,
             max_total: 8_000_000,
             max_rounds: 4,
@@ -344,21 +347,33 @@ fn adaptive_circle(
     near: &[Near],
     cap: usize,
 ) -> Result<(u64, Vec<u64>), ()> {
+    if n0 > cap as u64 || n0 == 0 || n0 % 8 != 0 {
+        return Err(());
+    }
     let coarse = TAU * c.radius / n0 as f64;
     // Finest level: where even the nearest gap asks for no more.
     let mut levels = 0;
-    while levels < MAX_LEVELS && coarse / 2f64.powi(levels as i32) * (1.0 + 0.5 * f) > f * g_nearest
+    // Precision floor: consecutive samples must bulge off their chord (`s^2 / 8r`) by at
+    // least 32 ulps of the coordinates (`eps (r + max |centre coordinate|)`), so that rounded
+    // samples keep the circle's convex position: `s >= sqrt(256 eps r (r + |c|))`, about
+    // `r / 2^22` for a circle at the origin. Closer circles get a spacing above their gap there
+    // (the Delaunay edges between consecutive samples survive in exact arithmetic).
+    let reach = c.radius + c.center[0].abs().max(c.center[1].abs());
+    let floor = (256.0 * f64::EPSILON * c.radius * reach).sqrt();
+    while levels < MAX_LEVELS
+        && coarse / 2f64.powi(levels as i32) * (1.0 + 0.5 * f) > f * g_nearest
+        && coarse / 2f64.powi(levels as i32 + 1) >= floor
     {
         levels += 1;
     }
-    let n = n0 << levels;
+    let n = n0.checked_mul(1u64 << levels).ok_or(())?;
     let step0 = 1u64 << levels;
     let unit = TAU * c.radius / n as f64;
     let point = |k: u64| {
         let u = unit_offset(k, n);
         [c.center[0] + c.radius * u[0], c.center[1] + c.radius * u[1]]
     };
-    let mut out: Vec<u64> = Vec::with_capacity(n0 as usize);
+    let mut out: Vec<u64> = Vec::with_capacity(n0.min(1 << 16) as usize);
     struct Ctx<'a> {
         f: f64,
         unit: f64,
@@ -413,8 +428,13 @@ fn adaptive_circle(
 /// The result of [`sample_adaptive`] when a circle would need more samples than allowed.
 #[derive(Debug, Clone, PartialEq)]
 pub struct TooManySamples {
+    /// The circle being sampled when a limit was passed.
     pub circle: CircleId,
+    /// The limit passed.
     pub limit: usize,
+    /// True when the limit is [`SamplingOptions::max_total`] (all circles together), false
+    /// for [`SamplingOptions::max_per_circle`].
+    pub total: bool,
 }
 
 /// Adaptive sampling (issue 8): every circle gets `round8(min_per_circle)` coarse samples at
@@ -492,10 +512,19 @@ pub fn sample_adaptive(
         };
         // Resampling doubles the density everywhere on the circle: the coarse count too.
         let k = density.get(slot).copied().unwrap_or(0).min(MAX_LEVELS);
-        let (n, ks) = adaptive_circle(c, n0 << k, factor(slot), g, &near, cap).map_err(|()| {
+        // The total budget bounds every circle too, so memory stays within `max_total`.
+        let left = opts.max_total.saturating_sub(s.points.len());
+        let budget = cap.min(left);
+        // Coarse count `n0 2^k`; one beyond the budget fails in `adaptive_circle`.
+        let coarse = n0
+            .checked_mul(1u64 << k)
+            .filter(|&v| v <= budget as u64)
+            .unwrap_or(u64::MAX);
+        let (n, ks) = adaptive_circle(c, coarse, factor(slot), g, &near, budget).map_err(|()| {
             TooManySamples {
                 circle: id,
-                limit: cap,
+                limit: if left < cap { opts.max_total } else { cap },
+                total: left < cap,
             }
         })?;
         s.circles.push(CircleSamples {
@@ -785,11 +814,18 @@ pub fn sample_and_triangulate(
         let samples =
             sample_adaptive(domain, opts, &gaps, &density).map_err(|e| MeshError::Sampling {
                 circle: e.circle,
-                message: format!(
-                    "the circle would need more than the most samples allowed ({}): its gap to \
-                     a neighbour is too small for the sampling",
-                    e.limit
-                ),
+                message: if e.total {
+                    format!(
+                        "more samples would be needed in total than the limit {}",
+                        e.limit
+                    )
+                } else {
+                    format!(
+                        "the circle would need more than the most samples allowed ({}): its \
+                         gap to a neighbour is too small for the sampling",
+                        e.limit
+                    )
+                },
             })?;
         let total = samples.len();
         if total > opts.max_total {
