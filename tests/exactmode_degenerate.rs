@@ -383,3 +383,21 @@ fn report_names_the_geometry() {
     let json = serde_json::to_string(&Report::from_mesh(&exact)).unwrap();
     assert!(json.contains("\"geometry\":\"exact\""));
 }
+
+/// The layout of `degen_refine::regression_zero_sweep_arc_on_inserted_hole` (paper mode's
+/// known zero-sweep arc next to an inserted hole): exact mode builds its own arcs around
+/// inserted holes and must mesh it exactly.
+#[test]
+fn zero_sweep_regression_layout_is_exact() {
+    let d = random_layout(17649210200229903181, 9, 0.002);
+    for fraction in [0.0, 0.05] {
+        let o = Options {
+            cells: 2,
+            collapse_fraction: fraction,
+            ..Options::default()
+        };
+        let m = mesh(&d, &o).unwrap();
+        assert!(!m.inserted_holes.is_empty());
+        check_exact(&d, &m);
+    }
+}
