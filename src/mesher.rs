@@ -25,8 +25,10 @@ pub const EXACT_RESAMPLING: usize = 2;
 
 /// Options of the pipeline.
 ///
-/// Paper mode reads `mode` and `cells` only (and `block_cells`, as `cells`). Exact mode reads all fields; for the disk and the
-/// annulus (fewer than two holes) both modes use the same templates and equal spacing.
+/// Paper mode reads `mode`, `cells` (and `block_cells`, as `cells`) and the degeneracy
+/// options (`refine_ratio`, `collapse_fraction`, `max_inserted_holes`). Exact mode reads all
+/// fields; for the disk and the annulus (fewer than two holes) both modes use the same
+/// templates and equal spacing.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Options {
     pub mode: Mode,

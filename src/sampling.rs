@@ -965,7 +965,8 @@ mod tests {
         let d = Domain::hexagon_example();
         let gaps = nearest_gaps(&d);
         assert_eq!(gaps.len(), 8);
-        assert!((gaps[0] - 0.9).abs() < 1e-12);
+        // The bounding circle (radius sqrt(3) - 0.3) to the outer holes, and hole to hole.
+        assert!((gaps[0] - (3f64.sqrt() - 1.6)).abs() < 1e-12);
         assert!((gaps[1] - 0.4).abs() < 1e-12);
         let counts = initial_counts(&d, &gaps, &SamplingOptions::default());
         assert!(counts.iter().all(|&n| n % 8 == 0 && n >= 32));

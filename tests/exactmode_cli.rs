@@ -121,3 +121,47 @@ fn compare_modes_puts_per_mode_figures_in_report_json() {
     assert_eq!(report["min_angle_deg"], modes["exact"]["min_angle_deg"]);
     assert_eq!(report["holes"], 7);
 }
+
+/// `report.json` names the geometry: exact on a co-circular lattice (collapsed vertices) and
+/// on the built-in hexagon, paper with `--mode paper`; the hexagon's angles are within 3
+/// degrees of 60/120.
+#[test]
+fn report_names_the_geometry_used() {
+    let dir = tempfile::tempdir().unwrap();
+    let lattice = dir.path().join("lattice.json");
+    let o = Command::new(env!("CARGO_BIN_EXE_medial-blocks"))
+        .args(["example", "square-lattice", "--holes", "9", "-o"])
+        .arg(&lattice)
+        .output()
+        .expect("binary runs");
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let cases: [(Vec<&str>, &str); 3] = [
+        (vec![lattice.to_str().unwrap()], "exact"),
+        (vec![], "exact"),
+        (vec!["--mode", "paper"], "paper"),
+    ];
+    for (k, (input, want)) in cases.iter().enumerate() {
+        let out = dir.path().join(format!("out{k}"));
+        let mut args = input.clone();
+        args.extend([
+            "-o",
+            out.to_str().unwrap(),
+            "--format",
+            "json",
+            "--cells",
+            "4",
+        ]);
+        let o = run(&args);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        let r = read_json(&out.join("report.json"));
+        assert_eq!(r["geometry"], *want, "case {k}");
+        if k == 0 {
+            assert_eq!(r["cocircular_groups"].as_array().unwrap().len(), 4);
+            assert_eq!(r["blocks"], 6 * 8 - 2 * 4);
+        }
+        if k == 1 {
+            assert!(r["min_angle_deg"].as_f64().unwrap() >= 57.0, "{r}");
+            assert!(r["max_angle_deg"].as_f64().unwrap() <= 123.0, "{r}");
+        }
+    }
+}

@@ -326,3 +326,78 @@ proptest! {
         check_exact(&d, &m);
     }
 }
+
+#[test]
+fn clustering_and_smoothing_on_degenerate_layouts() {
+    use medial_blocks::exact_mode::{Clustering, FirstCell};
+    for d in [sliver(), layouts::square_lattice(9).unwrap(), ngon(6)] {
+        let o = Options {
+            clustering: Clustering {
+                first: Some(FirstCell::Relative(0.01)),
+                growth: 1.2,
+            },
+            smooth: 10,
+            ..opts(4)
+        };
+        let m = mesh(&d, &o).unwrap();
+        check_exact(&d, &m);
+        // The first cell off every real wall has the requested height.
+        for (b, g) in m.layout.blocks.iter().zip(&m.grids) {
+            let Some(c) = b.wall else { continue };
+            let circle = d.circle(c);
+            let want = 0.01 * circle.radius;
+            for i in 0..=g.ni {
+                let (p, q) = (g.node(i, 0), g.node(i, 1));
+                let got = (q[0] - p[0]).hypot(q[1] - p[1]);
+                // Clustered unless the spoke is too short for nj cells of that height
+                // (then equal spacing, see exact_mode::clustering).
+                let top = g.node(i, g.nj);
+                let len = (top[0] - p[0]).hypot(top[1] - p[1]);
+                if len > 1.01 * g.nj as f64 * want {
+                    assert!(
+                        (got - want).abs() <= 1e-9 * want.max(1.0),
+                        "{got} vs {want}"
+                    );
+                }
+            }
+        }
+    }
+}
+
+#[test]
+fn report_names_the_geometry() {
+    use medial_blocks::output::report::Report;
+    let d = sliver();
+    let exact = mesh(&d, &opts(3)).unwrap();
+    assert_eq!(Report::from_mesh(&exact).geometry, "exact");
+    let paper = mesh(
+        &d,
+        &Options {
+            cells: 3,
+            ..Options::paper()
+        },
+    )
+    .unwrap();
+    assert_eq!(paper.geometry, Geometry::Paper);
+    assert_eq!(Report::from_mesh(&paper).geometry, "paper");
+    let json = serde_json::to_string(&Report::from_mesh(&exact)).unwrap();
+    assert!(json.contains("\"geometry\":\"exact\""));
+}
+
+/// The layout of `degen_refine::regression_zero_sweep_arc_on_inserted_hole` (paper mode's
+/// known zero-sweep arc next to an inserted hole): exact mode builds its own arcs around
+/// inserted holes and must mesh it exactly.
+#[test]
+fn zero_sweep_regression_layout_is_exact() {
+    let d = random_layout(17649210200229903181, 9, 0.002);
+    for fraction in [0.0, 0.05] {
+        let o = Options {
+            cells: 2,
+            collapse_fraction: fraction,
+            ..Options::default()
+        };
+        let m = mesh(&d, &o).unwrap();
+        assert!(!m.inserted_holes.is_empty());
+        check_exact(&d, &m);
+    }
+}
