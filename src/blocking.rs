@@ -567,10 +567,15 @@ pub struct CollapsedBlocking {
 }
 
 /// [`CollapsedBlocking`] of `domain` (see [`build_mesh_layout`] for the collapse retries).
+///
+/// `collapse_thin_walls`: also collapse every arc the sampling left with a single-sample wall
+/// (the paper pipeline needs it: its walls follow the samples, so such an arc would give a
+/// zero-sweep wall; exact mode computes exact walls and does not).
 pub fn collapsed_blocking_with(
     domain: &Domain,
     options: &Options,
     sampling: &SamplingOptions,
+    collapse_thin_walls: bool,
 ) -> Result<CollapsedBlocking, MeshError> {
     use crate::{cocircular, collapse, refine};
     let h = domain.hole_count();
@@ -600,7 +605,7 @@ pub fn collapsed_blocking_with(
     // Arcs the sampling left with a single-sample wall: always collapsed (their block on the
     // thin side would have a zero-sweep wall, and a zero-area ring block in a template).
     let mut forced = vec![false; medial.arcs.len()];
-    for v in &sampled.thin_walls {
+    for v in sampled.thin_walls.iter().filter(|_| collapse_thin_walls) {
         if let crate::sampling::ViolationKind::SingleSampleWall { arc } = v.kind {
             if let Some(f) = forced.get_mut(arc as usize) {
                 *f = true;
@@ -732,7 +737,7 @@ pub fn build_mesh_layout_with(
         contracted: _,
         mut layout,
         collapsed,
-    } = collapsed_blocking_with(domain, options, sampling)?;
+    } = collapsed_blocking_with(domain, options, sampling, true)?;
     let medial = &refined.sampled.medial;
     let mut split_arcs = 0;
     let before = layout.blocks.len();

@@ -303,7 +303,7 @@ fn exact_attempt(
     sampling: &SamplingOptions,
 ) -> Result<Option<Mesh>, MeshError> {
     let cb = timings::span("blocking", || {
-        blocking::collapsed_blocking_with(domain, options, sampling)
+        blocking::collapsed_blocking_with(domain, options, sampling, false)
     })?;
     match timings::span("exact_geometry", || {
         exact_mode::collapsed::build_collapsed(&cb, options)

@@ -139,9 +139,9 @@ fn block_cells_gives_n_by_n_raised_only_by_long_walls() {
             }
         }
     }
-    // The precondition holds for the hexagon and the lattice at N = 16 (a bubble next to the
-    // bounding circle has a long wall).
-    assert!(exact_layouts >= 2, "{exact_layouts}");
+    // The precondition holds for the lattice at N = 16 (a bubble next to the bounding circle
+    // has a long wall, and so has an outer hole of the tight built-in hexagon).
+    assert!(exact_layouts >= 1, "{exact_layouts}");
 }
 
 #[test]

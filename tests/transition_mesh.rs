@@ -238,11 +238,11 @@ fn rectangles_up_to_aspect_three() {
 fn bad_rectangles_are_refused() {
     let b = Domain::hexagon_example().bounding();
     for bounds in [
-        [-1.0, -3.0, 3.0, 3.0],     // cuts the circle
-        [-2.21, -3.0, 3.0, 3.0],    // grown to -2.25: less than one interval to spare
-        [3.0, -3.0, -3.0, 3.0],     // empty
-        [f64::NAN, -3.0, 3.0, 3.0], // not a number
-        [-1e30, -3.0, 3.0, 3.0],    // too many intervals
+        [-1.0, -3.0, 3.0, 3.0],               // cuts the circle
+        [-(b.radius + 0.01), -3.0, 3.0, 3.0], // grown to the lattice: less than one interval to spare
+        [3.0, -3.0, -3.0, 3.0],               // empty
+        [f64::NAN, -3.0, 3.0, 3.0],           // not a number
+        [-1e30, -3.0, 3.0, 3.0],              // too many intervals
     ] {
         let r = Rect::from_bounds(bounds, 0.25, b.center, b.radius);
         assert!(r.is_err(), "{bounds:?} accepted");

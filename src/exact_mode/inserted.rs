@@ -41,6 +41,7 @@ pub(crate) fn prepare(
     pieces: &mut Vec<Piece>,
     vertices: &mut Vec<ExactVertex>,
     c: CircleId,
+    fluid: &[CircleId],
 ) -> usize {
     let mut splits = 0;
     for _ in 0..MAX_SPLITS_PER_HOLE {
@@ -57,11 +58,25 @@ pub(crate) fn prepare(
         if k % 2 == 0 && k >= 4 && widest <= MAX_TEMPLATE_SWEEP {
             break;
         }
-        // The widest arc on the hole whose middle is defined (ties: the smallest index).
+        // The widest arc on the hole whose middle is defined (ties: the smallest index). A
+        // split adds an arc to both circles of the arc, so to fix an odd count prefer an arc
+        // whose other circle is not another inserted hole (whose parity it would break).
+        let other_fluid = |e: usize| {
+            pieces[e]
+                .circles
+                .iter()
+                .any(|&x| x != c && fluid.contains(&x))
+        };
         let mut best: Option<(f64, usize)> = None;
-        for &(e, w) in &on {
-            if w > 0.0 && best.map_or(true, |(bw, _)| w > bw) {
-                best = Some((w, e));
+        for pass in 0..2 {
+            for &(e, w) in &on {
+                let allowed = pass == 1 || k % 2 == 0 || !other_fluid(e);
+                if allowed && w > 0.0 && best.map_or(true, |(bw, _)| w > bw) {
+                    best = Some((w, e));
+                }
+            }
+            if best.is_some() {
+                break;
             }
         }
         let Some((_, e)) = best else { break };

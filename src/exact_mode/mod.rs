@@ -557,8 +557,16 @@ pub fn assemble(sk: Skeleton<'_>, options: &Options) -> Result<ExactMesh, MeshEr
         pieces.push(piece);
     }
     let mut split_arcs = 0;
-    for &c in &sk.fluid {
-        split_arcs += inserted::prepare(&mut pieces, &mut vertices, c);
+    // A split for one hole can change a neighbouring inserted hole's count: repeat until no
+    // hole asks for a split (bounded).
+    for _round in 0..4 {
+        let before = split_arcs;
+        for &c in &sk.fluid {
+            split_arcs += inserted::prepare(&mut pieces, &mut vertices, c, &sk.fluid);
+        }
+        if split_arcs == before {
+            break;
+        }
     }
 
     let mut targets = Vec::with_capacity(pieces.len());

@@ -72,6 +72,9 @@ use crate::sampling::{
 };
 use std::collections::HashMap;
 
+/// Most samples on one circle of the periodic tiling (its sampling is uniform per circle).
+pub const PERIODIC_MAX_PER_CIRCLE: usize = 1 << 14;
+
 /// Largest half-width `m` of the tiling array tried (`7 x 7` tiles).
 pub const MAX_TILING: i32 = 3;
 
@@ -270,6 +273,13 @@ fn sample_tiling(
     gaps_canonical: &[f64],
     opts: &SamplingOptions,
 ) -> Result<(Samples, Triangulation, MedialGraph), MeshError> {
+    // Uniform sampling per orbit (the adaptive bounded sampler's per-circle limit is far
+    // larger): keep the cap this sampler was designed with.
+    let capped = SamplingOptions {
+        max_per_circle: opts.max_per_circle.min(PERIODIC_MAX_PER_CIRCLE),
+        ..opts.clone()
+    };
+    let opts = &capped;
     let b = t.domain.bounding();
     let bgap = t
         .domain
