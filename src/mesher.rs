@@ -265,19 +265,21 @@ pub fn validate_block_cells(options: &Options) -> Result<(), MeshError> {
 /// to one circle; an exact arc not defined; an inverted cell; a template that does not fit),
 /// short-arc collapses are given up first (only zero-length arcs collapsed, whose merged
 /// vertex is an exact co-circular group circle), then the sampling is refined 4x per attempt,
-/// up to [`EXACT_RESAMPLING`] times. `Ok(None)` when it
+/// up to [`EXACT_RESAMPLING`] times: only on the circles around the disagreeing arcs and
+/// inverted blocks ([`SamplingOptions::boost`]) when they are known, else everywhere.
+/// `Ok(None)` when it
 /// never agreed: the caller falls back to the paper pipeline and reports
 /// [`Geometry::Paper`]. Errors other than [`MeshError::Internal`] are returned at once.
 fn mesh_exact(domain: &Domain, options: &Options) -> Result<Option<Mesh>, MeshError> {
     let mut sampling = SamplingOptions::default();
     for attempt in 0..=EXACT_RESAMPLING {
-        match exact_attempt(domain, options, &sampling) {
-            Ok(Some(m)) => return Ok(Some(m)),
-            Ok(None) => {}
+        let mut refine = match exact_attempt(domain, options, &sampling) {
+            Ok(Attempt::Done(m)) => return Ok(Some(*m)),
+            Ok(Attempt::Retry(circles)) => circles,
             // A finer sampling failed after a coarser one worked: fall back to paper mode.
             Err(_) if attempt > 0 => return Ok(None),
             Err(e) => return Err(e),
-        }
+        };
         // Short arcs collapsed into a merged vertex can invert cells next to it (the merged
         // centre is on none of the exact bisectors): keep only the zero-length collapses.
         if options.collapse_fraction > 0.0 {
@@ -285,23 +287,80 @@ fn mesh_exact(domain: &Domain, options: &Options) -> Result<Option<Mesh>, MeshEr
                 collapse_fraction: 0.0,
                 ..options.clone()
             };
-            if let Ok(Some(m)) = exact_attempt(domain, &zero_only, &sampling) {
-                return Ok(Some(m));
+            match exact_attempt(domain, &zero_only, &sampling) {
+                Ok(Attempt::Done(m)) => return Ok(Some(*m)),
+                Ok(Attempt::Retry(circles)) if refine.is_some() => {
+                    if let (Some(r), Some(c)) = (refine.as_mut(), circles) {
+                        r.extend(c);
+                    } else {
+                        refine = None;
+                    }
+                }
+                _ => {}
             }
         }
-        sampling.min_per_circle = sampling.min_per_circle.saturating_mul(4);
-        sampling.spacing_per_gap *= 0.25;
+        match refine {
+            // Refine 4x only around the arcs that disagreed (issue 8: no global resampling
+            // of thousands of circles for one nearly co-circular spot).
+            Some(circles) if !circles.is_empty() => {
+                for c in circles {
+                    let slot = (c + 1) as usize;
+                    if sampling.boost.len() <= slot {
+                        sampling.boost.resize(slot + 1, 0);
+                    }
+                    sampling.boost[slot] += 2;
+                }
+            }
+            _ => {
+                sampling.min_per_circle = sampling.min_per_circle.saturating_mul(4);
+                sampling.spacing_per_gap *= 0.25;
+            }
+        }
     }
     Ok(None)
 }
 
-/// One exact-mode attempt: `Ok(None)` when the exact geometry disagrees with the sampled
-/// combinatorics (see [`mesh_exact`]), `Err` when the front end fails.
+/// The outcome of one exact-mode attempt.
+enum Attempt {
+    Done(Box<Mesh>),
+    /// The exact geometry disagreed with the sampled combinatorics: the circles around the
+    /// disagreement (input circles only) to sample finer, or `None` when unknown (refine all).
+    Retry(Option<Vec<CircleId>>),
+}
+
+/// The input circles around the medial corners of `blocks` (walls of every block sharing a
+/// medial corner with one of them), sorted and deduplicated; inserted holes are left out.
+fn circles_around(
+    layout: &crate::layout::BlockLayout,
+    blocks: &[usize],
+    holes: usize,
+) -> Vec<CircleId> {
+    let mut corners: Vec<u32> = blocks
+        .iter()
+        .filter_map(|&b| layout.blocks.get(b))
+        .flat_map(|b| [b.corners[2], b.corners[3]])
+        .collect();
+    corners.sort_unstable();
+    corners.dedup();
+    let mut out: Vec<CircleId> = layout
+        .blocks
+        .iter()
+        .filter(|b| b.corners.iter().any(|v| corners.binary_search(v).is_ok()))
+        .filter_map(|b| b.wall)
+        .filter(|&c| c < holes as CircleId)
+        .collect();
+    out.sort_unstable();
+    out.dedup();
+    out
+}
+
+/// One exact-mode attempt: [`Attempt::Retry`] when the exact geometry disagrees with the
+/// sampled combinatorics (see [`mesh_exact`]), `Err` when the front end fails.
 fn exact_attempt(
     domain: &Domain,
     options: &Options,
     sampling: &SamplingOptions,
-) -> Result<Option<Mesh>, MeshError> {
+) -> Result<Attempt, MeshError> {
     let cb = timings::span("blocking", || {
         blocking::collapsed_blocking_with(domain, options, sampling, false)
     })?;
@@ -309,13 +368,27 @@ fn exact_attempt(
         exact_mode::collapsed::build_collapsed(&cb, options)
     }) {
         Ok(m) => {
-            let consistent = m.inconsistent_arcs.is_empty()
-                && timings::span("quality_check", || crate::quality::inverted_cells(&m.grids)) == 0;
-            if !consistent {
-                return Ok(None);
+            let inverted = timings::span("quality_check", || {
+                if m.inconsistent_arcs.is_empty() && crate::quality::inverted_cells(&m.grids) == 0 {
+                    Vec::new()
+                } else {
+                    (0..m.grids.len())
+                        .filter(|&b| {
+                            crate::quality::inverted_cells(std::slice::from_ref(&m.grids[b])) > 0
+                        })
+                        .collect()
+                }
+            });
+            if !(m.inconsistent_arcs.is_empty() && inverted.is_empty()) {
+                let mut bad: Vec<usize> = inverted;
+                for &e in &m.inconsistent_arcs {
+                    bad.extend([2 * e, 2 * e + 1]);
+                }
+                let circles = circles_around(&m.layout, &bad, domain.hole_count());
+                return Ok(Attempt::Retry((!circles.is_empty()).then_some(circles)));
             }
             let medial = &cb.refined.sampled.medial;
-            Ok(Some(Mesh {
+            Ok(Attempt::Done(Box::new(Mesh {
                 layout: m.layout,
                 grids: m.grids,
                 medial_vertices: medial.vertex_count(),
@@ -327,9 +400,9 @@ fn exact_attempt(
                 split_arcs: m.split_arcs,
                 template_blocks: m.template_blocks,
                 geometry: Geometry::Exact,
-            }))
+            })))
         }
-        Err(MeshError::Internal(_)) => Ok(None),
+        Err(MeshError::Internal(_)) => Ok(Attempt::Retry(None)),
         Err(err) => Err(err),
     }
 }

@@ -45,6 +45,12 @@ pub struct SamplingOptions {
     pub max_total: usize,
     /// Most resampling rounds after the first triangulation.
     pub max_rounds: usize,
+    /// Extra density doublings per circle from the start, in slot order (slot 0 the bounding
+    /// circle, slot `i + 1` hole `i`; missing entries are 0). Exact mode uses it to refine
+    /// only the circles around an arc whose exact geometry disagreed with the sampling. A
+    /// boost is shared by every circle of the same radius and gap (bitwise), so mirror images
+    /// stay sampled alike.
+    pub boost: Vec<u32>,
 }
 
 impl Default for SamplingOptions {
@@ -55,6 +61,7 @@ impl Default for SamplingOptions {
             spacing_per_gap: 1.0,
             max_total: 8_000_000,
             max_rounds: 4,
+            boost: Vec::new(),
         }
     }
 }
@@ -803,12 +810,27 @@ pub fn sample_and_triangulate(
 ) -> Result<SampledDomain, MeshError> {
     let _stage = crate::timings::enter("sampling");
     let gaps = nearest_gaps(domain);
-    // Per slot, the number of density doublings asked for by resampling.
-    let mut density = vec![0u32; gaps.len()];
     let radii: Vec<f64> = domain
         .circle_ids()
         .map(|c| domain.circle(c).radius)
         .collect();
+    // Per slot, the number of density doublings asked for by resampling (and the caller's
+    // boost, shared by circles of the same radius and gap).
+    let mut density = vec![0u32; gaps.len()];
+    if !opts.boost.is_empty() {
+        let mut by_key: HashMap<(u64, u64), u32> = HashMap::new();
+        for (slot, &b) in opts.boost.iter().enumerate().take(gaps.len()) {
+            let e = by_key
+                .entry((radii[slot].to_bits(), gaps[slot].to_bits()))
+                .or_insert(0);
+            *e = (*e).max(b.min(16));
+        }
+        for slot in 0..density.len() {
+            if let Some(&b) = by_key.get(&(radii[slot].to_bits(), gaps[slot].to_bits())) {
+                density[slot] = b;
+            }
+        }
+    }
     let mut round = 0;
     loop {
         let samples =
