@@ -383,3 +383,41 @@ fn sampling_budgets_are_typed_errors() {
         }
     }
 }
+
+/// `SamplingOptions::boost` refines only the boosted circle and the circles of the same
+/// radius and gap (mirror images), at least doubling their samples per doubling asked.
+#[test]
+fn boost_refines_only_the_named_circles() {
+    use medial_blocks::sampling::{sample_and_triangulate, SamplingOptions};
+    use medial_blocks::{Circle, Domain};
+    // Holes 0 and 1 are mirror images (same radius and gap); hole 2 differs.
+    let d = Domain::bounded(
+        Circle::new(0.0, 0.0, 4.0),
+        vec![
+            Circle::new(-1.0, 0.5, 0.6),
+            Circle::new(1.0, 0.5, 0.6),
+            Circle::new(0.0, -1.6, 0.9),
+        ],
+    )
+    .unwrap();
+    let plain = sample_and_triangulate(&d, &SamplingOptions::default()).unwrap();
+    let boosted = sample_and_triangulate(
+        &d,
+        &SamplingOptions {
+            boost: vec![0, 2],
+            ..SamplingOptions::default()
+        },
+    )
+    .unwrap();
+    let count = |s: &medial_blocks::sampling::SampledDomain, id| s.samples.of_circle(id).count;
+    for id in [0, 1] {
+        assert!(
+            count(&boosted, id) >= 3 * count(&plain, id),
+            "hole {id}: {} vs {}",
+            count(&boosted, id),
+            count(&plain, id)
+        );
+    }
+    assert_eq!(count(&boosted, 2), count(&plain, 2));
+    assert_eq!(count(&boosted, -1), count(&plain, -1));
+}
