@@ -897,9 +897,10 @@ fn triangulate_bad_rows() {
     );
 }
 
-// 30. A valid domain too tight for boundary sampling (a hole within 1e-8 R of the bounding
-// circle): a typed refusal, never a panic or a bad mesh (known limitation, see
-// tests/fuzz_replay_mesh.rs).
+// 30. A valid domain very tight for boundary sampling (holes within 1e-8 R of the bounding
+// circle): adaptive sampling meshes it now (tests/fuzz_replay_mesh.rs,
+// near_touching_bounding_circle_is_meshed); a refusal, if it ever comes back, must be typed,
+// never a panic or a bad mesh.
 #[test]
 fn too_tight_for_sampling() {
     let r = 0.44;
