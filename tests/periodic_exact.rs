@@ -184,12 +184,14 @@ fn exact_mode_is_the_default_for_periodic_domains() {
     let pd = PeriodicDomain::new(size, hs).unwrap();
     let mesh = mesh_periodic(&pd, &Options::default()).unwrap();
     check(&pd, &mesh, None);
+    assert_eq!(mesh.geometry, medial_blocks::mesh::Geometry::Exact);
     // One hole in a square box: a degenerate (co-circular) periodic Voronoi diagram.
     let pd = PeriodicDomain::new([1.0, 1.0], vec![Circle::new(0.5, 0.5, 0.2)]).unwrap();
     let mesh = mesh_periodic(&pd, &Options::default()).unwrap();
     // Its zero-length arc is collapsed: 6 h - 2 collapsed blocks.
     assert_eq!(mesh.collapsed_arcs, 1);
     assert_eq!(mesh.layout.blocks.len(), 6 - 2 * mesh.collapsed_arcs);
+    assert_eq!(mesh.geometry, medial_blocks::mesh::Geometry::Paper);
 }
 
 #[test]

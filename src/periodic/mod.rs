@@ -1348,6 +1348,7 @@ fn mesh_periodic_exact(
                         medial_vertices: p.medial_vertices,
                         medial_arcs: p.medial_arcs,
                         holes: pd.hole_count(),
+                        geometry: crate::mesh::Geometry::Exact,
                         ..Mesh::default()
                     };
                     return Ok(Some(PeriodicFrame {
