@@ -468,7 +468,7 @@ fn reuse_counts(
     if fm.structure().as_ref() != Some(want) {
         return Err("the run's node counts do not fit this frame's blocks".into());
     }
-    let inverted = measure(&fm.mesh.grids).inverted_cells;
+    let inverted = crate::quality::inverted_cells(&fm.mesh.grids);
     if inverted > 0 {
         return Err(format!(
             "the run's node counts give {inverted} inverted cells in this frame"

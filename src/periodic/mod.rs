@@ -1339,9 +1339,7 @@ fn mesh_periodic_exact(
         };
         match exact_mode::periodic::build(pb, options) {
             Ok(x) => {
-                if x.inconsistent_arcs.is_empty()
-                    && crate::quality::measure(&x.grids).inverted_cells == 0
-                {
+                if x.inconsistent_arcs.is_empty() && crate::quality::inverted_cells(&x.grids) == 0 {
                     let mesh = Mesh {
                         layout: x.layout,
                         grids: x.grids,
