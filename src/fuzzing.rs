@@ -411,35 +411,7 @@ pub fn check_mesh_with(domain: &Domain, m: &Mesh, checks: Checks) -> Result<Chec
     }
     // Signed areas.
     let big_r = domain.bounding().radius;
-    let mut cell_area = 0.0;
-    let mut abs_area = 0.0;
-    let mut terms = 0usize;
-    let mut report = CheckReport::default();
-    for g in &m.grids {
-        for j in 0..g.nj {
-            for i in 0..g.ni {
-                let q = [
-                    rel(g.node(i, j)),
-                    rel(g.node(i + 1, j)),
-                    rel(g.node(i + 1, j + 1)),
-                    rel(g.node(i, j + 1)),
-                ];
-                let a = shoelace(&q);
-                cell_area += a;
-                abs_area += a.abs();
-                terms += 4;
-                report.cells += 1;
-                let inverted = (0..4).any(|k| {
-                    let (p, x, y) = (q[k], q[(k + 1) % 4], q[(k + 3) % 4]);
-                    let cross = (x[0] - p[0]) * (y[1] - p[1]) - (x[1] - p[1]) * (y[0] - p[0]);
-                    cross.is_nan() || cross <= 0.0
-                });
-                if inverted {
-                    report.inverted_cells += 1;
-                }
-            }
-        }
-    }
+    let (cell_area, abs_area, mut terms, report) = cell_sums(m, rel);
     let mut expected = 0.0;
     for (k, nodes) in wall_nodes.iter_mut().enumerate() {
         if nodes.is_empty() {
@@ -474,6 +446,40 @@ pub fn check_mesh_with(domain: &Domain, m: &Mesh, checks: Checks) -> Result<Chec
         ));
     }
     Ok(report)
+}
+
+/// Over every cell of `m` (corners moved by `rel`): the sum of signed areas, the sum of their
+/// absolute values, the number of shoelace terms, and the cell and inverted-cell counts (a
+/// corner cross product `<= 0` or NaN).
+fn cell_sums(m: &Mesh, rel: impl Fn(Point) -> Point) -> (f64, f64, usize, CheckReport) {
+    let (mut area, mut abs_area, mut terms) = (0.0, 0.0, 0usize);
+    let mut report = CheckReport::default();
+    for g in &m.grids {
+        for j in 0..g.nj {
+            for i in 0..g.ni {
+                let q = [
+                    rel(g.node(i, j)),
+                    rel(g.node(i + 1, j)),
+                    rel(g.node(i + 1, j + 1)),
+                    rel(g.node(i, j + 1)),
+                ];
+                let a = shoelace(&q);
+                area += a;
+                abs_area += a.abs();
+                terms += 4;
+                report.cells += 1;
+                let inverted = (0..4).any(|k| {
+                    let (p, x, y) = (q[k], q[(k + 1) % 4], q[(k + 3) % 4]);
+                    let cross = (x[0] - p[0]) * (y[1] - p[1]) - (x[1] - p[1]) * (y[0] - p[0]);
+                    cross.is_nan() || cross <= 0.0
+                });
+                if inverted {
+                    report.inverted_cells += 1;
+                }
+            }
+        }
+    }
+    (area, abs_area, terms, report)
 }
 
 fn shoelace(p: &[Point]) -> f64 {
@@ -635,16 +641,24 @@ pub const SAMPLING_REFUSAL_GAP: f64 = Domain::GAP_TOLERANCE;
 /// bug: too many cells or nodes, or sampling that reached its cap on a layout with a gap below
 /// [`SAMPLING_REFUSAL_GAP`] times the bounding radius.
 pub fn accepted_refusal(domain: &Domain, e: &MeshError) -> bool {
+    within_limits(e, || {
+        let gaps = crate::sampling::nearest_gaps(domain);
+        (gaps, domain.bounding().radius)
+    })
+}
+
+/// [`accepted_refusal`] for any domain: `gaps_and_scale` gives the nearest gaps and the length
+/// [`SAMPLING_REFUSAL_GAP`] is relative to (asked only for a sampling error).
+fn within_limits(e: &MeshError, gaps_and_scale: impl FnOnce() -> (Vec<f64>, f64)) -> bool {
     use crate::grid::GridError;
     match e {
         MeshError::Grid(GridError::TooManyNodes { .. } | GridError::TooManyCellsPerSide { .. }) => {
             true
         }
         MeshError::Sampling { .. } => {
-            let min_gap = crate::sampling::nearest_gaps(domain)
-                .into_iter()
-                .fold(f64::INFINITY, f64::min);
-            min_gap < SAMPLING_REFUSAL_GAP * domain.bounding().radius
+            let (gaps, scale) = gaps_and_scale();
+            let min_gap = gaps.into_iter().fold(f64::INFINITY, f64::min);
+            min_gap < SAMPLING_REFUSAL_GAP * scale
         }
         _ => false,
     }

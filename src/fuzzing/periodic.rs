@@ -340,32 +340,7 @@ pub fn check_periodic_mesh(
         }
     }
     // Signed areas: the period minus the wall polygons.
-    let mut report = CheckReport::default();
-    let (mut area, mut abs_area, mut terms) = (0.0, 0.0, 0usize);
-    for g in &m.grids {
-        for j in 0..g.nj {
-            for i in 0..g.ni {
-                let q = [
-                    g.node(i, j),
-                    g.node(i + 1, j),
-                    g.node(i + 1, j + 1),
-                    g.node(i, j + 1),
-                ];
-                let a = super::shoelace(&q);
-                area += a;
-                abs_area += a.abs();
-                terms += 4;
-                report.cells += 1;
-                if (0..4).any(|k| {
-                    let (p, x, y) = (q[k], q[(k + 1) % 4], q[(k + 3) % 4]);
-                    let cross = (x[0] - p[0]) * (y[1] - p[1]) - (x[1] - p[1]) * (y[0] - p[0]);
-                    cross.is_nan() || cross <= 0.0
-                }) {
-                    report.inverted_cells += 1;
-                }
-            }
-        }
-    }
+    let (area, abs_area, mut terms, report) = super::cell_sums(m, |p| p);
     let mut expected_area = size[0] * size[1];
     for (k, nodes) in wall_nodes.iter_mut().enumerate() {
         if nodes.is_empty() {
@@ -426,17 +401,8 @@ pub fn check_periodic_bytes(data: &[u8]) -> Result<Option<CheckReport>, String> 
 /// A resource limit, or sampling at its cap with a gap below
 /// [`super::SAMPLING_REFUSAL_GAP`] of the period.
 fn accepted_periodic_refusal(pd: &PeriodicDomain, e: &crate::mesher::MeshError) -> bool {
-    use crate::grid::GridError;
-    use crate::mesher::MeshError;
-    let size = pd.size();
-    match e {
-        MeshError::Grid(GridError::TooManyNodes { .. } | GridError::TooManyCellsPerSide { .. }) => {
-            true
-        }
-        MeshError::Sampling { .. } => {
-            let min_gap = pd.nearest_gaps().into_iter().fold(f64::INFINITY, f64::min);
-            min_gap < super::SAMPLING_REFUSAL_GAP * size[0].max(size[1])
-        }
-        _ => false,
-    }
+    super::within_limits(e, || {
+        let size = pd.size();
+        (pd.nearest_gaps(), size[0].max(size[1]))
+    })
 }
