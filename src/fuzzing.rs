@@ -703,6 +703,41 @@ pub fn check_json_bytes(data: &[u8]) -> Result<(), String> {
     Ok(())
 }
 
+/// Random bytes through a fuzz check on the stable toolchain (the `*_exploration` tests):
+/// for `MESH_FUZZ_SECONDS` seconds (default 10) from seed `MESH_FUZZ_SEED` (default 1), inputs
+/// of 4 to 203 bytes whose first byte cycles through `generators`. Returns the inputs run, how
+/// many meshed, and each failure as `hex: message`.
+pub fn explore_random_bytes(
+    generators: u8,
+    check: impl Fn(&[u8]) -> Result<Option<CheckReport>, String>,
+) -> (u64, u64, Vec<String>) {
+    let env = |name: &str, default: u64| -> u64 {
+        std::env::var(name)
+            .ok()
+            .and_then(|s| s.parse().ok())
+            .unwrap_or(default)
+    };
+    let seconds = env("MESH_FUZZ_SECONDS", 10);
+    let mut rng = crate::layouts::SplitMix64(env("MESH_FUZZ_SEED", 1));
+    let start = std::time::Instant::now();
+    let (mut runs, mut meshed, mut failures) = (0u64, 0u64, Vec::new());
+    while start.elapsed().as_secs() < seconds {
+        let len = 4 + (rng.next_u64() % 200) as usize;
+        let mut data: Vec<u8> = (0..len).map(|_| rng.next_u64() as u8).collect();
+        data[0] = (runs % u64::from(generators.max(1))) as u8;
+        runs += 1;
+        match check(&data) {
+            Ok(Some(_)) => meshed += 1,
+            Ok(None) => {}
+            Err(e) => {
+                let hex: String = data.iter().map(|b| format!("{b:02x}")).collect();
+                failures.push(format!("{hex}: {e}"));
+            }
+        }
+    }
+    (runs, meshed, failures)
+}
+
 fn circle_bits(d: &Domain) -> Vec<[u64; 3]> {
     std::iter::once(d.bounding())
         .chain(d.holes().iter().copied())

@@ -109,37 +109,8 @@ fn near_touching_bounding_circle_is_meshed() {
 #[test]
 #[ignore = "exploration, run on demand with MESH_FUZZ_SECONDS"]
 fn random_bytes_exploration() {
-    let seconds: u64 = std::env::var("MESH_FUZZ_SECONDS")
-        .ok()
-        .and_then(|s| s.parse().ok())
-        .unwrap_or(10);
-    let seed: u64 = std::env::var("MESH_FUZZ_SEED")
-        .ok()
-        .and_then(|s| s.parse().ok())
-        .unwrap_or(1);
-    let start = std::time::Instant::now();
-    let mut s = seed.wrapping_mul(0x9e37_79b9_7f4a_7c15) | 1;
-    let mut next = || {
-        s ^= s << 13;
-        s ^= s >> 7;
-        s ^= s << 17;
-        s
-    };
-    let (mut runs, mut meshed, mut failures) = (0u64, 0u64, Vec::new());
-    while start.elapsed().as_secs() < seconds {
-        let len = 4 + (next() % 200) as usize;
-        let mut data: Vec<u8> = (0..len).map(|_| next() as u8).collect();
-        data[0] = (runs % 8) as u8;
-        runs += 1;
-        match check_layout_bytes(&data) {
-            Ok(Some(_)) => meshed += 1,
-            Ok(None) => {}
-            Err(e) => {
-                let hex: String = data.iter().map(|b| format!("{b:02x}")).collect();
-                failures.push(format!("{hex}: {e}"));
-            }
-        }
-    }
+    let (runs, meshed, failures) =
+        medial_blocks::fuzzing::explore_random_bytes(8, check_layout_bytes);
     eprintln!(
         "{runs} inputs, {meshed} meshed, {} failures",
         failures.len()

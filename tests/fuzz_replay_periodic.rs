@@ -77,31 +77,8 @@ fn generators_cover_edge_crossing_holes() {
 #[test]
 #[ignore = "exploration, run on demand with MESH_FUZZ_SECONDS"]
 fn random_bytes_exploration() {
-    let seconds: u64 = std::env::var("MESH_FUZZ_SECONDS")
-        .ok()
-        .and_then(|s| s.parse().ok())
-        .unwrap_or(10);
-    let seed: u64 = std::env::var("MESH_FUZZ_SEED")
-        .ok()
-        .and_then(|s| s.parse().ok())
-        .unwrap_or(1);
-    let mut rng = medial_blocks::layouts::SplitMix64(seed);
-    let start = std::time::Instant::now();
-    let (mut runs, mut meshed, mut failures) = (0u64, 0u64, Vec::new());
-    while start.elapsed().as_secs() < seconds {
-        let len = 4 + (rng.next_u64() % 200) as usize;
-        let mut data: Vec<u8> = (0..len).map(|_| rng.next_u64() as u8).collect();
-        data[0] = (runs % 6) as u8;
-        runs += 1;
-        match check_periodic_bytes(&data) {
-            Ok(Some(_)) => meshed += 1,
-            Ok(None) => {}
-            Err(e) => {
-                let hex: String = data.iter().map(|b| format!("{b:02x}")).collect();
-                failures.push(format!("{hex}: {e}"));
-            }
-        }
-    }
+    let (runs, meshed, failures) =
+        medial_blocks::fuzzing::explore_random_bytes(6, check_periodic_bytes);
     eprintln!(
         "{runs} inputs, {meshed} meshed, {} failures",
         failures.len()
