@@ -346,6 +346,15 @@ fn timings_flag_writes_timings_json_and_nothing_else_changes() {
     let report: serde_json::Value = serde_json::from_slice(&b[Path::new("report.json")]).unwrap();
     assert!(report.get("timings").is_none() && report.get("stages").is_none());
 
+    // A later run without --timings into the same directory leaves no stale timings.json
+    // (it would describe another mesh), and the directory then equals the one never timed.
+    run(&with, &[]);
+    assert!(
+        !with.join("timings.json").exists(),
+        "stale timings.json kept"
+    );
+    assert!(files(&with) == b, "rerun without --timings differs");
+
     let t: serde_json::Value = serde_json::from_slice(&timings).unwrap();
     let mut keys: Vec<String> = STAGES.iter().map(|s| s.to_string()).collect();
     keys.push("other".into());

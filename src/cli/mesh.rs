@@ -533,6 +533,19 @@ pub fn run(args: Args, global: Global) -> Result<(), Failure> {
     written.map_err(|e| {
         Failure::output(format!("cannot write into {}: {e}", args.output.display()))
     })?;
+    if !args.timings {
+        // A timings.json left by an earlier run with --timings describes another mesh.
+        let stale = args.output.join("timings.json");
+        match std::fs::remove_file(&stale) {
+            Err(e) if e.kind() != std::io::ErrorKind::NotFound => {
+                return Err(Failure::output(format!(
+                    "cannot remove the stale {}: {e}",
+                    stale.display()
+                )))
+            }
+            _ => {}
+        }
+    }
     if !global.quiet {
         let r = report::Report::from_mesh(&mesh);
         print!("{}", summary(&r));

@@ -165,7 +165,7 @@ pub fn write(mesh: &Mesh, path_out: &Path) -> io::Result<()> {
     write_atomic(path_out, |w| write_to(w, mesh))
 }
 
-/// The SVG document as a string (same checks as [`write`]).
+/// The SVG document as a string (same checks as [`write()`]).
 pub fn to_string(mesh: &Mesh) -> io::Result<String> {
     check_mesh(mesh)?;
     let mut buf = Vec::new();
@@ -173,7 +173,7 @@ pub fn to_string(mesh: &Mesh) -> io::Result<String> {
     String::from_utf8(buf).map_err(io::Error::other)
 }
 
-/// Write the SVG document to `w` (no checks beyond [`write`]'s; used by it).
+/// Write the SVG document to `w` (no checks beyond [`write()`]'s; used by it).
 fn write_to<W: Write>(w: &mut W, mesh: &Mesh) -> io::Result<()> {
     let circles = circles(mesh);
     let v = View::new(mesh, &circles);
