@@ -1,6 +1,9 @@
 //! Back end end-to-end: template -> build_grids -> quality -> writers, read back by small
 //! independent parsers; determinism of every file.
 
+mod common;
+
+use common::tree;
 use medial_blocks::domain::Circle;
 use medial_blocks::grid::build_grids;
 use medial_blocks::layout::BlockLayout;
@@ -116,28 +119,6 @@ fn check_vtk(mesh: &Mesh, dir: &Path) {
     }
 }
 
-fn read_all(dir: &Path) -> Vec<(String, Vec<u8>)> {
-    let mut out = Vec::new();
-    let mut stack = vec![dir.to_path_buf()];
-    while let Some(d) = stack.pop() {
-        let mut entries: Vec<_> = std::fs::read_dir(&d)
-            .unwrap()
-            .map(|e| e.unwrap().path())
-            .collect();
-        entries.sort();
-        for p in entries {
-            if p.is_dir() {
-                stack.push(p);
-            } else {
-                let name = p.strip_prefix(dir).unwrap().display().to_string();
-                out.push((name, std::fs::read(&p).unwrap()));
-            }
-        }
-    }
-    out.sort();
-    out
-}
-
 fn write_everything(mesh: &Mesh, dir: &Path) {
     vtk::write_multiblock(mesh, dir).unwrap();
     svg::write(mesh, &dir.join("mesh.svg")).unwrap();
@@ -202,7 +183,7 @@ fn end_to_end_writers_read_back() {
         assert!(svg.contains("viewBox=\"0 0 1000 "));
 
         // No temporary files left behind.
-        for (f, _) in read_all(&dir) {
+        for (f, _) in tree(&dir) {
             assert!(!f.contains(".tmp"), "{f}");
         }
     }
@@ -215,12 +196,12 @@ fn writing_twice_is_byte_identical() {
         let (a, b) = (tmp.path().join("a"), tmp.path().join("b"));
         write_everything(&mesh, &a);
         write_everything(&mesh, &b);
-        let (fa, fb) = (read_all(&a), read_all(&b));
+        let (fa, fb) = (tree(&a), tree(&b));
         assert_eq!(fa.len(), mesh.grids.len() + 3);
         assert_eq!(fa, fb, "{name}");
         // Rebuilding the mesh from scratch also gives the same bytes.
         write_everything(&meshes().into_iter().find(|m| m.0 == name).unwrap().1, &b);
-        assert_eq!(fa, read_all(&b), "{name}");
+        assert_eq!(fa, tree(&b), "{name}");
     }
 }
 

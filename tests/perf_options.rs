@@ -5,14 +5,16 @@
 //! from node coordinates alone, byte comparison of whole output directories, and an O(n^2)
 //! re-check of the bubble generator.
 
+mod common;
+
+use common::{run as cli, tree};
 use medial_blocks::grid::{GridError, MAX_CELLS_PER_SIDE};
 use medial_blocks::layout::Curve;
 use medial_blocks::mesher::mesh_timed;
 use medial_blocks::timings::STAGES;
 use medial_blocks::{layouts, mesh, Domain, Mesh, MeshError, Mode, Options};
 use std::collections::{BTreeMap, HashMap};
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::path::Path;
 
 const WALL_ANGLE_DEG: f64 = 15.0;
 
@@ -268,30 +270,6 @@ fn bubbles_are_separated_inside_and_reproducible() {
 
 // ---- the CLI ----
 
-fn cli(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_medial-blocks"))
-        .args(args)
-        .output()
-        .expect("binary runs")
-}
-
-fn files(dir: &Path) -> BTreeMap<PathBuf, Vec<u8>> {
-    let mut out = BTreeMap::new();
-    let mut stack = vec![dir.to_path_buf()];
-    while let Some(d) = stack.pop() {
-        for e in std::fs::read_dir(&d).unwrap() {
-            let p = e.unwrap().path();
-            if p.is_dir() {
-                stack.push(p);
-            } else {
-                let rel = p.strip_prefix(dir).unwrap().to_path_buf();
-                out.insert(rel, std::fs::read(&p).unwrap());
-            }
-        }
-    }
-    out
-}
-
 #[test]
 fn timings_flag_writes_timings_json_and_nothing_else_changes() {
     let tmp = tempfile::tempdir().unwrap();
@@ -331,19 +309,20 @@ fn timings_flag_writes_timings_json_and_nothing_else_changes() {
     let stderr = String::from_utf8_lossy(&o.stderr);
     assert!(stderr.contains("peak memory") && stderr.contains("triangulation"));
 
+    let files = |d: &Path| tree(d).into_iter().collect::<BTreeMap<String, Vec<u8>>>();
     let mut a = files(&with);
     let b = files(&without);
-    let timings = a.remove(Path::new("timings.json")).expect("timings.json");
-    assert!(!b.contains_key(Path::new("timings.json")));
+    let timings = a.remove("timings.json").expect("timings.json");
+    assert!(!b.contains_key("timings.json"));
     assert_eq!(
         a.keys().collect::<Vec<_>>(),
         b.keys().collect::<Vec<_>>(),
         "same files"
     );
     for (k, v) in &a {
-        assert!(v == &b[k], "{} differs with --timings", k.display());
+        assert!(v == &b[k], "{k} differs with --timings");
     }
-    let report: serde_json::Value = serde_json::from_slice(&b[Path::new("report.json")]).unwrap();
+    let report: serde_json::Value = serde_json::from_slice(&b["report.json"]).unwrap();
     assert!(report.get("timings").is_none() && report.get("stages").is_none());
 
     // A later run without --timings into the same directory leaves no stale timings.json

@@ -3,6 +3,9 @@
 //! byte-identical files. (Before serde_json's `float_roundtrip` the JSON reader could be an
 //! ulp off the CSV reader, which is Rust's correctly rounded `f64::from_str`.)
 
+mod common;
+
+use common::tree;
 use medial_blocks::input::{parse_holes_csv, parse_triple};
 use medial_blocks::{Circle, Domain};
 use proptest::prelude::*;
@@ -92,7 +95,7 @@ fn cli_meshes_json_and_csv_alike() {
     };
     let a = run(&json, "a", &[]);
     let c = run(&csv_path, "c", &["--bounding", &bounding]);
-    let (fa, fc) = (files(&a), files(&c));
+    let (fa, fc) = (tree(&a), tree(&c));
     assert!(fa.len() >= 3, "files written: {}", fa.len());
     assert_eq!(
         fa.iter().map(|f| &f.0).collect::<Vec<_>>(),
@@ -102,23 +105,4 @@ fn cli_meshes_json_and_csv_alike() {
         assert!(x == y, "{n:?} differs between the JSON and the CSV input");
     }
     let _ = Domain::from_json_str(&d.to_json_string()).unwrap();
-}
-
-/// Every file under `dir` (relative path, bytes), sorted.
-fn files(dir: &std::path::Path) -> Vec<(std::path::PathBuf, Vec<u8>)> {
-    let mut out = Vec::new();
-    let mut stack = vec![dir.to_path_buf()];
-    while let Some(d) = stack.pop() {
-        for e in std::fs::read_dir(&d).unwrap() {
-            let p = e.unwrap().path();
-            if p.is_dir() {
-                stack.push(p);
-            } else {
-                let rel = p.strip_prefix(dir).unwrap().to_path_buf();
-                out.push((rel, std::fs::read(&p).unwrap()));
-            }
-        }
-    }
-    out.sort();
-    out
 }

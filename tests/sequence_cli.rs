@@ -1,13 +1,11 @@
 //! `mesh-sequence`: frames in parallel, per-frame errors, pvd, summary, determinism.
 
+mod common;
+
+use common::{bin, tree};
 use medial_blocks::sequence::{mesh_frame, parse_frames};
 use medial_blocks::Options;
 use std::path::Path;
-use std::process::Command;
-
-fn bin() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_medial-blocks"))
-}
 
 /// Frames of three holes moving slowly; frame 3 has two overlapping holes; frame 5 is
 /// periodic.
@@ -37,24 +35,6 @@ fn run(input: &Path, out: &Path, threads: &str) -> std::process::Output {
         .args(["--threads", threads, "--cells", "6"])
         .output()
         .unwrap()
-}
-
-fn tree(dir: &Path) -> Vec<(String, Vec<u8>)> {
-    let mut out = Vec::new();
-    let mut stack = vec![dir.to_path_buf()];
-    while let Some(d) = stack.pop() {
-        for e in std::fs::read_dir(&d).unwrap() {
-            let p = e.unwrap().path();
-            if p.is_dir() {
-                stack.push(p);
-            } else {
-                let rel = p.strip_prefix(dir).unwrap().display().to_string();
-                out.push((rel, std::fs::read(&p).unwrap()));
-            }
-        }
-    }
-    out.sort();
-    out
 }
 
 #[test]

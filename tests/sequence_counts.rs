@@ -1,6 +1,9 @@
 //! Sequences keep block structure and node counts over runs of equal combinatorics (issue 6).
 //! Node counts are read back from the written connectivity.json (`dims` per block).
 
+mod common;
+
+use common::tree;
 use medial_blocks::exact_mode::imposed::ImposedCounts;
 use medial_blocks::sequence::{mesh_frame, parse_frames, run_sequence, SequenceSummary};
 use medial_blocks::{AnyDomain, Options};
@@ -70,24 +73,6 @@ fn dims(dir: &Path, k: usize) -> Vec<[u64; 2]> {
             [d[0].as_u64().unwrap(), d[1].as_u64().unwrap()]
         })
         .collect()
-}
-
-fn tree(dir: &Path) -> Vec<(String, Vec<u8>)> {
-    let mut out = Vec::new();
-    let mut stack = vec![dir.to_path_buf()];
-    while let Some(d) = stack.pop() {
-        for e in std::fs::read_dir(&d).unwrap() {
-            let p = e.unwrap().path();
-            if p.is_dir() {
-                stack.push(p);
-            } else {
-                let rel = p.strip_prefix(dir).unwrap().display().to_string();
-                out.push((rel, std::fs::read(&p).unwrap()));
-            }
-        }
-    }
-    out.sort();
-    out
 }
 
 fn check_run(text: &str, n: usize) {

@@ -1,38 +1,16 @@
 //! The CLI contract, run on the built binary: file names, `example`, exit codes, thread-count
 //! independence, help texts.
 
+mod common;
+
+use common::{run, tree};
 use medial_blocks::Domain;
 use std::collections::BTreeSet;
 use std::path::Path;
-use std::process::{Command, Output};
 
-fn bin() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_medial-blocks"))
-}
-
-fn run(args: &[&str]) -> Output {
-    bin().args(args).output().unwrap()
-}
-
+/// The relative paths of every file under `dir`.
 fn files(dir: &Path) -> BTreeSet<String> {
-    let mut out = BTreeSet::new();
-    let mut stack = vec![dir.to_path_buf()];
-    while let Some(d) = stack.pop() {
-        for e in std::fs::read_dir(&d).unwrap() {
-            let p = e.unwrap().path();
-            if p.is_dir() {
-                stack.push(p);
-            } else {
-                let rel = p
-                    .strip_prefix(dir)
-                    .unwrap()
-                    .to_string_lossy()
-                    .replace('\\', "/");
-                out.insert(rel);
-            }
-        }
-    }
-    out
+    tree(dir).into_iter().map(|(name, _)| name).collect()
 }
 
 #[test]
@@ -115,14 +93,7 @@ fn thread_count_does_not_change_the_output() {
             "vtk,vtu,plot3d,gmsh,svg,json",
         ]);
         assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-        let contents: Vec<(String, Vec<u8>)> = files(&out)
-            .into_iter()
-            .map(|f| {
-                let bytes = std::fs::read(out.join(&f)).unwrap();
-                (f, bytes)
-            })
-            .collect();
-        trees.push(contents);
+        trees.push(tree(&out));
     }
     assert!(!trees[0].is_empty());
     assert!(
