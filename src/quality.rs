@@ -120,21 +120,32 @@ pub fn cell_fields(grid: &BlockGrid) -> CellFields {
 /// Number of inverted cells (a corner Jacobian `<= 0` or not a number) over well-formed grids:
 /// the cheap check of [`Quality::inverted_cells`] (signs of cross products only).
 pub fn inverted_cells(grids: &[BlockGrid]) -> usize {
+    grids.par_iter().map(grid_inverted_cells).sum()
+}
+
+/// [`inverted_cells`] of one grid.
+fn grid_inverted_cells(g: &BlockGrid) -> usize {
+    if !well_formed(g) {
+        return 0;
+    }
+    let mut n = 0;
+    for j in 0..g.nj {
+        for i in 0..g.ni {
+            n += usize::from(kernel::is_inverted(&corners(g, i, j)));
+        }
+    }
+    n
+}
+
+/// The indices of the grids with at least one inverted cell (as [`inverted_cells`] counts
+/// them), in increasing order: one pass over the cells.
+pub fn inverted_blocks(grids: &[BlockGrid]) -> Vec<usize> {
     grids
         .par_iter()
-        .map(|g| {
-            if !well_formed(g) {
-                return 0;
-            }
-            let mut n = 0;
-            for j in 0..g.nj {
-                for i in 0..g.ni {
-                    n += usize::from(kernel::is_inverted(&corners(g, i, j)));
-                }
-            }
-            n
-        })
-        .sum()
+        .enumerate()
+        .filter(|(_, g)| grid_inverted_cells(g) > 0)
+        .map(|(b, _)| b)
+        .collect()
 }
 
 fn fold(v: [f64; 4], op: fn(f64, f64) -> f64) -> f64 {
