@@ -25,7 +25,7 @@ fn inverted(grids: &[BlockGrid]) -> usize {
                 let flipped = (0..4).any(|k| {
                     let (o, a, b) = (p[k], p[(k + 1) % 4], p[(k + 3) % 4]);
                     let cross = (a[0] - o[0]) * (b[1] - o[1]) - (a[1] - o[1]) * (b[0] - o[0]);
-                    !(cross > 0.0)
+                    cross.is_nan() || cross <= 0.0
                 });
                 bad += usize::from(flipped);
             }
