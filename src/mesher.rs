@@ -464,6 +464,9 @@ fn exact_on_sampling(
     let holes = domain.hole_count();
     // Inconsistent arcs already collapsed into a degree-4 vertex (sampled arc ids).
     let mut merged: Vec<u32> = Vec::new();
+    // The circles around the backwards arcs of the last degree-4 collapse, until a rebuild
+    // after it succeeds.
+    let mut around_merged: Option<Vec<CircleId>> = None;
     let mut fixes = 0;
     loop {
         let built = timings::span("exact_geometry", || {
@@ -472,17 +475,26 @@ fn exact_on_sampling(
         let m = match built {
             Ok(m) => m,
             Err(MeshError::Internal(_)) => {
+                // A degree-4 collapse of a backwards arc broke the construction: refine the
+                // sampling around that arc instead.
+                if let Some(circles) = around_merged.take() {
+                    return Ok(Attempt::Retry((!circles.is_empty()).then_some(circles)));
+                }
                 // Somewhere unknown: give up every short collapse (zero-length ones stay).
                 let short = short_collapses(cb, None);
                 if fixes < EXACT_LOCAL_FIXES && !short.is_empty() {
                     fixes += 1;
-                    give_up(cb, options, &short, given_up)?;
-                    continue;
+                    match give_up(cb, options, &short, given_up) {
+                        Ok(()) => continue,
+                        Err(MeshError::Internal(_)) => {}
+                        Err(err) => return Err(err),
+                    }
                 }
                 return Ok(Attempt::Retry(None));
             }
             Err(err) => return Err(err),
         };
+        around_merged = None;
         let inverted = timings::span("quality_check", || {
             crate::quality::inverted_blocks(&m.grids)
         });
@@ -494,20 +506,7 @@ fn exact_on_sampling(
             && inverted.is_empty()
             && (poor.is_empty() || fixes >= EXACT_LOCAL_FIXES)
         {
-            let medial = &cb.refined.sampled.medial;
-            return Ok(Attempt::Done(Box::new(Mesh {
-                layout: m.layout,
-                grids: m.grids,
-                medial_vertices: medial.vertex_count(),
-                medial_arcs: medial.arc_count(),
-                holes,
-                cocircular_groups: cb.groups.clone(),
-                collapsed_arcs: cb.collapsed,
-                inserted_holes: cb.refined.inserted.clone(),
-                split_arcs: m.split_arcs,
-                template_blocks: m.template_blocks,
-                geometry: Geometry::Exact,
-            })));
+            return Ok(done(cb, m, holes));
         }
         let mut bad: Vec<usize> = inverted;
         for &e in &m.inconsistent_arcs {
@@ -531,12 +530,7 @@ fn exact_on_sampling(
             clusters.sort_unstable();
             clusters.dedup();
             let short = short_collapses(cb, Some(&clusters));
-            if !short.is_empty() {
-                fixes += 1;
-                give_up(cb, options, &short, given_up)?;
-                continue;
-            }
-            // Arcs running backwards with nothing to give up at their ends: collapse them.
+            // The backwards arcs not collapsed yet (sampled arc ids).
             let mut force: Vec<u32> = m
                 .inconsistent_arcs
                 .iter()
@@ -545,17 +539,56 @@ fn exact_on_sampling(
                 .collect();
             force.sort_unstable();
             force.dedup();
-            if !force.is_empty() {
+            if !short.is_empty() {
                 fixes += 1;
+                match give_up(cb, options, &short, given_up) {
+                    Ok(()) => continue,
+                    Err(MeshError::Internal(_)) => {}
+                    Err(err) => return Err(err),
+                }
+            } else if !force.is_empty() {
+                // Arcs running backwards with nothing to give up at their ends: collapse them.
+                fixes += 1;
+                let around = circles_around(&m.layout, &bad, holes);
                 merged.extend_from_slice(&force);
                 merged.sort_unstable();
-                timings::span("blocking", || cb.recollapse(options, &[], &force))?;
-                continue;
+                match timings::span("blocking", || cb.recollapse(options, &[], &force)) {
+                    Ok(()) => {
+                        around_merged = Some(around);
+                        continue;
+                    }
+                    Err(MeshError::Internal(_)) => {
+                        return Ok(Attempt::Retry((!around.is_empty()).then_some(around)))
+                    }
+                    Err(err) => return Err(err),
+                }
             }
+        }
+        if bad.is_empty() {
+            // Only nearly flat cells, and nothing left to give up for them.
+            return Ok(done(cb, m, holes));
         }
         let circles = circles_around(&m.layout, &bad, holes);
         return Ok(Attempt::Retry((!circles.is_empty()).then_some(circles)));
     }
+}
+
+/// The exact mesh of `cb` as the mesher's result.
+fn done(cb: &blocking::CollapsedBlocking, m: exact_mode::ExactMesh, holes: usize) -> Attempt {
+    let medial = &cb.refined.sampled.medial;
+    Attempt::Done(Box::new(Mesh {
+        layout: m.layout,
+        grids: m.grids,
+        medial_vertices: medial.vertex_count(),
+        medial_arcs: medial.arc_count(),
+        holes,
+        cocircular_groups: cb.groups.clone(),
+        collapsed_arcs: cb.collapsed,
+        inserted_holes: cb.refined.inserted.clone(),
+        split_arcs: m.split_arcs,
+        template_blocks: m.template_blocks,
+        geometry: Geometry::Exact,
+    }))
 }
 
 /// Mesh either kind of domain: [`mesh`] for a bounded one, [`crate::periodic::mesh_periodic`]

@@ -162,3 +162,30 @@ fn local_uncollapse_keeps_the_collapses_outside_the_cluster() {
         assert_eq!(fresh_set, expected, "cluster {k}, from keys");
     }
 }
+
+/// An arc running backwards (the sampled Delaunay diagonal of four nearly co-circular circles
+/// is not the exact one) with no short collapse to give up: exact mode collapses it into a
+/// degree-4 vertex on the same triangulation instead of resampling.
+#[test]
+fn backwards_arc_is_collapsed_without_resampling() {
+    let options = Options {
+        collapse_fraction: 0.0,
+        block_cells: Some(2),
+        ..Options::default()
+    };
+    let domain = bubbles(150, 2).unwrap();
+    // Precondition, checked: the first exact build has an inconsistent arc.
+    let cb = collapsed_blocking_with(&domain, &options, &exact_sampling(), false).unwrap();
+    assert!(cb.chosen.iter().all(|c| c.zero));
+    let first = medial_blocks::exact_mode::collapsed::build_collapsed(&cb, &options).unwrap();
+    assert!(!first.inconsistent_arcs.is_empty());
+    let (mesh, t) = mesh_timed(&domain, &options).unwrap();
+    assert_eq!(mesh.geometry, Geometry::Exact);
+    assert_eq!(inverted(&mesh.grids), 0);
+    assert_eq!(calls(&t, "triangulation"), 1);
+    assert_eq!(calls(&t, "sampling"), 1);
+    assert_eq!(
+        mesh.collapsed_arcs,
+        cb.collapsed + first.inconsistent_arcs.len()
+    );
+}
