@@ -426,10 +426,9 @@ fn poor_merged_blocks(
                 .any(|&v| v < nc && merged.binary_search(&v).is_ok())
         })
         .filter(|&(b, _)| {
-            grids.get(b).is_some_and(|g| {
-                crate::quality::measure(std::slice::from_ref(g)).min_angle_deg
-                    < MERGED_MIN_ANGLE_DEG
-            })
+            grids
+                .get(b)
+                .is_some_and(|g| crate::quality::has_corner_below(g, MERGED_MIN_ANGLE_DEG))
         })
         .map(|(b, _)| b)
         .collect()
@@ -468,9 +467,17 @@ fn exact_on_sampling(
     // after it succeeds.
     let mut around_merged: Option<Vec<CircleId>> = None;
     let mut fixes = 0;
+    // The exact vertices of the sampled graph do not depend on the collapse: solved once.
+    let single = match timings::span("exact_geometry", || {
+        exact_mode::exact_vertices(&cb.refined.domain, &cb.refined.sampled.medial)
+    }) {
+        Ok(v) => v,
+        Err(MeshError::Internal(_)) => return Ok(Attempt::Retry(None)),
+        Err(err) => return Err(err),
+    };
     loop {
         let built = timings::span("exact_geometry", || {
-            exact_mode::collapsed::build_collapsed(cb, options)
+            exact_mode::collapsed::build_collapsed_on(cb, options, &single)
         });
         let m = match built {
             Ok(m) => m,

@@ -161,10 +161,13 @@ pub fn exact_vertices(
     domain: &Domain,
     medial: &crate::medial::MedialGraph,
 ) -> Result<Vec<ExactVertex>, MeshError> {
+    use rayon::prelude::*;
     let nh = domain.hole_count() as CircleId;
-    medial
+    // Solved in parallel, collected in vertex order: the first error is that of the first
+    // failing vertex, for every thread count.
+    let solved: Vec<Result<ExactVertex, MeshError>> = medial
         .vertices
-        .iter()
+        .par_iter()
         .enumerate()
         .map(|(k, v)| {
             let c = v.circles;
@@ -187,7 +190,8 @@ pub fn exact_vertices(
                 tangent: ap.tangent_points.to_vec(),
             })
         })
-        .collect()
+        .collect();
+    solved.into_iter().collect()
 }
 
 /// One medial arc sampled in exact geometry.
