@@ -42,7 +42,9 @@ pub struct Options {
     pub refine_ratio: Option<f64>,
     /// Collapse medial arcs shorter than this fraction of the local empty-circle radius
     /// ([`crate::collapse`]). Default [`DEFAULT_COLLAPSE_FRACTION`]; `0` collapses only
-    /// zero-length arcs (which are always collapsed).
+    /// zero-length arcs (which are always collapsed) and, in exact mode, arcs whose exact
+    /// geometry runs backwards (nearly co-circular circles whose sampled Delaunay diagonal is
+    /// not the exact one; see [`mesh`]).
     pub collapse_fraction: f64,
     /// The most holes refinement may insert before [`MeshError::Refinement`]. Default
     /// [`DEFAULT_MAX_INSERTED_HOLES`].
@@ -139,9 +141,11 @@ pub enum MeshError {
 /// In exact mode (the default) with two or more holes: the degeneracy handling below, then
 /// exact Apollonius vertices (co-circular group circles at collapsed vertices), exact medial
 /// arcs and spoke-aligned grids, inserted holes filled by templates ([`crate::exact_mode`],
-/// [`Mesh::geometry`] is [`Geometry::Exact`]). Only where the exact geometry still disagrees
-/// with the sampled combinatorics after resampling (see `mesh_exact`) is the paper pipeline
-/// used instead ([`Geometry::Paper`]), as it is in paper mode:
+/// [`Mesh::geometry`] is [`Geometry::Exact`]). Where the exact geometry disagrees with the
+/// sampled combinatorics it is fixed on the same triangulation first (short collapses given
+/// up around inverted or nearly flat blocks, an arc running backwards collapsed into a
+/// degree-4 vertex), then by resampling (see `mesh_exact`); only where it still disagrees is
+/// the paper pipeline used instead ([`Geometry::Paper`]), as it is in paper mode:
 ///
 /// Two or more holes: macro Delaunay refinement ([`crate::refine`], paper Algorithm 3: holes
 /// are inserted while an interior triangle is poor, the paper's strategy of refining angles
