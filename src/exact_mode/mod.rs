@@ -599,13 +599,20 @@ pub fn assemble(sk: Skeleton<'_>, options: &Options) -> Result<ExactMesh, MeshEr
             clustering_of(options, id)
         }
     };
+    // The radii of the vertices touching each circle (each vertex once per circle), bucketed
+    // in one pass (a scan of every vertex per circle was quadratic); the median does not
+    // depend on their order.
+    let mut near_radii: Vec<Vec<f64>> = vec![Vec::new(); ncirc];
+    for v in &vertices {
+        for (k, &c) in v.circles.iter().enumerate() {
+            if c >= -1 && cidx(c) < ncirc && !v.circles[..k].contains(&c) {
+                near_radii[cidx(c)].push(v.radius);
+            }
+        }
+    }
     let mut circle_target = vec![1.0; ncirc];
     for id in domain.circle_ids() {
-        let near: Vec<f64> = vertices
-            .iter()
-            .filter(|v| v.circles.contains(&id))
-            .map(|v| v.radius)
-            .collect();
+        let near = std::mem::take(&mut near_radii[cidx(id)]);
         let len = median(near).unwrap_or(h);
         let cl = cluster(id);
         let first = cl.first_height(domain.circle(id).radius);
