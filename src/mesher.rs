@@ -473,7 +473,11 @@ fn exact_on_sampling(
     let mut fixes = 0;
     // The exact vertices of the sampled graph do not depend on the collapse: solved once.
     let single = match timings::span("exact_geometry", || {
-        exact_mode::exact_vertices(&cb.refined.domain, &cb.refined.sampled.medial)
+        exact_mode::exact_vertices_with(
+            &cb.refined.domain,
+            &cb.refined.sampled.medial,
+            &cb.refined.circles,
+        )
     }) {
         Ok(v) => v,
         Err(MeshError::Internal(_)) => return Ok(Attempt::Retry(None)),

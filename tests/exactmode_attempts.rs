@@ -189,3 +189,35 @@ fn backwards_arc_is_collapsed_without_resampling() {
         cb.collapsed + first.inconsistent_arcs.len()
     );
 }
+
+/// Exact mode takes its sampled graph's exact vertices from the refinement's Apollonius
+/// circles instead of solving them again: the same vertices, bit for bit, as solving afresh.
+#[test]
+fn exact_vertices_from_the_refinement_are_the_solved_ones() {
+    use medial_blocks::exact_mode::{exact_vertices, exact_vertices_with};
+    for (n, seed) in [(60, 3), (150, 2)] {
+        let domain = bubbles(n, seed).unwrap();
+        let refined = refine::refine(&domain, Some(2.0), 10_000, &exact_sampling()).unwrap();
+        let medial = &refined.sampled.medial;
+        assert!(refined.circles.iter().filter(|c| c.is_some()).count() > medial.vertices.len() / 2);
+        let solved = exact_vertices(&refined.domain, medial).unwrap();
+        let reused = exact_vertices_with(&refined.domain, medial, &refined.circles).unwrap();
+        let bits = |v: &medial_blocks::exact_mode::ExactVertex| {
+            let mut b = vec![
+                v.center[0].to_bits(),
+                v.center[1].to_bits(),
+                v.radius.to_bits(),
+            ];
+            b.extend(
+                v.tangent
+                    .iter()
+                    .flat_map(|t| [t[0].to_bits(), t[1].to_bits()]),
+            );
+            (b, v.circles.clone())
+        };
+        assert_eq!(solved.len(), reused.len());
+        for (a, b) in solved.iter().zip(&reused) {
+            assert_eq!(bits(a), bits(b));
+        }
+    }
+}

@@ -161,6 +161,18 @@ pub fn exact_vertices(
     domain: &Domain,
     medial: &crate::medial::MedialGraph,
 ) -> Result<Vec<ExactVertex>, MeshError> {
+    exact_vertices_with(domain, medial, &[])
+}
+
+/// [`exact_vertices`], reusing `known[k]` when it is `Some`: the counter-clockwise Apollonius
+/// circle of vertex `k` nearest its position, as [`crate::cocircular::vertex_circles`] solves
+/// it (the same sites and the same choice as the first try here, so the same result; the
+/// refinement has them already). Missing or `None` entries are solved.
+pub fn exact_vertices_with(
+    domain: &Domain,
+    medial: &crate::medial::MedialGraph,
+    known: &[Option<crate::apollonius::Apollonius>],
+) -> Result<Vec<ExactVertex>, MeshError> {
     use rayon::prelude::*;
     let nh = domain.hole_count() as CircleId;
     // Solved in parallel, collected in vertex order: the first error is that of the first
@@ -176,6 +188,14 @@ pub fn exact_vertices(
                 return Err(internal(format!(
                     "medial vertex {k} does not touch three different circles: {c:?}"
                 )));
+            }
+            if let Some(Some(ap)) = known.get(k) {
+                return Ok(ExactVertex {
+                    center: ap.center,
+                    radius: ap.radius,
+                    circles: c.to_vec(),
+                    tangent: ap.tangent_points.to_vec(),
+                });
             }
             let sites = c.map(|x| Wall::of(domain, x).site());
             let ap = apollonius(sites, Choice::ccw().near(v.position))
