@@ -273,17 +273,23 @@ pub const EXACT_LOCAL_FIXES: usize = 8;
 /// follow the samples). Where the exact mesh disagrees, it is first fixed locally, on the same
 /// sampling and triangulation (no resampling), at most [`EXACT_LOCAL_FIXES`] times
 /// (`exact_on_sampling`):
-/// - an inverted block, or an arc running backwards
-///   ([`exact_mode::ExactMesh::inconsistent_arcs`]), at a vertex merged by *short*-arc
-///   collapse (whose merged centre is on none of the exact bisectors): the short collapses of
-///   only those clusters are given up (zero-length collapses, exact co-circular group circles,
-///   stay), and remembered by their circles ([`blocking::arc_key`]) for any later sampling;
+/// - an inverted block, an arc running backwards
+///   ([`exact_mode::ExactMesh::inconsistent_arcs`]), or a cell angle below
+///   [`MERGED_MIN_ANGLE_DEG`], at a vertex merged by *short*-arc collapse (whose merged centre
+///   is on none of the exact bisectors): the short collapses of only those clusters are given
+///   up (zero-length collapses, exact co-circular group circles, stay), and remembered by their
+///   circles ([`blocking::arc_key`]) for any later sampling;
 /// - an arc running backwards with no short collapse to give up at its ends (nearly
 ///   co-circular circles whose sampled Delaunay diagonal is not the exact one): the arc is
-///   collapsed, once, into a degree-4 vertex at the mean of its two Apollonius centres;
+///   collapsed, once, into a degree-4 vertex at the mean of its two Apollonius centres (if
+///   that breaks the construction, the circles around it are resampled);
 /// - a failure of the exact construction at an unknown place ([`MeshError::Internal`]: a
 ///   collapsed vertex with two spokes to one circle, an exact arc not defined, a template that
 ///   does not fit): every short collapse is given up.
+///
+/// The exact vertices of the sampled graph are taken from the refinement once per sampling
+/// ([`exact_mode::exact_vertices_with`]); a local rebuild redoes only the collapse, Blocking2D
+/// ([`blocking::CollapsedBlocking::recollapse`]) and the exact layout and grids.
 ///
 /// Only when that does not suffice is the sampling refined 4x, up to [`EXACT_RESAMPLING`]
 /// times: only on the circles around the disagreeing arcs and inverted blocks
