@@ -562,8 +562,34 @@ pub struct CollapsedBlocking {
     pub contracted: crate::collapse::Contracted,
     /// Blocking2D on the contracted graph.
     pub layout: BlockLayout,
-    /// Arcs collapsed.
+    /// Arcs collapsed (`chosen.len()`).
     pub collapsed: usize,
+    /// The arcs collapsed, in acceptance order ([`crate::collapse::select_forced`], less the
+    /// short ones given up).
+    pub chosen: Vec<crate::collapse::Candidate>,
+    /// Arcs always collapsed (single-sample walls, when asked for), one flag per sampled arc.
+    pub forced: Vec<bool>,
+    /// Arcs never collapsed as short arcs, one flag per sampled arc: those excluded by the
+    /// caller and those given up because their collapse left a block without area.
+    pub excluded: Vec<bool>,
+}
+
+/// A name for a sampled medial arc that survives resampling: the circles of its two end
+/// vertices, sorted and deduplicated (normally four: the arc's two circles and the third
+/// circle of each end). Empty for a malformed arc.
+pub fn arc_key(medial: &MedialGraph, arc: usize) -> Vec<CircleId> {
+    let Some(a) = medial.arcs.get(arc) else {
+        return Vec::new();
+    };
+    let mut key: Vec<CircleId> = a
+        .ends
+        .iter()
+        .filter_map(|&v| medial.vertices.get(v as usize))
+        .flat_map(|v| v.circles)
+        .collect();
+    key.sort_unstable();
+    key.dedup();
+    key
 }
 
 /// [`CollapsedBlocking`] of `domain` (see [`build_mesh_layout`] for the collapse retries).
@@ -577,7 +603,21 @@ pub fn collapsed_blocking_with(
     sampling: &SamplingOptions,
     collapse_thin_walls: bool,
 ) -> Result<CollapsedBlocking, MeshError> {
-    use crate::{cocircular, collapse, refine};
+    collapsed_blocking_excluding(domain, options, sampling, collapse_thin_walls, &[])
+}
+
+/// [`collapsed_blocking_with`], never collapsing as a short arc any arc whose [`arc_key`] is
+/// in `never` (sorted; zero-length and forced arcs are still collapsed). Exact mode uses it to
+/// keep the short collapses it gave up ([`CollapsedBlocking::recollapse`]) given up after a
+/// resampling, where arc ids change but circles do not.
+pub fn collapsed_blocking_excluding(
+    domain: &Domain,
+    options: &Options,
+    sampling: &SamplingOptions,
+    collapse_thin_walls: bool,
+    never: &[Vec<CircleId>],
+) -> Result<CollapsedBlocking, MeshError> {
+    use crate::{cocircular, refine};
     let h = domain.hole_count();
     if h < 2 {
         return Err(MeshError::Options(format!(
@@ -597,11 +637,15 @@ pub fn collapsed_blocking_with(
         options.max_inserted_holes,
         sampling,
     )?;
-    let final_domain = &refined.domain;
     let sampled = &refined.sampled;
     let medial = &sampled.medial;
     let groups = cocircular::cocircular_groups(medial, &refined.circles);
     let mut exclude = vec![false; medial.arcs.len()];
+    if !never.is_empty() {
+        for (e, x) in exclude.iter_mut().enumerate() {
+            *x = never.binary_search(&arc_key(medial, e)).is_ok();
+        }
+    }
     // Arcs the sampling left with a single-sample wall: always collapsed (their block on the
     // thin side would have a zero-sweep wall, and a zero-area ring block in a template).
     let mut forced = vec![false; medial.arcs.len()];
@@ -612,18 +656,89 @@ pub fn collapsed_blocking_with(
             }
         }
     }
+    let (layout, chosen, contracted, excluded) =
+        collapse_and_block(&refined, &groups, options, &forced, exclude)?;
+    Ok(CollapsedBlocking {
+        refined,
+        groups,
+        contracted,
+        layout,
+        collapsed: chosen.len(),
+        chosen,
+        forced,
+        excluded,
+    })
+}
+
+impl CollapsedBlocking {
+    /// Redo arc collapse and Blocking2D on the same sampling, triangulation and medial graph
+    /// (no resampling), giving up the short collapses of the sampled arcs `give_up` on top of
+    /// [`CollapsedBlocking::excluded`], and force-collapsing the arcs `force` (as zero-length
+    /// arcs are). The selection is the same deterministic greedy pass, so every other collapse
+    /// is chosen again unless a given-up arc was joining clusters another arc now joins.
+    pub fn recollapse(
+        &mut self,
+        options: &Options,
+        give_up: &[u32],
+        force: &[u32],
+    ) -> Result<(), MeshError> {
+        let mut exclude = std::mem::take(&mut self.excluded);
+        for &e in give_up {
+            if let Some(x) = exclude.get_mut(e as usize) {
+                *x = true;
+            }
+        }
+        for &e in force {
+            if let Some(f) = self.forced.get_mut(e as usize) {
+                *f = true;
+            }
+        }
+        let (layout, chosen, contracted, excluded) =
+            collapse_and_block(&self.refined, &self.groups, options, &self.forced, exclude)?;
+        self.layout = layout;
+        self.collapsed = chosen.len();
+        self.chosen = chosen;
+        self.contracted = contracted;
+        self.excluded = excluded;
+        Ok(())
+    }
+}
+
+/// Arc collapse and Blocking2D on the contracted graph, giving up short collapses that leave
+/// a block with non-positive outline area (at most 8 tries); `exclude` the arcs never
+/// collapsed as short ones (grows with the given-up ones).
+fn collapse_and_block(
+    refined: &crate::refine::Refined,
+    groups: &[crate::cocircular::CocircularGroup],
+    options: &Options,
+    forced: &[bool],
+    mut exclude: Vec<bool>,
+) -> Result<
+    (
+        BlockLayout,
+        Vec<crate::collapse::Candidate>,
+        crate::collapse::Contracted,
+        Vec<bool>,
+    ),
+    MeshError,
+> {
+    use crate::collapse;
+    let final_domain = &refined.domain;
+    let sampled = &refined.sampled;
+    let medial = &sampled.medial;
+    exclude.resize(medial.arcs.len(), false);
     let mut attempt = 0;
-    let (layout, collapsed, contracted) = loop {
+    loop {
         attempt += 1;
         let chosen = collapse::select_forced(
             medial,
             &sampled.triangulation,
             &refined.circles,
-            &groups,
+            groups,
             &sampled.samples.points,
             options.collapse_fraction,
             &exclude,
-            &forced,
+            forced,
         );
         let mut flags = vec![false; medial.arcs.len()];
         for c in &chosen {
@@ -647,16 +762,9 @@ pub fn collapsed_blocking_with(
             }
         }
         if !changed || attempt >= 8 {
-            break (layout, chosen.len(), contracted);
+            return Ok((layout, chosen, contracted, exclude));
         }
-    };
-    Ok(CollapsedBlocking {
-        refined,
-        groups,
-        contracted,
-        layout,
-        collapsed,
-    })
+    }
 }
 
 /// Last-line guard of [`build_mesh_layout`] (issue 4: "no zero-area block ever reaches the
@@ -734,9 +842,9 @@ pub fn build_mesh_layout_with(
     let CollapsedBlocking {
         refined,
         groups,
-        contracted: _,
         mut layout,
         collapsed,
+        ..
     } = collapsed_blocking_with(domain, options, sampling, true)?;
     let medial = &refined.sampled.medial;
     let mut split_arcs = 0;

@@ -44,10 +44,12 @@ pub fn site(domain: &Domain, id: CircleId) -> Site {
 /// `None` where no valid root has the triangle's orientation. Circle ids of the graph must
 /// be ids of `domain` (the graph was built from its samples).
 pub fn vertex_circles(domain: &Domain, medial: &MedialGraph) -> Vec<Option<Apollonius>> {
+    use rayon::prelude::*;
     let n = domain.hole_count() as CircleId;
+    // One independent solve per vertex, in parallel, collected in vertex order.
     medial
         .vertices
-        .iter()
+        .par_iter()
         .map(|v| {
             if v.circles.iter().any(|&c| c < -1 || c >= n) {
                 return None;

@@ -42,7 +42,9 @@ pub struct Options {
     pub refine_ratio: Option<f64>,
     /// Collapse medial arcs shorter than this fraction of the local empty-circle radius
     /// ([`crate::collapse`]). Default [`DEFAULT_COLLAPSE_FRACTION`]; `0` collapses only
-    /// zero-length arcs (which are always collapsed).
+    /// zero-length arcs (which are always collapsed) and, in exact mode, arcs whose exact
+    /// geometry runs backwards (nearly co-circular circles whose sampled Delaunay diagonal is
+    /// not the exact one; see [`mesh`]).
     pub collapse_fraction: f64,
     /// The most holes refinement may insert before [`MeshError::Refinement`]. Default
     /// [`DEFAULT_MAX_INSERTED_HOLES`].
@@ -139,9 +141,11 @@ pub enum MeshError {
 /// In exact mode (the default) with two or more holes: the degeneracy handling below, then
 /// exact Apollonius vertices (co-circular group circles at collapsed vertices), exact medial
 /// arcs and spoke-aligned grids, inserted holes filled by templates ([`crate::exact_mode`],
-/// [`Mesh::geometry`] is [`Geometry::Exact`]). Only where the exact geometry still disagrees
-/// with the sampled combinatorics after resampling (see `mesh_exact`) is the paper pipeline
-/// used instead ([`Geometry::Paper`]), as it is in paper mode:
+/// [`Mesh::geometry`] is [`Geometry::Exact`]). Where the exact geometry disagrees with the
+/// sampled combinatorics it is fixed on the same triangulation first (short collapses given
+/// up around inverted or nearly flat blocks, an arc running backwards collapsed into a
+/// degree-4 vertex), then by resampling (see `mesh_exact`); only where it still disagrees is
+/// the paper pipeline used instead ([`Geometry::Paper`]), as it is in paper mode:
 ///
 /// Two or more holes: macro Delaunay refinement ([`crate::refine`], paper Algorithm 3: holes
 /// are inserted while an interior triangle is poor, the paper's strategy of refining angles
@@ -254,51 +258,64 @@ pub fn validate_block_cells(options: &Options) -> Result<(), MeshError> {
     Ok(())
 }
 
+/// Exact mode: the most local rebuilds (arc collapse, Blocking2D and exact geometry again on
+/// the same sampling and triangulation, see `mesh_exact`) per sampling.
+pub const EXACT_LOCAL_FIXES: usize = 8;
+
 /// Exact mode for two or more holes, on the full front end
-/// ([`blocking::collapsed_blocking_with`]: refinement, co-circular groups, collapse) with exact
-/// geometry on collapsed vertices and around inserted holes
+/// ([`blocking::collapsed_blocking_excluding`]: refinement, co-circular groups, collapse) with
+/// exact geometry on collapsed vertices and around inserted holes
 /// ([`exact_mode::collapsed::build_collapsed`]).
 ///
-/// The sampled combinatorics must agree with the exact geometry. Where they disagree (nearly
-/// co-circular circles not collapsed and not resolved by the sampling: an exact arc running
-/// backwards, [`exact_mode::ExactMesh::inconsistent_arcs`]; a collapsed vertex with two spokes
-/// to one circle; an exact arc not defined; an inverted cell; a template that does not fit),
-/// short-arc collapses are given up first (only zero-length arcs collapsed, whose merged
-/// vertex is an exact co-circular group circle), then the sampling is refined 4x per attempt,
-/// up to [`EXACT_RESAMPLING`] times: only on the circles around the disagreeing arcs and
-/// inverted blocks ([`SamplingOptions::boost`]) when they are known, else everywhere.
-/// `Ok(None)` when it
-/// never agreed: the caller falls back to the paper pipeline and reports
-/// [`Geometry::Paper`]. Errors other than [`MeshError::Internal`] are returned at once.
+/// The sampled combinatorics must agree with the exact geometry: every mesh returned has
+/// consistent arcs and no inverted cell. The sampling is taken once, without the soft
+/// resampling rounds of invariant (d) ([`SamplingOptions::soft_rounds`]: exact walls do not
+/// follow the samples). Where the exact mesh disagrees, it is first fixed locally, on the same
+/// sampling and triangulation (no resampling), at most [`EXACT_LOCAL_FIXES`] times
+/// (`exact_on_sampling`):
+/// - an inverted block, an arc running backwards
+///   ([`exact_mode::ExactMesh::inconsistent_arcs`]), or a cell angle below
+///   [`MERGED_MIN_ANGLE_DEG`], at a vertex merged by *short*-arc collapse (whose merged centre
+///   is on none of the exact bisectors): the short collapses of only those clusters are given
+///   up (zero-length collapses, exact co-circular group circles, stay), and remembered by their
+///   circles ([`blocking::arc_key`]) for any later sampling;
+/// - an arc running backwards with no short collapse to give up at its ends (nearly
+///   co-circular circles whose sampled Delaunay diagonal is not the exact one): the arc is
+///   collapsed, once, into a degree-4 vertex at the mean of its two Apollonius centres (if
+///   that breaks the construction, the circles around it are resampled);
+/// - a failure of the exact construction at an unknown place ([`MeshError::Internal`]: a
+///   collapsed vertex with two spokes to one circle, an exact arc not defined, a template that
+///   does not fit): every short collapse is given up.
+///
+/// The exact vertices of the sampled graph are taken from the refinement once per sampling
+/// ([`exact_mode::exact_vertices_with`]); a local rebuild redoes only the collapse, Blocking2D
+/// ([`blocking::CollapsedBlocking::recollapse`]) and the exact layout and grids.
+///
+/// Only when that does not suffice is the sampling refined 4x, up to [`EXACT_RESAMPLING`]
+/// times: only on the circles around the disagreeing arcs and inverted blocks
+/// ([`SamplingOptions::boost`]) when they are known, else everywhere. `Ok(None)` when it never
+/// agreed: the caller falls back to the paper pipeline and reports [`Geometry::Paper`].
+/// Errors other than [`MeshError::Internal`] are returned at once on the first sampling (a
+/// finer sampling failing after a coarser one worked falls back to the paper pipeline).
 fn mesh_exact(domain: &Domain, options: &Options) -> Result<Option<Mesh>, MeshError> {
-    let mut sampling = SamplingOptions::default();
+    let mut sampling = SamplingOptions {
+        soft_rounds: false,
+        ..SamplingOptions::default()
+    };
+    // Short collapses given up, by their circles: they survive resampling (arc ids do not).
+    let mut given_up: Vec<Vec<CircleId>> = Vec::new();
     for attempt in 0..=EXACT_RESAMPLING {
-        let mut refine = match exact_attempt(domain, options, &sampling) {
+        let outcome = timings::span("blocking", || {
+            blocking::collapsed_blocking_excluding(domain, options, &sampling, false, &given_up)
+        })
+        .and_then(|mut cb| exact_on_sampling(domain, options, &mut cb, &mut given_up));
+        let refine = match outcome {
             Ok(Attempt::Done(m)) => return Ok(Some(*m)),
             Ok(Attempt::Retry(circles)) => circles,
             // A finer sampling failed after a coarser one worked: fall back to paper mode.
             Err(_) if attempt > 0 => return Ok(None),
             Err(e) => return Err(e),
         };
-        // Short arcs collapsed into a merged vertex can invert cells next to it (the merged
-        // centre is on none of the exact bisectors): keep only the zero-length collapses.
-        if options.collapse_fraction > 0.0 {
-            let zero_only = Options {
-                collapse_fraction: 0.0,
-                ..options.clone()
-            };
-            match exact_attempt(domain, &zero_only, &sampling) {
-                Ok(Attempt::Done(m)) => return Ok(Some(*m)),
-                Ok(Attempt::Retry(circles)) if refine.is_some() => {
-                    if let (Some(r), Some(c)) = (refine.as_mut(), circles) {
-                        r.extend(c);
-                    } else {
-                        refine = None;
-                    }
-                }
-                _ => {}
-            }
-        }
         match refine {
             // Refine 4x only around the arcs that disagreed (issue 8: no global resampling
             // of thousands of circles for one nearly co-circular spot).
@@ -320,7 +337,7 @@ fn mesh_exact(domain: &Domain, options: &Options) -> Result<Option<Mesh>, MeshEr
     Ok(None)
 }
 
-/// The outcome of one exact-mode attempt.
+/// The outcome of exact mode on one sampling.
 enum Attempt {
     Done(Box<Mesh>),
     /// The exact geometry disagreed with the sampled combinatorics: the circles around the
@@ -354,57 +371,245 @@ fn circles_around(
     out
 }
 
-/// One exact-mode attempt: [`Attempt::Retry`] when the exact geometry disagrees with the
-/// sampled combinatorics (see [`mesh_exact`]), `Err` when the front end fails.
-fn exact_attempt(
+/// The sampled arcs collapsed as *short* arcs (not zero-length, not forced) in `cb`, in
+/// increasing order: all of them (`clusters` `None`), or those merged into one of the
+/// contracted vertices `clusters` (sorted).
+pub(crate) fn short_collapses(
+    cb: &blocking::CollapsedBlocking,
+    clusters: Option<&[u32]>,
+) -> Vec<u32> {
+    let medial = &cb.refined.sampled.medial;
+    let mut out: Vec<u32> = cb
+        .chosen
+        .iter()
+        .filter(|c| !c.zero)
+        .filter(|c| {
+            clusters.map_or(true, |cl| {
+                let v = medial.arcs[c.arc as usize].ends[0] as usize;
+                cb.contracted
+                    .cluster_of
+                    .get(v)
+                    .is_some_and(|k| cl.binary_search(k).is_ok())
+            })
+        })
+        .map(|c| c.arc)
+        .collect();
+    out.sort_unstable();
+    out
+}
+
+/// Exact mode: a cell with a corner angle below this (degrees) in a block at a vertex merged
+/// by short-arc collapse has that collapse given up, as an inverted one (the merged centre is
+/// an approximation; the collapse must not make a nearly flat cell).
+pub const MERGED_MIN_ANGLE_DEG: f64 = 5.0;
+
+/// The blocks (sorted) with a corner at a vertex merged by short-arc collapse and a cell
+/// angle below [`MERGED_MIN_ANGLE_DEG`].
+fn poor_merged_blocks(
+    cb: &blocking::CollapsedBlocking,
+    layout: &crate::layout::BlockLayout,
+    grids: &[crate::mesh::BlockGrid],
+) -> Vec<usize> {
+    let medial = &cb.refined.sampled.medial;
+    let mut merged: Vec<u32> = cb
+        .chosen
+        .iter()
+        .filter(|c| !c.zero)
+        .filter_map(|c| {
+            let v = medial.arcs.get(c.arc as usize)?.ends[0] as usize;
+            cb.contracted.cluster_of.get(v).copied()
+        })
+        .collect();
+    if merged.is_empty() {
+        return Vec::new();
+    }
+    merged.sort_unstable();
+    merged.dedup();
+    let nc = cb.contracted.graph.vertices.len() as u32;
+    layout
+        .blocks
+        .iter()
+        .enumerate()
+        .filter(|(_, b)| {
+            b.corners
+                .iter()
+                .any(|&v| v < nc && merged.binary_search(&v).is_ok())
+        })
+        .filter(|&(b, _)| {
+            grids
+                .get(b)
+                .is_some_and(|g| crate::quality::has_corner_below(g, MERGED_MIN_ANGLE_DEG))
+        })
+        .map(|(b, _)| b)
+        .collect()
+}
+
+/// Give up the short collapses `arcs` of `cb` (remembered by [`blocking::arc_key`] in
+/// `given_up`, sorted) and redo the collapse on the same sampling.
+fn give_up(
+    cb: &mut blocking::CollapsedBlocking,
+    options: &Options,
+    arcs: &[u32],
+    given_up: &mut Vec<Vec<CircleId>>,
+) -> Result<(), MeshError> {
+    for &e in arcs {
+        let key = blocking::arc_key(&cb.refined.sampled.medial, e as usize);
+        if let Err(at) = given_up.binary_search(&key) {
+            given_up.insert(at, key);
+        }
+    }
+    timings::span("blocking", || cb.recollapse(options, arcs, &[]))
+}
+
+/// Exact mode on one sampling (see [`mesh_exact`]): build, check, fix locally and rebuild on
+/// the same triangulation; [`Attempt::Retry`] when only a resampling can help, `Err` when the
+/// exact construction fails other than by [`MeshError::Internal`].
+fn exact_on_sampling(
     domain: &Domain,
     options: &Options,
-    sampling: &SamplingOptions,
+    cb: &mut blocking::CollapsedBlocking,
+    given_up: &mut Vec<Vec<CircleId>>,
 ) -> Result<Attempt, MeshError> {
-    let cb = timings::span("blocking", || {
-        blocking::collapsed_blocking_with(domain, options, sampling, false)
-    })?;
-    match timings::span("exact_geometry", || {
-        exact_mode::collapsed::build_collapsed(&cb, options)
+    let holes = domain.hole_count();
+    // Inconsistent arcs already collapsed into a degree-4 vertex (sampled arc ids).
+    let mut merged: Vec<u32> = Vec::new();
+    // The circles around the backwards arcs of the last degree-4 collapse, until a rebuild
+    // after it succeeds.
+    let mut around_merged: Option<Vec<CircleId>> = None;
+    let mut fixes = 0;
+    // The exact vertices of the sampled graph do not depend on the collapse: solved once.
+    let single = match timings::span("exact_geometry", || {
+        exact_mode::exact_vertices_with(
+            &cb.refined.domain,
+            &cb.refined.sampled.medial,
+            &cb.refined.circles,
+        )
     }) {
-        Ok(m) => {
-            let inverted = timings::span("quality_check", || {
-                if m.inconsistent_arcs.is_empty() && crate::quality::inverted_cells(&m.grids) == 0 {
-                    Vec::new()
-                } else {
-                    (0..m.grids.len())
-                        .filter(|&b| {
-                            crate::quality::inverted_cells(std::slice::from_ref(&m.grids[b])) > 0
-                        })
-                        .collect()
+        Ok(v) => v,
+        Err(MeshError::Internal(_)) => return Ok(Attempt::Retry(None)),
+        Err(err) => return Err(err),
+    };
+    loop {
+        let built = timings::span("exact_geometry", || {
+            exact_mode::collapsed::build_collapsed_on(cb, options, &single)
+        });
+        let m = match built {
+            Ok(m) => m,
+            Err(MeshError::Internal(_)) => {
+                // A degree-4 collapse of a backwards arc broke the construction: refine the
+                // sampling around that arc instead.
+                if let Some(circles) = around_merged.take() {
+                    return Ok(Attempt::Retry((!circles.is_empty()).then_some(circles)));
                 }
-            });
-            if !(m.inconsistent_arcs.is_empty() && inverted.is_empty()) {
-                let mut bad: Vec<usize> = inverted;
-                for &e in &m.inconsistent_arcs {
-                    bad.extend([2 * e, 2 * e + 1]);
+                // Somewhere unknown: give up every short collapse (zero-length ones stay).
+                let short = short_collapses(cb, None);
+                if fixes < EXACT_LOCAL_FIXES && !short.is_empty() {
+                    fixes += 1;
+                    match give_up(cb, options, &short, given_up) {
+                        Ok(()) => continue,
+                        Err(MeshError::Internal(_)) => {}
+                        Err(err) => return Err(err),
+                    }
                 }
-                let circles = circles_around(&m.layout, &bad, domain.hole_count());
-                return Ok(Attempt::Retry((!circles.is_empty()).then_some(circles)));
+                return Ok(Attempt::Retry(None));
             }
-            let medial = &cb.refined.sampled.medial;
-            Ok(Attempt::Done(Box::new(Mesh {
-                layout: m.layout,
-                grids: m.grids,
-                medial_vertices: medial.vertex_count(),
-                medial_arcs: medial.arc_count(),
-                holes: domain.hole_count(),
-                cocircular_groups: cb.groups,
-                collapsed_arcs: cb.collapsed,
-                inserted_holes: cb.refined.inserted,
-                split_arcs: m.split_arcs,
-                template_blocks: m.template_blocks,
-                geometry: Geometry::Exact,
-            })))
+            Err(err) => return Err(err),
+        };
+        around_merged = None;
+        let inverted = timings::span("quality_check", || {
+            crate::quality::inverted_blocks(&m.grids)
+        });
+        // Nearly flat cells at a vertex merged by short-arc collapse: fixed like inverted ones.
+        let poor = timings::span("quality_check", || {
+            poor_merged_blocks(cb, &m.layout, &m.grids)
+        });
+        if m.inconsistent_arcs.is_empty()
+            && inverted.is_empty()
+            && (poor.is_empty() || fixes >= EXACT_LOCAL_FIXES)
+        {
+            return Ok(done(cb, m, holes));
         }
-        Err(MeshError::Internal(_)) => Ok(Attempt::Retry(None)),
-        Err(err) => Err(err),
+        let mut bad: Vec<usize> = inverted;
+        for &e in &m.inconsistent_arcs {
+            bad.extend([2 * e, 2 * e + 1]);
+        }
+        bad.sort_unstable();
+        bad.dedup();
+        if fixes < EXACT_LOCAL_FIXES {
+            let mut bad = bad.clone();
+            bad.extend_from_slice(&poor);
+            bad.sort_unstable();
+            bad.dedup();
+            // The contracted vertices at the corners of the bad blocks.
+            let nc = cb.contracted.graph.vertices.len() as u32;
+            let mut clusters: Vec<u32> = bad
+                .iter()
+                .filter_map(|&b| m.layout.blocks.get(b))
+                .flat_map(|b| b.corners)
+                .filter(|&v| v < nc)
+                .collect();
+            clusters.sort_unstable();
+            clusters.dedup();
+            let short = short_collapses(cb, Some(&clusters));
+            // The backwards arcs not collapsed yet (sampled arc ids).
+            let mut force: Vec<u32> = m
+                .inconsistent_arcs
+                .iter()
+                .filter_map(|&e| cb.contracted.kept.get(e).copied())
+                .filter(|e| merged.binary_search(e).is_err())
+                .collect();
+            force.sort_unstable();
+            force.dedup();
+            if !short.is_empty() {
+                fixes += 1;
+                match give_up(cb, options, &short, given_up) {
+                    Ok(()) => continue,
+                    Err(MeshError::Internal(_)) => {}
+                    Err(err) => return Err(err),
+                }
+            } else if !force.is_empty() {
+                // Arcs running backwards with nothing to give up at their ends: collapse them.
+                fixes += 1;
+                let around = circles_around(&m.layout, &bad, holes);
+                merged.extend_from_slice(&force);
+                merged.sort_unstable();
+                match timings::span("blocking", || cb.recollapse(options, &[], &force)) {
+                    Ok(()) => {
+                        around_merged = Some(around);
+                        continue;
+                    }
+                    Err(MeshError::Internal(_)) => {
+                        return Ok(Attempt::Retry((!around.is_empty()).then_some(around)))
+                    }
+                    Err(err) => return Err(err),
+                }
+            }
+        }
+        if bad.is_empty() {
+            // Only nearly flat cells, and nothing left to give up for them.
+            return Ok(done(cb, m, holes));
+        }
+        let circles = circles_around(&m.layout, &bad, holes);
+        return Ok(Attempt::Retry((!circles.is_empty()).then_some(circles)));
     }
+}
+
+/// The exact mesh of `cb` as the mesher's result.
+fn done(cb: &blocking::CollapsedBlocking, m: exact_mode::ExactMesh, holes: usize) -> Attempt {
+    let medial = &cb.refined.sampled.medial;
+    Attempt::Done(Box::new(Mesh {
+        layout: m.layout,
+        grids: m.grids,
+        medial_vertices: medial.vertex_count(),
+        medial_arcs: medial.arc_count(),
+        holes,
+        cocircular_groups: cb.groups.clone(),
+        collapsed_arcs: cb.collapsed,
+        inserted_holes: cb.refined.inserted.clone(),
+        split_arcs: m.split_arcs,
+        template_blocks: m.template_blocks,
+        geometry: Geometry::Exact,
+    }))
 }
 
 /// Mesh either kind of domain: [`mesh`] for a bounded one, [`crate::periodic::mesh_periodic`]

@@ -120,21 +120,58 @@ pub fn cell_fields(grid: &BlockGrid) -> CellFields {
 /// Number of inverted cells (a corner Jacobian `<= 0` or not a number) over well-formed grids:
 /// the cheap check of [`Quality::inverted_cells`] (signs of cross products only).
 pub fn inverted_cells(grids: &[BlockGrid]) -> usize {
-    grids
-        .par_iter()
-        .map(|g| {
-            if !well_formed(g) {
-                return 0;
-            }
-            let mut n = 0;
-            for j in 0..g.nj {
-                for i in 0..g.ni {
-                    n += usize::from(kernel::is_inverted(&corners(g, i, j)));
+    grids.par_iter().map(grid_inverted_cells).sum()
+}
+
+/// [`inverted_cells`] of one grid.
+fn grid_inverted_cells(g: &BlockGrid) -> usize {
+    if !well_formed(g) {
+        return 0;
+    }
+    let mut n = 0;
+    for j in 0..g.nj {
+        for i in 0..g.ni {
+            n += usize::from(kernel::is_inverted(&corners(g, i, j)));
+        }
+    }
+    n
+}
+
+/// True when some cell of a well-formed `grid` has a corner angle below `deg` degrees
+/// (`0 < deg < 90`), or is inverted or not finite: one cross and one dot product per corner
+/// (the angle is below `deg` when `0 < cross < tan(deg) dot`), no trigonometry per cell.
+pub fn has_corner_below(grid: &BlockGrid, deg: f64) -> bool {
+    if !well_formed(grid) {
+        return false;
+    }
+    let t = deg.to_radians().tan();
+    for j in 0..grid.nj {
+        for i in 0..grid.ni {
+            let p = corners(grid, i, j);
+            for k in 0..4 {
+                let (o, a, b) = (p[k], p[(k + 1) % 4], p[(k + 3) % 4]);
+                let e1 = [a[0] - o[0], a[1] - o[1]];
+                let e2 = [b[0] - o[0], b[1] - o[1]];
+                let cross = e1[0] * e2[1] - e1[1] * e2[0];
+                let dot = e1[0] * e2[0] + e1[1] * e2[1];
+                if cross.is_nan() || cross <= 0.0 || (dot > 0.0 && cross < t * dot) {
+                    return true;
                 }
             }
-            n
-        })
-        .sum()
+        }
+    }
+    false
+}
+
+/// The indices of the grids with at least one inverted cell (as [`inverted_cells`] counts
+/// them), in increasing order: one pass over the cells.
+pub fn inverted_blocks(grids: &[BlockGrid]) -> Vec<usize> {
+    grids
+        .par_iter()
+        .enumerate()
+        .filter(|(_, g)| grid_inverted_cells(g) > 0)
+        .map(|(b, _)| b)
+        .collect()
 }
 
 fn fold(v: [f64; 4], op: fn(f64, f64) -> f64) -> f64 {

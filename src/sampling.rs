@@ -51,6 +51,12 @@ pub struct SamplingOptions {
     /// boost is shared by every circle of the same radius and gap (bitwise), so mirror images
     /// stay sampled alike.
     pub boost: Vec<u32>,
+    /// Pursue the soft invariant (d) ([`thin_walls`]) with resampling rounds (default `true`).
+    /// `false`: stop as soon as the hard invariants hold (one triangulation when the first
+    /// sampling is good); [`SampledDomain::thin_walls`] still lists the violations left. Exact
+    /// mode uses `false`: it computes exact walls, so a single-sample wall costs it nothing,
+    /// while the paper pipeline (whose walls follow the samples) needs the rounds.
+    pub soft_rounds: bool,
 }
 
 impl Default for SamplingOptions {
@@ -62,6 +68,7 @@ impl Default for SamplingOptions {
             max_total: 8_000_000,
             max_rounds: 4,
             boost: Vec::new(),
+            soft_rounds: true,
         }
     }
 }
@@ -793,7 +800,7 @@ pub struct SampledDomain {
 ///
 /// Hard invariants ((a)-(c) and the in-hole/in-domain dichotomy, [`check_invariants`]) must
 /// hold; the soft invariant (d) ([`thin_walls`]) is pursued with the same resampling while
-/// rounds remain, then accepted as is.
+/// rounds remain (and [`SamplingOptions::soft_rounds`] asks for it), then accepted as is.
 ///
 /// Sampling is adaptive ([`sample_adaptive`]). Resampling rule (keeps mirror symmetry): when
 /// circle `c` offends, every circle with the same radius and nearest gap (bitwise) as `c`
@@ -883,7 +890,7 @@ pub fn sample_and_triangulate(
                 rounds: round,
                 thin_walls: soft.clone(),
             };
-            if soft.is_empty() || round >= opts.max_rounds {
+            if soft.is_empty() || round >= opts.max_rounds || !opts.soft_rounds {
                 return Ok(done);
             }
             (soft, Some(done))

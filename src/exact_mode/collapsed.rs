@@ -29,10 +29,25 @@ use crate::mesher::{MeshError, Options};
 /// circles are those of its kept arcs, each of which must appear on exactly two of them (one
 /// spoke per circle); otherwise [`MeshError::Internal`] (the caller falls back).
 pub fn cluster_vertices(cb: &CollapsedBlocking) -> Result<Vec<ExactVertex>, MeshError> {
+    let single = exact_vertices(&cb.refined.domain, &cb.refined.sampled.medial)?;
+    cluster_vertices_on(cb, &single)
+}
+
+/// [`cluster_vertices`] with the exact vertices of the sampled (uncollapsed) medial graph
+/// given ([`exact_vertices`] of `cb.refined`; they do not depend on the collapse, so exact
+/// mode computes them once per sampling).
+pub fn cluster_vertices_on(
+    cb: &CollapsedBlocking,
+    single: &[ExactVertex],
+) -> Result<Vec<ExactVertex>, MeshError> {
     let domain = &cb.refined.domain;
     let medial = &cb.refined.sampled.medial;
     let contracted = &cb.contracted;
-    let single = exact_vertices(domain, medial)?;
+    if single.len() != medial.vertices.len() {
+        return Err(internal(
+            "one exact vertex per sampled medial vertex expected".into(),
+        ));
+    }
     let nclusters = contracted.graph.vertices.len();
     let mut members: Vec<Vec<usize>> = vec![Vec::new(); nclusters];
     for (v, &c) in contracted.cluster_of.iter().enumerate() {
@@ -122,7 +137,18 @@ fn merged(
 /// Exact mode on the full front end (see the module docs): the skeleton of `cb` with its
 /// cluster vertices and inserted holes.
 pub fn build_collapsed(cb: &CollapsedBlocking, options: &Options) -> Result<ExactMesh, MeshError> {
-    let vertices = cluster_vertices(cb)?;
+    let single = exact_vertices(&cb.refined.domain, &cb.refined.sampled.medial)?;
+    build_collapsed_on(cb, options, &single)
+}
+
+/// [`build_collapsed`] with the exact vertices of the sampled medial graph given (see
+/// [`cluster_vertices_on`]): the same mesh.
+pub fn build_collapsed_on(
+    cb: &CollapsedBlocking,
+    options: &Options,
+    single: &[ExactVertex],
+) -> Result<ExactMesh, MeshError> {
+    let vertices = cluster_vertices_on(cb, single)?;
     let domain = &cb.refined.domain;
     let h = domain.hole_count() - cb.refined.inserted.len();
     let fluid: Vec<CircleId> = (h..domain.hole_count()).map(|i| i as CircleId).collect();

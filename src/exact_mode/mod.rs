@@ -161,10 +161,25 @@ pub fn exact_vertices(
     domain: &Domain,
     medial: &crate::medial::MedialGraph,
 ) -> Result<Vec<ExactVertex>, MeshError> {
+    exact_vertices_with(domain, medial, &[])
+}
+
+/// [`exact_vertices`], reusing `known[k]` when it is `Some`: the counter-clockwise Apollonius
+/// circle of vertex `k` nearest its position, as [`crate::cocircular::vertex_circles`] solves
+/// it (the same sites and the same choice as the first try here, so the same result; the
+/// refinement has them already). Missing or `None` entries are solved.
+pub fn exact_vertices_with(
+    domain: &Domain,
+    medial: &crate::medial::MedialGraph,
+    known: &[Option<crate::apollonius::Apollonius>],
+) -> Result<Vec<ExactVertex>, MeshError> {
+    use rayon::prelude::*;
     let nh = domain.hole_count() as CircleId;
-    medial
+    // Solved in parallel, collected in vertex order: the first error is that of the first
+    // failing vertex, for every thread count.
+    let solved: Vec<Result<ExactVertex, MeshError>> = medial
         .vertices
-        .iter()
+        .par_iter()
         .enumerate()
         .map(|(k, v)| {
             let c = v.circles;
@@ -173,6 +188,14 @@ pub fn exact_vertices(
                 return Err(internal(format!(
                     "medial vertex {k} does not touch three different circles: {c:?}"
                 )));
+            }
+            if let Some(Some(ap)) = known.get(k) {
+                return Ok(ExactVertex {
+                    center: ap.center,
+                    radius: ap.radius,
+                    circles: c.to_vec(),
+                    tangent: ap.tangent_points.to_vec(),
+                });
             }
             let sites = c.map(|x| Wall::of(domain, x).site());
             let ap = apollonius(sites, Choice::ccw().near(v.position))
@@ -187,7 +210,8 @@ pub fn exact_vertices(
                 tangent: ap.tangent_points.to_vec(),
             })
         })
-        .collect()
+        .collect();
+    solved.into_iter().collect()
 }
 
 /// One medial arc sampled in exact geometry.
@@ -595,13 +619,20 @@ pub fn assemble(sk: Skeleton<'_>, options: &Options) -> Result<ExactMesh, MeshEr
             clustering_of(options, id)
         }
     };
+    // The radii of the vertices touching each circle (each vertex once per circle), bucketed
+    // in one pass (a scan of every vertex per circle was quadratic); the median does not
+    // depend on their order.
+    let mut near_radii: Vec<Vec<f64>> = vec![Vec::new(); ncirc];
+    for v in &vertices {
+        for (k, &c) in v.circles.iter().enumerate() {
+            if c >= -1 && cidx(c) < ncirc && !v.circles[..k].contains(&c) {
+                near_radii[cidx(c)].push(v.radius);
+            }
+        }
+    }
     let mut circle_target = vec![1.0; ncirc];
     for id in domain.circle_ids() {
-        let near: Vec<f64> = vertices
-            .iter()
-            .filter(|v| v.circles.contains(&id))
-            .map(|v| v.radius)
-            .collect();
+        let near = std::mem::take(&mut near_radii[cidx(id)]);
         let len = median(near).unwrap_or(h);
         let cl = cluster(id);
         let first = cl.first_height(domain.circle(id).radius);
