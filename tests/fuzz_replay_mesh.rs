@@ -117,3 +117,58 @@ fn random_bytes_exploration() {
     );
     assert!(failures.is_empty(), "{}", failures.join("\n"));
 }
+
+/// Issue 9 (a): a bounded domain small for its coordinates. The bounding circle's samples were
+/// spaced by the precision floor of the holes (a sagitta of up to 128 ulps of the
+/// coordinates), so hole samples a few ulps from the bounding circle lay outside its chords
+/// and consecutive bounding samples were not Delaunay neighbours ("boundary sampling of
+/// circle -1 did not converge"). The bounding circle is now sampled finer where the floor's
+/// sagitta exceeds half the nearest gap. Bounding radius 0.34 centred at (307952, -125388):
+/// the nearest hole is 20 ulps of the coordinates from it (6.7e-10 R). Both modes.
+#[test]
+fn small_domain_far_from_the_origin_is_meshed() {
+    use medial_blocks::{mesh, Domain, Options};
+    let d = Domain::from_json_str(
+        r#"{"bounding":{"center":[307952.125,-125387.71875],"radius":0.33902680766223553},"holes":[{"center":[307952.25,-125387.4375],"radius":0.03125},{"center":[307952.25,-125387.625],"radius":0.03125000000000001},{"center":[307952.25,-125387.8125],"radius":0.03125},{"center":[307952.25,-125388.0],"radius":0.031249999999999997},{"center":[307952.125,-125387.4375],"radius":0.03125},{"center":[307952.125,-125387.625],"radius":0.03125},{"center":[307952.125,-125387.8125],"radius":0.031249999999999997},{"center":[307952.125,-125388.0],"radius":0.031249999999999997},{"center":[307952.0,-125387.4375],"radius":0.03125},{"center":[307952.0,-125387.625],"radius":0.03125},{"center":[307952.0,-125387.8125],"radius":0.03125000000000001},{"center":[307952.0,-125388.0],"radius":0.03125}]}"#,
+    )
+    .unwrap();
+    let unit = f64::EPSILON * Domain::coordinate_magnitude(&d.bounding());
+    let gap = medial_blocks::sampling::nearest_gaps(&d)[0];
+    assert!(gap > 10.0 * unit && gap < 40.0 * unit, "{}", gap / unit);
+    for options in [Options::default(), Options::paper()] {
+        let m = mesh(&d, &options).unwrap_or_else(|e| panic!("{:?}: {e}", options.mode));
+        medial_blocks::fuzzing::check_mesh(&d, &m).unwrap();
+    }
+}
+
+/// Issue 9 (a): bounding radius 6.5e-7 at (1.31, -0.97), a hole 3.3 ulps of the coordinates
+/// (4.5e-16, 7e-10 R) from the bounding circle: just above the smallest gap validation accepts
+/// there ([`Domain::MIN_GAP_ULPS`] = 3 units), and meshed. The same layout with the hole 2
+/// units from the circle (still above the tolerance 2.2 units) is refused with a typed error.
+#[test]
+fn tiny_domain_near_ulp_gap_is_meshed() {
+    use medial_blocks::{mesh, Domain, DomainError, Options};
+    let text = r#"{"bounding":{"center":[1.31414794921875,-0.966156005859375],"radius":6.455111792826174e-7},"holes":[{"center":[1.314148001945173,-0.9661555856619058],"radius":2.2201857063919303e-7},{"center":[1.31414794921875,-0.966156005859375],"radius":1.9153230823576448e-7}]}"#;
+    let d = Domain::from_json_str(text).unwrap();
+    let unit = f64::EPSILON * Domain::coordinate_magnitude(&d.bounding());
+    let gap = d.bounding_gap(0).unwrap();
+    assert!(gap > 3.0 * unit && gap < 4.0 * unit, "{}", gap / unit);
+    for options in [Options::default(), Options::paper()] {
+        let m = mesh(&d, &options).unwrap_or_else(|e| panic!("{:?}: {e}", options.mode));
+        medial_blocks::fuzzing::check_mesh(&d, &m).unwrap();
+    }
+    let mut holes = d.holes().to_vec();
+    holes[0].radius += 0.5 * unit;
+    let e = Domain::bounded(d.bounding(), holes).unwrap_err();
+    assert!(
+        matches!(
+            e,
+            DomainError::GapBelowPrecision {
+                first: -1,
+                second: 0,
+                ..
+            }
+        ),
+        "{e:?}"
+    );
+}
