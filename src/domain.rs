@@ -280,12 +280,11 @@ impl Domain {
     /// Largest accepted absolute value of a coordinate or radius (keeps squares finite).
     pub const MAX_MAGNITUDE: f64 = 1e100;
     /// Smallest accepted radius, in units of [`precision_unit`] of the coordinates'
-    /// magnitude ([`Domain::coordinate_magnitude`]): below it the coarse boundary samples of
-    /// the circle (at least 8, normally 32) cannot all be distinct and in convex position
-    /// after rounding (32 samples bulge off their chords by `0.0048 r`, which must exceed the
-    /// rounding of a sample, below one unit), and the cells around it would be below
-    /// the resolution of the output coordinates. [`DomainError::RadiusBelowPrecision`].
-    pub const MIN_RADIUS_ULPS: f64 = 512.0;
+    /// magnitude ([`Domain::coordinate_magnitude`]). Below it the 32 coarse boundary samples of
+    /// the circle (spacing `0.2 r`) come within the rounding of the coordinates of each other
+    /// and coincide (the hexagon example moved to `1.6e14`, holes of 8.4 units, failed that
+    /// way; at `8e13`, 17 units, it meshes, and still does). [`DomainError::RadiusBelowPrecision`].
+    pub const MIN_RADIUS_ULPS: f64 = 16.0;
     /// Smallest accepted gap between two circles, in units of [`precision_unit`] of the
     /// coordinates' magnitude, on top of [`Domain::GAP_TOLERANCE`] (which is relative to the
     /// bounding radius and so can be below the resolution of the coordinates when the domain

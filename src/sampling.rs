@@ -341,19 +341,20 @@ impl Near {
 /// (grid angles stay exact rationals of `f64`).
 const MAX_LEVELS: u32 = 36;
 
-/// The coarse count actually used for circle `c` asked for `n0` (a multiple of 8) coarse
-/// samples: `n0` halved (staying a multiple of 8, at least 8) while the coarse chords would
-/// bulge by less than `2 unit`, `unit = eps (r + max |centre coordinate|)` (rounding moves a
-/// coordinate by at most half that), so a circle tiny for its coordinates keeps its samples
-/// convex even when resampling or exact mode's retries multiply the coarse count. The sagitta
-/// of `n` samples is `(2 pi / n)^2 r / 8`: the count is `n0` whenever `r >= 0.41 n0^2 unit`
-/// (`r >= 415 unit` at the default 32), so layouts away from the limits of precision are
-/// sampled exactly as before.
-fn coarse_count(c: Circle, n0: u64) -> u64 {
+/// The coarse count actually used for circle `c` asked for `n` coarse samples (`n0 2^k`:
+/// the options' count `n0`, a multiple of 8, doubled `k` times by resampling): `n` halved,
+/// never below `n0`, while the coarse chords would bulge off their arcs (the sagitta
+/// `(2 pi / n)^2 r / 8`) by less than `unit / 2`, `unit = eps (r + max |centre coordinate|)`.
+/// Rounding moves a sample by at most `0.71 unit`, and three consecutive samples bulge by four
+/// sagittas, so above that bound resampling keeps a circle's samples convex; below it,
+/// doubling only makes them coincide or fold. The first sampling (`n = n0`) is never
+/// changed, and the count is `n` whenever `r >= 0.1 n^2 unit`: layouts away from the limits
+/// of precision are sampled exactly as before.
+fn coarse_count(c: Circle, n: u64, n0: u64) -> u64 {
     let reach = c.radius + c.center[0].abs().max(c.center[1].abs());
-    let min_sagitta = 2.0 * f64::EPSILON * reach;
-    let mut n = n0;
-    while n % 16 == 0 && n > 8 {
+    let min_sagitta = 0.5 * f64::EPSILON * reach;
+    let mut n = n;
+    while n % 16 == 0 && n / 2 >= n0 {
         let s = TAU * c.radius / n as f64;
         if s * s / (8.0 * c.radius) >= min_sagitta {
             break;
@@ -567,7 +568,7 @@ pub fn sample_adaptive(
         // [`coarse_count`]); one beyond the budget fails in `adaptive_circle`.
         let coarse = n0
             .checked_mul(1u64 << k)
-            .map(|v| coarse_count(c, v))
+            .map(|v| coarse_count(c, v, n0))
             .filter(|&v| v <= budget as u64)
             .unwrap_or(u64::MAX);
         let (n, ks) = adaptive_circle(c, id == BOUNDING, coarse, factor(slot), g, &near, budget)

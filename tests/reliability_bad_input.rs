@@ -940,20 +940,20 @@ fn too_tight_for_sampling() {
     );
 }
 
-// 32. A circle too small for the magnitude of its coordinates (radius below 512 units in the
-// last place: its samples cannot be distinct and convex). Prefer meshing: a radius just above
+// 32. A circle too small for the magnitude of its coordinates (radius below 16 units in the
+// last place: its samples cannot be distinct). Prefer meshing: a radius just above
 // the limit is accepted.
 #[test]
 fn radius_below_precision() {
     let bounding = Circle::new(1e6, 0.0, 10.0);
     let min_radius = Domain::min_radius_for(&bounding);
-    assert!(min_radius > 1e-7 && min_radius < 2e-7, "{min_radius}");
-    let e = Domain::bounded(bounding, vec![Circle::new(1e6, 0.0, 1e-8)]).unwrap_err();
+    assert!(min_radius > 3e-9 && min_radius < 4e-9, "{min_radius}");
+    let e = Domain::bounded(bounding, vec![Circle::new(1e6, 0.0, 1e-9)]).unwrap_err();
     assert!(
         matches!(
             e,
             DomainError::RadiusBelowPrecision { circle: 0, radius, magnitude, .. }
-                if radius == 1e-8 && magnitude == 1e6 + 10.0
+                if radius == 1e-9 && magnitude == 1e6 + 10.0
         ),
         "{e:?}"
     );
@@ -965,14 +965,14 @@ fn radius_below_precision() {
     .unwrap();
     Domain::bounded(bounding, vec![Circle::new(1e6, 0.0, min_radius)]).unwrap();
     // The bounding circle too.
-    let e = Domain::bounded(Circle::new(1e6, 0.0, 1e-8), vec![]).unwrap_err();
+    let e = Domain::bounded(Circle::new(1e6, 0.0, 1e-9), vec![]).unwrap_err();
     assert!(
         matches!(e, DomainError::RadiusBelowPrecision { circle: -1, .. }),
         "{e:?}"
     );
     let text = json_domain(
         "{\"center\": [1e6, 0], \"radius\": 10}",
-        &[&c(1e6, 0.0, 1e-8)],
+        &[&c(1e6, 0.0, 1e-9)],
     );
     Scratch::new().mesh(
         "d.json",
@@ -980,13 +980,13 @@ fn radius_below_precision() {
         &[],
         2,
         &[
-            "hole 0 has radius 1e-8, which is too small for coordinates of magnitude 1.00001e6",
+            "hole 0 has radius 1e-9, which is too small for coordinates of magnitude 1.00001e6",
             "units in the last place",
             "translate the layout nearer the origin or scale it up",
         ],
     );
     // Periodic domains: the bound is the extent of the tiling the mesher samples (8 L).
-    let e = medial_blocks::PeriodicDomain::new([1.0, 1.0], vec![Circle::new(0.5, 0.5, 1e-13)])
+    let e = medial_blocks::PeriodicDomain::new([1.0, 1.0], vec![Circle::new(0.5, 0.5, 1e-14)])
         .unwrap_err();
     assert!(
         matches!(e, DomainError::RadiusBelowPrecision { circle: 0, magnitude, .. } if magnitude == 8.0),
