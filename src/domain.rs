@@ -87,6 +87,15 @@ pub fn circle_name(id: CircleId) -> String {
     }
 }
 
+/// `"holes 1 and 2"` or `"the bounding circle and hole 2"`.
+fn pair_name(first: CircleId, second: usize) -> String {
+    if first < 0 {
+        format!("the bounding circle and hole {second}")
+    } else {
+        format!("holes {first} and {second}")
+    }
+}
+
 /// Why a domain was refused. Holes are named by their 0-based index in the input.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum DomainError {
@@ -139,6 +148,45 @@ pub enum DomainError {
         second: usize,
         gap: f64,
         tolerance: f64,
+    },
+    /// A circle too small for the magnitude of its coordinates: double precision cannot
+    /// place enough distinct, convexly positioned samples on it. `magnitude` is
+    /// [`Domain::coordinate_magnitude`] (for a periodic domain, the extent of the tiling the
+    /// mesher samples, [`crate::periodic::PeriodicDomain::coordinate_magnitude`]) and
+    /// `min_radius` is [`Domain::MIN_RADIUS_ULPS`] units of [`precision_unit`]`(magnitude)`.
+    #[error(
+        "{} has radius {radius:e}, which is too small for coordinates of magnitude \
+         {magnitude:e}: double precision there needs a radius of at least {min_radius:e} \
+         ({ulps} units in the last place) to sample the circle; translate the layout nearer \
+         the origin or scale it up",
+        circle_name(*circle),
+        ulps = Domain::MIN_RADIUS_ULPS
+    )]
+    RadiusBelowPrecision {
+        circle: CircleId,
+        radius: f64,
+        magnitude: f64,
+        min_radius: f64,
+    },
+    /// Two circles closer than double precision can resolve at the magnitude of their
+    /// coordinates (though farther apart than the relative tolerance): their boundary samples
+    /// could not be told apart. `first` is [`BOUNDING`] for a hole's gap to the bounding
+    /// circle; `min_gap` is [`Domain::MIN_GAP_ULPS`] units of
+    /// [`precision_unit`]`(magnitude)`, `magnitude` is [`Domain::coordinate_magnitude`].
+    #[error(
+        "{} are only {gap:e} apart, which is too close for coordinates of magnitude \
+         {magnitude:e}: double precision there needs a gap of at least {min_gap:e} ({ulps} \
+         units in the last place) to tell the circles apart; translate the layout nearer the \
+         origin or scale it up",
+        pair_name(*first, *second),
+        ulps = Domain::MIN_GAP_ULPS
+    )]
+    GapBelowPrecision {
+        first: CircleId,
+        second: usize,
+        gap: f64,
+        magnitude: f64,
+        min_gap: f64,
     },
     /// A period length is not finite and positive (or beyond [`Domain::MAX_MAGNITUDE`]);
     /// `axis` 0 is `Lx`, 1 is `Ly`.
@@ -231,6 +279,22 @@ impl Domain {
     pub const GAP_TOLERANCE: f64 = 1e-9;
     /// Largest accepted absolute value of a coordinate or radius (keeps squares finite).
     pub const MAX_MAGNITUDE: f64 = 1e100;
+    /// Smallest accepted radius, in units of [`precision_unit`] of the coordinates'
+    /// magnitude ([`Domain::coordinate_magnitude`]). Below it the 32 coarse boundary samples of
+    /// the circle (spacing `0.2 r`) come within the rounding of the coordinates of each other
+    /// and coincide (the hexagon example moved to `1.6e14`, holes of 8.4 units, failed that
+    /// way; at `8e13`, 17 units, it meshes, and still does). [`DomainError::RadiusBelowPrecision`].
+    pub const MIN_RADIUS_ULPS: f64 = 16.0;
+    /// Smallest accepted gap between two circles, in units of [`precision_unit`] of the
+    /// coordinates' magnitude, on top of [`Domain::GAP_TOLERANCE`] (which is relative to the
+    /// bounding radius and so can be below the resolution of the coordinates when the domain
+    /// is small and far from the origin). Boundary sampling keeps every hole sample strictly
+    /// inside the bounding polygon and the bounding samples convex for gaps above `2.84`
+    /// units even when every rounding goes the wrong way (`crate::sampling`, the bounding
+    /// circle's precision floor); a stress test of layouts far from the origin (gaps of 1 to 40
+    /// units, about 40 000 meshes) found failures only below 1.5 units. Smaller gaps cannot be
+    /// meshed in `f64` coordinates of that magnitude. [`DomainError::GapBelowPrecision`].
+    pub const MIN_GAP_ULPS: f64 = 3.0;
 
     /// Build and validate a bounded domain with the default hole limit [`Self::MAX_HOLES`].
     pub fn bounded(bounding: Circle, holes: Vec<Circle>) -> Result<Self, DomainError> {
@@ -293,7 +357,30 @@ impl Domain {
                 }
             }
         }
+        check_precision(&bounding, &holes, &index)?;
         Ok(Domain { bounding, holes })
+    }
+
+    /// The magnitude of the coordinates of a domain with this bounding circle:
+    /// `max(|Cx|, |Cy|) + R`, an upper bound of every coordinate of every circle and sample
+    /// (holes lie inside the bounding circle).
+    pub fn coordinate_magnitude(bounding: &Circle) -> f64 {
+        bounding.center[0].abs().max(bounding.center[1].abs()) + bounding.radius
+    }
+
+    /// The smallest radius a circle of a domain with this bounding circle may have
+    /// ([`Domain::MIN_RADIUS_ULPS`]).
+    pub fn min_radius_for(bounding: &Circle) -> f64 {
+        Self::MIN_RADIUS_ULPS * precision_unit(Self::coordinate_magnitude(bounding))
+    }
+
+    /// The smallest gap two circles of a domain with this bounding circle may have:
+    /// the larger of the tolerance ([`Domain::GAP_TOLERANCE`], where touching is refused as
+    /// overlapping) and [`Domain::MIN_GAP_ULPS`] units of precision (where it is refused as
+    /// too small for the coordinates).
+    pub fn min_gap_for(bounding: &Circle) -> f64 {
+        let precision = Self::MIN_GAP_ULPS * precision_unit(Self::coordinate_magnitude(bounding));
+        Self::tolerance_for(bounding.radius).max(precision)
     }
 
     /// Parse and validate a domain from JSON of exactly this shape:
@@ -402,6 +489,70 @@ impl Domain {
         let h = self.holes.get(i)?;
         Some(self.bounding.radius - dist(h.center, self.bounding.center) - h.radius)
     }
+}
+
+/// The resolution of `f64` coordinates of magnitude at most `magnitude`: `eps * magnitude`
+/// (at least one ulp of any such coordinate, so rounding moves a coordinate by at most half
+/// of it), and never below the smallest subnormal.
+pub fn precision_unit(magnitude: f64) -> f64 {
+    (f64::EPSILON * magnitude.abs()).max(f64::from_bits(1))
+}
+
+/// The precision checks of [`Domain::bounded_with_limit`], run after every other check: each
+/// radius at least [`Domain::min_radius_for`] and each gap (to the bounding circle and to the
+/// nearest hole, from `index`) at least [`Domain::MIN_GAP_ULPS`] units. Skipped entirely when
+/// the validation tolerance already exceeds them (every layout within about `5e5 R` of the
+/// origin).
+fn check_precision(
+    bounding: &Circle,
+    holes: &[Circle],
+    index: &HoleIndex,
+) -> Result<(), DomainError> {
+    let magnitude = Domain::coordinate_magnitude(bounding);
+    let unit = precision_unit(magnitude);
+    let min_radius = Domain::MIN_RADIUS_ULPS * unit;
+    let circles = std::iter::once((BOUNDING, bounding))
+        .chain(holes.iter().enumerate().map(|(i, h)| (i as CircleId, h)));
+    for (circle, c) in circles {
+        if c.radius < min_radius {
+            return Err(DomainError::RadiusBelowPrecision {
+                circle,
+                radius: c.radius,
+                magnitude,
+                min_radius,
+            });
+        }
+    }
+    let min_gap = Domain::MIN_GAP_ULPS * unit;
+    if min_gap <= Domain::tolerance_for(bounding.radius) {
+        return Ok(());
+    }
+    for (i, h) in holes.iter().enumerate() {
+        let gap = bounding.radius - dist(h.center, bounding.center) - h.radius;
+        if gap < min_gap {
+            return Err(DomainError::GapBelowPrecision {
+                first: BOUNDING,
+                second: i,
+                gap,
+                magnitude,
+                min_gap,
+            });
+        }
+    }
+    for i in 0..holes.len() {
+        if let Some((j, gap)) = index.nearest_gap(i) {
+            if gap < min_gap {
+                return Err(DomainError::GapBelowPrecision {
+                    first: i.min(j) as CircleId,
+                    second: i.max(j),
+                    gap,
+                    magnitude,
+                    min_gap,
+                });
+            }
+        }
+    }
+    Ok(())
 }
 
 /// Check one circle's numbers.

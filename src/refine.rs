@@ -158,7 +158,8 @@ pub fn refine(
                 radius: 0.5 * rho,
             };
             let b = current.bounding();
-            let ok = hole.radius > 0.0
+            // Too small for the coordinates (Domain::MIN_RADIUS_ULPS): not inserted.
+            let ok = hole.radius >= Domain::min_radius_for(&b)
                 && hole.radius.is_finite()
                 && b.radius - dist(b.center, center) - hole.radius >= g
                 && current.holes().iter().all(|c| gap(c, &hole) >= g);

@@ -348,13 +348,37 @@ impl Near {
 /// (grid angles stay exact rationals of `f64`).
 const MAX_LEVELS: u32 = 36;
 
-/// One circle's adaptive samples: `n0` coarse samples (a multiple of 8), then recursive
-/// bisection of every interval whose arc length `L` is too long for the local gap
-/// (`L (1 + f / 2) > f g(mid)`, with `g` 1-Lipschitz this bounds `L <= f g` on the whole
-/// interval). Returns the grid size and the grid indices in increasing order; `Err(())` when
-/// more than `cap` samples would be needed.
+/// The coarse count actually used for circle `c` asked for `n` coarse samples (`n0 2^k`:
+/// the options' count `n0`, a multiple of 8, doubled `k` times by resampling): `n` halved,
+/// never below `n0`, while the coarse chords would bulge off their arcs (the sagitta
+/// `(2 pi / n)^2 r / 8`) by less than `unit / 2`, `unit = eps (r + max |centre coordinate|)`.
+/// Rounding moves a sample by at most `0.71 unit`, and three consecutive samples bulge by four
+/// sagittas, so above that bound resampling keeps a circle's samples convex; below it,
+/// doubling only makes them coincide or fold. The first sampling (`n = n0`) is never
+/// changed, and the count is `n` whenever `r >= 0.1 n^2 unit`: layouts away from the limits
+/// of precision are sampled exactly as before.
+fn coarse_count(c: Circle, n: u64, n0: u64) -> u64 {
+    let reach = c.radius + c.center[0].abs().max(c.center[1].abs());
+    let min_sagitta = 0.5 * f64::EPSILON * reach;
+    let mut n = n;
+    while n % 16 == 0 && n / 2 >= n0 {
+        let s = TAU * c.radius / n as f64;
+        if s * s / (8.0 * c.radius) >= min_sagitta {
+            break;
+        }
+        n /= 2;
+    }
+    n
+}
+
+/// One circle's adaptive samples: `n0` coarse samples (a multiple of 8), then recursive bisection of every interval
+/// whose arc length `L` is too long for the local gap (`L (1 + f / 2) > f g(mid)`, with `g`
+/// 1-Lipschitz this bounds `L <= f g` on the whole interval), never below a precision floor
+/// (see the comments in the body). `outer` is true for the bounding circle. Returns the grid size and the
+/// grid indices in increasing order; `Err(())` when more than `cap` samples would be needed.
 fn adaptive_circle(
     c: Circle,
+    outer: bool,
     n0: u64,
     f: f64,
     g_nearest: f64,
@@ -370,13 +394,31 @@ fn adaptive_circle(
     // Precision floor: consecutive samples must bulge off their chord (`s^2 / 8r`) by at
     // least 32 ulps of the coordinates (`eps (r + max |centre coordinate|)`), so that rounded
     // samples keep the circle's convex position: `s >= sqrt(256 eps r (r + |c|))`, about
-    // `r / 2^22` for a circle at the origin. Closer circles get a spacing above their gap there
-    // (the Delaunay edges between consecutive samples survive in exact arithmetic).
+    // `r / 2^22` for a circle at the origin. Closer holes get a spacing above their gap there:
+    // the Delaunay edges between consecutive samples survive, as the other hole's samples lie
+    // outside the circle.
     let reach = c.radius + c.center[0].abs().max(c.center[1].abs());
     let floor = (256.0 * f64::EPSILON * c.radius * reach).sqrt();
+    // The bounding circle is the other way round: every hole sample must lie strictly inside
+    // the bounding polygon, so each chord's sagitta must stay below the gap to the nearest
+    // hole minus rounding. The floor may stop the bisection with a spacing of up to twice
+    // itself (a sagitta of up to 128 ulps); where that is more than half the nearest gap `g`,
+    // the bounding circle is bisected further, to a spacing `s <= sqrt(4 R g)` (sagitta at
+    // most `g / 2`, at least `g / 8`). A hole sample, at least `g` from the circle, then stays
+    // `g / 2 - 1.5 unit > 0` inside every chord (`unit = eps (R + |C|)`, rounding moves a
+    // sample by at most `0.71 unit`), and three consecutive samples bulge by at least
+    // `4 g / 8 > 1.5 unit` (convex after rounding) when `g > 2.84 unit`; [`Domain`]
+    // validation refuses gaps below [`Domain::MIN_GAP_ULPS`] `= 3` units. For every other circle, and whenever
+    // the floor is not what stops the bisection, `sag_limit` changes nothing.
+    let sag_limit = if outer {
+        (4.0 * c.radius * g_nearest).sqrt()
+    } else {
+        f64::INFINITY
+    };
     while levels < MAX_LEVELS
         && coarse / 2f64.powi(levels as i32) * (1.0 + 0.5 * f) > f * g_nearest
-        && coarse / 2f64.powi(levels as i32 + 1) >= floor
+        && (coarse / 2f64.powi(levels as i32 + 1) >= floor
+            || coarse / 2f64.powi(levels as i32) > sag_limit)
     {
         levels += 1;
     }
@@ -529,18 +571,19 @@ pub fn sample_adaptive(
         // The total budget bounds every circle too, so memory stays within `max_total`.
         let left = opts.max_total.saturating_sub(s.points.len());
         let budget = cap.min(left);
-        // Coarse count `n0 2^k`; one beyond the budget fails in `adaptive_circle`.
+        // Coarse count `n0 2^k` (fewer for a circle tiny for its coordinates,
+        // [`coarse_count`]); one beyond the budget fails in `adaptive_circle`.
         let coarse = n0
             .checked_mul(1u64 << k)
+            .map(|v| coarse_count(c, v, n0))
             .filter(|&v| v <= budget as u64)
             .unwrap_or(u64::MAX);
-        let (n, ks) = adaptive_circle(c, coarse, factor(slot), g, &near, budget).map_err(|()| {
-            TooManySamples {
+        let (n, ks) = adaptive_circle(c, id == BOUNDING, coarse, factor(slot), g, &near, budget)
+            .map_err(|()| TooManySamples {
                 circle: id,
                 limit: if left < cap { opts.max_total } else { cap },
                 total: left < cap,
-            }
-        })?;
+            })?;
         s.circles.push(CircleSamples {
             circle: id,
             first: s.points.len() as u32,

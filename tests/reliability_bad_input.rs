@@ -939,3 +939,119 @@ fn too_tight_for_sampling() {
         "{code}: {err}"
     );
 }
+
+// 32. A circle too small for the magnitude of its coordinates (radius below 16 units in the
+// last place: its samples cannot be distinct). Prefer meshing: a radius just above
+// the limit is accepted.
+#[test]
+fn radius_below_precision() {
+    let bounding = Circle::new(1e6, 0.0, 10.0);
+    let min_radius = Domain::min_radius_for(&bounding);
+    assert!(min_radius > 3e-9 && min_radius < 4e-9, "{min_radius}");
+    let e = Domain::bounded(bounding, vec![Circle::new(1e6, 0.0, 1e-9)]).unwrap_err();
+    assert!(
+        matches!(
+            e,
+            DomainError::RadiusBelowPrecision { circle: 0, radius, magnitude, .. }
+                if radius == 1e-9 && magnitude == 1e6 + 10.0
+        ),
+        "{e:?}"
+    );
+    // The same hole near the origin is fine, and so is a radius at the limit.
+    Domain::bounded(
+        Circle::new(0.0, 0.0, 10.0),
+        vec![Circle::new(0.0, 0.0, 1e-8)],
+    )
+    .unwrap();
+    Domain::bounded(bounding, vec![Circle::new(1e6, 0.0, min_radius)]).unwrap();
+    // The bounding circle too.
+    let e = Domain::bounded(Circle::new(1e6, 0.0, 1e-9), vec![]).unwrap_err();
+    assert!(
+        matches!(e, DomainError::RadiusBelowPrecision { circle: -1, .. }),
+        "{e:?}"
+    );
+    let text = json_domain(
+        "{\"center\": [1e6, 0], \"radius\": 10}",
+        &[&c(1e6, 0.0, 1e-9)],
+    );
+    Scratch::new().mesh(
+        "d.json",
+        &text,
+        &[],
+        2,
+        &[
+            "hole 0 has radius 1e-9, which is too small for coordinates of magnitude 1.00001e6",
+            "units in the last place",
+            "translate the layout nearer the origin or scale it up",
+        ],
+    );
+    // Periodic domains: the bound is the extent of the tiling the mesher samples (8 L).
+    let e = medial_blocks::PeriodicDomain::new([1.0, 1.0], vec![Circle::new(0.5, 0.5, 1e-14)])
+        .unwrap_err();
+    assert!(
+        matches!(e, DomainError::RadiusBelowPrecision { circle: 0, magnitude, .. } if magnitude == 8.0),
+        "{e:?}"
+    );
+}
+
+// 33. Two circles farther apart than the tolerance (1e-9 R) but closer than double precision
+// resolves at the magnitude of their coordinates (3 units in the last place): a small domain
+// far from the origin.
+#[test]
+fn gap_below_precision() {
+    let bounding = Circle::new(1e6, 0.0, 0.1);
+    let a = Circle::new(1e6 - 0.05, 0.0, 0.04);
+    let d = medial_blocks::domain::dist(a.center, [1e6 + 0.04, 0.0]);
+    let b = Circle::new(1e6 + 0.04, 0.0, d - 0.04 - 3e-10);
+    let gap = medial_blocks::domain::gap(&a, &b);
+    let unit = f64::EPSILON * (1e6 + 0.1);
+    assert!(gap > 1e-9 * 0.1 && gap < 3.0 * unit, "{gap:e}");
+    assert_eq!(Domain::min_gap_for(&bounding), 3.0 * unit);
+    let e = Domain::bounded(bounding, vec![a, b]).unwrap_err();
+    assert!(
+        matches!(e, DomainError::GapBelowPrecision { first: 0, second: 1, gap: g, .. } if g == gap),
+        "{e:?}"
+    );
+    // A hole as close to the bounding circle.
+    let h = Circle::new(1e6 + 0.05, 0.0, 0.05 - 2e-10);
+    let e = Domain::bounded(bounding, vec![h]).unwrap_err();
+    assert!(
+        matches!(
+            e,
+            DomainError::GapBelowPrecision {
+                first: -1,
+                second: 0,
+                ..
+            }
+        ),
+        "{e:?}"
+    );
+    // The same pair at the origin is a valid (near-touching) domain.
+    Domain::bounded(
+        Circle::new(0.0, 0.0, 0.1),
+        vec![
+            Circle::new(-0.05, 0.0, 0.04),
+            Circle::new(0.04, 0.0, 0.05 - 0.04 - 3e-10 + 0.04),
+        ],
+    )
+    .unwrap();
+    let text = json_domain(
+        &c(1e6, 0.0, 0.1),
+        &[
+            &c(a.center[0], 0.0, a.radius),
+            &c(b.center[0], 0.0, b.radius),
+        ],
+    );
+    Scratch::new().mesh(
+        "d.json",
+        &text,
+        &[],
+        2,
+        &[
+            "holes 0 and 1 are only",
+            "apart, which is too close for coordinates of magnitude 1.0000001e6",
+            "needs a gap of at least",
+            "translate the layout nearer the origin or scale it up",
+        ],
+    );
+}

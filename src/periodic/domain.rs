@@ -17,7 +17,9 @@
 //! copies, `O(h log h)`: with every diameter below the period, the nearest image of a hole is
 //! always in a neighbouring tile.
 
-use crate::domain::{check_circle, Circle, CircleId, Domain, DomainError, HoleIndex};
+use crate::domain::{
+    check_circle, precision_unit, Circle, CircleId, Domain, DomainError, HoleIndex,
+};
 use serde::{Deserialize, Serialize};
 
 /// A validated periodic domain (see the module documentation).
@@ -92,6 +94,18 @@ impl PeriodicDomain {
         for (i, h) in holes.iter().enumerate() {
             check_circle(i as CircleId, h)?;
         }
+        let magnitude = Self::coordinate_magnitude(size);
+        let min_radius = Domain::MIN_RADIUS_ULPS * precision_unit(magnitude);
+        for (i, h) in holes.iter().enumerate() {
+            if h.radius < min_radius {
+                return Err(DomainError::RadiusBelowPrecision {
+                    circle: i as CircleId,
+                    radius: h.radius,
+                    magnitude,
+                    min_radius,
+                });
+            }
+        }
         let tol = Self::tolerance_for(size);
         let min_l = size[0].min(size[1]);
         for (i, h) in holes.iter_mut().enumerate() {
@@ -159,6 +173,17 @@ impl PeriodicDomain {
             holes: &self.holes,
         })
         .unwrap_or_default()
+    }
+
+    /// A bound of the coordinates the mesher samples for a period `size`: `8 max(Lx, Ly)`.
+    /// The largest tiling ([`crate::periodic::MAX_TILING`] `= 3`, 7 x 7 copies) has its
+    /// bounding circle centred at `(Lx / 2, Ly / 2)` with radius `3.5 |(Lx, Ly)| + max(Lx,
+    /// Ly)`, so every coordinate is below `6.5 max(Lx, Ly)`. Holes with a radius below
+    /// [`Domain::MIN_RADIUS_ULPS`] units of precision at this magnitude are refused
+    /// ([`DomainError::RadiusBelowPrecision`]), so the tiled bounded domain always validates.
+    /// Gaps need no such rule: [`Self::GAP_TOLERANCE`] is far above the precision there.
+    pub fn coordinate_magnitude(size: [f64; 2]) -> f64 {
+        8.0 * size[0].max(size[1])
     }
 
     /// The tolerance for a period `size`.

@@ -317,7 +317,10 @@ fn sample_tiling(
         let hard = check_invariants(&samples, &tri, &kinds);
         let mut grow_b = false;
         let mut grow: Vec<bool> = vec![false; t.h];
-        let violations = if hard.is_empty() {
+        // With only the soft invariant (d) left, the sampling is kept in case no orbit can be
+        // refined any more (all at the cap): thin walls are then accepted, as in the bounded
+        // sampler (`crate::sampling::sample_and_triangulate`).
+        let (violations, soft_done) = if hard.is_empty() {
             let medial = medial_graph(&samples, &tri, &kinds)?;
             let soft: Vec<_> = thin_walls(&tri, &medial)
                 .into_iter()
@@ -332,7 +335,7 @@ fn sample_tiling(
             if soft.is_empty() || round == opts.max_rounds {
                 return Ok((samples, tri, medial));
             }
-            soft
+            (soft, Some((samples, tri, medial)))
         } else {
             if let Some(v) = hard
                 .iter()
@@ -343,7 +346,7 @@ fn sample_tiling(
                     message: v.describe(),
                 });
             }
-            hard
+            (hard, None)
         };
         for v in &violations {
             match t.key(v.circle) {
@@ -363,13 +366,17 @@ fn sample_tiling(
             }
         }
         if !refined {
+            if let Some(done) = soft_done {
+                return Ok(done);
+            }
             break;
         }
     }
     Err(MeshError::Sampling {
         circle: -1,
         message: format!(
-            "the periodic tiling's sampling invariants still fail after {} rounds",
+            "the periodic tiling's sampling invariants still fail after {} rounds (or with \
+             every offending orbit at the cap of {cap} samples)",
             opts.max_rounds
         ),
     })
