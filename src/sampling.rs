@@ -41,7 +41,14 @@ pub struct SamplingOptions {
     pub max_per_circle: usize,
     /// Target sample spacing as a multiple of the circle's nearest gap.
     pub spacing_per_gap: f64,
-    /// Most samples in total; more is a [`MeshError::Sampling`].
+    /// Most samples in total; more is a [`MeshError::Sampling`]. Checked circle by circle
+    /// while sampling, before the samples and the triangulation are allocated.
+    ///
+    /// Default 32 M: random bubbles need about 90 samples per circle, so the default meshes
+    /// about 350 000 of them (issue 8: 100 000 particles need about 9 M), while one sample
+    /// costs about 100 bytes at peak (point, circle and grid indices, triangulation), so an
+    /// absurd input stops near 3 GB. The limit is a plain count: [`Default`] cannot see the
+    /// circle count, so it cannot be a per-circle budget.
     pub max_total: usize,
     /// Most resampling rounds after the first triangulation.
     pub max_rounds: usize,
@@ -59,7 +66,7 @@ impl Default for SamplingOptions {
             min_per_circle: 32,
             max_per_circle: 1 << 20,
             spacing_per_gap: 1.0,
-            max_total: 8_000_000,
+            max_total: 32_000_000,
             max_rounds: 4,
             boost: Vec::new(),
         }
