@@ -28,6 +28,7 @@ use crate::apollonius::{apollonius, same_circle, Apollonius, Choice, Sign, Site}
 use crate::domain::{CircleId, Domain};
 use crate::geometry::{Point, Triangulation};
 use crate::medial::{MedialArc, MedialGraph};
+use rayon::prelude::*;
 use serde::Serialize;
 
 /// The tangency site of circle `id` of `domain` (a hole, or the bounding circle for `-1`).
@@ -45,9 +46,10 @@ pub fn site(domain: &Domain, id: CircleId) -> Site {
 /// be ids of `domain` (the graph was built from its samples).
 pub fn vertex_circles(domain: &Domain, medial: &MedialGraph) -> Vec<Option<Apollonius>> {
     let n = domain.hole_count() as CircleId;
+    // Independent solves, in parallel on the current rayon pool, collected in vertex order.
     medial
         .vertices
-        .iter()
+        .par_iter()
         .map(|v| {
             if v.circles.iter().any(|&c| c < -1 || c >= n) {
                 return None;

@@ -19,7 +19,7 @@
 //! spoke at a collapsed vertex is exactly normal to its wall. Inserted holes are handled by
 //! [`super::inserted`].
 
-use super::{assemble, exact_vertices, internal, ExactMesh, ExactVertex, Skeleton, Wall};
+use super::{assemble, exact_vertices_reusing, internal, ExactMesh, ExactVertex, Skeleton, Wall};
 use crate::blocking::CollapsedBlocking;
 use crate::domain::{CircleId, Domain};
 use crate::geometry::Point;
@@ -32,7 +32,8 @@ pub fn cluster_vertices(cb: &CollapsedBlocking) -> Result<Vec<ExactVertex>, Mesh
     let domain = &cb.refined.domain;
     let medial = &cb.refined.sampled.medial;
     let contracted = &cb.contracted;
-    let single = exact_vertices(domain, medial)?;
+    // The refinement solved every vertex's Apollonius circle already (same domain and graph).
+    let single = exact_vertices_reusing(domain, medial, &cb.refined.circles)?;
     let nclusters = contracted.graph.vertices.len();
     let mut members: Vec<Vec<usize>> = vec![Vec::new(); nclusters];
     for (v, &c) in contracted.cluster_of.iter().enumerate() {

@@ -162,6 +162,20 @@ pub fn exact_vertices(
     domain: &Domain,
     medial: &crate::medial::MedialGraph,
 ) -> Result<Vec<ExactVertex>, MeshError> {
+    exact_vertices_reusing(domain, medial, &[])
+}
+
+/// [`exact_vertices`], reusing `known[k]` for vertex `k` where it is `Some`: it must be
+/// [`crate::cocircular::vertex_circles`]`(domain, medial)[k]`, the same solve with the same
+/// sites and [`Choice`] (counter-clockwise, nearest the vertex), so the result is bitwise
+/// that of [`exact_vertices`] (tested in `tests/perf_equivalence.rs`). Missing or `None`
+/// entries are solved here. Saves the second exact solve per vertex on the full front end,
+/// whose refinement already solved them all.
+pub fn exact_vertices_reusing(
+    domain: &Domain,
+    medial: &crate::medial::MedialGraph,
+    known: &[Option<crate::apollonius::Apollonius>],
+) -> Result<Vec<ExactVertex>, MeshError> {
     let nh = domain.hole_count() as CircleId;
     // One independent Apollonius solve per vertex, in parallel on the current rayon pool;
     // collected in vertex order and the first error in vertex order returned, so the result
@@ -179,16 +193,23 @@ pub fn exact_vertices(
                 )));
             }
             let sites = c.map(|x| Wall::of(domain, x).site());
-            let ap = apollonius(sites, Choice::ccw().near(v.position))
-                .or_else(|_| apollonius(sites, Choice::any().near(v.position)))
-                .map_err(|e| {
-                    internal(format!("no Apollonius circle for medial vertex {k}: {e}"))
-                })?;
+            let reused = known.get(k).and_then(|a| a.as_ref());
+            let (center, radius, tangent) = match reused {
+                Some(a) => (a.center, a.radius, a.tangent_points),
+                None => {
+                    let ap = apollonius(sites, Choice::ccw().near(v.position))
+                        .or_else(|_| apollonius(sites, Choice::any().near(v.position)))
+                        .map_err(|e| {
+                            internal(format!("no Apollonius circle for medial vertex {k}: {e}"))
+                        })?;
+                    (ap.center, ap.radius, ap.tangent_points)
+                }
+            };
             Ok(ExactVertex {
-                center: ap.center,
-                radius: ap.radius,
+                center,
+                radius,
                 circles: c.to_vec(),
-                tangent: ap.tangent_points.to_vec(),
+                tangent: tangent.to_vec(),
             })
         })
         .collect();
