@@ -216,6 +216,26 @@ pub fn exact_vertices_reusing(
     all.into_iter().collect()
 }
 
+/// Per circle slot (`c + 1`, `ncirc` slots), the radii of the vertices touching circle `c`,
+/// in vertex order: the list `vertices.filter(|v| v.circles.contains(&c)).map(radius)` for
+/// every circle at once, in one pass (O(vertices), not O(circles x vertices); a vertex listing
+/// a circle twice counts once, as in the filter). Circles outside `-1..ncirc - 1` are ignored.
+/// Tested against the filter in `tests/perf_scale.rs`.
+pub fn radii_by_circle(vertices: &[ExactVertex], ncirc: usize) -> Vec<Vec<f64>> {
+    let mut out: Vec<Vec<f64>> = vec![Vec::new(); ncirc];
+    for v in vertices {
+        for (k, &c) in v.circles.iter().enumerate() {
+            if v.circles[..k].contains(&c) {
+                continue;
+            }
+            if let Some(list) = usize::try_from(c + 1).ok().and_then(|i| out.get_mut(i)) {
+                list.push(v.radius);
+            }
+        }
+    }
+    out
+}
+
 /// One medial arc sampled in exact geometry.
 #[derive(Debug, Clone)]
 pub(crate) struct ArcGeometry {
@@ -642,21 +662,7 @@ pub fn assemble(sk: Skeleton<'_>, options: &Options) -> Result<ExactMesh, MeshEr
             clustering_of(options, id)
         }
     };
-    // The radii of the vertices touching each circle, in one pass over the vertices (each
-    // vertex counted once per circle it touches, like a filter over the vertices per circle,
-    // but O(vertices) instead of O(circles x vertices)). Only the median of each list is
-    // read, which does not depend on the list's order.
-    let mut near_radii: Vec<Vec<f64>> = vec![Vec::new(); ncirc];
-    for v in &vertices {
-        for (k, &c) in v.circles.iter().enumerate() {
-            if v.circles[..k].contains(&c) {
-                continue;
-            }
-            if let Some(list) = usize::try_from(c + 1).ok().and_then(|i| near_radii.get_mut(i)) {
-                list.push(v.radius);
-            }
-        }
-    }
+    let mut near_radii = radii_by_circle(&vertices, ncirc);
     let mut circle_target = vec![1.0; ncirc];
     for id in domain.circle_ids() {
         let near = std::mem::take(&mut near_radii[cidx(id)]);
