@@ -7,10 +7,12 @@
 //! - `exact_mode::collapsed::build_collapsed` (exact vertices, arc geometry, densities, grids
 //!   and smoothing in parallel) on rayon pools of 1, 2 and 3 threads: layout, vertices and
 //!   every grid node bitwise equal, and the error (if any) equal, on random bubbles, the
-//!   co-circular square lattice and a layout with inserted holes (templates).
+//!   co-circular square lattice and a layout with inserted holes (templates);
+//! - `HoleIndex::any_closer` (the refinement's candidate check) against the scan over all
+//!   holes it replaced, on random holes and queries (near, overlapping, far, degenerate).
 
 use medial_blocks::blocking::collapsed_blocking_with;
-use medial_blocks::domain::{CircleId, Domain};
+use medial_blocks::domain::{gap, CircleId, Domain, HoleIndex};
 use medial_blocks::exact_mode::collapsed::build_collapsed;
 use medial_blocks::exact_mode::{exact_vertices, exact_vertices_reusing, radii_by_circle};
 use medial_blocks::exact_mode::{ExactMesh, ExactVertex};
@@ -203,4 +205,61 @@ fn exact_geometry_is_independent_of_the_thread_count() {
         }
     }
     assert!(saw_templates, "no case exercised the inserted-hole templates");
+}
+
+#[test]
+fn any_closer_matches_the_scan() {
+    let mut rng = SplitMix64(88);
+    for round in 0..300 {
+        let n = (rng.next_u64() % 200) as usize;
+        let spread = 1.0 + rng.next_f64() * 50.0;
+        let holes: Vec<Circle> = (0..n)
+            .map(|_| {
+                Circle::new(
+                    (rng.next_f64() - 0.5) * spread,
+                    (rng.next_f64() - 0.5) * spread,
+                    rng.next_f64() * 0.5 + 1e-9,
+                )
+            })
+            .collect();
+        let index = HoleIndex::new(&holes);
+        for _ in 0..40 {
+            // Queries: random, or centred just off an existing hole's boundary.
+            let q = if n > 0 && rng.next_u64() % 2 == 0 {
+                let h = holes[(rng.next_u64() % n as u64) as usize];
+                let a = rng.next_f64() * std::f64::consts::TAU;
+                let d = h.radius + rng.next_f64() * 0.3;
+                Circle {
+                    center: [h.center[0] + d * a.cos(), h.center[1] + d * a.sin()],
+                    radius: rng.next_f64() * 0.2,
+                }
+            } else {
+                Circle {
+                    center: [
+                        (rng.next_f64() - 0.5) * spread * 1.5,
+                        (rng.next_f64() - 0.5) * spread * 1.5,
+                    ],
+                    radius: rng.next_f64(),
+                }
+            };
+            // Gaps around the actual ones, so both answers occur.
+            let g = match rng.next_u64() % 4 {
+                0 => rng.next_f64() * 0.1,
+                1 => -rng.next_f64(),
+                2 if n > 0 => gap(&holes[(rng.next_u64() % n as u64) as usize], &q),
+                _ => rng.next_f64() * spread,
+            };
+            let scan = !holes.iter().all(|c| gap(c, &q) >= g);
+            assert_eq!(index.any_closer(&q, g), scan, "round {round}, q {q:?}, g {g}");
+        }
+        // Non-finite queries and gaps take the scan.
+        for (q, g) in [
+            (Circle { center: [f64::NAN, 0.0], radius: 0.1 }, 0.1),
+            (Circle { center: [0.0, 0.0], radius: 0.1 }, f64::NAN),
+            (Circle { center: [0.0, 0.0], radius: 0.1 }, f64::INFINITY),
+        ] {
+            let scan = !holes.iter().all(|c| gap(c, &q) >= g);
+            assert_eq!(index.any_closer(&q, g), scan, "round {round}, non-finite");
+        }
+    }
 }
