@@ -828,23 +828,32 @@ pub fn assemble(sk: Skeleton<'_>, options: &Options) -> Result<ExactMesh, MeshEr
     // piece's corner spokes are computed by each piece that uses them, from the same inputs
     // (vertex `v`'s tangent point `s` determines the circle, hence the count and clustering),
     // so the blocks sharing a spoke hold bitwise identical nodes whatever the thread count.
+    // The sub-step densities (2 x ARC_SUBSTEPS f64 per arc, more than a 16 x 16 grid) are
+    // moved into the tasks and freed as each piece turns them into its node parameters, so
+    // they do not stay alive next to all the grids (issue 8: peak memory).
+    let CountProblem {
+        arcs: arc_targets, ..
+    } = problem;
     let per_piece: Vec<Result<(Vec<Point>, [BlockGrid; 2]), MeshError>> = pieces
         .par_iter()
+        .zip(arc_targets.into_par_iter())
         .enumerate()
-        .map(|(e, p)| {
+        .map(|(e, (p, t))| {
             let g = &p.geom;
             let n = counts.arc[e];
-            let weights: Vec<f64> = {
+            let params = {
                 let nbar = 0.5
                     * (counts.circle[cidx(p.circles[0])] + counts.circle[cidx(p.circles[1])])
                         as f64;
-                let t = &problem.arcs[e];
-                t.sq.iter()
+                let weights: Vec<f64> = t
+                    .sq
+                    .iter()
                     .zip(&t.ang)
                     .map(|(s, a)| (nbar * s).max(*a))
-                    .collect()
+                    .collect();
+                drop(t);
+                equidistribute(&weights, n)
             };
-            let params = equidistribute(&weights, n);
             let mut m_nodes = Vec::with_capacity(n + 1);
             let mut a_nodes: [Vec<Point>; 2] =
                 [Vec::with_capacity(n + 1), Vec::with_capacity(n + 1)];
