@@ -652,10 +652,13 @@ impl HoleIndex<'_> {
             match node.children {
                 None => {
                     let leaf = &self.order[node.start as usize..node.end as usize];
-                    if leaf
-                        .iter()
-                        .any(|&k| !(gap(&self.holes[k as usize], q) >= max_gap))
-                    {
+                    if leaf.iter().any(|&k| {
+                        // `!(gap >= max_gap)`: a NaN gap counts as closer, as in the scan.
+                        matches!(
+                            gap(&self.holes[k as usize], q).partial_cmp(&max_gap),
+                            None | Some(std::cmp::Ordering::Less)
+                        )
+                    }) {
                         return true;
                     }
                 }

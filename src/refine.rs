@@ -28,11 +28,11 @@
 use crate::apollonius::Apollonius;
 use crate::cocircular::vertex_circles;
 use crate::domain::{dist, gap, Circle, Domain, HoleIndex};
-use std::collections::HashSet;
 use crate::geometry::Point;
 use crate::medial::{circumcenter, MedialGraph};
 use crate::mesher::MeshError;
 use crate::sampling::{nearest_gaps, sample_and_triangulate, SampledDomain, SamplingOptions};
+use std::collections::HashSet;
 
 /// The poorness ratio `circumradius / shortest edge` of medial vertex `v`: from the tangent
 /// points of its Apollonius circle (`circle`), else from its sample triangle (`points` the

@@ -90,8 +90,7 @@ fn same_vertex(a: &ExactVertex, b: &ExactVertex) -> bool {
         && a.radius.to_bits() == b.radius.to_bits()
         && a.circles == b.circles
         && a.tangent.len() == b.tangent.len()
-        && a
-            .tangent
+        && a.tangent
             .iter()
             .zip(&b.tangent)
             .all(|(p, q)| p.map(f64::to_bits) == q.map(f64::to_bits))
@@ -133,19 +132,29 @@ fn fingerprint(m: &ExactMesh) -> (String, Vec<u64>, Vec<u64>) {
         .grids
         .iter()
         .flat_map(|g| {
-            [g.ni as u64, g.nj as u64]
-                .into_iter()
-                .chain(g.nodes.iter().flat_map(|p| [p[0].to_bits(), p[1].to_bits()]))
+            [g.ni as u64, g.nj as u64].into_iter().chain(
+                g.nodes
+                    .iter()
+                    .flat_map(|p| [p[0].to_bits(), p[1].to_bits()]),
+            )
         })
         .collect();
     let vertices: Vec<u64> = m
         .vertices
         .iter()
         .flat_map(|v| {
-            [v.center[0].to_bits(), v.center[1].to_bits(), v.radius.to_bits()]
-                .into_iter()
-                .chain(v.tangent.iter().flat_map(|p| [p[0].to_bits(), p[1].to_bits()]))
-                .chain(v.circles.iter().map(|&c| c as u64))
+            [
+                v.center[0].to_bits(),
+                v.center[1].to_bits(),
+                v.radius.to_bits(),
+            ]
+            .into_iter()
+            .chain(
+                v.tangent
+                    .iter()
+                    .flat_map(|p| [p[0].to_bits(), p[1].to_bits()]),
+            )
+            .chain(v.circles.iter().map(|&c| c as u64))
         })
         .collect();
     (layout, nodes, vertices)
@@ -195,16 +204,25 @@ fn exact_geometry_is_independent_of_the_thread_count() {
             match (&one, &other) {
                 (Ok(a), Ok(b)) => {
                     let (fa, fb) = (fingerprint(a), fingerprint(b));
-                    assert!(fa.0 == fb.0, "case {k}: layout differs on {threads} threads");
+                    assert!(
+                        fa.0 == fb.0,
+                        "case {k}: layout differs on {threads} threads"
+                    );
                     assert!(fa.1 == fb.1, "case {k}: grids differ on {threads} threads");
-                    assert!(fa.2 == fb.2, "case {k}: vertices differ on {threads} threads");
+                    assert!(
+                        fa.2 == fb.2,
+                        "case {k}: vertices differ on {threads} threads"
+                    );
                 }
                 (Err(a), Err(b)) => assert_eq!(format!("{a}"), format!("{b}"), "case {k}"),
                 _ => panic!("case {k}: 1 and {threads} threads disagree on success"),
             }
         }
     }
-    assert!(saw_templates, "no case exercised the inserted-hole templates");
+    assert!(
+        saw_templates,
+        "no case exercised the inserted-hole templates"
+    );
 }
 
 #[test]
@@ -250,13 +268,35 @@ fn any_closer_matches_the_scan() {
                 _ => rng.next_f64() * spread,
             };
             let scan = !holes.iter().all(|c| gap(c, &q) >= g);
-            assert_eq!(index.any_closer(&q, g), scan, "round {round}, q {q:?}, g {g}");
+            assert_eq!(
+                index.any_closer(&q, g),
+                scan,
+                "round {round}, q {q:?}, g {g}"
+            );
         }
         // Non-finite queries and gaps take the scan.
         for (q, g) in [
-            (Circle { center: [f64::NAN, 0.0], radius: 0.1 }, 0.1),
-            (Circle { center: [0.0, 0.0], radius: 0.1 }, f64::NAN),
-            (Circle { center: [0.0, 0.0], radius: 0.1 }, f64::INFINITY),
+            (
+                Circle {
+                    center: [f64::NAN, 0.0],
+                    radius: 0.1,
+                },
+                0.1,
+            ),
+            (
+                Circle {
+                    center: [0.0, 0.0],
+                    radius: 0.1,
+                },
+                f64::NAN,
+            ),
+            (
+                Circle {
+                    center: [0.0, 0.0],
+                    radius: 0.1,
+                },
+                f64::INFINITY,
+            ),
         ] {
             let scan = !holes.iter().all(|c| gap(c, &q) >= g);
             assert_eq!(index.any_closer(&q, g), scan, "round {round}, non-finite");

@@ -578,33 +578,33 @@ pub fn assemble(sk: Skeleton<'_>, options: &Options) -> Result<ExactMesh, MeshEr
         .par_iter()
         .enumerate()
         .map(|(e, arc)| {
-        let [v0, v1] = arc.ends.map(|v| v as usize);
-        let (Some(x0), Some(x1)) = (vertices.get(v0), vertices.get(v1)) else {
-            return Err(internal(format!("arc {e} has an unknown end vertex")));
-        };
-        if arc.circles.iter().any(|&c| c < -1 || cidx(c) >= ncirc) {
-            return Err(internal(format!("arc {e} has an unknown circle")));
-        }
-        let walls = arc.circles.map(|c| Wall::of(domain, c));
-        let mut ends_a = [[[0.0; 2]; 2]; 2];
-        for (side, &c) in arc.circles.iter().enumerate() {
-            let (Some(s0), Some(s1)) = (x0.slot(c), x1.slot(c)) else {
-                return Err(internal(format!(
-                    "arc {e}: an end vertex does not touch circle {c}"
-                )));
+            let [v0, v1] = arc.ends.map(|v| v as usize);
+            let (Some(x0), Some(x1)) = (vertices.get(v0), vertices.get(v1)) else {
+                return Err(internal(format!("arc {e} has an unknown end vertex")));
             };
-            ends_a[0][side] = x0.tangent[s0];
-            ends_a[1][side] = x1.tangent[s1];
-        }
-        let hint_a = wall_hint(sk.sampled, 2 * e)
-            .ok_or_else(|| internal(format!("arc {e}: no sampled wall")))?;
-        let hint_b = wall_hint(sk.sampled, 2 * e + 1)
-            .ok_or_else(|| internal(format!("arc {e}: no sampled wall")))?;
-        Ok(Piece {
-            ends: [v0, v1],
-            circles: arc.circles,
-            geom: ArcGeometry::new(walls, [x0.center, x1.center], ends_a, [hint_a, -hint_b]),
-        })
+            if arc.circles.iter().any(|&c| c < -1 || cidx(c) >= ncirc) {
+                return Err(internal(format!("arc {e} has an unknown circle")));
+            }
+            let walls = arc.circles.map(|c| Wall::of(domain, c));
+            let mut ends_a = [[[0.0; 2]; 2]; 2];
+            for (side, &c) in arc.circles.iter().enumerate() {
+                let (Some(s0), Some(s1)) = (x0.slot(c), x1.slot(c)) else {
+                    return Err(internal(format!(
+                        "arc {e}: an end vertex does not touch circle {c}"
+                    )));
+                };
+                ends_a[0][side] = x0.tangent[s0];
+                ends_a[1][side] = x1.tangent[s1];
+            }
+            let hint_a = wall_hint(sk.sampled, 2 * e)
+                .ok_or_else(|| internal(format!("arc {e}: no sampled wall")))?;
+            let hint_b = wall_hint(sk.sampled, 2 * e + 1)
+                .ok_or_else(|| internal(format!("arc {e}: no sampled wall")))?;
+            Ok(Piece {
+                ends: [v0, v1],
+                circles: arc.circles,
+                geom: ArcGeometry::new(walls, [x0.center, x1.center], ends_a, [hint_a, -hint_b]),
+            })
         })
         .collect();
     let mut pieces = Vec::with_capacity(sk.arcs.len());
@@ -834,7 +834,8 @@ pub fn assemble(sk: Skeleton<'_>, options: &Options) -> Result<ExactMesh, MeshEr
     let CountProblem {
         arcs: arc_targets, ..
     } = problem;
-    let per_piece: Vec<Result<(Vec<Point>, [BlockGrid; 2]), MeshError>> = pieces
+    type PieceGrids = Result<(Vec<Point>, [BlockGrid; 2]), MeshError>;
+    let per_piece: Vec<PieceGrids> = pieces
         .par_iter()
         .zip(arc_targets.into_par_iter())
         .enumerate()
@@ -845,12 +846,11 @@ pub fn assemble(sk: Skeleton<'_>, options: &Options) -> Result<ExactMesh, MeshEr
                 let nbar = 0.5
                     * (counts.circle[cidx(p.circles[0])] + counts.circle[cidx(p.circles[1])])
                         as f64;
-                let weights: Vec<f64> = t
-                    .sq
-                    .iter()
-                    .zip(&t.ang)
-                    .map(|(s, a)| (nbar * s).max(*a))
-                    .collect();
+                let weights: Vec<f64> =
+                    t.sq.iter()
+                        .zip(&t.ang)
+                        .map(|(s, a)| (nbar * s).max(*a))
+                        .collect();
                 drop(t);
                 equidistribute(&weights, n)
             };
