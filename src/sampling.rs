@@ -44,11 +44,12 @@ pub struct SamplingOptions {
     /// Most samples in total; more is a [`MeshError::Sampling`]. Checked circle by circle
     /// while sampling, before the samples and the triangulation are allocated.
     ///
-    /// Default 32 M: random bubbles need about 90 samples per circle, so the default meshes
-    /// about 350 000 of them (issue 8: 100 000 particles need about 9 M), while one sample
-    /// costs about 100 bytes at peak (point, circle and grid indices, triangulation), so an
-    /// absurd input stops near 3 GB. The limit is a plain count: [`Default`] cannot see the
-    /// circle count, so it cannot be a per-circle budget.
+    /// Default 32 M: random bubbles need about 85-100 samples per circle, so the default
+    /// meshes about 300 000 of them (issue 8: 100 000 particles need about 9 M; the old 8 M
+    /// stopped near 94 000). The front end holds a few hundred bytes per sample at peak
+    /// (points, indices, triangulation, medial graph), so an absurd input is refused before
+    /// it needs more than roughly 10 GB. The limit is a plain count: [`Default`] cannot see
+    /// the circle count, so it cannot be a per-circle budget.
     pub max_total: usize,
     /// Most resampling rounds after the first triangulation.
     pub max_rounds: usize,
