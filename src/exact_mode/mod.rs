@@ -619,13 +619,17 @@ pub fn assemble(sk: Skeleton<'_>, options: &Options) -> Result<ExactMesh, MeshEr
     let mut split_arcs = 0;
     // A split for one hole can change a neighbouring inserted hole's count: repeat until no
     // hole asks for a split (bounded).
-    for _round in 0..4 {
-        let before = split_arcs;
-        for &c in &sk.fluid {
-            split_arcs += inserted::prepare(&mut pieces, &mut vertices, c, &sk.fluid);
-        }
-        if split_arcs == before {
-            break;
+    if !sk.fluid.is_empty() {
+        let mut index = inserted::PiecesByCircle::new(&pieces, ncirc);
+        for _round in 0..4 {
+            let before = split_arcs;
+            for &c in &sk.fluid {
+                split_arcs +=
+                    inserted::prepare(&mut pieces, &mut vertices, c, &is_fluid, &mut index);
+            }
+            if split_arcs == before {
+                break;
+            }
         }
     }
 
