@@ -9,7 +9,10 @@
 //!   every grid node bitwise equal, and the error (if any) equal, on random bubbles, the
 //!   co-circular square lattice and a layout with inserted holes (templates);
 //! - `HoleIndex::any_closer` (the refinement's candidate check) against the scan over all
-//!   holes it replaced, on random holes and queries (near, overlapping, far, degenerate).
+//!   holes it replaced, on random holes and queries (near, overlapping, far, degenerate);
+//! - `templates::fill_inserted_holes` (one pass for all inserted holes) against one
+//!   `fill_inserted_hole` call per hole, on random synthetic layouts (arcs of several holes
+//!   interleaved, both directions, failing holes included).
 
 use medial_blocks::blocking::collapsed_blocking_with;
 use medial_blocks::domain::{gap, CircleId, Domain, HoleIndex};
@@ -302,4 +305,140 @@ fn any_closer_matches_the_scan() {
             assert_eq!(index.any_closer(&q, g), scan, "round {round}, non-finite");
         }
     }
+}
+
+/// A synthetic layout: per hole `k` wall arcs (some stored reversed) closing a cycle around
+/// it, each carrying one outer block (side 0 on the arc, `wall: Some(hole)`), the edges of
+/// all holes shuffled together, plus a few unrelated blocks.
+fn holes_layout(
+    rng: &mut SplitMix64,
+    arcs_per_hole: &[usize],
+) -> (medial_blocks::layout::BlockLayout, Vec<(CircleId, Circle)>) {
+    use medial_blocks::layout::{Block, BlockLayout, Curve, Edge, EdgeKind, SideRef};
+    let mut layout = BlockLayout::default();
+    let mut edges: Vec<(Edge, CircleId)> = Vec::new();
+    let mut holes = Vec::new();
+    for (h, &k) in arcs_per_hole.iter().enumerate() {
+        let id = (h + 3) as CircleId;
+        let circle = Circle::new(10.0 * h as f64, 0.0, 1.0 + rng.next_f64());
+        holes.push((id, circle));
+        let phase = rng.next_f64() * std::f64::consts::TAU;
+        // Angles with jitter, every sweep below half a turn for k >= 4.
+        let mut t: Vec<f64> = (0..k)
+            .map(|i| {
+                phase + (i as f64 + 0.3 * (rng.next_f64() - 0.5)) * std::f64::consts::TAU / k as f64
+            })
+            .collect();
+        t.push(t[0] + std::f64::consts::TAU);
+        let v0 = layout.vertices.len() as u32;
+        for &a in &t[..k] {
+            layout.vertices.push([
+                circle.center[0] + circle.radius * a.cos(),
+                circle.center[1] + circle.radius * a.sin(),
+            ]);
+        }
+        let v = |i: usize| v0 + (i % k) as u32;
+        for i in 0..k {
+            let edge = if rng.next_u64() % 2 == 0 {
+                Edge {
+                    ends: [v(i), v(i + 1)],
+                    curve: Curve::Arc {
+                        center: circle.center,
+                        radius: circle.radius,
+                        start: t[i],
+                        sweep: t[i + 1] - t[i],
+                    },
+                    kind: EdgeKind::Wall(id),
+                }
+            } else {
+                Edge {
+                    ends: [v(i + 1), v(i)],
+                    curve: Curve::Arc {
+                        center: circle.center,
+                        radius: circle.radius,
+                        start: t[i + 1],
+                        sweep: t[i] - t[i + 1],
+                    },
+                    kind: EdgeKind::Wall(id),
+                }
+            };
+            edges.push((edge, id));
+        }
+    }
+    // Shuffle the edges (Fisher-Yates), then one outer block per wall edge and some others.
+    for i in (1..edges.len()).rev() {
+        let j = (rng.next_u64() % (i as u64 + 1)) as usize;
+        edges.swap(i, j);
+    }
+    for (e, (edge, id)) in edges.into_iter().enumerate() {
+        let side = |edge: u32| SideRef {
+            edge,
+            reversed: false,
+        };
+        layout.blocks.push(Block {
+            corners: [edge.ends[0], edge.ends[1], edge.ends[1], edge.ends[0]],
+            sides: [
+                side(e as u32),
+                side(e as u32),
+                side(e as u32),
+                side(e as u32),
+            ],
+            wall: Some(id),
+        });
+        if rng.next_u64() % 3 == 0 {
+            layout.blocks.push(Block {
+                corners: [0, 0, 0, 0],
+                sides: [side(e as u32), side(0), side(0), side(0)],
+                wall: Some(-1),
+            });
+        }
+        layout.edges.push(edge);
+    }
+    (layout, holes)
+}
+
+#[test]
+fn batched_templates_equal_one_call_per_hole() {
+    use medial_blocks::templates::{fill_inserted_hole, fill_inserted_holes};
+    let mut rng = SplitMix64(4242);
+    let mut failures = 0;
+    for round in 0..200 {
+        let nh = 1 + (rng.next_u64() % 5) as usize;
+        // Mostly valid even counts; sometimes an odd or too small count (an error).
+        let counts: Vec<usize> = (0..nh)
+            .map(|_| match rng.next_u64() % 10 {
+                0 => 3,
+                1 => 5,
+                _ => 4 + 2 * (rng.next_u64() % 3) as usize,
+            })
+            .collect();
+        let (layout, mut holes) = holes_layout(&mut rng, &counts);
+        if rng.next_u64() % 8 == 0 {
+            // A hole listed twice fails the second time in both.
+            holes.push(holes[0]);
+        }
+        let mut seq = layout.clone();
+        let mut seq_result: Result<usize, (CircleId, String)> = Ok(0);
+        for &(c, circle) in &holes {
+            match fill_inserted_hole(&mut seq, c, circle) {
+                Ok(n) => seq_result = seq_result.map(|t| t + n),
+                Err(m) => {
+                    seq_result = Err((c, m));
+                    break;
+                }
+            }
+        }
+        let mut batch = layout.clone();
+        let batch_result = fill_inserted_holes(&mut batch, &holes);
+        assert_eq!(batch_result, seq_result, "round {round}");
+        if seq_result.is_ok() {
+            assert!(batch == seq, "round {round}: layouts differ");
+        } else {
+            failures += 1;
+        }
+    }
+    assert!(
+        failures > 0 && failures < 200,
+        "both outcomes must occur ({failures} failures)"
+    );
 }

@@ -802,10 +802,10 @@ pub fn assemble(sk: Skeleton<'_>, options: &Options) -> Result<ExactMesh, MeshEr
 
     // Templates in the inserted holes, and the count ties they bring.
     let first_template = layout.blocks.len();
-    for &c in &sk.fluid {
-        crate::templates::fill_inserted_hole(&mut layout, c, domain.circle(c))
-            .map_err(|m| internal(format!("inserted hole {c}: {m}")))?;
-    }
+    let holes: Vec<(CircleId, crate::domain::Circle)> =
+        sk.fluid.iter().map(|&c| (c, domain.circle(c))).collect();
+    crate::templates::fill_inserted_holes(&mut layout, &holes)
+        .map_err(|(c, m)| internal(format!("inserted hole {c}: {m}")))?;
     let template_blocks = layout.blocks.len() - first_template;
     if template_blocks > 0 {
         inserted::tie_counts(&layout, &medial_edges, &mut counts.arc);
