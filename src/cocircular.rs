@@ -28,6 +28,7 @@ use crate::apollonius::{apollonius, same_circle, Apollonius, Choice, Sign, Site}
 use crate::domain::{CircleId, Domain};
 use crate::geometry::{Point, Triangulation};
 use crate::medial::{MedialArc, MedialGraph};
+use rayon::prelude::*;
 use serde::Serialize;
 
 /// The tangency site of circle `id` of `domain` (a hole, or the bounding circle for `-1`).
@@ -44,7 +45,6 @@ pub fn site(domain: &Domain, id: CircleId) -> Site {
 /// `None` where no valid root has the triangle's orientation. Circle ids of the graph must
 /// be ids of `domain` (the graph was built from its samples).
 pub fn vertex_circles(domain: &Domain, medial: &MedialGraph) -> Vec<Option<Apollonius>> {
-    use rayon::prelude::*;
     let n = domain.hole_count() as CircleId;
     // One independent solve per vertex, in parallel, collected in vertex order.
     medial

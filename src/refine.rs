@@ -27,11 +27,12 @@
 
 use crate::apollonius::Apollonius;
 use crate::cocircular::vertex_circles;
-use crate::domain::{dist, gap, Circle, Domain};
+use crate::domain::{dist, gap, Circle, Domain, HoleIndex};
 use crate::geometry::Point;
 use crate::medial::{circumcenter, MedialGraph};
 use crate::mesher::MeshError;
 use crate::sampling::{nearest_gaps, sample_and_triangulate, SampledDomain, SamplingOptions};
+use std::collections::HashSet;
 
 /// The poorness ratio `circumradius / shortest edge` of medial vertex `v`: from the tangent
 /// points of its Apollonius circle (`circle`), else from its sample triangle (`points` the
@@ -110,7 +111,12 @@ pub fn refine(
     let mut inserted: Vec<Circle> = Vec::new();
     let mut min_gaps = Vec::new();
     // Candidate centres found unusable (their insertion would break Lemma 2): not retried.
-    let mut refused: Vec<Point> = Vec::new();
+    // Kept as a set of `==`-classes (`-0.0` as `0.0`; a NaN never equals anything, so it is
+    // never stored): the same answers as `Vec::contains`, in O(1) (issue 8).
+    let mut refused: HashSet<[u64; 2]> = HashSet::new();
+    let key = |p: Point| -> Option<[u64; 2]> {
+        (!p[0].is_nan() && !p[1].is_nan()).then(|| [(p[0] + 0.0).to_bits(), (p[1] + 0.0).to_bits()])
+    };
     loop {
         let sampled = sample_and_triangulate(&current, sampling)?;
         let circles = vertex_circles(&current, &sampled.medial);
@@ -141,6 +147,9 @@ pub fn refine(
             .collect();
         poor.sort_by(|a, b| b.0.total_cmp(&a.0).then(a.1.cmp(&b.1)));
         let mut batch: Vec<Circle> = Vec::new();
+        // The holes of this round, indexed: a candidate is checked against its neighbours,
+        // not against every hole (O(log n) per candidate instead of O(n)).
+        let index = HoleIndex::new(current.holes());
         for &(_, v) in &poor {
             let (center, rho) = match &circles[v] {
                 Some(c) => (c.center, c.radius),
@@ -150,7 +159,7 @@ pub fn refine(
                     (mv.position, dist(mv.position, p))
                 }
             };
-            if refused.contains(&center) {
+            if key(center).is_some_and(|k| refused.contains(&k)) {
                 continue;
             }
             let hole = Circle {
@@ -162,9 +171,11 @@ pub fn refine(
             let ok = hole.radius >= Domain::min_radius_for(&b)
                 && hole.radius.is_finite()
                 && b.radius - dist(b.center, center) - hole.radius >= g
-                && current.holes().iter().all(|c| gap(c, &hole) >= g);
+                && !index.any_closer(&hole, g);
             if !ok {
-                refused.push(center);
+                if let Some(k) = key(center) {
+                    refused.insert(k);
+                }
                 continue;
             }
             if batch.iter().all(|c| gap(c, &hole) >= g) {

@@ -41,7 +41,15 @@ pub struct SamplingOptions {
     pub max_per_circle: usize,
     /// Target sample spacing as a multiple of the circle's nearest gap.
     pub spacing_per_gap: f64,
-    /// Most samples in total; more is a [`MeshError::Sampling`].
+    /// Most samples in total; more is a [`MeshError::Sampling`]. Checked circle by circle
+    /// while sampling, before the samples and the triangulation are allocated.
+    ///
+    /// Default 32 M: random bubbles need about 85-100 samples per circle, so the default
+    /// meshes about 300 000 of them (issue 8: 100 000 particles need about 9 M; the old 8 M
+    /// stopped near 94 000). The front end holds a few hundred bytes per sample at peak
+    /// (points, indices, triangulation, medial graph), so an absurd input is refused before
+    /// it needs more than roughly 10 GB. The limit is a plain count: [`Default`] cannot see
+    /// the circle count, so it cannot be a per-circle budget.
     pub max_total: usize,
     /// Most resampling rounds after the first triangulation.
     pub max_rounds: usize,
@@ -65,7 +73,7 @@ impl Default for SamplingOptions {
             min_per_circle: 32,
             max_per_circle: 1 << 20,
             spacing_per_gap: 1.0,
-            max_total: 8_000_000,
+            max_total: 32_000_000,
             max_rounds: 4,
             boost: Vec::new(),
             soft_rounds: true,

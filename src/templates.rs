@@ -266,13 +266,79 @@ pub fn fill_inserted_hole(
     hole: CircleId,
     circle: Circle,
 ) -> Result<usize, String> {
+    let walls: Vec<usize> = (0..layout.edges.len())
+        .filter(|&e| layout.edges[e].kind == EdgeKind::Wall(hole))
+        .collect();
+    let first_block = layout.blocks.len();
+    let (n, mut hole_edges) = fill_with_walls(layout, circle, &walls)?;
+    hole_edges.sort_unstable();
+    for b in layout.blocks[..first_block].iter_mut() {
+        if hole_edges
+            .binary_search(&(b.sides[0].edge as usize))
+            .is_ok()
+        {
+            b.wall = None;
+        }
+    }
+    Ok(n)
+}
+
+/// [`fill_inserted_hole`] for every `(hole, circle)` of `holes` in order, with one pass over
+/// the edges (each hole's wall arcs) and one over the blocks (`wall: None` on the blocks
+/// outside the holes whose side 0 is one of their arcs) instead of one of each per hole
+/// (issue 8: O(edges) per inserted hole). The wall arcs of a hole are those present before
+/// the call; templates add no wall edges, so this is what the sequential calls see, as long as
+/// nothing else changes the layout between holes (exact mode: all arcs split first). Returns
+/// the template blocks added, or the first failing hole and its error (the layout is then
+/// partly filled and must be discarded). A hole listed twice fails the second time, as it
+/// would sequentially (its arcs are no longer walls).
+pub fn fill_inserted_holes(
+    layout: &mut BlockLayout,
+    holes: &[(CircleId, Circle)],
+) -> Result<usize, (CircleId, String)> {
+    let mut walls: std::collections::HashMap<CircleId, Vec<usize>> =
+        holes.iter().map(|&(c, _)| (c, Vec::new())).collect();
+    for (e, edge) in layout.edges.iter().enumerate() {
+        if let EdgeKind::Wall(c) = edge.kind {
+            if let Some(list) = walls.get_mut(&c) {
+                list.push(e);
+            }
+        }
+    }
+    let first_block = layout.blocks.len();
+    let mut was_wall = vec![false; layout.edges.len()];
+    let mut added = 0;
+    for &(hole, circle) in holes {
+        let list = walls.remove(&hole).unwrap_or_default();
+        let (n, hole_edges) = fill_with_walls(layout, circle, &list).map_err(|m| (hole, m))?;
+        for e in hole_edges {
+            if let Some(w) = was_wall.get_mut(e) {
+                *w = true;
+            }
+        }
+        added += n;
+    }
+    for b in layout.blocks[..first_block].iter_mut() {
+        if was_wall.get(b.sides[0].edge as usize) == Some(&true) {
+            b.wall = None;
+        }
+    }
+    Ok(added)
+}
+
+/// The template of one inserted hole whose wall arcs are the edges `walls` (increasing):
+/// blocks and edges appended, the arcs made [`EdgeKind::Interface`]. Returns the blocks added
+/// and the arcs (the caller clears `wall` on the blocks outside that sit on them).
+fn fill_with_walls(
+    layout: &mut BlockLayout,
+    circle: Circle,
+    walls: &[usize],
+) -> Result<(usize, Vec<usize>), String> {
     use std::f64::consts::{PI, TAU};
     // (edge, ccw start angle, ccw sweep, ccw first vertex, ccw last vertex)
     let mut arcs: Vec<(usize, f64, f64, u32, u32)> = Vec::new();
-    for (e, edge) in layout.edges.iter().enumerate() {
-        if edge.kind != EdgeKind::Wall(hole) {
-            continue;
-        }
+    for &e in walls {
+        let edge = &layout.edges[e];
         let Curve::Arc { start, sweep, .. } = edge.curve else {
             return Err(format!("edge {e} on the hole is not an arc"));
         };
@@ -367,11 +433,6 @@ pub fn fill_inserted_hole(
     for a in &arcs {
         layout.edges[a.0].kind = EdgeKind::Interface;
     }
-    let hole_edges: Vec<u32> = arcs.iter().map(|a| a.0 as u32).collect();
-    for b in layout.blocks[..first_block].iter_mut() {
-        if hole_edges.contains(&b.sides[0].edge) {
-            b.wall = None;
-        }
-    }
-    Ok(layout.blocks.len() - first_block)
+    let hole_edges: Vec<usize> = arcs.iter().map(|a| a.0).collect();
+    Ok((layout.blocks.len() - first_block, hole_edges))
 }

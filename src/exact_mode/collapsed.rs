@@ -19,7 +19,7 @@
 //! spoke at a collapsed vertex is exactly normal to its wall. Inserted holes are handled by
 //! [`super::inserted`].
 
-use super::{assemble, exact_vertices, internal, ExactMesh, ExactVertex, Skeleton, Wall};
+use super::{assemble, exact_vertices_with, internal, ExactMesh, ExactVertex, Skeleton, Wall};
 use crate::blocking::CollapsedBlocking;
 use crate::domain::{CircleId, Domain};
 use crate::geometry::Point;
@@ -29,12 +29,16 @@ use crate::mesher::{MeshError, Options};
 /// circles are those of its kept arcs, each of which must appear on exactly two of them (one
 /// spoke per circle); otherwise [`MeshError::Internal`] (the caller falls back).
 pub fn cluster_vertices(cb: &CollapsedBlocking) -> Result<Vec<ExactVertex>, MeshError> {
-    let single = exact_vertices(&cb.refined.domain, &cb.refined.sampled.medial)?;
+    let single = exact_vertices_with(
+        &cb.refined.domain,
+        &cb.refined.sampled.medial,
+        &cb.refined.circles,
+    )?;
     cluster_vertices_on(cb, &single)
 }
 
 /// [`cluster_vertices`] with the exact vertices of the sampled (uncollapsed) medial graph
-/// given ([`exact_vertices`] of `cb.refined`; they do not depend on the collapse, so exact
+/// given ([`super::exact_vertices`] of `cb.refined`; they do not depend on the collapse, so exact
 /// mode computes them once per sampling).
 pub fn cluster_vertices_on(
     cb: &CollapsedBlocking,
@@ -137,7 +141,11 @@ fn merged(
 /// Exact mode on the full front end (see the module docs): the skeleton of `cb` with its
 /// cluster vertices and inserted holes.
 pub fn build_collapsed(cb: &CollapsedBlocking, options: &Options) -> Result<ExactMesh, MeshError> {
-    let single = exact_vertices(&cb.refined.domain, &cb.refined.sampled.medial)?;
+    let single = exact_vertices_with(
+        &cb.refined.domain,
+        &cb.refined.sampled.medial,
+        &cb.refined.circles,
+    )?;
     build_collapsed_on(cb, options, &single)
 }
 

@@ -33,22 +33,64 @@ pub const FLUID_CLUSTERING: Clustering = Clustering {
 /// The most arcs split around one inserted hole.
 pub const MAX_SPLITS_PER_HOLE: usize = 16;
 
+/// The pieces on each circle, by circle slot (`c + 1`), in increasing piece index: what a
+/// scan `pieces.iter().enumerate().filter(|p| p.circles.contains(&c))` lists, without the
+/// scan (issue 8: [`prepare`] ran it per inserted hole and per split, O(holes x arcs)).
+/// Kept up to date by [`prepare`] as it appends split halves.
+pub(crate) struct PiecesByCircle(Vec<Vec<usize>>);
+
+impl PiecesByCircle {
+    pub(crate) fn new(pieces: &[Piece], ncirc: usize) -> Self {
+        let mut index = PiecesByCircle(vec![Vec::new(); ncirc]);
+        for (e, p) in pieces.iter().enumerate() {
+            index.push(e, p.circles);
+        }
+        index
+    }
+    /// Record piece `e` (larger than every recorded index) on its circles (once per circle).
+    fn push(&mut self, e: usize, circles: [CircleId; 2]) {
+        for (k, &c) in circles.iter().enumerate() {
+            if k == 1 && circles[0] == c {
+                continue;
+            }
+            if let Some(list) = usize::try_from(c + 1).ok().and_then(|i| self.0.get_mut(i)) {
+                list.push(e);
+            }
+        }
+    }
+    fn on(&self, c: CircleId) -> &[usize] {
+        usize::try_from(c + 1)
+            .ok()
+            .and_then(|i| self.0.get(i))
+            .map_or(&[], |v| v.as_slice())
+    }
+}
+
 /// Split arcs on inserted hole `c` (widest wall first) until it has an even number `k >= 4`
 /// of arcs, none wider than [`MAX_TEMPLATE_SWEEP`] (bounded effort: the template reports what
 /// is still wrong). A split arc's halves replace it (the first keeps its index, the second is
-/// appended) and the middle vertex is appended to `vertices`. Returns the number of splits.
+/// appended, and recorded in `index`) and the middle vertex is appended to `vertices`.
+/// `is_fluid[c + 1]` tells the inserted holes. Returns the number of splits.
 pub(crate) fn prepare(
     pieces: &mut Vec<Piece>,
     vertices: &mut Vec<ExactVertex>,
     c: CircleId,
-    fluid: &[CircleId],
+    is_fluid: &[bool],
+    index: &mut PiecesByCircle,
 ) -> usize {
+    let fluid = |x: CircleId| {
+        usize::try_from(x + 1)
+            .ok()
+            .and_then(|i| is_fluid.get(i).copied())
+            .unwrap_or(false)
+    };
     let mut splits = 0;
     for _ in 0..MAX_SPLITS_PER_HOLE {
-        let on: Vec<(usize, f64)> = pieces
+        let on: Vec<(usize, f64)> = index
+            .on(c)
             .iter()
-            .enumerate()
-            .filter_map(|(e, p)| {
+            .filter_map(|&e| {
+                let p = pieces.get(e)?;
                 let side = p.circles.iter().position(|&x| x == c)?;
                 Some((e, p.geom.sweep[side].abs()))
             })
@@ -61,12 +103,7 @@ pub(crate) fn prepare(
         // The widest arc on the hole whose middle is defined (ties: the smallest index). A
         // split adds an arc to both circles of the arc, so to fix an odd count prefer an arc
         // whose other circle is not another inserted hole (whose parity it would break).
-        let other_fluid = |e: usize| {
-            pieces[e]
-                .circles
-                .iter()
-                .any(|&x| x != c && fluid.contains(&x))
-        };
+        let other_fluid = |e: usize| pieces[e].circles.iter().any(|&x| x != c && fluid(x));
         let mut best: Option<(f64, usize)> = None;
         for pass in 0..2 {
             for &(e, w) in &on {
@@ -99,6 +136,7 @@ pub(crate) fn prepare(
             circles,
             geom: second,
         });
+        index.push(pieces.len() - 1, circles);
         splits += 1;
     }
     splits

@@ -54,6 +54,7 @@ use crate::layout::{Block, BlockLayout, Curve, Edge, EdgeKind, SideRef};
 use crate::mesh::BlockGrid;
 use crate::mesher::{MeshError, Options};
 use counts::{ArcTarget, CountProblem, Counts};
+use rayon::prelude::*;
 use std::collections::HashMap;
 use std::f64::consts::{PI, TAU};
 
@@ -212,6 +213,26 @@ pub fn exact_vertices_with(
         })
         .collect();
     solved.into_iter().collect()
+}
+
+/// Per circle slot (`c + 1`, `ncirc` slots), the radii of the vertices touching circle `c`,
+/// in vertex order: the list `vertices.filter(|v| v.circles.contains(&c)).map(radius)` for
+/// every circle at once, in one pass (O(vertices), not O(circles x vertices); a vertex listing
+/// a circle twice counts once, as in the filter). Circles outside `-1..ncirc - 1` are ignored.
+/// Tested against the filter in `tests/perf_scale.rs`.
+pub fn radii_by_circle(vertices: &[ExactVertex], ncirc: usize) -> Vec<Vec<f64>> {
+    let mut out: Vec<Vec<f64>> = vec![Vec::new(); ncirc];
+    for v in vertices {
+        for (k, &c) in v.circles.iter().enumerate() {
+            if v.circles[..k].contains(&c) {
+                continue;
+            }
+            if let Some(list) = usize::try_from(c + 1).ok().and_then(|i| out.get_mut(i)) {
+                list.push(v.radius);
+            }
+        }
+    }
+    out
 }
 
 /// One medial arc sampled in exact geometry.
@@ -542,39 +563,53 @@ pub fn assemble(sk: Skeleton<'_>, options: &Options) -> Result<ExactMesh, MeshEr
     if let Some(&c) = sk.fluid.iter().find(|&&c| c < 0 || cidx(c) >= ncirc) {
         return Err(internal(format!("unknown inserted hole {c}")));
     }
-    let fluid = |c: CircleId| sk.fluid.contains(&c);
+    // Inserted holes by circle slot (a lookup, not a scan of `sk.fluid` per query).
+    let mut is_fluid = vec![false; ncirc];
+    for &c in &sk.fluid {
+        is_fluid[cidx(c)] = true;
+    }
+    let fluid = |c: CircleId| c >= -1 && is_fluid.get(cidx(c)).copied().unwrap_or(false);
 
-    // Geometry of every arc.
+    // Geometry of every arc: independent per arc, computed in parallel and collected in arc
+    // order (the first error in arc order is returned), so nothing depends on the thread count.
+    let geometry: Vec<Result<Piece, MeshError>> = sk
+        .arcs
+        .par_iter()
+        .enumerate()
+        .map(|(e, arc)| {
+            let [v0, v1] = arc.ends.map(|v| v as usize);
+            let (Some(x0), Some(x1)) = (vertices.get(v0), vertices.get(v1)) else {
+                return Err(internal(format!("arc {e} has an unknown end vertex")));
+            };
+            if arc.circles.iter().any(|&c| c < -1 || cidx(c) >= ncirc) {
+                return Err(internal(format!("arc {e} has an unknown circle")));
+            }
+            let walls = arc.circles.map(|c| Wall::of(domain, c));
+            let mut ends_a = [[[0.0; 2]; 2]; 2];
+            for (side, &c) in arc.circles.iter().enumerate() {
+                let (Some(s0), Some(s1)) = (x0.slot(c), x1.slot(c)) else {
+                    return Err(internal(format!(
+                        "arc {e}: an end vertex does not touch circle {c}"
+                    )));
+                };
+                ends_a[0][side] = x0.tangent[s0];
+                ends_a[1][side] = x1.tangent[s1];
+            }
+            let hint_a = wall_hint(sk.sampled, 2 * e)
+                .ok_or_else(|| internal(format!("arc {e}: no sampled wall")))?;
+            let hint_b = wall_hint(sk.sampled, 2 * e + 1)
+                .ok_or_else(|| internal(format!("arc {e}: no sampled wall")))?;
+            Ok(Piece {
+                ends: [v0, v1],
+                circles: arc.circles,
+                geom: ArcGeometry::new(walls, [x0.center, x1.center], ends_a, [hint_a, -hint_b]),
+            })
+        })
+        .collect();
     let mut pieces = Vec::with_capacity(sk.arcs.len());
     let mut inconsistent_arcs = Vec::new();
-    for (e, arc) in sk.arcs.iter().enumerate() {
-        let [v0, v1] = arc.ends.map(|v| v as usize);
-        let (Some(x0), Some(x1)) = (vertices.get(v0), vertices.get(v1)) else {
-            return Err(internal(format!("arc {e} has an unknown end vertex")));
-        };
-        if arc.circles.iter().any(|&c| c < -1 || cidx(c) >= ncirc) {
-            return Err(internal(format!("arc {e} has an unknown circle")));
-        }
-        let walls = arc.circles.map(|c| Wall::of(domain, c));
-        let mut ends_a = [[[0.0; 2]; 2]; 2];
-        for (side, &c) in arc.circles.iter().enumerate() {
-            let (Some(s0), Some(s1)) = (x0.slot(c), x1.slot(c)) else {
-                return Err(internal(format!(
-                    "arc {e}: an end vertex does not touch circle {c}"
-                )));
-            };
-            ends_a[0][side] = x0.tangent[s0];
-            ends_a[1][side] = x1.tangent[s1];
-        }
-        let hint_a = wall_hint(sk.sampled, 2 * e)
-            .ok_or_else(|| internal(format!("arc {e}: no sampled wall")))?;
-        let hint_b = wall_hint(sk.sampled, 2 * e + 1)
-            .ok_or_else(|| internal(format!("arc {e}: no sampled wall")))?;
-        let piece = Piece {
-            ends: [v0, v1],
-            circles: arc.circles,
-            geom: ArcGeometry::new(walls, [x0.center, x1.center], ends_a, [hint_a, -hint_b]),
-        };
+    for (e, piece) in geometry.into_iter().enumerate() {
+        let piece = piece?;
         if !piece.consistent() {
             inconsistent_arcs.push(e);
         }
@@ -583,28 +618,39 @@ pub fn assemble(sk: Skeleton<'_>, options: &Options) -> Result<ExactMesh, MeshEr
     let mut split_arcs = 0;
     // A split for one hole can change a neighbouring inserted hole's count: repeat until no
     // hole asks for a split (bounded).
-    for _round in 0..4 {
-        let before = split_arcs;
-        for &c in &sk.fluid {
-            split_arcs += inserted::prepare(&mut pieces, &mut vertices, c, &sk.fluid);
-        }
-        if split_arcs == before {
-            break;
+    if !sk.fluid.is_empty() {
+        let mut index = inserted::PiecesByCircle::new(&pieces, ncirc);
+        for _round in 0..4 {
+            let before = split_arcs;
+            for &c in &sk.fluid {
+                split_arcs +=
+                    inserted::prepare(&mut pieces, &mut vertices, c, &is_fluid, &mut index);
+            }
+            if split_arcs == before {
+                break;
+            }
         }
     }
 
-    let mut targets = Vec::with_capacity(pieces.len());
-    for (e, p) in pieces.iter().enumerate() {
-        let (sq, ang) = p
-            .geom
-            .densities()
-            .ok_or_else(|| internal(format!("arc {e}: the exact medial arc is not defined")))?;
-        targets.push(ArcTarget {
-            circles: p.circles.map(cidx),
-            sq,
-            ang,
-        });
-    }
+    // Sub-step densities per piece, in parallel, collected in piece order.
+    let targets: Vec<Option<ArcTarget>> = pieces
+        .par_iter()
+        .map(|p| {
+            let (sq, ang) = p.geom.densities()?;
+            Some(ArcTarget {
+                circles: p.circles.map(cidx),
+                sq,
+                ang,
+            })
+        })
+        .collect();
+    let targets = targets
+        .into_iter()
+        .enumerate()
+        .map(|(e, t)| {
+            t.ok_or_else(|| internal(format!("arc {e}: the exact medial arc is not defined")))
+        })
+        .collect::<Result<Vec<_>, _>>()?;
 
     // Target size and the count problem.
     let radii: Vec<f64> = vertices.iter().map(|v| v.radius).collect();
@@ -619,17 +665,7 @@ pub fn assemble(sk: Skeleton<'_>, options: &Options) -> Result<ExactMesh, MeshEr
             clustering_of(options, id)
         }
     };
-    // The radii of the vertices touching each circle (each vertex once per circle), bucketed
-    // in one pass (a scan of every vertex per circle was quadratic); the median does not
-    // depend on their order.
-    let mut near_radii: Vec<Vec<f64>> = vec![Vec::new(); ncirc];
-    for v in &vertices {
-        for (k, &c) in v.circles.iter().enumerate() {
-            if c >= -1 && cidx(c) < ncirc && !v.circles[..k].contains(&c) {
-                near_radii[cidx(c)].push(v.radius);
-            }
-        }
-    }
+    let mut near_radii = radii_by_circle(&vertices, ncirc);
     let mut circle_target = vec![1.0; ncirc];
     for id in domain.circle_ids() {
         let near = std::mem::take(&mut near_radii[cidx(id)]);
@@ -765,10 +801,10 @@ pub fn assemble(sk: Skeleton<'_>, options: &Options) -> Result<ExactMesh, MeshEr
 
     // Templates in the inserted holes, and the count ties they bring.
     let first_template = layout.blocks.len();
-    for &c in &sk.fluid {
-        crate::templates::fill_inserted_hole(&mut layout, c, domain.circle(c))
-            .map_err(|m| internal(format!("inserted hole {c}: {m}")))?;
-    }
+    let holes: Vec<(CircleId, crate::domain::Circle)> =
+        sk.fluid.iter().map(|&c| (c, domain.circle(c))).collect();
+    crate::templates::fill_inserted_holes(&mut layout, &holes)
+        .map_err(|(c, m)| internal(format!("inserted hole {c}: {m}")))?;
     let template_blocks = layout.blocks.len() - first_template;
     if template_blocks > 0 {
         inserted::tie_counts(&layout, &medial_edges, &mut counts.arc);
@@ -790,43 +826,56 @@ pub fn assemble(sk: Skeleton<'_>, options: &Options) -> Result<ExactMesh, MeshEr
         }));
     }
 
-    // Grids of the medial blocks: spoke nodes computed once per (vertex, slot).
-    let mut spoke_cache: HashMap<(usize, usize), Vec<Point>> = HashMap::new();
-    let mut grids = Vec::with_capacity(layout.blocks.len());
-    for (e, p) in pieces.iter().enumerate() {
-        let g = &p.geom;
-        let n = counts.arc[e];
-        let weights: Vec<f64> = {
-            let nbar = 0.5
-                * (counts.circle[cidx(p.circles[0])] + counts.circle[cidx(p.circles[1])]) as f64;
-            let t = &problem.arcs[e];
-            t.sq.iter()
-                .zip(&t.ang)
-                .map(|(s, a)| (nbar * s).max(*a))
-                .collect()
-        };
-        let params = equidistribute(&weights, n);
-        let mut m_nodes = Vec::with_capacity(n + 1);
-        let mut a_nodes: [Vec<Point>; 2] = [Vec::with_capacity(n + 1), Vec::with_capacity(n + 1)];
-        for &t in &params {
-            let (m, a, _) = g
-                .at(t)
-                .ok_or_else(|| internal(format!("arc {e}: a medial node is not defined")))?;
-            m_nodes.push(m);
-            a_nodes[0].push(a[0]);
-            a_nodes[1].push(a[1]);
-        }
-        let [v0, v1] = p.ends;
-        layout.edges[medial_edges[e] as usize].curve = Curve::Polyline(m_nodes.clone());
-        #[allow(clippy::needless_range_loop)] // `side` indexes parallel arrays
-        for side in 0..2 {
-            let c = p.circles[side];
-            let nj = counts.circle[cidx(c)];
-            let cl = cluster(c);
-            let first = cl.first_height(domain.circle(c).radius);
-            let (s0, s1) = slots(p, side);
-            for (v, s) in [(v0, s0), (v1, s1)] {
-                spoke_cache.entry((v, s)).or_insert_with(|| {
+    // Grids of the medial blocks, one piece (two blocks) per task in parallel on the current
+    // rayon pool, collected in piece order (the first error in piece order is returned). A
+    // piece's corner spokes are computed by each piece that uses them, from the same inputs
+    // (vertex `v`'s tangent point `s` determines the circle, hence the count and clustering),
+    // so the blocks sharing a spoke hold bitwise identical nodes whatever the thread count.
+    // The sub-step densities (2 x ARC_SUBSTEPS f64 per arc, more than a 16 x 16 grid) are
+    // moved into the tasks and freed as each piece turns them into its node parameters, so
+    // they do not stay alive next to all the grids (issue 8: peak memory).
+    let CountProblem {
+        arcs: arc_targets, ..
+    } = problem;
+    type PieceGrids = Result<(Vec<Point>, [BlockGrid; 2]), MeshError>;
+    let per_piece: Vec<PieceGrids> = pieces
+        .par_iter()
+        .zip(arc_targets.into_par_iter())
+        .enumerate()
+        .map(|(e, (p, t))| {
+            let g = &p.geom;
+            let n = counts.arc[e];
+            let params = {
+                let nbar = 0.5
+                    * (counts.circle[cidx(p.circles[0])] + counts.circle[cidx(p.circles[1])])
+                        as f64;
+                let weights: Vec<f64> =
+                    t.sq.iter()
+                        .zip(&t.ang)
+                        .map(|(s, a)| (nbar * s).max(*a))
+                        .collect();
+                drop(t);
+                equidistribute(&weights, n)
+            };
+            let mut m_nodes = Vec::with_capacity(n + 1);
+            let mut a_nodes: [Vec<Point>; 2] =
+                [Vec::with_capacity(n + 1), Vec::with_capacity(n + 1)];
+            for &t in &params {
+                let (m, a, _) = g
+                    .at(t)
+                    .ok_or_else(|| internal(format!("arc {e}: a medial node is not defined")))?;
+                m_nodes.push(m);
+                a_nodes[0].push(a[0]);
+                a_nodes[1].push(a[1]);
+            }
+            let [v0, v1] = p.ends;
+            let grid = |side: usize| {
+                let c = p.circles[side];
+                let nj = counts.circle[cidx(c)];
+                let cl = cluster(c);
+                let first = cl.first_height(domain.circle(c).radius);
+                let (s0, s1) = slots(p, side);
+                let corner = |v: usize, s: usize| {
                     spoke_nodes(
                         vertices[v].tangent[s],
                         vertices[v].center,
@@ -834,31 +883,40 @@ pub fn assemble(sk: Skeleton<'_>, options: &Options) -> Result<ExactMesh, MeshEr
                         first,
                         cl.growth,
                     )
-                });
-            }
-            // Column i is arc node k = i (side 0) or n - i (side 1).
-            let mut nodes = vec![[0.0; 2]; (n + 1) * (nj + 1)];
-            for i in 0..=n {
-                let k = if side == 0 { i } else { n - i };
-                let col: Vec<Point> = if k == 0 {
-                    spoke_cache[&(v0, s0)].clone()
-                } else if k == n {
-                    spoke_cache[&(v1, s1)].clone()
-                } else {
-                    spoke_nodes(a_nodes[side][k], m_nodes[k], nj, first, cl.growth)
                 };
-                for (j, q) in col.into_iter().enumerate() {
-                    nodes[i + j * (n + 1)] = q;
+                // Column i is arc node k = i (side 0) or n - i (side 1).
+                let mut nodes = vec![[0.0; 2]; (n + 1) * (nj + 1)];
+                for i in 0..=n {
+                    let k = if side == 0 { i } else { n - i };
+                    let col: Vec<Point> = if k == 0 {
+                        corner(v0, s0)
+                    } else if k == n {
+                        corner(v1, s1)
+                    } else {
+                        spoke_nodes(a_nodes[side][k], m_nodes[k], nj, first, cl.growth)
+                    };
+                    for (j, q) in col.into_iter().enumerate() {
+                        nodes[i + j * (n + 1)] = q;
+                    }
                 }
-            }
-            grids.push(BlockGrid { ni: n, nj, nodes });
-        }
+                BlockGrid { ni: n, nj, nodes }
+            };
+            let pair = [grid(0), grid(1)];
+            Ok((m_nodes, pair))
+        })
+        .collect();
+    let mut grids = Vec::with_capacity(layout.blocks.len());
+    for (e, r) in per_piece.into_iter().enumerate() {
+        let (m_nodes, pair) = r?;
+        layout.edges[medial_edges[e] as usize].curve = Curve::Polyline(m_nodes);
+        grids.extend(pair);
     }
     if options.smooth > 0 {
-        for g in grids.iter_mut() {
+        // Each block smooths alone (its sides fixed): in parallel, same result for any pool.
+        grids.par_iter_mut().for_each(|g| {
             let rows = smoothing::boundary_layer_rows(g);
             smoothing::winslow(g, options.smooth, rows);
-        }
+        });
     }
     if template_blocks > 0 {
         let t = inserted::template_grids(&layout, &grids, first_template, h)?;
