@@ -115,34 +115,69 @@ pub fn select_forced(
         .map(|e| (e, true))
         .chain(must.into_iter().map(|(_, e)| (e, true)))
         .chain(short.into_iter().map(|(_, e)| (e, false)));
-    let n = medial.vertices.len();
+    let ends: Vec<[u32; 2]> = medial.arcs.iter().map(|a| a.ends).collect();
+    accept(order, &ends, medial.vertices.len())
+}
+
+/// The acceptance loop of [`select_forced`]: take the arcs of `order` (arc id, always-taken
+/// flag) one by one, skipping an arc whose ends are already in one cluster (no cycles: the
+/// taken arcs form a forest) or which has a *parallel* arc, another arc not taken joining the
+/// same two clusters (contracting one of two parallel arcs would turn the other into a loop).
+/// `ends[e]` are arc `e`'s end vertices; an arc with an end `>= n` is ignored.
+///
+/// Each cluster keeps the list of arcs incident to its vertices (merged smaller into larger on
+/// every union), so the parallel check scans the smaller of the two clusters' lists instead of
+/// every arc: O(m log m) list moves in all, where a scan of every arc per candidate was
+/// O(candidates x arcs) (90% of a 100 000-bubble run). Same result as that scan (tested
+/// against it on random multigraphs).
+fn accept(order: impl Iterator<Item = (u32, bool)>, ends: &[[u32; 2]], n: usize) -> Vec<Candidate> {
+    let valid = |e: usize| ends[e].iter().all(|&v| (v as usize) < n);
     let mut parent: Vec<u32> = (0..n as u32).collect();
-    let mut taken = vec![false; medial.arcs.len()];
+    let mut incident: Vec<Vec<u32>> = vec![Vec::new(); n];
+    for (e, &[a, b]) in ends.iter().enumerate() {
+        if valid(e) {
+            incident[a as usize].push(e as u32);
+            if b != a {
+                incident[b as usize].push(e as u32);
+            }
+        }
+    }
+    let mut taken = vec![false; ends.len()];
     let mut out = Vec::new();
     for (e, is_zero) in order {
-        let [a, b] = medial.arcs[e as usize].ends;
-        if a as usize >= n || b as usize >= n {
+        if e as usize >= ends.len() || !valid(e as usize) {
             continue;
         }
+        let [a, b] = ends[e as usize];
         let (ra, rb) = (find(&mut parent, a), find(&mut parent, b));
         if ra == rb {
             continue;
         }
-        let parallel = medial.arcs.iter().enumerate().any(|(f, other)| {
-            if f == e as usize || taken[f] {
+        let (small, large) = if incident[ra as usize].len() <= incident[rb as usize].len() {
+            (ra, rb)
+        } else {
+            (rb, ra)
+        };
+        let parallel = (0..incident[small as usize].len()).any(|i| {
+            let f = incident[small as usize][i];
+            if f == e || taken[f as usize] {
                 return false;
             }
-            let [x, y] = other.ends;
-            if x as usize >= n || y as usize >= n {
-                return false;
-            }
+            let [x, y] = ends[f as usize];
             let (rx, ry) = (find(&mut parent, x), find(&mut parent, y));
-            (rx == ra && ry == rb) || (rx == rb && ry == ra)
+            (rx == small && ry == large) || (rx == large && ry == small)
         });
         if parallel {
             continue;
         }
-        parent[ra.max(rb) as usize] = ra.min(rb);
+        let (root, child) = (ra.min(rb), ra.max(rb));
+        parent[child as usize] = root;
+        let (mut kept, moved) = (
+            std::mem::take(&mut incident[large as usize]),
+            std::mem::take(&mut incident[small as usize]),
+        );
+        kept.extend(moved);
+        incident[root as usize] = kept;
         taken[e as usize] = true;
         out.push(Candidate {
             arc: e,
@@ -328,4 +363,81 @@ pub fn contract(medial: &MedialGraph, collapse: &[bool]) -> Result<Contracted, M
         kept,
         cluster_size: members.iter().map(|m| m.len() as u32).collect(),
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+
+    /// The acceptance loop as first written: the parallel check scans every arc.
+    fn accept_by_scan(order: &[(u32, bool)], ends: &[[u32; 2]], n: usize) -> Vec<Candidate> {
+        let mut parent: Vec<u32> = (0..n as u32).collect();
+        let mut taken = vec![false; ends.len()];
+        let mut out = Vec::new();
+        for &(e, is_zero) in order {
+            let Some(&[a, b]) = ends.get(e as usize) else {
+                continue;
+            };
+            if a as usize >= n || b as usize >= n {
+                continue;
+            }
+            let (ra, rb) = (find(&mut parent, a), find(&mut parent, b));
+            if ra == rb {
+                continue;
+            }
+            let parallel = ends.iter().enumerate().any(|(f, &[x, y])| {
+                if f == e as usize || taken[f] || x as usize >= n || y as usize >= n {
+                    return false;
+                }
+                let (rx, ry) = (find(&mut parent, x), find(&mut parent, y));
+                (rx == ra && ry == rb) || (rx == rb && ry == ra)
+            });
+            if parallel {
+                continue;
+            }
+            parent[ra.max(rb) as usize] = ra.min(rb);
+            taken[e as usize] = true;
+            out.push(Candidate {
+                arc: e,
+                zero: is_zero,
+            });
+        }
+        out
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(400))]
+        /// Random multigraphs (parallel arcs, loops, ends out of range, repeated and unknown
+        /// arcs in the order): the indexed loop takes exactly the arcs the full scan takes.
+        #[test]
+        fn accept_equals_the_full_scan(
+            n in 1usize..40,
+            raw in proptest::collection::vec((0u32..45, 0u32..45), 0..120),
+            order in proptest::collection::vec((0u32..130, any::<bool>()), 0..150),
+        ) {
+            let ends: Vec<[u32; 2]> = raw.iter().map(|&(a, b)| [a, b]).collect();
+            let fast = accept(order.iter().copied(), &ends, n);
+            prop_assert_eq!(fast, accept_by_scan(&order, &ends, n));
+        }
+    }
+
+    /// Two parallel arcs between two vertices: only one collapse is refused, the first taken
+    /// arc forbids neither (the other is parallel), and a triangle closes no cycle.
+    #[test]
+    fn parallel_arcs_and_cycles_are_refused() {
+        let ends = [[0, 1], [0, 1], [1, 2], [2, 0]];
+        let order = [(0, false), (1, false), (2, false), (3, false)];
+        let got = accept(order.iter().copied(), &ends, 3);
+        // Arc 0 has the parallel arc 1 (not taken): refused; so is 1 (parallel to 0). Arc 2
+        // joins {1} and {2}; arc 3 then joins {0} to {1, 2}, but arcs 0 and 1 are parallel to
+        // it there: refused.
+        assert_eq!(
+            got,
+            vec![Candidate {
+                arc: 2,
+                zero: false
+            }]
+        );
+    }
 }
