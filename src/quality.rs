@@ -572,72 +572,119 @@ fn side_cell_height(grid: &BlockGrid, s: usize, p: usize) -> f64 {
     }
 }
 
-/// The growth ratios across every interface of the layout (each interface once).
+/// The growth ratios across every interface of the layout (each interface once), counted
+/// into `m`. Blocks are visited in parallel in fixed chunks of [`CHUNK`]; counts and extremes
+/// do not depend on the order, so the result is that of a sequential visit.
 fn growth_ratios(layout: &BlockLayout, grids: &[BlockGrid], m: &mut MetricSummary) {
     let Ok(conn) = connectivity(layout, grids) else {
         return;
     };
-    for bc in &conn {
-        for sc in &bc.sides {
-            let Some(partner) = sc.partner else { continue };
-            // Each interface once: from the side with the smaller (block, side).
-            if (partner.block, partner.side) < (bc.block, sc.side) {
-                continue;
+    let empty = MetricSummary {
+        min: None,
+        max: None,
+        histogram: Histogram::new(&m.histogram.edges),
+        acceptable: m.acceptable,
+        outside: 0,
+        samples: 0,
+    };
+    let parts: Vec<MetricSummary> = conn
+        .par_chunks(CHUNK)
+        .map(|chunk| {
+            let mut part = empty.clone();
+            for bc in chunk {
+                block_growth_ratios(bc, grids, &mut part);
             }
-            let (Some(ga), Some(gb)) = (grids.get(bc.block), grids.get(partner.block)) else {
-                continue;
-            };
-            if !well_formed(ga) || !well_formed(gb) {
-                continue;
-            }
-            let n = if sc.side % 2 == 0 { ga.ni } else { ga.nj };
-            let nb = if partner.side % 2 == 0 { gb.ni } else { gb.nj };
-            if n != nb || n == 0 || ga.ni == 0 || ga.nj == 0 || gb.ni == 0 || gb.nj == 0 {
-                continue;
-            }
-            for p in 0..n {
-                let q = if partner.same_direction { p } else { n - 1 - p };
-                let ha = side_cell_height(ga, sc.side, p);
-                let hb = side_cell_height(gb, partner.side, q);
-                m.add(ratio(ha.max(hb), ha.min(hb)));
-            }
+            part
+        })
+        .collect();
+    for part in &parts {
+        m.merge(part);
+    }
+}
+
+/// The growth ratios across the interfaces of one block that it owns (each interface is
+/// owned by the side with the smaller (block, side)).
+fn block_growth_ratios(
+    bc: &crate::connectivity::BlockConnectivity,
+    grids: &[BlockGrid],
+    m: &mut MetricSummary,
+) {
+    for sc in &bc.sides {
+        let Some(partner) = sc.partner else { continue };
+        if (partner.block, partner.side) < (bc.block, sc.side) {
+            continue;
+        }
+        let (Some(ga), Some(gb)) = (grids.get(bc.block), grids.get(partner.block)) else {
+            continue;
+        };
+        if !well_formed(ga) || !well_formed(gb) {
+            continue;
+        }
+        let n = if sc.side % 2 == 0 { ga.ni } else { ga.nj };
+        let nb = if partner.side % 2 == 0 { gb.ni } else { gb.nj };
+        if n != nb || n == 0 || ga.ni == 0 || ga.nj == 0 || gb.ni == 0 || gb.nj == 0 {
+            continue;
+        }
+        for p in 0..n {
+            let q = if partner.same_direction { p } else { n - 1 - p };
+            let ha = side_cell_height(ga, sc.side, p);
+            let hb = side_cell_height(gb, partner.side, q);
+            m.add(ratio(ha.max(hb), ha.min(hb)));
         }
     }
 }
 
-/// Largest deviation (degrees) from the wall normal of the grid lines leaving wall nodes.
+/// NaN-propagating maximum: NaN once either is NaN, else the larger. Associative and
+/// commutative, so a parallel reduction equals the sequential fold.
+fn max_nan(a: Option<f64>, b: Option<f64>) -> Option<f64> {
+    match (a, b) {
+        (None, x) | (x, None) => x,
+        (Some(x), Some(y)) if x.is_nan() || y.is_nan() => Some(f64::NAN),
+        (Some(x), Some(y)) => Some(x.max(y)),
+    }
+}
+
+/// Largest deviation (degrees) from the wall normal of the grid lines leaving wall nodes
+/// (blocks in parallel, reduced with [`max_nan`]: the same for every thread count).
 fn wall_orthogonality(layout: &BlockLayout, grids: &[BlockGrid]) -> Option<f64> {
+    layout
+        .blocks
+        .par_iter()
+        .zip(grids.par_iter())
+        .map(|(block, grid)| block_wall_orthogonality(layout, block, grid))
+        .reduce(|| None, max_nan)
+}
+
+/// [`wall_orthogonality`] of one block.
+fn block_wall_orthogonality(
+    layout: &BlockLayout,
+    block: &crate::layout::Block,
+    grid: &BlockGrid,
+) -> Option<f64> {
+    if !well_formed(grid) || grid.ni == 0 || grid.nj == 0 {
+        return None;
+    }
     let mut worst: Option<f64> = None;
-    for (block, grid) in layout.blocks.iter().zip(grids) {
-        if !well_formed(grid) || grid.ni == 0 || grid.nj == 0 {
+    for (s, side) in block.sides.iter().enumerate() {
+        let Some(edge) = layout.edges.get(side.edge as usize) else {
             continue;
-        }
-        for (s, side) in block.sides.iter().enumerate() {
-            let Some(edge) = layout.edges.get(side.edge as usize) else {
-                continue;
+        };
+        let (EdgeKind::Wall(id), Curve::Arc { center, .. }) = (edge.kind, &edge.curve) else {
+            continue;
+        };
+        let n = if s % 2 == 0 { grid.ni } else { grid.nj };
+        for p in 0..=n {
+            let (w, inner) = side_node_and_inward(grid, s, p);
+            // Into the fluid: away from a hole's center, towards the bounding circle's.
+            let normal = if id < 0 {
+                [center[0] - w[0], center[1] - w[1]]
+            } else {
+                [w[0] - center[0], w[1] - center[1]]
             };
-            let (EdgeKind::Wall(id), Curve::Arc { center, .. }) = (edge.kind, &edge.curve) else {
-                continue;
-            };
-            let n = if s % 2 == 0 { grid.ni } else { grid.nj };
-            for p in 0..=n {
-                let (w, inner) = side_node_and_inward(grid, s, p);
-                // Into the fluid: away from a hole's center, towards the bounding circle's.
-                let normal = if id < 0 {
-                    [center[0] - w[0], center[1] - w[1]]
-                } else {
-                    [w[0] - center[0], w[1] - center[1]]
-                };
-                let d = [inner[0] - w[0], inner[1] - w[1]];
-                let cross = normal[0] * d[1] - normal[1] * d[0];
-                let dot = normal[0] * d[0] + normal[1] * d[1];
-                let ang = cross.atan2(dot).abs().to_degrees();
-                // NaN-propagating maximum.
-                worst = Some(match worst {
-                    Some(x) if x.is_nan() || ang <= x => x,
-                    _ => ang,
-                });
-            }
+            let d = [inner[0] - w[0], inner[1] - w[1]];
+            let cross = normal[0] * d[1] - normal[1] * d[0];
+            let dot = normal[0] * d[0] + normal[1] * d[1];
+            worst = max_nan(worst, Some(cross.atan2(dot).abs().to_degrees()));
         }
     }
     worst
@@ -659,4 +706,42 @@ pub fn measure_all(layout: &BlockLayout, grids: &[BlockGrid]) -> (Quality, Quali
         m.max_wall_orthogonality_deviation_deg = wall_orthogonality(layout, grids);
     }
     (q, m)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+
+    /// The sequential fold [`wall_orthogonality`] used before it ran in parallel.
+    fn fold_sequential(values: &[f64]) -> Option<f64> {
+        let mut worst: Option<f64> = None;
+        for &ang in values {
+            worst = Some(match worst {
+                Some(x) if x.is_nan() || ang <= x => x,
+                _ => ang,
+            });
+        }
+        worst
+    }
+
+    fn value() -> impl Strategy<Value = f64> {
+        prop_oneof![0.0f64..180.0, Just(f64::NAN), Just(0.0), Just(90.0)]
+    }
+
+    proptest! {
+        /// Any split of the values into chunks reduced with `max_nan` in any grouping gives
+        /// the sequential fold's result, bit for bit (NaN when any value is NaN).
+        #[test]
+        fn max_nan_reduction_equals_the_sequential_fold(
+            values in proptest::collection::vec(value(), 0..40),
+            cut in 0usize..40,
+        ) {
+            let cut = cut.min(values.len());
+            let (a, b) = values.split_at(cut);
+            let parts = max_nan(fold_sequential(b), fold_sequential(a));
+            let want = fold_sequential(&values);
+            prop_assert_eq!(parts.map(f64::to_bits), want.map(f64::to_bits));
+        }
+    }
 }
