@@ -421,3 +421,34 @@ fn block_cells_flag_errors_exit_2() {
             .unwrap();
     assert_eq!(r["cells"], 36 * 256);
 }
+
+#[test]
+fn summary_and_report_json_show_the_same_figures() {
+    // The CLI measures the mesh once for both: the printed summary must match report.json.
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("o");
+    let o = cli(&[
+        "mesh",
+        "-o",
+        out.to_str().unwrap(),
+        "--cells",
+        "4",
+        "--format",
+        "json",
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    let r: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("report.json")).unwrap()).unwrap();
+    let first = format!(
+        "{} holes -> {} blocks, {} cells",
+        r["holes"], r["blocks"], r["cells"]
+    );
+    assert!(stdout.contains(&first), "{first:?} not in {stdout}");
+    let angles = format!(
+        "mean smallest angle {:.1} deg, mean largest {:.1} deg",
+        r["mean_min_angle_deg"].as_f64().unwrap(),
+        r["mean_max_angle_deg"].as_f64().unwrap()
+    );
+    assert!(stdout.contains(&angles), "{angles:?} not in {stdout}");
+}

@@ -8,7 +8,7 @@ use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use medial_blocks::domain::{AnyDomain, Circle, Domain};
 use medial_blocks::exact_mode::{Clustering, FirstCell};
 use medial_blocks::input::{parse_holes_csv, parse_triple};
-use medial_blocks::output::{report, write_files_with_progress, Format};
+use medial_blocks::output::{report, write_files_reporting, Format};
 use medial_blocks::periodic::PeriodicDomain;
 use medial_blocks::{mesh_any, timings, Mode, Options};
 use std::path::PathBuf;
@@ -524,10 +524,19 @@ pub fn run(args: Args, global: Global) -> Result<(), Failure> {
             _ => Failure::input(e.to_string()),
         }
     })?;
+    // The report (quality figures) once, for report.json and the summary.
+    let summary_report = (!global.quiet || formats.contains(&Format::Json))
+        .then(|| report::Report::from_mesh(&mesh));
     let written = timings::span("write", || {
-        write_files_with_progress(&mesh, &args.output, &formats, |f| {
-            bar.set_message(format!("writing {}", f.name()));
-        })
+        write_files_reporting(
+            &mesh,
+            &args.output,
+            &formats,
+            summary_report.as_ref(),
+            |f| {
+                bar.set_message(format!("writing {}", f.name()));
+            },
+        )
     });
     bar.finish_and_clear();
     written.map_err(|e| {
@@ -546,9 +555,8 @@ pub fn run(args: Args, global: Global) -> Result<(), Failure> {
             _ => {}
         }
     }
-    if !global.quiet {
-        let r = report::Report::from_mesh(&mesh);
-        print!("{}", summary(&r));
+    if let Some(r) = summary_report.as_ref().filter(|_| !global.quiet) {
+        print!("{}", summary(r));
         println!("written to {}/", args.output.display());
     }
     if args.compare_modes {

@@ -207,6 +207,19 @@ pub fn write_files_with_progress(
     mesh: &Mesh,
     dir: &Path,
     formats: &[Format],
+    progress: impl FnMut(Format),
+) -> io::Result<()> {
+    write_files_reporting(mesh, dir, formats, None, progress)
+}
+
+/// [`write_files_with_progress`] with `report.json` written from `report` (which must be
+/// [`report::Report::from_mesh`]`(mesh)`) instead of measuring the mesh again: for a caller
+/// that also shows the report (the CLI's summary), so the quality figures are computed once.
+pub fn write_files_reporting(
+    mesh: &Mesh,
+    dir: &Path,
+    formats: &[Format],
+    report: Option<&report::Report>,
     mut progress: impl FnMut(Format),
 ) -> io::Result<()> {
     std::fs::create_dir_all(dir)?;
@@ -215,7 +228,7 @@ pub fn write_files_with_progress(
         std::fs::remove_dir_all(&staging)?;
     }
     std::fs::create_dir(&staging)?;
-    let result = write_into(mesh, &staging, formats, &mut progress).and_then(|()| {
+    let result = write_into(mesh, &staging, formats, report, &mut progress).and_then(|()| {
         if formats.contains(&Format::Json) {
             match std::fs::remove_file(dir.join("report.json")) {
                 Err(e) if e.kind() != io::ErrorKind::NotFound => return Err(e),
@@ -274,6 +287,7 @@ fn write_into(
     mesh: &Mesh,
     dir: &Path,
     formats: &[Format],
+    report: Option<&report::Report>,
     progress: &mut impl FnMut(Format),
 ) -> io::Result<()> {
     for f in formats {
@@ -306,7 +320,11 @@ fn write_into(
                 let conn = crate::connectivity::connectivity(&mesh.layout, &mesh.grids)
                     .map_err(io::Error::other)?;
                 connectivity::write_json(&conn, &dir.join("connectivity.json"))?;
-                report::write_json(&report::Report::from_mesh(mesh), &dir.join("report.json"))?;
+                let path = dir.join("report.json");
+                match report {
+                    Some(r) => report::write_json(r, &path)?,
+                    None => report::write_json(&report::Report::from_mesh(mesh), &path)?,
+                }
             }
         }
     }
