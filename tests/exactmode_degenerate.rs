@@ -327,6 +327,20 @@ proptest! {
     }
 }
 
+/// A case `random_poor_layouts_are_meshed_exactly` found (it fell back to paper geometry on
+/// an earlier version), kept as a named regression.
+#[test]
+fn regression_random_poor_layout_seed_14924378680947049249() {
+    let d = random_layout(14924378680947049249, 6, 0.04783174593658949);
+    let o = Options {
+        cells: 2,
+        collapse_fraction: 0.0,
+        ..Options::default()
+    };
+    let m = mesh(&d, &o).unwrap();
+    check_exact(&d, &m);
+}
+
 #[test]
 fn clustering_and_smoothing_on_degenerate_layouts() {
     use medial_blocks::exact_mode::{Clustering, FirstCell};
