@@ -753,10 +753,14 @@ fn collapse_and_block(
                 bad_clusters.extend(layout.blocks[b].corners.iter().filter(|&&v| v < nv));
             }
         }
+        // Sorted for the lookups below (bad blocks can be many on large layouts).
+        bad_clusters.sort_unstable();
+        bad_clusters.dedup();
         let mut changed = false;
         for c in &chosen {
             let ends = medial.arcs[c.arc as usize].ends;
-            if !c.zero && bad_clusters.contains(&contracted.cluster_of[ends[0] as usize]) {
+            let cluster = contracted.cluster_of[ends[0] as usize];
+            if !c.zero && bad_clusters.binary_search(&cluster).is_ok() {
                 exclude[c.arc as usize] = true;
                 changed = true;
             }
