@@ -298,3 +298,19 @@ fn regression_inserted_holes_that_did_not_fit() {
         }
     }
 }
+
+/// Was "grid generation failed: the grid would have 2987781830 nodes" (exact mode, default
+/// options; random layout 47 of the stress test with `INSERTED_CELLS=16`): three holes of
+/// about 1e-4 R, and the holes refinement inserts around them, made the median Apollonius
+/// radius (the default target size's scale) tiny for every circle. Exact mode now coarsens
+/// the default target size until the mesh fits the node limit.
+#[test]
+fn tiny_holes_do_not_explode_the_node_count() {
+    let d = Domain::from_json_str(r#"{"bounding":{"center":[-400.0817856577331,33.87822533056584],"radius":1.0},"holes":[{"center":[-400.08312479371654,33.44838334890991],"radius":0.0990630459071938},{"center":[-399.7947884873536,34.381635245660654],"radius":0.10418356028060242},{"center":[-400.34032909914225,34.13765904541643],"radius":0.15484414181549747},{"center":[-400.0938468361977,33.637360311276765],"radius":0.08959851009587018},{"center":[-400.07449930958086,33.975518636641894],"radius":0.15651953635017232},{"center":[-400.20025144500437,34.06995272688713],"radius":0.00005517186456721176},{"center":[-400.2002104163847,34.070164390528866],"radius":0.00009968364075799228},{"center":[-400.21574421724756,34.04455227047863],"radius":0.00006730713755663978}]}"#).unwrap();
+    let m = mesh(&d, &Options::default()).unwrap();
+    let nodes: usize = m.grids.iter().map(|g| g.nodes.len()).sum();
+    assert!(
+        nodes <= medial_blocks::grid::MAX_TOTAL_NODES / 16,
+        "{nodes} nodes"
+    );
+}

@@ -612,6 +612,11 @@ pub fn assemble(sk: Skeleton<'_>, options: &Options) -> Result<ExactMesh, MeshEr
 
     // Target size and the count problem.
     let radii: Vec<f64> = vertices.iter().map(|v| v.radius).collect();
+    let radii_max = radii
+        .iter()
+        .copied()
+        .filter(|r| r.is_finite())
+        .fold(0.0, f64::max);
     let mut h = match options.cell_size {
         Some(h) => h,
         None => median(radii).unwrap_or(1.0) / options.cells.max(1) as f64,
@@ -789,12 +794,12 @@ pub fn assemble(sk: Skeleton<'_>, options: &Options) -> Result<ExactMesh, MeshEr
     // inserts around them, issue #9) it is tiny for every circle, and the counts of the
     // large blocks explode (billions of nodes for a 10-hole layout) although nothing needs
     // them. Only then, and only when the size was not chosen by the user (`cell_size`,
-    // `block_cells`, imposed counts), the target size is coarsened (at least 2x per step,
+    // `block_cells`, imposed counts, or a `cells` too large even for the largest Apollonius
+    // radius), the target size is coarsened (at least 2x per step,
     // at most [`MAX_COARSENING`] steps) until the mesh fits [`MAX_TOTAL_NODES`] (aiming at
     // 1/64 of it); a layout
     // within the limit never gets here, so its counts are unchanged.
-    let mut coarsened = 0;
-    loop {
+    let total_of = |counts: &Counts| {
         let mut total: usize = 0;
         for (e, p) in pieces.iter().enumerate() {
             let n = counts.arc[e];
@@ -803,11 +808,26 @@ pub fn assemble(sk: Skeleton<'_>, options: &Options) -> Result<ExactMesh, MeshEr
                 total = total.saturating_add((n + 1).saturating_mul(nj + 1));
             }
         }
+        total
+    };
+    let mut coarsened = 0;
+    loop {
+        let total = total_of(&counts);
         if total <= MAX_TOTAL_NODES {
             break;
         }
-        let user_sized =
+        let mut user_sized =
             options.cell_size.is_some() || options.block_cells.is_some() || imposed_used;
+        if !user_sized && coarsened == 0 {
+            // `cells` itself asks for too much when even the largest Apollonius radius over
+            // `cells` does not fit (e.g. `--cells 100000`): refused, not coarsened.
+            let largest = radii_max / options.cells.max(1) as f64;
+            let mut c = solve_counts(largest.max(h))?;
+            if template_blocks > 0 {
+                inserted::tie_counts(&layout, &medial_edges, &mut c.arc);
+            }
+            user_sized = total_of(&c) > MAX_TOTAL_NODES;
+        }
         if user_sized || coarsened >= MAX_COARSENING {
             return Err(MeshError::Grid(GridError::TooManyNodes {
                 nodes: total,
