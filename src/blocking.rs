@@ -549,6 +549,186 @@ fn prepare_inserted_hole(layout: &mut BlockLayout, hole: CircleId) -> usize {
     splits
 }
 
+/// The blocks whose side 0 is an edge of kind `Wall(hole)`.
+fn blocks_on_hole(layout: &BlockLayout, hole: CircleId) -> Vec<usize> {
+    (0..layout.blocks.len())
+        .filter(|&b| {
+            let e = layout.blocks[b].sides[0].edge as usize;
+            layout.edges.get(e).map(|x| x.kind) == Some(EdgeKind::Wall(hole))
+        })
+        .collect()
+}
+
+/// A block pair [`split_block_pair`] can split, seen from one of its blocks: `(sweep of that
+/// block's wall, medial edge, circle on the other side)`. The medial edge must have exactly
+/// two blocks, both with a wall arc of non-zero sweep on a circle, and a positive length.
+fn splittable_from(layout: &BlockLayout, b: usize) -> Option<(f64, u32, CircleId)> {
+    let e = layout.blocks[b].sides[2].edge;
+    if layout.edges.get(e as usize)?.kind != EdgeKind::Medial {
+        return None;
+    }
+    let pair = blocks_on_medial(layout, e);
+    if pair.len() != 2 || !pair.contains(&b) {
+        return None;
+    }
+    let partner = if pair[0] == b { pair[1] } else { pair[0] };
+    let EdgeKind::Wall(other) = layout.edges[layout.blocks[partner].sides[0].edge as usize].kind
+    else {
+        return None;
+    };
+    let sweep = wall_sweep(layout, b)?.abs();
+    let partner_sweep = wall_sweep(layout, partner)?.abs();
+    if !(sweep > 0.0 && partner_sweep > 0.0 && sweep.is_finite() && partner_sweep.is_finite()) {
+        return None;
+    }
+    let length_ok = match &layout.edges[e as usize].curve {
+        Curve::Polyline(p) => halve_polyline(p).is_some(),
+        Curve::Segment => {
+            let [a, c] = layout.edges[e as usize].ends;
+            let (a, c) = (layout.vertices[a as usize], layout.vertices[c as usize]);
+            (a[0] - c[0]).hypot(a[1] - c[1]) > 0.0
+        }
+        Curve::Arc { .. } => false,
+    };
+    length_ok.then_some((sweep, e, other))
+}
+
+/// The splittable block pairs on inserted hole `hole` ([`splittable_from`]), widest side
+/// first (ties: lower medial edge id).
+fn splittable_on(layout: &BlockLayout, hole: CircleId) -> Vec<(f64, u32, CircleId)> {
+    let mut out: Vec<(f64, u32, CircleId)> = blocks_on_hole(layout, hole)
+        .into_iter()
+        .filter_map(|b| splittable_from(layout, b))
+        .collect();
+    out.sort_by(|x, y| y.0.total_cmp(&x.0).then(x.1.cmp(&y.1)));
+    out
+}
+
+/// The most block pairs split per inserted hole and phase by
+/// [`prepare_inserted_holes_jointly`] to bring its sides under [`MAX_TEMPLATE_SWEEP`].
+const MAX_WIDTH_SPLITS_PER_HOLE: usize = 64;
+
+/// Make the sides of every inserted hole in `holes` fit the template at once, before any of
+/// them is filled (so no block pair is out of reach because it already lies in a filled
+/// template). Returns the number of splits.
+///
+/// A split of the block pair on a medial arc adds one side to *both* circles of the arc. Two
+/// phases:
+/// 1. widths: on each hole in turn, split its widest side until it has at least 4 sides, none
+///    wider than [`MAX_TEMPLATE_SWEEP`] (a split only adds sides and halves sweeps, so a later
+///    split never undoes this);
+/// 2. parity: for each hole `A` left with an odd count, a breadth-first search over the
+///    splittable pairs (widest first) finds a path `A = c_0, c_1, ..., c_n` of circles, every
+///    `c_1..c_{n-1}` an inserted hole, ending at an input circle (or the bounding circle) or at
+///    another inserted hole with an odd count; splitting one pair on each step flips the
+///    parity of `A` and `c_n` only (the inner circles get two sides each). The medial graph is
+///    connected and every inserted hole touches at least one other circle, so such a path
+///    exists whenever the pairs on it can be split (a positive-length medial arc and walls of
+///    non-zero sweep); when not, the template reports the hole as a typed error.
+fn prepare_inserted_holes_jointly(layout: &mut BlockLayout, holes: &[CircleId]) -> usize {
+    let mut splits = 0;
+    for &hole in holes {
+        for _ in 0..MAX_WIDTH_SPLITS_PER_HOLE {
+            let on_hole = blocks_on_hole(layout, hole);
+            let k = on_hole.len();
+            let widest = on_hole
+                .iter()
+                .filter_map(|&b| wall_sweep(layout, b).map(|s| s.abs()))
+                .fold(0.0, f64::max);
+            if k >= 4 && widest <= MAX_TEMPLATE_SWEEP {
+                break;
+            }
+            let Some(&(_, e, _)) = splittable_on(layout, hole).first() else {
+                break;
+            };
+            if split_block_pair(layout, e).is_none() {
+                break;
+            }
+            splits += 1;
+        }
+    }
+    let odd = |layout: &BlockLayout, c: CircleId| blocks_on_hole(layout, c).len() % 2 == 1;
+    for &hole in holes {
+        if !odd(layout, hole) {
+            continue;
+        }
+        // Breadth-first search from `hole`; `parent[c]` = (previous circle, medial edge).
+        let mut parent: HashMap<CircleId, (CircleId, u32)> = HashMap::new();
+        let mut queue = std::collections::VecDeque::from([hole]);
+        let mut found = None;
+        'search: while let Some(c) = queue.pop_front() {
+            for (_, e, other) in splittable_on(layout, c) {
+                if other == hole || parent.contains_key(&other) {
+                    continue;
+                }
+                parent.insert(other, (c, e));
+                let fluid = holes.contains(&other);
+                if !fluid || odd(layout, other) {
+                    found = Some(other);
+                    break 'search;
+                }
+                queue.push_back(other);
+            }
+        }
+        let Some(mut c) = found else { continue };
+        let mut path = Vec::new();
+        while c != hole {
+            let (prev, e) = parent[&c];
+            path.push(e);
+            c = prev;
+        }
+        // Split from `hole` outwards (each split leaves the other medial edges' ids alone).
+        for e in path.into_iter().rev() {
+            if split_block_pair(layout, e).is_some() {
+                splits += 1;
+            }
+        }
+    }
+    splits
+}
+
+/// Split block pairs and fill every inserted hole (`holes`, the circles of ids `first..`)
+/// with its template. Returns (splits, template blocks).
+///
+/// First the historical order, kept so that every layout it handles is meshed exactly as
+/// before: per hole, [`prepare_inserted_hole`] then the template. That greedy order cannot
+/// split a pair whose other side is an inserted hole already filled, so a hole whose only
+/// fixable sides face such a hole kept an odd count (issue #9: a hole of 21 sides, each of
+/// 16 splits made on the wrong side). When any hole does not fit, the layout is restored and
+/// the holes are prepared together ([`prepare_inserted_holes_jointly`]), then filled.
+fn fill_inserted_holes(
+    layout: &mut BlockLayout,
+    first: usize,
+    holes: &[crate::domain::Circle],
+) -> Result<(usize, usize), MeshError> {
+    use crate::templates;
+    let ids: Vec<CircleId> = (0..holes.len()).map(|k| (first + k) as CircleId).collect();
+    let snapshot = layout.clone();
+    let (mut splits, mut template_blocks) = (0, 0);
+    let mut sequential_ok = true;
+    for (&id, &circle) in ids.iter().zip(holes) {
+        splits += prepare_inserted_hole(layout, id);
+        match templates::fill_inserted_hole(layout, id, circle) {
+            Ok(n) => template_blocks += n,
+            Err(_) => {
+                sequential_ok = false;
+                break;
+            }
+        }
+    }
+    if sequential_ok {
+        return Ok((splits, template_blocks));
+    }
+    *layout = snapshot;
+    let splits = prepare_inserted_holes_jointly(layout, &ids);
+    let mut template_blocks = 0;
+    for (&id, &circle) in ids.iter().zip(holes) {
+        template_blocks += templates::fill_inserted_hole(layout, id, circle)
+            .map_err(|e| MeshError::Internal(format!("inserted hole {id}: {e}")))?;
+    }
+    Ok((splits, template_blocks))
+}
+
 /// The front end of [`build_mesh_layout`] before any block pair is split or any inserted hole
 /// filled: macro Delaunay refinement, co-circular groups, arc collapse and Blocking2D on the
 /// contracted graph (two blocks per kept arc, block `2e` on its `circles[0]`).
@@ -841,7 +1021,6 @@ pub fn build_mesh_layout_with(
     options: &Options,
     sampling: &SamplingOptions,
 ) -> Result<MeshLayout, MeshError> {
-    use crate::templates;
     let h = domain.hole_count();
     let CollapsedBlocking {
         refined,
@@ -851,15 +1030,8 @@ pub fn build_mesh_layout_with(
         ..
     } = collapsed_blocking_with(domain, options, sampling, true)?;
     let medial = &refined.sampled.medial;
-    let mut split_arcs = 0;
     let before = layout.blocks.len();
-    let mut template_blocks = 0;
-    for (k, &circle) in refined.inserted.iter().enumerate() {
-        let id = (h + k) as CircleId;
-        split_arcs += prepare_inserted_hole(&mut layout, id);
-        template_blocks += templates::fill_inserted_hole(&mut layout, id, circle)
-            .map_err(|e| MeshError::Internal(format!("inserted hole {id}: {e}")))?;
-    }
+    let (split_arcs, template_blocks) = fill_inserted_holes(&mut layout, h, &refined.inserted)?;
     debug_assert_eq!(
         layout.blocks.len(),
         before + split_arcs * 2 + template_blocks

@@ -175,22 +175,37 @@ fn tiny_domain_near_ulp_gap_is_meshed() {
 
 /// Found by a stress test of issue 9 (small domains far from the origin with gaps of a few
 /// ulps), but not a precision problem: the same layout moved to the origin (a near-touching
-/// domain, a hole 5e-9 R from the bounding circle) fails the same way in paper mode, on main
-/// too. Macro refinement inserts a hole with 21 arcs around it and the paper pipeline's
-/// inserted-hole template refuses an odd count ("internal invariant broken ... inserted hole
-/// 6: 21 arcs around the hole (need an even number >= 4)"); exact mode meshes it at the
-/// origin, but far from the origin (centre (-171098.1358, -77056.1411)) exact mode falls back
-/// to the paper pipeline and fails the same way. Open.
+/// domain, a hole 5e-9 R from the bounding circle) failed the same way in paper mode. Macro
+/// refinement inserts two adjacent holes (5 and 6) with 5 sides each; hole 6's widest side
+/// (135 degrees) faces hole 5. The per-hole preparation filled hole 5 first, after which the
+/// pair between them could not be split, so hole 6 was split 16 times on other sides without
+/// ever getting under the width bound, and ended with 21 sides ("inserted hole 6: 21 arcs
+/// around the hole (need an even number >= 4)"); exact mode met the same far from the origin
+/// (centre (-171098.1358, -77056.1411)) after falling back to the paper pipeline. Fixed:
+/// when the per-hole order cannot fit every hole, all holes are prepared together before any
+/// is filled, with parity repaired along a path of splittable pairs
+/// (`blocking::fill_inserted_holes`).
 #[test]
-#[ignore = "known bug: paper-mode inserted hole with an odd number of arcs (issue 9 follow-up)"]
 fn inserted_hole_with_odd_arc_count_is_meshed() {
     use medial_blocks::{mesh, Domain, Options};
     let d = Domain::from_json_str(
         r#"{"bounding": {"center": [0.0, 0.0], "radius": 0.00018499169007752184}, "holes": [{"center": [0.00015034133684821427, 3.3688993426039815e-05], "radius": 3.092181383829158e-05}, {"center": [0.0001205284206662327, -8.090236224234104e-05], "radius": 1.389862540292113e-05}, {"center": [9.736412903293967e-05, -9.479095751885325e-05], "radius": 1.3109242980482222e-05}, {"center": [6.413974915631115e-05, -0.00012390152551233768], "radius": 1.0186837052707806e-05}, {"center": [6.50527945253998e-05, 0.00013194206985644996], "radius": 2.1953554392145494e-05}]}"#,
     )
     .unwrap();
-    for options in [Options::default(), Options::paper()] {
-        let m = mesh(&d, &options).unwrap_or_else(|e| panic!("{:?}: {e}", options.mode));
-        medial_blocks::fuzzing::check_mesh(&d, &m).unwrap();
+    // The same layout far from the origin, where exact mode falls back to the paper pipeline.
+    let off = [-171098.1358, -77056.1411];
+    let shift = |c: medial_blocks::Circle| {
+        medial_blocks::Circle::new(c.center[0] + off[0], c.center[1] + off[1], c.radius)
+    };
+    let far = Domain::bounded(
+        shift(d.bounding()),
+        d.holes().iter().copied().map(shift).collect(),
+    )
+    .unwrap();
+    for d in [d, far] {
+        for options in [Options::default(), Options::paper()] {
+            let m = mesh(&d, &options).unwrap_or_else(|e| panic!("{:?}: {e}", options.mode));
+            medial_blocks::fuzzing::check_mesh(&d, &m).unwrap();
+        }
     }
 }

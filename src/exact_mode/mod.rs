@@ -353,6 +353,10 @@ fn cidx(id: CircleId) -> usize {
     (id + 1) as usize
 }
 
+/// The most times the default target cell size is coarsened to bring a mesh under
+/// [`MAX_TOTAL_NODES`] (see the limits in [`assemble`]).
+pub const MAX_COARSENING: usize = 8;
+
 fn median(mut v: Vec<f64>) -> Option<f64> {
     v.retain(|x| x.is_finite());
     if v.is_empty() {
@@ -644,7 +648,7 @@ pub fn assemble(sk: Skeleton<'_>, options: &Options) -> Result<ExactMesh, MeshEr
             })
         })
         .collect();
-    let targets = targets
+    let mut targets = targets
         .into_iter()
         .enumerate()
         .map(|(e, t)| {
@@ -654,7 +658,12 @@ pub fn assemble(sk: Skeleton<'_>, options: &Options) -> Result<ExactMesh, MeshEr
 
     // Target size and the count problem.
     let radii: Vec<f64> = vertices.iter().map(|v| v.radius).collect();
-    let h = match options.cell_size {
+    let radii_max = radii
+        .iter()
+        .copied()
+        .filter(|r| r.is_finite())
+        .fold(0.0, f64::max);
+    let mut h = match options.cell_size {
         Some(h) => h,
         None => median(radii).unwrap_or(1.0) / options.cells.max(1) as f64,
     };
@@ -665,35 +674,47 @@ pub fn assemble(sk: Skeleton<'_>, options: &Options) -> Result<ExactMesh, MeshEr
             clustering_of(options, id)
         }
     };
-    let mut near_radii = radii_by_circle(&vertices, ncirc);
-    let mut circle_target = vec![1.0; ncirc];
-    for id in domain.circle_ids() {
-        let near = std::mem::take(&mut near_radii[cidx(id)]);
-        let len = median(near).unwrap_or(h);
-        let cl = cluster(id);
-        let first = cl.first_height(domain.circle(id).radius);
-        circle_target[cidx(id)] = clustering::cells_for(len, h, first, cl.growth) as f64;
-    }
+    // The radii of the vertices touching each circle, bucketed in one pass
+    // ([`radii_by_circle`]); the median does not depend on their order.
+    let near_median: Vec<Option<f64>> = radii_by_circle(&vertices, ncirc)
+        .into_iter()
+        .map(median)
+        .collect();
     let mut circle_fixed = vec![None; ncirc];
     for (c, n) in &options.wall_cells {
         if *c >= -1 && ((*c + 1) as usize) < ncirc && !fluid(*c) {
             circle_fixed[cidx(*c)] = Some(*n);
         }
     }
-    let problem = CountProblem {
-        circle_target,
-        circle_fixed,
-        // The templates' ties ([`inserted::tie_counts`]) pair the sides of every inserted
-        // hole, which makes its perimeter even without the parity repair.
-        template: vec![false; ncirc],
-        arcs: targets,
+    // The node counts for target cell size `h`.
+    // The arc targets are lent to each count problem and given back (no copy: they hold
+    // 2 x ARC_SUBSTEPS f64 per arc).
+    let solve_counts = |h: f64, arcs: &mut Vec<ArcTarget>| -> Result<Counts, MeshError> {
+        let mut circle_target = vec![1.0; ncirc];
+        for id in domain.circle_ids() {
+            let len = near_median[cidx(id)].unwrap_or(h);
+            let cl = cluster(id);
+            let first = cl.first_height(domain.circle(id).radius);
+            circle_target[cidx(id)] = clustering::cells_for(len, h, first, cl.growth) as f64;
+        }
+        let problem = CountProblem {
+            circle_target,
+            circle_fixed: circle_fixed.clone(),
+            // The templates' ties ([`inserted::tie_counts`]) pair the sides of every inserted
+            // hole, which makes its perimeter even without the parity repair.
+            template: vec![false; ncirc],
+            arcs: std::mem::take(arcs),
+        };
+        let solved = crate::timings::span("node_counts", || match options.block_cells {
+            Some(n) => problem.solve_uniform(n),
+            None => problem.solve(),
+        });
+        *arcs = problem.arcs;
+        solved.map_err(internal)
     };
-    let mut counts = crate::timings::span("node_counts", || match options.block_cells {
-        Some(n) => problem.solve_uniform(n),
-        None => problem.solve(),
-    })
-    .map_err(internal)?;
+    let mut counts = solve_counts(h, &mut targets)?;
     // Counts imposed by a sequence (issue 6): all or nothing.
+    let mut imposed_used = false;
     if let Some(imp) = &options.imposed_counts {
         let ends: Vec<([usize; 2], [CircleId; 2])> =
             pieces.iter().map(|p| (p.ends, p.circles)).collect();
@@ -702,6 +723,7 @@ pub fn assemble(sk: Skeleton<'_>, options: &Options) -> Result<ExactMesh, MeshEr
             .and_then(|keys| imp.counts_for(&keys, &arcs, ncirc))
         {
             counts = Counts { circle, arc };
+            imposed_used = true;
         }
     }
 
@@ -810,20 +832,60 @@ pub fn assemble(sk: Skeleton<'_>, options: &Options) -> Result<ExactMesh, MeshEr
         inserted::tie_counts(&layout, &medial_edges, &mut counts.arc);
     }
 
-    // Limits before allocating.
-    let mut total: usize = 0;
-    for (e, p) in pieces.iter().enumerate() {
-        let n = counts.arc[e];
-        for &c in &p.circles {
-            let nj = counts.circle[cidx(c)];
-            total = total.saturating_add((n + 1).saturating_mul(nj + 1));
+    // Limits before allocating. The default target size is the median Apollonius radius over
+    // `cells`: where most medial vertices are tiny (tiny holes, and the holes refinement
+    // inserts around them, issue #9) it is tiny for every circle, and the counts of the
+    // large blocks explode (billions of nodes for a 10-hole layout) although nothing needs
+    // them. Only then, and only when the size was not chosen by the user (`cell_size`,
+    // `block_cells`, imposed counts, or a `cells` too large even for the largest Apollonius
+    // radius), the target size is coarsened (at least 2x per step,
+    // at most [`MAX_COARSENING`] steps) until the mesh fits [`MAX_TOTAL_NODES`] (aiming at
+    // 1/64 of it); a layout
+    // within the limit never gets here, so its counts are unchanged.
+    let total_of = |counts: &Counts| {
+        let mut total: usize = 0;
+        for (e, p) in pieces.iter().enumerate() {
+            let n = counts.arc[e];
+            for &c in &p.circles {
+                let nj = counts.circle[cidx(c)];
+                total = total.saturating_add((n + 1).saturating_mul(nj + 1));
+            }
         }
-    }
-    if total > MAX_TOTAL_NODES {
-        return Err(MeshError::Grid(GridError::TooManyNodes {
-            nodes: total,
-            limit: MAX_TOTAL_NODES,
-        }));
+        total
+    };
+    let mut coarsened = 0;
+    loop {
+        let total = total_of(&counts);
+        if total <= MAX_TOTAL_NODES {
+            break;
+        }
+        let mut user_sized =
+            options.cell_size.is_some() || options.block_cells.is_some() || imposed_used;
+        if !user_sized && coarsened == 0 {
+            // `cells` itself asks for too much when even the largest Apollonius radius over
+            // `cells` does not fit (e.g. `--cells 100000`): refused, not coarsened.
+            let largest = radii_max / options.cells.max(1) as f64;
+            let mut c = solve_counts(largest.max(h), &mut targets)?;
+            if template_blocks > 0 {
+                inserted::tie_counts(&layout, &medial_edges, &mut c.arc);
+            }
+            user_sized = total_of(&c) > MAX_TOTAL_NODES;
+        }
+        if user_sized || coarsened >= MAX_COARSENING {
+            return Err(MeshError::Grid(GridError::TooManyNodes {
+                nodes: total,
+                limit: MAX_TOTAL_NODES,
+            }));
+        }
+        // Nodes scale about as 1 / h^2: aim at 1/64 of the limit (a few million nodes, a
+        // mesh that can still be written and used; the limit itself is a memory guard).
+        let ratio = total as f64 / (MAX_TOTAL_NODES as f64 / 64.0);
+        h *= ratio.sqrt().max(2.0);
+        coarsened += 1;
+        counts = solve_counts(h, &mut targets)?;
+        if template_blocks > 0 {
+            inserted::tie_counts(&layout, &medial_edges, &mut counts.arc);
+        }
     }
 
     // Grids of the medial blocks, one piece (two blocks) per task in parallel on the current
@@ -834,9 +896,7 @@ pub fn assemble(sk: Skeleton<'_>, options: &Options) -> Result<ExactMesh, MeshEr
     // The sub-step densities (2 x ARC_SUBSTEPS f64 per arc, more than a 16 x 16 grid) are
     // moved into the tasks and freed as each piece turns them into its node parameters, so
     // they do not stay alive next to all the grids (issue 8: peak memory).
-    let CountProblem {
-        arcs: arc_targets, ..
-    } = problem;
+    let arc_targets = targets;
     type PieceGrids = Result<(Vec<Point>, [BlockGrid; 2]), MeshError>;
     let per_piece: Vec<PieceGrids> = pieces
         .par_iter()
