@@ -461,7 +461,7 @@ pub struct ExactMesh {
     /// The exact vertices: those of the skeleton, then one per split arc.
     pub vertices: Vec<ExactVertex>,
     /// The solved counts: `circle[c + 1]` wall-normal cells of circle `c`, `arc[e]` cells along
-    /// arc piece `e` (after the template ties of [`inserted::tie_counts`]).
+    /// arc piece `e` (after the template ties of `inserted::tie_counts`).
     pub counts: Counts,
     /// The target cell size used.
     pub cell_size: f64,
@@ -469,7 +469,7 @@ pub struct ExactMesh {
     /// combinatorics disagree with the exact medial axis there (nearly co-circular circles
     /// not resolved by the sampling); their blocks are inverted. Empty on a consistent layout.
     pub inconsistent_arcs: Vec<usize>,
-    /// Arcs split in two so that an inserted hole fits its template ([`inserted::prepare`]).
+    /// Arcs split in two so that an inserted hole fits its template (`inserted::prepare`).
     pub split_arcs: usize,
     /// Blocks inside inserted holes (the last ones of the layout).
     pub template_blocks: usize,
