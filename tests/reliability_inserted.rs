@@ -144,15 +144,16 @@ fn mesh_both(d: &Domain) -> Result<usize, String> {
     Ok(inserted)
 }
 
-#[test]
-fn random_refined_layouts_are_meshed_in_both_modes() {
-    let mut rng = SplitMix64(0x0DD_A4C5);
+/// Mesh `count` layouts from `next` in both modes (`INSERTED_DUMP=DIR` writes them to
+/// `DIR/{name}_{case}.json`); every failure is collected and reported at once. Returns the
+/// layouts meshed and those of them with inserted holes.
+fn mesh_cases(name: &str, count: u64, mut next: impl FnMut() -> Option<Domain>) -> (usize, usize) {
     let mut failures = Vec::new();
     let (mut meshed, mut refined) = (0, 0);
-    for case in 0..cases() {
-        let Some(d) = layout(&mut rng) else { continue };
+    for case in 0..count {
+        let Some(d) = next() else { continue };
         if let Ok(dir) = std::env::var("INSERTED_DUMP") {
-            std::fs::write(format!("{dir}/random_{case}.json"), d.to_json_string()).unwrap();
+            std::fs::write(format!("{dir}/{name}_{case}.json"), d.to_json_string()).unwrap();
         }
         if d.hole_count() < 2 {
             continue;
@@ -167,6 +168,13 @@ fn random_refined_layouts_are_meshed_in_both_modes() {
     }
     eprintln!("{meshed} layouts meshed, {refined} with inserted holes");
     assert!(failures.is_empty(), "{}", failures.join("\n"));
+    (meshed, refined)
+}
+
+#[test]
+fn random_refined_layouts_are_meshed_in_both_modes() {
+    let mut rng = SplitMix64(0x0DD_A4C5);
+    let (meshed, refined) = mesh_cases("random", cases(), || layout(&mut rng));
     assert!(
         refined * 3 >= meshed,
         "{refined} of {meshed} layouts refined"
@@ -250,25 +258,9 @@ fn near_touching_with_tiny_hole(rng: &mut SplitMix64) -> Option<Domain> {
 #[test]
 fn near_touching_circles_with_a_tiny_hole_are_meshed() {
     let mut rng = SplitMix64(0x71_A7_E0);
-    let mut failures = Vec::new();
-    let (mut meshed, mut refined) = (0, 0);
-    for case in 0..cases() / 2 {
-        let Some(d) = near_touching_with_tiny_hole(&mut rng) else {
-            continue;
-        };
-        if let Ok(dir) = std::env::var("INSERTED_DUMP") {
-            std::fs::write(format!("{dir}/near_{case}.json"), d.to_json_string()).unwrap();
-        }
-        match mesh_both(&d) {
-            Ok(n) => {
-                meshed += 1;
-                refined += usize::from(n > 0);
-            }
-            Err(e) => failures.push(format!("case {case}: {e}\n  {}", d.to_json_string())),
-        }
-    }
-    eprintln!("{meshed} layouts meshed, {refined} with inserted holes");
-    assert!(failures.is_empty(), "{}", failures.join("\n"));
+    let (meshed, refined) = mesh_cases("near", cases() / 2, || {
+        near_touching_with_tiny_hole(&mut rng)
+    });
     assert!(refined > 0, "none of {meshed} layouts refined");
 }
 
