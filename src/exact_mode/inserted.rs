@@ -171,16 +171,23 @@ pub(crate) fn template_grids(
     h: f64,
 ) -> Result<Vec<BlockGrid>, MeshError> {
     let (class, ncls) = edge_classes(layout);
+    // The edges the template blocks lie on: only their gridded nodes are copied (copying
+    // every gridded side of a large layout cost more than the templates themselves).
+    let mut on_template = vec![false; layout.edges.len()];
+    for block in layout.blocks.iter().skip(first) {
+        for side in block.sides {
+            if let Some(t) = on_template.get_mut(side.edge as usize) {
+                *t = true;
+            }
+        }
+    }
     let mut known: HashMap<usize, Vec<Point>> = HashMap::new();
     let mut count: Vec<Option<usize>> = vec![None; ncls];
     for (b, g) in grids.iter().enumerate().take(first) {
         for (k, side) in layout.blocks[b].sides.iter().enumerate() {
             let e = side.edge as usize;
-            let mut nodes = g.side(k);
-            if side.reversed {
-                nodes.reverse();
-            }
-            let n = nodes.len() - 1;
+            // Side k has ni cells (k even) or nj cells (k odd), as `g.side(k)` has nodes - 1.
+            let n = if k % 2 == 0 { g.ni } else { g.nj };
             match count[class[e]] {
                 Some(m) if m != n => {
                     return Err(internal(format!(
@@ -189,7 +196,15 @@ pub(crate) fn template_grids(
                 }
                 _ => count[class[e]] = Some(n),
             }
-            known.entry(e).or_insert(nodes);
+            if on_template.get(e).copied().unwrap_or(false) {
+                known.entry(e).or_insert_with(|| {
+                    let mut nodes = g.side(k);
+                    if side.reversed {
+                        nodes.reverse();
+                    }
+                    nodes
+                });
+            }
         }
     }
     let vertex = |i: u32| layout.vertices.get(i as usize).copied().unwrap_or([0.0; 2]);
