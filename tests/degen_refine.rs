@@ -2,6 +2,8 @@
 //! counting identities with collapse and insertion, positive block areas, conformity found from
 //! node coordinates, the minimum gap never decreasing (paper Lemma 2), the iteration bound.
 
+mod common;
+
 use medial_blocks::blocking::{block_area, build_mesh_layout};
 use medial_blocks::domain::{Circle, Domain};
 use medial_blocks::layouts::SplitMix64;
@@ -15,25 +17,7 @@ use std::collections::HashMap;
 fn layout(seed: u64, h: usize, min_gap: f64) -> Domain {
     let mut rng = SplitMix64(seed);
     let big_r = 1.0 + 4.0 * rng.next_f64();
-    let mut holes: Vec<Circle> = Vec::new();
-    let mut tries = 0;
-    while holes.len() < h && tries < 20_000 {
-        tries += 1;
-        let r = big_r * (0.03 + 0.15 * rng.next_f64());
-        let a = rng.next_f64() * std::f64::consts::TAU;
-        let d = (big_r - r - min_gap * big_r) * rng.next_f64().sqrt();
-        let c = [d * a.cos(), d * a.sin()];
-        let ok = holes.iter().all(|o| {
-            let dd = (c[0] - o.center[0]).hypot(c[1] - o.center[1]);
-            dd - r - o.radius > min_gap * big_r
-        });
-        if ok {
-            holes.push(Circle {
-                center: c,
-                radius: r,
-            });
-        }
-    }
+    let holes = common::random_holes(&mut rng, h, big_r, [0.0, 0.0], min_gap);
     Domain::bounded(Circle::new(0.0, 0.0, big_r), holes).expect("valid layout")
 }
 

@@ -7,6 +7,8 @@
 //! coordinates ([`check_mesh_with`]), wall orthogonality measured on the grids, inserted holes
 //! checked to be fully covered by template nodes that are bitwise the outer blocks' nodes.
 
+mod common;
+
 use medial_blocks::domain::{Circle, Domain};
 use medial_blocks::exact_mode::metrics::max_wall_orthogonality_deviation_deg;
 use medial_blocks::fuzzing::{check_mesh_with, Checks};
@@ -285,25 +287,7 @@ fn degenerate_meshes_are_deterministic() {
 fn random_layout(seed: u64, h: usize, min_gap: f64) -> Domain {
     let mut rng = SplitMix64(seed);
     let big_r = 1.0 + 4.0 * rng.next_f64();
-    let mut holes: Vec<Circle> = Vec::new();
-    let mut tries = 0;
-    while holes.len() < h && tries < 20_000 {
-        tries += 1;
-        let r = big_r * (0.03 + 0.15 * rng.next_f64());
-        let a = rng.next_f64() * std::f64::consts::TAU;
-        let dist = (big_r - r - min_gap * big_r) * rng.next_f64().sqrt();
-        let c = [dist * a.cos(), dist * a.sin()];
-        let ok = holes.iter().all(|o| {
-            let dd = (c[0] - o.center[0]).hypot(c[1] - o.center[1]);
-            dd - r - o.radius > min_gap * big_r
-        });
-        if ok {
-            holes.push(Circle {
-                center: c,
-                radius: r,
-            });
-        }
-    }
+    let holes = common::random_holes(&mut rng, h, big_r, [0.0, 0.0], min_gap);
     Domain::bounded(Circle::new(0.0, 0.0, big_r), holes).expect("valid layout")
 }
 

@@ -5,6 +5,8 @@
 //! positive cross product at every cell corner. Also: clustering gives the requested first
 //! cell height; smoothing never lowers the smallest scaled Jacobian and keeps all of the above.
 
+mod common;
+
 use medial_blocks::domain::{Circle, Domain};
 use medial_blocks::exact_mode::{Clustering, FirstCell};
 use medial_blocks::layouts::SplitMix64;
@@ -17,25 +19,7 @@ fn layout(seed: u64, h: usize, min_gap: f64) -> Domain {
     let mut rng = SplitMix64(seed);
     let big_r = 1.0 + 9.0 * rng.next_f64();
     let center = [rng.next_f64() * 10.0 - 5.0, rng.next_f64() * 10.0 - 5.0];
-    let mut holes: Vec<Circle> = Vec::new();
-    let mut tries = 0;
-    while holes.len() < h && tries < 20_000 {
-        tries += 1;
-        let r = big_r * (0.03 + 0.15 * rng.next_f64());
-        let a = rng.next_f64() * std::f64::consts::TAU;
-        let d = (big_r - r - min_gap * big_r) * rng.next_f64().sqrt();
-        let c = [center[0] + d * a.cos(), center[1] + d * a.sin()];
-        let ok = holes.iter().all(|o| {
-            let dd = (c[0] - o.center[0]).hypot(c[1] - o.center[1]);
-            dd - r - o.radius > min_gap * big_r
-        });
-        if ok {
-            holes.push(Circle {
-                center: c,
-                radius: r,
-            });
-        }
-    }
+    let holes = common::random_holes(&mut rng, h, big_r, center, min_gap);
     Domain::bounded(
         Circle {
             center,

@@ -42,3 +42,35 @@ pub fn tree(dir: &Path) -> Vec<(String, Vec<u8>)> {
     out.sort();
     out
 }
+
+/// Up to `h` random holes inside the circle of radius `big_r` about `center`, radii in
+/// `[0.03, 0.18] big_r`, gaps to each other and to the bounding circle of at least
+/// `min_gap * big_r` (rejection sampling, at most 20 000 draws).
+pub fn random_holes(
+    rng: &mut medial_blocks::layouts::SplitMix64,
+    h: usize,
+    big_r: f64,
+    center: [f64; 2],
+    min_gap: f64,
+) -> Vec<medial_blocks::Circle> {
+    let mut holes: Vec<medial_blocks::Circle> = Vec::new();
+    let mut tries = 0;
+    while holes.len() < h && tries < 20_000 {
+        tries += 1;
+        let r = big_r * (0.03 + 0.15 * rng.next_f64());
+        let a = rng.next_f64() * std::f64::consts::TAU;
+        let d = (big_r - r - min_gap * big_r) * rng.next_f64().sqrt();
+        let c = [center[0] + d * a.cos(), center[1] + d * a.sin()];
+        let ok = holes.iter().all(|o| {
+            let dd = (c[0] - o.center[0]).hypot(c[1] - o.center[1]);
+            dd - r - o.radius > min_gap * big_r
+        });
+        if ok {
+            holes.push(medial_blocks::Circle {
+                center: c,
+                radius: r,
+            });
+        }
+    }
+    holes
+}
