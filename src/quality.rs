@@ -28,22 +28,15 @@ pub struct CellCorners {
 
 /// Measure one quadrilateral's corners.
 pub fn cell_corners(p: [Point; 4]) -> CellCorners {
+    let (jacobian, dots) = kernel::corner_products(&p);
     let mut angle_deg = [0.0; 4];
-    let mut jacobian = [0.0; 4];
     for k in 0..4 {
-        let o = p[k];
-        let a = p[(k + 1) % 4];
-        let b = p[(k + 3) % 4];
-        let e1 = [a[0] - o[0], a[1] - o[1]];
-        let e2 = [b[0] - o[0], b[1] - o[1]];
-        let cross = e1[0] * e2[1] - e1[1] * e2[0];
-        let dot = e1[0] * e2[0] + e1[1] * e2[1];
+        let (cross, dot) = (jacobian[k], dots[k]);
         let mut ang = cross.atan2(dot).to_degrees();
         if ang < 0.0 {
             ang += 360.0;
         }
         angle_deg[k] = ang;
-        jacobian[k] = cross;
     }
     CellCorners {
         angle_deg,
@@ -147,13 +140,8 @@ pub fn has_corner_below(grid: &BlockGrid, deg: f64) -> bool {
     let t = deg.to_radians().tan();
     for j in 0..grid.nj {
         for i in 0..grid.ni {
-            let p = corners(grid, i, j);
-            for k in 0..4 {
-                let (o, a, b) = (p[k], p[(k + 1) % 4], p[(k + 3) % 4]);
-                let e1 = [a[0] - o[0], a[1] - o[1]];
-                let e2 = [b[0] - o[0], b[1] - o[1]];
-                let cross = e1[0] * e2[1] - e1[1] * e2[0];
-                let dot = e1[0] * e2[0] + e1[1] * e2[1];
+            let (crosses, dots) = kernel::corner_products(&corners(grid, i, j));
+            for (cross, dot) in crosses.into_iter().zip(dots) {
                 if cross.is_nan() || cross <= 0.0 || (dot > 0.0 && cross < t * dot) {
                     return true;
                 }

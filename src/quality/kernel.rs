@@ -62,7 +62,7 @@ fn angle_deg(cross: f64, dot: f64) -> f64 {
 
 /// Cross and dot products at the four corners, with the reference expressions.
 #[inline]
-fn corner_products(p: &[Point; 4]) -> ([f64; 4], [f64; 4]) {
+pub(super) fn corner_products(p: &[Point; 4]) -> ([f64; 4], [f64; 4]) {
     let mut cross = [0.0; 4];
     let mut dot = [0.0; 4];
     for k in 0..4 {
