@@ -567,14 +567,7 @@ fn growth_ratios(layout: &BlockLayout, grids: &[BlockGrid], m: &mut MetricSummar
     let Ok(conn) = connectivity(layout, grids) else {
         return;
     };
-    let empty = MetricSummary {
-        min: None,
-        max: None,
-        histogram: Histogram::new(&m.histogram.edges),
-        acceptable: m.acceptable,
-        outside: 0,
-        samples: 0,
-    };
+    let empty = MetricSummary::new(&m.histogram.edges, m.acceptable);
     let parts: Vec<MetricSummary> = conn
         .par_chunks(CHUNK)
         .map(|chunk| {
