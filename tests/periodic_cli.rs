@@ -72,3 +72,60 @@ fn periodic_json_and_csv() {
         .unwrap();
     assert_eq!(r.status.code(), Some(2));
 }
+
+/// `--timings` on a periodic domain attributes the work to the pipeline's stages (before,
+/// everything but input and writing fell into `other`), in exact mode and in paper mode,
+/// and the stages still add up to the total.
+#[test]
+fn periodic_timings_name_the_stages() {
+    let dir = tempfile::tempdir().unwrap();
+    let json = dir.path().join("p.json");
+    std::fs::write(
+        &json,
+        r#"{"periodic": {"size": [2, 1]}, "holes": [{"center": [0.1, 0.1], "radius": 0.2},
+            {"center": [1.2, 0.6], "radius": 0.25}, {"center": [0.9, 0.2], "radius": 0.1}]}"#,
+    )
+    .unwrap();
+    for (mode, stages) in [
+        (
+            "exact",
+            &[
+                "sampling",
+                "triangulation",
+                "medial_graph",
+                "blocking",
+                "exact_geometry",
+                "quality_check",
+            ][..],
+        ),
+        (
+            "paper",
+            &["sampling", "triangulation", "medial_graph", "blocking", "grids"][..],
+        ),
+    ] {
+        let out = dir.path().join(mode);
+        let r = bin()
+            .args(["--quiet", "mesh", json.to_str().unwrap(), "--timings"])
+            .args(["--mode", mode, "--format", "json", "-o"])
+            .arg(&out)
+            .output()
+            .unwrap();
+        assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+        let t: serde_json::Value =
+            serde_json::from_slice(&std::fs::read(out.join("timings.json")).unwrap()).unwrap();
+        for s in stages {
+            assert!(
+                t["calls"][*s].as_u64().is_some_and(|c| c >= 1),
+                "{mode}: stage {s} never entered: {t}"
+            );
+        }
+        let total = t["total_seconds"].as_f64().unwrap();
+        let sum: f64 = t["stages"]
+            .as_object()
+            .unwrap()
+            .values()
+            .map(|v| v.as_f64().unwrap())
+            .sum();
+        assert!((sum - total).abs() <= 1e-6 * total.max(1.0), "{mode}: {t}");
+    }
+}

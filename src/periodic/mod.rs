@@ -70,6 +70,7 @@ use crate::sampling::{
     check_invariants, initial_counts, thin_walls, unit_offsets, CircleSamples, Samples,
     SamplingOptions, ViolationKind,
 };
+use crate::timings;
 use std::collections::HashMap;
 
 /// Most samples on one circle of the periodic tiling (its sampling is uniform per circle).
@@ -311,17 +312,20 @@ fn sample_tiling(
                 ),
             });
         }
-        let samples = t.samples(&counts, bcount, &gaps);
-        let tri = Triangulation::new(&samples.points)?;
-        let kinds = classify(&samples, &tri);
-        let hard = check_invariants(&samples, &tri, &kinds);
+        let samples = timings::span("sampling", || t.samples(&counts, bcount, &gaps));
+        let tri = timings::span("triangulation", || Triangulation::new(&samples.points))?;
+        let (kinds, hard) = timings::span("sampling", || {
+            let kinds = classify(&samples, &tri);
+            let hard = check_invariants(&samples, &tri, &kinds);
+            (kinds, hard)
+        });
         let mut grow_b = false;
         let mut grow: Vec<bool> = vec![false; t.h];
         // With only the soft invariant (d) left, the sampling is kept in case no orbit can be
         // refined any more (all at the cap): thin walls are then accepted, as in the bounded
         // sampler (`crate::sampling::sample_and_triangulate`).
         let (violations, soft_done) = if hard.is_empty() {
-            let medial = medial_graph(&samples, &tri, &kinds)?;
+            let medial = timings::span("medial_graph", || medial_graph(&samples, &tri, &kinds))?;
             let soft: Vec<_> = thin_walls(&tri, &medial)
                 .into_iter()
                 .filter(|v| match v.kind {
@@ -436,7 +440,10 @@ pub fn periodic_layout_with(
     for m in 1..=MAX_TILING {
         let t = Tiling::new(pd, m)?;
         let (samples, tri, medial) = sample_tiling(&t, &gaps, &opts)?;
-        match extract(pd, &t, &samples, &tri, &medial, options.collapse_fraction)? {
+        let extracted = timings::span("blocking", || {
+            extract(pd, &t, &samples, &tri, &medial, options.collapse_fraction)
+        })?;
+        match extracted {
             Some(p) => return Ok(p),
             None => last = Some(m),
         }
@@ -1305,7 +1312,7 @@ pub fn mesh_periodic_frame(
         }
     }
     let p = periodic_layout(pd, options)?;
-    let grids = build_grids(&p.layout, options.cells)?;
+    let grids = timings::span("grids", || build_grids(&p.layout, options.cells))?;
     Ok(PeriodicFrame {
         mesh: Mesh {
             layout: p.layout,
@@ -1344,9 +1351,13 @@ fn mesh_periodic_exact(
         let Some(pb) = &p.blocking else {
             return Ok(None);
         };
-        match exact_mode::periodic::build(pb, options) {
+        match timings::span("exact_geometry", || {
+            exact_mode::periodic::build(pb, options)
+        }) {
             Ok(x) => {
-                if x.inconsistent_arcs.is_empty() && crate::quality::inverted_cells(&x.grids) == 0 {
+                let inverted =
+                    timings::span("quality_check", || crate::quality::inverted_cells(&x.grids));
+                if x.inconsistent_arcs.is_empty() && inverted == 0 {
                     let mesh = Mesh {
                         layout: x.layout,
                         grids: x.grids,
