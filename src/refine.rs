@@ -26,10 +26,11 @@
 //! would be inserted.
 
 use crate::apollonius::Apollonius;
-use crate::cocircular::vertex_circles;
+use crate::cocircular::vertex_circles_reusing;
 use crate::domain::{dist, gap, Circle, Domain, HoleIndex};
 use crate::geometry::Point;
 use crate::medial::{circumcenter, MedialGraph};
+
 use crate::mesher::MeshError;
 use crate::sampling::{nearest_gaps, sample_and_triangulate, SampledDomain, SamplingOptions};
 use std::collections::HashSet;
@@ -117,9 +118,16 @@ pub fn refine(
     let key = |p: Point| -> Option<[u64; 2]> {
         (!p[0].is_nan() && !p[1].is_nan()).then(|| [(p[0] + 0.0).to_bits(), (p[1] + 0.0).to_bits()])
     };
+    // The medial graph and vertex circles of the previous round: inserted holes are appended,
+    // so a vertex with the same circles and position has the same solve (not redone).
+    let mut previous: Option<(MedialGraph, Vec<Option<Apollonius>>)> = None;
     loop {
         let sampled = sample_and_triangulate(&current, sampling)?;
-        let circles = vertex_circles(&current, &sampled.medial);
+        let circles = vertex_circles_reusing(
+            &current,
+            &sampled.medial,
+            previous.as_ref().map(|(g, c)| (g, c.as_slice())),
+        );
         let g = min_gap(&current);
         min_gaps.push(g);
         let Some(limit) = ratio else {
@@ -202,5 +210,6 @@ pub fn refine(
         inserted.extend_from_slice(&batch);
         current = Domain::bounded(current.bounding(), holes)
             .map_err(|e| MeshError::Internal(format!("an inserted hole broke the domain: {e}")))?;
+        previous = Some((sampled.medial, circles));
     }
 }
