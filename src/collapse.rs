@@ -32,7 +32,6 @@ use crate::cocircular::{arc_length, group_of, is_zero_length, local_radius, Coci
 use crate::geometry::{Point, Triangulation};
 use crate::medial::{MedialArc, MedialGraph, MedialVertex};
 use crate::mesher::MeshError;
-use std::collections::HashMap;
 
 /// One arc chosen for collapse.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -283,12 +282,18 @@ pub fn contract(medial: &MedialGraph, collapse: &[bool]) -> Result<Contracted, M
             [(v1, c2l), (v0, c2f)]
         }
     };
-    let mut start_block: HashMap<(u32, u32), usize> = HashMap::new();
-    for b in 0..2 * m {
-        if start_block.insert(corners(b)[0], b).is_some() {
-            return Err(internal("two blocks start at one corner"));
-        }
+    // The block starting at each corner: sorted by corner, found by binary search (no
+    // hashing of 2m keys, issue 8).
+    let mut start_block: Vec<((u32, u32), usize)> =
+        (0..2 * m).map(|b| (corners(b)[0], b)).collect();
+    start_block.sort_unstable();
+    if start_block.windows(2).any(|w| w[0].0 == w[1].0) {
+        return Err(internal("two blocks start at one corner"));
     }
+    let block_at = |corner: (u32, u32)| -> Option<usize> {
+        let i = start_block.binary_search_by(|x| x.0.cmp(&corner)).ok()?;
+        Some(start_block[i].1)
+    };
     let mut ext_end: Vec<Vec<u32>> = vec![Vec::new(); 2 * m];
     let mut ext_start: Vec<Vec<u32>> = vec![Vec::new(); 2 * m];
     for p in 0..2 * m {
@@ -299,9 +304,7 @@ pub fn contract(medial: &MedialGraph, collapse: &[bool]) -> Result<Contracted, M
         let mut run = vec![corner.1];
         let mut steps = 0;
         let q = loop {
-            let b = *start_block
-                .get(&corner)
-                .ok_or_else(|| internal("no block starts at a corner"))?;
+            let b = block_at(corner).ok_or_else(|| internal("no block starts at a corner"))?;
             if !collapse[b / 2] {
                 break b;
             }

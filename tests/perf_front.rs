@@ -2,15 +2,22 @@
 //! slow references computed alongside.
 //! - refinement reuses the Apollonius solves of the previous round for vertices with the same
 //!   circles and position ([`vertex_circles_reusing`]): the circles it returns equal a fresh
-//!   solve of every vertex of the final graph, and reuse actually happens.
+//!   solve of every vertex of the final graph, and reuse actually happens;
+//! - Blocking2D's corner and spoke maps indexed by sample (not hashed), the block area with
+//!   reused buffers and the contraction's sorted corner lookup: checked against hash maps and
+//!   the area as first written, on bubbles and refined layouts.
 
 mod common;
 
+use medial_blocks::blocking::{block_area, blocks, collapsed_blocking_with};
 use medial_blocks::cocircular::{vertex_circles, vertex_circles_reusing};
 use medial_blocks::domain::{Circle, Domain};
+use medial_blocks::layout::{BlockLayout, Curve, EdgeKind, SideRef};
 use medial_blocks::layouts::SplitMix64;
 use medial_blocks::refine::refine;
 use medial_blocks::sampling::{sample_and_triangulate, SamplingOptions};
+use medial_blocks::Options;
+use std::collections::HashMap;
 
 /// A layout whose refinement inserts holes (tiny holes next to larger ones).
 const INSERTING: &str = r#"{"bounding": {"center": [0.0, 0.0], "radius": 1.0}, "holes": [{"center": [0.3191541531691544, -0.3717929964389844], "radius": 0.24464422640973763}, {"center": [-0.11404744597041541, 0.08146095395643421], "radius": 0.11128467651604039}, {"center": [-0.42552889518459386, -0.38974998510540637], "radius": 0.0750062319977368}, {"center": [0.2359704484055954, 0.25273697336967405], "radius": 0.13286706779388338}, {"center": [-0.42666764696355597, -0.6507308368236295], "radius": 0.09961340826274921}, {"center": [-0.23212309121288838, 0.8791544668853195], "radius": 0.05751471364390008}, {"center": [-0.32687904034838855, -0.5760590860014616], "radius": 0.024988992683331306}, {"center": [-0.24251728387830382, 0.7025270240084398], "radius": 0.11940545640071007}, {"center": [-0.4207493523072746, 0.7239570940575171], "radius": 0.060101631399608516}, {"center": [-0.05955622155850428, -0.08922488265519388], "radius": 0.00012118752906053852}, {"center": [-0.07489413579200777, 0.6892364901244837], "radius": 0.00010388535976705469}, {"center": [0.9854949986492719, -0.13332433619018963], "radius": 0.00010024369325342005}]}"#;
@@ -88,5 +95,112 @@ fn reusing_the_previous_round_is_exact() {
             })
             .count();
         assert!(same > 0, "no vertex survives the insertion of {k} holes");
+    }
+}
+
+/// The outline area of a block as first written (a fresh vector per side and per block),
+/// verbatim: the reference for the buffered [`block_area`].
+fn area_reference(layout: &BlockLayout, b: usize) -> f64 {
+    let side_points = |side: SideRef| -> Vec<[f64; 2]> {
+        let Some(edge) = layout.edges.get(side.edge as usize) else {
+            return Vec::new();
+        };
+        let v = |i: u32| layout.vertices.get(i as usize).copied().unwrap_or([0.0; 2]);
+        let mut pts: Vec<[f64; 2]> = match &edge.curve {
+            Curve::Segment => vec![v(edge.ends[0]), v(edge.ends[1])],
+            Curve::Arc {
+                center,
+                radius,
+                start,
+                sweep,
+            } => (0..=8)
+                .map(|k| {
+                    let a = start + sweep * k as f64 / 8.0;
+                    [center[0] + radius * a.cos(), center[1] + radius * a.sin()]
+                })
+                .collect(),
+            Curve::Polyline(p) => p.clone(),
+        };
+        if let Some(first) = pts.first_mut() {
+            *first = v(edge.ends[0]);
+        }
+        if let Some(last) = pts.last_mut() {
+            *last = v(edge.ends[1]);
+        }
+        if side.reversed {
+            pts.reverse();
+        }
+        pts
+    };
+    let Some(block) = layout.blocks.get(b) else {
+        return 0.0;
+    };
+    let mut outline: Vec<[f64; 2]> = Vec::new();
+    for s in block.sides {
+        let pts = side_points(s);
+        outline.extend_from_slice(&pts[..pts.len().saturating_sub(1)]);
+    }
+    let n = outline.len();
+    if n < 3 {
+        return 0.0;
+    }
+    let o = outline[0];
+    let mut twice = 0.0;
+    for k in 1..n - 1 {
+        let (a, c) = (outline[k], outline[k + 1]);
+        twice += (a[0] - o[0]) * (c[1] - o[1]) - (a[1] - o[1]) * (c[0] - o[0]);
+    }
+    0.5 * twice
+}
+
+/// Blocking2D with indexed (not hashed) corner and spoke maps, and the buffered block area:
+/// one layout vertex per corner sample and one spoke edge per (medial vertex, sample) pair,
+/// checked with hash maps built here; spokes shared by exactly two blocks; every block area
+/// bit for bit the reference's; contraction keeps the counting identity of the collapse.
+#[test]
+fn blocking_maps_and_areas_match_hashed_references() {
+    let mut domains: Vec<Domain> = (1..=3)
+        .map(|s| medial_blocks::layouts::bubbles(60, s).unwrap())
+        .collect();
+    domains.extend(layouts());
+    for d in &domains {
+        let options = Options::default();
+        let cb = collapsed_blocking_with(d, &options, &SamplingOptions::default(), true).unwrap();
+        let samples = &cb.refined.sampled.samples;
+        let graph = &cb.contracted.graph;
+        let (layout, vertex_samples) = blocks(&cb.refined.domain, samples, graph).unwrap();
+        assert_eq!(layout, cb.layout);
+        let mut seen: HashMap<u32, usize> = HashMap::new();
+        for (v, s) in vertex_samples.iter().enumerate() {
+            if let Some(s) = s {
+                assert!(seen.insert(*s, v).is_none(), "sample {s} has two vertices");
+                assert_eq!(layout.vertices[v], samples.points[*s as usize]);
+            }
+        }
+        let nv = graph.vertices.len() as u32;
+        let mut spokes: HashMap<(u32, u32), u32> = HashMap::new();
+        let mut uses: HashMap<u32, usize> = HashMap::new();
+        for block in &layout.blocks {
+            for k in [1, 3] {
+                let e = block.sides[k].edge;
+                let [m, sv] = layout.edges[e as usize].ends;
+                assert!(m < nv && sv >= nv);
+                assert_eq!(layout.edges[e as usize].kind, EdgeKind::Spoke);
+                let s = vertex_samples[sv as usize].unwrap();
+                assert_eq!(*spokes.entry((m, s)).or_insert(e), e, "two spokes {m}->{s}");
+                *uses.entry(e).or_default() += 1;
+            }
+        }
+        assert!(
+            uses.values().all(|&n| n == 2),
+            "a spoke not shared by two blocks"
+        );
+        for b in 0..layout.blocks.len() {
+            let (fast, slow) = (block_area(&layout, b), area_reference(&layout, b));
+            assert_eq!(fast.to_bits(), slow.to_bits(), "block {b}");
+        }
+        let m = cb.refined.sampled.medial.arcs.len();
+        assert_eq!(graph.arcs.len(), m - cb.collapsed);
+        assert_eq!(layout.blocks.len(), 2 * (m - cb.collapsed));
     }
 }
