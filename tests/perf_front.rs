@@ -12,19 +12,29 @@ mod common;
 use medial_blocks::blocking::{block_area, blocks, collapsed_blocking_with};
 use medial_blocks::cocircular::{vertex_circles, vertex_circles_reusing};
 use medial_blocks::domain::{Circle, Domain};
+use medial_blocks::geometry::verify::verify_exact;
+use medial_blocks::geometry::Triangulation;
 use medial_blocks::layout::{BlockLayout, Curve, EdgeKind, SideRef};
 use medial_blocks::layouts::SplitMix64;
 use medial_blocks::refine::refine;
 use medial_blocks::sampling::{sample_and_triangulate, SamplingOptions};
 use medial_blocks::Options;
+use proptest::prelude::*;
 use std::collections::HashMap;
 
 /// A layout whose refinement inserts holes (tiny holes next to larger ones).
 const INSERTING: &str = r#"{"bounding": {"center": [0.0, 0.0], "radius": 1.0}, "holes": [{"center": [0.3191541531691544, -0.3717929964389844], "radius": 0.24464422640973763}, {"center": [-0.11404744597041541, 0.08146095395643421], "radius": 0.11128467651604039}, {"center": [-0.42552889518459386, -0.38974998510540637], "radius": 0.0750062319977368}, {"center": [0.2359704484055954, 0.25273697336967405], "radius": 0.13286706779388338}, {"center": [-0.42666764696355597, -0.6507308368236295], "radius": 0.09961340826274921}, {"center": [-0.23212309121288838, 0.8791544668853195], "radius": 0.05751471364390008}, {"center": [-0.32687904034838855, -0.5760590860014616], "radius": 0.024988992683331306}, {"center": [-0.24251728387830382, 0.7025270240084398], "radius": 0.11940545640071007}, {"center": [-0.4207493523072746, 0.7239570940575171], "radius": 0.060101631399608516}, {"center": [-0.05955622155850428, -0.08922488265519388], "radius": 0.00012118752906053852}, {"center": [-0.07489413579200777, 0.6892364901244837], "radius": 0.00010388535976705469}, {"center": [0.9854949986492719, -0.13332433619018963], "radius": 0.00010024369325342005}]}"#;
 
+/// A layout (far from the origin) whose refinement inserts a hole without resampling any
+/// other circle: the samples before are a prefix of the samples after.
+const PREFIX: &str = r#"{"bounding": {"center": [99.80518032777042, 222.13404102732048], "radius": 1.0}, "holes": [{"center": [100.01448901478783, 222.33167266433094], "radius": 0.20821141244148114}, {"center": [99.15416679567457, 222.4725675840845], "radius": 0.24053959701870642}, {"center": [100.49276751007557, 221.92556284706956], "radius": 0.00010638887682197367}, {"center": [100.68302868175985, 221.93803595726027], "radius": 0.00014962206114609836}, {"center": [99.46589073326423, 222.3685354043989], "radius": 0.0001105205087575796}]}"#;
+
 /// Random layouts with tiny holes near the others, so that refinement often inserts holes.
 fn layouts() -> Vec<Domain> {
-    let mut out = vec![Domain::from_json_str(INSERTING).expect("valid layout")];
+    let mut out = vec![
+        Domain::from_json_str(INSERTING).expect("valid layout"),
+        Domain::from_json_str(PREFIX).expect("valid layout"),
+    ];
     for seed in 0..12u64 {
         let mut rng = SplitMix64(seed);
         let mut holes = common::random_holes(&mut rng, 8, 1.0, [0.0, 0.0], 0.02);
@@ -203,4 +213,97 @@ fn blocking_maps_and_areas_match_hashed_references() {
         assert_eq!(graph.arcs.len(), m - cb.collapsed);
         assert_eq!(layout.blocks.len(), 2 * (m - cb.collapsed));
     }
+}
+
+/// A triangle rotated to start at its smallest vertex (orientation kept).
+fn canonical(t: [u32; 3]) -> [u32; 3] {
+    let k = (0..3).min_by_key(|&k| t[k]).unwrap();
+    [t[k], t[(k + 1) % 3], t[(k + 2) % 3]]
+}
+
+fn triangle_set(dt: &Triangulation) -> Vec<[u32; 3]> {
+    let mut v: Vec<[u32; 3]> = dt.triangles().map(canonical).collect();
+    v.sort_unstable();
+    v
+}
+
+/// Points on a coarse lattice (many co-circular quadruples, collinear hull points, exact
+/// duplicates) or spread at random.
+fn points_strategy() -> impl Strategy<Value = Vec<[f64; 2]>> {
+    let lattice = (0i32..6, 0i32..6).prop_map(|(x, y)| [f64::from(x) * 0.5, f64::from(y) * 0.5]);
+    let spread = (-1e3f64..1e3, -1e3f64..1e3).prop_map(|(x, y)| [x, y]);
+    proptest::collection::vec(prop_oneof![lattice, spread], 3..60)
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(300))]
+    /// Inserting the points after a prefix into the prefix's triangulation gives the triangle
+    /// set and duplicates of a triangulation from scratch, and passes the exact verifier.
+    #[test]
+    fn extended_triangulation_equals_a_fresh_one(pts in points_strategy(), cut in 0.0f64..1.0) {
+        let Ok(full) = Triangulation::new(&pts) else { return Ok(()); };
+        let n0 = ((pts.len() as f64 * cut) as usize).max(3);
+        let Ok(prefix) = Triangulation::new(&pts[..n0]) else { return Ok(()); };
+        let Some(ext) = prefix.extended(&pts).unwrap() else { return Ok(()); };
+        prop_assert_eq!(triangle_set(&ext), triangle_set(&full));
+        prop_assert_eq!(ext.duplicates(), full.duplicates());
+        prop_assert!(verify_exact(&ext).is_ok(), "{:?}", verify_exact(&ext));
+    }
+}
+
+/// The same on the samples of a refined layout whose samples before refinement are a prefix
+/// of those after (the case refinement meets), and `None` when the prefix differs.
+#[test]
+fn extended_triangulation_on_refinement_samples() {
+    let sampling = SamplingOptions {
+        soft_rounds: false,
+        ..SamplingOptions::default()
+    };
+    let mut extended = 0;
+    for d in layouts() {
+        let Ok(r) = refine(&d, Some(2.0), 10_000, &sampling) else {
+            continue;
+        };
+        let s0 = sample_and_triangulate(&d, &sampling).unwrap();
+        let (p0, p1) = (&s0.samples.points, &r.sampled.samples.points);
+        let prefix = p1.len() >= p0.len() && p1[..p0.len()] == p0[..];
+        match s0.triangulation.extended(p1).unwrap() {
+            Some(ext) => {
+                assert!(prefix);
+                let full = Triangulation::new(p1).unwrap();
+                assert_eq!(triangle_set(&ext), triangle_set(&full));
+                verify_exact(&ext).unwrap();
+                extended += usize::from(p1.len() > p0.len());
+            }
+            None => assert!(!prefix || p1.len() == p0.len()),
+        }
+    }
+    assert!(extended >= 1, "no layout exercised the extension");
+}
+
+/// Meshes of layouts whose refinement inserts holes (the extended triangulation's path
+/// included: PREFIX and bubbles 200 seed 3) pass `check_mesh` in both modes, with and without
+/// `block_cells`, and the counting identity of refinement and collapse.
+#[test]
+fn refined_meshes_pass_check_mesh() {
+    let mut domains = layouts();
+    domains.push(medial_blocks::layouts::bubbles(200, 3).unwrap());
+    let mut inserted = 0;
+    for d in &domains {
+        for options in [
+            Options::default(),
+            Options::paper(),
+            Options {
+                block_cells: Some(16),
+                ..Options::default()
+            },
+        ] {
+            let m = medial_blocks::mesh(d, &options).unwrap();
+            medial_blocks::fuzzing::check_mesh(d, &m).unwrap();
+            inserted += usize::from(!m.inserted_holes.is_empty());
+            let h = m.holes + m.inserted_holes.len();
+            assert_eq!(m.medial_arcs, 3 * (h - 1));
+        }
+    }
+    assert!(inserted >= 6, "{inserted}");
 }
