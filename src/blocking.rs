@@ -762,6 +762,9 @@ pub struct CollapsedBlocking {
     /// collapse) and its exact vertex circles.
     pub refined: crate::refine::Refined,
     pub groups: Vec<crate::cocircular::CocircularGroup>,
+    /// The per-arc data of the collapse selection (independent of the exclusions, kept for
+    /// [`CollapsedBlocking::recollapse`]).
+    pub selection: crate::collapse::Selection,
     /// The contracted medial graph and its clusters.
     pub contracted: crate::collapse::Contracted,
     /// Blocking2D on the contracted graph.
@@ -860,11 +863,20 @@ pub fn collapsed_blocking_excluding(
             }
         }
     }
+    let selection = crate::collapse::Selection::new(
+        medial,
+        &sampled.triangulation,
+        &refined.circles,
+        &groups,
+        &sampled.samples.points,
+        options.collapse_fraction,
+    );
     let (layout, chosen, contracted, excluded) =
-        collapse_and_block(&refined, &groups, options, &forced, exclude)?;
+        collapse_and_block(&refined, &selection, &forced, exclude)?;
     Ok(CollapsedBlocking {
         refined,
         groups,
+        selection,
         contracted,
         layout,
         collapsed: chosen.len(),
@@ -880,12 +892,16 @@ impl CollapsedBlocking {
     /// [`CollapsedBlocking::excluded`], and force-collapsing the arcs `force` (as zero-length
     /// arcs are). The selection is the same deterministic greedy pass, so every other collapse
     /// is chosen again unless a given-up arc was joining clusters another arc now joins.
+    ///
+    /// The per-arc data of the selection are those of the construction
+    /// ([`CollapsedBlocking::selection`], with its collapse fraction): `options` is not read.
     pub fn recollapse(
         &mut self,
         options: &Options,
         give_up: &[u32],
         force: &[u32],
     ) -> Result<(), MeshError> {
+        let _ = options;
         let mut exclude = std::mem::take(&mut self.excluded);
         for &e in give_up {
             if let Some(x) = exclude.get_mut(e as usize) {
@@ -898,7 +914,7 @@ impl CollapsedBlocking {
             }
         }
         let (layout, chosen, contracted, excluded) =
-            collapse_and_block(&self.refined, &self.groups, options, &self.forced, exclude)?;
+            collapse_and_block(&self.refined, &self.selection, &self.forced, exclude)?;
         self.layout = layout;
         self.collapsed = chosen.len();
         self.chosen = chosen;
@@ -913,8 +929,7 @@ impl CollapsedBlocking {
 /// collapsed as short ones (grows with the given-up ones).
 fn collapse_and_block(
     refined: &crate::refine::Refined,
-    groups: &[crate::cocircular::CocircularGroup],
-    options: &Options,
+    selection: &crate::collapse::Selection,
     forced: &[bool],
     mut exclude: Vec<bool>,
 ) -> Result<
@@ -934,16 +949,7 @@ fn collapse_and_block(
     let mut attempt = 0;
     loop {
         attempt += 1;
-        let chosen = collapse::select_forced(
-            medial,
-            &sampled.triangulation,
-            &refined.circles,
-            groups,
-            &sampled.samples.points,
-            options.collapse_fraction,
-            &exclude,
-            forced,
-        );
+        let chosen = selection.select(&exclude, forced);
         let mut flags = vec![false; medial.arcs.len()];
         for c in &chosen {
             flags[c.arc as usize] = true;

@@ -5,12 +5,17 @@
 //!   solve of every vertex of the final graph, and reuse actually happens;
 //! - Blocking2D's corner and spoke maps indexed by sample (not hashed), the block area with
 //!   reused buffers and the contraction's sorted corner lookup: checked against hash maps and
-//!   the area as first written, on bubbles and refined layouts.
+//!   the area as first written, on bubbles and refined layouts;
+//! - the collapse selection's per-arc data kept for the local rebuilds: the same choice as
+//!   `select_forced` from scratch for random exclusions and forced arcs;
+//! - the extended triangulation (new samples inserted into the previous round's): the triangle
+//!   set of a fresh one, and refined meshes that use it pass `check_mesh`.
 
 mod common;
 
 use medial_blocks::blocking::{block_area, blocks, collapsed_blocking_with};
 use medial_blocks::cocircular::{vertex_circles, vertex_circles_reusing};
+use medial_blocks::collapse::{select_forced, Selection};
 use medial_blocks::domain::{Circle, Domain};
 use medial_blocks::geometry::verify::verify_exact;
 use medial_blocks::geometry::Triangulation;
@@ -306,4 +311,49 @@ fn refined_meshes_pass_check_mesh() {
         }
     }
     assert!(inserted >= 6, "{inserted}");
+}
+
+/// The kept per-arc data of the collapse selection (`collapse::Selection`) chooses exactly
+/// what `select_forced` computes from scratch, for random exclusions and forced arcs on the
+/// sampled graphs of bubbles and refined layouts (the calls of the local rebuilds).
+#[test]
+fn kept_selection_equals_select_forced() {
+    let mut rng = SplitMix64(7);
+    let mut domains: Vec<Domain> = (1..=3)
+        .map(|s| medial_blocks::layouts::bubbles(80, s).unwrap())
+        .collect();
+    domains.extend(layouts());
+    for d in &domains {
+        let options = Options::default();
+        let cb = collapsed_blocking_with(d, &options, &SamplingOptions::default(), false).unwrap();
+        let s = &cb.refined.sampled;
+        let m = s.medial.arcs.len();
+        for fraction in [0.0, 0.05, 0.3] {
+            let kept = Selection::new(
+                &s.medial,
+                &s.triangulation,
+                &cb.refined.circles,
+                &cb.groups,
+                &s.samples.points,
+                fraction,
+            );
+            for round in 0..6 {
+                let p = [0.0, 0.1, 0.5][round % 3];
+                let mut flags =
+                    |p: f64| -> Vec<bool> { (0..m).map(|_| rng.next_f64() < p).collect() };
+                let (exclude, forced) = (flags(p), flags(p / 2.0));
+                let fresh = select_forced(
+                    &s.medial,
+                    &s.triangulation,
+                    &cb.refined.circles,
+                    &cb.groups,
+                    &s.samples.points,
+                    fraction,
+                    &exclude,
+                    &forced,
+                );
+                assert_eq!(kept.select(&exclude, &forced), fresh);
+            }
+        }
+    }
 }
