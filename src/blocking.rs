@@ -161,29 +161,44 @@ pub fn blocks(
         blocks: Vec::with_capacity(2 * medial.arcs.len()),
     };
     let mut vertex_samples: Vec<Option<u32>> = vec![None; layout.vertices.len()];
-    let mut sample_vertex: HashMap<u32, u32> = HashMap::new();
-    let mut spokes: HashMap<(u32, u32), u32> = HashMap::new();
+    // Indexed by sample id (checked `< samples.len()` below) instead of hashed: the layout
+    // vertex of each sample used as a corner, and per sample the spokes to it as a list of
+    // `(medial vertex, edge, next)` (a sample has a spoke from one to three medial vertices).
+    let mut sample_vertex: Vec<u32> = vec![u32::MAX; samples.len()];
+    let mut spoke_head: Vec<u32> = vec![u32::MAX; samples.len()];
+    let mut spoke_list: Vec<(u32, u32, u32)> = Vec::with_capacity(3 * medial.vertices.len());
 
     let mut sample_vertex_of = |s: u32, layout: &mut BlockLayout| -> u32 {
-        *sample_vertex.entry(s).or_insert_with(|| {
+        let slot = &mut sample_vertex[s as usize];
+        if *slot == u32::MAX {
             layout.vertices.push(samples.points[s as usize]);
             vertex_samples.push(Some(s));
-            (layout.vertices.len() - 1) as u32
-        })
+            *slot = (layout.vertices.len() - 1) as u32;
+        }
+        *slot
     };
     let add_edge = |layout: &mut BlockLayout, ends: [u32; 2], curve: Curve, kind| -> u32 {
         layout.edges.push(Edge { ends, curve, kind });
         (layout.edges.len() - 1) as u32
     };
     let mut spoke = |layout: &mut BlockLayout, mv: u32, s: u32, sv: u32| -> u32 {
-        *spokes.entry((mv, s)).or_insert_with(|| {
-            layout.edges.push(Edge {
-                ends: [mv, sv],
-                curve: Curve::Segment,
-                kind: EdgeKind::Spoke,
-            });
-            (layout.edges.len() - 1) as u32
-        })
+        let mut at = spoke_head[s as usize];
+        while at != u32::MAX {
+            let (v, edge, next) = spoke_list[at as usize];
+            if v == mv {
+                return edge;
+            }
+            at = next;
+        }
+        layout.edges.push(Edge {
+            ends: [mv, sv],
+            curve: Curve::Segment,
+            kind: EdgeKind::Spoke,
+        });
+        let edge = (layout.edges.len() - 1) as u32;
+        spoke_list.push((mv, edge, spoke_head[s as usize]));
+        spoke_head[s as usize] = (spoke_list.len() - 1) as u32;
+        edge
     };
     let fwd = |edge| SideRef {
         edge,
@@ -251,28 +266,28 @@ pub fn blocks(
     Ok((layout, vertex_samples))
 }
 
-/// The points of edge `e` along a block side: end vertices exactly, arcs at 8 equal angle
+/// The points of edge `e` along a block side, into `pts` (cleared first; one buffer reused over
+/// every block): end vertices exactly, arcs at 8 equal angle
 /// steps, polylines through their points; in the side's direction.
-fn side_points(layout: &BlockLayout, side: SideRef) -> Vec<Point> {
+fn side_points_into(layout: &BlockLayout, side: SideRef, pts: &mut Vec<Point>) {
+    pts.clear();
     let Some(edge) = layout.edges.get(side.edge as usize) else {
-        return Vec::new();
+        return;
     };
     let v = |i: u32| layout.vertices.get(i as usize).copied().unwrap_or([0.0; 2]);
-    let mut pts: Vec<Point> = match &edge.curve {
-        Curve::Segment => vec![v(edge.ends[0]), v(edge.ends[1])],
+    match &edge.curve {
+        Curve::Segment => pts.extend([v(edge.ends[0]), v(edge.ends[1])]),
         Curve::Arc {
             center,
             radius,
             start,
             sweep,
-        } => (0..=8)
-            .map(|k| {
-                let a = start + sweep * k as f64 / 8.0;
-                [center[0] + radius * a.cos(), center[1] + radius * a.sin()]
-            })
-            .collect(),
-        Curve::Polyline(p) => p.clone(),
-    };
+        } => pts.extend((0..=8).map(|k| {
+            let a = start + sweep * k as f64 / 8.0;
+            [center[0] + radius * a.cos(), center[1] + radius * a.sin()]
+        })),
+        Curve::Polyline(p) => pts.extend_from_slice(p),
+    }
     if let Some(first) = pts.first_mut() {
         *first = v(edge.ends[0]);
     }
@@ -282,18 +297,27 @@ fn side_points(layout: &BlockLayout, side: SideRef) -> Vec<Point> {
     if side.reversed {
         pts.reverse();
     }
-    pts
 }
 
 /// The signed area of block `b`'s outline (its four sides, arcs sampled at 8 steps): positive
 /// for a valid counter-clockwise block, zero for a collapsed one. `0` for a bad index.
 pub fn block_area(layout: &BlockLayout, b: usize) -> f64 {
+    block_area_with(layout, b, &mut Vec::new(), &mut Vec::new())
+}
+
+/// [`block_area`] with caller-owned buffers (a loop over every block allocates nothing).
+fn block_area_with(
+    layout: &BlockLayout,
+    b: usize,
+    pts: &mut Vec<Point>,
+    outline: &mut Vec<Point>,
+) -> f64 {
     let Some(block) = layout.blocks.get(b) else {
         return 0.0;
     };
-    let mut outline: Vec<Point> = Vec::new();
+    outline.clear();
     for s in block.sides {
-        let pts = side_points(layout, s);
+        side_points_into(layout, s, pts);
         outline.extend_from_slice(&pts[..pts.len().saturating_sub(1)]);
     }
     let n = outline.len();
@@ -738,6 +762,9 @@ pub struct CollapsedBlocking {
     /// collapse) and its exact vertex circles.
     pub refined: crate::refine::Refined,
     pub groups: Vec<crate::cocircular::CocircularGroup>,
+    /// The per-arc data of the collapse selection (independent of the exclusions, kept for
+    /// [`CollapsedBlocking::recollapse`]).
+    pub selection: crate::collapse::Selection,
     /// The contracted medial graph and its clusters.
     pub contracted: crate::collapse::Contracted,
     /// Blocking2D on the contracted graph.
@@ -836,11 +863,20 @@ pub fn collapsed_blocking_excluding(
             }
         }
     }
+    let selection = crate::collapse::Selection::new(
+        medial,
+        &sampled.triangulation,
+        &refined.circles,
+        &groups,
+        &sampled.samples.points,
+        options.collapse_fraction,
+    );
     let (layout, chosen, contracted, excluded) =
-        collapse_and_block(&refined, &groups, options, &forced, exclude)?;
+        collapse_and_block(&refined, &selection, &forced, exclude)?;
     Ok(CollapsedBlocking {
         refined,
         groups,
+        selection,
         contracted,
         layout,
         collapsed: chosen.len(),
@@ -856,12 +892,16 @@ impl CollapsedBlocking {
     /// [`CollapsedBlocking::excluded`], and force-collapsing the arcs `force` (as zero-length
     /// arcs are). The selection is the same deterministic greedy pass, so every other collapse
     /// is chosen again unless a given-up arc was joining clusters another arc now joins.
+    ///
+    /// The per-arc data of the selection are those of the construction
+    /// ([`CollapsedBlocking::selection`], with its collapse fraction): `options` is not read.
     pub fn recollapse(
         &mut self,
         options: &Options,
         give_up: &[u32],
         force: &[u32],
     ) -> Result<(), MeshError> {
+        let _ = options;
         let mut exclude = std::mem::take(&mut self.excluded);
         for &e in give_up {
             if let Some(x) = exclude.get_mut(e as usize) {
@@ -874,7 +914,7 @@ impl CollapsedBlocking {
             }
         }
         let (layout, chosen, contracted, excluded) =
-            collapse_and_block(&self.refined, &self.groups, options, &self.forced, exclude)?;
+            collapse_and_block(&self.refined, &self.selection, &self.forced, exclude)?;
         self.layout = layout;
         self.collapsed = chosen.len();
         self.chosen = chosen;
@@ -889,8 +929,7 @@ impl CollapsedBlocking {
 /// collapsed as short ones (grows with the given-up ones).
 fn collapse_and_block(
     refined: &crate::refine::Refined,
-    groups: &[crate::cocircular::CocircularGroup],
-    options: &Options,
+    selection: &crate::collapse::Selection,
     forced: &[bool],
     mut exclude: Vec<bool>,
 ) -> Result<
@@ -910,16 +949,7 @@ fn collapse_and_block(
     let mut attempt = 0;
     loop {
         attempt += 1;
-        let chosen = collapse::select_forced(
-            medial,
-            &sampled.triangulation,
-            &refined.circles,
-            groups,
-            &sampled.samples.points,
-            options.collapse_fraction,
-            &exclude,
-            forced,
-        );
+        let chosen = selection.select(&exclude, forced);
         let mut flags = vec![false; medial.arcs.len()];
         for c in &chosen {
             flags[c.arc as usize] = true;
@@ -928,8 +958,9 @@ fn collapse_and_block(
         let (layout, _) = blocks(final_domain, &sampled.samples, &contracted.graph)?;
         let nv = contracted.graph.vertices.len() as u32;
         let mut bad_clusters: Vec<u32> = Vec::new();
+        let (mut pts, mut outline) = (Vec::new(), Vec::new());
         for b in 0..layout.blocks.len() {
-            if block_area(&layout, b) <= 0.0 {
+            if block_area_with(&layout, b, &mut pts, &mut outline) <= 0.0 {
                 bad_clusters.extend(layout.blocks[b].corners.iter().filter(|&&v| v < nv));
             }
         }

@@ -27,9 +27,10 @@
 use crate::apollonius::{apollonius, same_circle, Apollonius, Choice, Sign, Site};
 use crate::domain::{CircleId, Domain};
 use crate::geometry::{Point, Triangulation};
-use crate::medial::{MedialArc, MedialGraph};
+use crate::medial::{MedialArc, MedialGraph, MedialVertex};
 use rayon::prelude::*;
 use serde::Serialize;
+use std::collections::HashMap;
 
 /// The tangency site of circle `id` of `domain` (a hole, or the bounding circle for `-1`).
 pub fn site(domain: &Domain, id: CircleId) -> Site {
@@ -45,22 +46,61 @@ pub fn site(domain: &Domain, id: CircleId) -> Site {
 /// `None` where no valid root has the triangle's orientation. Circle ids of the graph must
 /// be ids of `domain` (the graph was built from its samples).
 pub fn vertex_circles(domain: &Domain, medial: &MedialGraph) -> Vec<Option<Apollonius>> {
+    vertex_circles_reusing(domain, medial, None)
+}
+
+/// The solve of one medial vertex: a function of its circle ids (in order), the circles of
+/// `domain` they name, and its position (the hint).
+fn vertex_circle(domain: &Domain, v: &MedialVertex) -> Option<Apollonius> {
     let n = domain.hole_count() as CircleId;
+    if v.circles.iter().any(|&c| c < -1 || c >= n) {
+        return None;
+    }
+    let sites = v.circles.map(|c| site(domain, c));
+    let choice = Choice {
+        orientation: Some(Sign::Positive),
+        hint: None,
+    }
+    .near(v.position);
+    apollonius(sites, choice).ok()
+}
+
+/// The key a vertex's solve depends on besides the circles themselves: circle ids in order
+/// and the position's bits.
+fn solve_key(v: &MedialVertex) -> ([CircleId; 3], [u64; 2]) {
+    (v.circles, v.position.map(f64::to_bits))
+}
+
+/// [`vertex_circles`], taking the answer of a vertex of `previous` (a medial graph of an
+/// earlier domain, with its vertex circles) with the same circle ids in the same order and the
+/// same position bits instead of solving again.
+///
+/// Exact when every circle id of the earlier domain names the same circle in `domain`: macro
+/// refinement ([`crate::refine`]) only appends holes, so the ids, the sites and the hint of such
+/// a vertex are those of the earlier solve, which is deterministic. Refinement re-samples only
+/// near inserted holes in effect, so nearly every vertex is found (issue 8: the second solve of
+/// every Apollonius circle of the domain was about half the blocking stage at 3e4 holes).
+pub fn vertex_circles_reusing(
+    domain: &Domain,
+    medial: &MedialGraph,
+    previous: Option<(&MedialGraph, &[Option<Apollonius>])>,
+) -> Vec<Option<Apollonius>> {
+    let known: HashMap<([CircleId; 3], [u64; 2]), usize> = match previous {
+        Some((graph, circles)) if graph.vertices.len() == circles.len() => graph
+            .vertices
+            .iter()
+            .enumerate()
+            .map(|(i, v)| (solve_key(v), i))
+            .collect(),
+        _ => HashMap::new(),
+    };
     // One independent solve per vertex, in parallel, collected in vertex order.
     medial
         .vertices
         .par_iter()
-        .map(|v| {
-            if v.circles.iter().any(|&c| c < -1 || c >= n) {
-                return None;
-            }
-            let sites = v.circles.map(|c| site(domain, c));
-            let choice = Choice {
-                orientation: Some(Sign::Positive),
-                hint: None,
-            }
-            .near(v.position);
-            apollonius(sites, choice).ok()
+        .map(|v| match (known.get(&solve_key(v)), previous) {
+            (Some(&i), Some((_, circles))) => circles[i].clone(),
+            _ => vertex_circle(domain, v),
         })
         .collect()
 }

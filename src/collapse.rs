@@ -32,7 +32,6 @@ use crate::cocircular::{arc_length, group_of, is_zero_length, local_radius, Coci
 use crate::geometry::{Point, Triangulation};
 use crate::medial::{MedialArc, MedialGraph, MedialVertex};
 use crate::mesher::MeshError;
-use std::collections::HashMap;
 
 /// One arc chosen for collapse.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -86,37 +85,93 @@ pub fn select_forced(
     exclude: &[bool],
     forced: &[bool],
 ) -> Vec<Candidate> {
-    let group = group_of(medial, groups);
-    let mut zero = Vec::new();
-    let mut must: Vec<(f64, u32)> = Vec::new();
-    let mut short: Vec<(f64, u32)> = Vec::new();
-    for (e, arc) in medial.arcs.iter().enumerate() {
-        if is_zero_length(arc, medial, tri, &group) {
-            zero.push(e as u32);
-        } else if forced.get(e).copied().unwrap_or(false) {
-            must.push((arc_length(arc), e as u32));
-        } else if fraction > 0.0 && !exclude.get(e).copied().unwrap_or(false) {
-            let r = local_radius(medial, circles, points, arc.ends[0]).min(local_radius(
-                medial,
-                circles,
-                points,
-                arc.ends[1],
-            ));
-            let rel = arc_length(arc) / r;
-            if rel.is_finite() && rel < fraction {
-                short.push((rel, e as u32));
+    Selection::new(medial, tri, circles, groups, points, fraction).select(exclude, forced)
+}
+
+/// The part of [`select_forced`] that depends on neither `exclude` nor `forced`, computed once
+/// and kept for the local rebuilds ([`crate::blocking::CollapsedBlocking::recollapse`]): the
+/// zero-length arcs, every arc's sampled length, and the short candidates (relative length
+/// below the fraction) already sorted. Filtering a sorted list keeps it sorted, so
+/// [`Selection::select`] is [`select_forced`] exactly.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Selection {
+    /// Zero-length arcs, in arc order.
+    zero: Vec<u32>,
+    is_zero: Vec<bool>,
+    /// Sampled length per arc.
+    length: Vec<f64>,
+    /// `(relative length, arc)` of the non-zero arcs below the fraction, sorted.
+    short: Vec<(f64, u32)>,
+    ends: Vec<[u32; 2]>,
+    vertices: usize,
+}
+
+impl Selection {
+    /// The per-arc data of [`select_forced`] (same arguments less `exclude` and `forced`).
+    pub fn new(
+        medial: &MedialGraph,
+        tri: &Triangulation,
+        circles: &[Option<Apollonius>],
+        groups: &[CocircularGroup],
+        points: &[Point],
+        fraction: f64,
+    ) -> Selection {
+        let group = group_of(medial, groups);
+        let m = medial.arcs.len();
+        let (mut zero, mut is_zero) = (Vec::new(), vec![false; m]);
+        let mut length = vec![0.0; m];
+        let mut short: Vec<(f64, u32)> = Vec::new();
+        for (e, arc) in medial.arcs.iter().enumerate() {
+            if is_zero_length(arc, medial, tri, &group) {
+                zero.push(e as u32);
+                is_zero[e] = true;
+                continue;
+            }
+            length[e] = arc_length(arc);
+            if fraction > 0.0 {
+                let r = local_radius(medial, circles, points, arc.ends[0]).min(local_radius(
+                    medial,
+                    circles,
+                    points,
+                    arc.ends[1],
+                ));
+                let rel = length[e] / r;
+                if rel.is_finite() && rel < fraction {
+                    short.push((rel, e as u32));
+                }
             }
         }
+        short.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+        Selection {
+            zero,
+            is_zero,
+            length,
+            short,
+            ends: medial.arcs.iter().map(|a| a.ends).collect(),
+            vertices: medial.vertices.len(),
+        }
     }
-    short.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
-    must.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
-    let order = zero
-        .into_iter()
-        .map(|e| (e, true))
-        .chain(must.into_iter().map(|(_, e)| (e, true)))
-        .chain(short.into_iter().map(|(_, e)| (e, false)));
-    let ends: Vec<[u32; 2]> = medial.arcs.iter().map(|a| a.ends).collect();
-    accept(order, &ends, medial.vertices.len())
+
+    /// [`select_forced`] with these per-arc data.
+    pub fn select(&self, exclude: &[bool], forced: &[bool]) -> Vec<Candidate> {
+        let flag = |f: &[bool], e: usize| f.get(e).copied().unwrap_or(false);
+        let mut must: Vec<(f64, u32)> = (0..self.length.len())
+            .filter(|&e| !self.is_zero[e] && flag(forced, e))
+            .map(|e| (self.length[e], e as u32))
+            .collect();
+        must.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+        let short = self.short.iter().filter(|&&(_, e)| {
+            let e = e as usize;
+            !flag(forced, e) && !flag(exclude, e)
+        });
+        let order = self
+            .zero
+            .iter()
+            .map(|&e| (e, true))
+            .chain(must.into_iter().map(|(_, e)| (e, true)))
+            .chain(short.map(|&(_, e)| (e, false)));
+        accept(order, &self.ends, self.vertices)
+    }
 }
 
 /// The acceptance loop of [`select_forced`]: take the arcs of `order` (arc id, always-taken
@@ -283,12 +338,18 @@ pub fn contract(medial: &MedialGraph, collapse: &[bool]) -> Result<Contracted, M
             [(v1, c2l), (v0, c2f)]
         }
     };
-    let mut start_block: HashMap<(u32, u32), usize> = HashMap::new();
-    for b in 0..2 * m {
-        if start_block.insert(corners(b)[0], b).is_some() {
-            return Err(internal("two blocks start at one corner"));
-        }
+    // The block starting at each corner: sorted by corner, found by binary search (no
+    // hashing of 2m keys, issue 8).
+    let mut start_block: Vec<((u32, u32), usize)> =
+        (0..2 * m).map(|b| (corners(b)[0], b)).collect();
+    start_block.sort_unstable();
+    if start_block.windows(2).any(|w| w[0].0 == w[1].0) {
+        return Err(internal("two blocks start at one corner"));
     }
+    let block_at = |corner: (u32, u32)| -> Option<usize> {
+        let i = start_block.binary_search_by(|x| x.0.cmp(&corner)).ok()?;
+        Some(start_block[i].1)
+    };
     let mut ext_end: Vec<Vec<u32>> = vec![Vec::new(); 2 * m];
     let mut ext_start: Vec<Vec<u32>> = vec![Vec::new(); 2 * m];
     for p in 0..2 * m {
@@ -299,9 +360,7 @@ pub fn contract(medial: &MedialGraph, collapse: &[bool]) -> Result<Contracted, M
         let mut run = vec![corner.1];
         let mut steps = 0;
         let q = loop {
-            let b = *start_block
-                .get(&corner)
-                .ok_or_else(|| internal("no block starts at a corner"))?;
+            let b = block_at(corner).ok_or_else(|| internal("no block starts at a corner"))?;
             if !collapse[b / 2] {
                 break b;
             }

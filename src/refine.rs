@@ -26,12 +26,13 @@
 //! would be inserted.
 
 use crate::apollonius::Apollonius;
-use crate::cocircular::vertex_circles;
+use crate::cocircular::vertex_circles_reusing;
 use crate::domain::{dist, gap, Circle, Domain, HoleIndex};
 use crate::geometry::Point;
 use crate::medial::{circumcenter, MedialGraph};
+
 use crate::mesher::MeshError;
-use crate::sampling::{nearest_gaps, sample_and_triangulate, SampledDomain, SamplingOptions};
+use crate::sampling::{nearest_gaps, sample_and_triangulate_after, SampledDomain, SamplingOptions};
 use std::collections::HashSet;
 
 /// The poorness ratio `circumradius / shortest edge` of medial vertex `v`: from the tangent
@@ -117,9 +118,20 @@ pub fn refine(
     let key = |p: Point| -> Option<[u64; 2]> {
         (!p[0].is_nan() && !p[1].is_nan()).then(|| [(p[0] + 0.0).to_bits(), (p[1] + 0.0).to_bits()])
     };
+    // The sampling and vertex circles of the previous round. Inserted holes are appended, so
+    // a vertex with the same circles and position has the same solve (not redone), and when
+    // no other circle is resampled the new samples are inserted into the previous
+    // triangulation (the same triangles, renumbered).
+    let mut previous: Option<(SampledDomain, Vec<Option<Apollonius>>)> = None;
     loop {
-        let sampled = sample_and_triangulate(&current, sampling)?;
-        let circles = vertex_circles(&current, &sampled.medial);
+        let sampled =
+            sample_and_triangulate_after(&current, sampling, previous.as_ref().map(|p| &p.0))?;
+        let circles = vertex_circles_reusing(
+            &current,
+            &sampled.medial,
+            previous.as_ref().map(|(s, c)| (&s.medial, c.as_slice())),
+        );
+        drop(previous.take());
         let g = min_gap(&current);
         min_gaps.push(g);
         let Some(limit) = ratio else {
@@ -202,5 +214,6 @@ pub fn refine(
         inserted.extend_from_slice(&batch);
         current = Domain::bounded(current.bounding(), holes)
             .map_err(|e| MeshError::Internal(format!("an inserted hole broke the domain: {e}")))?;
+        previous = Some((sampled, circles));
     }
 }

@@ -866,6 +866,19 @@ pub fn sample_and_triangulate(
     domain: &Domain,
     opts: &SamplingOptions,
 ) -> Result<SampledDomain, MeshError> {
+    sample_and_triangulate_after(domain, opts, None)
+}
+
+/// [`sample_and_triangulate`], given the sampling of an earlier domain (`previous`, e.g. the
+/// round before macro refinement inserted holes): when its sample points are a prefix of the
+/// new ones, bit for bit (no other circle was resampled, the new holes' samples come last), the
+/// new points are inserted into its triangulation ([`Triangulation::extended`]) instead of
+/// triangulating from scratch. Same triangles, numbered differently; deterministic.
+pub fn sample_and_triangulate_after(
+    domain: &Domain,
+    opts: &SamplingOptions,
+    previous: Option<&SampledDomain>,
+) -> Result<SampledDomain, MeshError> {
     let _stage = crate::timings::enter("sampling");
     let gaps = nearest_gaps(domain);
     let radii: Vec<f64> = domain
@@ -923,8 +936,13 @@ pub fn sample_and_triangulate(
                 ),
             });
         }
-        let triangulation =
-            crate::timings::span("triangulation", || Triangulation::new(&samples.points))?;
+        let triangulation = crate::timings::span("triangulation", || {
+            let extended = match previous {
+                Some(p) => p.triangulation.extended(&samples.points)?,
+                None => None,
+            };
+            extended.map_or_else(|| Triangulation::new(&samples.points), Ok)
+        })?;
         let kinds = classify(&samples, &triangulation);
         let hard = check_invariants(&samples, &triangulation, &kinds);
         let (violations, soft_result) = if hard.is_empty() {

@@ -117,6 +117,35 @@ impl<'a> Builder<'a> {
         s
     }
 
+    /// Resume from a finished triangulation: `tv` / `adj` in this module's layout (infinite
+    /// triangles included, vertex ids = indices of `pts`), `dups` its duplicate pairs. Further
+    /// [`Builder::insert`] calls then add points as for a builder that made it.
+    pub(crate) fn resume(
+        pts: &'a [Point],
+        tv: Vec<[u32; 3]>,
+        adj: Vec<u32>,
+        dups: Vec<(u32, u32)>,
+    ) -> Self {
+        let n = pts.len();
+        let inf = n as u32;
+        let last = tv.iter().position(|v| !v.contains(&inf)).unwrap_or(0) as u32;
+        Builder {
+            pts,
+            inf,
+            mark: vec![0; tv.len()],
+            tv,
+            adj,
+            stamp: 0,
+            start_at: vec![0; n + 1],
+            stack: Vec::new(),
+            cavity: Vec::new(),
+            boundary: Vec::new(),
+            last,
+            rng: 0x9e37_79b9,
+            dups,
+        }
+    }
+
     #[inline(always)]
     fn p(&self, v: u32) -> &Point {
         &self.pts[v as usize]

@@ -170,6 +170,98 @@ impl Triangulation {
         Ok(Self::finish(points, &order, builder))
     }
 
+    /// The triangulation of `points`, whose first [`Self::vertex_count`] entries are this
+    /// triangulation's points (bit for bit): the new points are inserted into it in input
+    /// order instead of triangulating from scratch. `Ok(None)` when `points` does not extend
+    /// this triangulation's points, or when the coordinate scaling of the predicates
+    /// (`safe_shift`) would differ.
+    ///
+    /// The triangle *set* is the one [`Self::new`] gives (the Delaunay triangulation under the
+    /// lexicographic simulation of simplicity is a function of the point set; duplicates keep
+    /// their smallest index); the triangle *numbering* differs: kept triangles keep their ids,
+    /// new ones follow. Deterministic.
+    pub fn extended(&self, points: &[Point]) -> Result<Option<Self>, TriangulationError> {
+        let n0 = self.points.len();
+        let bits = |p: &Point| p.map(f64::to_bits);
+        if points.len() < n0
+            || points[..n0]
+                .iter()
+                .zip(&self.points)
+                .any(|(a, b)| bits(a) != bits(b))
+        {
+            return Ok(None);
+        }
+        if let Some(index) = points[n0..]
+            .iter()
+            .position(|p| !(p[0].is_finite() && p[1].is_finite()))
+        {
+            return Err(TriangulationError::NonFinite { index: n0 + index });
+        }
+        if points.len() > MAX_POINTS {
+            return Err(TriangulationError::TooManyPoints {
+                count: points.len(),
+                max: MAX_POINTS,
+            });
+        }
+        let shift = safe_shift(points);
+        if shift != safe_shift(&self.points) || self.tris.is_empty() {
+            return Ok(None);
+        }
+        let work: Vec<Point> = points
+            .iter()
+            .map(|&p| shift.map_or(p, |s| [scale(p[0], s), scale(p[1], s)]))
+            .collect();
+        let (tv, adj) = self.builder_arrays(points.len() as u32);
+        let mut builder = Builder::resume(&work, tv, adj, self.duplicates.clone());
+        for pos in n0..points.len() {
+            builder
+                .insert(pos as u32)
+                .map_err(|e| TriangulationError::Internal { message: e.0 })?;
+        }
+        let order: Vec<u32> = (0..points.len() as u32).collect();
+        Ok(Some(Self::finish(points, &order, builder)))
+    }
+
+    /// This triangulation in the builder's layout (see `build`): the finite triangles, then one
+    /// infinite triangle `(u, w, inf)` per hull edge `w -> u` of a finite triangle, in order of
+    /// finite triangle and edge; `adj` as half-edge ids.
+    fn builder_arrays(&self, inf: u32) -> (Vec<[u32; 3]>, Vec<u32>) {
+        let next = |k: usize| (k + 1) % 3;
+        let prev = |k: usize| (k + 2) % 3;
+        let mut tv = self.tris.clone();
+        let mut adj = vec![NONE; 3 * tv.len()];
+        // The infinite triangle whose first vertex is `u`, per vertex.
+        let mut hull_from: Vec<u32> = vec![NONE; self.points.len()];
+        for (t, nb) in self.adj.iter().enumerate() {
+            let v = self.tris[t];
+            for k in 0..3 {
+                let (a, b) = (v[next(k)], v[prev(k)]);
+                if nb[k] != NONE {
+                    let m = nb[k] as usize;
+                    let w = self.tris[m];
+                    if let Some(j) = (0..3).find(|&j| w[next(j)] == b && w[prev(j)] == a) {
+                        adj[3 * t + k] = (3 * m + j) as u32;
+                    }
+                } else {
+                    let s = tv.len();
+                    tv.push([b, a, inf]);
+                    adj.extend_from_slice(&[NONE; 3]);
+                    adj[3 * s + 2] = (3 * t + k) as u32;
+                    adj[3 * t + k] = (3 * s + 2) as u32;
+                    hull_from[b as usize] = s as u32;
+                }
+            }
+        }
+        // Infinite triangle s = (u, w, inf): across its edge (w, inf) is the one starting at w.
+        for s in self.tris.len()..tv.len() {
+            let w = tv[s][1];
+            let s2 = hull_from[w as usize] as usize;
+            adj[3 * s] = (3 * s2 + 1) as u32;
+            adj[3 * s2 + 1] = (3 * s) as u32;
+        }
+        (tv, adj)
+    }
+
     /// Compact the builder into finite triangles with input-index vertices.
     /// `order[v]` is the input index of builder vertex `v`.
     fn finish(points: &[Point], order: &[u32], b: Builder<'_>) -> Self {
