@@ -17,6 +17,7 @@ use rayon::prelude::*;
 use serde::Serialize;
 
 mod kernel;
+mod rows;
 
 /// Angles (degrees) and Jacobians of the four corners of one quadrilateral `[p0, p1, p2, p3]`
 /// (see the module doc for the conventions).
@@ -208,15 +209,13 @@ fn block_stats(grids: &[BlockGrid]) -> Vec<(Vec<kernel::BlockFigures>, QualityMe
     let tables = kernel::Tables::new();
     grids
         .par_chunks(CHUNK)
-        .map_init(Vec::new, |buf, chunk| {
-            let mut metrics = QualityMetrics::empty();
-            let mut figs = Vec::with_capacity(chunk.len());
-            for g in chunk {
-                let s = kernel::block_stats(g, &tables, buf, metrics);
-                metrics = s.metrics;
-                figs.push(s.fig);
-            }
-            (figs, metrics)
+        .map_init(rows::Rows::default, |scratch, chunk| {
+            let mut acc = rows::Chunk::new();
+            let figs = chunk
+                .iter()
+                .map(|g| acc.block(g, &tables, scratch))
+                .collect();
+            (figs, acc.finish())
         })
         .collect()
 }
