@@ -205,6 +205,44 @@ impl Rows {
     }
 }
 
+/// The per-cell arrays of one row, cut to the row's length (so that indexing below `ni`
+/// needs no further checks).
+struct View<'a> {
+    cross: [&'a [f64]; 4],
+    dot: [&'a [f64]; 4],
+    key: [&'a [f64]; 4],
+    ext: [&'a [f64]; 4],
+    single: &'a [f64],
+    fig: [&'a [f64]; 3],
+    ok: &'a [f64],
+}
+
+impl<'a> View<'a> {
+    fn of(r: &'a Rows, n: usize) -> View<'a> {
+        let four = |v: &'a [Vec<f64>; 4]| [&v[0][..n], &v[1][..n], &v[2][..n], &v[3][..n]];
+        View {
+            cross: four(&r.cross),
+            dot: four(&r.dot),
+            key: four(&r.key),
+            ext: four(&r.extreme),
+            single: &r.single[..n],
+            fig: [&r.fig[0][..n], &r.fig[1][..n], &r.fig[2][..n]],
+            ok: &r.ok[..n],
+        }
+    }
+}
+
+/// One cell's figures from the row loop (see [`Rows`]).
+struct Cell {
+    cross: [f64; 4],
+    dot: [f64; 4],
+    key: [f64; 4],
+    extreme: [f64; 4],
+    /// Each extreme corner is alone within [`KEY_TOL`].
+    single: bool,
+    fig: [f64; 3],
+}
+
 /// Running figures of a chunk of blocks, in visiting order: the metrics' counts, and their
 /// extremes as plain numbers (`+-inf` until a finite value came), turned into
 /// [`MetricSummary::min`] / `max` by [`Chunk::finish`]. Folding `x` into `+inf` gives `x`, so
@@ -301,7 +339,9 @@ impl Chunk {
         }
         let w = ni + 1;
         let n = &grid.nodes;
-        rows.candidates.clear();
+        // Taken out of `rows` while the row's arrays are borrowed; put back at the end.
+        let mut candidates = std::mem::take(&mut rows.candidates);
+        candidates.clear();
         // Running approximate extremes of the length figures (see `candidate`).
         let mut lo = [f64::INFINITY; 3];
         let mut hi = [f64::NEG_INFINITY; 3];
@@ -309,13 +349,22 @@ impl Chunk {
         for j in 0..nj {
             let (line, next) = (&n[j * w..(j + 1) * w], &n[(j + 1) * w..(j + 2) * w]);
             rows.products(line, next);
+            let v = View::of(rows, ni);
+            let corners = |i: usize| [line[i], line[i + 1], next[i + 1], next[i]];
             for i in 0..ni {
-                let p = [line[i], line[i + 1], next[i + 1], next[i]];
-                if rows.ok[i] == 0.0 {
-                    self.add_reference(&mut f, &p);
+                if v.ok[i] == 0.0 {
+                    self.add_reference(&mut f, &corners(i));
                     continue;
                 }
-                let figs = self.add_fast(&mut f, rows, i, t, &p);
+                let cell = Cell {
+                    cross: [v.cross[0][i], v.cross[1][i], v.cross[2][i], v.cross[3][i]],
+                    dot: [v.dot[0][i], v.dot[1][i], v.dot[2][i], v.dot[3][i]],
+                    key: [v.key[0][i], v.key[1][i], v.key[2][i], v.key[3][i]],
+                    extreme: [v.ext[0][i], v.ext[1][i], v.ext[2][i], v.ext[3][i]],
+                    single: v.single[i] == 1.0,
+                    fig: [v.fig[0][i], v.fig[1][i], v.fig[2][i]],
+                };
+                let figs = self.add_fast(&mut f, &cell, t, || corners(i));
                 // A cell within REL_TOL of the block's final extreme is within 3 REL_TOL of
                 // the running extreme when visited (see the module doc of `kernel`).
                 let mut keep = false;
@@ -327,7 +376,7 @@ impl Chunk {
                         || hi[k] - x <= 3.0 * REL_TOL * hi[k].abs();
                 }
                 if keep {
-                    rows.candidates.push((i + j * ni, figs));
+                    candidates.push((i + j * ni, figs));
                 }
             }
             std::mem::swap(&mut rows.bx, &mut rows.tx);
@@ -337,7 +386,7 @@ impl Chunk {
         // Extremes of the length figures: the candidates within 2 REL_TOL of the smallest or
         // largest figure, recomputed with `hypot`, in cell order.
         let near = |x: f64, e: f64| (x - e).abs() <= 2.0 * REL_TOL * e.abs();
-        for &(c, figs) in &rows.candidates {
+        for &(c, figs) in &candidates {
             if !(0..3).any(|k| near(figs[k], lo[k]) || near(figs[k], hi[k])) {
                 continue;
             }
@@ -350,6 +399,7 @@ impl Chunk {
             self.extremes(AR, ar);
             min_sj(&mut f, sj);
         }
+        rows.candidates = candidates;
         f
     }
 
@@ -390,34 +440,16 @@ impl Chunk {
     fn add_fast(
         &mut self,
         f: &mut BlockFigures,
-        rows: &Rows,
-        i: usize,
+        c: &Cell,
         t: &Tables,
-        p: &[Point; 4],
+        corners: impl Fn() -> [Point; 4],
     ) -> [f64; 3] {
-        let cross = [
-            rows.cross[0][i],
-            rows.cross[1][i],
-            rows.cross[2][i],
-            rows.cross[3][i],
-        ];
-        let dot = [
-            rows.dot[0][i],
-            rows.dot[1][i],
-            rows.dot[2][i],
-            rows.dot[3][i],
-        ];
-        let keys = [
-            rows.key[0][i],
-            rows.key[1][i],
-            rows.key[2][i],
-            rows.key[3][i],
-        ];
-        let (lo, hi) = if rows.single[i] == 1.0 {
-            // One corner near each extreme: the fold below reduces to these two.
+        let (cross, dot, keys) = (c.cross, c.dot, c.key);
+        let (lo, hi) = if c.single {
+            // One corner near each extreme: the fold of `extreme_angles` reduces to these.
             (
-                angle_deg(rows.extreme[0][i], rows.extreme[1][i]),
-                angle_deg(rows.extreme[2][i], rows.extreme[3][i]),
+                angle_deg(c.extreme[0], c.extreme[1]),
+                angle_deg(c.extreme[2], c.extreme[3]),
             )
         } else {
             extreme_angles(keys, cross, dot)
@@ -448,7 +480,7 @@ impl Chunk {
         count(&mut m.equiangle_skewness, s);
         self.extremes(SKEW, sk);
         let m = &mut self.metrics;
-        let (sj, er, ar) = (rows.fig[0][i], rows.fig[1][i], rows.fig[2][i]);
+        let [sj, er, ar] = c.fig;
         let approx = [
             t.scaled_jacobian.get(sj),
             t.edge_ratio.get(er),
@@ -460,7 +492,7 @@ impl Chunk {
         } else if let Some(s) = super::kernel::approx_slots(m, t, [sj, er, ar]) {
             ([sj, er, ar], s)
         } else {
-            let (sj, er, ar) = length_figures(&cross, &exact_lengths(p));
+            let (sj, er, ar) = length_figures(&cross, &exact_lengths(&corners()));
             let s = [
                 exact_slot(&m.scaled_jacobian, &t.scaled_jacobian, sj),
                 exact_slot(&m.edge_ratio, &t.edge_ratio, er),
