@@ -199,6 +199,9 @@ pub(super) const AMBIGUOUS: u8 = u8::MAX;
 /// Flag of a [`BinTable`] slot: outside the acceptable range.
 pub(super) const OUTSIDE: u8 = 0x80;
 
+/// Slots of a [`BinTable`] (a power of two).
+const SLOTS: usize = 4096;
+
 /// Constant-time histogram bins of approximate values: slot `s` covers
 /// `[lo + s / scale, lo + (s + 1) / scale)`, padded by a relative 1e-9 (far more than the
 /// approximation and slot-index errors), and holds the bin (and [`OUTSIDE`]) shared by every
@@ -206,15 +209,16 @@ pub(super) const OUTSIDE: u8 = 0x80;
 pub(super) struct BinTable {
     lo: f64,
     scale: f64,
-    slots: Vec<u8>,
+    slots: Box<[u8; SLOTS]>,
 }
 
 impl BinTable {
-    fn new(edges: &[f64], acceptable: [f64; 2], lo: f64, hi: f64, n: usize) -> BinTable {
-        let scale = n as f64 / (hi - lo);
+    fn new(edges: &[f64], acceptable: [f64; 2], lo: f64, hi: f64) -> BinTable {
+        let scale = SLOTS as f64 / (hi - lo);
         let accepts = |x: f64| x >= acceptable[0] && x <= acceptable[1];
-        let slots = (0..n)
-            .map(|s| {
+        let mut slots = Box::new([AMBIGUOUS; SLOTS]);
+        for (s, slot) in slots.iter_mut().enumerate() {
+            *slot = {
                 let a = lo + s as f64 / scale;
                 let b = lo + (s + 1) as f64 / scale;
                 let pad = 1e-9 * a.abs().max(b.abs()).max(1.0);
@@ -225,8 +229,8 @@ impl BinTable {
                 } else {
                     ba as u8 | if accepts(a) { 0 } else { OUTSIDE }
                 }
-            })
-            .collect();
+            };
+        }
         BinTable { lo, scale, slots }
     }
 
@@ -234,8 +238,10 @@ impl BinTable {
     #[inline]
     pub(super) fn get(&self, x: f64) -> u8 {
         let t = (x - self.lo) * self.scale;
-        if t >= 0.0 && t < self.slots.len() as f64 {
-            self.slots[t as usize]
+        if t >= 0.0 && t < SLOTS as f64 {
+            // `t` is in [0, SLOTS): the cast truncates and the mask changes nothing (it only
+            // spares the bounds check).
+            self.slots[t as u32 as usize & (SLOTS - 1)]
         } else {
             AMBIGUOUS
         }
@@ -263,17 +269,11 @@ impl Tables {
             .collect();
         let all = [f64::NEG_INFINITY, f64::INFINITY];
         Tables {
-            angle_key: BinTable::new(&keys, all, 0.0, 4.0, 4096),
-            skewness: BinTable::new(&SKEWNESS_EDGES, SKEWNESS_ACCEPTABLE, -1.0, 3.0, 4096),
-            scaled_jacobian: BinTable::new(
-                &JACOBIAN_EDGES,
-                SCALED_JACOBIAN_ACCEPTABLE,
-                -1.5,
-                1.5,
-                4096,
-            ),
-            edge_ratio: BinTable::new(&RATIO_EDGES, EDGE_RATIO_ACCEPTABLE, 1.0, 129.0, 4096),
-            aspect_ratio: BinTable::new(&RATIO_EDGES, ASPECT_ACCEPTABLE, 1.0, 129.0, 4096),
+            angle_key: BinTable::new(&keys, all, 0.0, 4.0),
+            skewness: BinTable::new(&SKEWNESS_EDGES, SKEWNESS_ACCEPTABLE, -1.0, 3.0),
+            scaled_jacobian: BinTable::new(&JACOBIAN_EDGES, SCALED_JACOBIAN_ACCEPTABLE, -1.5, 1.5),
+            edge_ratio: BinTable::new(&RATIO_EDGES, EDGE_RATIO_ACCEPTABLE, 1.0, 129.0),
+            aspect_ratio: BinTable::new(&RATIO_EDGES, ASPECT_ACCEPTABLE, 1.0, 129.0),
         }
     }
 }
