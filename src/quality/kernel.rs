@@ -375,8 +375,29 @@ pub(super) fn cell_field_values(p: &[Point; 4]) -> [f64; 7] {
     ]
 }
 
-/// True when some corner Jacobian of the cell is `<= 0` or not a number.
-#[inline]
-pub(super) fn is_inverted(p: &[Point; 4]) -> bool {
-    corner_products(p).0.iter().any(|&x| x.is_nan() || x <= 0.0)
+/// The cells between node lines `lo` and `hi` (same length) with some corner Jacobian
+/// `<= 0` or not a number: the cross products of [`corner_products`], each edge taken as a
+/// difference of its two nodes in one direction and negated for the other corner. Negation
+/// changes at most the sign of a zero product, and `!(cross > 0)` holds for both zeros (and
+/// NaN), so the count is that of the reference test.
+pub(super) fn row_inverted(lo: &[Point], hi: &[Point]) -> usize {
+    let n = lo.len().min(hi.len()).saturating_sub(1);
+    let (lo, hi) = (&lo[..=n], &hi[..=n]);
+    let mut count = 0;
+    for i in 0..n {
+        // p0 -> p1, p3 -> p2, p0 -> p3, p1 -> p2.
+        let (hx, hy) = (lo[i + 1][0] - lo[i][0], lo[i + 1][1] - lo[i][1]);
+        let (ux, uy) = (hi[i + 1][0] - hi[i][0], hi[i + 1][1] - hi[i][1]);
+        let (vx, vy) = (hi[i][0] - lo[i][0], hi[i][1] - lo[i][1]);
+        let (wx, wy) = (hi[i + 1][0] - lo[i + 1][0], hi[i + 1][1] - lo[i + 1][1]);
+        let c = [
+            hx * vy - hy * vx,
+            wx * (-hy) - wy * (-hx),
+            (-ux) * (-wy) - (-uy) * (-wx),
+            (-vx) * uy - (-vy) * ux,
+        ];
+        let good = (c[0] > 0.0) & (c[1] > 0.0) & (c[2] > 0.0) & (c[3] > 0.0);
+        count += usize::from(!good);
+    }
+    count
 }
