@@ -9,7 +9,7 @@
 //! (so the four angles of a simple counter-clockwise cell sum to 360). A cell is *inverted*
 //! when any corner Jacobian is `<= 0` or not a number.
 
-use crate::connectivity::connectivity;
+use crate::connectivity::{connectivity, BlockConnectivity};
 use crate::geometry::Point;
 use crate::layout::{BlockLayout, Curve, EdgeKind};
 use crate::mesh::BlockGrid;
@@ -17,6 +17,7 @@ use rayon::prelude::*;
 use serde::Serialize;
 
 mod kernel;
+mod rows;
 
 /// Angles (degrees) and Jacobians of the four corners of one quadrilateral `[p0, p1, p2, p3]`
 /// (see the module doc for the conventions).
@@ -121,13 +122,10 @@ fn grid_inverted_cells(g: &BlockGrid) -> usize {
     if !well_formed(g) {
         return 0;
     }
-    let mut n = 0;
-    for j in 0..g.nj {
-        for i in 0..g.ni {
-            n += usize::from(kernel::is_inverted(&corners(g, i, j)));
-        }
-    }
-    n
+    let w = g.ni + 1;
+    (0..g.nj)
+        .map(|j| kernel::row_inverted(&g.nodes[j * w..(j + 1) * w], &g.nodes[(j + 1) * w..][..w]))
+        .sum()
 }
 
 /// True when some cell of a well-formed `grid` has a corner angle below `deg` degrees
@@ -208,15 +206,13 @@ fn block_stats(grids: &[BlockGrid]) -> Vec<(Vec<kernel::BlockFigures>, QualityMe
     let tables = kernel::Tables::new();
     grids
         .par_chunks(CHUNK)
-        .map_init(Vec::new, |buf, chunk| {
-            let mut metrics = QualityMetrics::empty();
-            let mut figs = Vec::with_capacity(chunk.len());
-            for g in chunk {
-                let s = kernel::block_stats(g, &tables, buf, metrics);
-                metrics = s.metrics;
-                figs.push(s.fig);
-            }
-            (figs, metrics)
+        .map_init(rows::Rows::default, |scratch, chunk| {
+            let mut acc = rows::Chunk::new();
+            let figs = chunk
+                .iter()
+                .map(|g| acc.block(g, &tables, scratch))
+                .collect();
+            (figs, acc.finish())
         })
         .collect()
 }
@@ -560,13 +556,10 @@ fn side_cell_height(grid: &BlockGrid, s: usize, p: usize) -> f64 {
     }
 }
 
-/// The growth ratios across every interface of the layout (each interface once), counted
-/// into `m`. Blocks are visited in parallel in fixed chunks of [`CHUNK`]; counts and extremes
-/// do not depend on the order, so the result is that of a sequential visit.
-fn growth_ratios(layout: &BlockLayout, grids: &[BlockGrid], m: &mut MetricSummary) {
-    let Ok(conn) = connectivity(layout, grids) else {
-        return;
-    };
+/// The growth ratios across every interface of `conn` (each interface once), counted into
+/// `m`. Blocks are visited in parallel in fixed chunks of [`CHUNK`]; counts and extremes do
+/// not depend on the order, so the result is that of a sequential visit.
+fn growth_ratios(conn: &[BlockConnectivity], grids: &[BlockGrid], m: &mut MetricSummary) {
     let empty = MetricSummary::new(&m.histogram.edges, m.acceptable);
     let parts: Vec<MetricSummary> = conn
         .par_chunks(CHUNK)
@@ -681,9 +674,23 @@ pub fn quality_metrics(layout: &BlockLayout, grids: &[BlockGrid]) -> QualityMetr
 
 /// [`measure`] and [`quality_metrics`] together, with one pass over the cells.
 pub fn measure_all(layout: &BlockLayout, grids: &[BlockGrid]) -> (Quality, QualityMetrics) {
+    let conn = connectivity(layout, grids).ok();
+    measure_all_with(layout, grids, conn.as_deref())
+}
+
+/// [`measure_all`] with the block connectivity already computed: `conn` must be
+/// `connectivity(layout, grids).ok()` (without it, as when the layout has no valid
+/// connectivity, there are no interface growth ratios).
+pub fn measure_all_with(
+    layout: &BlockLayout,
+    grids: &[BlockGrid],
+    conn: Option<&[BlockConnectivity]>,
+) -> (Quality, QualityMetrics) {
     let (q, mut m) = reduce(&block_stats(grids));
     if layout.blocks.len() == grids.len() {
-        growth_ratios(layout, grids, &mut m.interface_growth_ratio);
+        if let Some(conn) = conn {
+            growth_ratios(conn, grids, &mut m.interface_growth_ratio);
+        }
         m.max_wall_orthogonality_deviation_deg = wall_orthogonality(layout, grids);
     }
     (q, m)

@@ -400,6 +400,35 @@ fn exact_squares_match_the_reference() {
     assert_eq!(q.max_angle_deg, 90.0);
 }
 
+/// Nearly equal cells: a sheared lattice whose nodes move by relative 1e-16..1e-9, so the
+/// length figures of many cells lie within the kernel's tolerance windows of each other and
+/// of the block's extremes, rising, falling and alternating along the rows (the row pass
+/// keeps every cell that may hold an extreme and re-checks it exactly).
+#[test]
+fn near_ties_match_the_reference() {
+    let mut rng = SplitMix64(11);
+    for scale in [1e-16, 1e-13, 1e-11, 1e-10, 3e-10, 1e-9] {
+        for order in 0..3 {
+            let (ni, nj) = (9, 7);
+            let mut nodes = Vec::new();
+            for j in 0..=nj {
+                for i in 0..=ni {
+                    let step = match order {
+                        0 => (i + j * ni) as f64,
+                        1 => -((i + j * ni) as f64),
+                        _ => ((i + j) % 2) as f64,
+                    };
+                    let r = (rng.next_u64() >> 11) as f64 / (1u64 << 53) as f64;
+                    let d = scale * (step + r);
+                    let (x, y) = (i as f64 * (1.0 + d), j as f64 * 0.7 * (1.0 - d));
+                    nodes.push([x + 0.3 * y, y]);
+                }
+            }
+            check_grids(&[BlockGrid { ni, nj, nodes }]);
+        }
+    }
+}
+
 /// Real meshes (both modes) against the reference.
 #[test]
 fn pipeline_meshes_match_the_reference() {

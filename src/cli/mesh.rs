@@ -8,7 +8,7 @@ use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use medial_blocks::domain::{AnyDomain, Circle, Domain};
 use medial_blocks::exact_mode::{Clustering, FirstCell};
 use medial_blocks::input::{parse_holes_csv, parse_triple};
-use medial_blocks::output::{report, write_files_reporting, Format};
+use medial_blocks::output::{report, write_files_prepared, Format};
 use medial_blocks::periodic::PeriodicDomain;
 use medial_blocks::{mesh_any, timings, Mode, Options};
 use std::path::PathBuf;
@@ -524,15 +524,24 @@ pub fn run(args: Args, global: Global) -> Result<(), Failure> {
             _ => Failure::input(e.to_string()),
         }
     })?;
-    // The report (quality figures) once, for report.json and the summary.
-    let summary_report = (!global.quiet || formats.contains(&Format::Json))
-        .then(|| report::Report::from_mesh(&mesh));
+    // The report (quality figures) and the block connectivity once, for report.json,
+    // connectivity.json and the summary.
+    let want_report = !global.quiet || formats.contains(&Format::Json);
+    let conn = want_report.then(|| {
+        timings::span("quality", || {
+            medial_blocks::connectivity::connectivity(&mesh.layout, &mesh.grids).ok()
+        })
+    });
+    let conn = conn.flatten();
+    let summary_report =
+        want_report.then(|| report::Report::from_mesh_with(&mesh, conn.as_deref()));
     let written = timings::span("write", || {
-        write_files_reporting(
+        write_files_prepared(
             &mesh,
             &args.output,
             &formats,
             summary_report.as_ref(),
+            conn.as_deref(),
             |f| {
                 bar.set_message(format!("writing {}", f.name()));
             },

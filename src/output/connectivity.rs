@@ -21,7 +21,8 @@
 //! this side's nodes onto the partner's). CGNS ranges are 1-based.
 
 use super::write_atomic;
-use crate::connectivity::BlockConnectivity;
+use crate::connectivity::{BlockConnectivity, SideKind};
+use rayon::prelude::*;
 use serde::Serialize;
 use std::io::{self, Write};
 use std::path::Path;
@@ -36,23 +37,231 @@ is true, else node n - p. CGNS ranges are 1-based (i, j); transform[a] = +-(b+1)
 block's index a to the donor's index b. Kind 'periodic': the partner is on the opposite \
 boundary of the period and its nodes are this side's plus 'translation'.";
 
+/// The file as serde sees it: [`write_json`] writes exactly `serde_json::to_writer_pretty` of
+/// this value (and a final newline), which the tests check.
 #[derive(Serialize)]
-struct File<'a> {
-    conventions: &'static str,
-    blocks: &'a [BlockConnectivity],
+pub struct File<'a> {
+    pub conventions: &'static str,
+    pub blocks: &'a [BlockConnectivity],
 }
 
-/// Write `connectivity.json`.
+/// Blocks formatted per parallel task.
+const CHUNK: usize = 64;
+/// Chunks formatted before they are written (bounds the memory held: ~2 KB per block).
+const WAVE: usize = 64;
+
+/// Write `connectivity.json`: serde_json's pretty format, byte for byte, written by hand
+/// ([`write_block`]): blocks are formatted in parallel, in waves of [`WAVE`] chunks of
+/// [`CHUNK`] blocks, and written in block order, so the file does not depend on the thread
+/// count and at most a few MB are held at once.
 pub fn write_json(blocks: &[BlockConnectivity], path: &Path) -> io::Result<()> {
     write_atomic(path, |w| {
-        serde_json::to_writer_pretty(
-            &mut *w,
-            &File {
-                conventions: CONVENTIONS,
-                blocks,
-            },
-        )
-        .map_err(io::Error::other)?;
-        writeln!(w)
+        w.write_all(b"{\n  \"conventions\": ")?;
+        serde_json::to_writer(&mut *w, CONVENTIONS).map_err(io::Error::other)?;
+        w.write_all(b",\n  \"blocks\": ")?;
+        if blocks.is_empty() {
+            w.write_all(b"[]")?;
+        } else {
+            w.write_all(b"[")?;
+            for (wi, wave) in blocks.chunks(CHUNK * WAVE).enumerate() {
+                let texts: Vec<Vec<u8>> = wave
+                    .par_chunks(CHUNK)
+                    .enumerate()
+                    .map(|(ci, chunk)| {
+                        let mut out = Vec::with_capacity(chunk.len() * 2048);
+                        for (k, b) in chunk.iter().enumerate() {
+                            if wi > 0 || ci > 0 || k > 0 {
+                                out.push(b',');
+                            }
+                            out.extend_from_slice(b"\n    ");
+                            write_block(&mut out, b);
+                        }
+                        out
+                    })
+                    .collect();
+                for t in &texts {
+                    w.write_all(t)?;
+                }
+            }
+            w.write_all(b"\n  ]")?;
+        }
+        w.write_all(b"\n}\n")
     })
+}
+
+/// serde_json's pretty printer, for the few shapes of this file: `{`/`[` open a level, every
+/// entry starts on its own line two spaces deeper, and the closing bracket returns to the
+/// opening line's depth.
+struct Pretty<'a> {
+    out: &'a mut Vec<u8>,
+    depth: usize,
+    /// Whether the innermost open object or array has an entry yet.
+    first: bool,
+}
+
+impl Pretty<'_> {
+    fn newline(&mut self) {
+        self.out.push(b'\n');
+        for _ in 0..self.depth {
+            self.out.extend_from_slice(b"  ");
+        }
+    }
+    /// Start the next entry of the innermost object (`"key": `) or array (`key == None`).
+    fn entry(&mut self, key: Option<&str>) {
+        if !self.first {
+            self.out.push(b',');
+        }
+        self.first = false;
+        self.newline();
+        if let Some(k) = key {
+            self.out.push(b'"');
+            self.out.extend_from_slice(k.as_bytes());
+            self.out.extend_from_slice(b"\": ");
+        }
+    }
+    fn open(&mut self, bracket: u8) {
+        self.out.push(bracket);
+        self.depth += 1;
+        self.first = true;
+    }
+    /// Close a non-empty object or array.
+    fn close(&mut self, bracket: u8) {
+        self.depth -= 1;
+        self.newline();
+        self.out.push(bracket);
+        self.first = false;
+    }
+    fn int(&mut self, key: Option<&str>, x: impl itoa_like::Int) {
+        self.entry(key);
+        x.write(self.out);
+    }
+    fn string(&mut self, key: &str, s: &str) {
+        self.entry(Some(key));
+        if s.bytes().all(|c| c.is_ascii_alphanumeric() || c == b'_') {
+            self.out.push(b'"');
+            self.out.extend_from_slice(s.as_bytes());
+            self.out.push(b'"');
+        } else {
+            // Escapes as serde_json writes them.
+            let _ = serde_json::to_writer(&mut *self.out, s);
+        }
+    }
+    fn pair(&mut self, key: Option<&str>, v: [usize; 2]) {
+        self.entry(key);
+        self.open(b'[');
+        self.int(None, v[0]);
+        self.int(None, v[1]);
+        self.close(b']');
+    }
+}
+
+/// Integers as serde_json writes them (decimal, `-` for negatives).
+mod itoa_like {
+    pub trait Int {
+        fn write(self, out: &mut Vec<u8>);
+    }
+    fn unsigned(mut x: u64, out: &mut Vec<u8>) {
+        let mut buf = [0u8; 20];
+        let mut at = buf.len();
+        loop {
+            at -= 1;
+            buf[at] = b'0' + (x % 10) as u8;
+            x /= 10;
+            if x == 0 {
+                break;
+            }
+        }
+        out.extend_from_slice(&buf[at..]);
+    }
+    impl Int for usize {
+        fn write(self, out: &mut Vec<u8>) {
+            unsigned(self as u64, out);
+        }
+    }
+    impl Int for i32 {
+        fn write(self, out: &mut Vec<u8>) {
+            if self < 0 {
+                out.push(b'-');
+            }
+            unsigned(u64::from(self.unsigned_abs()), out);
+        }
+    }
+}
+
+/// One element of `"blocks"`, at depth 2, exactly as serde_json's pretty printer writes
+/// [`BlockConnectivity`] there (without the separator before it).
+pub fn write_block(out: &mut Vec<u8>, b: &BlockConnectivity) {
+    let mut p = Pretty {
+        out,
+        depth: 2,
+        first: true,
+    };
+    p.open(b'{');
+    p.int(Some("block"), b.block);
+    p.pair(Some("dims"), b.dims);
+    p.entry(Some("sides"));
+    p.open(b'[');
+    for s in &b.sides {
+        p.entry(None);
+        p.open(b'{');
+        p.int(Some("side"), s.side);
+        p.string("name", s.name);
+        p.string("kind", kind_name(s.kind));
+        if let Some(c) = s.circle {
+            p.int(Some("circle"), c);
+        }
+        if let Some(q) = s.partner {
+            p.entry(Some("partner"));
+            p.open(b'{');
+            p.int(Some("block"), q.block);
+            p.int(Some("side"), q.side);
+            p.entry(Some("same_direction"));
+            p.out
+                .extend_from_slice(if q.same_direction { b"true" } else { b"false" });
+            p.close(b'}');
+        }
+        if let Some(c) = s.cgns {
+            p.entry(Some("cgns"));
+            p.open(b'{');
+            for (key, range) in [
+                ("point_range", c.point_range),
+                ("point_range_donor", c.point_range_donor),
+            ] {
+                p.entry(Some(key));
+                p.open(b'[');
+                p.pair(None, range[0]);
+                p.pair(None, range[1]);
+                p.close(b']');
+            }
+            p.entry(Some("transform"));
+            p.open(b'[');
+            p.int(None, c.transform[0]);
+            p.int(None, c.transform[1]);
+            p.close(b']');
+            p.close(b'}');
+        }
+        if let Some(t) = s.translation {
+            p.entry(Some("translation"));
+            p.open(b'[');
+            for x in t {
+                p.entry(None);
+                // serde_json's own float format (null when not finite).
+                let _ = serde_json::to_writer(&mut *p.out, &x);
+            }
+            p.close(b']');
+        }
+        p.close(b'}');
+    }
+    p.close(b']');
+    p.close(b'}');
+}
+
+/// The JSON name of a side kind (serde's `snake_case` of [`SideKind`]).
+fn kind_name(k: SideKind) -> &'static str {
+    match k {
+        SideKind::Wall => "wall",
+        SideKind::Outer => "outer",
+        SideKind::Interface => "interface",
+        SideKind::Periodic => "periodic",
+    }
 }

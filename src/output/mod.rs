@@ -24,6 +24,7 @@ pub mod vtu;
 #[cfg(feature = "cgns")]
 pub mod cgns;
 
+use crate::connectivity::BlockConnectivity;
 use crate::mesh::Mesh;
 use crate::quality::well_formed;
 use std::fs::File;
@@ -220,6 +221,20 @@ pub fn write_files_reporting(
     dir: &Path,
     formats: &[Format],
     report: Option<&report::Report>,
+    progress: impl FnMut(Format),
+) -> io::Result<()> {
+    write_files_prepared(mesh, dir, formats, report, None, progress)
+}
+
+/// [`write_files_reporting`] with the block connectivity already computed: `conn` must be
+/// [`crate::connectivity::connectivity`]`(&mesh.layout, &mesh.grids)` when given (the CLI
+/// computes it once for the report and `connectivity.json`).
+pub fn write_files_prepared(
+    mesh: &Mesh,
+    dir: &Path,
+    formats: &[Format],
+    report: Option<&report::Report>,
+    conn: Option<&[BlockConnectivity]>,
     mut progress: impl FnMut(Format),
 ) -> io::Result<()> {
     std::fs::create_dir_all(dir)?;
@@ -228,7 +243,8 @@ pub fn write_files_reporting(
         std::fs::remove_dir_all(&staging)?;
     }
     std::fs::create_dir(&staging)?;
-    let result = write_into(mesh, &staging, formats, report, &mut progress).and_then(|()| {
+    let prepared = Prepared { report, conn };
+    let result = write_into(mesh, &staging, formats, &prepared, &mut progress).and_then(|()| {
         if formats.contains(&Format::Json) {
             match std::fs::remove_file(dir.join("report.json")) {
                 Err(e) if e.kind() != io::ErrorKind::NotFound => return Err(e),
@@ -282,12 +298,18 @@ fn publish(staging: &Path, dir: &Path) -> io::Result<()> {
     Ok(())
 }
 
+/// What the caller of [`write_files_prepared`] already computed.
+struct Prepared<'a> {
+    report: Option<&'a report::Report>,
+    conn: Option<&'a [BlockConnectivity]>,
+}
+
 /// Write every format into `dir` (no staging).
 fn write_into(
     mesh: &Mesh,
     dir: &Path,
     formats: &[Format],
-    report: Option<&report::Report>,
+    prepared: &Prepared,
     progress: &mut impl FnMut(Format),
 ) -> io::Result<()> {
     for f in formats {
@@ -317,11 +339,18 @@ fn write_into(
             Format::Svg => svg::write(mesh, &dir.join("mesh.svg"))?,
             Format::Png => png::write(mesh, &dir.join("mesh.png"))?,
             Format::Json => {
-                let conn = crate::connectivity::connectivity(&mesh.layout, &mesh.grids)
-                    .map_err(io::Error::other)?;
-                connectivity::write_json(&conn, &dir.join("connectivity.json"))?;
+                let computed;
+                let conn = match prepared.conn {
+                    Some(c) => c,
+                    None => {
+                        computed = crate::connectivity::connectivity(&mesh.layout, &mesh.grids)
+                            .map_err(io::Error::other)?;
+                        &computed
+                    }
+                };
+                connectivity::write_json(conn, &dir.join("connectivity.json"))?;
                 let path = dir.join("report.json");
-                match report {
+                match prepared.report {
                     Some(r) => report::write_json(r, &path)?,
                     None => report::write_json(&report::Report::from_mesh(mesh), &path)?,
                 }

@@ -3,9 +3,10 @@
 
 use super::write_atomic;
 use crate::cocircular::CocircularGroup;
+use crate::connectivity::{connectivity, BlockConnectivity};
 use crate::domain::Circle;
 use crate::mesh::Mesh;
-use crate::quality::{measure_all, QualityMetrics};
+use crate::quality::{measure_all_with, QualityMetrics};
 use serde::Serialize;
 use std::io::{self, Write};
 use std::path::Path;
@@ -61,10 +62,23 @@ pub struct Report {
 
 impl Report {
     /// Counts from the mesh, quality from [`crate::quality::measure`] and
-    /// [`crate::quality::quality_metrics`] over its grids (one pass, [`measure_all`]).
+    /// [`crate::quality::quality_metrics`] over its grids (one pass,
+    /// [`crate::quality::measure_all`]).
     pub fn from_mesh(mesh: &Mesh) -> Report {
         let _stage = crate::timings::enter("quality");
-        let (q, quality) = measure_all(&mesh.layout, &mesh.grids);
+        let conn = connectivity(&mesh.layout, &mesh.grids).ok();
+        Report::build(mesh, conn.as_deref())
+    }
+
+    /// [`Report::from_mesh`] with the block connectivity already computed (`conn` must be
+    /// `connectivity(&mesh.layout, &mesh.grids).ok()`), for a caller that also writes it.
+    pub fn from_mesh_with(mesh: &Mesh, conn: Option<&[BlockConnectivity]>) -> Report {
+        let _stage = crate::timings::enter("quality");
+        Report::build(mesh, conn)
+    }
+
+    fn build(mesh: &Mesh, conn: Option<&[BlockConnectivity]>) -> Report {
+        let (q, quality) = measure_all_with(&mesh.layout, &mesh.grids, conn);
         Report {
             holes: mesh.holes,
             blocks: mesh.layout.blocks.len(),

@@ -17,42 +17,41 @@
 //!   every extreme is that of the reference;
 //! - cells with a zero product, a very short or very long edge, or a non-finite number take
 //!   the reference path.
+//!
+//! The per-block pass that applies these rules row by row is [`super::rows`].
 
 use super::{cell_corners, cell_metrics, fold, MetricSummary, QualityMetrics};
 use crate::geometry::Point;
-use crate::mesh::BlockGrid;
 
 /// Pseudo-angle tolerance: the pseudo-angle and `atan2` in degrees are both within ~1e-14 of
 /// the true angle of the computed `(cross, dot)`, and the pseudo-angle's slope against the
 /// angle in radians is between 1/2 and 1.
-const KEY_TOL: f64 = 1e-10;
+pub(super) const KEY_TOL: f64 = 1e-10;
 /// Relative tolerance between the `sqrt` and the `hypot` figures (they differ by ~1e-15).
-const REL_TOL: f64 = 1e-10;
+pub(super) const REL_TOL: f64 = 1e-10;
 /// Squared edge lengths outside this range take the reference path (no underflow or overflow
 /// in `x² + y²` or in the products).
-const SQ_MIN: f64 = 1e-280;
-const SQ_MAX: f64 = 1e280;
+pub(super) const SQ_MIN: f64 = 1e-280;
+pub(super) const SQ_MAX: f64 = 1e280;
 
 /// A value in `[0, 4)` increasing with the counter-clockwise angle `atan2(cross, dot)` taken
 /// in `[0, 360)` degrees (one unit per quadrant). Requires `(cross, dot) != (0, 0)`.
+/// Branch-free: `r = dot / (|cross| + |dot|)` runs from 1 to -1 over the upper half-turn and
+/// back over the lower one; its slope against the angle in radians is between 1/2 and 1 in
+/// magnitude.
 #[inline]
 pub(super) fn pseudo_angle(cross: f64, dot: f64) -> f64 {
+    let r = dot / (cross.abs() + dot.abs());
     if cross >= 0.0 {
-        if dot > 0.0 {
-            cross / (cross + dot)
-        } else {
-            1.0 + (-dot) / (cross - dot)
-        }
-    } else if dot < 0.0 {
-        2.0 + (-cross) / (-cross - dot)
+        1.0 - r
     } else {
-        3.0 + dot / (dot - cross)
+        3.0 + r
     }
 }
 
 /// The reference corner angle in degrees, `[0, 360)`.
 #[inline]
-fn angle_deg(cross: f64, dot: f64) -> f64 {
+pub(super) fn angle_deg(cross: f64, dot: f64) -> f64 {
     let mut ang = cross.atan2(dot).to_degrees();
     if ang < 0.0 {
         ang += 360.0;
@@ -81,30 +80,24 @@ pub(super) fn corner_products(p: &[Point; 4]) -> ([f64; 4], [f64; 4]) {
 #[derive(Debug, Clone, Copy)]
 pub(super) struct FastCell {
     pub cross: [f64; 4],
-    pub keys: [f64; 4],
-    pub dot: [f64; 4],
     pub min_angle_deg: f64,
     pub max_angle_deg: f64,
-    /// `sqrt(x² + y²)` of the four edges `p0p1, p1p2, p2p3, p3p0`.
-    pub approx_len: [f64; 4],
 }
 
 impl FastCell {
-    /// The fast path, or `None` when the cell must take the reference path.
+    /// The fast path, or `None` when the cell must take the reference path (a zero or
+    /// non-finite product, or an edge whose squared length is outside `[SQ_MIN, SQ_MAX]`).
     #[inline]
     pub fn of(p: &[Point; 4]) -> Option<FastCell> {
         let (cross, dot) = corner_products(p);
-        let mut approx_len = [0.0; 4];
         for k in 0..4 {
             let a = p[k];
             let b = p[(k + 1) % 4];
             let (x, y) = (b[0] - a[0], b[1] - a[1]);
-            let sq = x * x + y * y;
             // Also false for NaN.
-            if !(SQ_MIN..=SQ_MAX).contains(&sq) {
+            if !(SQ_MIN..=SQ_MAX).contains(&(x * x + y * y)) {
                 return None;
             }
-            approx_len[k] = sq.sqrt();
         }
         let mut keys = [0.0; 4];
         for k in 0..4 {
@@ -134,11 +127,8 @@ impl FastCell {
         }
         Some(FastCell {
             cross,
-            keys,
-            dot,
             min_angle_deg: fold(lo, f64::min),
             max_angle_deg: fold(hi, f64::max),
-            approx_len,
         })
     }
 
@@ -146,12 +136,6 @@ impl FastCell {
     #[inline]
     pub fn min_jacobian(&self) -> f64 {
         fold(self.cross, f64::min)
-    }
-
-    /// Corner `k`'s angle in degrees, with the reference formula.
-    #[inline]
-    pub fn angle_deg(&self, k: usize) -> f64 {
-        angle_deg(self.cross[k], self.dot[k])
     }
 }
 
@@ -193,23 +177,30 @@ pub(super) fn length_figures(cross: &[f64; 4], edges: &[f64; 4]) -> (f64, f64, f
     )
 }
 
-/// Equiangle skewness from the extreme angles (the expression of [`cell_metrics`]).
+/// Equiangle skewness from the extreme angles (finite), equal to the expression of
+/// [`cell_metrics`].
 #[inline]
+///
+/// One division: for finite angles, dividing by 90 is monotone and neither difference is
+/// `-0.0`, so the larger quotient is the quotient of the larger difference.
 pub(super) fn skewness(min_angle_deg: f64, max_angle_deg: f64) -> f64 {
-    ((max_angle_deg - 90.0) / 90.0).max((90.0 - min_angle_deg) / 90.0)
+    (max_angle_deg - 90.0).max(90.0 - min_angle_deg) / 90.0
 }
 
 /// Histogram bin of `x` (finite), the rule of [`super::Histogram::add`].
 #[inline]
-fn bin(edges: &[f64], x: f64) -> usize {
+pub(super) fn bin(edges: &[f64], x: f64) -> usize {
     let last = edges.len().saturating_sub(2);
     edges[1..].partition_point(|&e| e <= x).min(last)
 }
 
 /// A slot of [`BinTable`] whose bin or acceptance is not certain.
-const AMBIGUOUS: u8 = u8::MAX;
+pub(super) const AMBIGUOUS: u8 = u8::MAX;
 /// Flag of a [`BinTable`] slot: outside the acceptable range.
-const OUTSIDE: u8 = 0x80;
+pub(super) const OUTSIDE: u8 = 0x80;
+
+/// Slots of a [`BinTable`] (a power of two).
+const SLOTS: usize = 4096;
 
 /// Constant-time histogram bins of approximate values: slot `s` covers
 /// `[lo + s / scale, lo + (s + 1) / scale)`, padded by a relative 1e-9 (far more than the
@@ -218,15 +209,16 @@ const OUTSIDE: u8 = 0x80;
 pub(super) struct BinTable {
     lo: f64,
     scale: f64,
-    slots: Vec<u8>,
+    slots: Box<[u8; SLOTS]>,
 }
 
 impl BinTable {
-    fn new(edges: &[f64], acceptable: [f64; 2], lo: f64, hi: f64, n: usize) -> BinTable {
-        let scale = n as f64 / (hi - lo);
+    fn new(edges: &[f64], acceptable: [f64; 2], lo: f64, hi: f64) -> BinTable {
+        let scale = SLOTS as f64 / (hi - lo);
         let accepts = |x: f64| x >= acceptable[0] && x <= acceptable[1];
-        let slots = (0..n)
-            .map(|s| {
+        let mut slots = Box::new([AMBIGUOUS; SLOTS]);
+        for (s, slot) in slots.iter_mut().enumerate() {
+            *slot = {
                 let a = lo + s as f64 / scale;
                 let b = lo + (s + 1) as f64 / scale;
                 let pad = 1e-9 * a.abs().max(b.abs()).max(1.0);
@@ -237,17 +229,19 @@ impl BinTable {
                 } else {
                     ba as u8 | if accepts(a) { 0 } else { OUTSIDE }
                 }
-            })
-            .collect();
+            };
+        }
         BinTable { lo, scale, slots }
     }
 
     /// The slot of `x`, or [`AMBIGUOUS`] (also outside the table and for NaN).
     #[inline]
-    fn get(&self, x: f64) -> u8 {
+    pub(super) fn get(&self, x: f64) -> u8 {
         let t = (x - self.lo) * self.scale;
-        if t >= 0.0 && t < self.slots.len() as f64 {
-            self.slots[t as usize]
+        if t >= 0.0 && t < SLOTS as f64 {
+            // `t` is in [0, SLOTS): the cast truncates and the mask changes nothing (it only
+            // spares the bounds check).
+            self.slots[t as u32 as usize & (SLOTS - 1)]
         } else {
             AMBIGUOUS
         }
@@ -256,11 +250,11 @@ impl BinTable {
 
 /// The bin tables of one measurement (angles by pseudo-angle; the other metrics by value).
 pub(super) struct Tables {
-    angle_key: BinTable,
-    skewness: BinTable,
-    scaled_jacobian: BinTable,
-    edge_ratio: BinTable,
-    aspect_ratio: BinTable,
+    pub angle_key: BinTable,
+    pub skewness: BinTable,
+    pub scaled_jacobian: BinTable,
+    pub edge_ratio: BinTable,
+    pub aspect_ratio: BinTable,
 }
 
 impl Tables {
@@ -275,24 +269,18 @@ impl Tables {
             .collect();
         let all = [f64::NEG_INFINITY, f64::INFINITY];
         Tables {
-            angle_key: BinTable::new(&keys, all, 0.0, 4.0, 4096),
-            skewness: BinTable::new(&SKEWNESS_EDGES, SKEWNESS_ACCEPTABLE, -1.0, 3.0, 4096),
-            scaled_jacobian: BinTable::new(
-                &JACOBIAN_EDGES,
-                SCALED_JACOBIAN_ACCEPTABLE,
-                -1.5,
-                1.5,
-                4096,
-            ),
-            edge_ratio: BinTable::new(&RATIO_EDGES, EDGE_RATIO_ACCEPTABLE, 1.0, 129.0, 4096),
-            aspect_ratio: BinTable::new(&RATIO_EDGES, ASPECT_ACCEPTABLE, 1.0, 129.0, 4096),
+            angle_key: BinTable::new(&keys, all, 0.0, 4.0),
+            skewness: BinTable::new(&SKEWNESS_EDGES, SKEWNESS_ACCEPTABLE, -1.0, 3.0),
+            scaled_jacobian: BinTable::new(&JACOBIAN_EDGES, SCALED_JACOBIAN_ACCEPTABLE, -1.5, 1.5),
+            edge_ratio: BinTable::new(&RATIO_EDGES, EDGE_RATIO_ACCEPTABLE, 1.0, 129.0),
+            aspect_ratio: BinTable::new(&RATIO_EDGES, ASPECT_ACCEPTABLE, 1.0, 129.0),
         }
     }
 }
 
 /// The slot (bin and [`OUTSIDE`]) of an exact value `x`.
 #[inline]
-fn exact_slot(m: &MetricSummary, table: &BinTable, x: f64) -> u8 {
+pub(super) fn exact_slot(m: &MetricSummary, table: &BinTable, x: f64) -> u8 {
     let s = table.get(x);
     if s != AMBIGUOUS {
         return s;
@@ -323,23 +311,27 @@ fn approx_slot(m: &MetricSummary, table: &BinTable, x: f64) -> Option<u8> {
         .then(|| b as u8 | if m.accepts(x) { 0 } else { OUTSIDE })
 }
 
+/// The slots of the approximate scaled Jacobian, edge ratio and aspect ratio when all three
+/// are certain.
+#[inline]
+pub(super) fn approx_slots(m: &QualityMetrics, t: &Tables, x: [f64; 3]) -> Option<[u8; 3]> {
+    Some([
+        approx_slot(&m.scaled_jacobian, &t.scaled_jacobian, x[0])?,
+        approx_slot(&m.edge_ratio, &t.edge_ratio, x[1])?,
+        approx_slot(&m.aspect_ratio, &t.aspect_ratio, x[2])?,
+    ])
+}
+
 /// Count one value of slot `s` (extremes left to the caller).
 #[inline]
-fn count(m: &mut MetricSummary, s: u8) {
+pub(super) fn count(m: &mut MetricSummary, s: u8) {
     m.samples += 1;
     m.histogram.counts[(s & !OUTSIDE) as usize] += 1;
     m.outside += u64::from(s & OUTSIDE != 0);
 }
 
-/// Update `m`'s extremes with a finite value.
-#[inline]
-fn extremes(m: &mut MetricSummary, x: f64) {
-    m.min = Some(m.min.map_or(x, |a| a.min(x)));
-    m.max = Some(m.max.map_or(x, |a| a.max(x)));
-}
-
 /// Per-block partial results of [`super::measure`] (small; the metrics of
-/// [`super::quality_metrics`] are accumulated per chunk of blocks, see [`BlockStats`]).
+/// [`super::quality_metrics`] are accumulated per chunk of blocks, see [`super::rows::Chunk`]).
 #[derive(Debug, Clone, Copy)]
 pub(super) struct BlockFigures {
     /// The grid's node count does not match `ni`, `nj` (no cell measured).
@@ -352,197 +344,6 @@ pub(super) struct BlockFigures {
     pub inverted: usize,
     /// NaN-sticky minimum of the cells' scaled Jacobians.
     pub min_scaled_jacobian: f64,
-}
-
-/// One block's figures, and the metrics it was counted into (shared by a chunk of blocks:
-/// counts and extremes do not depend on how blocks are grouped).
-#[derive(Debug, Clone)]
-pub(super) struct BlockStats {
-    pub fig: BlockFigures,
-    pub metrics: QualityMetrics,
-}
-
-/// A fast-path cell's length figures (scaled Jacobian, edge ratio, aspect ratio), `exact`
-/// when computed with `hypot`; its index in the block.
-#[derive(Debug, Clone, Copy)]
-pub(super) struct Pending {
-    cell: usize,
-    figures: [f64; 3],
-    exact: bool,
-}
-
-impl BlockStats {
-    fn new(metrics: QualityMetrics) -> BlockStats {
-        BlockStats {
-            fig: BlockFigures {
-                malformed: false,
-                cells: 0,
-                sum_min: 0.0,
-                sum_max: 0.0,
-                min_angle_deg: f64::INFINITY,
-                max_angle_deg: f64::NEG_INFINITY,
-                inverted: 0,
-                min_scaled_jacobian: f64::INFINITY,
-            },
-            metrics,
-        }
-    }
-
-    fn add_angles_common(&mut self, lo: f64, hi: f64) {
-        self.fig.cells += 1;
-        self.fig.sum_min += lo;
-        self.fig.sum_max += hi;
-        self.fig.min_angle_deg = self.fig.min_angle_deg.min(lo);
-        self.fig.max_angle_deg = self.fig.max_angle_deg.max(hi);
-        let a = &mut self.metrics.angle_deg;
-        if !(a.accepts(lo) && a.accepts(hi)) {
-            a.outside += 1;
-        }
-    }
-
-    fn min_sj(&mut self, sj: f64) {
-        if sj.is_nan() || sj < self.fig.min_scaled_jacobian {
-            self.fig.min_scaled_jacobian = sj;
-        }
-    }
-
-    /// Everything the reference computes from one cell, with the reference formulas.
-    fn add_reference(&mut self, p: &[Point; 4]) {
-        let c = cell_metrics(*p);
-        let jacobian = cell_corners(*p).jacobian;
-        self.add_angles_common(c.min_angle_deg, c.max_angle_deg);
-        if jacobian.iter().any(|&x| x.is_nan() || x <= 0.0) {
-            self.fig.inverted += 1;
-        }
-        self.min_sj(c.scaled_jacobian);
-        let m = &mut self.metrics;
-        for a in c.angle_deg {
-            m.angle_deg.add_value(a);
-        }
-        m.equiangle_skewness.add(c.equiangle_skewness);
-        m.edge_ratio.add(c.edge_ratio);
-        m.scaled_jacobian.add(c.scaled_jacobian);
-        m.aspect_ratio.add(c.aspect_ratio);
-    }
-
-    /// One cell through the fast path (the reference path where it must); the length figures
-    /// are counted in the histograms and queued in `pending` for the extremes.
-    #[inline]
-    fn add_cell(&mut self, p: &[Point; 4], t: &Tables, cell: usize, pending: &mut Vec<Pending>) {
-        let Some(f) = FastCell::of(p) else {
-            self.add_reference(p);
-            return;
-        };
-        let (lo, hi) = (f.min_angle_deg, f.max_angle_deg);
-        self.add_angles_common(lo, hi);
-        if f.cross.iter().any(|&x| x <= 0.0) {
-            self.fig.inverted += 1;
-        }
-        let m = &mut self.metrics;
-        {
-            // Corner angles: four samples; the extremes are the cell's (never 0 or NaN here).
-            let a = &mut m.angle_deg;
-            a.samples += 4;
-            extremes(a, lo);
-            extremes(a, hi);
-            for k in 0..4 {
-                let s = t.angle_key.get(f.keys[k]);
-                let b = if s == AMBIGUOUS {
-                    bin(&a.histogram.edges, f.angle_deg(k))
-                } else {
-                    (s & !OUTSIDE) as usize
-                };
-                a.histogram.counts[b] += 1;
-            }
-        }
-        let sk = skewness(lo, hi);
-        let s = exact_slot(&m.equiangle_skewness, &t.skewness, sk);
-        count(&mut m.equiangle_skewness, s);
-        extremes(&mut m.equiangle_skewness, sk);
-        let (sj, er, ar) = length_figures(&f.cross, &f.approx_len);
-        // The approximations' bins when all three are certain, else the exact figures.
-        let slots = approx_slot(&m.scaled_jacobian, &t.scaled_jacobian, sj).and_then(|a| {
-            let b = approx_slot(&m.edge_ratio, &t.edge_ratio, er)?;
-            let c = approx_slot(&m.aspect_ratio, &t.aspect_ratio, ar)?;
-            Some([a, b, c])
-        });
-        let (figures, slots, exact) = match slots {
-            Some(s) => ([sj, er, ar], s, false),
-            None => {
-                let (sj, er, ar) = length_figures(&f.cross, &exact_lengths(p));
-                let s = [
-                    exact_slot(&m.scaled_jacobian, &t.scaled_jacobian, sj),
-                    exact_slot(&m.edge_ratio, &t.edge_ratio, er),
-                    exact_slot(&m.aspect_ratio, &t.aspect_ratio, ar),
-                ];
-                ([sj, er, ar], s, true)
-            }
-        };
-        count(&mut m.scaled_jacobian, slots[0]);
-        count(&mut m.edge_ratio, slots[1]);
-        count(&mut m.aspect_ratio, slots[2]);
-        pending.push(Pending {
-            cell,
-            figures,
-            exact,
-        });
-    }
-}
-
-/// The partial results of one block (a malformed grid contributes no cell), counted into
-/// `metrics`. `pending` is scratch space.
-pub(super) fn block_stats(
-    grid: &BlockGrid,
-    t: &Tables,
-    pending: &mut Vec<Pending>,
-    metrics: QualityMetrics,
-) -> BlockStats {
-    let mut s = BlockStats::new(metrics);
-    if !super::well_formed(grid) {
-        s.fig.malformed = true;
-        return s;
-    }
-    pending.clear();
-    let w = grid.ni + 1;
-    let n = &grid.nodes;
-    let cell_corners_at = |c: usize| {
-        let (i, j) = (c % grid.ni, c / grid.ni);
-        let b = i + j * w;
-        [n[b], n[b + 1], n[b + 1 + w], n[b + w]]
-    };
-    for c in 0..grid.ni * grid.nj {
-        s.add_cell(&cell_corners_at(c), t, c, pending);
-    }
-    // Extremes of the length figures: the approximations within REL_TOL of the smallest or
-    // largest approximation are the only candidates; they are recomputed exactly.
-    let mut lo = [f64::INFINITY; 3];
-    let mut hi = [f64::NEG_INFINITY; 3];
-    for q in pending.iter() {
-        for k in 0..3 {
-            lo[k] = lo[k].min(q.figures[k]);
-            hi[k] = hi[k].max(q.figures[k]);
-        }
-    }
-    let near = |x: f64, e: f64| (x - e).abs() <= 2.0 * REL_TOL * e.abs();
-    for q in pending.iter() {
-        if !(0..3).any(|k| near(q.figures[k], lo[k]) || near(q.figures[k], hi[k])) {
-            continue;
-        }
-        let [sj, er, ar] = if q.exact {
-            q.figures
-        } else {
-            let p = cell_corners_at(q.cell);
-            let (cross, _) = corner_products(&p);
-            let (sj, er, ar) = length_figures(&cross, &exact_lengths(&p));
-            [sj, er, ar]
-        };
-        let m = &mut s.metrics;
-        extremes(&mut m.scaled_jacobian, sj);
-        extremes(&mut m.edge_ratio, er);
-        extremes(&mut m.aspect_ratio, ar);
-        s.min_sj(sj);
-    }
-    s
 }
 
 /// Per-cell figures of [`super::CellFields`] for one cell: (min angle, max angle, min
@@ -574,8 +375,29 @@ pub(super) fn cell_field_values(p: &[Point; 4]) -> [f64; 7] {
     ]
 }
 
-/// True when some corner Jacobian of the cell is `<= 0` or not a number.
-#[inline]
-pub(super) fn is_inverted(p: &[Point; 4]) -> bool {
-    corner_products(p).0.iter().any(|&x| x.is_nan() || x <= 0.0)
+/// The cells between node lines `lo` and `hi` (same length) with some corner Jacobian
+/// `<= 0` or not a number: the cross products of [`corner_products`], each edge taken as a
+/// difference of its two nodes in one direction and negated for the other corner. Negation
+/// changes at most the sign of a zero product, and `!(cross > 0)` holds for both zeros (and
+/// NaN), so the count is that of the reference test.
+pub(super) fn row_inverted(lo: &[Point], hi: &[Point]) -> usize {
+    let n = lo.len().min(hi.len()).saturating_sub(1);
+    let (lo, hi) = (&lo[..=n], &hi[..=n]);
+    let mut count = 0;
+    for i in 0..n {
+        // p0 -> p1, p3 -> p2, p0 -> p3, p1 -> p2.
+        let (hx, hy) = (lo[i + 1][0] - lo[i][0], lo[i + 1][1] - lo[i][1]);
+        let (ux, uy) = (hi[i + 1][0] - hi[i][0], hi[i + 1][1] - hi[i][1]);
+        let (vx, vy) = (hi[i][0] - lo[i][0], hi[i][1] - lo[i][1]);
+        let (wx, wy) = (hi[i + 1][0] - lo[i + 1][0], hi[i + 1][1] - lo[i + 1][1]);
+        let c = [
+            hx * vy - hy * vx,
+            wx * (-hy) - wy * (-hx),
+            (-ux) * (-wy) - (-uy) * (-wx),
+            (-vx) * uy - (-vy) * ux,
+        ];
+        let good = (c[0] > 0.0) & (c[1] > 0.0) & (c[2] > 0.0) & (c[3] > 0.0);
+        count += usize::from(!good);
+    }
+    count
 }

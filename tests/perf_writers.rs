@@ -1,0 +1,162 @@
+//! The hand-written `connectivity.json` writer and the shared connectivity of issue #8 against
+//! independent references:
+//! - `connectivity.json` is byte for byte serde_json's pretty printing of the same value (the
+//!   writer it replaced), on real meshes (walls, outer boundary, interfaces, periodic sides
+//!   with translations) and on synthetic blocks (odd floats, negative circles, a name that
+//!   needs escaping, more blocks than one wave of parallel formatting);
+//! - the report built from a shared connectivity equals the one that computes its own, and
+//!   `write_files_prepared` with the shared connectivity writes the same files as
+//!   `write_files`.
+
+use medial_blocks::connectivity::{
+    connectivity, BlockConnectivity, Cgns1to1, Partner, SideConnectivity, SideKind,
+};
+use medial_blocks::output::connectivity::{write_json, File, CONVENTIONS};
+use medial_blocks::output::report::Report;
+use medial_blocks::output::{write_files, write_files_prepared, Format};
+use medial_blocks::periodic::{mesh_periodic, PeriodicDomain};
+use medial_blocks::{layouts, mesh, Circle, Mesh, Mode, Options};
+
+/// What serde_json's pretty printer writes for `blocks` (plus the final newline).
+fn serde_bytes(blocks: &[BlockConnectivity]) -> Vec<u8> {
+    let mut v = serde_json::to_vec_pretty(&File {
+        conventions: CONVENTIONS,
+        blocks,
+    })
+    .unwrap();
+    v.push(b'\n');
+    v
+}
+
+fn written(blocks: &[BlockConnectivity]) -> Vec<u8> {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("connectivity.json");
+    write_json(blocks, &path).unwrap();
+    std::fs::read(&path).unwrap()
+}
+
+fn meshes() -> Vec<Mesh> {
+    let bubbles = layouts::bubbles(12, 3).unwrap();
+    let mut out = vec![
+        mesh(&layouts::hexagon(), &Options::default()).unwrap(),
+        mesh(
+            &bubbles,
+            &Options {
+                mode: Mode::Paper,
+                ..Options::default()
+            },
+        )
+        .unwrap(),
+        mesh(
+            &bubbles,
+            &Options {
+                cells: 4,
+                block_cells: Some(4),
+                ..Options::default()
+            },
+        )
+        .unwrap(),
+    ];
+    let pd = PeriodicDomain::new(
+        [2.0, 1.0],
+        vec![Circle::new(0.1, 0.1, 0.2), Circle::new(1.2, 0.6, 0.25)],
+    )
+    .unwrap();
+    out.push(mesh_periodic(&pd, &Options::default()).unwrap());
+    out
+}
+
+#[test]
+fn connectivity_json_is_serde_pretty_on_real_meshes() {
+    let mut periodic = false;
+    for m in meshes() {
+        let conn = connectivity(&m.layout, &m.grids).unwrap();
+        periodic |= conn
+            .iter()
+            .any(|b| b.sides.iter().any(|s| s.kind == SideKind::Periodic));
+        assert_eq!(written(&conn), serde_bytes(&conn));
+    }
+    assert!(periodic, "a periodic mesh with translations is covered");
+}
+
+/// Synthetic blocks: every optional field, odd floats and integers, an escaped name, and
+/// enough blocks for several waves of parallel formatting.
+#[test]
+fn connectivity_json_is_serde_pretty_on_synthetic_blocks() {
+    assert_eq!(written(&[]), serde_bytes(&[]));
+    let floats = [
+        0.0,
+        -0.0,
+        1e-7,
+        -2.5e-300,
+        1e16,
+        123456789.125,
+        f64::MAX,
+        f64::NAN,
+        f64::INFINITY,
+        0.1,
+    ];
+    let side = |k: usize| {
+        let i = k % floats.len();
+        SideConnectivity {
+            side: k % 4,
+            name: if k % 97 == 0 {
+                "odd \"name\"\n"
+            } else {
+                "j_min"
+            },
+            kind: [
+                SideKind::Wall,
+                SideKind::Outer,
+                SideKind::Interface,
+                SideKind::Periodic,
+            ][k % 4],
+            circle: (k % 3 == 0).then_some(-(k as i32) + 7),
+            partner: (k % 2 == 0).then_some(Partner {
+                block: k * 31,
+                side: k % 4,
+                same_direction: k % 5 == 0,
+            }),
+            cgns: (k % 5 != 1).then_some(Cgns1to1 {
+                point_range: [[k, 1], [usize::MAX, 0]],
+                point_range_donor: [[1, k + 10], [999, 1000]],
+                transform: [-(k as i32 % 3) - 1, 2],
+            }),
+            translation: (k % 4 == 3).then_some([floats[i], floats[(i + 3) % floats.len()]]),
+        }
+    };
+    let blocks: Vec<BlockConnectivity> = (0..9000)
+        .map(|b| BlockConnectivity {
+            block: b,
+            dims: [b % 17 + 2, b * 7 + 2],
+            sides: [
+                side(4 * b),
+                side(4 * b + 1),
+                side(4 * b + 2),
+                side(4 * b + 3),
+            ],
+        })
+        .collect();
+    assert_eq!(written(&blocks[..1]), serde_bytes(&blocks[..1]));
+    assert_eq!(written(&blocks), serde_bytes(&blocks));
+}
+
+/// The report from a shared connectivity is the report that computes its own, and the files
+/// written with it are those of `write_files`.
+#[test]
+fn shared_connectivity_gives_the_same_report_and_files() {
+    for m in meshes() {
+        let conn = connectivity(&m.layout, &m.grids).unwrap();
+        let r = Report::from_mesh_with(&m, Some(&conn));
+        assert_eq!(r, Report::from_mesh(&m));
+        let a = tempfile::tempdir().unwrap();
+        let b = tempfile::tempdir().unwrap();
+        write_files(&m, a.path(), &[Format::Json]).unwrap();
+        write_files_prepared(&m, b.path(), &[Format::Json], Some(&r), Some(&conn), |_| {}).unwrap();
+        for f in ["report.json", "connectivity.json"] {
+            let x = std::fs::read(a.path().join(f)).unwrap();
+            let y = std::fs::read(b.path().join(f)).unwrap();
+            assert!(x == y, "{f} differs");
+        }
+    }
+}
