@@ -41,9 +41,11 @@ pub mod imposed;
 pub mod inserted;
 pub mod metrics;
 pub mod periodic;
+pub mod piece_cache;
 pub mod smoothing;
 
 pub use clustering::{Clustering, FirstCell};
+pub use piece_cache::PieceCache;
 
 use crate::apollonius::{apollonius, Choice, Site};
 use crate::blocking::Blocking;
@@ -53,7 +55,8 @@ use crate::grid::{GridError, MAX_CELLS_PER_SIDE, MAX_TOTAL_NODES};
 use crate::layout::{Block, BlockLayout, Curve, Edge, EdgeKind, SideRef};
 use crate::mesh::BlockGrid;
 use crate::mesher::{MeshError, Options};
-use counts::{ArcTarget, CountProblem, Counts};
+use counts::{ArcTarget, CountProblem, Counts, Known};
+use piece_cache::{Entry, GeomKey};
 use rayon::prelude::*;
 use std::collections::HashMap;
 use std::f64::consts::{PI, TAU};
@@ -555,6 +558,17 @@ pub fn build(
 /// circle order). Edges: walls are exact [`Curve::Arc`]s, spokes [`Curve::Segment`]s, medial
 /// arcs [`Curve::Polyline`]s through the grid's medial nodes.
 pub fn assemble(sk: Skeleton<'_>, options: &Options) -> Result<ExactMesh, MeshError> {
+    assemble_cached(sk, options, &mut PieceCache::default())
+}
+
+/// [`assemble`], taking the densities and arc-node parameters of pieces an earlier build
+/// already computed from `cache` ([`piece_cache`]) and leaving this build's there: the same
+/// mesh as [`assemble`] whatever the cache holds.
+pub fn assemble_cached(
+    sk: Skeleton<'_>,
+    options: &Options,
+    cache: &mut PieceCache,
+) -> Result<ExactMesh, MeshError> {
     validate_options(options)?;
     let domain = sk.domain;
     let mut vertices = sk.vertices;
@@ -636,18 +650,35 @@ pub fn assemble(sk: Skeleton<'_>, options: &Options) -> Result<ExactMesh, MeshEr
         }
     }
 
-    // Sub-step densities per piece, in parallel, collected in piece order.
+    // Sub-step densities per piece, in parallel, collected in piece order; a piece whose
+    // geometry the cache knows holds only what was computed from them (its densities are
+    // computed later if a count or its nodes still need them).
+    let keys: Vec<GeomKey> = pieces.par_iter().map(|p| GeomKey::of(&p.geom)).collect();
     let targets: Vec<Option<ArcTarget>> = pieces
         .par_iter()
-        .map(|p| {
+        .zip(&keys)
+        .map(|(p, key)| {
+            if let Some(known) = cache.known(key) {
+                return Some(ArcTarget {
+                    circles: p.circles.map(cidx),
+                    sq: Vec::new(),
+                    ang: Vec::new(),
+                    known: Some(known),
+                });
+            }
             let (sq, ang) = p.geom.densities()?;
             Some(ArcTarget {
                 circles: p.circles.map(cidx),
                 sq,
                 ang,
+                known: None,
             })
         })
         .collect();
+    let reused = targets
+        .iter()
+        .filter(|t| t.as_ref().is_some_and(|t| !t.holds_densities()))
+        .count();
     let mut targets = targets
         .into_iter()
         .enumerate()
@@ -697,7 +728,7 @@ pub fn assemble(sk: Skeleton<'_>, options: &Options) -> Result<ExactMesh, MeshEr
             let first = cl.first_height(domain.circle(id).radius);
             circle_target[cidx(id)] = clustering::cells_for(len, h, first, cl.growth) as f64;
         }
-        let problem = CountProblem {
+        let mut problem = CountProblem {
             circle_target,
             circle_fixed: circle_fixed.clone(),
             // The templates' ties ([`inserted::tie_counts`]) pair the sides of every inserted
@@ -705,6 +736,33 @@ pub fn assemble(sk: Skeleton<'_>, options: &Options) -> Result<ExactMesh, MeshEr
             template: vec![false; ncirc],
             arcs: std::mem::take(arcs),
         };
+        if options.block_cells.is_none() {
+            // Size-driven counts need each arc's target for its `nbar`: compute the densities
+            // of the arcs whose target the cache does not know for it.
+            let circle = problem.circle_counts();
+            let nbar = |a: &ArcTarget| {
+                let n = |c: usize| circle.get(c).copied().unwrap_or(0);
+                0.5 * (n(a.circles[0]) + n(a.circles[1])) as f64
+            };
+            let need: Vec<usize> = (0..problem.arcs.len())
+                .filter(|&e| {
+                    problem.arcs[e]
+                        .known_target(nbar(&problem.arcs[e]))
+                        .is_none()
+                })
+                .collect();
+            let filled: Vec<Option<(Vec<f64>, Vec<f64>)>> = need
+                .par_iter()
+                .map(|&e| pieces[e].geom.densities())
+                .collect();
+            for (&e, d) in need.iter().zip(filled) {
+                let (sq, ang) = d.ok_or_else(|| {
+                    internal(format!("arc {e}: the exact medial arc is not defined"))
+                })?;
+                let t = &mut problem.arcs[e];
+                (t.sq, t.ang, t.known) = (sq, ang, None);
+            }
+        }
         let solved = crate::timings::span("node_counts", || match options.block_cells {
             Some(n) => problem.solve_uniform(n),
             None => problem.solve(),
@@ -896,8 +954,12 @@ pub fn assemble(sk: Skeleton<'_>, options: &Options) -> Result<ExactMesh, MeshEr
     // The sub-step densities (2 x ARC_SUBSTEPS f64 per arc, more than a 16 x 16 grid) are
     // moved into the tasks and freed as each piece turns them into its node parameters, so
     // they do not stay alive next to all the grids (issue 8: peak memory).
+    // A piece whose geometry, `nbar` and count the cache knows takes its node parameters
+    // from there; one whose densities were not computed computes them now.
     let arc_targets = targets;
-    type PieceGrids = Result<(Vec<Point>, [BlockGrid; 2]), MeshError>;
+    let uniform = options.block_cells.is_some();
+    let cache_ref = &*cache;
+    type PieceGrids = Result<(Vec<Point>, [BlockGrid; 2], Entry), MeshError>;
     let per_piece: Vec<PieceGrids> = pieces
         .par_iter()
         .zip(arc_targets.into_par_iter())
@@ -905,17 +967,45 @@ pub fn assemble(sk: Skeleton<'_>, options: &Options) -> Result<ExactMesh, MeshEr
         .map(|(e, (p, t))| {
             let g = &p.geom;
             let n = counts.arc[e];
-            let params = {
-                let nbar = 0.5
-                    * (counts.circle[cidx(p.circles[0])] + counts.circle[cidx(p.circles[1])])
-                        as f64;
-                let weights: Vec<f64> =
-                    t.sq.iter()
-                        .zip(&t.ang)
-                        .map(|(s, a)| (nbar * s).max(*a))
-                        .collect();
-                drop(t);
-                equidistribute(&weights, n)
+            let nbar = 0.5
+                * (counts.circle[cidx(p.circles[0])] + counts.circle[cidx(p.circles[1])]) as f64;
+            let cached = cache_ref.params(&keys[e], nbar, n).map(<[f64]>::to_vec);
+            let mut known = Known {
+                min_cells: t.min_cells(),
+                target: None,
+            };
+            let params = match cached {
+                Some(params) => {
+                    if !uniform {
+                        known.target = t.known_target(nbar).map(|x| (nbar, x));
+                    }
+                    params
+                }
+                None => {
+                    let t = if t.holds_densities() {
+                        t
+                    } else {
+                        let (sq, ang) = g.densities().ok_or_else(|| {
+                            internal(format!("arc {e}: the exact medial arc is not defined"))
+                        })?;
+                        ArcTarget {
+                            sq,
+                            ang,
+                            known: None,
+                            ..t
+                        }
+                    };
+                    if !uniform {
+                        known.target = Some((nbar, t.target(nbar)));
+                    }
+                    let weights: Vec<f64> =
+                        t.sq.iter()
+                            .zip(&t.ang)
+                            .map(|(s, a)| (nbar * s).max(*a))
+                            .collect();
+                    drop(t);
+                    equidistribute(&weights, n)
+                }
             };
             let mut m_nodes = Vec::with_capacity(n + 1);
             let mut a_nodes: [Vec<Point>; 2] =
@@ -962,15 +1052,22 @@ pub fn assemble(sk: Skeleton<'_>, options: &Options) -> Result<ExactMesh, MeshEr
                 BlockGrid { ni: n, nj, nodes }
             };
             let pair = [grid(0), grid(1)];
-            Ok((m_nodes, pair))
+            let entry = Entry {
+                known,
+                params: Some((nbar, n, params)),
+            };
+            Ok((m_nodes, pair, entry))
         })
         .collect();
     let mut grids = Vec::with_capacity(layout.blocks.len());
+    let mut entries = Vec::with_capacity(per_piece.len());
     for (e, r) in per_piece.into_iter().enumerate() {
-        let (m_nodes, pair) = r?;
+        let (m_nodes, pair, entry) = r?;
         layout.edges[medial_edges[e] as usize].curve = Curve::Polyline(m_nodes);
         grids.extend(pair);
+        entries.push((keys[e], entry));
     }
+    cache.replace(entries, reused);
     if options.smooth > 0 {
         // Each block smooths alone (its sides fixed): in parallel, same result for any pool.
         grids.par_iter_mut().for_each(|g| {
