@@ -567,7 +567,11 @@ fn exact_on_sampling(
             if !short.is_empty() {
                 fixes += 1;
                 match give_up(cb, options, &short, given_up) {
-                    Ok(()) => continue,
+                    Ok(()) => {
+                        // Rejected: its grids go back to the cache for the rebuild.
+                        cache.keep(m);
+                        continue;
+                    }
                     Err(MeshError::Internal(_)) => {}
                     Err(err) => return Err(err),
                 }
@@ -580,6 +584,7 @@ fn exact_on_sampling(
                 match timings::span("blocking", || cb.recollapse(options, &[], &force)) {
                     Ok(()) => {
                         around_merged = Some(around);
+                        cache.keep(m);
                         continue;
                     }
                     Err(MeshError::Internal(_)) => {
@@ -594,6 +599,7 @@ fn exact_on_sampling(
             return Ok(done(cb, m, holes));
         }
         let circles = circles_around(&m.layout, &bad, holes);
+        cache.keep(m);
         return Ok(Attempt::Retry((!circles.is_empty()).then_some(circles)));
     }
 }

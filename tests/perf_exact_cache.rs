@@ -91,11 +91,17 @@ fn rebuild_matches(d: &Domain, o: &Options, what: &str) -> usize {
     if first.is_err() {
         return 0;
     }
-    // The same skeleton again: every piece is reused.
+    // The same skeleton again: every piece is reused, grids included once handed back.
     let again = build(&cb, o, Some(&mut cache));
     assert_same(&again, &first, what);
     let pieces = first.as_ref().unwrap().counts.arc.len();
     assert_eq!(cache.reused(), pieces, "{what}: identical rebuild");
+    assert_eq!(cache.reused_grids(), 0, "{what}: no grids handed back");
+    cache.keep(again.unwrap());
+    let third = build(&cb, o, Some(&mut cache));
+    assert_same(&third, &first, what);
+    assert_eq!(cache.reused_grids(), pieces, "{what}: grids handed back");
+    cache.keep(third.unwrap());
     let short: Vec<u32> = cb
         .chosen
         .iter()
@@ -107,7 +113,8 @@ fn rebuild_matches(d: &Domain, o: &Options, what: &str) -> usize {
     }
     let cached = build(&cb, o, Some(&mut cache));
     assert_same(&cached, &build(&cb, o, None), &format!("{what} (given up)"));
-    cache.reused()
+    assert!(cache.reused_grids() <= cache.reused());
+    cache.reused_grids()
 }
 
 fn random_layout(seed: u64, h: usize, min_gap: f64) -> Domain {
@@ -191,11 +198,14 @@ fn the_memo_survives_a_resampling() {
         };
         let mut cache = PieceCache::default();
         let cb = collapsed_blocking_excluding(&d, &o, &exact_sampling(), false, &[]).unwrap();
-        let _ = build(&cb, &o, Some(&mut cache));
+        if let Ok(m) = build(&cb, &o, Some(&mut cache)) {
+            cache.keep(m);
+        }
         let mut finer = exact_sampling();
         finer.boost = vec![0, 2, 0, 2];
         let cb = collapsed_blocking_excluding(&d, &o, &finer, false, &[]).unwrap();
         let cached = build(&cb, &o, Some(&mut cache));
         assert_same(&cached, &build(&cb, &o, None), &format!("seed {seed}"));
+        assert!(cache.reused_grids() > 0, "seed {seed}");
     }
 }

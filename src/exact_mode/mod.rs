@@ -56,7 +56,7 @@ use crate::layout::{Block, BlockLayout, Curve, Edge, EdgeKind, SideRef};
 use crate::mesh::BlockGrid;
 use crate::mesher::{MeshError, Options};
 use counts::{ArcTarget, CountProblem, Counts, Known};
-use piece_cache::{Entry, GeomKey};
+use piece_cache::{Entry, GeomKey, GridKey, Payload};
 use rayon::prelude::*;
 use std::collections::HashMap;
 use std::f64::consts::{PI, TAU};
@@ -954,26 +954,55 @@ pub fn assemble_cached(
     // The sub-step densities (2 x ARC_SUBSTEPS f64 per arc, more than a 16 x 16 grid) are
     // moved into the tasks and freed as each piece turns them into its node parameters, so
     // they do not stay alive next to all the grids (issue 8: peak memory).
-    // A piece whose geometry, `nbar` and count the cache knows takes its node parameters
+    // A piece whose geometry, counts and clustering the cache holds grids for takes them
+    // (moved); else one whose geometry, `nbar` and count it knows takes its node parameters
     // from there; one whose densities were not computed computes them now.
     let arc_targets = targets;
     let uniform = options.block_cells.is_some();
+    let side_inputs = |p: &Piece, side: usize| {
+        let c = p.circles[side];
+        let cl = cluster(c);
+        let first = cl.first_height(domain.circle(c).radius);
+        (counts.circle[cidx(c)], first, cl.growth)
+    };
+    let grid_keys: Vec<GridKey> = pieces
+        .iter()
+        .enumerate()
+        .map(|(e, p)| {
+            let sides = [side_inputs(p, 0), side_inputs(p, 1)];
+            GridKey::of(counts.arc[e], sides, options.smooth)
+        })
+        .collect();
+    let reuse: Vec<Option<Payload>> = cache.take_grids(&keys, &grid_keys);
     let cache_ref = &*cache;
-    type PieceGrids = Result<(Vec<Point>, [BlockGrid; 2], Entry), MeshError>;
+    type PieceGrids = Result<(Vec<Point>, [BlockGrid; 2], Entry, bool), MeshError>;
     let per_piece: Vec<PieceGrids> = pieces
         .par_iter()
         .zip(arc_targets.into_par_iter())
+        .zip(reuse.into_par_iter())
         .enumerate()
-        .map(|(e, (p, t))| {
+        .map(|(e, ((p, t), reused))| {
             let g = &p.geom;
             let n = counts.arc[e];
             let nbar = 0.5
                 * (counts.circle[cidx(p.circles[0])] + counts.circle[cidx(p.circles[1])]) as f64;
-            let cached = cache_ref.params(&keys[e], nbar, n).map(<[f64]>::to_vec);
             let mut known = Known {
                 min_cells: t.min_cells(),
                 target: None,
             };
+            if let Some((m_nodes, pair)) = reused {
+                if !uniform {
+                    known.target = t.known_target(nbar).map(|x| (nbar, x));
+                }
+                let entry = Entry {
+                    known,
+                    params: None,
+                    grid_key: grid_keys[e],
+                    grids: None,
+                };
+                return Ok((m_nodes, pair, entry, true));
+            }
+            let cached = cache_ref.params(&keys[e], nbar, n).map(<[f64]>::to_vec);
             let params = match cached {
                 Some(params) => {
                     if !uniform {
@@ -1018,32 +1047,24 @@ pub fn assemble_cached(
                 a_nodes[0].push(a[0]);
                 a_nodes[1].push(a[1]);
             }
-            let [v0, v1] = p.ends;
             let grid = |side: usize| {
-                let c = p.circles[side];
-                let nj = counts.circle[cidx(c)];
-                let cl = cluster(c);
-                let first = cl.first_height(domain.circle(c).radius);
-                let (s0, s1) = slots(p, side);
-                let corner = |v: usize, s: usize| {
-                    spoke_nodes(
-                        vertices[v].tangent[s],
-                        vertices[v].center,
-                        nj,
-                        first,
-                        cl.growth,
-                    )
-                };
+                let (nj, first, growth) = side_inputs(p, side);
+                // The corner spokes run from the piece's exact ends: its end vertices' tangent
+                // points on this circle and centres (`ends_a`, `ends_m` are taken from them by
+                // the same slots), so every block at a vertex gets the same nodes and the
+                // cache key (the geometry) covers them.
+                let corner =
+                    |end: usize| spoke_nodes(g.ends_a[end][side], g.ends_m[end], nj, first, growth);
                 // Column i is arc node k = i (side 0) or n - i (side 1).
                 let mut nodes = vec![[0.0; 2]; (n + 1) * (nj + 1)];
                 for i in 0..=n {
                     let k = if side == 0 { i } else { n - i };
                     let col: Vec<Point> = if k == 0 {
-                        corner(v0, s0)
+                        corner(0)
                     } else if k == n {
-                        corner(v1, s1)
+                        corner(1)
                     } else {
-                        spoke_nodes(a_nodes[side][k], m_nodes[k], nj, first, cl.growth)
+                        spoke_nodes(a_nodes[side][k], m_nodes[k], nj, first, growth)
                     };
                     for (j, q) in col.into_iter().enumerate() {
                         nodes[i + j * (n + 1)] = q;
@@ -1055,24 +1076,31 @@ pub fn assemble_cached(
             let entry = Entry {
                 known,
                 params: Some((nbar, n, params)),
+                grid_key: grid_keys[e],
+                grids: None,
             };
-            Ok((m_nodes, pair, entry))
+            Ok((m_nodes, pair, entry, false))
         })
         .collect();
     let mut grids = Vec::with_capacity(layout.blocks.len());
     let mut entries = Vec::with_capacity(per_piece.len());
+    let mut smoothed = Vec::with_capacity(per_piece.len());
     for (e, r) in per_piece.into_iter().enumerate() {
-        let (m_nodes, pair, entry) = r?;
+        let (m_nodes, pair, entry, done) = r?;
         layout.edges[medial_edges[e] as usize].curve = Curve::Polyline(m_nodes);
         grids.extend(pair);
-        entries.push((keys[e], entry));
+        entries.push(entry);
+        smoothed.push(done);
     }
-    cache.replace(entries, reused);
+    cache.replace(keys, entries, medial_edges.clone(), reused);
     if options.smooth > 0 {
         // Each block smooths alone (its sides fixed): in parallel, same result for any pool.
-        grids.par_iter_mut().for_each(|g| {
-            let rows = smoothing::boundary_layer_rows(g);
-            smoothing::winslow(g, options.smooth, rows);
+        // Grids taken from the cache were smoothed by the build that made them.
+        grids.par_iter_mut().enumerate().for_each(|(b, g)| {
+            if !smoothed[b / 2] {
+                let rows = smoothing::boundary_layer_rows(g);
+                smoothing::winslow(g, options.smooth, rows);
+            }
         });
     }
     if template_blocks > 0 {

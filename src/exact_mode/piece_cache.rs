@@ -10,12 +10,22 @@
 //! parameters it computed, and the next build takes them instead of recomputing: the same
 //! values bit for bit, so the mesh does not change.
 //!
-//! Only the latest build's entries are kept (tens of bytes per piece besides the key, not the
-//! densities). Entries are written in piece order and read by key, so nothing depends on the
-//! thread count.
+//! A piece's two block grids and medial nodes depend on its geometry, its counts (`n` and the
+//! wall-normal count of each side), the clustering of each side and the smoothing sweeps
+//! ([`GridKey`] with the geometry; its corner spokes are its geometry's ends). When the build
+//! is rejected (inverted or poor blocks), the mesher hands its grids back ([`PieceCache::keep`])
+//! and the next build moves those of its unchanged pieces into its own mesh: no copy, and the
+//! grids not reused are freed before the new ones are made (peak memory unchanged).
+//!
+//! Only the latest build's entries are kept (a few hundred bytes per piece besides the grids
+//! handed back, not the densities). Entries are written in piece order and read by key, so
+//! nothing depends on the thread count.
 
 use super::counts::Known;
-use super::ArcGeometry;
+use super::{ArcGeometry, ExactMesh};
+use crate::geometry::Point;
+use crate::layout::Curve;
+use crate::mesh::BlockGrid;
 use std::collections::HashMap;
 
 /// Number of `u64` words in a [`GeomKey`].
@@ -57,44 +67,161 @@ impl GeomKey {
     }
 }
 
+/// Besides the geometry, everything a piece's grids depend on: `n`, the wall-normal count, first
+/// height (flag and bits) and growth of each side, and the smoothing sweeps.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub(crate) struct GridKey([u64; 10]);
+
+impl GridKey {
+    /// `sides[k] = (nj, first height, growth)` of the block on `circles[k]`.
+    pub(crate) fn of(n: usize, sides: [(usize, Option<f64>, f64); 2], smooth: usize) -> GridKey {
+        let mut w = [0u64; 10];
+        w[0] = n as u64;
+        for (k, (nj, first, growth)) in sides.into_iter().enumerate() {
+            w[1 + 4 * k] = nj as u64;
+            w[2 + 4 * k] = u64::from(first.is_some());
+            w[3 + 4 * k] = first.map_or(0, f64::to_bits);
+            w[4 + 4 * k] = growth.to_bits();
+        }
+        w[9] = smooth as u64;
+        GridKey(w)
+    }
+}
+
+/// A piece's medial nodes and its two block grids (smoothed when asked).
+pub(crate) type Payload = (Vec<Point>, [BlockGrid; 2]);
+
 /// What one build computed for one piece geometry.
 #[derive(Debug, Clone, PartialEq)]
 pub(crate) struct Entry {
     /// The densities' lower bound and (size-driven counts only) the target for one `nbar`.
     pub(crate) known: Known,
-    /// `(nbar, n, parameters)`: the `n + 1` arc-node parameters for that `nbar` and count.
+    /// `(nbar, n, parameters)`: the `n + 1` arc-node parameters for that `nbar` and count
+    /// (dropped once the grids are handed back).
     pub(crate) params: Option<(f64, usize, Vec<f64>)>,
+    /// The grid inputs besides the geometry, and the grids once handed back.
+    pub(crate) grid_key: GridKey,
+    pub(crate) grids: Option<Box<Payload>>,
 }
 
 /// The memo (see the module docs). `PieceCache::default()` is empty: a build with it computes
 /// everything, as without a memo.
 #[derive(Debug, Default)]
 pub struct PieceCache {
-    entries: HashMap<GeomKey, Entry>,
-    /// Pieces of the latest build whose densities were not computed.
+    /// The latest build's pieces, in piece order: geometry key and entry.
+    pieces: Vec<(GeomKey, Entry)>,
+    /// Their medial edges in the latest build's layout, while its grids may be handed back.
+    medial_edges: Vec<u32>,
+    /// Hash of a geometry key -> the last piece with that hash; lookups compare the full key,
+    /// so a hash collision is a miss, never a wrong entry.
+    index: HashMap<u64, u32>,
+    /// Pieces of the latest build whose densities were not computed / whose grids were moved
+    /// from the memo.
     reused: usize,
+    reused_grids: usize,
+}
+
+fn hash_of(key: &GeomKey) -> u64 {
+    use std::hash::{Hash, Hasher};
+    let mut h = std::collections::hash_map::DefaultHasher::new();
+    key.hash(&mut h);
+    h.finish()
 }
 
 impl PieceCache {
+    fn find(&self, key: &GeomKey) -> Option<usize> {
+        let i = *self.index.get(&hash_of(key))? as usize;
+        (self.pieces.get(i)?.0 == *key).then_some(i)
+    }
+
     /// What an earlier build knew of geometry `key`'s densities.
     pub(crate) fn known(&self, key: &GeomKey) -> Option<Known> {
-        self.entries.get(key).map(|e| e.known)
+        self.find(key).map(|i| self.pieces[i].1.known)
     }
 
     /// The arc-node parameters an earlier build drew for geometry `key`, `nbar` and count `n`.
     pub(crate) fn params(&self, key: &GeomKey, nbar: f64, n: usize) -> Option<&[f64]> {
-        match self.entries.get(key)?.params.as_ref()? {
+        match self.pieces[self.find(key)?].1.params.as_ref()? {
             (nb, m, p) if nb.to_bits() == nbar.to_bits() && *m == n => Some(p),
             _ => None,
         }
     }
 
-    /// Replace the entries by those of the build that just finished (`reused` of its pieces
-    /// computed no densities). A key met twice keeps its last entry.
-    pub(crate) fn replace(&mut self, entries: Vec<(GeomKey, Entry)>, reused: usize) {
-        self.entries.clear();
-        self.entries.extend(entries);
+    /// The grids handed back for piece `e` of a new build (geometry `keys[e]`, other inputs
+    /// `grid_keys[e]`), moved out of the memo; then every grid not taken is freed.
+    pub(crate) fn take_grids(
+        &mut self,
+        keys: &[GeomKey],
+        grid_keys: &[GridKey],
+    ) -> Vec<Option<Payload>> {
+        let out: Vec<Option<Payload>> = keys
+            .iter()
+            .zip(grid_keys)
+            .map(|(k, gk)| {
+                let i = self.find(k)?;
+                let e = &mut self.pieces[i].1;
+                if e.grid_key != *gk {
+                    return None;
+                }
+                e.grids.take().map(|b| *b)
+            })
+            .collect();
+        for (_, e) in &mut self.pieces {
+            e.grids = None;
+        }
+        self.reused_grids = out.iter().filter(|x| x.is_some()).count();
+        out
+    }
+
+    /// Replace the entries by those of the build that just finished (pieces `keys`, medial
+    /// edges `medial_edges`, `reused` of them computed no densities). A key met twice is
+    /// found at its last piece.
+    pub(crate) fn replace(
+        &mut self,
+        keys: Vec<GeomKey>,
+        entries: Vec<Entry>,
+        medial_edges: Vec<u32>,
+        reused: usize,
+    ) {
+        self.index.clear();
+        self.index
+            .extend(keys.iter().enumerate().map(|(i, k)| (hash_of(k), i as u32)));
+        self.pieces = keys.into_iter().zip(entries).collect();
+        self.medial_edges = medial_edges;
         self.reused = reused;
+    }
+
+    /// Hand back the grids of `mesh`, which must be what the latest build with this memo
+    /// returned (the mesher rejected it and builds again): the next build moves those of its
+    /// unchanged pieces instead of computing them. A mesh whose pieces do not match the
+    /// latest build's counts is ignored.
+    pub fn keep(&mut self, mesh: ExactMesh) {
+        let medial_edges = std::mem::take(&mut self.medial_edges);
+        let ExactMesh {
+            mut layout, grids, ..
+        } = mesh;
+        if grids.len() < 2 * self.pieces.len() || medial_edges.len() != self.pieces.len() {
+            return;
+        }
+        let mut it = grids.into_iter();
+        for ((_, entry), &edge) in self.pieces.iter_mut().zip(&medial_edges) {
+            let (Some(g0), Some(g1)) = (it.next(), it.next()) else {
+                return;
+            };
+            let w = entry.grid_key.0;
+            let fits = (g0.ni, g0.nj, g1.ni, g1.nj)
+                == (w[0] as usize, w[1] as usize, w[0] as usize, w[5] as usize);
+            let nodes = match layout.edges.get_mut(edge as usize) {
+                Some(e) => match std::mem::replace(&mut e.curve, Curve::Segment) {
+                    Curve::Polyline(v) if fits && v.len() == g0.ni + 1 => v,
+                    _ => continue,
+                },
+                None => continue,
+            };
+            // The grids supersede the node parameters (drawn for the same counts).
+            entry.params = None;
+            entry.grids = Some(Box::new((nodes, [g0, g1])));
+        }
     }
 
     /// How many pieces the latest build took from the memo without computing their densities
@@ -103,13 +230,18 @@ impl PieceCache {
         self.reused
     }
 
-    /// Number of piece geometries held.
+    /// How many pieces the latest build moved their grids from the memo.
+    pub fn reused_grids(&self) -> usize {
+        self.reused_grids
+    }
+
+    /// Number of pieces held.
     pub fn len(&self) -> usize {
-        self.entries.len()
+        self.pieces.len()
     }
 
     /// True when nothing is held.
     pub fn is_empty(&self) -> bool {
-        self.entries.is_empty()
+        self.pieces.is_empty()
     }
 }
