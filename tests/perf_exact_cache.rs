@@ -209,3 +209,70 @@ fn the_memo_survives_a_resampling() {
         assert!(cache.reused_grids() > 0, "seed {seed}");
     }
 }
+
+/// The tiny holes of `reliability_inserted::tiny_holes_do_not_explode_the_node_count`: the
+/// default target size is coarsened, so the counts are solved for several `nbar`.
+fn tiny_holes() -> Domain {
+    Domain::from_json_str(r#"{"bounding":{"center":[-400.0817856577331,33.87822533056584],"radius":1.0},"holes":[{"center":[-400.08312479371654,33.44838334890991],"radius":0.0990630459071938},{"center":[-399.7947884873536,34.381635245660654],"radius":0.10418356028060242},{"center":[-400.34032909914225,34.13765904541643],"radius":0.15484414181549747},{"center":[-400.0938468361977,33.637360311276765],"radius":0.08959851009587018},{"center":[-400.07449930958086,33.975518636641894],"radius":0.15651953635017232},{"center":[-400.20025144500437,34.06995272688713],"radius":0.00005517186456721176},{"center":[-400.2002104163847,34.070164390528866],"radius":0.00009968364075799228},{"center":[-400.21574421724756,34.04455227047863],"radius":0.00006730713755663978}]}"#).unwrap()
+}
+
+/// The summaries a first build keeps instead of the densities (lower bound, target and node
+/// parameters for the predicted counts, densities computed again where the final counts
+/// differ) give the mesh of the reference path, which holds every piece's densities and
+/// draws the nodes from them.
+#[test]
+fn summaries_equal_the_reference_densities() {
+    let mut domains: Vec<(String, Domain)> = vec![
+        ("lattice".into(), layouts::lattice().unwrap()),
+        (
+            "square lattice 16".into(),
+            layouts::square_lattice(16).unwrap(),
+        ),
+        ("tiny holes".into(), tiny_holes()),
+    ];
+    for seed in 5..=8u64 {
+        domains.push((
+            format!("bubbles 50 seed {seed}"),
+            layouts::bubbles(50, seed).unwrap(),
+        ));
+    }
+    for seed in [7u64, 14924378680947049249] {
+        domains.push((format!("poor seed {seed}"), random_layout(seed, 12, 0.003)));
+    }
+    let mut sets = option_sets();
+    sets.push((
+        "block-cells 16",
+        Options {
+            block_cells: Some(16),
+            ..Options::default()
+        },
+    ));
+    sets.push(("defaults", Options::default()));
+    sets.push((
+        "wall cells, relative first height",
+        Options {
+            wall_cells: vec![(0, 7), (-1, 3)],
+            clustering: medial_blocks::exact_mode::Clustering {
+                first: Some(medial_blocks::exact_mode::FirstCell::Relative(0.01)),
+                growth: 1.15,
+            },
+            ..Options::default()
+        },
+    ));
+    for (name, d) in &domains {
+        for (oname, o) in &sets {
+            // The coarsened tiny-hole meshes have millions of nodes with small cell counts.
+            if name == "tiny holes" && o.cells < 16 && o.block_cells.is_none() {
+                continue;
+            }
+            let what = format!("{name}, {oname}");
+            let Ok(cb) = collapsed_blocking_excluding(d, o, &exact_sampling(), false, &[]) else {
+                continue;
+            };
+            let s = single(&cb);
+            let reference = build_collapsed_cached(&cb, o, &s, &mut PieceCache::reference())
+                .map_err(|e| e.to_string());
+            assert_same(&build(&cb, o, None), &reference, &what);
+        }
+    }
+}

@@ -131,6 +131,18 @@ fn round_count(x: f64) -> usize {
     }
 }
 
+/// An arc's count before the parity repair: its rounded target `t` raised to its lower bound
+/// `lb` ([`CountProblem::solve`]).
+pub fn arc_count(t: f64, lb: usize) -> usize {
+    round_count(t).max(lb)
+}
+
+/// An arc's count with a fixed grid of `n` per block before the parity repair
+/// ([`CountProblem::solve_uniform`]).
+pub fn uniform_arc_count(n: usize, lb: usize) -> usize {
+    n.clamp(1, super::super::grid::MAX_CELLS_PER_SIDE).max(lb)
+}
+
 fn term(n: usize, t: f64) -> f64 {
     let t = t.max(1e-9);
     (n as f64 - t).powi(2) / t
@@ -170,7 +182,7 @@ impl CountProblem {
             let lb = a.min_cells();
             targets.push(t);
             lower.push(lb);
-            arc.push(round_count(t).max(lb));
+            arc.push(arc_count(t, lb));
         }
         self.repair_parity(&mut arc, &targets, &lower)?;
         Ok(Counts { circle, arc })
@@ -192,7 +204,7 @@ impl CountProblem {
             }
             let lb = a.min_cells();
             lower.push(lb);
-            arc.push(n.max(lb));
+            arc.push(uniform_arc_count(n, lb));
         }
         let targets: Vec<f64> = arc.iter().map(|&k| k as f64).collect();
         self.repair_parity(&mut arc, &targets, &lower)?;

@@ -56,7 +56,7 @@ use crate::layout::{Block, BlockLayout, Curve, Edge, EdgeKind, SideRef};
 use crate::mesh::BlockGrid;
 use crate::mesher::{MeshError, Options};
 use counts::{ArcTarget, CountProblem, Counts, Known};
-use piece_cache::{Entry, GeomKey, GridKey, Payload};
+use piece_cache::{Entry, GeomKey, GridKey, Params, Payload};
 use rayon::prelude::*;
 use std::collections::HashMap;
 use std::f64::consts::{PI, TAU};
@@ -312,15 +312,21 @@ impl ArcGeometry {
 
     /// Sub-step densities for the count problem: `(sq, ang)` per sub-step.
     fn densities(&self) -> Option<(Vec<f64>, Vec<f64>)> {
+        let mut sq = Vec::with_capacity(ARC_SUBSTEPS);
+        let mut ang = Vec::with_capacity(ARC_SUBSTEPS);
+        self.densities_into(&mut sq, &mut ang)?;
+        Some((sq, ang))
+    }
+
+    /// [`ArcGeometry::densities`] into `sq` and `ang` (cleared first), point by point (no
+    /// buffer of the `ARC_SUBSTEPS + 1` points). `None` when a point is not defined.
+    fn densities_into(&self, sq: &mut Vec<f64>, ang: &mut Vec<f64>) -> Option<()> {
         let k = ARC_SUBSTEPS;
-        let pts: Option<Vec<(Point, [Point; 2], f64)>> =
-            (0..=k).map(|s| self.at(s as f64 / k as f64)).collect();
-        let pts = pts?;
-        let mut sq = Vec::with_capacity(k);
-        let mut ang = Vec::with_capacity(k);
-        for w in pts.windows(2) {
-            let (m0, a0, r0) = w[0];
-            let (m1, a1, r1) = w[1];
+        sq.clear();
+        ang.clear();
+        let (mut m0, mut a0, mut r0) = self.at(0.0)?;
+        for s in 1..=k {
+            let (m1, a1, r1) = self.at(s as f64 / k as f64)?;
             let ds =
                 0.5 * (dist(mid(m0, a0[0]), mid(m1, a1[0])) + dist(mid(m0, a0[1]), mid(m1, a1[1])));
             let rho = 0.5 * (r0 + r1);
@@ -328,8 +334,9 @@ impl ArcGeometry {
             let t0 = turn(self.walls[0].c, a0[0], a1[0]).abs();
             let t1 = turn(self.walls[1].c, a0[1], a1[1]).abs();
             ang.push(t0.max(t1) / MAX_WALL_ANGLE);
+            (m0, a0, r0) = (m1, a1, r1);
         }
-        Some((sq, ang))
+        Some(())
     }
 }
 
@@ -454,6 +461,37 @@ fn equidistribute(w: &[f64], n: usize) -> Vec<f64> {
     }
     t.push(1.0);
     t
+}
+
+/// A piece's densities reduced to what its counts and nodes need: the lower bound and the
+/// target for `nbar` ([`Known`]), and the node parameters `(nbar, n, params)` for the count `n`
+/// it gets before template ties (`uniform`: a fixed grid of that many cells per block, else
+/// the size-driven count). The same values, bit for bit, as from the densities later.
+/// `scratch` holds the densities and weights (reused from piece to piece: only the parameters
+/// stay allocated, so the heap does not fragment between them).
+fn summarize(
+    g: &ArcGeometry,
+    nbar: f64,
+    uniform: Option<usize>,
+    scratch: &mut ArcTarget,
+) -> Option<(Known, Params)> {
+    scratch.known = None;
+    g.densities_into(&mut scratch.sq, &mut scratch.ang)?;
+    let lb = scratch.min_cells();
+    let target = scratch.target(nbar);
+    let n = match uniform {
+        Some(n) => counts::uniform_arc_count(n, lb),
+        None => counts::arc_count(target, lb),
+    };
+    // The weights replace `sq` in place (the same values as collected into a new vector).
+    for (s, a) in scratch.sq.iter_mut().zip(&scratch.ang) {
+        *s = (nbar * *s).max(*a);
+    }
+    let known = Known {
+        min_cells: lb,
+        target: Some((nbar, target)),
+    };
+    Some((known, (nbar, n, equidistribute(&scratch.sq, n))))
 }
 
 /// What exact mode built, beyond the mesh.
@@ -650,43 +688,6 @@ pub fn assemble_cached(
         }
     }
 
-    // Sub-step densities per piece, in parallel, collected in piece order; a piece whose
-    // geometry the cache knows holds only what was computed from them (its densities are
-    // computed later if a count or its nodes still need them).
-    let keys: Vec<GeomKey> = pieces.par_iter().map(|p| GeomKey::of(&p.geom)).collect();
-    let targets: Vec<Option<ArcTarget>> = pieces
-        .par_iter()
-        .zip(&keys)
-        .map(|(p, key)| {
-            if let Some(known) = cache.known(key) {
-                return Some(ArcTarget {
-                    circles: p.circles.map(cidx),
-                    sq: Vec::new(),
-                    ang: Vec::new(),
-                    known: Some(known),
-                });
-            }
-            let (sq, ang) = p.geom.densities()?;
-            Some(ArcTarget {
-                circles: p.circles.map(cidx),
-                sq,
-                ang,
-                known: None,
-            })
-        })
-        .collect();
-    let reused = targets
-        .iter()
-        .filter(|t| t.as_ref().is_some_and(|t| !t.holds_densities()))
-        .count();
-    let mut targets = targets
-        .into_iter()
-        .enumerate()
-        .map(|(e, t)| {
-            t.ok_or_else(|| internal(format!("arc {e}: the exact medial arc is not defined")))
-        })
-        .collect::<Result<Vec<_>, _>>()?;
-
     // Target size and the count problem.
     let radii: Vec<f64> = vertices.iter().map(|v| v.radius).collect();
     let radii_max = radii
@@ -717,10 +718,8 @@ pub fn assemble_cached(
             circle_fixed[cidx(*c)] = Some(*n);
         }
     }
-    // The node counts for target cell size `h`.
-    // The arc targets are lent to each count problem and given back (no copy: they hold
-    // 2 x ARC_SUBSTEPS f64 per arc).
-    let solve_counts = |h: f64, arcs: &mut Vec<ArcTarget>| -> Result<Counts, MeshError> {
+    // The count problem for target cell size `h`, without its arcs.
+    let circle_problem = |h: f64| {
         let mut circle_target = vec![1.0; ncirc];
         for id in domain.circle_ids() {
             let len = near_median[cidx(id)].unwrap_or(h);
@@ -728,13 +727,96 @@ pub fn assemble_cached(
             let first = cl.first_height(domain.circle(id).radius);
             circle_target[cidx(id)] = clustering::cells_for(len, h, first, cl.growth) as f64;
         }
-        let mut problem = CountProblem {
+        CountProblem {
             circle_target,
             circle_fixed: circle_fixed.clone(),
             // The templates' ties ([`inserted::tie_counts`]) pair the sides of every inserted
             // hole, which makes its perimeter even without the parity repair.
             template: vec![false; ncirc],
+            arcs: Vec::new(),
+        }
+    };
+
+    // Sub-step densities per piece, in parallel, collected in piece order. Each piece keeps
+    // only what the counts and its nodes need (issue 8: the densities of all pieces at once
+    // were 4 KB per piece): its lower bound, its target for the `nbar` its circles' counts
+    // give, and the node parameters for that `nbar` and the count it would get before the
+    // template ties. Where the final `nbar` or count differ (ties, imposed counts,
+    // coarsening), the densities are computed again. A piece whose geometry the cache
+    // knows takes that from the cache instead.
+    let uniform_n = options
+        .block_cells
+        .map(|n| n.clamp(1, crate::grid::MAX_CELLS_PER_SIDE));
+    let first_circle = match uniform_n {
+        Some(n) => vec![n; ncirc],
+        None => circle_problem(h).circle_counts(),
+    };
+    let keys: Vec<GeomKey> = pieces.par_iter().map(|p| GeomKey::of(&p.geom)).collect();
+    type Summary = (ArcTarget, Option<Params>);
+    let scratch = || ArcTarget {
+        circles: [0, 0],
+        sq: Vec::with_capacity(ARC_SUBSTEPS),
+        ang: Vec::with_capacity(ARC_SUBSTEPS),
+        known: None,
+    };
+    let summaries: Vec<Option<Summary>> = pieces
+        .par_iter()
+        .zip(&keys)
+        .map_init(scratch, |scratch, (p, key)| {
+            let circles = p.circles.map(cidx);
+            if let Some(known) = cache.known(key) {
+                let t = ArcTarget {
+                    circles,
+                    sq: Vec::new(),
+                    ang: Vec::new(),
+                    known: Some(known),
+                };
+                return Some((t, None));
+            }
+            if cache.is_reference() {
+                let (sq, ang) = p.geom.densities()?;
+                let t = ArcTarget {
+                    circles,
+                    sq,
+                    ang,
+                    known: None,
+                };
+                return Some((t, None));
+            }
+            let nbar = 0.5 * (first_circle[circles[0]] + first_circle[circles[1]]) as f64;
+            let (known, params) = summarize(&p.geom, nbar, uniform_n, scratch)?;
+            let t = ArcTarget {
+                circles,
+                sq: Vec::new(),
+                ang: Vec::new(),
+                known: Some(known),
+            };
+            Some((t, Some(params)))
+        })
+        .collect();
+    let reused = summaries
+        .iter()
+        .filter(|s| {
+            s.as_ref()
+                .is_some_and(|s| s.1.is_none() && !s.0.holds_densities())
+        })
+        .count();
+    let mut targets = Vec::with_capacity(pieces.len());
+    let mut first_params = Vec::with_capacity(pieces.len());
+    for (e, s) in summaries.into_iter().enumerate() {
+        let (t, params) =
+            s.ok_or_else(|| internal(format!("arc {e}: the exact medial arc is not defined")))?;
+        targets.push(t);
+        first_params.push(params);
+    }
+
+    // The node counts for target cell size `h`.
+    // The arc targets are lent to each count problem and given back (no copy: an arc whose
+    // densities had to be computed again holds 2 x ARC_SUBSTEPS f64).
+    let solve_counts = |h: f64, arcs: &mut Vec<ArcTarget>| -> Result<Counts, MeshError> {
+        let mut problem = CountProblem {
             arcs: std::mem::take(arcs),
+            ..circle_problem(h)
         };
         if options.block_cells.is_none() {
             // Size-driven counts need each arc's target for its `nbar`: compute the densities
@@ -951,12 +1033,10 @@ pub fn assemble_cached(
     // piece's corner spokes are computed by each piece that uses them, from the same inputs
     // (vertex `v`'s tangent point `s` determines the circle, hence the count and clustering),
     // so the blocks sharing a spoke hold bitwise identical nodes whatever the thread count.
-    // The sub-step densities (2 x ARC_SUBSTEPS f64 per arc, more than a 16 x 16 grid) are
-    // moved into the tasks and freed as each piece turns them into its node parameters, so
-    // they do not stay alive next to all the grids (issue 8: peak memory).
     // A piece whose geometry, counts and clustering the cache holds grids for takes them
-    // (moved); else one whose geometry, `nbar` and count it knows takes its node parameters
-    // from there; one whose densities were not computed computes them now.
+    // (moved); else it takes its node parameters from its summary or the cache when drawn
+    // for its final `nbar` and count; else it computes its densities again (held only by
+    // that task, 2 x ARC_SUBSTEPS f64, freed once turned into parameters).
     let arc_targets = targets;
     let uniform = options.block_cells.is_some();
     let side_inputs = |p: &Piece, side: usize| {
@@ -980,8 +1060,9 @@ pub fn assemble_cached(
         .par_iter()
         .zip(arc_targets.into_par_iter())
         .zip(reuse.into_par_iter())
+        .zip(first_params.into_par_iter())
         .enumerate()
-        .map(|(e, ((p, t), reused))| {
+        .map(|(e, (((p, t), reused), first))| {
             let g = &p.geom;
             let n = counts.arc[e];
             let nbar = 0.5
@@ -1002,7 +1083,10 @@ pub fn assemble_cached(
                 };
                 return Ok((m_nodes, pair, entry, true));
             }
-            let cached = cache_ref.params(&keys[e], nbar, n).map(<[f64]>::to_vec);
+            let cached = match first {
+                Some((nb, m, params)) if nb.to_bits() == nbar.to_bits() && m == n => Some(params),
+                _ => cache_ref.params(&keys[e], nbar, n).map(<[f64]>::to_vec),
+            };
             let params = match cached {
                 Some(params) => {
                     if !uniform {

@@ -88,6 +88,9 @@ impl GridKey {
     }
 }
 
+/// `(nbar, n, parameters)`: a piece's `n + 1` arc-node parameters for that `nbar` and count.
+pub(crate) type Params = (f64, usize, Vec<f64>);
+
 /// A piece's medial nodes and its two block grids (smoothed when asked).
 pub(crate) type Payload = (Vec<Point>, [BlockGrid; 2]);
 
@@ -98,7 +101,7 @@ pub(crate) struct Entry {
     pub(crate) known: Known,
     /// `(nbar, n, parameters)`: the `n + 1` arc-node parameters for that `nbar` and count
     /// (dropped once the grids are handed back).
-    pub(crate) params: Option<(f64, usize, Vec<f64>)>,
+    pub(crate) params: Option<Params>,
     /// The grid inputs besides the geometry, and the grids once handed back.
     pub(crate) grid_key: GridKey,
     pub(crate) grids: Option<Box<Payload>>,
@@ -119,6 +122,8 @@ pub struct PieceCache {
     /// from the memo.
     reused: usize,
     reused_grids: usize,
+    /// The reference path for tests ([`PieceCache::reference`]).
+    reference: bool,
 }
 
 fn hash_of(key: &GeomKey) -> u64 {
@@ -129,7 +134,26 @@ fn hash_of(key: &GeomKey) -> u64 {
 }
 
 impl PieceCache {
+    /// A memo that is never read and makes the build compute every piece's densities up
+    /// front and draw its nodes from them, as exact mode did before the memo and the
+    /// summaries: the oracle the fast paths are tested against (same mesh, bit for bit).
+    #[doc(hidden)]
+    pub fn reference() -> PieceCache {
+        PieceCache {
+            reference: true,
+            ..PieceCache::default()
+        }
+    }
+
+    /// True for [`PieceCache::reference`].
+    pub(crate) fn is_reference(&self) -> bool {
+        self.reference
+    }
+
     fn find(&self, key: &GeomKey) -> Option<usize> {
+        if self.reference {
+            return None;
+        }
         let i = *self.index.get(&hash_of(key))? as usize;
         (self.pieces.get(i)?.0 == *key).then_some(i)
     }
