@@ -147,11 +147,37 @@ fn mid(a: Point, b: Point) -> Point {
     [0.5 * (a[0] + b[0]), 0.5 * (a[1] + b[1])]
 }
 
-/// The angle from `a - c` to `b - c`, in `(-pi, pi]`.
+/// The angle from `a - c` to `b - c`, in `(-pi, pi]` (the densities use [`larger_turn`]).
+#[cfg(test)]
 fn turn(c: Point, a: Point, b: Point) -> f64 {
+    let (cross, dot) = turn_parts(c, a, b);
+    cross.atan2(dot)
+}
+
+/// `(cross, dot)` of `a - c` and `b - c`: [`turn`] is `cross.atan2(dot)`.
+fn turn_parts(c: Point, a: Point, b: Point) -> (f64, f64) {
     let u = [a[0] - c[0], a[1] - c[1]];
     let v = [b[0] - c[0], b[1] - c[1]];
-    (u[0] * v[1] - u[1] * v[0]).atan2(u[0] * v[0] + u[1] * v[1])
+    (u[0] * v[1] - u[1] * v[0], u[0] * v[0] + u[1] * v[1])
+}
+
+/// `max(|atan2(c0, d0)|, |atan2(c1, d1)|)`, bit for bit, with one `atan2` when the larger
+/// angle is clear: both below 90 degrees (`d > 0`) and `tan` of one more than `1 + 1e-9` times
+/// the other's (compared as `|c0| d1` against `|c1| d0`, each rounded once). `atan2` is
+/// accurate to about one ulp, far below that margin, so the larger angle's `atan2` is the
+/// larger value. Otherwise (ties, obtuse or non-finite cases) both are computed.
+fn larger_turn(c0: f64, d0: f64, c1: f64, d1: f64) -> f64 {
+    const MARGIN: f64 = 1.0 + 1e-9;
+    if d0 > 0.0 && d1 > 0.0 {
+        let (p0, p1) = (c0.abs() * d1, c1.abs() * d0);
+        if p0 > p1 * MARGIN && p1.is_finite() {
+            return c0.atan2(d0).abs();
+        }
+        if p1 > p0 * MARGIN && p0.is_finite() {
+            return c1.atan2(d1).abs();
+        }
+    }
+    c0.atan2(d0).abs().max(c1.atan2(d1).abs())
 }
 
 fn internal(msg: String) -> MeshError {
@@ -331,9 +357,9 @@ impl ArcGeometry {
                 0.5 * (dist(mid(m0, a0[0]), mid(m1, a1[0])) + dist(mid(m0, a0[1]), mid(m1, a1[1])));
             let rho = 0.5 * (r0 + r1);
             sq.push(if rho > 0.0 { ds / rho } else { 0.0 });
-            let t0 = turn(self.walls[0].c, a0[0], a1[0]).abs();
-            let t1 = turn(self.walls[1].c, a0[1], a1[1]).abs();
-            ang.push(t0.max(t1) / MAX_WALL_ANGLE);
+            let (c0, d0) = turn_parts(self.walls[0].c, a0[0], a1[0]);
+            let (c1, d1) = turn_parts(self.walls[1].c, a0[1], a1[1]);
+            ang.push(larger_turn(c0, d0, c1, d1) / MAX_WALL_ANGLE);
             (m0, a0, r0) = (m1, a1, r1);
         }
         Some(())
@@ -1253,6 +1279,81 @@ mod tests {
         assert_eq!((t[0], t[7]), (0.0, 1.0));
         assert!(t.windows(2).all(|x| x[0] <= x[1]));
         assert_eq!(equidistribute(&[0.0; 4], 2), vec![0.0, 0.5, 1.0]);
+    }
+
+    /// [`larger_turn`] against both `atan2`s, bit for bit: random vectors of all sizes and
+    /// quadrants, and near ties (one or a few ulps apart, equal, mirrored).
+    #[test]
+    fn larger_turn_is_the_max_of_both_turns() {
+        let reference =
+            |c0: f64, d0: f64, c1: f64, d1: f64| c0.atan2(d0).abs().max(c1.atan2(d1).abs());
+        let mut rng = crate::layouts::SplitMix64(7);
+        let mut next = |scale: f64| (rng.next_f64() - 0.5) * scale;
+        let mut checked = 0;
+        for k in 0..200_000 {
+            let scale = 10f64.powi((k % 40) - 20);
+            let (c0, d0) = (next(scale), next(1.0).abs() + next(scale));
+            let (c1, d1) = match k % 5 {
+                0 => (next(scale), next(1.0)),
+                1 => (c0, d0),
+                2 => (-c0, f64::from_bits(d0.to_bits() + 1)),
+                3 => (f64::from_bits(c0.to_bits().wrapping_add(k as u64 % 7)), d0),
+                _ => (c0 * (1.0 + 1e-9 * next(4.0)), d0 * (1.0 + 1e-9 * next(4.0))),
+            };
+            let (a, b) = (larger_turn(c0, d0, c1, d1), reference(c0, d0, c1, d1));
+            assert_eq!(a.to_bits(), b.to_bits(), "{c0} {d0} {c1} {d1}");
+            let (a, b) = (larger_turn(c1, d1, c0, d0), reference(c1, d1, c0, d0));
+            assert_eq!(a.to_bits(), b.to_bits(), "{c1} {d1} {c0} {d0}");
+            checked += 1;
+        }
+        assert_eq!(checked, 200_000);
+    }
+
+    /// The densities of sampled arcs (holes and bounding circle, both parametrisations)
+    /// against the formula written out with both `atan2`s.
+    #[test]
+    fn densities_match_the_plain_formula() {
+        let mut rng = crate::layouts::SplitMix64(11);
+        let mut tested = 0;
+        for _ in 0..400 {
+            let p = hole(rng.next_f64(), rng.next_f64(), 0.05 + 0.3 * rng.next_f64());
+            let q = if rng.next_f64() < 0.3 {
+                Wall {
+                    c: [0.5, 0.5],
+                    r: 3.0,
+                    s: -3.0,
+                }
+            } else {
+                hole(
+                    1.5 + rng.next_f64(),
+                    rng.next_f64(),
+                    0.05 + 0.3 * rng.next_f64(),
+                )
+            };
+            let (t0, t1) = (6.0 * rng.next_f64(), 6.0 * rng.next_f64());
+            let (Some((a0, m0, _)), Some((a1, m1, _))) =
+                (medial_point(&p, &q, t0), medial_point(&p, &q, t1))
+            else {
+                continue;
+            };
+            let ends_a = [[a0, q.project(m0)], [a1, q.project(m1)]];
+            let hints = [t1 - t0, turn(q.c, ends_a[0][1], ends_a[1][1])];
+            let g = ArcGeometry::new([p, q], [m0, m1], ends_a, hints);
+            let Some((_, ang)) = g.densities() else {
+                continue;
+            };
+            let k = ARC_SUBSTEPS;
+            let pts: Vec<_> = (0..=k)
+                .map(|s| g.at(s as f64 / k as f64).unwrap())
+                .collect();
+            for (s, w) in pts.windows(2).enumerate() {
+                let t0 = turn(g.walls[0].c, w[0].1[0], w[1].1[0]).abs();
+                let t1 = turn(g.walls[1].c, w[0].1[1], w[1].1[1]).abs();
+                assert_eq!(ang[s].to_bits(), (t0.max(t1) / MAX_WALL_ANGLE).to_bits());
+            }
+            tested += 1;
+        }
+        assert!(tested > 100, "{tested}");
     }
 
     #[test]
