@@ -1080,7 +1080,6 @@ pub fn assemble_cached(
         })
         .collect();
     let reuse: Vec<Option<Payload>> = cache.take_grids(&keys, &grid_keys);
-    let cache_ref = &*cache;
     type PieceGrids = Result<(Vec<Point>, [BlockGrid; 2], Entry, bool), MeshError>;
     let per_piece: Vec<PieceGrids> = pieces
         .par_iter()
@@ -1101,17 +1100,12 @@ pub fn assemble_cached(
                 if !uniform {
                     known.target = t.known_target(nbar).map(|x| (nbar, x));
                 }
-                let entry = Entry {
-                    known,
-                    params: None,
-                    grid_key: grid_keys[e],
-                    grids: None,
-                };
+                let entry = Entry { known, grids: None };
                 return Ok((m_nodes, pair, entry, true));
             }
             let cached = match first {
                 Some((nb, m, params)) if nb.to_bits() == nbar.to_bits() && m == n => Some(params),
-                _ => cache_ref.params(&keys[e], nbar, n).map(<[f64]>::to_vec),
+                _ => None,
             };
             let params = match cached {
                 Some(params) => {
@@ -1183,12 +1177,7 @@ pub fn assemble_cached(
                 BlockGrid { ni: n, nj, nodes }
             };
             let pair = [grid(0), grid(1)];
-            let entry = Entry {
-                known,
-                params: Some((nbar, n, params)),
-                grid_key: grid_keys[e],
-                grids: None,
-            };
+            let entry = Entry { known, grids: None };
             Ok((m_nodes, pair, entry, false))
         })
         .collect();
@@ -1202,7 +1191,7 @@ pub fn assemble_cached(
         entries.push(entry);
         smoothed.push(done);
     }
-    cache.replace(keys, entries, medial_edges.clone(), reused);
+    cache.replace(keys, entries, medial_edges.clone(), grid_keys, reused);
     if options.smooth > 0 {
         // Each block smooths alone (its sides fixed): in parallel, same result for any pool.
         // Grids taken from the cache were smoothed by the build that made them.

@@ -4,11 +4,10 @@
 //! collapses, degree-4 merges) or a local resampling are needed, and each rebuild changes only
 //! the pieces around what was fixed. A piece's sub-step densities
 //! ([`super::ArcGeometry::densities`]: 257 points of the conic, most of exact mode's cost) are
-//! a function of its [`super::ArcGeometry`] alone, and the arc-node parameters drawn from them
-//! of that geometry, `nbar` and the arc count. So a build records, per piece, the geometry's
-//! bit patterns ([`GeomKey`]: every field) with the lower bound, the target and the
-//! parameters it computed, and the next build takes them instead of recomputing: the same
-//! values bit for bit, so the mesh does not change.
+//! a function of its [`super::ArcGeometry`] alone. So a build records, per piece, the
+//! geometry's bit patterns ([`GeomKey`]: every field) with what the counts need from the
+//! densities (lower bound, target for one `nbar`), and the next build takes them instead of
+//! recomputing: the same values bit for bit, so the mesh does not change.
 //!
 //! A piece's two block grids and medial nodes depend on its geometry, its counts (`n` and the
 //! wall-normal count of each side), the clustering of each side and the smoothing sweeps
@@ -17,8 +16,9 @@
 //! and the next build moves those of its unchanged pieces into its own mesh: no copy, and the
 //! grids not reused are freed before the new ones are made (peak memory unchanged).
 //!
-//! Only the latest build's entries are kept (a few hundred bytes per piece besides the grids
-//! handed back, not the densities). Entries are written in piece order and read by key, so
+//! Only the latest build's entries are kept (about 250 bytes per piece besides the grids
+//! handed back, not the densities nor the node parameters: a piece without its grids
+//! computes its densities again). Entries are written in piece order and read by key, so
 //! nothing depends on the thread count.
 
 use super::counts::Known;
@@ -99,12 +99,8 @@ pub(crate) type Payload = (Vec<Point>, [BlockGrid; 2]);
 pub(crate) struct Entry {
     /// The densities' lower bound and (size-driven counts only) the target for one `nbar`.
     pub(crate) known: Known,
-    /// `(nbar, n, parameters)`: the `n + 1` arc-node parameters for that `nbar` and count
-    /// (dropped once the grids are handed back).
-    pub(crate) params: Option<Params>,
-    /// The grid inputs besides the geometry, and the grids once handed back.
-    pub(crate) grid_key: GridKey,
-    pub(crate) grids: Option<Box<Payload>>,
+    /// Once handed back: the grid inputs besides the geometry, and the grids.
+    pub(crate) grids: Option<Box<(GridKey, Payload)>>,
 }
 
 /// The memo (see the module docs). `PieceCache::default()` is empty: a build with it computes
@@ -113,8 +109,10 @@ pub(crate) struct Entry {
 pub struct PieceCache {
     /// The latest build's pieces, in piece order: geometry key and entry.
     pieces: Vec<(GeomKey, Entry)>,
-    /// Their medial edges in the latest build's layout, while its grids may be handed back.
+    /// Their medial edges in the latest build's layout and their grid inputs, while its grids
+    /// may be handed back.
     medial_edges: Vec<u32>,
+    grid_keys: Vec<GridKey>,
     /// Hash of a geometry key -> the last piece with that hash; lookups compare the full key,
     /// so a hash collision is a miss, never a wrong entry.
     index: HashMap<u64, u32>,
@@ -163,14 +161,6 @@ impl PieceCache {
         self.find(key).map(|i| self.pieces[i].1.known)
     }
 
-    /// The arc-node parameters an earlier build drew for geometry `key`, `nbar` and count `n`.
-    pub(crate) fn params(&self, key: &GeomKey, nbar: f64, n: usize) -> Option<&[f64]> {
-        match self.pieces[self.find(key)?].1.params.as_ref()? {
-            (nb, m, p) if nb.to_bits() == nbar.to_bits() && *m == n => Some(p),
-            _ => None,
-        }
-    }
-
     /// The grids handed back for piece `e` of a new build (geometry `keys[e]`, other inputs
     /// `grid_keys[e]`), moved out of the memo; then every grid not taken is freed.
     pub(crate) fn take_grids(
@@ -184,10 +174,10 @@ impl PieceCache {
             .map(|(k, gk)| {
                 let i = self.find(k)?;
                 let e = &mut self.pieces[i].1;
-                if e.grid_key != *gk {
-                    return None;
+                match e.grids.take() {
+                    Some(b) if b.0 == *gk => Some(b.1),
+                    _ => None,
                 }
-                e.grids.take().map(|b| *b)
             })
             .collect();
         for (_, e) in &mut self.pieces {
@@ -198,15 +188,17 @@ impl PieceCache {
     }
 
     /// Replace the entries by those of the build that just finished (pieces `keys`, medial
-    /// edges `medial_edges`, `reused` of them computed no densities). A key met twice is
-    /// found at its last piece.
+    /// edges `medial_edges`, grid inputs `grid_keys`, `reused` of them computed no densities).
+    /// A key met twice is found at its last piece.
     pub(crate) fn replace(
         &mut self,
         keys: Vec<GeomKey>,
         entries: Vec<Entry>,
         medial_edges: Vec<u32>,
+        grid_keys: Vec<GridKey>,
         reused: usize,
     ) {
+        self.grid_keys = grid_keys;
         self.index.clear();
         self.index
             .extend(keys.iter().enumerate().map(|(i, k)| (hash_of(k), i as u32)));
@@ -221,18 +213,21 @@ impl PieceCache {
     /// latest build's counts is ignored.
     pub fn keep(&mut self, mesh: ExactMesh) {
         let medial_edges = std::mem::take(&mut self.medial_edges);
+        let grid_keys = std::mem::take(&mut self.grid_keys);
         let ExactMesh {
             mut layout, grids, ..
         } = mesh;
-        if grids.len() < 2 * self.pieces.len() || medial_edges.len() != self.pieces.len() {
+        let n = self.pieces.len();
+        if grids.len() < 2 * n || medial_edges.len() != n || grid_keys.len() != n {
             return;
         }
         let mut it = grids.into_iter();
-        for ((_, entry), &edge) in self.pieces.iter_mut().zip(&medial_edges) {
+        let all = self.pieces.iter_mut().zip(&medial_edges).zip(&grid_keys);
+        for (((_, entry), &edge), gk) in all {
             let (Some(g0), Some(g1)) = (it.next(), it.next()) else {
                 return;
             };
-            let w = entry.grid_key.0;
+            let w = gk.0;
             let fits = (g0.ni, g0.nj, g1.ni, g1.nj)
                 == (w[0] as usize, w[1] as usize, w[0] as usize, w[5] as usize);
             let nodes = match layout.edges.get_mut(edge as usize) {
@@ -242,9 +237,7 @@ impl PieceCache {
                 },
                 None => continue,
             };
-            // The grids supersede the node parameters (drawn for the same counts).
-            entry.params = None;
-            entry.grids = Some(Box::new((nodes, [g0, g1])));
+            entry.grids = Some(Box::new((*gk, (nodes, [g0, g1]))));
         }
     }
 
