@@ -162,7 +162,8 @@ impl PieceCache {
     }
 
     /// The grids handed back for piece `e` of a new build (geometry `keys[e]`, other inputs
-    /// `grid_keys[e]`), moved out of the memo; then every grid not taken is freed.
+    /// `grid_keys[e]`), moved out of the memo; then the memo is emptied until
+    /// [`PieceCache::replace`].
     pub(crate) fn take_grids(
         &mut self,
         keys: &[GeomKey],
@@ -180,9 +181,10 @@ impl PieceCache {
                 }
             })
             .collect();
-        for (_, e) in &mut self.pieces {
-            e.grids = None;
-        }
+        // Nothing else is read before `replace`: free the entries (and every grid not taken)
+        // before the new grids are made.
+        self.pieces = Vec::new();
+        self.index = HashMap::new();
         self.reused_grids = out.iter().filter(|x| x.is_some()).count();
         out
     }
