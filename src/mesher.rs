@@ -304,11 +304,14 @@ fn mesh_exact(domain: &Domain, options: &Options) -> Result<Option<Mesh>, MeshEr
     };
     // Short collapses given up, by their circles: they survive resampling (arc ids do not).
     let mut given_up: Vec<Vec<CircleId>> = Vec::new();
+    // Per-piece work of the latest exact build, reused by the next one (rebuilds after local
+    // fixes and resamplings change only a few pieces; [`exact_mode::piece_cache`]).
+    let mut cache = exact_mode::PieceCache::default();
     for attempt in 0..=EXACT_RESAMPLING {
         let outcome = timings::span("blocking", || {
             blocking::collapsed_blocking_excluding(domain, options, &sampling, false, &given_up)
         })
-        .and_then(|mut cb| exact_on_sampling(domain, options, &mut cb, &mut given_up));
+        .and_then(|mut cb| exact_on_sampling(domain, options, &mut cb, &mut given_up, &mut cache));
         let refine = match outcome {
             Ok(Attempt::Done(m)) => return Ok(Some(*m)),
             Ok(Attempt::Retry(circles)) => circles,
@@ -469,6 +472,7 @@ fn exact_on_sampling(
     options: &Options,
     cb: &mut blocking::CollapsedBlocking,
     given_up: &mut Vec<Vec<CircleId>>,
+    cache: &mut exact_mode::PieceCache,
 ) -> Result<Attempt, MeshError> {
     let holes = domain.hole_count();
     // Inconsistent arcs already collapsed into a degree-4 vertex (sampled arc ids).
@@ -491,7 +495,7 @@ fn exact_on_sampling(
     };
     loop {
         let built = timings::span("exact_geometry", || {
-            exact_mode::collapsed::build_collapsed_on(cb, options, &single)
+            exact_mode::collapsed::build_collapsed_cached(cb, options, &single, cache)
         });
         let m = match built {
             Ok(m) => m,
@@ -563,7 +567,11 @@ fn exact_on_sampling(
             if !short.is_empty() {
                 fixes += 1;
                 match give_up(cb, options, &short, given_up) {
-                    Ok(()) => continue,
+                    Ok(()) => {
+                        // Rejected: its grids go back to the cache for the rebuild.
+                        cache.keep(m);
+                        continue;
+                    }
                     Err(MeshError::Internal(_)) => {}
                     Err(err) => return Err(err),
                 }
@@ -576,6 +584,7 @@ fn exact_on_sampling(
                 match timings::span("blocking", || cb.recollapse(options, &[], &force)) {
                     Ok(()) => {
                         around_merged = Some(around);
+                        cache.keep(m);
                         continue;
                     }
                     Err(MeshError::Internal(_)) => {
@@ -590,6 +599,7 @@ fn exact_on_sampling(
             return Ok(done(cb, m, holes));
         }
         let circles = circles_around(&m.layout, &bad, holes);
+        cache.keep(m);
         return Ok(Attempt::Retry((!circles.is_empty()).then_some(circles)));
     }
 }

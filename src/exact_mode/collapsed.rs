@@ -19,7 +19,10 @@
 //! spoke at a collapsed vertex is exactly normal to its wall. Inserted holes are handled by
 //! [`super::inserted`].
 
-use super::{assemble, exact_vertices_with, internal, ExactMesh, ExactVertex, Skeleton, Wall};
+use super::{
+    assemble_cached, exact_vertices_with, internal, ExactMesh, ExactVertex, PieceCache, Skeleton,
+    Wall,
+};
 use crate::blocking::CollapsedBlocking;
 use crate::domain::{CircleId, Domain};
 use crate::geometry::Point;
@@ -156,11 +159,22 @@ pub fn build_collapsed_on(
     options: &Options,
     single: &[ExactVertex],
 ) -> Result<ExactMesh, MeshError> {
+    build_collapsed_cached(cb, options, single, &mut PieceCache::default())
+}
+
+/// [`build_collapsed_on`] reusing the per-piece work of earlier builds held in `cache` and
+/// leaving this build's there ([`super::assemble_cached`]): the same mesh.
+pub fn build_collapsed_cached(
+    cb: &CollapsedBlocking,
+    options: &Options,
+    single: &[ExactVertex],
+    cache: &mut PieceCache,
+) -> Result<ExactMesh, MeshError> {
     let vertices = cluster_vertices_on(cb, single)?;
     let domain = &cb.refined.domain;
     let h = domain.hole_count() - cb.refined.inserted.len();
     let fluid: Vec<CircleId> = (h..domain.hole_count()).map(|i| i as CircleId).collect();
-    assemble(
+    assemble_cached(
         Skeleton {
             domain,
             arcs: &cb.contracted.graph.arcs,
@@ -169,5 +183,6 @@ pub fn build_collapsed_on(
             fluid,
         },
         options,
+        cache,
     )
 }

@@ -38,19 +38,63 @@ pub struct ArcTarget {
     pub sq: Vec<f64>,
     /// Per sub-step: the largest wall angle swept, over the 15-degree limit.
     pub ang: Vec<f64>,
+    /// When `Some`, what an earlier computation of these same densities gave (exact mode
+    /// reuses it across the rebuilds of one layout, [`super::piece_cache`]); `sq` and `ang`
+    /// are then usually not held (empty).
+    pub known: Option<Known>,
+}
+
+/// Results of [`ArcTarget::min_cells`] and of [`ArcTarget::target`] for one `nbar`, computed
+/// from an arc's densities and kept instead of them (bitwise the values they give).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Known {
+    pub min_cells: usize,
+    /// `(nbar, target(nbar))`, if known.
+    pub target: Option<(f64, f64)>,
 }
 
 impl ArcTarget {
-    /// The real target `t_e` for a mean wall-normal count `nbar`.
+    /// The target for `nbar` when it is known without the densities (see [`ArcTarget::known`]);
+    /// `None` when the densities are needed but not held.
+    pub fn known_target(&self, nbar: f64) -> Option<f64> {
+        match self.known {
+            Some(Known {
+                target: Some((nb, t)),
+                ..
+            }) if nb.to_bits() == nbar.to_bits() => Some(t),
+            _ if self.holds_densities() => Some(self.target(nbar)),
+            _ => None,
+        }
+    }
+
+    /// True when `sq` and `ang` are held (as many as the sub-steps, at least one).
+    pub fn holds_densities(&self) -> bool {
+        !self.sq.is_empty() && self.sq.len() == self.ang.len()
+    }
+
+    /// The real target `t_e` for a mean wall-normal count `nbar`: from [`ArcTarget::known`]
+    /// for the `nbar` it holds, else from the densities (which must then be held).
     pub fn target(&self, nbar: f64) -> f64 {
+        if let Some(Known {
+            target: Some((nb, t)),
+            ..
+        }) = self.known
+        {
+            if nb.to_bits() == nbar.to_bits() {
+                return t;
+            }
+        }
         self.sq
             .iter()
             .zip(&self.ang)
             .map(|(s, a)| (nbar * s).max(*a))
             .sum()
     }
-    /// The lower bound `ceil(sum ang)` (at least 1).
+    /// The lower bound `ceil(sum ang)` (at least 1), or the known one.
     pub fn min_cells(&self) -> usize {
+        if let Some(k) = self.known {
+            return k.min_cells;
+        }
         let s: f64 = self.ang.iter().sum();
         if s.is_finite() {
             ((s - 1e-9).ceil().max(1.0) as usize).min(super::super::grid::MAX_CELLS_PER_SIDE)
@@ -87,16 +131,27 @@ fn round_count(x: f64) -> usize {
     }
 }
 
+/// An arc's count before the parity repair: its rounded target `t` raised to its lower bound
+/// `lb` ([`CountProblem::solve`]).
+pub fn arc_count(t: f64, lb: usize) -> usize {
+    round_count(t).max(lb)
+}
+
+/// An arc's count with a fixed grid of `n` per block before the parity repair
+/// ([`CountProblem::solve_uniform`]).
+pub fn uniform_arc_count(n: usize, lb: usize) -> usize {
+    n.clamp(1, super::super::grid::MAX_CELLS_PER_SIDE).max(lb)
+}
+
 fn term(n: usize, t: f64) -> f64 {
     let t = t.max(1e-9);
     (n as f64 - t).powi(2) / t
 }
 
 impl CountProblem {
-    /// Solve (see the module docs). `Err` when a template circle's parity cannot be repaired.
-    pub fn solve(&self) -> Result<Counts, String> {
-        let nc = self.circle_target.len();
-        let circle: Vec<usize> = (0..nc)
+    /// The circle counts [`CountProblem::solve`] gives: they depend on the circles only.
+    pub fn circle_counts(&self) -> Vec<usize> {
+        (0..self.circle_target.len())
             .map(|c| {
                 self.circle_fixed
                     .get(c)
@@ -105,7 +160,14 @@ impl CountProblem {
                     .map(|n| n.clamp(1, super::super::grid::MAX_CELLS_PER_SIDE))
                     .unwrap_or_else(|| round_count(self.circle_target[c]))
             })
-            .collect();
+            .collect()
+    }
+
+    /// Solve (see the module docs). `Err` when a template circle's parity cannot be repaired
+    /// or an arc's target for its `nbar` is neither known nor computable (densities not held).
+    pub fn solve(&self) -> Result<Counts, String> {
+        let nc = self.circle_target.len();
+        let circle = self.circle_counts();
         let mut targets = Vec::with_capacity(self.arcs.len());
         let mut lower = Vec::with_capacity(self.arcs.len());
         let mut arc = Vec::with_capacity(self.arcs.len());
@@ -114,11 +176,13 @@ impl CountProblem {
                 return Err("arc refers to an unknown circle".into());
             }
             let nbar = 0.5 * (circle[a.circles[0]] + circle[a.circles[1]]) as f64;
-            let t = a.target(nbar);
+            let t = a
+                .known_target(nbar)
+                .ok_or("an arc's densities are needed but not held")?;
             let lb = a.min_cells();
             targets.push(t);
             lower.push(lb);
-            arc.push(round_count(t).max(lb));
+            arc.push(arc_count(t, lb));
         }
         self.repair_parity(&mut arc, &targets, &lower)?;
         Ok(Counts { circle, arc })
@@ -140,7 +204,7 @@ impl CountProblem {
             }
             let lb = a.min_cells();
             lower.push(lb);
-            arc.push(n.max(lb));
+            arc.push(uniform_arc_count(n, lb));
         }
         let targets: Vec<f64> = arc.iter().map(|&k| k as f64).collect();
         self.repair_parity(&mut arc, &targets, &lower)?;
@@ -269,6 +333,7 @@ mod tests {
             circles: [a, b],
             sq: vec![t],
             ang: vec![0.0],
+            known: None,
         }
     }
 
@@ -324,5 +389,41 @@ mod tests {
         let per: usize = [0, 1, 2].iter().map(|&e| c.arc[e]).sum();
         assert_eq!(per % 2, 0, "{c:?}");
         assert!(per >= 4);
+    }
+
+    #[test]
+    fn known_summaries_give_the_counts_of_the_densities() {
+        let full = |a: usize, b: usize, k: u64| {
+            let x = |i: u64| ((i * 7919 + k * 104_729) % 1000) as f64 / 700.0;
+            ArcTarget {
+                circles: [a, b],
+                sq: (0..32).map(|i| x(i) * 0.05).collect(),
+                ang: (0..32).map(|i| x(i + 13) * 0.08).collect(),
+                known: None,
+            }
+        };
+        let arcs: Vec<ArcTarget> = (0..6).map(|k| full(k % 3, (k + 1) % 3, k as u64)).collect();
+        let p = CountProblem {
+            circle_target: vec![4.4, 7.6, 2.0],
+            circle_fixed: vec![None; 3],
+            template: vec![false, true, false],
+            arcs,
+        };
+        let circle = p.circle_counts();
+        let mut q = p.clone();
+        for a in &mut q.arcs {
+            let nbar = 0.5 * (circle[a.circles[0]] + circle[a.circles[1]]) as f64;
+            a.known = Some(Known {
+                min_cells: a.min_cells(),
+                target: Some((nbar, a.target(nbar))),
+            });
+            a.sq.clear();
+            a.ang.clear();
+        }
+        assert_eq!(p.solve(), q.solve());
+        assert_eq!(p.solve_uniform(5), q.solve_uniform(5));
+        // A target for another `nbar` is not known: refused, not guessed.
+        q.circle_target[0] = 9.0;
+        assert!(q.solve().is_err());
     }
 }

@@ -41,9 +41,11 @@ pub mod imposed;
 pub mod inserted;
 pub mod metrics;
 pub mod periodic;
+pub mod piece_cache;
 pub mod smoothing;
 
 pub use clustering::{Clustering, FirstCell};
+pub use piece_cache::PieceCache;
 
 use crate::apollonius::{apollonius, Choice, Site};
 use crate::blocking::Blocking;
@@ -53,7 +55,8 @@ use crate::grid::{GridError, MAX_CELLS_PER_SIDE, MAX_TOTAL_NODES};
 use crate::layout::{Block, BlockLayout, Curve, Edge, EdgeKind, SideRef};
 use crate::mesh::BlockGrid;
 use crate::mesher::{MeshError, Options};
-use counts::{ArcTarget, CountProblem, Counts};
+use counts::{ArcTarget, CountProblem, Counts, Known};
+use piece_cache::{Entry, GeomKey, GridKey, Params, Payload};
 use rayon::prelude::*;
 use std::collections::HashMap;
 use std::f64::consts::{PI, TAU};
@@ -144,11 +147,37 @@ fn mid(a: Point, b: Point) -> Point {
     [0.5 * (a[0] + b[0]), 0.5 * (a[1] + b[1])]
 }
 
-/// The angle from `a - c` to `b - c`, in `(-pi, pi]`.
+/// The angle from `a - c` to `b - c`, in `(-pi, pi]` (the densities use [`larger_turn`]).
+#[cfg(test)]
 fn turn(c: Point, a: Point, b: Point) -> f64 {
+    let (cross, dot) = turn_parts(c, a, b);
+    cross.atan2(dot)
+}
+
+/// `(cross, dot)` of `a - c` and `b - c`: [`turn`] is `cross.atan2(dot)`.
+fn turn_parts(c: Point, a: Point, b: Point) -> (f64, f64) {
     let u = [a[0] - c[0], a[1] - c[1]];
     let v = [b[0] - c[0], b[1] - c[1]];
-    (u[0] * v[1] - u[1] * v[0]).atan2(u[0] * v[0] + u[1] * v[1])
+    (u[0] * v[1] - u[1] * v[0], u[0] * v[0] + u[1] * v[1])
+}
+
+/// `max(|atan2(c0, d0)|, |atan2(c1, d1)|)`, bit for bit, with one `atan2` when the larger
+/// angle is clear: both below 90 degrees (`d > 0`) and `tan` of one more than `1 + 1e-9` times
+/// the other's (compared as `|c0| d1` against `|c1| d0`, each rounded once). `atan2` is
+/// accurate to about one ulp, far below that margin, so the larger angle's `atan2` is the
+/// larger value. Otherwise (ties, obtuse or non-finite cases) both are computed.
+fn larger_turn(c0: f64, d0: f64, c1: f64, d1: f64) -> f64 {
+    const MARGIN: f64 = 1.0 + 1e-9;
+    if d0 > 0.0 && d1 > 0.0 {
+        let (p0, p1) = (c0.abs() * d1, c1.abs() * d0);
+        if p0 > p1 * MARGIN && p1.is_finite() {
+            return c0.atan2(d0).abs();
+        }
+        if p1 > p0 * MARGIN && p0.is_finite() {
+            return c1.atan2(d1).abs();
+        }
+    }
+    c0.atan2(d0).abs().max(c1.atan2(d1).abs())
 }
 
 fn internal(msg: String) -> MeshError {
@@ -309,24 +338,31 @@ impl ArcGeometry {
 
     /// Sub-step densities for the count problem: `(sq, ang)` per sub-step.
     fn densities(&self) -> Option<(Vec<f64>, Vec<f64>)> {
+        let mut sq = Vec::with_capacity(ARC_SUBSTEPS);
+        let mut ang = Vec::with_capacity(ARC_SUBSTEPS);
+        self.densities_into(&mut sq, &mut ang)?;
+        Some((sq, ang))
+    }
+
+    /// [`ArcGeometry::densities`] into `sq` and `ang` (cleared first), point by point (no
+    /// buffer of the `ARC_SUBSTEPS + 1` points). `None` when a point is not defined.
+    fn densities_into(&self, sq: &mut Vec<f64>, ang: &mut Vec<f64>) -> Option<()> {
         let k = ARC_SUBSTEPS;
-        let pts: Option<Vec<(Point, [Point; 2], f64)>> =
-            (0..=k).map(|s| self.at(s as f64 / k as f64)).collect();
-        let pts = pts?;
-        let mut sq = Vec::with_capacity(k);
-        let mut ang = Vec::with_capacity(k);
-        for w in pts.windows(2) {
-            let (m0, a0, r0) = w[0];
-            let (m1, a1, r1) = w[1];
+        sq.clear();
+        ang.clear();
+        let (mut m0, mut a0, mut r0) = self.at(0.0)?;
+        for s in 1..=k {
+            let (m1, a1, r1) = self.at(s as f64 / k as f64)?;
             let ds =
                 0.5 * (dist(mid(m0, a0[0]), mid(m1, a1[0])) + dist(mid(m0, a0[1]), mid(m1, a1[1])));
             let rho = 0.5 * (r0 + r1);
             sq.push(if rho > 0.0 { ds / rho } else { 0.0 });
-            let t0 = turn(self.walls[0].c, a0[0], a1[0]).abs();
-            let t1 = turn(self.walls[1].c, a0[1], a1[1]).abs();
-            ang.push(t0.max(t1) / MAX_WALL_ANGLE);
+            let (c0, d0) = turn_parts(self.walls[0].c, a0[0], a1[0]);
+            let (c1, d1) = turn_parts(self.walls[1].c, a0[1], a1[1]);
+            ang.push(larger_turn(c0, d0, c1, d1) / MAX_WALL_ANGLE);
+            (m0, a0, r0) = (m1, a1, r1);
         }
-        Some((sq, ang))
+        Some(())
     }
 }
 
@@ -453,6 +489,37 @@ fn equidistribute(w: &[f64], n: usize) -> Vec<f64> {
     t
 }
 
+/// A piece's densities reduced to what its counts and nodes need: the lower bound and the
+/// target for `nbar` ([`Known`]), and the node parameters `(nbar, n, params)` for the count `n`
+/// it gets before template ties (`uniform`: a fixed grid of that many cells per block, else
+/// the size-driven count). The same values, bit for bit, as from the densities later.
+/// `scratch` holds the densities and weights (reused from piece to piece: only the parameters
+/// stay allocated, so the heap does not fragment between them).
+fn summarize(
+    g: &ArcGeometry,
+    nbar: f64,
+    uniform: Option<usize>,
+    scratch: &mut ArcTarget,
+) -> Option<(Known, Params)> {
+    scratch.known = None;
+    g.densities_into(&mut scratch.sq, &mut scratch.ang)?;
+    let lb = scratch.min_cells();
+    let target = scratch.target(nbar);
+    let n = match uniform {
+        Some(n) => counts::uniform_arc_count(n, lb),
+        None => counts::arc_count(target, lb),
+    };
+    // The weights replace `sq` in place (the same values as collected into a new vector).
+    for (s, a) in scratch.sq.iter_mut().zip(&scratch.ang) {
+        *s = (nbar * *s).max(*a);
+    }
+    let known = Known {
+        min_cells: lb,
+        target: Some((nbar, target)),
+    };
+    Some((known, (nbar, n, equidistribute(&scratch.sq, n))))
+}
+
 /// What exact mode built, beyond the mesh.
 #[derive(Debug, Clone)]
 pub struct ExactMesh {
@@ -555,6 +622,17 @@ pub fn build(
 /// circle order). Edges: walls are exact [`Curve::Arc`]s, spokes [`Curve::Segment`]s, medial
 /// arcs [`Curve::Polyline`]s through the grid's medial nodes.
 pub fn assemble(sk: Skeleton<'_>, options: &Options) -> Result<ExactMesh, MeshError> {
+    assemble_cached(sk, options, &mut PieceCache::default())
+}
+
+/// [`assemble`], taking the densities and arc-node parameters of pieces an earlier build
+/// already computed from `cache` ([`piece_cache`]) and leaving this build's there: the same
+/// mesh as [`assemble`] whatever the cache holds.
+pub fn assemble_cached(
+    sk: Skeleton<'_>,
+    options: &Options,
+    cache: &mut PieceCache,
+) -> Result<ExactMesh, MeshError> {
     validate_options(options)?;
     let domain = sk.domain;
     let mut vertices = sk.vertices;
@@ -636,26 +714,6 @@ pub fn assemble(sk: Skeleton<'_>, options: &Options) -> Result<ExactMesh, MeshEr
         }
     }
 
-    // Sub-step densities per piece, in parallel, collected in piece order.
-    let targets: Vec<Option<ArcTarget>> = pieces
-        .par_iter()
-        .map(|p| {
-            let (sq, ang) = p.geom.densities()?;
-            Some(ArcTarget {
-                circles: p.circles.map(cidx),
-                sq,
-                ang,
-            })
-        })
-        .collect();
-    let mut targets = targets
-        .into_iter()
-        .enumerate()
-        .map(|(e, t)| {
-            t.ok_or_else(|| internal(format!("arc {e}: the exact medial arc is not defined")))
-        })
-        .collect::<Result<Vec<_>, _>>()?;
-
     // Target size and the count problem.
     let radii: Vec<f64> = vertices.iter().map(|v| v.radius).collect();
     let radii_max = radii
@@ -686,10 +744,8 @@ pub fn assemble(sk: Skeleton<'_>, options: &Options) -> Result<ExactMesh, MeshEr
             circle_fixed[cidx(*c)] = Some(*n);
         }
     }
-    // The node counts for target cell size `h`.
-    // The arc targets are lent to each count problem and given back (no copy: they hold
-    // 2 x ARC_SUBSTEPS f64 per arc).
-    let solve_counts = |h: f64, arcs: &mut Vec<ArcTarget>| -> Result<Counts, MeshError> {
+    // The count problem for target cell size `h`, without its arcs.
+    let circle_problem = |h: f64| {
         let mut circle_target = vec![1.0; ncirc];
         for id in domain.circle_ids() {
             let len = near_median[cidx(id)].unwrap_or(h);
@@ -697,14 +753,124 @@ pub fn assemble(sk: Skeleton<'_>, options: &Options) -> Result<ExactMesh, MeshEr
             let first = cl.first_height(domain.circle(id).radius);
             circle_target[cidx(id)] = clustering::cells_for(len, h, first, cl.growth) as f64;
         }
-        let problem = CountProblem {
+        CountProblem {
             circle_target,
             circle_fixed: circle_fixed.clone(),
             // The templates' ties ([`inserted::tie_counts`]) pair the sides of every inserted
             // hole, which makes its perimeter even without the parity repair.
             template: vec![false; ncirc],
+            arcs: Vec::new(),
+        }
+    };
+
+    // Sub-step densities per piece, in parallel, collected in piece order. Each piece keeps
+    // only what the counts and its nodes need (issue 8: the densities of all pieces at once
+    // were 4 KB per piece): its lower bound, its target for the `nbar` its circles' counts
+    // give, and the node parameters for that `nbar` and the count it would get before the
+    // template ties. Where the final `nbar` or count differ (ties, imposed counts,
+    // coarsening), the densities are computed again. A piece whose geometry the cache
+    // knows takes that from the cache instead.
+    let uniform_n = options
+        .block_cells
+        .map(|n| n.clamp(1, crate::grid::MAX_CELLS_PER_SIDE));
+    let first_circle = match uniform_n {
+        Some(n) => vec![n; ncirc],
+        None => circle_problem(h).circle_counts(),
+    };
+    let keys: Vec<GeomKey> = pieces.par_iter().map(|p| GeomKey::of(&p.geom)).collect();
+    type Summary = (ArcTarget, Option<Params>);
+    let scratch = || ArcTarget {
+        circles: [0, 0],
+        sq: Vec::with_capacity(ARC_SUBSTEPS),
+        ang: Vec::with_capacity(ARC_SUBSTEPS),
+        known: None,
+    };
+    let summaries: Vec<Option<Summary>> = pieces
+        .par_iter()
+        .zip(&keys)
+        .map_init(scratch, |scratch, (p, key)| {
+            let circles = p.circles.map(cidx);
+            if let Some(known) = cache.known(key) {
+                let t = ArcTarget {
+                    circles,
+                    sq: Vec::new(),
+                    ang: Vec::new(),
+                    known: Some(known),
+                };
+                return Some((t, None));
+            }
+            if cache.is_reference() {
+                let (sq, ang) = p.geom.densities()?;
+                let t = ArcTarget {
+                    circles,
+                    sq,
+                    ang,
+                    known: None,
+                };
+                return Some((t, None));
+            }
+            let nbar = 0.5 * (first_circle[circles[0]] + first_circle[circles[1]]) as f64;
+            let (known, params) = summarize(&p.geom, nbar, uniform_n, scratch)?;
+            let t = ArcTarget {
+                circles,
+                sq: Vec::new(),
+                ang: Vec::new(),
+                known: Some(known),
+            };
+            Some((t, Some(params)))
+        })
+        .collect();
+    let reused = summaries
+        .iter()
+        .filter(|s| {
+            s.as_ref()
+                .is_some_and(|s| s.1.is_none() && !s.0.holds_densities())
+        })
+        .count();
+    let mut targets = Vec::with_capacity(pieces.len());
+    let mut first_params = Vec::with_capacity(pieces.len());
+    for (e, s) in summaries.into_iter().enumerate() {
+        let (t, params) =
+            s.ok_or_else(|| internal(format!("arc {e}: the exact medial arc is not defined")))?;
+        targets.push(t);
+        first_params.push(params);
+    }
+
+    // The node counts for target cell size `h`.
+    // The arc targets are lent to each count problem and given back (no copy: an arc whose
+    // densities had to be computed again holds 2 x ARC_SUBSTEPS f64).
+    let solve_counts = |h: f64, arcs: &mut Vec<ArcTarget>| -> Result<Counts, MeshError> {
+        let mut problem = CountProblem {
             arcs: std::mem::take(arcs),
+            ..circle_problem(h)
         };
+        if options.block_cells.is_none() {
+            // Size-driven counts need each arc's target for its `nbar`: compute the densities
+            // of the arcs whose target the cache does not know for it.
+            let circle = problem.circle_counts();
+            let nbar = |a: &ArcTarget| {
+                let n = |c: usize| circle.get(c).copied().unwrap_or(0);
+                0.5 * (n(a.circles[0]) + n(a.circles[1])) as f64
+            };
+            let need: Vec<usize> = (0..problem.arcs.len())
+                .filter(|&e| {
+                    problem.arcs[e]
+                        .known_target(nbar(&problem.arcs[e]))
+                        .is_none()
+                })
+                .collect();
+            let filled: Vec<Option<(Vec<f64>, Vec<f64>)>> = need
+                .par_iter()
+                .map(|&e| pieces[e].geom.densities())
+                .collect();
+            for (&e, d) in need.iter().zip(filled) {
+                let (sq, ang) = d.ok_or_else(|| {
+                    internal(format!("arc {e}: the exact medial arc is not defined"))
+                })?;
+                let t = &mut problem.arcs[e];
+                (t.sq, t.ang, t.known) = (sq, ang, None);
+            }
+        }
         let solved = crate::timings::span("node_counts", || match options.block_cells {
             Some(n) => problem.solve_uniform(n),
             None => problem.solve(),
@@ -893,29 +1059,86 @@ pub fn assemble(sk: Skeleton<'_>, options: &Options) -> Result<ExactMesh, MeshEr
     // piece's corner spokes are computed by each piece that uses them, from the same inputs
     // (vertex `v`'s tangent point `s` determines the circle, hence the count and clustering),
     // so the blocks sharing a spoke hold bitwise identical nodes whatever the thread count.
-    // The sub-step densities (2 x ARC_SUBSTEPS f64 per arc, more than a 16 x 16 grid) are
-    // moved into the tasks and freed as each piece turns them into its node parameters, so
-    // they do not stay alive next to all the grids (issue 8: peak memory).
+    // A piece whose geometry, counts and clustering the cache holds grids for takes them
+    // (moved); else it takes its node parameters from its summary or the cache when drawn
+    // for its final `nbar` and count; else it computes its densities again (held only by
+    // that task, 2 x ARC_SUBSTEPS f64, freed once turned into parameters).
     let arc_targets = targets;
-    type PieceGrids = Result<(Vec<Point>, [BlockGrid; 2]), MeshError>;
+    let uniform = options.block_cells.is_some();
+    let side_inputs = |p: &Piece, side: usize| {
+        let c = p.circles[side];
+        let cl = cluster(c);
+        let first = cl.first_height(domain.circle(c).radius);
+        (counts.circle[cidx(c)], first, cl.growth)
+    };
+    let grid_keys: Vec<GridKey> = pieces
+        .iter()
+        .enumerate()
+        .map(|(e, p)| {
+            let sides = [side_inputs(p, 0), side_inputs(p, 1)];
+            GridKey::of(counts.arc[e], sides, options.smooth)
+        })
+        .collect();
+    let reuse: Vec<Option<Payload>> = cache.take_grids(&keys, &grid_keys);
+    type PieceGrids = Result<(Vec<Point>, [BlockGrid; 2], Entry, bool), MeshError>;
     let per_piece: Vec<PieceGrids> = pieces
         .par_iter()
         .zip(arc_targets.into_par_iter())
+        .zip(reuse.into_par_iter())
+        .zip(first_params.into_par_iter())
         .enumerate()
-        .map(|(e, (p, t))| {
+        .map(|(e, (((p, t), reused), first))| {
             let g = &p.geom;
             let n = counts.arc[e];
-            let params = {
-                let nbar = 0.5
-                    * (counts.circle[cidx(p.circles[0])] + counts.circle[cidx(p.circles[1])])
-                        as f64;
-                let weights: Vec<f64> =
-                    t.sq.iter()
-                        .zip(&t.ang)
-                        .map(|(s, a)| (nbar * s).max(*a))
-                        .collect();
-                drop(t);
-                equidistribute(&weights, n)
+            let nbar = 0.5
+                * (counts.circle[cidx(p.circles[0])] + counts.circle[cidx(p.circles[1])]) as f64;
+            let mut known = Known {
+                min_cells: t.min_cells(),
+                target: None,
+            };
+            if let Some((m_nodes, pair)) = reused {
+                if !uniform {
+                    known.target = t.known_target(nbar).map(|x| (nbar, x));
+                }
+                let entry = Entry { known, grids: None };
+                return Ok((m_nodes, pair, entry, true));
+            }
+            let cached = match first {
+                Some((nb, m, params)) if nb.to_bits() == nbar.to_bits() && m == n => Some(params),
+                _ => None,
+            };
+            let params = match cached {
+                Some(params) => {
+                    if !uniform {
+                        known.target = t.known_target(nbar).map(|x| (nbar, x));
+                    }
+                    params
+                }
+                None => {
+                    let t = if t.holds_densities() {
+                        t
+                    } else {
+                        let (sq, ang) = g.densities().ok_or_else(|| {
+                            internal(format!("arc {e}: the exact medial arc is not defined"))
+                        })?;
+                        ArcTarget {
+                            sq,
+                            ang,
+                            known: None,
+                            ..t
+                        }
+                    };
+                    if !uniform {
+                        known.target = Some((nbar, t.target(nbar)));
+                    }
+                    let weights: Vec<f64> =
+                        t.sq.iter()
+                            .zip(&t.ang)
+                            .map(|(s, a)| (nbar * s).max(*a))
+                            .collect();
+                    drop(t);
+                    equidistribute(&weights, n)
+                }
             };
             let mut m_nodes = Vec::with_capacity(n + 1);
             let mut a_nodes: [Vec<Point>; 2] =
@@ -928,32 +1151,24 @@ pub fn assemble(sk: Skeleton<'_>, options: &Options) -> Result<ExactMesh, MeshEr
                 a_nodes[0].push(a[0]);
                 a_nodes[1].push(a[1]);
             }
-            let [v0, v1] = p.ends;
             let grid = |side: usize| {
-                let c = p.circles[side];
-                let nj = counts.circle[cidx(c)];
-                let cl = cluster(c);
-                let first = cl.first_height(domain.circle(c).radius);
-                let (s0, s1) = slots(p, side);
-                let corner = |v: usize, s: usize| {
-                    spoke_nodes(
-                        vertices[v].tangent[s],
-                        vertices[v].center,
-                        nj,
-                        first,
-                        cl.growth,
-                    )
-                };
+                let (nj, first, growth) = side_inputs(p, side);
+                // The corner spokes run from the piece's exact ends: its end vertices' tangent
+                // points on this circle and centres (`ends_a`, `ends_m` are taken from them by
+                // the same slots), so every block at a vertex gets the same nodes and the
+                // cache key (the geometry) covers them.
+                let corner =
+                    |end: usize| spoke_nodes(g.ends_a[end][side], g.ends_m[end], nj, first, growth);
                 // Column i is arc node k = i (side 0) or n - i (side 1).
                 let mut nodes = vec![[0.0; 2]; (n + 1) * (nj + 1)];
                 for i in 0..=n {
                     let k = if side == 0 { i } else { n - i };
                     let col: Vec<Point> = if k == 0 {
-                        corner(v0, s0)
+                        corner(0)
                     } else if k == n {
-                        corner(v1, s1)
+                        corner(1)
                     } else {
-                        spoke_nodes(a_nodes[side][k], m_nodes[k], nj, first, cl.growth)
+                        spoke_nodes(a_nodes[side][k], m_nodes[k], nj, first, growth)
                     };
                     for (j, q) in col.into_iter().enumerate() {
                         nodes[i + j * (n + 1)] = q;
@@ -962,20 +1177,29 @@ pub fn assemble(sk: Skeleton<'_>, options: &Options) -> Result<ExactMesh, MeshEr
                 BlockGrid { ni: n, nj, nodes }
             };
             let pair = [grid(0), grid(1)];
-            Ok((m_nodes, pair))
+            let entry = Entry { known, grids: None };
+            Ok((m_nodes, pair, entry, false))
         })
         .collect();
     let mut grids = Vec::with_capacity(layout.blocks.len());
+    let mut entries = Vec::with_capacity(per_piece.len());
+    let mut smoothed = Vec::with_capacity(per_piece.len());
     for (e, r) in per_piece.into_iter().enumerate() {
-        let (m_nodes, pair) = r?;
+        let (m_nodes, pair, entry, done) = r?;
         layout.edges[medial_edges[e] as usize].curve = Curve::Polyline(m_nodes);
         grids.extend(pair);
+        entries.push(entry);
+        smoothed.push(done);
     }
+    cache.replace(keys, entries, medial_edges.clone(), grid_keys, reused);
     if options.smooth > 0 {
         // Each block smooths alone (its sides fixed): in parallel, same result for any pool.
-        grids.par_iter_mut().for_each(|g| {
-            let rows = smoothing::boundary_layer_rows(g);
-            smoothing::winslow(g, options.smooth, rows);
+        // Grids taken from the cache were smoothed by the build that made them.
+        grids.par_iter_mut().enumerate().for_each(|(b, g)| {
+            if !smoothed[b / 2] {
+                let rows = smoothing::boundary_layer_rows(g);
+                smoothing::winslow(g, options.smooth, rows);
+            }
         });
     }
     if template_blocks > 0 {
@@ -1044,6 +1268,81 @@ mod tests {
         assert_eq!((t[0], t[7]), (0.0, 1.0));
         assert!(t.windows(2).all(|x| x[0] <= x[1]));
         assert_eq!(equidistribute(&[0.0; 4], 2), vec![0.0, 0.5, 1.0]);
+    }
+
+    /// [`larger_turn`] against both `atan2`s, bit for bit: random vectors of all sizes and
+    /// quadrants, and near ties (one or a few ulps apart, equal, mirrored).
+    #[test]
+    fn larger_turn_is_the_max_of_both_turns() {
+        let reference =
+            |c0: f64, d0: f64, c1: f64, d1: f64| c0.atan2(d0).abs().max(c1.atan2(d1).abs());
+        let mut rng = crate::layouts::SplitMix64(7);
+        let mut next = |scale: f64| (rng.next_f64() - 0.5) * scale;
+        let mut checked = 0;
+        for k in 0..200_000 {
+            let scale = 10f64.powi((k % 40) - 20);
+            let (c0, d0) = (next(scale), next(1.0).abs() + next(scale));
+            let (c1, d1) = match k % 5 {
+                0 => (next(scale), next(1.0)),
+                1 => (c0, d0),
+                2 => (-c0, f64::from_bits(d0.to_bits() + 1)),
+                3 => (f64::from_bits(c0.to_bits().wrapping_add(k as u64 % 7)), d0),
+                _ => (c0 * (1.0 + 1e-9 * next(4.0)), d0 * (1.0 + 1e-9 * next(4.0))),
+            };
+            let (a, b) = (larger_turn(c0, d0, c1, d1), reference(c0, d0, c1, d1));
+            assert_eq!(a.to_bits(), b.to_bits(), "{c0} {d0} {c1} {d1}");
+            let (a, b) = (larger_turn(c1, d1, c0, d0), reference(c1, d1, c0, d0));
+            assert_eq!(a.to_bits(), b.to_bits(), "{c1} {d1} {c0} {d0}");
+            checked += 1;
+        }
+        assert_eq!(checked, 200_000);
+    }
+
+    /// The densities of sampled arcs (holes and bounding circle, both parametrisations)
+    /// against the formula written out with both `atan2`s.
+    #[test]
+    fn densities_match_the_plain_formula() {
+        let mut rng = crate::layouts::SplitMix64(11);
+        let mut tested = 0;
+        for _ in 0..400 {
+            let p = hole(rng.next_f64(), rng.next_f64(), 0.05 + 0.3 * rng.next_f64());
+            let q = if rng.next_f64() < 0.3 {
+                Wall {
+                    c: [0.5, 0.5],
+                    r: 3.0,
+                    s: -3.0,
+                }
+            } else {
+                hole(
+                    1.5 + rng.next_f64(),
+                    rng.next_f64(),
+                    0.05 + 0.3 * rng.next_f64(),
+                )
+            };
+            let (t0, t1) = (6.0 * rng.next_f64(), 6.0 * rng.next_f64());
+            let (Some((a0, m0, _)), Some((a1, m1, _))) =
+                (medial_point(&p, &q, t0), medial_point(&p, &q, t1))
+            else {
+                continue;
+            };
+            let ends_a = [[a0, q.project(m0)], [a1, q.project(m1)]];
+            let hints = [t1 - t0, turn(q.c, ends_a[0][1], ends_a[1][1])];
+            let g = ArcGeometry::new([p, q], [m0, m1], ends_a, hints);
+            let Some((_, ang)) = g.densities() else {
+                continue;
+            };
+            let k = ARC_SUBSTEPS;
+            let pts: Vec<_> = (0..=k)
+                .map(|s| g.at(s as f64 / k as f64).unwrap())
+                .collect();
+            for (s, w) in pts.windows(2).enumerate() {
+                let t0 = turn(g.walls[0].c, w[0].1[0], w[1].1[0]).abs();
+                let t1 = turn(g.walls[1].c, w[0].1[1], w[1].1[1]).abs();
+                assert_eq!(ang[s].to_bits(), (t0.max(t1) / MAX_WALL_ANGLE).to_bits());
+            }
+            tested += 1;
+        }
+        assert!(tested > 100, "{tested}");
     }
 
     #[test]

@@ -206,6 +206,7 @@ pub fn build(pb: &PeriodicBlocking, options: &Options) -> Result<PeriodicExact, 
             circles: arc.circles.map(|c| c.0 as usize + 1),
             sq,
             ang,
+            known: None,
         });
         geoms.push(g);
         slots.push(slot);

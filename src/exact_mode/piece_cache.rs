@@ -1,0 +1,266 @@
+//! Memo of per-piece work across the rebuilds of exact mode on one layout (issue #8).
+//!
+//! [`crate::mesher`] builds the exact layout several times when local fixes (given-up
+//! collapses, degree-4 merges) or a local resampling are needed, and each rebuild changes only
+//! the pieces around what was fixed. A piece's sub-step densities
+//! ([`super::ArcGeometry::densities`]: 257 points of the conic, most of exact mode's cost) are
+//! a function of its [`super::ArcGeometry`] alone. So a build records, per piece, the
+//! geometry's bit patterns ([`GeomKey`]: every field) with what the counts need from the
+//! densities (lower bound, target for one `nbar`), and the next build takes them instead of
+//! recomputing: the same values bit for bit, so the mesh does not change.
+//!
+//! A piece's two block grids and medial nodes depend on its geometry, its counts (`n` and the
+//! wall-normal count of each side), the clustering of each side and the smoothing sweeps
+//! ([`GridKey`] with the geometry; its corner spokes are its geometry's ends). When the build
+//! is rejected (inverted or poor blocks), the mesher hands its grids back ([`PieceCache::keep`])
+//! and the next build moves those of its unchanged pieces into its own mesh: no copy, and the
+//! grids not reused are freed before the new ones are made (peak memory unchanged).
+//!
+//! Only the latest build's entries are kept (about 250 bytes per piece besides the grids
+//! handed back, not the densities nor the node parameters: a piece without its grids
+//! computes its densities again). Entries are written in piece order and read by key, so
+//! nothing depends on the thread count.
+
+use super::counts::Known;
+use super::{ArcGeometry, ExactMesh};
+use crate::geometry::Point;
+use crate::layout::Curve;
+use crate::mesh::BlockGrid;
+use std::collections::HashMap;
+
+/// Number of `u64` words in a [`GeomKey`].
+const KEY_WORDS: usize = 25;
+
+/// The bit patterns of every field of an [`ArcGeometry`]: equal keys, equal geometry (and so
+/// equal densities and nodes).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub(crate) struct GeomKey([u64; KEY_WORDS]);
+
+impl GeomKey {
+    pub(crate) fn of(g: &ArcGeometry) -> GeomKey {
+        let mut w = [0u64; KEY_WORDS];
+        let mut i = 0;
+        let mut put = |x: f64| {
+            w[i] = x.to_bits();
+            i += 1;
+        };
+        for wall in &g.walls {
+            put(wall.c[0]);
+            put(wall.c[1]);
+            put(wall.r);
+            put(wall.s);
+        }
+        for k in 0..2 {
+            put(g.start[k]);
+            put(g.sweep[k]);
+        }
+        for end in 0..2 {
+            put(g.ends_m[end][0]);
+            put(g.ends_m[end][1]);
+            for side in 0..2 {
+                put(g.ends_a[end][side][0]);
+                put(g.ends_a[end][side][1]);
+            }
+        }
+        w[KEY_WORDS - 1] = g.param as u64;
+        GeomKey(w)
+    }
+}
+
+/// Besides the geometry, everything a piece's grids depend on: `n`, the wall-normal count, first
+/// height (flag and bits) and growth of each side, and the smoothing sweeps.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub(crate) struct GridKey([u64; 10]);
+
+impl GridKey {
+    /// `sides[k] = (nj, first height, growth)` of the block on `circles[k]`.
+    pub(crate) fn of(n: usize, sides: [(usize, Option<f64>, f64); 2], smooth: usize) -> GridKey {
+        let mut w = [0u64; 10];
+        w[0] = n as u64;
+        for (k, (nj, first, growth)) in sides.into_iter().enumerate() {
+            w[1 + 4 * k] = nj as u64;
+            w[2 + 4 * k] = u64::from(first.is_some());
+            w[3 + 4 * k] = first.map_or(0, f64::to_bits);
+            w[4 + 4 * k] = growth.to_bits();
+        }
+        w[9] = smooth as u64;
+        GridKey(w)
+    }
+}
+
+/// `(nbar, n, parameters)`: a piece's `n + 1` arc-node parameters for that `nbar` and count.
+pub(crate) type Params = (f64, usize, Vec<f64>);
+
+/// A piece's medial nodes and its two block grids (smoothed when asked).
+pub(crate) type Payload = (Vec<Point>, [BlockGrid; 2]);
+
+/// What one build computed for one piece geometry.
+#[derive(Debug, Clone, PartialEq)]
+pub(crate) struct Entry {
+    /// The densities' lower bound and (size-driven counts only) the target for one `nbar`.
+    pub(crate) known: Known,
+    /// Once handed back: the grid inputs besides the geometry, and the grids.
+    pub(crate) grids: Option<Box<(GridKey, Payload)>>,
+}
+
+/// The memo (see the module docs). `PieceCache::default()` is empty: a build with it computes
+/// everything, as without a memo.
+#[derive(Debug, Default)]
+pub struct PieceCache {
+    /// The latest build's pieces, in piece order: geometry key and entry.
+    pieces: Vec<(GeomKey, Entry)>,
+    /// Their medial edges in the latest build's layout and their grid inputs, while its grids
+    /// may be handed back.
+    medial_edges: Vec<u32>,
+    grid_keys: Vec<GridKey>,
+    /// Hash of a geometry key -> the last piece with that hash; lookups compare the full key,
+    /// so a hash collision is a miss, never a wrong entry.
+    index: HashMap<u64, u32>,
+    /// Pieces of the latest build whose densities were not computed / whose grids were moved
+    /// from the memo.
+    reused: usize,
+    reused_grids: usize,
+    /// The reference path for tests ([`PieceCache::reference`]).
+    reference: bool,
+}
+
+fn hash_of(key: &GeomKey) -> u64 {
+    use std::hash::{Hash, Hasher};
+    let mut h = std::collections::hash_map::DefaultHasher::new();
+    key.hash(&mut h);
+    h.finish()
+}
+
+impl PieceCache {
+    /// A memo that is never read and makes the build compute every piece's densities up
+    /// front and draw its nodes from them, as exact mode did before the memo and the
+    /// summaries: the oracle the fast paths are tested against (same mesh, bit for bit).
+    #[doc(hidden)]
+    pub fn reference() -> PieceCache {
+        PieceCache {
+            reference: true,
+            ..PieceCache::default()
+        }
+    }
+
+    /// True for [`PieceCache::reference`].
+    pub(crate) fn is_reference(&self) -> bool {
+        self.reference
+    }
+
+    fn find(&self, key: &GeomKey) -> Option<usize> {
+        if self.reference {
+            return None;
+        }
+        let i = *self.index.get(&hash_of(key))? as usize;
+        (self.pieces.get(i)?.0 == *key).then_some(i)
+    }
+
+    /// What an earlier build knew of geometry `key`'s densities.
+    pub(crate) fn known(&self, key: &GeomKey) -> Option<Known> {
+        self.find(key).map(|i| self.pieces[i].1.known)
+    }
+
+    /// The grids handed back for piece `e` of a new build (geometry `keys[e]`, other inputs
+    /// `grid_keys[e]`), moved out of the memo; then the memo is emptied until
+    /// [`PieceCache::replace`].
+    pub(crate) fn take_grids(
+        &mut self,
+        keys: &[GeomKey],
+        grid_keys: &[GridKey],
+    ) -> Vec<Option<Payload>> {
+        let out: Vec<Option<Payload>> = keys
+            .iter()
+            .zip(grid_keys)
+            .map(|(k, gk)| {
+                let i = self.find(k)?;
+                let e = &mut self.pieces[i].1;
+                match e.grids.take() {
+                    Some(b) if b.0 == *gk => Some(b.1),
+                    _ => None,
+                }
+            })
+            .collect();
+        // Nothing else is read before `replace`: free the entries (and every grid not taken)
+        // before the new grids are made.
+        self.pieces = Vec::new();
+        self.index = HashMap::new();
+        self.reused_grids = out.iter().filter(|x| x.is_some()).count();
+        out
+    }
+
+    /// Replace the entries by those of the build that just finished (pieces `keys`, medial
+    /// edges `medial_edges`, grid inputs `grid_keys`, `reused` of them computed no densities).
+    /// A key met twice is found at its last piece.
+    pub(crate) fn replace(
+        &mut self,
+        keys: Vec<GeomKey>,
+        entries: Vec<Entry>,
+        medial_edges: Vec<u32>,
+        grid_keys: Vec<GridKey>,
+        reused: usize,
+    ) {
+        self.grid_keys = grid_keys;
+        self.index.clear();
+        self.index
+            .extend(keys.iter().enumerate().map(|(i, k)| (hash_of(k), i as u32)));
+        self.pieces = keys.into_iter().zip(entries).collect();
+        self.medial_edges = medial_edges;
+        self.reused = reused;
+    }
+
+    /// Hand back the grids of `mesh`, which must be what the latest build with this memo
+    /// returned (the mesher rejected it and builds again): the next build moves those of its
+    /// unchanged pieces instead of computing them. A mesh whose pieces do not match the
+    /// latest build's counts is ignored.
+    pub fn keep(&mut self, mesh: ExactMesh) {
+        let medial_edges = std::mem::take(&mut self.medial_edges);
+        let grid_keys = std::mem::take(&mut self.grid_keys);
+        let ExactMesh {
+            mut layout, grids, ..
+        } = mesh;
+        let n = self.pieces.len();
+        if grids.len() < 2 * n || medial_edges.len() != n || grid_keys.len() != n {
+            return;
+        }
+        let mut it = grids.into_iter();
+        let all = self.pieces.iter_mut().zip(&medial_edges).zip(&grid_keys);
+        for (((_, entry), &edge), gk) in all {
+            let (Some(g0), Some(g1)) = (it.next(), it.next()) else {
+                return;
+            };
+            let w = gk.0;
+            let fits = (g0.ni, g0.nj, g1.ni, g1.nj)
+                == (w[0] as usize, w[1] as usize, w[0] as usize, w[5] as usize);
+            let nodes = match layout.edges.get_mut(edge as usize) {
+                Some(e) => match std::mem::replace(&mut e.curve, Curve::Segment) {
+                    Curve::Polyline(v) if fits && v.len() == g0.ni + 1 => v,
+                    _ => continue,
+                },
+                None => continue,
+            };
+            entry.grids = Some(Box::new((*gk, (nodes, [g0, g1]))));
+        }
+    }
+
+    /// How many pieces the latest build took from the memo without computing their densities
+    /// (for tests: a rebuild that should reuse work does).
+    pub fn reused(&self) -> usize {
+        self.reused
+    }
+
+    /// How many pieces the latest build moved their grids from the memo.
+    pub fn reused_grids(&self) -> usize {
+        self.reused_grids
+    }
+
+    /// Number of pieces held.
+    pub fn len(&self) -> usize {
+        self.pieces.len()
+    }
+
+    /// True when nothing is held.
+    pub fn is_empty(&self) -> bool {
+        self.pieces.is_empty()
+    }
+}
