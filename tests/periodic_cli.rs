@@ -100,7 +100,13 @@ fn periodic_timings_name_the_stages() {
         ),
         (
             "paper",
-            &["sampling", "triangulation", "medial_graph", "blocking", "grids"][..],
+            &[
+                "sampling",
+                "triangulation",
+                "medial_graph",
+                "blocking",
+                "grids",
+            ][..],
         ),
     ] {
         let out = dir.path().join(mode);
