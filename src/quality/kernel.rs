@@ -76,6 +76,29 @@ pub(super) fn corner_products(p: &[Point; 4]) -> ([f64; 4], [f64; 4]) {
     (cross, dot)
 }
 
+/// The smallest and largest corner angle: the reference folds all four angles; corners far
+/// from the extreme cannot win, so they enter the same fold as +-infinity.
+pub(super) fn extreme_angles(keys: [f64; 4], cross: [f64; 4], dot: [f64; 4]) -> (f64, f64) {
+    let kmin = fold(keys, f64::min);
+    let kmax = fold(keys, f64::max);
+    let mut lo4 = [f64::INFINITY; 4];
+    let mut hi4 = [f64::NEG_INFINITY; 4];
+    for k in 0..4 {
+        let near_lo = keys[k] <= kmin + KEY_TOL;
+        let near_hi = keys[k] >= kmax - KEY_TOL;
+        if near_lo || near_hi {
+            let a = angle_deg(cross[k], dot[k]);
+            if near_lo {
+                lo4[k] = a;
+            }
+            if near_hi {
+                hi4[k] = a;
+            }
+        }
+    }
+    (fold(lo4, f64::min), fold(hi4, f64::max))
+}
+
 /// The figures of one cell that the fast path computes exactly.
 #[derive(Debug, Clone, Copy)]
 pub(super) struct FastCell {
@@ -106,29 +129,11 @@ impl FastCell {
             }
             keys[k] = pseudo_angle(cross[k], dot[k]);
         }
-        let kmin = fold(keys, f64::min);
-        let kmax = fold(keys, f64::max);
-        // The reference folds all four angles; corners far from the extreme cannot win, so
-        // they enter the same fold as +-infinity.
-        let mut lo = [f64::INFINITY; 4];
-        let mut hi = [f64::NEG_INFINITY; 4];
-        for k in 0..4 {
-            let near_lo = keys[k] <= kmin + KEY_TOL;
-            let near_hi = keys[k] >= kmax - KEY_TOL;
-            if near_lo || near_hi {
-                let a = angle_deg(cross[k], dot[k]);
-                if near_lo {
-                    lo[k] = a;
-                }
-                if near_hi {
-                    hi[k] = a;
-                }
-            }
-        }
+        let (min_angle_deg, max_angle_deg) = extreme_angles(keys, cross, dot);
         Some(FastCell {
             cross,
-            min_angle_deg: fold(lo, f64::min),
-            max_angle_deg: fold(hi, f64::max),
+            min_angle_deg,
+            max_angle_deg,
         })
     }
 

@@ -21,10 +21,10 @@
 //! decides between `-0.0` and `0.0`).
 
 use super::kernel::{
-    angle_deg, bin, count, exact_lengths, exact_slot, length_figures, pseudo_angle, skewness,
-    BlockFigures, Tables, AMBIGUOUS, KEY_TOL, OUTSIDE, REL_TOL, SQ_MAX, SQ_MIN,
+    angle_deg, bin, count, exact_lengths, exact_slot, extreme_angles, length_figures, pseudo_angle,
+    skewness, BlockFigures, Tables, AMBIGUOUS, KEY_TOL, OUTSIDE, REL_TOL, SQ_MAX, SQ_MIN,
 };
-use super::{cell_corners, cell_metrics, fold, MetricSummary, QualityMetrics};
+use super::{cell_corners, cell_metrics, MetricSummary, QualityMetrics};
 use crate::geometry::Point;
 use crate::mesh::BlockGrid;
 
@@ -505,29 +505,6 @@ impl Chunk {
         count(&mut m.aspect_ratio, slots[2]);
         figures
     }
-}
-
-/// The smallest and largest corner angle: the reference folds all four angles; corners far
-/// from the extreme cannot win, so they enter the same fold as +-infinity.
-fn extreme_angles(keys: [f64; 4], cross: [f64; 4], dot: [f64; 4]) -> (f64, f64) {
-    let kmin = fold(keys, f64::min);
-    let kmax = fold(keys, f64::max);
-    let mut lo4 = [f64::INFINITY; 4];
-    let mut hi4 = [f64::NEG_INFINITY; 4];
-    for k in 0..4 {
-        let near_lo = keys[k] <= kmin + KEY_TOL;
-        let near_hi = keys[k] >= kmax - KEY_TOL;
-        if near_lo || near_hi {
-            let a = angle_deg(cross[k], dot[k]);
-            if near_lo {
-                lo4[k] = a;
-            }
-            if near_hi {
-                hi4[k] = a;
-            }
-        }
-    }
-    (fold(lo4, f64::min), fold(hi4, f64::max))
 }
 
 /// NaN-sticky minimum of the scaled Jacobians, in visiting order.
