@@ -34,6 +34,15 @@ const INSERTING: &str = r#"{"bounding": {"center": [0.0, 0.0], "radius": 1.0}, "
 /// other circle: the samples before are a prefix of the samples after.
 const PREFIX: &str = r#"{"bounding": {"center": [99.80518032777042, 222.13404102732048], "radius": 1.0}, "holes": [{"center": [100.01448901478783, 222.33167266433094], "radius": 0.20821141244148114}, {"center": [99.15416679567457, 222.4725675840845], "radius": 0.24053959701870642}, {"center": [100.49276751007557, 221.92556284706956], "radius": 0.00010638887682197367}, {"center": [100.68302868175985, 221.93803595726027], "radius": 0.00014962206114609836}, {"center": [99.46589073326423, 222.3685354043989], "radius": 0.0001105205087575796}]}"#;
 
+/// `n` random bubbles for seeds 1 to 3, then [`layouts`].
+fn bubbles_and_layouts(n: usize) -> Vec<Domain> {
+    let mut domains: Vec<Domain> = (1..=3)
+        .map(|s| medial_blocks::layouts::bubbles(n, s).unwrap())
+        .collect();
+    domains.extend(layouts());
+    domains
+}
+
 /// Random layouts with tiny holes near the others, so that refinement often inserts holes.
 fn layouts() -> Vec<Domain> {
     let mut out = vec![
@@ -174,10 +183,7 @@ fn area_reference(layout: &BlockLayout, b: usize) -> f64 {
 /// bit for bit the reference's; contraction keeps the counting identity of the collapse.
 #[test]
 fn blocking_maps_and_areas_match_hashed_references() {
-    let mut domains: Vec<Domain> = (1..=3)
-        .map(|s| medial_blocks::layouts::bubbles(60, s).unwrap())
-        .collect();
-    domains.extend(layouts());
+    let domains = bubbles_and_layouts(60);
     for d in &domains {
         let options = Options::default();
         let cb = collapsed_blocking_with(d, &options, &SamplingOptions::default(), true).unwrap();
@@ -319,10 +325,7 @@ fn refined_meshes_pass_check_mesh() {
 #[test]
 fn kept_selection_equals_select_forced() {
     let mut rng = SplitMix64(7);
-    let mut domains: Vec<Domain> = (1..=3)
-        .map(|s| medial_blocks::layouts::bubbles(80, s).unwrap())
-        .collect();
-    domains.extend(layouts());
+    let domains = bubbles_and_layouts(80);
     for d in &domains {
         let options = Options::default();
         let cb = collapsed_blocking_with(d, &options, &SamplingOptions::default(), false).unwrap();
