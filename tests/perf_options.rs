@@ -344,17 +344,7 @@ fn timings_flag_writes_timings_json_and_nothing_else_changes() {
         let x = t["stages"][k.as_str()].as_f64();
         assert!(x.is_some_and(|x| x >= 0.0), "stage {k}: {t}");
     }
-    let total = t["total_seconds"].as_f64().unwrap();
-    let sum: f64 = t["stages"]
-        .as_object()
-        .unwrap()
-        .values()
-        .map(|v| v.as_f64().unwrap())
-        .sum();
-    assert!(
-        total >= 0.0 && (sum - total).abs() <= 1e-6 * total.max(1.0),
-        "{t}"
-    );
+    common::assert_stages_add_up(&t);
     assert!(t["peak_memory_bytes"].is_null() || t["peak_memory_bytes"].as_u64().unwrap() > 0);
     if !t["cpu_stages"].is_null() {
         for k in &keys {

@@ -1,10 +1,7 @@
 //! `medial-blocks mesh` on periodic input (JSON with "periodic", or CSV with --periodic).
 
-use std::process::Command;
-
-fn bin() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_medial-blocks"))
-}
+mod common;
+use common::{assert_stages_add_up, bin};
 
 #[test]
 fn periodic_json_and_csv() {
@@ -125,13 +122,6 @@ fn periodic_timings_name_the_stages() {
                 "{mode}: stage {s} never entered: {t}"
             );
         }
-        let total = t["total_seconds"].as_f64().unwrap();
-        let sum: f64 = t["stages"]
-            .as_object()
-            .unwrap()
-            .values()
-            .map(|v| v.as_f64().unwrap())
-            .sum();
-        assert!((sum - total).abs() <= 1e-6 * total.max(1.0), "{mode}: {t}");
+        assert_stages_add_up(&t);
     }
 }

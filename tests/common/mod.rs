@@ -74,3 +74,19 @@ pub fn random_holes(
     }
     holes
 }
+
+/// The stages of a `timings.json` add up to its total (exclusive times; `other` included),
+/// and the total is not negative.
+pub fn assert_stages_add_up(t: &serde_json::Value) {
+    let total = t["total_seconds"].as_f64().expect("total_seconds");
+    let sum: f64 = t["stages"]
+        .as_object()
+        .expect("stages")
+        .values()
+        .map(|v| v.as_f64().expect("a stage's seconds"))
+        .sum();
+    assert!(
+        total >= 0.0 && (sum - total).abs() <= 1e-6 * total.max(1.0),
+        "stages add up to {sum}, total {total}: {t}"
+    );
+}
