@@ -1,6 +1,8 @@
 //! Back end oracles: templates + grids checked by code that does not trust the crate
 //! (conformity, validity, wall placement recomputed here), TFI exactness, angle measurement.
 
+mod common;
+
 use medial_blocks::domain::Circle;
 use medial_blocks::geometry::Point;
 use medial_blocks::grid::{build_grids, tfi, GridError, MAX_CELLS_PER_SIDE};
@@ -78,29 +80,6 @@ fn check_conformity(layout: &BlockLayout, grids: &[BlockGrid]) {
     }
 }
 
-/// Inverted cells, recomputed here: corner cross products of each cell, CCW.
-fn count_inverted(grids: &[BlockGrid]) -> usize {
-    let mut bad = 0;
-    for g in grids {
-        let at = |i: usize, j: usize| g.nodes[i + j * (g.ni + 1)];
-        for j in 0..g.nj {
-            for i in 0..g.ni {
-                let p = [at(i, j), at(i + 1, j), at(i + 1, j + 1), at(i, j + 1)];
-                let ok = (0..4).all(|k| {
-                    let o = p[k];
-                    let a = p[(k + 1) % 4];
-                    let b = p[(k + 3) % 4];
-                    (a[0] - o[0]) * (b[1] - o[1]) - (a[1] - o[1]) * (b[0] - o[0]) > 0.0
-                });
-                if !ok {
-                    bad += 1;
-                }
-            }
-        }
-    }
-    bad
-}
-
 /// Every node of every wall side lies on its circle within `tol`.
 fn check_walls(
     layout: &BlockLayout,
@@ -144,7 +123,7 @@ fn check_annulus(big: Circle, hole: Circle, cells: usize) {
     let grids = build_grids(&layout, cells).expect("grids");
     check_conformity(&layout, &grids);
     assert_eq!(
-        count_inverted(&grids),
+        common::count_inverted_cells(&grids),
         0,
         "inverted cells for {big:?} {hole:?} n={cells}"
     );
@@ -181,7 +160,7 @@ fn disk_template_is_conforming_and_valid() {
         for cells in [1, 2, 3, 8, 17] {
             let grids = build_grids(&layout, cells).unwrap();
             check_conformity(&layout, &grids);
-            assert_eq!(count_inverted(&grids), 0);
+            assert_eq!(common::count_inverted_cells(&grids), 0);
             check_walls(&layout, &grids, &|_| big, 1e-12 * radius);
             let q = measure(&grids);
             assert_eq!(q.cells, grids.iter().map(|g| g.ni * g.nj).sum::<usize>());

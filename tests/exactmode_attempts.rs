@@ -5,34 +5,16 @@
 //! nodes (cross products at the four corners of every cell), triangulation counts from
 //! [`timings::Recording`], and collapse sets compared by plain set arithmetic.
 
+mod common;
+
 use medial_blocks::blocking::{arc_key, collapsed_blocking_excluding, collapsed_blocking_with};
 use medial_blocks::domain::CircleId;
 use medial_blocks::layouts::bubbles;
-use medial_blocks::mesh::{BlockGrid, Geometry};
+use medial_blocks::mesh::Geometry;
 use medial_blocks::mesher::{mesh_timed, Options};
 use medial_blocks::sampling::{sample_and_triangulate, SamplingOptions};
 use medial_blocks::{refine, timings};
 use std::collections::BTreeSet;
-
-/// Cells with a corner whose two edges turn clockwise (or are not finite), recomputed here.
-fn inverted(grids: &[BlockGrid]) -> usize {
-    let mut bad = 0;
-    for g in grids {
-        let at = |i: usize, j: usize| g.nodes[i + j * (g.ni + 1)];
-        for j in 0..g.nj {
-            for i in 0..g.ni {
-                let p = [at(i, j), at(i + 1, j), at(i + 1, j + 1), at(i, j + 1)];
-                let flipped = (0..4).any(|k| {
-                    let (o, a, b) = (p[k], p[(k + 1) % 4], p[(k + 3) % 4]);
-                    let cross = (a[0] - o[0]) * (b[1] - o[1]) - (a[1] - o[1]) * (b[0] - o[0]);
-                    cross.is_nan() || cross <= 0.0
-                });
-                bad += usize::from(flipped);
-            }
-        }
-    }
-    bad
-}
 
 fn calls(t: &timings::Timings, stage: &str) -> u64 {
     t.calls
@@ -61,7 +43,7 @@ fn random_bubbles_are_exact_in_one_triangulation() {
         let domain = bubbles(40, seed).unwrap();
         let (mesh, t) = mesh_timed(&domain, &options).unwrap();
         assert_eq!(mesh.geometry, Geometry::Exact, "seed {seed}");
-        assert_eq!(inverted(&mesh.grids), 0, "seed {seed}");
+        assert_eq!(common::count_inverted_cells(&mesh.grids), 0, "seed {seed}");
         // No hard resampling and no inserted hole: one sampling, one triangulation.
         let sampled = sample_and_triangulate(&domain, &exact_sampling()).unwrap();
         let refined = refine::refine(
@@ -181,7 +163,7 @@ fn backwards_arc_is_collapsed_without_resampling() {
     assert!(!first.inconsistent_arcs.is_empty());
     let (mesh, t) = mesh_timed(&domain, &options).unwrap();
     assert_eq!(mesh.geometry, Geometry::Exact);
-    assert_eq!(inverted(&mesh.grids), 0);
+    assert_eq!(common::count_inverted_cells(&mesh.grids), 0);
     assert_eq!(calls(&t, "triangulation"), 1);
     assert_eq!(calls(&t, "sampling"), 1);
     assert_eq!(

@@ -90,3 +90,25 @@ pub fn assert_stages_add_up(t: &serde_json::Value) {
         "stages add up to {sum}, total {total}: {t}"
     );
 }
+
+/// Inverted cells, recomputed here from the nodes (not through the crate's quality code): a
+/// cell counts when the cross product of its two edges at some corner, counter-clockwise, is
+/// not positive (zero, negative or NaN).
+pub fn count_inverted_cells(grids: &[medial_blocks::mesh::BlockGrid]) -> usize {
+    let mut bad = 0;
+    for g in grids {
+        let at = |i: usize, j: usize| g.nodes[i + j * (g.ni + 1)];
+        for j in 0..g.nj {
+            for i in 0..g.ni {
+                let p = [at(i, j), at(i + 1, j), at(i + 1, j + 1), at(i, j + 1)];
+                let flipped = (0..4).any(|k| {
+                    let (o, a, b) = (p[k], p[(k + 1) % 4], p[(k + 3) % 4]);
+                    let cross = (a[0] - o[0]) * (b[1] - o[1]) - (a[1] - o[1]) * (b[0] - o[0]);
+                    cross.is_nan() || cross <= 0.0
+                });
+                bad += usize::from(flipped);
+            }
+        }
+    }
+    bad
+}
