@@ -30,7 +30,6 @@ use crate::cocircular::vertex_circles_reusing;
 use crate::domain::{dist, gap, Circle, Domain, HoleIndex};
 use crate::geometry::Point;
 use crate::medial::{circumcenter, MedialGraph};
-
 use crate::mesher::MeshError;
 use crate::sampling::{nearest_gaps, sample_and_triangulate_after, SampledDomain, SamplingOptions};
 use std::collections::HashSet;
