@@ -37,6 +37,7 @@ pub mod benchmarks;
 pub mod clustering;
 pub mod collapsed;
 pub mod counts;
+pub mod densities;
 pub mod imposed;
 pub mod inserted;
 pub mod metrics;
@@ -129,7 +130,11 @@ impl Wall {
 /// The medial point of walls `p` and `q` whose touching point on `p` is at angle `theta`:
 /// `(a, m, rho)` (see the module docs). `None` when it is not finite or `rho < 0`.
 fn medial_point(p: &Wall, q: &Wall, theta: f64) -> Option<(Point, Point, f64)> {
-    let u = [theta.cos(), theta.sin()];
+    medial_point_u(p, q, [theta.cos(), theta.sin()])
+}
+
+/// [`medial_point`] for the unit vector `u` of the touching angle.
+fn medial_point_u(p: &Wall, q: &Wall, u: Point) -> Option<(Point, Point, f64)> {
     let a = [p.c[0] + p.r * u[0], p.c[1] + p.r * u[1]];
     let n = if p.s < 0.0 { [-u[0], -u[1]] } else { u };
     let d = [a[0] - q.c[0], a[1] - q.c[1]];
@@ -334,35 +339,6 @@ impl ArcGeometry {
         let mut both = [a, a];
         both[q] = b;
         Some((m, both, rho))
-    }
-
-    /// Sub-step densities for the count problem: `(sq, ang)` per sub-step.
-    fn densities(&self) -> Option<(Vec<f64>, Vec<f64>)> {
-        let mut sq = Vec::with_capacity(ARC_SUBSTEPS);
-        let mut ang = Vec::with_capacity(ARC_SUBSTEPS);
-        self.densities_into(&mut sq, &mut ang)?;
-        Some((sq, ang))
-    }
-
-    /// [`ArcGeometry::densities`] into `sq` and `ang` (cleared first), point by point (no
-    /// buffer of the `ARC_SUBSTEPS + 1` points). `None` when a point is not defined.
-    fn densities_into(&self, sq: &mut Vec<f64>, ang: &mut Vec<f64>) -> Option<()> {
-        let k = ARC_SUBSTEPS;
-        sq.clear();
-        ang.clear();
-        let (mut m0, mut a0, mut r0) = self.at(0.0)?;
-        for s in 1..=k {
-            let (m1, a1, r1) = self.at(s as f64 / k as f64)?;
-            let ds =
-                0.5 * (dist(mid(m0, a0[0]), mid(m1, a1[0])) + dist(mid(m0, a0[1]), mid(m1, a1[1])));
-            let rho = 0.5 * (r0 + r1);
-            sq.push(if rho > 0.0 { ds / rho } else { 0.0 });
-            let (c0, d0) = turn_parts(self.walls[0].c, a0[0], a1[0]);
-            let (c1, d1) = turn_parts(self.walls[1].c, a0[1], a1[1]);
-            ang.push(larger_turn(c0, d0, c1, d1) / MAX_WALL_ANGLE);
-            (m0, a0, r0) = (m1, a1, r1);
-        }
-        Some(())
     }
 }
 
@@ -614,44 +590,11 @@ pub fn build(
     )
 }
 
-/// Build the exact-mode layout and grids of a [`Skeleton`].
-///
-/// Block `2e` lies on piece `e`'s `circles[0]`, block `2e + 1` on `circles[1]`, with the corner
-/// and side conventions of [`crate::blocking`]; template blocks of the inserted holes follow.
-/// Layout vertices: the exact vertex centres, then their tangent points (vertex by vertex, in
-/// circle order). Edges: walls are exact [`Curve::Arc`]s, spokes [`Curve::Segment`]s, medial
-/// arcs [`Curve::Polyline`]s through the grid's medial nodes.
-pub fn assemble(sk: Skeleton<'_>, options: &Options) -> Result<ExactMesh, MeshError> {
-    assemble_cached(sk, options, &mut PieceCache::default())
-}
-
-/// [`assemble`], taking the densities and arc-node parameters of pieces an earlier build
-/// already computed from `cache` ([`piece_cache`]) and leaving this build's there: the same
-/// mesh as [`assemble`] whatever the cache holds.
-pub fn assemble_cached(
-    sk: Skeleton<'_>,
-    options: &Options,
-    cache: &mut PieceCache,
-) -> Result<ExactMesh, MeshError> {
-    validate_options(options)?;
-    let domain = sk.domain;
-    let mut vertices = sk.vertices;
+/// The pieces of a skeleton's arcs (one per arc, in arc order) and the arcs running backwards
+/// ([`Piece::consistent`]). Errors ([`MeshError::Internal`]) as [`assemble`].
+fn pieces_of(sk: &Skeleton<'_>) -> Result<(Vec<Piece>, Vec<usize>), MeshError> {
+    let (domain, vertices) = (sk.domain, &sk.vertices);
     let ncirc = domain.hole_count() + 1;
-    if sk.sampled.blocks.len() != 2 * sk.arcs.len() {
-        return Err(internal(
-            "the blocking does not have two blocks per arc".into(),
-        ));
-    }
-    if let Some(&c) = sk.fluid.iter().find(|&&c| c < 0 || cidx(c) >= ncirc) {
-        return Err(internal(format!("unknown inserted hole {c}")));
-    }
-    // Inserted holes by circle slot (a lookup, not a scan of `sk.fluid` per query).
-    let mut is_fluid = vec![false; ncirc];
-    for &c in &sk.fluid {
-        is_fluid[cidx(c)] = true;
-    }
-    let fluid = |c: CircleId| c >= -1 && is_fluid.get(cidx(c)).copied().unwrap_or(false);
-
     // Geometry of every arc: independent per arc, computed in parallel and collected in arc
     // order (the first error in arc order is returned), so nothing depends on the thread count.
     let geometry: Vec<Result<Piece, MeshError>> = sk
@@ -697,6 +640,48 @@ pub fn assemble_cached(
         }
         pieces.push(piece);
     }
+    Ok((pieces, inconsistent_arcs))
+}
+
+/// Build the exact-mode layout and grids of a [`Skeleton`].
+///
+/// Block `2e` lies on piece `e`'s `circles[0]`, block `2e + 1` on `circles[1]`, with the corner
+/// and side conventions of [`crate::blocking`]; template blocks of the inserted holes follow.
+/// Layout vertices: the exact vertex centres, then their tangent points (vertex by vertex, in
+/// circle order). Edges: walls are exact [`Curve::Arc`]s, spokes [`Curve::Segment`]s, medial
+/// arcs [`Curve::Polyline`]s through the grid's medial nodes.
+pub fn assemble(sk: Skeleton<'_>, options: &Options) -> Result<ExactMesh, MeshError> {
+    assemble_cached(sk, options, &mut PieceCache::default())
+}
+
+/// [`assemble`], taking the densities and arc-node parameters of pieces an earlier build
+/// already computed from `cache` ([`piece_cache`]) and leaving this build's there: the same
+/// mesh as [`assemble`] whatever the cache holds.
+pub fn assemble_cached(
+    mut sk: Skeleton<'_>,
+    options: &Options,
+    cache: &mut PieceCache,
+) -> Result<ExactMesh, MeshError> {
+    validate_options(options)?;
+    let domain = sk.domain;
+    let ncirc = domain.hole_count() + 1;
+    if sk.sampled.blocks.len() != 2 * sk.arcs.len() {
+        return Err(internal(
+            "the blocking does not have two blocks per arc".into(),
+        ));
+    }
+    if let Some(&c) = sk.fluid.iter().find(|&&c| c < 0 || cidx(c) >= ncirc) {
+        return Err(internal(format!("unknown inserted hole {c}")));
+    }
+    // Inserted holes by circle slot (a lookup, not a scan of `sk.fluid` per query).
+    let mut is_fluid = vec![false; ncirc];
+    for &c in &sk.fluid {
+        is_fluid[cidx(c)] = true;
+    }
+    let fluid = |c: CircleId| c >= -1 && is_fluid.get(cidx(c)).copied().unwrap_or(false);
+
+    let (mut pieces, inconsistent_arcs) = pieces_of(&sk)?;
+    let mut vertices = std::mem::take(&mut sk.vertices);
     let mut split_arcs = 0;
     // A split for one hole can change a neighbouring inserted hole's count: repeat until no
     // hole asks for a split (bounded).
@@ -1298,8 +1283,9 @@ mod tests {
         assert_eq!(checked, 200_000);
     }
 
-    /// The densities of sampled arcs (holes and bounding circle, both parametrisations)
-    /// against the formula written out with both `atan2`s.
+    /// The plain densities of sampled arcs (holes and bounding circle, both
+    /// parametrisations) against the formula written out with both `atan2`s, and the fast
+    /// ones against the plain ones (to rounding: `tests/perf_densities.rs` on real layouts).
     #[test]
     fn densities_match_the_plain_formula() {
         let mut rng = crate::layouts::SplitMix64(11);
@@ -1328,9 +1314,15 @@ mod tests {
             let ends_a = [[a0, q.project(m0)], [a1, q.project(m1)]];
             let hints = [t1 - t0, turn(q.c, ends_a[0][1], ends_a[1][1])];
             let g = ArcGeometry::new([p, q], [m0, m1], ends_a, hints);
-            let Some((_, ang)) = g.densities() else {
+            let Some((sq, ang)) = g.densities_plain() else {
                 continue;
             };
+            let (fsq, fang) = g.densities().unwrap();
+            let close = |f: &[f64], p: &[f64]| {
+                let mean = p.iter().sum::<f64>() / p.len() as f64;
+                f.iter().zip(p).all(|(a, b)| (a - b).abs() <= 1e-9 * mean)
+            };
+            assert!(close(&fsq, &sq) && close(&fang, &ang));
             let k = ARC_SUBSTEPS;
             let pts: Vec<_> = (0..=k)
                 .map(|s| g.at(s as f64 / k as f64).unwrap())

@@ -1,0 +1,226 @@
+//! The sub-step densities of one arc piece (`ARC_SUBSTEPS + 1` points of the conic), the
+//! inner loop of exact mode (issue 8).
+//!
+//! [`ArcGeometry::densities_into`] computes the same quantities as the plain formula
+//! ([`ArcGeometry::densities_plain`]: every point from [`ArcGeometry::at`], both wall turns by
+//! `atan2`) with cheaper arithmetic, so the values agree to rounding, not bit for bit:
+//! - the points are equally spaced in the parametrised wall's angle, so `(cos, sin)` of the
+//!   interior points comes from a rotation by the step, restarted exactly (`sin_cos` of the
+//!   same angle as in `at`) every [`RESTART`] sub-steps so the drift stays a few ulps;
+//! - lengths use `sqrt(x^2 + y^2)` instead of `hypot` (coordinates are far from overflow);
+//! - the parametrised wall turns by exactly `|sweep| / ARC_SUBSTEPS` per sub-step, so only the
+//!   other wall's turn may need an `atan2`, and not when it is clearly the smaller one.
+//!
+//! The ends are the exact end points, as in `at`. Tested against the plain formula on random
+//! arcs and on every piece of real layouts (`tests/perf_densities.rs`).
+
+use super::{dist, larger_turn, medial_point_u, mid, turn_parts, ArcGeometry, Wall};
+use super::{ARC_SUBSTEPS, MAX_WALL_ANGLE};
+use crate::geometry::Point;
+
+/// Sub-steps between exact restarts of the rotation recurrence.
+pub const RESTART: usize = 16;
+
+/// `|a - b|` as `sqrt`, without `hypot`'s overflow guard.
+fn len(a: Point, b: Point) -> f64 {
+    let (x, y) = (a[0] - b[0], a[1] - b[1]);
+    (x * x + y * y).sqrt()
+}
+
+/// The touching point on `w` of the empty circle centred at `m` (as [`Wall::project`], with
+/// `sqrt` instead of `hypot`).
+fn project(w: &Wall, m: Point) -> Point {
+    let d = [m[0] - w.c[0], m[1] - w.c[1]];
+    let l = (d[0] * d[0] + d[1] * d[1]).sqrt();
+    [w.c[0] + w.r * d[0] / l, w.c[1] + w.r * d[1] / l]
+}
+
+impl ArcGeometry {
+    /// Sub-step densities for the count problem: `(sq, ang)` per sub-step.
+    pub(crate) fn densities(&self) -> Option<(Vec<f64>, Vec<f64>)> {
+        let mut sq = Vec::with_capacity(ARC_SUBSTEPS);
+        let mut ang = Vec::with_capacity(ARC_SUBSTEPS);
+        self.densities_into(&mut sq, &mut ang)?;
+        Some((sq, ang))
+    }
+
+    /// [`ArcGeometry::densities`] into `sq` and `ang` (cleared first), point by point (see the
+    /// module docs). `None` when a point is not defined.
+    pub(crate) fn densities_into(&self, sq: &mut Vec<f64>, ang: &mut Vec<f64>) -> Option<()> {
+        let k = ARC_SUBSTEPS;
+        sq.clear();
+        ang.clear();
+        let p = self.param;
+        let q = 1 - p;
+        let (wp, wq) = (&self.walls[p], &self.walls[q]);
+        let step = self.sweep[p] / k as f64;
+        let (sd, cd) = step.sin_cos();
+        let turn_p = step.abs();
+        // `atan(|c| / d) < turn_p` when `|c| < tan(turn_p) d` (with a margin for the two
+        // roundings of the comparison): then the other wall's turn is the smaller one.
+        let tan_p = turn_p.tan() / (1.0 + 1e-9);
+        let (mut m0, mut a0, mut r0) = self.at(0.0)?;
+        let mut u = [1.0, 0.0];
+        for s in 1..=k {
+            let (m1, a1, r1) = if s == k {
+                self.at(1.0)?
+            } else {
+                u = if s == 1 || s % RESTART == 0 {
+                    // The same angle as `at(s / k)`.
+                    let theta = self.start[p] + (s as f64 / k as f64) * self.sweep[p];
+                    [theta.cos(), theta.sin()]
+                } else {
+                    [u[0] * cd - u[1] * sd, u[1] * cd + u[0] * sd]
+                };
+                let (a, m, rho) = medial_point_u(wp, wq, u)?;
+                let b = project(wq, m);
+                if !(b[0].is_finite() && b[1].is_finite()) {
+                    return None;
+                }
+                let mut both = [a, a];
+                both[q] = b;
+                (m, both, rho)
+            };
+            let ds =
+                0.5 * (len(mid(m0, a0[0]), mid(m1, a1[0])) + len(mid(m0, a0[1]), mid(m1, a1[1])));
+            let rho = 0.5 * (r0 + r1);
+            sq.push(if rho > 0.0 { ds / rho } else { 0.0 });
+            let (c, d) = turn_parts(wq.c, a0[q], a1[q]);
+            let turn = if d > 0.0 && c.abs() < tan_p * d {
+                turn_p
+            } else {
+                turn_p.max(c.atan2(d).abs())
+            };
+            ang.push(turn / MAX_WALL_ANGLE);
+            (m0, a0, r0) = (m1, a1, r1);
+        }
+        Some(())
+    }
+
+    /// The plain formula the fast [`ArcGeometry::densities_into`] stands for: every point from
+    /// [`ArcGeometry::at`], `ds` between the spoke mid-points with `hypot`, both wall turns by
+    /// `atan2` ([`larger_turn`] takes the larger). The reference of the tests.
+    pub(crate) fn densities_plain(&self) -> Option<(Vec<f64>, Vec<f64>)> {
+        let k = ARC_SUBSTEPS;
+        let mut sq = Vec::with_capacity(k);
+        let mut ang = Vec::with_capacity(k);
+        let (mut m0, mut a0, mut r0) = self.at(0.0)?;
+        for s in 1..=k {
+            let (m1, a1, r1) = self.at(s as f64 / k as f64)?;
+            let ds =
+                0.5 * (dist(mid(m0, a0[0]), mid(m1, a1[0])) + dist(mid(m0, a0[1]), mid(m1, a1[1])));
+            let rho = 0.5 * (r0 + r1);
+            sq.push(if rho > 0.0 { ds / rho } else { 0.0 });
+            let (c0, d0) = turn_parts(self.walls[0].c, a0[0], a1[0]);
+            let (c1, d1) = turn_parts(self.walls[1].c, a0[1], a1[1]);
+            ang.push(larger_turn(c0, d0, c1, d1) / MAX_WALL_ANGLE);
+            (m0, a0, r0) = (m1, a1, r1);
+        }
+        Some((sq, ang))
+    }
+}
+
+/// How far the fast densities are from the plain formula (test hook, issue 8).
+#[doc(hidden)]
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct Deviation {
+    /// Arcs compared (pieces and both halves of each).
+    pub arcs: usize,
+    /// Largest `|fast - plain|` of one sub-step's `sq`, relative to the arc's mean plain `sq`
+    /// (what the node parameters see: the weights are equidistributed against their sum).
+    pub sq: f64,
+    /// The same for `ang`.
+    pub ang: f64,
+    /// Arcs whose lower bound `ceil(sum ang)` differs, or defined by only one of the two.
+    pub mismatches: usize,
+}
+
+impl Deviation {
+    fn add(&mut self, g: &ArcGeometry) {
+        use super::counts::ArcTarget;
+        self.arcs += 1;
+        let (fast, plain) = (g.densities(), g.densities_plain());
+        let (Some((fs, fa)), Some((ps, pa))) = (fast.clone(), plain.clone()) else {
+            self.mismatches += usize::from(fast.is_some() != plain.is_some());
+            return;
+        };
+        let rel = |f: &[f64], p: &[f64]| {
+            let mean = p.iter().sum::<f64>() / p.len() as f64;
+            let worst = f
+                .iter()
+                .zip(p)
+                .map(|(a, b)| (a - b).abs())
+                .fold(0.0, f64::max);
+            if mean > 0.0 {
+                worst / mean
+            } else {
+                worst
+            }
+        };
+        self.sq = self.sq.max(rel(&fs, &ps));
+        self.ang = self.ang.max(rel(&fa, &pa));
+        let bound = |sq, ang| {
+            ArcTarget {
+                circles: [0, 0],
+                sq,
+                ang,
+                known: None,
+            }
+            .min_cells()
+        };
+        self.mismatches += usize::from(bound(fs, fa) != bound(ps, pa));
+    }
+}
+
+/// [`Deviation`] over every piece of the exact build of `cb` and both halves of each piece (the
+/// halves inserted holes split arcs into): exact vertices, collapse and pieces as
+/// [`super::collapsed::build_collapsed`] makes them.
+#[doc(hidden)]
+pub fn deviation(
+    cb: &crate::blocking::CollapsedBlocking,
+) -> Result<Deviation, crate::mesher::MeshError> {
+    let single = super::exact_vertices_with(
+        &cb.refined.domain,
+        &cb.refined.sampled.medial,
+        &cb.refined.circles,
+    )?;
+    let vertices = super::collapsed::cluster_vertices_on(cb, &single)?;
+    let sk = super::Skeleton {
+        domain: &cb.refined.domain,
+        arcs: &cb.contracted.graph.arcs,
+        vertices,
+        sampled: &cb.layout,
+        fluid: Vec::new(),
+    };
+    let (pieces, _) = super::pieces_of(&sk)?;
+    let mut out = Deviation::default();
+    for p in &pieces {
+        out.add(&p.geom);
+        if let Some((_, _, _, first, second)) = p.geom.split() {
+            out.add(&first);
+            out.add(&second);
+        }
+    }
+    Ok(out)
+}
+
+/// [`Deviation`] of one random-ish arc given by its two walls and end angles on the first
+/// (the ends from [`super::medial_point`], the second wall's sweep from the turn between its
+/// touching points): `None` when an end is not defined.
+#[doc(hidden)]
+pub fn deviation_of_arc(p: [f64; 3], q: [f64; 3], t0: f64, t1: f64) -> Option<Deviation> {
+    let wall = |w: [f64; 3]| Wall {
+        c: [w[0], w[1]],
+        r: w[2].abs(),
+        s: w[2],
+    };
+    let (p, q) = (wall(p), wall(q));
+    let (a0, m0, _) = super::medial_point(&p, &q, t0)?;
+    let (a1, m1, _) = super::medial_point(&p, &q, t1)?;
+    let ends_a = [[a0, q.project(m0)], [a1, q.project(m1)]];
+    let (c, d) = turn_parts(q.c, ends_a[0][1], ends_a[1][1]);
+    let g = ArcGeometry::new([p, q], [m0, m1], ends_a, [t1 - t0, c.atan2(d)]);
+    let mut out = Deviation::default();
+    out.add(&g);
+    Some(out)
+}
