@@ -374,6 +374,36 @@ pub fn round_scaled(num: &Integer, den: &Integer, exp: i64) -> f64 {
     }
 }
 
+/// Bits of the first bracket of [`ZSqrt::to_f64`] (doubled until the rounding is decided).
+const FIRST_BRACKET_BITS: u32 = 128;
+
+/// The first bracket of `sqrt(D)` that [`ZSqrt::to_f64`] uses for a radicand `D > 0`:
+/// `t = floor(sqrt(D 4^k))` and whether it is exact. Every rounding of one Apollonius root
+/// (centre, radius, tangent points) brackets the same `sqrt(D)`: computed once, shared.
+#[derive(Debug, Clone)]
+pub struct SqrtBracket {
+    k: u32,
+    t: Integer,
+    exact: bool,
+}
+
+impl SqrtBracket {
+    /// The first bracket for `d` (`None` when `d <= 0`: no square root is taken then).
+    pub fn new(d: &Integer) -> Option<SqrtBracket> {
+        if d.cmp0() != Ordering::Greater {
+            return None;
+        }
+        let half = d.significant_bits() / 2;
+        let k = FIRST_BRACKET_BITS.saturating_sub(half) + 1;
+        let (t, rem) = Integer::from(d << (2 * k)).sqrt_rem(Integer::new());
+        Some(SqrtBracket {
+            k,
+            t,
+            exact: rem.cmp0() == Ordering::Equal,
+        })
+    }
+}
+
 /// The number `a + b sqrt(D)` with integer parts, `D` an integer held by the caller. The solver
 /// works with these over a shared positive denominator, which avoids the gcd of every rational
 /// operation (the dominant cost otherwise).
@@ -486,21 +516,41 @@ impl ZSqrt {
     /// The `f64` nearest to `2^exp (a + b sqrt(D)) / den` (`den > 0`), ties to even; see
     /// [`QSqrt::to_f64`] for the bracketing argument and the precision cap.
     pub fn to_f64(&self, d: &Integer, den: &Integer, exp: i64) -> f64 {
+        self.to_f64_with(d, den, exp, None)
+    }
+
+    /// [`ZSqrt::to_f64`], taking the first bracket's square root from `first` (computed once
+    /// for `d` by [`SqrtBracket::new`]) instead of computing it again: the same value.
+    pub fn to_f64_with(
+        &self,
+        d: &Integer,
+        den: &Integer,
+        exp: i64,
+        first: Option<&SqrtBracket>,
+    ) -> f64 {
         if self.b.cmp0() == Ordering::Equal || d.cmp0() != Ordering::Greater {
             return round_scaled(&self.a, den, exp);
         }
         let half = d.significant_bits() / 2;
-        let mut bits = 128u32;
+        let mut bits = FIRST_BRACKET_BITS;
         loop {
             // sqrt(D) in [t, t + 1] / 2^k.
             let k = bits.saturating_sub(half) + 1;
-            let (t, rem) = Integer::from(d << (2 * k)).sqrt_rem(Integer::new());
+            let computed;
+            let (t, exact) = match first {
+                Some(f) if f.k == k => (&f.t, f.exact),
+                _ => {
+                    let (t, rem) = Integer::from(d << (2 * k)).sqrt_rem(Integer::new());
+                    computed = t;
+                    (&computed, rem.cmp0() == Ordering::Equal)
+                }
+            };
             let base = Integer::from(&self.a << k);
-            let lo_t = Integer::from(&base + &self.b * &t);
+            let lo_t = Integer::from(&base + &self.b * t);
             let hi_t = lo_t.clone() + &self.b;
             let kk = exp - i64::from(k);
             let fl = round_scaled(&lo_t, den, kk);
-            if rem.cmp0() == Ordering::Equal {
+            if exact {
                 return fl; // D is a square: the bracket is exact
             }
             let fh = round_scaled(&hi_t, den, kk);

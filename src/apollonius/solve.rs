@@ -33,7 +33,7 @@
 //! `sign(sigma_0 sigma_1 sigma_2) * sign(sigma_2 u_0 x u_1 + sigma_0 u_1 x u_2 + sigma_1 u_2 x u_0)`,
 //! and `Zero` when some `sigma_i = 0`.
 
-use super::exact::{common_scale, dyadic, QSqrt, Sign, ZSqrt};
+use super::exact::{common_scale, dyadic, QSqrt, Sign, SqrtBracket, ZSqrt};
 use super::Site;
 use rug::{Integer, Rational};
 use std::cmp::Ordering;
@@ -109,6 +109,12 @@ impl ExactApollonius {
         self.orientation
     }
 
+    /// Set the rounded centre and radius (`approx`) from the exact ones.
+    fn round(&mut self, sq: Option<&SqrtBracket>) {
+        let (d, den, exp) = (&self.disc, &self.den, self.exp);
+        self.approx = [0, 1, 2].map(|i| self.num[i].to_f64_with(d, den, exp, sq));
+    }
+
     /// The integer frame: `(exp, disc, den, [x, y, rho] numerators)`.
     pub(crate) fn frame(&self) -> (i64, &Integer, &Integer, &[ZSqrt; 3]) {
         (self.exp, &self.disc, &self.den, &self.num)
@@ -174,14 +180,20 @@ impl ExactApollonius {
 
     /// The rounded [`Apollonius`] circle with its tangent points.
     pub fn to_apollonius(&self) -> Result<Apollonius, ApolloniusError> {
+        self.to_apollonius_with(None)
+    }
+
+    /// [`ExactApollonius::to_apollonius`] with the first bracket of `sqrt(D)` given (the same
+    /// values).
+    fn to_apollonius_with(&self, sq: Option<&SqrtBracket>) -> Result<Apollonius, ApolloniusError> {
         let mut tangent_points = [[0.0; 2]; 3];
         for (i, t) in tangent_points.iter_mut().enumerate() {
             let ([ax, ay], den) = self
                 .tangent_point_frac(i)
                 .ok_or(ApolloniusError::UndefinedTangentPoint)?;
             *t = [
-                ax.to_f64(&self.disc, &den, self.exp),
-                ay.to_f64(&self.disc, &den, self.exp),
+                ax.to_f64_with(&self.disc, &den, self.exp, sq),
+                ay.to_f64_with(&self.disc, &den, self.exp, sq),
             ];
         }
         Ok(Apollonius {
@@ -253,6 +265,16 @@ fn lorentz(u: &[Integer; 3], v: &[Integer; 3]) -> Integer {
 /// form `<u, v> = u_x v_x + u_y v_y - u_r v_r`. A root `t = (-B ± sqrt(disc)) / 2A` gives
 /// `u = (2A U0 - B U1 ± U1 sqrt(disc)) / (2A m)`.
 pub fn apollonius_roots(sites: &[Site; 3]) -> Result<Vec<ExactApollonius>, ApolloniusError> {
+    let mut roots = unrounded_roots(sites)?;
+    for r in &mut roots {
+        r.round(None);
+    }
+    Ok(roots)
+}
+
+/// [`apollonius_roots`] without the rounded values (`approx` is left at zero until
+/// [`ExactApollonius::round`]): the roots `choose` drops are never rounded.
+fn unrounded_roots(sites: &[Site; 3]) -> Result<Vec<ExactApollonius>, ApolloniusError> {
     let mut vals = Vec::with_capacity(9);
     for s in sites {
         for v in [s.center[0], s.center[1], s.s] {
@@ -364,7 +386,7 @@ pub fn apollonius_roots(sites: &[Site; 3]) -> Result<Vec<ExactApollonius>, Apoll
     Ok(roots)
 }
 
-/// Validate a candidate root and compute its orientation and rounded values.
+/// Validate a candidate root and compute its orientation (not its rounded values).
 fn build_root(
     sites: &[Site; 3],
     q: &[[Integer; 3]; 3],
@@ -419,14 +441,13 @@ fn build_root(
         let den_sign = sig_signs[0].times(sig_signs[1]).times(sig_signs[2]);
         total.sign(d).times(den_sign)
     };
-    let approx = [0, 1, 2].map(|i| num[i].to_f64(d, &den, exp));
     Some(ExactApollonius {
         sites: *sites,
         exp,
         disc,
         den,
         num,
-        approx,
+        approx: [0.0; 3],
         orientation,
     })
 }
@@ -463,9 +484,14 @@ pub fn choose(roots: Vec<ExactApollonius>, choice: Choice) -> Option<ExactApollo
 }
 
 /// The Apollonius circle of three sites selected by `choice`, rounded, with tangent points.
+///
+/// Only the chosen root is rounded, and all its roundings share one square root of `D`: the
+/// same values as `choose(apollonius_roots(&sites)?, choice)?.to_apollonius()` (tested in
+/// `tests/apollonius_solve.rs`).
 pub fn apollonius(sites: [Site; 3], choice: Choice) -> Result<Apollonius, ApolloniusError> {
-    let roots = apollonius_roots(&sites)?;
-    choose(roots, choice)
-        .ok_or(ApolloniusError::NoCircle)?
-        .to_apollonius()
+    let roots = unrounded_roots(&sites)?;
+    let mut root = choose(roots, choice).ok_or(ApolloniusError::NoCircle)?;
+    let sq = SqrtBracket::new(&root.disc);
+    root.round(sq.as_ref());
+    root.to_apollonius_with(sq.as_ref())
 }
