@@ -2,7 +2,8 @@
 //! ([`medial_blocks::exact_mode::densities`], issue #8) against the plain formula (every point
 //! from the arc's parametrisation with `sin_cos`, `hypot` and both walls' `atan2`), computed
 //! alongside: on every piece (and both halves of each, as inserted holes split them) of real
-//! layouts, and on random arcs between holes and with the bounding circle.
+//! layouts (bounded and periodic), and on random arcs between holes and with the bounding
+//! circle.
 
 mod common;
 
@@ -60,6 +61,48 @@ fn real_layouts_match_the_plain_formula() {
 /// `eps r` is itself only good to about `eps / step` relative (`step = sweep / 256`, 1e-4 at
 /// 1e-9 rad) while the fast path's wall turn is the step itself, so they agree to that
 /// (and such arcs are collapsed in a real layout).
+/// Periodic layouts: the arc orbits exact mode builds (`exact_mode::periodic`).
+#[test]
+fn periodic_layouts_match_the_plain_formula() {
+    use medial_blocks::periodic::{periodic_layout, PeriodicDomain};
+    let options = Options {
+        collapse_fraction: 0.0,
+        ..Options::default()
+    };
+    let mut checked = 0;
+    for seed in 1..=4 {
+        let mut rng = SplitMix64(seed);
+        let size = [2.0, 1.0 + rng.next_f64()];
+        let mut holes: Vec<Circle> = Vec::new();
+        for _ in 0..20_000 {
+            if holes.len() == 12 {
+                break;
+            }
+            let r = 0.04 + 0.12 * rng.next_f64();
+            let c = [rng.next_f64() * size[0], rng.next_f64() * size[1]];
+            let apart = holes.iter().all(|o| {
+                (-1..=1).all(|a| {
+                    (-1..=1).all(|b| {
+                        let dx = c[0] - o.center[0] + a as f64 * size[0];
+                        let dy = c[1] - o.center[1] + b as f64 * size[1];
+                        dx.hypot(dy) > r + o.radius + 0.02
+                    })
+                })
+            });
+            if apart {
+                holes.push(Circle::new(c[0], c[1], r));
+            }
+        }
+        let pd = PeriodicDomain::new(size, holes).unwrap();
+        let p = periodic_layout(&pd, &options).unwrap();
+        let Some(pb) = &p.blocking else { continue };
+        let d = medial_blocks::exact_mode::periodic::density_deviation(pb, &options).unwrap();
+        check(d, &format!("periodic {seed}"));
+        checked += 1;
+    }
+    assert!(checked >= 2, "{checked}");
+}
+
 #[test]
 fn random_arcs_match_the_plain_formula() {
     let mut rng = SplitMix64(17);

@@ -136,7 +136,8 @@ pub struct Deviation {
 }
 
 impl Deviation {
-    fn add(&mut self, g: &ArcGeometry) {
+    /// Compare the densities of `g`.
+    pub(crate) fn add(&mut self, g: &ArcGeometry) {
         use super::counts::ArcTarget;
         self.arcs += 1;
         let (fast, plain) = (g.densities(), g.densities_plain());

@@ -133,6 +133,27 @@ impl Vertex {
 /// [`MeshError::Internal`] when the exact geometry disagrees with the combinatorics (the
 /// caller then resamples or falls back to paper mode). Never panics.
 pub fn build(pb: &PeriodicBlocking, options: &Options) -> Result<PeriodicExact, MeshError> {
+    build_checking(pb, options, None)
+}
+
+/// How far the fast densities of every arc orbit of `pb` are from the plain formula
+/// ([`super::densities::Deviation`]; test hook, issue 8), from the arcs [`build`] makes.
+#[doc(hidden)]
+pub fn density_deviation(
+    pb: &PeriodicBlocking,
+    options: &Options,
+) -> Result<super::densities::Deviation, MeshError> {
+    let mut d = super::densities::Deviation::default();
+    build_checking(pb, options, Some(&mut d))?;
+    Ok(d)
+}
+
+/// [`build`], adding each arc orbit's densities to `check` when given.
+fn build_checking(
+    pb: &PeriodicBlocking,
+    options: &Options,
+    mut check: Option<&mut super::densities::Deviation>,
+) -> Result<PeriodicExact, MeshError> {
     validate_options(options)?;
     let size = pb.size;
     let h = pb.holes.len();
@@ -197,6 +218,9 @@ pub fn build(pb: &PeriodicBlocking, options: &Options) -> Result<PeriodicExact, 
             ends_m,
             ends_a,
         };
+        if let Some(d) = check.as_deref_mut() {
+            d.add(&g);
+        }
         let (sq, ang) = g.densities().ok_or_else(|| {
             internal(format!(
                 "arc orbit {o}: the exact medial arc is not defined"
