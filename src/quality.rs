@@ -8,6 +8,11 @@
 //! `[0, 360)` degrees: below 180 where the Jacobian is positive, above 180 at a reflex corner
 //! (so the four angles of a simple counter-clockwise cell sum to 360). A cell is *inverted*
 //! when any corner Jacobian is `<= 0` or not a number.
+//!
+//! The reference formulas are [`cell_corners`] and [`cell_metrics`]: corner angles by
+//! [`angle_deg`] (an `atan2` in degrees written here, within a few ulps of libm's, see
+//! [`atan`]), edge lengths `sqrt(x² + y²)` (`hypot` only where the squares could underflow or
+//! overflow). The per-block pass of [`measure_all`] gives their bits exactly.
 
 use crate::connectivity::{connectivity, BlockConnectivity};
 use crate::geometry::Point;
@@ -16,8 +21,11 @@ use crate::mesh::BlockGrid;
 use rayon::prelude::*;
 use serde::Serialize;
 
+pub mod atan;
 mod kernel;
 mod rows;
+
+pub use atan::angle_deg;
 
 /// Angles (degrees) and Jacobians of the four corners of one quadrilateral `[p0, p1, p2, p3]`
 /// (see the module doc for the conventions).
@@ -30,17 +38,8 @@ pub struct CellCorners {
 /// Measure one quadrilateral's corners.
 pub fn cell_corners(p: [Point; 4]) -> CellCorners {
     let (jacobian, dots) = kernel::corner_products(&p);
-    let mut angle_deg = [0.0; 4];
-    for k in 0..4 {
-        let (cross, dot) = (jacobian[k], dots[k]);
-        let mut ang = cross.atan2(dot).to_degrees();
-        if ang < 0.0 {
-            ang += 360.0;
-        }
-        angle_deg[k] = ang;
-    }
     CellCorners {
-        angle_deg,
+        angle_deg: [0, 1, 2, 3].map(|k| angle_deg(jacobian[k], dots[k])),
         jacobian,
     }
 }
@@ -278,7 +277,8 @@ pub struct CellMetrics {
     /// Smallest and largest interior angle, degrees.
     pub min_angle_deg: f64,
     pub max_angle_deg: f64,
-    /// Equiangle skewness `max((θmax - 90) / 90, (90 - θmin) / 90)`: 0 for a rectangle, 1 for a
+    /// Equiangle skewness `max((θmax - 90) / 90, (90 - θmin) / 90)` (computed as
+    /// `max(θmax - 90, 90 - θmin) / 90`, the same for finite angles): 0 for a rectangle, 1 for a
     /// degenerate cell (an angle of 0 or 180 degrees), above 1 with a reflex corner.
     pub equiangle_skewness: f64,
     /// Longest edge over shortest edge (`>= 1`; infinite with a zero-length edge).
@@ -292,8 +292,10 @@ pub struct CellMetrics {
     pub aspect_ratio: f64,
 }
 
+/// The reference edge length ([`kernel::edge_len`]: `sqrt(x² + y²)`, `hypot` only near
+/// underflow or overflow).
 fn len(a: Point, b: Point) -> f64 {
-    (b[0] - a[0]).hypot(b[1] - a[1])
+    kernel::edge_len(b[0] - a[0], b[1] - a[1])
 }
 
 /// Ratio `a / b` of two non-negative lengths, `a >= b`: infinite when `b == 0 < a`, 1 when
@@ -319,30 +321,15 @@ pub fn cell_metrics(p: [Point; 4]) -> CellMetrics {
         len(p[2], p[3]),
         len(p[3], p[0]),
     ];
-    let mut scaled_jacobian = f64::INFINITY;
-    for k in 0..4 {
-        // Corner k is between edge k (to p[k+1]) and edge k-1 (to p[k-1]).
-        let (la, lb) = (edges[k], edges[(k + 3) % 4]);
-        let s = if la > 0.0 && lb > 0.0 {
-            c.jacobian[k] / (la * lb)
-        } else {
-            0.0
-        };
-        if s.is_nan() || s < scaled_jacobian {
-            scaled_jacobian = s;
-        }
-    }
-    let (lo, hi) = (fold(edges, f64::min), fold(edges, f64::max));
-    let li = 0.5 * (edges[0] + edges[2]);
-    let lj = 0.5 * (edges[1] + edges[3]);
+    let (scaled_jacobian, edge_ratio, aspect_ratio) = kernel::length_figures(&c.jacobian, &edges);
     CellMetrics {
         angle_deg: c.angle_deg,
         min_angle_deg,
         max_angle_deg,
-        equiangle_skewness: ((max_angle_deg - 90.0) / 90.0).max((90.0 - min_angle_deg) / 90.0),
-        edge_ratio: ratio(hi, lo),
+        equiangle_skewness: kernel::skewness(min_angle_deg, max_angle_deg),
+        edge_ratio,
         scaled_jacobian,
-        aspect_ratio: ratio(li.max(lj), li.min(lj)),
+        aspect_ratio,
     }
 }
 
@@ -658,7 +645,7 @@ fn block_wall_orthogonality(
             let d = [inner[0] - w[0], inner[1] - w[1]];
             let cross = normal[0] * d[1] - normal[1] * d[0];
             let dot = normal[0] * d[0] + normal[1] * d[1];
-            worst = max_nan(worst, Some(cross.atan2(dot).abs().to_degrees()));
+            worst = max_nan(worst, Some(angle_deg(cross.abs(), dot)));
         }
     }
     worst
