@@ -89,45 +89,42 @@ pub(super) fn bin(edges: &[f64], x: f64) -> usize {
 const SLOTS: usize = 2048;
 
 /// Exact histogram bins in constant time, without a search: `x` maps to slot
-/// `s = clamp(floor((x - lo) * scale), 0, SLOTS - 1)`, whose entry is the bin of
-/// `lo + (s - 1) / scale` (a slot below); the bin of `x` is that entry or the next one, decided
-/// by one comparison with the next bin's lower edge (`+inf` after the last bin). This holds
-/// because bin edges are more than 2.1 slots apart, the first inner edge is more than 3 slots
-/// above `lo` and the last edge more than 2 slots below the table's end (checked when built),
-/// and the slot of `x` is off by far less than one slot from its exact value (so `x` lies
-/// above the entry's value and below the slot after the next edge can come).
+/// `s = round(clamp((x - lo) * scale, 0, SLOTS - 1))` (rounded by adding 2⁵², so the slot is
+/// the low bits of a float), whose entry is the bin of `lo + (s - 1.5) / scale` (a slot below
+/// the slot's lower end); the bin of `x` is that entry or the next one, decided by one
+/// comparison with the next bin's lower edge (`+inf` after the last bin). This holds because
+/// bin edges are more than 2.1 slots apart, the first inner edge is more than 3 slots above
+/// `lo` and the last edge more than 3 slots below the table's end (checked when built), and
+/// the computed slot is off by far less than a slot from the exact `(x - lo) * scale`, so `x`
+/// lies above the entry's value and at most one edge lies between them.
 /// Finite `x` only (the fast path's figures); see [`bin`] for the general rule.
 pub(super) struct Bins {
     lo: f64,
     scale: f64,
-    /// Per slot: the bin of the value one slot below the slot's start.
+    /// Per slot: the bin of the value 1.5 slots below the slot's centre.
     slot: Box<[u8; SLOTS]>,
-    /// Per bin: the lower edge of the next bin (`+inf` for the last).
-    upper: Vec<f64>,
+    /// Per bin: the lower edge of the next bin (`+inf` for the last), padded to 32 entries.
+    upper: [f64; 32],
 }
 
+/// `2⁵²`: adding it to a float in `[0, 2⁵¹)` rounds it to an integer held in the low bits.
+const ROUND: f64 = 4_503_599_627_370_496.0;
+
 impl Bins {
-    /// Table over `[lo, hi)` for `edges` (increasing, at most 200).
+    /// Table over `[lo, hi)` for `edges` (increasing, at most 32).
     pub fn new(edges: &[f64], lo: f64, hi: f64) -> Bins {
         let scale = SLOTS as f64 / (hi - lo);
         let w = 1.0 / scale;
-        assert!(edges.len() >= 2 && edges.len() < 200);
+        assert!(edges.len() >= 2 && edges.len() <= 32);
         assert!(edges.windows(2).all(|p| p[1] - p[0] > 2.1 * w));
-        assert!(edges[1] - lo > 3.0 * w && hi - edges[edges.len() - 1] > 2.0 * w);
+        assert!(edges[1] - lo > 3.0 * w && hi - edges[edges.len() - 1] > 3.0 * w);
         let mut slot = Box::new([0u8; SLOTS]);
         for (s, e) in slot.iter_mut().enumerate() {
-            *e = bin(edges, lo + (s as f64 - 1.0) * w) as u8;
+            *e = bin(edges, lo + (s as f64 - 1.5) * w) as u8;
         }
         let last = edges.len() - 2;
-        let upper = (0..=last)
-            .map(|b| {
-                if b < last {
-                    edges[b + 1]
-                } else {
-                    f64::INFINITY
-                }
-            })
-            .collect();
+        let mut upper = [f64::INFINITY; 32];
+        upper[..last].copy_from_slice(&edges[1..=last]);
         Bins {
             lo,
             scale,
@@ -136,13 +133,31 @@ impl Bins {
         }
     }
 
-    /// The bin of a finite `x` (equal to [`bin`]).
+    /// The slot of a finite `x`, as the float `2⁵² + slot` (computed in the vectorised row
+    /// loop; the clamps are comparisons, one instruction each).
     #[inline(always)]
-    pub fn of(&self, x: f64) -> usize {
-        // The float-to-integer cast saturates; the clamp keeps it in the table.
-        let s = (((x - self.lo) * self.scale) as i64).clamp(0, SLOTS as i64 - 1) as usize;
-        let b = self.slot[s] as usize;
+    pub fn slot(&self, x: f64) -> f64 {
+        let t = (x - self.lo) * self.scale;
+        let t = if t > 0.0 { t } else { 0.0 };
+        let t = if t < (SLOTS - 1) as f64 {
+            t
+        } else {
+            (SLOTS - 1) as f64
+        };
+        t + ROUND
+    }
+
+    /// The bin of a finite `x` whose [`Bins::slot`] is `slot` (equal to [`bin`]), below 32.
+    #[inline(always)]
+    pub fn bin(&self, slot: f64, x: f64) -> usize {
+        let b = self.slot[slot.to_bits() as usize & (SLOTS - 1)] as usize & 31;
         b + usize::from(x >= self.upper[b])
+    }
+
+    /// The bin of a finite `x` (equal to [`bin`]).
+    #[cfg(test)]
+    pub fn of(&self, x: f64) -> usize {
+        self.bin(self.slot(x), x)
     }
 }
 
@@ -152,6 +167,9 @@ pub(super) struct Tables {
     pub skewness: Bins,
     pub scaled_jacobian: Bins,
     pub ratio: Bins,
+    /// The CPU has AVX2: the row loop runs in 4-lane vectors (same bits, see
+    /// [`super::rows`]).
+    pub wide: bool,
 }
 
 impl Tables {
@@ -162,7 +180,20 @@ impl Tables {
             skewness: Bins::new(&SKEWNESS_EDGES, -0.5, 2.5),
             scaled_jacobian: Bins::new(&JACOBIAN_EDGES, -1.5, 1.5),
             ratio: Bins::new(&RATIO_EDGES, 0.5, 128.5),
+            wide: wide(),
         }
+    }
+}
+
+/// True when the CPU has AVX2 (x86-64 only).
+fn wide() -> bool {
+    #[cfg(target_arch = "x86_64")]
+    {
+        std::arch::is_x86_feature_detected!("avx2")
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    {
+        false
     }
 }
 
@@ -231,4 +262,42 @@ pub(super) fn row_inverted(lo: &[Point], hi: &[Point]) -> usize {
         count += usize::from(!good);
     }
     count
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::quality::{ANGLE_EDGES, JACOBIAN_EDGES, RATIO_EDGES, SKEWNESS_EDGES};
+
+    /// Values at, just around and between every edge, and far outside, in every table: the
+    /// table bin equals the search of [`bin`].
+    #[test]
+    fn table_bins_equal_the_search() {
+        let t = Tables::new();
+        let cases: [(&Bins, &[f64]); 4] = [
+            (&t.angle, &ANGLE_EDGES),
+            (&t.skewness, &SKEWNESS_EDGES),
+            (&t.scaled_jacobian, &JACOBIAN_EDGES),
+            (&t.ratio, &RATIO_EDGES),
+        ];
+        for (bins, edges) in cases {
+            let mut xs = vec![-1e300, -400.0, -2.0, 0.0, 1e-300, 1e300, 500.0, 150.0];
+            for &e in edges {
+                for k in -3i64..=3 {
+                    // Neighbouring floats (for 0.0, NaN patterns below it are skipped).
+                    xs.push(f64::from_bits((e.to_bits() as i64 + k) as u64));
+                    xs.push(-f64::from_bits(k.unsigned_abs()));
+                    xs.push(e + k as f64 * 1e-3);
+                    xs.push(e + k as f64 * 0.07);
+                }
+            }
+            let (lo, hi) = (edges[0] - 5.0, edges[edges.len() - 1] + 5.0);
+            for s in 0..100_000 {
+                xs.push(lo + (hi - lo) * s as f64 / 100_000.0);
+            }
+            for x in xs.into_iter().filter(|x| x.is_finite()) {
+                assert_eq!(bins.of(x), bin(edges, x), "{x:e} in {edges:?}");
+            }
+        }
+    }
 }
