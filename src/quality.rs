@@ -533,9 +533,10 @@ fn side_cell_height(grid: &BlockGrid, s: usize, p: usize) -> f64 {
     let q = corners(grid, i, j);
     let area = 0.5
         * ((q[2][0] - q[0][0]) * (q[3][1] - q[1][1]) - (q[2][1] - q[0][1]) * (q[3][0] - q[1][0]));
-    let (a, _) = side_node_and_inward(grid, s, p);
-    let (b, _) = side_node_and_inward(grid, s, p + 1);
-    let l = len(a, b);
+    // The cell's edge on side `s` runs from corner `s` to corner `s + 1` (in the side's
+    // direction): the nodes `side_node_and_inward(grid, s, p)` and `(.., p + 1)`.
+    let k = s.min(3);
+    let l = len(q[k], q[(k + 1) % 4]);
     if l > 0.0 {
         area.abs() / l
     } else {

@@ -140,6 +140,24 @@ struct RowCounts {
     /// Cells, and inverted cells.
     fast: u64,
     inverted: u64,
+    /// Smallest and largest [`key`] per metric (angle: of the cells' smallest and largest
+    /// angles), `i64::MAX` and `i64::MIN` without a cell.
+    lo: [i64; 5],
+    hi: [i64; 5],
+}
+
+/// An integer ordered as the float `x` (the order of `f64::total_cmp`; that of `<` for
+/// numbers other than NaN and zeros, which the fast path does not produce): integer minima
+/// and maxima are reductions the compiler vectorises, float ones (`minnum`) are not.
+#[inline(always)]
+fn key(x: f64) -> i64 {
+    let b = x.to_bits() as i64;
+    b ^ (((b >> 63) as u64) >> 1) as i64
+}
+
+/// The float of a [`key`].
+fn unkey(k: i64) -> f64 {
+    f64::from_bits((k ^ (((k >> 63) as u64) >> 1) as i64) as u64)
 }
 
 /// [`row_figures`] compiled for AVX2.
@@ -166,7 +184,11 @@ fn row_figures(
     bins: &Tables,
 ) -> RowCounts {
     let n = out.len();
-    let mut k = RowCounts::default();
+    let mut k = RowCounts {
+        lo: [i64::MAX; 5],
+        hi: [i64::MIN; 5],
+        ..RowCounts::default()
+    };
     let (bx, by, bl) = (&b[0][..n], &b[1][..n], &b[2][..n]);
     let (tx, ty, tl) = (&t[0][..n], &t[1][..n], &t[2][..n]);
     let (ax, ay, al) = (&v[0][..n], &v[1][..n], &v[2][..n]);
@@ -218,6 +240,13 @@ fn row_figures(
         k.outside[SJ] += u64::from(fine & outside(sj, SCALED_JACOBIAN_ACCEPTABLE));
         k.outside[ER] += u64::from(fine & outside(er, EDGE_RATIO_ACCEPTABLE));
         k.outside[AR] += u64::from(fine & outside(ar, ASPECT_ACCEPTABLE));
+        for (m, (x, y)) in [(amin, amax), (sk, sk), (sj, sj), (er, er), (ar, ar)]
+            .into_iter()
+            .enumerate()
+        {
+            k.lo[m] = k.lo[m].min(if fine { key(x) } else { i64::MAX });
+            k.hi[m] = k.hi[m].max(if fine { key(y) } else { i64::MIN });
+        }
         out[i] = Figures {
             ang: a,
             fig: [amin, amax, sk, sj, er, ar],
@@ -365,26 +394,31 @@ impl Chunk {
         for j in 0..nj {
             let (line, next) = (&n[j * w..(j + 1) * w], &n[(j + 1) * w..(j + 2) * w]);
             let k = rows.figures(line, next, t);
-            self.fast += k.fast;
-            f.inverted += k.inverted as usize;
-            for (a, b) in self.outside.iter_mut().zip(k.outside) {
-                *a += b;
+            if k.fast > 0 {
+                // Extremes of the row's fast cells: no NaN, no zero, so merging them here
+                // rather than cell by cell gives the same bits.
+                self.fast += k.fast;
+                f.cells += k.fast as usize;
+                f.inverted += k.inverted as usize;
+                for (a, b) in self.outside.iter_mut().zip(k.outside) {
+                    *a += b;
+                }
+                for (m, e) in self.ext.iter_mut().enumerate() {
+                    e[0] = less(unkey(k.lo[m]), e[0]);
+                    e[1] = more(unkey(k.hi[m]), e[1]);
+                }
+                f.min_angle_deg = less(unkey(k.lo[ANGLE]), f.min_angle_deg);
+                f.max_angle_deg = more(unkey(k.hi[ANGLE]), f.max_angle_deg);
+                min_sj(&mut f, unkey(k.lo[SJ]));
             }
-            let mut ext = self.ext;
             for (i, cell) in rows.cells[..ni].iter().enumerate() {
                 if cell.flag == 0.0 {
-                    self.ext = ext;
                     self.add_reference(&mut f, &[line[i], line[i + 1], next[i + 1], next[i]]);
-                    ext = self.ext;
                     continue;
                 }
                 let [lo, hi, sk, sj, er, ar] = cell.fig;
-                f.cells += 1;
                 f.sum_min += lo;
                 f.sum_max += hi;
-                f.min_angle_deg = less(lo, f.min_angle_deg);
-                f.max_angle_deg = more(hi, f.max_angle_deg);
-                min_sj(&mut f, sj);
                 let (c, s) = (&mut self.counts, &cell.slot);
                 for k in 0..4 {
                     c[ANGLE][t.angle.bin(s[k], cell.ang[k])] += 1;
@@ -393,15 +427,7 @@ impl Chunk {
                 c[SJ][t.scaled_jacobian.bin(s[5], sj)] += 1;
                 c[ER][t.ratio.bin(s[6], er)] += 1;
                 c[AR][t.ratio.bin(s[7], ar)] += 1;
-                for (e, [lo, hi]) in
-                    ext.iter_mut()
-                        .zip([[lo, hi], [sk, sk], [sj, sj], [er, er], [ar, ar]])
-                {
-                    e[0] = less(lo, e[0]);
-                    e[1] = more(hi, e[1]);
-                }
             }
-            self.ext = ext;
             std::mem::swap(&mut rows.bx, &mut rows.tx);
             std::mem::swap(&mut rows.by, &mut rows.ty);
             std::mem::swap(&mut rows.bl, &mut rows.tl);
