@@ -192,7 +192,7 @@ pub struct Quality {
 /// Blocks are measured in parallel (on the current rayon pool) and reduced in block order:
 /// the means are sums of per-block sums, the same for every thread count.
 pub fn measure(grids: &[BlockGrid]) -> Quality {
-    reduce(&block_stats(grids)).0
+    reduce(&block_stats(grids, None)).0
 }
 
 /// Blocks per chunk of [`block_stats`]: a fixed number, so that nothing depends on the
@@ -200,16 +200,30 @@ pub fn measure(grids: &[BlockGrid]) -> Quality {
 const CHUNK: usize = 64;
 
 /// [`measure`] and the cell part of [`quality_metrics`] in one pass over the cells: the
-/// figures of every block, and the metrics of every chunk of [`CHUNK`] blocks.
-fn block_stats(grids: &[BlockGrid]) -> Vec<(Vec<kernel::BlockFigures>, QualityMetrics)> {
+/// figures of every block, and the metrics of every chunk of [`CHUNK`] blocks. With `conn`
+/// (one entry per grid, in grid order), also the growth ratios of the interfaces each block
+/// owns, right after the block (while its nodes are in cache; counts and extremes of growth
+/// ratios do not depend on the order, see [`growth_ratios`]).
+fn block_stats(
+    grids: &[BlockGrid],
+    conn: Option<&[BlockConnectivity]>,
+) -> Vec<(Vec<kernel::BlockFigures>, QualityMetrics)> {
     let tables = kernel::Tables::new();
     grids
         .par_chunks(CHUNK)
-        .map_init(rows::Rows::default, |scratch, chunk| {
+        .enumerate()
+        .map_init(rows::Rows::default, |scratch, (c, chunk)| {
             let mut acc = rows::Chunk::new();
             let figs = chunk
                 .iter()
-                .map(|g| acc.block(g, &tables, scratch))
+                .enumerate()
+                .map(|(k, g)| {
+                    let f = acc.block(g, &tables, scratch);
+                    if let Some(bc) = conn.and_then(|conn| conn.get(c * CHUNK + k)) {
+                        block_growth_ratios(bc, grids, acc.growth());
+                    }
+                    f
+                })
                 .collect();
             (figs, acc.finish())
         })
@@ -231,7 +245,7 @@ fn reduce(stats: &[(Vec<kernel::BlockFigures>, QualityMetrics)]) -> (Quality, Qu
     let mut m = QualityMetrics::empty();
     let (mut sum_min, mut sum_max) = (0.0, 0.0);
     for (figs, metrics) in stats {
-        m.merge_cells(metrics);
+        m.merge_metrics(metrics);
         for s in figs {
             if s.malformed {
                 q.malformed_grids += 1;
@@ -499,12 +513,13 @@ impl QualityMetrics {
         ]
     }
 
-    fn merge_cells(&mut self, o: &QualityMetrics) {
+    fn merge_metrics(&mut self, o: &QualityMetrics) {
         self.angle_deg.merge(&o.angle_deg);
         self.equiangle_skewness.merge(&o.equiangle_skewness);
         self.edge_ratio.merge(&o.edge_ratio);
         self.scaled_jacobian.merge(&o.scaled_jacobian);
         self.aspect_ratio.merge(&o.aspect_ratio);
+        self.interface_growth_ratio.merge(&o.interface_growth_ratio);
     }
 }
 
@@ -546,7 +561,8 @@ fn side_cell_height(grid: &BlockGrid, s: usize, p: usize) -> f64 {
 
 /// The growth ratios across every interface of `conn` (each interface once), counted into
 /// `m`. Blocks are visited in parallel in fixed chunks of [`CHUNK`]; counts and extremes do
-/// not depend on the order, so the result is that of a sequential visit.
+/// not depend on the order (a ratio is at least 1 or infinite: never NaN nor a zero whose
+/// sign a fold could pick), so the result is that of a sequential visit.
 fn growth_ratios(conn: &[BlockConnectivity], grids: &[BlockGrid], m: &mut MetricSummary) {
     let empty = MetricSummary::new(&m.histogram.edges, m.acceptable);
     let parts: Vec<MetricSummary> = conn
@@ -674,11 +690,16 @@ pub fn measure_all_with(
     grids: &[BlockGrid],
     conn: Option<&[BlockConnectivity]>,
 ) -> (Quality, QualityMetrics) {
-    let (q, mut m) = reduce(&block_stats(grids));
-    if layout.blocks.len() == grids.len() {
-        if let Some(conn) = conn {
-            growth_ratios(conn, grids, &mut m.interface_growth_ratio);
-        }
+    let same = layout.blocks.len() == grids.len();
+    let conn = conn.filter(|_| same);
+    // One entry per grid in grid order: the growth ratios go with the cell pass.
+    let in_order = conn
+        .filter(|c| c.len() == grids.len() && c.iter().enumerate().all(|(b, bc)| bc.block == b));
+    let (q, mut m) = reduce(&block_stats(grids, in_order));
+    if let (Some(conn), None) = (conn, in_order) {
+        growth_ratios(conn, grids, &mut m.interface_growth_ratio);
+    }
+    if same {
         m.max_wall_orthogonality_deviation_deg = wall_orthogonality(layout, grids);
     }
     (q, m)
@@ -703,6 +724,25 @@ mod tests {
 
     fn value() -> impl Strategy<Value = f64> {
         prop_oneof![0.0f64..180.0, Just(f64::NAN), Just(0.0), Just(90.0)]
+    }
+
+    /// The growth ratios counted with the cell pass (blocks in grid order) equal those of the
+    /// separate pass over the connectivity, on real meshes of both modes.
+    #[test]
+    fn growth_ratios_in_the_cell_pass_equal_the_separate_pass() {
+        let domain = crate::layouts::bubbles(30, 3).expect("layout");
+        for opts in [crate::Options::default(), crate::Options::paper()] {
+            let m = crate::mesh(&domain, &opts).expect("mesh");
+            let conn = connectivity(&m.layout, &m.grids).expect("connectivity");
+            let (_, got) = measure_all_with(&m.layout, &m.grids, Some(&conn));
+            let mut want = MetricSummary::new(&GROWTH_EDGES, GROWTH_ACCEPTABLE);
+            growth_ratios(&conn, &m.grids, &mut want);
+            assert!(want.samples > 0);
+            assert_eq!(
+                format!("{:?}", got.interface_growth_ratio),
+                format!("{want:?}")
+            );
+        }
     }
 
     proptest! {

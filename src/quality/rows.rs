@@ -351,6 +351,11 @@ impl Chunk {
         }
     }
 
+    /// The growth ratios of the chunk (counted by the caller).
+    pub fn growth(&mut self) -> &mut MetricSummary {
+        &mut self.metrics.interface_growth_ratio
+    }
+
     /// The metrics of every block measured.
     pub fn finish(mut self) -> QualityMetrics {
         for which in [ANGLE, SKEW, SJ, ER, AR] {
