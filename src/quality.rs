@@ -135,17 +135,14 @@ pub fn has_corner_below(grid: &BlockGrid, deg: f64) -> bool {
         return false;
     }
     let t = deg.to_radians().tan();
-    for j in 0..grid.nj {
-        for i in 0..grid.ni {
-            let (crosses, dots) = kernel::corner_products(&corners(grid, i, j));
-            for (cross, dot) in crosses.into_iter().zip(dots) {
-                if cross.is_nan() || cross <= 0.0 || (dot > 0.0 && cross < t * dot) {
-                    return true;
-                }
-            }
-        }
-    }
-    false
+    let w = grid.ni + 1;
+    (0..grid.nj).any(|j| {
+        kernel::row_corner_below(
+            &grid.nodes[j * w..(j + 1) * w],
+            &grid.nodes[(j + 1) * w..][..w],
+            t,
+        )
+    })
 }
 
 /// The indices of the grids with at least one inverted cell (as [`inverted_cells`] counts
@@ -745,7 +742,42 @@ mod tests {
         }
     }
 
+    /// [`has_corner_below`] cell by cell with the reference products (its former body).
+    fn corner_below_by_cells(grid: &BlockGrid, deg: f64) -> bool {
+        let t = deg.to_radians().tan();
+        (0..grid.nj).any(|j| {
+            (0..grid.ni).any(|i| {
+                let (crosses, dots) = kernel::corner_products(&corners(grid, i, j));
+                crosses.into_iter().zip(dots).any(|(cross, dot)| {
+                    cross.is_nan() || cross <= 0.0 || (dot > 0.0 && cross < t * dot)
+                })
+            })
+        })
+    }
+
+    fn coord() -> impl Strategy<Value = f64> {
+        prop_oneof![
+            8 => -3.0..3.0f64,
+            2 => (-2i32..3).prop_map(f64::from),
+            1 => prop_oneof![Just(0.0), Just(-0.0), Just(f64::NAN), Just(f64::INFINITY)],
+        ]
+    }
+
     proptest! {
+        /// The row pass of [`has_corner_below`] decides as the cell-by-cell test, on blocks of
+        /// random, degenerate (repeated, collinear, signed-zero) and non-finite nodes.
+        #[test]
+        fn corner_below_rows_equal_cells(
+            ni in 1usize..5,
+            nj in 1usize..4,
+            deg in prop_oneof![Just(5.0), Just(30.0), Just(45.0), 1.0..89.0f64],
+            v in proptest::collection::vec(coord(), 60),
+        ) {
+            let nodes = (0..(ni + 1) * (nj + 1)).map(|k| [v[2 * k], v[2 * k + 1]]).collect();
+            let g = BlockGrid { ni, nj, nodes };
+            prop_assert_eq!(has_corner_below(&g, deg), corner_below_by_cells(&g, deg));
+        }
+
         /// Any split of the values into chunks reduced with `max_nan` in any grouping gives
         /// the sequential fold's result, bit for bit (NaN when any value is NaN).
         #[test]

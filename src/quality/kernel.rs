@@ -264,6 +264,39 @@ pub(super) fn row_inverted(lo: &[Point], hi: &[Point]) -> usize {
     count
 }
 
+/// True when some cell between node lines `lo` and `hi` (same length) has a corner with
+/// `cross <= 0` or NaN (inverted, degenerate or not a number) or `dot > 0` and `cross < t dot` (an
+/// angle below `atan(t)`): the test of [`super::has_corner_below`] with the products of
+/// [`row_inverted`] (shared edges: a product may differ from the reference's only in the sign
+/// of a zero, which neither comparison sees).
+pub(super) fn row_corner_below(lo: &[Point], hi: &[Point], t: f64) -> bool {
+    let n = lo.len().min(hi.len()).saturating_sub(1);
+    let (lo, hi) = (&lo[..=n], &hi[..=n]);
+    let mut bad = false;
+    for i in 0..n {
+        let (hx, hy) = (lo[i + 1][0] - lo[i][0], lo[i + 1][1] - lo[i][1]);
+        let (ux, uy) = (hi[i + 1][0] - hi[i][0], hi[i + 1][1] - hi[i][1]);
+        let (vx, vy) = (hi[i][0] - lo[i][0], hi[i][1] - lo[i][1]);
+        let (wx, wy) = (hi[i + 1][0] - lo[i + 1][0], hi[i + 1][1] - lo[i + 1][1]);
+        let c = [
+            hx * vy - hy * vx,
+            wx * (-hy) - wy * (-hx),
+            (-ux) * (-wy) - (-uy) * (-wx),
+            (-vx) * uy - (-vy) * ux,
+        ];
+        let d = [
+            hx * vx + hy * vy,
+            wx * (-hx) + wy * (-hy),
+            (-ux) * (-wx) + (-uy) * (-wy),
+            (-vx) * ux + (-vy) * uy,
+        ];
+        for k in 0..4 {
+            bad |= c[k].is_nan() | (c[k] <= 0.0) | ((d[k] > 0.0) & (c[k] < t * d[k]));
+        }
+    }
+    bad
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
