@@ -243,6 +243,23 @@ pub(super) fn cell_field_values(p: &[Point; 4]) -> [f64; 7] {
 /// changes at most the sign of a zero product, and `!(cross > 0)` holds for both zeros (and
 /// NaN), so the count is that of the reference test.
 pub(super) fn row_inverted(lo: &[Point], hi: &[Point]) -> usize {
+    #[cfg(target_arch = "x86_64")]
+    if std::arch::is_x86_feature_detected!("avx2") {
+        // SAFETY: the CPU has AVX2 (checked just above).
+        return unsafe { row_inverted_avx2(lo, hi) };
+    }
+    row_inverted_portable(lo, hi)
+}
+
+/// [`row_inverted`] compiled for AVX2 (the same comparisons of the same products).
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+fn row_inverted_avx2(lo: &[Point], hi: &[Point]) -> usize {
+    row_inverted_portable(lo, hi)
+}
+
+#[inline(always)]
+fn row_inverted_portable(lo: &[Point], hi: &[Point]) -> usize {
     let n = lo.len().min(hi.len()).saturating_sub(1);
     let (lo, hi) = (&lo[..=n], &hi[..=n]);
     let mut count = 0;
@@ -270,6 +287,23 @@ pub(super) fn row_inverted(lo: &[Point], hi: &[Point]) -> usize {
 /// [`row_inverted`] (shared edges: a product may differ from the reference's only in the sign
 /// of a zero, which neither comparison sees).
 pub(super) fn row_corner_below(lo: &[Point], hi: &[Point], t: f64) -> bool {
+    #[cfg(target_arch = "x86_64")]
+    if std::arch::is_x86_feature_detected!("avx2") {
+        // SAFETY: the CPU has AVX2 (checked just above).
+        return unsafe { row_corner_below_avx2(lo, hi, t) };
+    }
+    row_corner_below_portable(lo, hi, t)
+}
+
+/// [`row_corner_below`] compiled for AVX2 (the same comparisons of the same products).
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+fn row_corner_below_avx2(lo: &[Point], hi: &[Point], t: f64) -> bool {
+    row_corner_below_portable(lo, hi, t)
+}
+
+#[inline(always)]
+fn row_corner_below_portable(lo: &[Point], hi: &[Point], t: f64) -> bool {
     let n = lo.len().min(hi.len()).saturating_sub(1);
     let (lo, hi) = (&lo[..=n], &hi[..=n]);
     let mut bad = false;
@@ -301,6 +335,48 @@ pub(super) fn row_corner_below(lo: &[Point], hi: &[Point], t: f64) -> bool {
 mod tests {
     use super::*;
     use crate::quality::{ANGLE_EDGES, JACOBIAN_EDGES, RATIO_EDGES, SKEWNESS_EDGES};
+
+    /// The AVX2 and portable builds of the row tests agree, on rows with degenerate,
+    /// inverted, signed-zero and non-finite cells.
+    #[test]
+    fn wide_and_portable_row_tests_agree() {
+        if !std::arch::is_x86_feature_detected!("avx2") {
+            return;
+        }
+        let mut r = crate::layouts::SplitMix64(5);
+        let vals = [
+            0.0,
+            -0.0,
+            1.0,
+            -1.0,
+            0.5,
+            2.0,
+            f64::NAN,
+            f64::INFINITY,
+            1e-300,
+            3.0,
+        ];
+        for n in [2usize, 3, 5, 9, 17] {
+            for _ in 0..3000 {
+                let mut p = || {
+                    let mut v = || vals[(r.next_u64() % vals.len() as u64) as usize];
+                    [v(), v()]
+                };
+                let lo: Vec<Point> = (0..n).map(|_| p()).collect();
+                let hi: Vec<Point> = (0..n).map(|_| p()).collect();
+                // SAFETY: AVX2 was detected above.
+                unsafe {
+                    assert_eq!(row_inverted_avx2(&lo, &hi), row_inverted_portable(&lo, &hi));
+                    for t in [0.1, 1.0] {
+                        assert_eq!(
+                            row_corner_below_avx2(&lo, &hi, t),
+                            row_corner_below_portable(&lo, &hi, t)
+                        );
+                    }
+                }
+            }
+        }
+    }
 
     /// Values at, just around and between every edge, and far outside, in every table: the
     /// table bin equals the search of [`bin`].
