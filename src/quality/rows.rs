@@ -4,10 +4,11 @@
 //! A row of cells is measured in two loops:
 //! 1. straight-line arithmetic over arrays (the compiler vectorises it): the edge vectors and
 //!    lengths (each computed once and shared by the two cells on either side), the corner cross
-//!    and dot products, the four corner angles, the extreme angles and every length figure, and
-//!    whether the cell takes this path;
-//! 2. per cell, in cell order: histogram bins ([`Bins`]: a table look-up and one comparison),
-//!    acceptance counts, extremes and sums (or the reference path).
+//!    and dot products, the four corner angles, the extreme angles and every length figure,
+//!    whether the cell takes this path, the histogram slots, and as reductions over the row the
+//!    acceptance, inverted and cell counts and the row's extremes (integer keys);
+//! 2. per cell, in cell order: the angle sums and the histogram counts ([`Bins`]: a table
+//!    look-up and one comparison), or the reference path.
 //!
 //! Why this gives the reference's numbers: every figure is computed with the reference's own
 //! functions ([`angle_deg`], [`length_figures`], [`skewness`], the `sqrt` length of
