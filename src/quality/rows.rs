@@ -7,7 +7,7 @@
 //!    and dot products, the four corner angles, the extreme angles and every length figure,
 //!    whether the cell takes this path, the histogram slots, and as reductions over the row the
 //!    acceptance, inverted and cell counts and the row's extremes (integer keys);
-//! 2. per cell, in cell order: the angle sums and the histogram counts ([`Bins`]: a table
+//! 2. per cell, in cell order: the angle sums and the histogram counts ([`super::kernel::Bins`]: a table
 //!    look-up and one comparison), or the reference path.
 //!
 //! Why this gives the reference's numbers: every figure is computed with the reference's own
@@ -89,7 +89,7 @@ struct Figures {
     ang: [f64; 4],
     /// Smallest and largest angle, skewness, scaled Jacobian, edge ratio, aspect ratio.
     fig: [f64; 6],
-    /// [`Bins::slot`] of the four angles and of the figures from skewness on.
+    /// [`super::kernel::Bins::slot`] of the four angles and of the figures from skewness on.
     slot: [f64; 8],
     /// 0 for the reference path, 1 for a valid cell, 2 for an inverted one (counted in loop 1).
     flag: f64,
