@@ -8,6 +8,11 @@
 //! `[0, 360)` degrees: below 180 where the Jacobian is positive, above 180 at a reflex corner
 //! (so the four angles of a simple counter-clockwise cell sum to 360). A cell is *inverted*
 //! when any corner Jacobian is `<= 0` or not a number.
+//!
+//! The reference formulas are [`cell_corners`] and [`cell_metrics`]: corner angles by
+//! [`angle_deg`] (an `atan2` in degrees written here, within a few ulps of libm's, see
+//! [`atan`]), edge lengths `sqrt(x² + y²)` (`hypot` only where the squares could underflow or
+//! overflow). The per-block pass of [`measure_all`] gives their bits exactly.
 
 use crate::connectivity::{connectivity, BlockConnectivity};
 use crate::geometry::Point;
@@ -16,8 +21,11 @@ use crate::mesh::BlockGrid;
 use rayon::prelude::*;
 use serde::Serialize;
 
+pub mod atan;
 mod kernel;
 mod rows;
+
+pub use atan::angle_deg;
 
 /// Angles (degrees) and Jacobians of the four corners of one quadrilateral `[p0, p1, p2, p3]`
 /// (see the module doc for the conventions).
@@ -30,17 +38,8 @@ pub struct CellCorners {
 /// Measure one quadrilateral's corners.
 pub fn cell_corners(p: [Point; 4]) -> CellCorners {
     let (jacobian, dots) = kernel::corner_products(&p);
-    let mut angle_deg = [0.0; 4];
-    for k in 0..4 {
-        let (cross, dot) = (jacobian[k], dots[k]);
-        let mut ang = cross.atan2(dot).to_degrees();
-        if ang < 0.0 {
-            ang += 360.0;
-        }
-        angle_deg[k] = ang;
-    }
     CellCorners {
-        angle_deg,
+        angle_deg: [0, 1, 2, 3].map(|k| angle_deg(jacobian[k], dots[k])),
         jacobian,
     }
 }
@@ -136,17 +135,14 @@ pub fn has_corner_below(grid: &BlockGrid, deg: f64) -> bool {
         return false;
     }
     let t = deg.to_radians().tan();
-    for j in 0..grid.nj {
-        for i in 0..grid.ni {
-            let (crosses, dots) = kernel::corner_products(&corners(grid, i, j));
-            for (cross, dot) in crosses.into_iter().zip(dots) {
-                if cross.is_nan() || cross <= 0.0 || (dot > 0.0 && cross < t * dot) {
-                    return true;
-                }
-            }
-        }
-    }
-    false
+    let w = grid.ni + 1;
+    (0..grid.nj).any(|j| {
+        kernel::row_corner_below(
+            &grid.nodes[j * w..(j + 1) * w],
+            &grid.nodes[(j + 1) * w..][..w],
+            t,
+        )
+    })
 }
 
 /// The indices of the grids with at least one inverted cell (as [`inverted_cells`] counts
@@ -193,7 +189,7 @@ pub struct Quality {
 /// Blocks are measured in parallel (on the current rayon pool) and reduced in block order:
 /// the means are sums of per-block sums, the same for every thread count.
 pub fn measure(grids: &[BlockGrid]) -> Quality {
-    reduce(&block_stats(grids)).0
+    reduce(&block_stats(grids, None)).0
 }
 
 /// Blocks per chunk of [`block_stats`]: a fixed number, so that nothing depends on the
@@ -201,16 +197,30 @@ pub fn measure(grids: &[BlockGrid]) -> Quality {
 const CHUNK: usize = 64;
 
 /// [`measure`] and the cell part of [`quality_metrics`] in one pass over the cells: the
-/// figures of every block, and the metrics of every chunk of [`CHUNK`] blocks.
-fn block_stats(grids: &[BlockGrid]) -> Vec<(Vec<kernel::BlockFigures>, QualityMetrics)> {
+/// figures of every block, and the metrics of every chunk of [`CHUNK`] blocks. With `conn`
+/// (one entry per grid, in grid order), also the growth ratios of the interfaces each block
+/// owns, right after the block (while its nodes are in cache; counts and extremes of growth
+/// ratios do not depend on the order, see [`growth_ratios`]).
+fn block_stats(
+    grids: &[BlockGrid],
+    conn: Option<&[BlockConnectivity]>,
+) -> Vec<(Vec<kernel::BlockFigures>, QualityMetrics)> {
     let tables = kernel::Tables::new();
     grids
         .par_chunks(CHUNK)
-        .map_init(rows::Rows::default, |scratch, chunk| {
+        .enumerate()
+        .map_init(rows::Rows::default, |scratch, (c, chunk)| {
             let mut acc = rows::Chunk::new();
             let figs = chunk
                 .iter()
-                .map(|g| acc.block(g, &tables, scratch))
+                .enumerate()
+                .map(|(k, g)| {
+                    let f = acc.block(g, &tables, scratch);
+                    if let Some(bc) = conn.and_then(|conn| conn.get(c * CHUNK + k)) {
+                        block_growth_ratios(bc, grids, acc.growth());
+                    }
+                    f
+                })
                 .collect();
             (figs, acc.finish())
         })
@@ -232,7 +242,7 @@ fn reduce(stats: &[(Vec<kernel::BlockFigures>, QualityMetrics)]) -> (Quality, Qu
     let mut m = QualityMetrics::empty();
     let (mut sum_min, mut sum_max) = (0.0, 0.0);
     for (figs, metrics) in stats {
-        m.merge_cells(metrics);
+        m.merge_metrics(metrics);
         for s in figs {
             if s.malformed {
                 q.malformed_grids += 1;
@@ -278,7 +288,8 @@ pub struct CellMetrics {
     /// Smallest and largest interior angle, degrees.
     pub min_angle_deg: f64,
     pub max_angle_deg: f64,
-    /// Equiangle skewness `max((θmax - 90) / 90, (90 - θmin) / 90)`: 0 for a rectangle, 1 for a
+    /// Equiangle skewness `max((θmax - 90) / 90, (90 - θmin) / 90)` (computed as
+    /// `max(θmax - 90, 90 - θmin) / 90`, the same for finite angles): 0 for a rectangle, 1 for a
     /// degenerate cell (an angle of 0 or 180 degrees), above 1 with a reflex corner.
     pub equiangle_skewness: f64,
     /// Longest edge over shortest edge (`>= 1`; infinite with a zero-length edge).
@@ -292,8 +303,10 @@ pub struct CellMetrics {
     pub aspect_ratio: f64,
 }
 
+/// The reference edge length ([`kernel::edge_len`]: `sqrt(x² + y²)`, `hypot` only near
+/// underflow or overflow).
 fn len(a: Point, b: Point) -> f64 {
-    (b[0] - a[0]).hypot(b[1] - a[1])
+    kernel::edge_len(b[0] - a[0], b[1] - a[1])
 }
 
 /// Ratio `a / b` of two non-negative lengths, `a >= b`: infinite when `b == 0 < a`, 1 when
@@ -319,30 +332,15 @@ pub fn cell_metrics(p: [Point; 4]) -> CellMetrics {
         len(p[2], p[3]),
         len(p[3], p[0]),
     ];
-    let mut scaled_jacobian = f64::INFINITY;
-    for k in 0..4 {
-        // Corner k is between edge k (to p[k+1]) and edge k-1 (to p[k-1]).
-        let (la, lb) = (edges[k], edges[(k + 3) % 4]);
-        let s = if la > 0.0 && lb > 0.0 {
-            c.jacobian[k] / (la * lb)
-        } else {
-            0.0
-        };
-        if s.is_nan() || s < scaled_jacobian {
-            scaled_jacobian = s;
-        }
-    }
-    let (lo, hi) = (fold(edges, f64::min), fold(edges, f64::max));
-    let li = 0.5 * (edges[0] + edges[2]);
-    let lj = 0.5 * (edges[1] + edges[3]);
+    let (scaled_jacobian, edge_ratio, aspect_ratio) = kernel::length_figures(&c.jacobian, &edges);
     CellMetrics {
         angle_deg: c.angle_deg,
         min_angle_deg,
         max_angle_deg,
-        equiangle_skewness: ((max_angle_deg - 90.0) / 90.0).max((90.0 - min_angle_deg) / 90.0),
-        edge_ratio: ratio(hi, lo),
+        equiangle_skewness: kernel::skewness(min_angle_deg, max_angle_deg),
+        edge_ratio,
         scaled_jacobian,
-        aspect_ratio: ratio(li.max(lj), li.min(lj)),
+        aspect_ratio,
     }
 }
 
@@ -512,12 +510,13 @@ impl QualityMetrics {
         ]
     }
 
-    fn merge_cells(&mut self, o: &QualityMetrics) {
+    fn merge_metrics(&mut self, o: &QualityMetrics) {
         self.angle_deg.merge(&o.angle_deg);
         self.equiangle_skewness.merge(&o.equiangle_skewness);
         self.edge_ratio.merge(&o.edge_ratio);
         self.scaled_jacobian.merge(&o.scaled_jacobian);
         self.aspect_ratio.merge(&o.aspect_ratio);
+        self.interface_growth_ratio.merge(&o.interface_growth_ratio);
     }
 }
 
@@ -546,9 +545,10 @@ fn side_cell_height(grid: &BlockGrid, s: usize, p: usize) -> f64 {
     let q = corners(grid, i, j);
     let area = 0.5
         * ((q[2][0] - q[0][0]) * (q[3][1] - q[1][1]) - (q[2][1] - q[0][1]) * (q[3][0] - q[1][0]));
-    let (a, _) = side_node_and_inward(grid, s, p);
-    let (b, _) = side_node_and_inward(grid, s, p + 1);
-    let l = len(a, b);
+    // The cell's edge on side `s` runs from corner `s` to corner `s + 1` (in the side's
+    // direction): the nodes `side_node_and_inward(grid, s, p)` and `(.., p + 1)`.
+    let k = s.min(3);
+    let l = len(q[k], q[(k + 1) % 4]);
     if l > 0.0 {
         area.abs() / l
     } else {
@@ -558,7 +558,8 @@ fn side_cell_height(grid: &BlockGrid, s: usize, p: usize) -> f64 {
 
 /// The growth ratios across every interface of `conn` (each interface once), counted into
 /// `m`. Blocks are visited in parallel in fixed chunks of [`CHUNK`]; counts and extremes do
-/// not depend on the order, so the result is that of a sequential visit.
+/// not depend on the order (a ratio is at least 1 or infinite: never NaN nor a zero whose
+/// sign a fold could pick), so the result is that of a sequential visit.
 fn growth_ratios(conn: &[BlockConnectivity], grids: &[BlockGrid], m: &mut MetricSummary) {
     let empty = MetricSummary::new(&m.histogram.edges, m.acceptable);
     let parts: Vec<MetricSummary> = conn
@@ -658,7 +659,7 @@ fn block_wall_orthogonality(
             let d = [inner[0] - w[0], inner[1] - w[1]];
             let cross = normal[0] * d[1] - normal[1] * d[0];
             let dot = normal[0] * d[0] + normal[1] * d[1];
-            worst = max_nan(worst, Some(cross.atan2(dot).abs().to_degrees()));
+            worst = max_nan(worst, Some(angle_deg(cross.abs(), dot)));
         }
     }
     worst
@@ -686,11 +687,16 @@ pub fn measure_all_with(
     grids: &[BlockGrid],
     conn: Option<&[BlockConnectivity]>,
 ) -> (Quality, QualityMetrics) {
-    let (q, mut m) = reduce(&block_stats(grids));
-    if layout.blocks.len() == grids.len() {
-        if let Some(conn) = conn {
-            growth_ratios(conn, grids, &mut m.interface_growth_ratio);
-        }
+    let same = layout.blocks.len() == grids.len();
+    let conn = conn.filter(|_| same);
+    // One entry per grid in grid order: the growth ratios go with the cell pass.
+    let in_order = conn
+        .filter(|c| c.len() == grids.len() && c.iter().enumerate().all(|(b, bc)| bc.block == b));
+    let (q, mut m) = reduce(&block_stats(grids, in_order));
+    if let (Some(conn), None) = (conn, in_order) {
+        growth_ratios(conn, grids, &mut m.interface_growth_ratio);
+    }
+    if same {
         m.max_wall_orthogonality_deviation_deg = wall_orthogonality(layout, grids);
     }
     (q, m)
@@ -717,7 +723,61 @@ mod tests {
         prop_oneof![0.0f64..180.0, Just(f64::NAN), Just(0.0), Just(90.0)]
     }
 
+    /// The growth ratios counted with the cell pass (blocks in grid order) equal those of the
+    /// separate pass over the connectivity, on real meshes of both modes.
+    #[test]
+    fn growth_ratios_in_the_cell_pass_equal_the_separate_pass() {
+        let domain = crate::layouts::bubbles(30, 3).expect("layout");
+        for opts in [crate::Options::default(), crate::Options::paper()] {
+            let m = crate::mesh(&domain, &opts).expect("mesh");
+            let conn = connectivity(&m.layout, &m.grids).expect("connectivity");
+            let (_, got) = measure_all_with(&m.layout, &m.grids, Some(&conn));
+            let mut want = MetricSummary::new(&GROWTH_EDGES, GROWTH_ACCEPTABLE);
+            growth_ratios(&conn, &m.grids, &mut want);
+            assert!(want.samples > 0);
+            assert_eq!(
+                format!("{:?}", got.interface_growth_ratio),
+                format!("{want:?}")
+            );
+        }
+    }
+
+    /// [`has_corner_below`] cell by cell with the reference products (its former body).
+    fn corner_below_by_cells(grid: &BlockGrid, deg: f64) -> bool {
+        let t = deg.to_radians().tan();
+        (0..grid.nj).any(|j| {
+            (0..grid.ni).any(|i| {
+                let (crosses, dots) = kernel::corner_products(&corners(grid, i, j));
+                crosses.into_iter().zip(dots).any(|(cross, dot)| {
+                    cross.is_nan() || cross <= 0.0 || (dot > 0.0 && cross < t * dot)
+                })
+            })
+        })
+    }
+
+    fn coord() -> impl Strategy<Value = f64> {
+        prop_oneof![
+            8 => -3.0..3.0f64,
+            2 => (-2i32..3).prop_map(f64::from),
+            1 => prop_oneof![Just(0.0), Just(-0.0), Just(f64::NAN), Just(f64::INFINITY)],
+        ]
+    }
+
     proptest! {
+        /// The row pass of [`has_corner_below`] decides as the cell-by-cell test, on blocks of
+        /// random, degenerate (repeated, collinear, signed-zero) and non-finite nodes.
+        #[test]
+        fn corner_below_rows_equal_cells(
+            ni in 1usize..5,
+            nj in 1usize..4,
+            deg in prop_oneof![Just(5.0), Just(30.0), Just(45.0), 1.0..89.0f64],
+            v in proptest::collection::vec(coord(), 60),
+        ) {
+            let nodes = (0..(ni + 1) * (nj + 1)).map(|k| [v[2 * k], v[2 * k + 1]]).collect();
+            let g = BlockGrid { ni, nj, nodes };
+            prop_assert_eq!(has_corner_below(&g, deg), corner_below_by_cells(&g, deg));
+        }
+
         /// Any split of the values into chunks reduced with `max_nan` in any grouping gives
         /// the sequential fold's result, bit for bit (NaN when any value is NaN).
         #[test]

