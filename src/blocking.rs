@@ -759,7 +759,8 @@ fn fill_inserted_holes(
 #[derive(Debug, Clone)]
 pub struct CollapsedBlocking {
     /// Refinement: the final domain, the inserted holes, the sampled medial graph (before
-    /// collapse) and its exact vertex circles.
+    /// collapse) and its exact vertex circles. Its triangulation and triangle classes are
+    /// released (empty) once the collapse selection is built: nothing later reads them.
     pub refined: crate::refine::Refined,
     pub groups: Vec<crate::cocircular::CocircularGroup>,
     /// The per-arc data of the collapse selection (independent of the exclusions, kept for
@@ -838,7 +839,7 @@ pub fn collapsed_blocking_excluding(
             options.collapse_fraction
         )));
     }
-    let refined = refine::refine(
+    let mut refined = refine::refine(
         domain,
         options.refine_ratio,
         options.max_inserted_holes,
@@ -871,6 +872,7 @@ pub fn collapsed_blocking_excluding(
         &sampled.samples.points,
         options.collapse_fraction,
     );
+    release_triangulation(&mut refined.sampled);
     let (layout, chosen, contracted, excluded) =
         collapse_and_block(&refined, &selection, &forced, exclude)?;
     Ok(CollapsedBlocking {
@@ -884,6 +886,16 @@ pub fn collapsed_blocking_excluding(
         forced,
         excluded,
     })
+}
+
+/// Free the triangulation and the triangle classes of `sampled` (left empty): after the
+/// collapse selection ([`crate::collapse::Selection`]) nothing reads them (the selection keeps
+/// its per-arc data; the blocks, the exact geometry and the rebuilds read the samples and the
+/// medial graph). At 1e5 particles they are ~70 bytes per sample, a few hundred MB that would
+/// otherwise stay alive under the grids (issue 8).
+fn release_triangulation(sampled: &mut crate::sampling::SampledDomain) {
+    sampled.triangulation = Triangulation::default();
+    sampled.kinds = Vec::new();
 }
 
 impl CollapsedBlocking {

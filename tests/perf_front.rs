@@ -329,7 +329,23 @@ fn kept_selection_equals_select_forced() {
     for d in &domains {
         let options = Options::default();
         let cb = collapsed_blocking_with(d, &options, &SamplingOptions::default(), false).unwrap();
-        let s = &cb.refined.sampled;
+        // The collapsed blocking releases its triangulation after the selection: the same
+        // (deterministic) refinement again gives it back, with the same medial graph.
+        assert!(cb.refined.sampled.triangulation.is_empty());
+        assert!(cb.refined.sampled.kinds.is_empty());
+        let refined = refine(
+            d,
+            options.refine_ratio,
+            options.max_inserted_holes,
+            &SamplingOptions::default(),
+        )
+        .unwrap();
+        assert_eq!(refined.sampled.medial, cb.refined.sampled.medial);
+        assert_eq!(
+            refined.sampled.samples.points,
+            cb.refined.sampled.samples.points
+        );
+        let s = &refined.sampled;
         let m = s.medial.arcs.len();
         for fraction in [0.0, 0.05, 0.3] {
             let kept = Selection::new(
