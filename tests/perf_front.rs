@@ -376,3 +376,44 @@ fn kept_selection_equals_select_forced() {
         }
     }
 }
+
+/// The medial graph without its per-triangle circumcentre cache: every arc's polyline is, bit
+/// for bit, its start vertex's position, the circumcentres of its boundary triangles (computed
+/// here from the triangulation's points in triangle order) and its end vertex's position, and
+/// no boundary triangle is walked by two arcs.
+#[test]
+fn medial_polylines_are_the_walked_circumcentres() {
+    use medial_blocks::medial::{circumcenter, TriangleKind};
+    for d in bubbles_and_layouts(60) {
+        let s = sample_and_triangulate(&d, &SamplingOptions::default()).unwrap();
+        let (tri, g) = (&s.triangulation, &s.medial);
+        let cc = |t: u32| {
+            let p = tri.triangle(t as usize).map(|v| tri.points()[v as usize]);
+            circumcenter(p[0], p[1], p[2]).unwrap()
+        };
+        let mut seen = vec![false; tri.len()];
+        for v in &g.vertices {
+            assert_eq!(v.position, cc(v.triangle));
+        }
+        for a in &g.arcs {
+            assert_eq!(a.polyline.len(), a.triangles.len() + 2);
+            assert_eq!(a.polyline[0], g.vertices[a.ends[0] as usize].position);
+            assert_eq!(
+                *a.polyline.last().unwrap(),
+                g.vertices[a.ends[1] as usize].position
+            );
+            for (k, &t) in a.triangles.iter().enumerate() {
+                assert!(matches!(s.kinds[t as usize], TriangleKind::Boundary { .. }));
+                assert!(
+                    !std::mem::replace(&mut seen[t as usize], true),
+                    "triangle {t}"
+                );
+                let (x, y) = (a.polyline[k + 1], cc(t));
+                assert_eq!(
+                    [x[0].to_bits(), x[1].to_bits()],
+                    [y[0].to_bits(), y[1].to_bits()]
+                );
+            }
+        }
+    }
+}
