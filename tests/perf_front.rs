@@ -417,3 +417,28 @@ fn medial_polylines_are_the_walked_circumcentres() {
         }
     }
 }
+
+/// Refinement takes each round's minimum gap from the sampling's recorded per-circle gaps
+/// instead of a second nearest-gap search: bitwise `min_gap` of the round's domain, checked on
+/// the first round (the input domain) and the last (the refined domain), on layouts that do
+/// and do not insert holes.
+#[test]
+fn refinement_min_gaps_are_min_gap_of_the_domains() {
+    use medial_blocks::refine::min_gap;
+    let options = Options::default();
+    let mut inserting = 0;
+    for d in bubbles_and_layouts(50) {
+        let r = refine(
+            &d,
+            options.refine_ratio,
+            options.max_inserted_holes,
+            &SamplingOptions::default(),
+        )
+        .unwrap();
+        assert_eq!(r.min_gaps[0].to_bits(), min_gap(&d).to_bits());
+        let last = r.min_gaps.last().unwrap();
+        assert_eq!(last.to_bits(), min_gap(&r.domain).to_bits());
+        inserting += usize::from(!r.inserted.is_empty());
+    }
+    assert!(inserting > 0, "some layout inserts holes");
+}
