@@ -155,8 +155,12 @@ pub fn blocks(
     samples: &Samples,
     medial: &MedialGraph,
 ) -> Result<(BlockLayout, Vec<Option<u32>>), MeshError> {
+    // Vertices: the medial ones, then at most four sample corners per arc (reserved once:
+    // no doubling of a large vector, issue 8).
+    let mut vertices = Vec::with_capacity(medial.vertices.len() + 4 * medial.arcs.len());
+    vertices.extend(medial.vertices.iter().map(|v| v.position));
     let mut layout = BlockLayout {
-        vertices: medial.vertices.iter().map(|v| v.position).collect(),
+        vertices,
         edges: Vec::with_capacity(5 * medial.arcs.len()),
         blocks: Vec::with_capacity(2 * medial.arcs.len()),
     };
@@ -209,6 +213,8 @@ pub fn blocks(
         reversed: true,
     };
 
+    // One buffer for every arc's reversed C2 chain.
+    let mut c2_back: Vec<u32> = Vec::new();
     for arc in &medial.arcs {
         let [m0, m1] = arc.ends;
         let [ca, cb] = arc.circles;
@@ -252,7 +258,8 @@ pub fn blocks(
             wall: Some(ca),
         });
         // Block on B: wall along C2 backward.
-        let c2_back: Vec<u32> = arc.c2.iter().rev().copied().collect();
+        c2_back.clear();
+        c2_back.extend(arc.c2.iter().rev());
         let wall_b = wall_curve(domain, samples, cb, &c2_back, expect(cb))?;
         let wall_b = add_edge(&mut layout, [vb1, vb0], wall_b, EdgeKind::Wall(cb));
         let s_b0 = spoke(&mut layout, m0, b0, vb0);

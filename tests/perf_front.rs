@@ -191,6 +191,19 @@ fn blocking_maps_and_areas_match_hashed_references() {
         let graph = &cb.contracted.graph;
         let (layout, vertex_samples) = blocks(&cb.refined.domain, samples, graph).unwrap();
         assert_eq!(layout, cb.layout);
+        // Walls (the B side's from a reused reversed-chain buffer): every arc ends on its
+        // vertices, and runs clockwise round a hole, counter-clockwise round the bounding
+        // circle.
+        medial_blocks::grid::validate_layout(&layout).unwrap();
+        for block in &layout.blocks {
+            let wall = &layout.edges[block.sides[0].edge as usize];
+            if let (EdgeKind::Wall(c), Curve::Arc { sweep, .. }) = (wall.kind, &wall.curve) {
+                assert!(
+                    *sweep == 0.0 || (*sweep > 0.0) == (c < 0),
+                    "circle {c} sweep {sweep}"
+                );
+            }
+        }
         let mut seen: HashMap<u32, usize> = HashMap::new();
         for (v, s) in vertex_samples.iter().enumerate() {
             if let Some(s) = s {
