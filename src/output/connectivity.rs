@@ -116,9 +116,17 @@ struct Pretty<'a> {
 
 impl Pretty<'_> {
     fn newline(&mut self) {
-        self.out.push(b'\n');
-        for _ in 0..self.depth {
-            self.out.extend_from_slice(b"  ");
+        /// A line break and the indentation of every depth this file reaches (at most 7),
+        /// copied in one go.
+        const BREAK: &[u8; 33] = b"\n                                ";
+        match BREAK.get(..1 + 2 * self.depth) {
+            Some(line) => self.out.extend_from_slice(line),
+            None => {
+                self.out.push(b'\n');
+                for _ in 0..self.depth {
+                    self.out.extend_from_slice(b"  ");
+                }
+            }
         }
     }
     /// Start the next entry of the innermost object (`"key": `) or array (`key == None`).
