@@ -48,8 +48,9 @@ pub struct File<'a> {
 /// Blocks formatted per parallel task.
 pub const CHUNK: usize = 64;
 /// Chunks per wave: the blocks formatted together before they are written (bounds the memory
-/// held: ~2 KB per block, two waves at a time).
-pub const WAVE: usize = 64;
+/// held: ~2 KB per block, two waves at a time, as much as one wave of 64 chunks before the
+/// writing overlapped the formatting).
+pub const WAVE: usize = 32;
 
 /// Write `connectivity.json`: serde_json's pretty format, byte for byte, written by hand
 /// ([`write_block`]): blocks are formatted in parallel, in waves of [`WAVE`] chunks of
