@@ -155,8 +155,12 @@ pub fn blocks(
     samples: &Samples,
     medial: &MedialGraph,
 ) -> Result<(BlockLayout, Vec<Option<u32>>), MeshError> {
+    // Vertices: the medial ones, then at most four sample corners per arc (reserved once:
+    // no doubling of a large vector, issue 8).
+    let mut vertices = Vec::with_capacity(medial.vertices.len() + 4 * medial.arcs.len());
+    vertices.extend(medial.vertices.iter().map(|v| v.position));
     let mut layout = BlockLayout {
-        vertices: medial.vertices.iter().map(|v| v.position).collect(),
+        vertices,
         edges: Vec::with_capacity(5 * medial.arcs.len()),
         blocks: Vec::with_capacity(2 * medial.arcs.len()),
     };
@@ -209,6 +213,8 @@ pub fn blocks(
         reversed: true,
     };
 
+    // One buffer for every arc's reversed C2 chain.
+    let mut c2_back: Vec<u32> = Vec::new();
     for arc in &medial.arcs {
         let [m0, m1] = arc.ends;
         let [ca, cb] = arc.circles;
@@ -252,7 +258,8 @@ pub fn blocks(
             wall: Some(ca),
         });
         // Block on B: wall along C2 backward.
-        let c2_back: Vec<u32> = arc.c2.iter().rev().copied().collect();
+        c2_back.clear();
+        c2_back.extend(arc.c2.iter().rev());
         let wall_b = wall_curve(domain, samples, cb, &c2_back, expect(cb))?;
         let wall_b = add_edge(&mut layout, [vb1, vb0], wall_b, EdgeKind::Wall(cb));
         let s_b0 = spoke(&mut layout, m0, b0, vb0);
@@ -759,7 +766,8 @@ fn fill_inserted_holes(
 #[derive(Debug, Clone)]
 pub struct CollapsedBlocking {
     /// Refinement: the final domain, the inserted holes, the sampled medial graph (before
-    /// collapse) and its exact vertex circles.
+    /// collapse) and its exact vertex circles. Its triangulation and triangle classes are
+    /// released (empty) once the collapse selection is built: nothing later reads them.
     pub refined: crate::refine::Refined,
     pub groups: Vec<crate::cocircular::CocircularGroup>,
     /// The per-arc data of the collapse selection (independent of the exclusions, kept for
@@ -838,7 +846,7 @@ pub fn collapsed_blocking_excluding(
             options.collapse_fraction
         )));
     }
-    let refined = refine::refine(
+    let mut refined = refine::refine(
         domain,
         options.refine_ratio,
         options.max_inserted_holes,
@@ -871,6 +879,7 @@ pub fn collapsed_blocking_excluding(
         &sampled.samples.points,
         options.collapse_fraction,
     );
+    release_triangulation(&mut refined.sampled);
     let (layout, chosen, contracted, excluded) =
         collapse_and_block(&refined, &selection, &forced, exclude)?;
     Ok(CollapsedBlocking {
@@ -884,6 +893,16 @@ pub fn collapsed_blocking_excluding(
         forced,
         excluded,
     })
+}
+
+/// Free the triangulation and the triangle classes of `sampled` (left empty): after the
+/// collapse selection ([`crate::collapse::Selection`]) nothing reads them (the selection keeps
+/// its per-arc data; the blocks, the exact geometry and the rebuilds read the samples and the
+/// medial graph). At 1e5 particles they are ~70 bytes per sample, a few hundred MB that would
+/// otherwise stay alive under the grids (issue 8).
+fn release_triangulation(sampled: &mut crate::sampling::SampledDomain) {
+    sampled.triangulation = Triangulation::default();
+    sampled.kinds = Vec::new();
 }
 
 impl CollapsedBlocking {

@@ -127,129 +127,180 @@ pub fn connectivity(
             grids: grids.len(),
         });
     }
-    let mut users: Vec<Vec<(usize, usize)>> = vec![Vec::new(); layout.edges.len()];
-    for (b, block) in layout.blocks.iter().enumerate() {
-        for (s, side) in block.sides.iter().enumerate() {
-            let e = side.edge as usize;
-            users
-                .get_mut(e)
-                .ok_or(ConnectivityError::MissingEdge { edge: e })?
-                .push((b, s));
-        }
-    }
+    let users = EdgeUsers::new(layout)?;
     let mut out = Vec::with_capacity(layout.blocks.len());
     for (b, block) in layout.blocks.iter().enumerate() {
         let g = &grids[b];
-        let sides: Vec<SideConnectivity> = (0..4)
-            .map(|s| {
-                let e = block.sides[s].edge as usize;
-                let edge = &layout.edges[e];
-                let u = &users[e];
-                match edge.kind {
-                    EdgeKind::Wall(c) => {
-                        if u.len() != 1 {
-                            return Err(ConnectivityError::EdgeUse {
-                                edge: e,
-                                count: u.len(),
-                            });
-                        }
-                        Ok(SideConnectivity {
-                            side: s,
-                            name: SIDE_NAMES[s],
-                            kind: if c < 0 {
-                                SideKind::Outer
-                            } else {
-                                SideKind::Wall
-                            },
-                            circle: Some(c),
-                            partner: None,
-                            cgns: None,
-                            translation: None,
-                        })
+        let side_of = |s: usize| {
+            let e = block.sides[s].edge as usize;
+            let edge = &layout.edges[e];
+            let u = users.of(e);
+            match edge.kind {
+                EdgeKind::Wall(c) => {
+                    if u.len() != 1 {
+                        return Err(ConnectivityError::EdgeUse {
+                            edge: e,
+                            count: u.len(),
+                        });
                     }
-                    kind => {
-                        let periodic = match kind {
-                            EdgeKind::Periodic {
-                                partner,
-                                translation,
-                            } => Some((partner as usize, translation.0)),
-                            _ => None,
-                        };
-                        let (pb, ps) = match periodic {
-                            Some((p, _)) => {
-                                let pu = users
-                                    .get(p)
-                                    .ok_or(ConnectivityError::MissingEdge { edge: p })?;
-                                if u.len() != 1 || pu.len() != 1 {
-                                    return Err(ConnectivityError::EdgeUse {
-                                        edge: e,
-                                        count: u.len(),
-                                    });
-                                }
-                                pu[0]
-                            }
-                            None => {
-                                if u.len() != 2 {
-                                    return Err(ConnectivityError::EdgeUse {
-                                        edge: e,
-                                        count: u.len(),
-                                    });
-                                }
-                                if u[0] == (b, s) {
-                                    u[1]
-                                } else {
-                                    u[0]
-                                }
-                            }
-                        };
-                        let same = layout.blocks[pb].sides[ps].reversed == block.sides[s].reversed;
-                        let pg = &grids[pb];
-                        let n = if s % 2 == 0 { g.ni } else { g.nj };
-                        let q = |p: usize| if same { p } else { n - p };
-                        let (aa, sa) = along(s);
-                        let (ab, sb) = along(ps);
-                        let (na, ia) = inward(s);
-                        let (nb, ib) = inward(ps);
-                        let dir = if same { 1 } else { -1 };
-                        let mut transform = [0i32; 2];
-                        transform[aa] = sa * sb * dir * (ab as i32 + 1);
-                        transform[na] = -ia * ib * (nb as i32 + 1);
-                        Ok(SideConnectivity {
-                            side: s,
-                            name: SIDE_NAMES[s],
-                            kind: if periodic.is_some() {
-                                SideKind::Periodic
-                            } else {
-                                SideKind::Interface
-                            },
-                            circle: None,
-                            partner: Some(Partner {
-                                block: pb,
-                                side: ps,
-                                same_direction: same,
-                            }),
-                            cgns: Some(Cgns1to1 {
-                                point_range: [
-                                    side_node(s, 0, g.ni, g.nj),
-                                    side_node(s, n, g.ni, g.nj),
-                                ],
-                                point_range_donor: [
-                                    side_node(ps, q(0), pg.ni, pg.nj),
-                                    side_node(ps, q(n), pg.ni, pg.nj),
-                                ],
-                                transform,
-                            }),
-                            translation: periodic.map(|(_, t)| t),
-                        })
-                    }
+                    Ok(SideConnectivity {
+                        side: s,
+                        name: SIDE_NAMES[s],
+                        kind: if c < 0 {
+                            SideKind::Outer
+                        } else {
+                            SideKind::Wall
+                        },
+                        circle: Some(c),
+                        partner: None,
+                        cgns: None,
+                        translation: None,
+                    })
                 }
-            })
-            .collect::<Result<_, _>>()?;
+                kind => {
+                    let periodic = match kind {
+                        EdgeKind::Periodic {
+                            partner,
+                            translation,
+                        } => Some((partner as usize, translation.0)),
+                        _ => None,
+                    };
+                    let (pb, ps) = match periodic {
+                        Some((p, _)) => {
+                            if p >= layout.edges.len() {
+                                return Err(ConnectivityError::MissingEdge { edge: p });
+                            }
+                            let pu = users.of(p);
+                            if u.len() != 1 || pu.len() != 1 {
+                                return Err(ConnectivityError::EdgeUse {
+                                    edge: e,
+                                    count: u.len(),
+                                });
+                            }
+                            pu[0]
+                        }
+                        None => {
+                            if u.len() != 2 {
+                                return Err(ConnectivityError::EdgeUse {
+                                    edge: e,
+                                    count: u.len(),
+                                });
+                            }
+                            if u[0] == (b, s) {
+                                u[1]
+                            } else {
+                                u[0]
+                            }
+                        }
+                    };
+                    let same = layout.blocks[pb].sides[ps].reversed == block.sides[s].reversed;
+                    let pg = &grids[pb];
+                    let n = if s % 2 == 0 { g.ni } else { g.nj };
+                    let q = |p: usize| if same { p } else { n - p };
+                    let (aa, sa) = along(s);
+                    let (ab, sb) = along(ps);
+                    let (na, ia) = inward(s);
+                    let (nb, ib) = inward(ps);
+                    let dir = if same { 1 } else { -1 };
+                    let mut transform = [0i32; 2];
+                    transform[aa] = sa * sb * dir * (ab as i32 + 1);
+                    transform[na] = -ia * ib * (nb as i32 + 1);
+                    Ok(SideConnectivity {
+                        side: s,
+                        name: SIDE_NAMES[s],
+                        kind: if periodic.is_some() {
+                            SideKind::Periodic
+                        } else {
+                            SideKind::Interface
+                        },
+                        circle: None,
+                        partner: Some(Partner {
+                            block: pb,
+                            side: ps,
+                            same_direction: same,
+                        }),
+                        cgns: Some(Cgns1to1 {
+                            point_range: [side_node(s, 0, g.ni, g.nj), side_node(s, n, g.ni, g.nj)],
+                            point_range_donor: [
+                                side_node(ps, q(0), pg.ni, pg.nj),
+                                side_node(ps, q(n), pg.ni, pg.nj),
+                            ],
+                            transform,
+                        }),
+                        translation: periodic.map(|(_, t)| t),
+                    })
+                }
+            }
+        };
         out.push(BlockConnectivity {
             block: b,
             dims: [g.ni + 1, g.nj + 1],
-            sides: [sides[0], sides[1], sides[2], sides[3]],
+            sides: [side_of(0)?, side_of(1)?, side_of(2)?, side_of(3)?],
         });
     }
     Ok(out)
+}
+
+/// The block sides using each edge, in block then side order: how many, and the first two
+/// (all a valid layout has). Two flat arrays instead of one small `Vec` per edge (issue 8:
+/// 1.2 M edges at 1e5 particles); [`EdgeUsers::of`] is the list the per-edge vectors held,
+/// cut after two entries, so every check on it (its length, its entries) reads the same.
+struct EdgeUsers {
+    count: Vec<u32>,
+    first: Vec<[(usize, usize); 2]>,
+}
+
+/// One edge's users: `len` (the full count) and the first `min(len, 2)` entries.
+struct Users<'a> {
+    count: usize,
+    first: &'a [(usize, usize); 2],
+}
+
+impl Users<'_> {
+    fn len(&self) -> usize {
+        self.count
+    }
+}
+
+impl std::ops::Index<usize> for Users<'_> {
+    type Output = (usize, usize);
+    fn index(&self, k: usize) -> &(usize, usize) {
+        assert!(
+            k < self.count.min(2),
+            "user {k} of an edge with {} users",
+            self.count
+        );
+        &self.first[k]
+    }
+}
+
+impl EdgeUsers {
+    /// Count and record every block side's edge; a side naming a missing edge is an error
+    /// (the first such side in block order, as before).
+    fn new(layout: &BlockLayout) -> Result<EdgeUsers, ConnectivityError> {
+        let ne = layout.edges.len();
+        let mut count = vec![0u32; ne];
+        let mut first = vec![[(0, 0); 2]; ne];
+        for (b, block) in layout.blocks.iter().enumerate() {
+            for (s, side) in block.sides.iter().enumerate() {
+                let e = side.edge as usize;
+                let c = count
+                    .get_mut(e)
+                    .ok_or(ConnectivityError::MissingEdge { edge: e })?;
+                if *c < 2 {
+                    first[e][*c as usize] = (b, s);
+                }
+                *c = c.saturating_add(1);
+            }
+        }
+        Ok(EdgeUsers { count, first })
+    }
+
+    /// The users of edge `e` (`e` in range).
+    fn of(&self, e: usize) -> Users<'_> {
+        Users {
+            count: self.count[e] as usize,
+            first: &self.first[e],
+        }
+    }
 }

@@ -217,17 +217,18 @@ pub fn medial_graph(
         }
     }
     let mut visited = vec![[false; 3]; g.vertices.len()];
-    let mut circumcenters: Vec<Option<Point>> = vec![None; n];
-    let mut cc = |t: usize| -> Result<Point, MeshError> {
-        if let Some(p) = circumcenters[t] {
-            return Ok(p);
+    // The circumcentre of a walked triangle: no cache (issue 8: a per-triangle cache was
+    // 24 bytes x 2 per sample, zeroed): a boundary triangle is walked through once (by the
+    // one arc it belongs to), and an interior one's is its vertex's `position`, the same
+    // computation on the same points.
+    let cc = |t: usize| -> Result<Point, MeshError> {
+        if vertex_of[t] != u32::MAX {
+            return Ok(g.vertices[vertex_of[t] as usize].position);
         }
         let v = tri.triangle(t);
         let p = v.map(|s| samples.points[s as usize]);
-        let c = circumcenter(p[0], p[1], p[2])
-            .ok_or_else(|| internal(format!("triangle {t} is degenerate")))?;
-        circumcenters[t] = Some(c);
-        Ok(c)
+        circumcenter(p[0], p[1], p[2])
+            .ok_or_else(|| internal(format!("triangle {t} is degenerate")))
     };
     for v0 in 0..g.vertices.len() {
         let t0 = g.vertices[v0].triangle as usize;

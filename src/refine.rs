@@ -131,7 +131,14 @@ pub fn refine(
             previous.as_ref().map(|(s, c)| (&s.medial, c.as_slice())),
         );
         drop(previous.take());
-        let g = min_gap(&current);
+        // `min_gap(&current)` without a second nearest-gap search: the sampling recorded
+        // every circle's nearest gap, in slot order ([`crate::sampling::CircleSamples::gap`]).
+        let g = sampled
+            .samples
+            .circles
+            .iter()
+            .map(|c| c.gap)
+            .fold(f64::INFINITY, f64::min);
         min_gaps.push(g);
         let Some(limit) = ratio else {
             return Ok(Refined {

@@ -191,6 +191,19 @@ fn blocking_maps_and_areas_match_hashed_references() {
         let graph = &cb.contracted.graph;
         let (layout, vertex_samples) = blocks(&cb.refined.domain, samples, graph).unwrap();
         assert_eq!(layout, cb.layout);
+        // Walls (the B side's from a reused reversed-chain buffer): every arc ends on its
+        // vertices, and runs clockwise round a hole, counter-clockwise round the bounding
+        // circle.
+        medial_blocks::grid::validate_layout(&layout).unwrap();
+        for block in &layout.blocks {
+            let wall = &layout.edges[block.sides[0].edge as usize];
+            if let (EdgeKind::Wall(c), Curve::Arc { sweep, .. }) = (wall.kind, &wall.curve) {
+                assert!(
+                    *sweep == 0.0 || (*sweep > 0.0) == (c < 0),
+                    "circle {c} sweep {sweep}"
+                );
+            }
+        }
         let mut seen: HashMap<u32, usize> = HashMap::new();
         for (v, s) in vertex_samples.iter().enumerate() {
             if let Some(s) = s {
@@ -329,7 +342,23 @@ fn kept_selection_equals_select_forced() {
     for d in &domains {
         let options = Options::default();
         let cb = collapsed_blocking_with(d, &options, &SamplingOptions::default(), false).unwrap();
-        let s = &cb.refined.sampled;
+        // The collapsed blocking releases its triangulation after the selection: the same
+        // (deterministic) refinement again gives it back, with the same medial graph.
+        assert!(cb.refined.sampled.triangulation.is_empty());
+        assert!(cb.refined.sampled.kinds.is_empty());
+        let refined = refine(
+            d,
+            options.refine_ratio,
+            options.max_inserted_holes,
+            &SamplingOptions::default(),
+        )
+        .unwrap();
+        assert_eq!(refined.sampled.medial, cb.refined.sampled.medial);
+        assert_eq!(
+            refined.sampled.samples.points,
+            cb.refined.sampled.samples.points
+        );
+        let s = &refined.sampled;
         let m = s.medial.arcs.len();
         for fraction in [0.0, 0.05, 0.3] {
             let kept = Selection::new(
@@ -359,4 +388,70 @@ fn kept_selection_equals_select_forced() {
             }
         }
     }
+}
+
+/// The medial graph without its per-triangle circumcentre cache: every arc's polyline is, bit
+/// for bit, its start vertex's position, the circumcentres of its boundary triangles (computed
+/// here from the triangulation's points in triangle order) and its end vertex's position, and
+/// no boundary triangle is walked by two arcs.
+#[test]
+fn medial_polylines_are_the_walked_circumcentres() {
+    use medial_blocks::medial::{circumcenter, TriangleKind};
+    for d in bubbles_and_layouts(60) {
+        let s = sample_and_triangulate(&d, &SamplingOptions::default()).unwrap();
+        let (tri, g) = (&s.triangulation, &s.medial);
+        let cc = |t: u32| {
+            let p = tri.triangle(t as usize).map(|v| tri.points()[v as usize]);
+            circumcenter(p[0], p[1], p[2]).unwrap()
+        };
+        let mut seen = vec![false; tri.len()];
+        for v in &g.vertices {
+            assert_eq!(v.position, cc(v.triangle));
+        }
+        for a in &g.arcs {
+            assert_eq!(a.polyline.len(), a.triangles.len() + 2);
+            assert_eq!(a.polyline[0], g.vertices[a.ends[0] as usize].position);
+            assert_eq!(
+                *a.polyline.last().unwrap(),
+                g.vertices[a.ends[1] as usize].position
+            );
+            for (k, &t) in a.triangles.iter().enumerate() {
+                assert!(matches!(s.kinds[t as usize], TriangleKind::Boundary { .. }));
+                assert!(
+                    !std::mem::replace(&mut seen[t as usize], true),
+                    "triangle {t}"
+                );
+                let (x, y) = (a.polyline[k + 1], cc(t));
+                assert_eq!(
+                    [x[0].to_bits(), x[1].to_bits()],
+                    [y[0].to_bits(), y[1].to_bits()]
+                );
+            }
+        }
+    }
+}
+
+/// Refinement takes each round's minimum gap from the sampling's recorded per-circle gaps
+/// instead of a second nearest-gap search: bitwise `min_gap` of the round's domain, checked on
+/// the first round (the input domain) and the last (the refined domain), on layouts that do
+/// and do not insert holes.
+#[test]
+fn refinement_min_gaps_are_min_gap_of_the_domains() {
+    use medial_blocks::refine::min_gap;
+    let options = Options::default();
+    let mut inserting = 0;
+    for d in bubbles_and_layouts(50) {
+        let r = refine(
+            &d,
+            options.refine_ratio,
+            options.max_inserted_holes,
+            &SamplingOptions::default(),
+        )
+        .unwrap();
+        assert_eq!(r.min_gaps[0].to_bits(), min_gap(&d).to_bits());
+        let last = r.min_gaps.last().unwrap();
+        assert_eq!(last.to_bits(), min_gap(&r.domain).to_bits());
+        inserting += usize::from(!r.inserted.is_empty());
+    }
+    assert!(inserting > 0, "some layout inserts holes");
 }

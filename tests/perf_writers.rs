@@ -11,7 +11,7 @@
 use medial_blocks::connectivity::{
     connectivity, BlockConnectivity, Cgns1to1, Partner, SideConnectivity, SideKind,
 };
-use medial_blocks::output::connectivity::{write_json, File, CONVENTIONS};
+use medial_blocks::output::connectivity::{write_json, File, CHUNK, CONVENTIONS, WAVE};
 use medial_blocks::output::report::Report;
 use medial_blocks::output::{write_files, write_files_prepared, Format};
 use medial_blocks::periodic::{mesh_periodic, PeriodicDomain};
@@ -79,11 +79,8 @@ fn connectivity_json_is_serde_pretty_on_real_meshes() {
     assert!(periodic, "a periodic mesh with translations is covered");
 }
 
-/// Synthetic blocks: every optional field, odd floats and integers, an escaped name, and
-/// enough blocks for several waves of parallel formatting.
-#[test]
-fn connectivity_json_is_serde_pretty_on_synthetic_blocks() {
-    assert_eq!(written(&[]), serde_bytes(&[]));
+/// `n` synthetic blocks: every optional field, odd floats and integers, an escaped name.
+fn synthetic_blocks(n: usize) -> Vec<BlockConnectivity> {
     let floats = [
         0.0,
         -0.0,
@@ -125,7 +122,7 @@ fn connectivity_json_is_serde_pretty_on_synthetic_blocks() {
             translation: (k % 4 == 3).then_some([floats[i], floats[(i + 3) % floats.len()]]),
         }
     };
-    let blocks: Vec<BlockConnectivity> = (0..9000)
+    (0..n)
         .map(|b| BlockConnectivity {
             block: b,
             dims: [b % 17 + 2, b * 7 + 2],
@@ -136,9 +133,45 @@ fn connectivity_json_is_serde_pretty_on_synthetic_blocks() {
                 side(4 * b + 3),
             ],
         })
-        .collect();
+        .collect()
+}
+
+/// Synthetic blocks, enough for several waves of parallel formatting.
+#[test]
+fn connectivity_json_is_serde_pretty_on_synthetic_blocks() {
+    assert_eq!(written(&[]), serde_bytes(&[]));
+    let blocks = synthetic_blocks(9000);
     assert_eq!(written(&blocks[..1]), serde_bytes(&blocks[..1]));
     assert_eq!(written(&blocks), serde_bytes(&blocks));
+}
+
+/// Wave and chunk boundaries of the pipelined writer (a wave written while the next one is
+/// formatted): one block short of, exactly at, and one past a wave; a partial last chunk after
+/// two full waves. Same bytes as serde_json with one thread and with two.
+#[test]
+fn connectivity_json_at_wave_boundaries() {
+    let wave = CHUNK * WAVE;
+    let blocks = synthetic_blocks(2 * wave + CHUNK + 1);
+    for threads in [1, 2] {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap();
+        for n in [
+            CHUNK,
+            CHUNK + 1,
+            wave - 1,
+            wave,
+            wave + 1,
+            2 * wave + CHUNK + 1,
+        ] {
+            let b = &blocks[..n];
+            assert!(
+                pool.install(|| written(b)) == serde_bytes(b),
+                "{n} blocks, {threads} threads"
+            );
+        }
+    }
 }
 
 /// The report from a shared connectivity is the report that computes its own, and the files

@@ -58,7 +58,10 @@ const NONE: u32 = u32::MAX;
 /// let square = Triangulation::new(&pts[..4]).unwrap();
 /// assert_eq!(square.cocircular_groups(), vec![vec![0, 1, 2, 3]]);
 /// ```
-#[derive(Debug, Clone)]
+///
+/// `Triangulation::default()` is the empty triangulation (no points, no triangles): what a
+/// holder keeps after releasing one nothing reads any more ([`crate::blocking::CollapsedBlocking`]).
+#[derive(Debug, Clone, Default)]
 pub struct Triangulation {
     points: Vec<Point>,
     tris: Vec<[u32; 3]>,

@@ -1,0 +1,148 @@
+//! Issue #8: `connectivity::connectivity` records each edge's users in two flat arrays (a count
+//! and the first two block sides) instead of one `Vec` per edge. Checked here against
+//! independent facts on real meshes (bounded, refined, periodic, transition):
+//! - every interface/periodic side's partner names it back, with the same orientation flag;
+//! - counting identity: sides per edge kind (a wall or outer edge has one side, an interface
+//!   two, a periodic edge one on each of its two partner edges) add up to `4 * blocks`;
+//! - matching nodes: along an interface, node `p` of this side is node `p` or `n - p` of the
+//!   partner side, bit for bit, as `same_direction` says;
+//! - broken layouts give the same errors as the per-edge lists did: an edge used three times
+//!   is `EdgeUse` with count 3 (of the first side in block order to meet it), a side naming a
+//!   missing edge is `MissingEdge`, a grid count mismatch is `GridCount`.
+
+use medial_blocks::connectivity::{connectivity, ConnectivityError, SideKind};
+use medial_blocks::layout::EdgeKind;
+use medial_blocks::periodic::{mesh_periodic, PeriodicDomain};
+use medial_blocks::{layouts, mesh, Circle, Mesh, Mode, Options};
+
+fn meshes() -> Vec<Mesh> {
+    let mut out = vec![
+        mesh(&layouts::hexagon(), &Options::default()).unwrap(),
+        mesh(
+            &layouts::bubbles(30, 2).unwrap(),
+            &Options {
+                mode: Mode::Paper,
+                ..Options::default()
+            },
+        )
+        .unwrap(),
+        mesh(
+            &layouts::bubbles(40, 1).unwrap(),
+            &Options {
+                cells: 4,
+                block_cells: Some(4),
+                ..Options::default()
+            },
+        )
+        .unwrap(),
+    ];
+    let pd = PeriodicDomain::new(
+        [2.0, 1.0],
+        vec![Circle::new(0.1, 0.1, 0.2), Circle::new(1.2, 0.6, 0.25)],
+    )
+    .unwrap();
+    out.push(mesh_periodic(&pd, &Options::default()).unwrap());
+    out
+}
+
+#[test]
+fn partners_counts_and_nodes_agree() {
+    for m in meshes() {
+        let conn = connectivity(&m.layout, &m.grids).unwrap();
+        assert_eq!(conn.len(), m.layout.blocks.len());
+        let mut per_edge = vec![0usize; m.layout.edges.len()];
+        for b in &m.layout.blocks {
+            for s in &b.sides {
+                per_edge[s.edge as usize] += 1;
+            }
+        }
+        for (e, edge) in m.layout.edges.iter().enumerate() {
+            let want = match edge.kind {
+                EdgeKind::Wall(_) | EdgeKind::Periodic { .. } => 1,
+                _ => 2,
+            };
+            assert!(per_edge[e] == want || per_edge[e] == 0, "edge {e}");
+        }
+        let mut sides = 0;
+        for (b, bc) in conn.iter().enumerate() {
+            assert_eq!(bc.block, b);
+            for (s, sc) in bc.sides.iter().enumerate() {
+                sides += 1;
+                assert_eq!(sc.side, s);
+                let e = m.layout.blocks[b].sides[s].edge as usize;
+                match sc.kind {
+                    SideKind::Wall | SideKind::Outer => {
+                        assert!(matches!(m.layout.edges[e].kind, EdgeKind::Wall(_)));
+                        assert!(sc.partner.is_none());
+                    }
+                    SideKind::Interface | SideKind::Periodic => {
+                        let p = sc.partner.unwrap();
+                        let back = conn[p.block].sides[p.side].partner.unwrap();
+                        assert_eq!((back.block, back.side), (b, s));
+                        assert_eq!(back.same_direction, p.same_direction);
+                        let (g, pg) = (&m.grids[b], &m.grids[p.block]);
+                        let (mine, theirs) = (g.side(s), pg.side(p.side));
+                        assert_eq!(mine.len(), theirs.len());
+                        if sc.kind == SideKind::Interface {
+                            let n = mine.len() - 1;
+                            for (k, x) in mine.iter().enumerate() {
+                                let q = if p.same_direction { k } else { n - k };
+                                assert_eq!(x, &theirs[q], "block {b} side {s} node {k}");
+                            }
+                        }
+                    }
+                }
+            }
+        }
+        assert_eq!(sides, 4 * m.layout.blocks.len());
+    }
+}
+
+#[test]
+fn broken_layouts_give_the_same_errors() {
+    let m = mesh(&layouts::hexagon(), &Options::default()).unwrap();
+    // An interface edge used by a third side: the first side (in block order) that meets it.
+    let conn = connectivity(&m.layout, &m.grids).unwrap();
+    let (b, s) = (0..conn.len())
+        .flat_map(|b| (0..4).map(move |s| (b, s)))
+        .find(|&(b, s)| conn[b].sides[s].kind == SideKind::Interface)
+        .unwrap();
+    let e = m.layout.blocks[b].sides[s].edge;
+    let wall = (0..conn.len())
+        .flat_map(|b| (0..4).map(move |s| (b, s)))
+        .find(|&(b, s)| conn[b].sides[s].kind == SideKind::Wall)
+        .unwrap();
+    let mut layout = m.layout.clone();
+    layout.blocks[wall.0].sides[wall.1].edge = e;
+    let err = connectivity(&layout, &m.grids).unwrap_err();
+    // The wall edge left behind has no user; the edge now has three.
+    let first_user = (0..layout.blocks.len())
+        .flat_map(|b| (0..4).map(move |s| (b, s)))
+        .find(|&(b, s)| layout.blocks[b].sides[s].edge == e)
+        .unwrap();
+    assert!(first_user <= (b, s));
+    assert_eq!(
+        err,
+        ConnectivityError::EdgeUse {
+            edge: e as usize,
+            count: 3
+        }
+    );
+    // A side naming a missing edge.
+    let mut layout = m.layout.clone();
+    let ne = layout.edges.len() as u32;
+    layout.blocks[3].sides[2].edge = ne + 5;
+    assert_eq!(
+        connectivity(&layout, &m.grids).unwrap_err(),
+        ConnectivityError::MissingEdge {
+            edge: ne as usize + 5
+        }
+    );
+    assert_eq!(
+        connectivity(&m.layout, &m.grids[1..]).unwrap_err(),
+        ConnectivityError::GridCount {
+            layout: m.layout.blocks.len(),
+            grids: m.grids.len() - 1
+        }
+    );
+}
