@@ -3,7 +3,9 @@
 //! values of the reference path (every root rounded, each rounding with its own square root:
 //! `choose(apollonius_roots(..), choice).to_apollonius()`) and the correctly rounded values of
 //! the exact root computed with the rational arithmetic of `QSqrt::to_f64` (another code path),
-//! on random, near-tangent, co-circular and integer triples and under proptest.
+//! on random, near-tangent, co-circular and integer triples and under proptest. The in-place
+//! tangent-point integers and orientation sums equal those of the plain `ZSqrt` formulas, and the rational oracle's
+//! tangent points come from that plain formula.
 
 use medial_blocks::apollonius::{
     apollonius, apollonius_roots, choose, Apollonius, Choice, ExactApollonius, Site,
@@ -60,6 +62,18 @@ fn check(sites: [Site; 3], hint: [f64; 2]) -> bool {
                 assert_eq!(bits(f), bits(&r), "{sites:?} {choice:?}");
                 assert_eq!(f.exact, r.exact, "{sites:?} {choice:?}");
                 assert_eq!(Some(bits(f)), rational_rounding(&f.exact), "{sites:?}");
+                for root in apollonius_roots(&sites).unwrap() {
+                    let (same_sum, o) = root.orientation_reference().expect("same frame");
+                    assert!(same_sum, "orientation sum {sites:?}");
+                    assert_eq!(o, root.orientation(), "{sites:?}");
+                }
+                for i in 0..3 {
+                    assert_eq!(
+                        f.exact.tangent_point_frac(i),
+                        f.exact.tangent_point_frac_reference(i),
+                        "{sites:?}"
+                    );
+                }
                 found = true;
             }
             (Err(_), Ok(Some(r))) => assert!(r.to_apollonius().is_err(), "{sites:?}"),

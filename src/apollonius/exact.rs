@@ -535,20 +535,25 @@ impl ZSqrt {
     }
 
     /// `self * other`.
+    ///
+    /// Accumulated in place (`+= x * y` is GMP's addmul): two allocations, no temporaries.
     pub fn mul(&self, o: &ZSqrt, d: &Integer) -> ZSqrt {
-        let bb = Integer::from(&self.b * &o.b) * d;
-        ZSqrt {
-            a: Integer::from(&self.a * &o.a) + bb,
-            b: Integer::from(&self.a * &o.b) + Integer::from(&o.a * &self.b),
-        }
+        let mut a = Integer::from(&self.b * &o.b);
+        a *= d;
+        a += &self.a * &o.a;
+        let mut b = Integer::from(&self.a * &o.b);
+        b += &o.a * &self.b;
+        ZSqrt { a, b }
     }
 
     /// `self^2`.
     pub fn square(&self, d: &Integer) -> ZSqrt {
-        ZSqrt {
-            a: Integer::from(self.a.square_ref()) + Integer::from(self.b.square_ref()) * d,
-            b: Integer::from(&self.a * &self.b) << 1u32,
-        }
+        let mut a = Integer::from(self.b.square_ref());
+        a *= d;
+        a += &self.a * &self.a;
+        let mut b = Integer::from(&self.a * &self.b);
+        b <<= 1u32;
+        ZSqrt { a, b }
     }
 
     /// `k * self` for an integer `k`.
@@ -629,15 +634,16 @@ impl ZSqrt {
                     (&computed, rem.cmp0() == Ordering::Equal)
                 }
             };
-            let base = Integer::from(&self.a << k);
-            let lo_t = Integer::from(&base + &self.b * t);
-            let hi_t = lo_t.clone() + &self.b;
+            // lo = a 2^k + b t, then hi = lo + b, in one buffer.
+            let mut bound = Integer::from(&self.a << k);
+            bound += &self.b * t;
             let kk = exp - i64::from(k);
-            let fl = round_scaled(&lo_t, den, kk);
+            let fl = round_scaled(&bound, den, kk);
             if exact {
                 return fl; // D is a square: the bracket is exact
             }
-            let fh = round_scaled(&hi_t, den, kk);
+            bound += &self.b;
+            let fh = round_scaled(&bound, den, kk);
             if fl == fh || bits >= 1 << 16 {
                 return fl;
             }

@@ -141,7 +141,77 @@ impl ExactApollonius {
     /// The tangent point on site `i` as a numerator over `den'` in this root's exponent:
     /// `a_i = p + rho (c_i - p) / sigma_i`, i.e. with `U = den c_i - P`, `S = R + den s_i`,
     /// `a_i = 2^exp (P N(S) + R U conj(S)) / (den N(S))`. `None` when undefined.
-    fn tangent_point_frac(&self, i: usize) -> Option<([ZSqrt; 2], Integer)> {
+    ///
+    /// The same integers as [`ExactApollonius::tangent_point_frac_reference`] (tested), with
+    /// the products expanded and accumulated in place: with `F = R conj(S) = fa + fb sqrt(D)`
+    /// (`fb = R_b den s_i`) and `P = pa + pb sqrt(D)`, the numerator is
+    /// `pa (N - fa) + den c fa - pb fb D` plus `(pb (N - fa) + (den c - pa) fb) sqrt(D)`.
+    #[doc(hidden)]
+    pub fn tangent_point_frac(&self, i: usize) -> Option<([ZSqrt; 2], Integer)> {
+        let site = self.sites.get(i)?;
+        let vals = [
+            dyadic(site.center[0])?,
+            dyadic(site.center[1])?,
+            dyadic(site.s)?,
+        ];
+        let e = vals.iter().map(|v| v.1).fold(self.exp, i64::min);
+        let ints = vals.map(|(n, ei)| n << ((ei - e) as u32));
+        let up = (self.exp - e) as u32;
+        let shifted;
+        let num = if up == 0 {
+            &self.num
+        } else {
+            shifted = [0, 1, 2].map(|j| self.num[j].shl(up));
+            &shifted
+        };
+        let d = &self.disc;
+        let [px, py, r] = num;
+        if r.sign(d) == Sign::Zero {
+            return Some(([px.clone(), py.clone()], self.den.clone()));
+        }
+        // S = R + den s_i: sa = R_a + den s_i, sb = R_b.
+        let ds = Integer::from(&self.den * &ints[2]);
+        let sa = Integer::from(&r.a + &ds);
+        let mut rb2d = Integer::from(r.b.square_ref());
+        rb2d *= d;
+        let mut n = Integer::from(sa.square_ref());
+        n -= &rb2d;
+        if n.cmp0() == Ordering::Equal {
+            return None;
+        }
+        let mut fa = Integer::from(&r.a * &sa);
+        fa -= &rb2d;
+        let fb = Integer::from(&r.b * &ds);
+        let fbd = Integer::from(&fb * d);
+        let n_fa = Integer::from(&n - &fa);
+        let coord = |p: &ZSqrt, c: &Integer| -> ZSqrt {
+            let dc = Integer::from(&self.den * c);
+            let mut a = Integer::from(&p.a * &n_fa);
+            a += &dc * &fa;
+            a -= &p.b * &fbd;
+            let mut ua = dc;
+            ua -= &p.a;
+            let mut b = Integer::from(&p.b * &n_fa);
+            b += &ua * &fb;
+            ZSqrt::new(a, b)
+        };
+        let (mut ax, mut ay) = (coord(px, &ints[0]), coord(py, &ints[1]));
+        n *= &self.den;
+        if n.cmp0() == Ordering::Less {
+            n = -n;
+            for z in [&mut ax, &mut ay] {
+                z.a = -std::mem::take(&mut z.a);
+                z.b = -std::mem::take(&mut z.b);
+            }
+        }
+        // The frame exponent e may be below exp: scale the denominator to compensate.
+        n <<= up;
+        Some(([ax, ay], n))
+    }
+
+    /// [`ExactApollonius::tangent_point_frac`] by the plain `ZSqrt` formula (the test oracle).
+    #[doc(hidden)]
+    pub fn tangent_point_frac_reference(&self, i: usize) -> Option<([ZSqrt; 2], Integer)> {
         let site = self.sites.get(i)?;
         let (num, ints, e) = self.rescaled(&[site.center[0], site.center[1], site.s])?;
         let d = &self.disc;
@@ -171,10 +241,42 @@ impl ExactApollonius {
         Some(([ax, ay], den << fix))
     }
 
+    /// The orientation recomputed by the plain `ZSqrt` products (the test oracle of the in-place
+    /// sum [`orientation_sum`]): `(reference sum == in-place sum, orientation)`.
+    #[doc(hidden)]
+    pub fn orientation_reference(&self) -> Option<(bool, Sign)> {
+        let mut vals = Vec::with_capacity(9);
+        for s in &self.sites {
+            for v in [s.center[0], s.center[1], s.s] {
+                vals.push(dyadic(v)?);
+            }
+        }
+        let (ints, exp) = common_scale(&vals);
+        if exp != self.exp {
+            return None;
+        }
+        let q: [[Integer; 3]; 3] = [0, 1, 2].map(|i| [0, 1, 2].map(|c| ints[3 * i + c].clone()));
+        let d = &self.disc;
+        let sig: Vec<ZSqrt> = q
+            .iter()
+            .map(|qi| self.num[2].add_int(&Integer::from(&self.den * &qi[2])))
+            .collect();
+        let signs: Vec<Sign> = sig.iter().map(|s| s.sign(d)).collect();
+        if signs.contains(&Sign::Zero) {
+            return Some((true, Sign::Zero));
+        }
+        let reference = orientation_sum_reference(&q, &self.den, &self.num, &sig, d);
+        let fast = orientation_sum(&q, &self.den, &self.num, &sig, d);
+        let o = reference
+            .sign(d)
+            .times(signs[0].times(signs[1]).times(signs[2]));
+        Some((reference == fast, o))
+    }
+
     /// The exact tangent point on site `i` (`None` when undefined: the circle is the bounding
-    /// circle). For `rho = 0` it is the centre.
+    /// circle). For `rho = 0` it is the centre. (By the reference formula: a test oracle.)
     pub fn tangent_point_exact(&self, i: usize) -> Option<[QSqrt; 2]> {
-        let ([ax, ay], den) = self.tangent_point_frac(i)?;
+        let ([ax, ay], den) = self.tangent_point_frac_reference(i)?;
         Some([ax.to_qsqrt(&den, self.exp), ay.to_qsqrt(&den, self.exp)])
     }
 
@@ -248,12 +350,17 @@ impl Choice {
 
 /// 2x2 determinant of two columns.
 fn det(a: [&Integer; 2], b: [&Integer; 2]) -> Integer {
-    Integer::from(a[0] * b[1]) - Integer::from(a[1] * b[0])
+    let mut v = Integer::from(a[0] * b[1]);
+    v -= a[1] * b[0];
+    v
 }
 
 /// Lorentz form `<u, v> = u_x v_x + u_y v_y - u_r v_r`.
 fn lorentz(u: &[Integer; 3], v: &[Integer; 3]) -> Integer {
-    Integer::from(&u[0] * &v[0]) + Integer::from(&u[1] * &v[1]) - Integer::from(&u[2] * &v[2])
+    let mut l = Integer::from(&u[0] * &v[0]);
+    l += &u[1] * &v[1];
+    l -= &u[2] * &v[2];
+    l
 }
 
 /// All valid Apollonius circles of three sites (0, 1 or 2), by increasing radius.
@@ -285,8 +392,10 @@ fn unrounded_roots(sites: &[Site; 3]) -> Result<Vec<ExactApollonius>, Apollonius
     let q: [[Integer; 3]; 3] = [0, 1, 2].map(|i| [0, 1, 2].map(|c| ints[3 * i + c].clone()));
     let k = |i: usize| -> Integer {
         let [x, y, s] = &q[i];
-        Integer::from(x.square_ref()) + Integer::from(y.square_ref())
-            - Integer::from(s.square_ref())
+        let mut k = Integer::from(x.square_ref());
+        k += y * y;
+        k -= s * s;
+        k
     };
     let k0 = k(0);
     let mut m: [[Integer; 3]; 2] = Default::default();
@@ -334,7 +443,9 @@ fn unrounded_roots(sites: &[Site; 3]) -> Result<Vec<ExactApollonius>, Apollonius
     let c = lorentz(&e, &e);
     // Candidate roots: (numerators, den, disc) with u = num / den.
     let combine = |p: &Integer, r: &Integer, i: usize| -> Integer {
-        Integer::from(p * &u0[i]) + Integer::from(r * &u1[i])
+        let mut v = Integer::from(p * &u0[i]);
+        v += r * &u1[i];
+        v
     };
     let mut cands: Vec<([ZSqrt; 3], Integer, Integer)> = Vec::new();
     if a.cmp0() == Ordering::Equal {
@@ -360,8 +471,9 @@ fn unrounded_roots(sites: &[Site; 3]) -> Result<Vec<ExactApollonius>, Apollonius
                 cands.push((num, den, Integer::new()));
             }
             Ordering::Greater => {
-                let (root, rem) = disc.clone().sqrt_rem(Integer::new());
-                if rem.cmp0() == Ordering::Equal {
+                // GMP's residue tests reject almost every non-square without a square root.
+                if disc.is_perfect_square() {
+                    let root = Integer::from(disc.sqrt_ref());
                     for r in [Integer::from(&nb - &root), Integer::from(&nb + &root)] {
                         let num = [0, 1, 2].map(|i| ZSqrt::int(combine(&two_a, &r, i)));
                         cands.push((num, den.clone(), Integer::new()));
@@ -422,22 +534,7 @@ fn build_root(
     let orientation = if sig_signs.contains(&Sign::Zero) {
         Sign::Zero
     } else {
-        // den (c_i - p) / 2^exp.
-        let u: Vec<[ZSqrt; 2]> = q
-            .iter()
-            .map(|qi| {
-                [
-                    ZSqrt::int(Integer::from(&den * &qi[0])) - &num[0],
-                    ZSqrt::int(Integer::from(&den * &qi[1])) - &num[1],
-                ]
-            })
-            .collect();
-        let cross =
-            |a: &[ZSqrt; 2], b: &[ZSqrt; 2]| -> ZSqrt { &a[0].mul(&b[1], d) - &a[1].mul(&b[0], d) };
-        let t0 = sig[2].mul(&cross(&u[0], &u[1]), d);
-        let t1 = sig[0].mul(&cross(&u[1], &u[2]), d);
-        let t2 = sig[1].mul(&cross(&u[2], &u[0]), d);
-        let total = &(&t0 + &t1) + &t2;
+        let total = orientation_sum(q, &den, &num, &sig, d);
         let den_sign = sig_signs[0].times(sig_signs[1]).times(sig_signs[2]);
         total.sign(d).times(den_sign)
     };
@@ -450,6 +547,75 @@ fn build_root(
         approx: [0.0; 3],
         orientation,
     })
+}
+
+/// `sigma_2 u_0 x u_1 + sigma_0 u_1 x u_2 + sigma_1 u_2 x u_0` (times `den^3 / 8^exp`), with
+/// `U_i = den c_i - P = (A_i - Bx sqrt(D), C_i - By sqrt(D))` (`P = num[0..2]`, the `sqrt(D)`
+/// parts shared by every `i`), so that `U_i x U_j = (A_i C_j - C_i A_j) + den (By (x_j - x_i) -
+/// Bx (y_j - y_i)) sqrt(D)` (the `D` terms cancel), and every `sigma_k = sa_k + R_b sqrt(D)`
+/// shares `R_b`. The same number as [`orientation_sum_reference`] (tested through
+/// [`ExactApollonius::orientation_reference`]), accumulated in place.
+fn orientation_sum(
+    q: &[[Integer; 3]; 3],
+    den: &Integer,
+    num: &[ZSqrt; 3],
+    sig: &[ZSqrt],
+    d: &Integer,
+) -> ZSqrt {
+    let coord = |i: usize, c: usize| -> Integer {
+        let mut v = Integer::from(den * &q[i][c]);
+        v -= &num[c].a;
+        v
+    };
+    let a = [coord(0, 0), coord(1, 0), coord(2, 0)];
+    let c = [coord(0, 1), coord(1, 1), coord(2, 1)];
+    let (bx, by, rb) = (&num[0].b, &num[1].b, &num[2].b);
+    let (mut acc_a, mut acc_b) = (Integer::new(), Integer::new());
+    let (mut sum_ca, mut sum_cb) = (Integer::new(), Integer::new());
+    for (k, i, j) in [(2, 0, 1), (0, 1, 2), (1, 2, 0)] {
+        let mut ca = Integer::from(&a[i] * &c[j]);
+        ca -= &c[i] * &a[j];
+        let dx = Integer::from(&q[j][0] - &q[i][0]);
+        let dy = Integer::from(&q[j][1] - &q[i][1]);
+        let mut cb = Integer::from(by * &dx);
+        cb -= bx * &dy;
+        cb *= den;
+        acc_a += &sig[k].a * &ca;
+        acc_b += &sig[k].a * &cb;
+        sum_ca += &ca;
+        sum_cb += &cb;
+    }
+    let mut t = Integer::from(rb * &sum_cb);
+    t *= d;
+    acc_a += &t;
+    acc_b += rb * &sum_ca;
+    ZSqrt::new(acc_a, acc_b)
+}
+
+/// [`orientation_sum`] by the plain `ZSqrt` products (the test oracle).
+fn orientation_sum_reference(
+    q: &[[Integer; 3]; 3],
+    den: &Integer,
+    num: &[ZSqrt; 3],
+    sig: &[ZSqrt],
+    d: &Integer,
+) -> ZSqrt {
+    // den (c_i - p) / 2^exp.
+    let u: Vec<[ZSqrt; 2]> = q
+        .iter()
+        .map(|qi| {
+            [
+                ZSqrt::int(Integer::from(den * &qi[0])) - &num[0],
+                ZSqrt::int(Integer::from(den * &qi[1])) - &num[1],
+            ]
+        })
+        .collect();
+    let cross =
+        |a: &[ZSqrt; 2], b: &[ZSqrt; 2]| -> ZSqrt { &a[0].mul(&b[1], d) - &a[1].mul(&b[0], d) };
+    let t0 = sig[2].mul(&cross(&u[0], &u[1]), d);
+    let t1 = sig[0].mul(&cross(&u[1], &u[2]), d);
+    let t2 = sig[1].mul(&cross(&u[2], &u[0]), d);
+    &(&t0 + &t1) + &t2
 }
 
 /// Pick one root per `choice`: filter by orientation, then nearest to the hint (exact
