@@ -142,10 +142,12 @@ impl ExactApollonius {
     /// `a_i = p + rho (c_i - p) / sigma_i`, i.e. with `U = den c_i - P`, `S = R + den s_i`,
     /// `a_i = 2^exp (P N(S) + R U conj(S)) / (den N(S))`. `None` when undefined.
     ///
-    /// The same integers as [`ExactApollonius::tangent_point_frac_reference`] (tested), with
-    /// the products expanded and accumulated in place: with `F = R conj(S) = fa + fb sqrt(D)`
-    /// (`fb = R_b den s_i`) and `P = pa + pb sqrt(D)`, the numerator is
-    /// `pa (N - fa) + den c fa - pb fb D` plus `(pb (N - fa) + (den c - pa) fb) sqrt(D)`.
+    /// The same value as [`ExactApollonius::tangent_point_frac_reference`] (tested), by the
+    /// equivalent `a_i = c_i - s_i (c_i - p) / sigma_i` (`c_i - a_i = u (sigma_i - rho) /
+    /// sigma_i`) over the smaller denominator `den' = N(S) 2^up`: with `C` the site's centre
+    /// coordinate, `U = den C - P = Ua - Pb sqrt(D)` and `S = sa + Rb sqrt(D)`,
+    /// `U conj(S) = (Ua sa + Pb Rb D) - (Ua Rb + Pb sa) sqrt(D)`, so the numerator is
+    /// `C N(S) - s (Ua sa + Pb Rb D)` plus `s (Ua Rb + Pb sa) sqrt(D)`.
     #[doc(hidden)]
     pub fn tangent_point_frac(&self, i: usize) -> Option<([ZSqrt; 2], Integer)> {
         let site = self.sites.get(i)?;
@@ -169,34 +171,30 @@ impl ExactApollonius {
         if r.sign(d) == Sign::Zero {
             return Some(([px.clone(), py.clone()], self.den.clone()));
         }
+        let si = &ints[2];
         // S = R + den s_i: sa = R_a + den s_i, sb = R_b.
-        let ds = Integer::from(&self.den * &ints[2]);
-        let sa = Integer::from(&r.a + &ds);
-        let mut rb2d = Integer::from(r.b.square_ref());
-        rb2d *= d;
+        let mut sa = Integer::from(&self.den * si);
+        sa += &r.a;
+        let rbd = Integer::from(&r.b * d);
         let mut n = Integer::from(sa.square_ref());
-        n -= &rb2d;
+        n -= &rbd * &r.b;
         if n.cmp0() == Ordering::Equal {
             return None;
         }
-        let mut fa = Integer::from(&r.a * &sa);
-        fa -= &rb2d;
-        let fb = Integer::from(&r.b * &ds);
-        let fbd = Integer::from(&fb * d);
-        let n_fa = Integer::from(&n - &fa);
         let coord = |p: &ZSqrt, c: &Integer| -> ZSqrt {
-            let dc = Integer::from(&self.den * c);
-            let mut a = Integer::from(&p.a * &n_fa);
-            a += &dc * &fa;
-            a -= &p.b * &fbd;
-            let mut ua = dc;
+            let mut ua = Integer::from(&self.den * c);
             ua -= &p.a;
-            let mut b = Integer::from(&p.b * &n_fa);
-            b += &ua * &fb;
+            let mut t = Integer::from(&ua * &sa);
+            t += &p.b * &rbd;
+            t *= si;
+            let mut a = Integer::from(c * &n);
+            a -= &t;
+            let mut b = Integer::from(&ua * &r.b);
+            b += &p.b * &sa;
+            b *= si;
             ZSqrt::new(a, b)
         };
         let (mut ax, mut ay) = (coord(px, &ints[0]), coord(py, &ints[1]));
-        n *= &self.den;
         if n.cmp0() == Ordering::Less {
             n = -n;
             for z in [&mut ax, &mut ay] {
