@@ -34,6 +34,7 @@
 //! and `Zero` when some `sigma_i = 0`.
 
 use super::exact::{common_scale, dyadic, QSqrt, Sign, SqrtBracket, ZSqrt};
+use super::interval::Interval;
 use super::Site;
 use rug::{Integer, Rational};
 use std::cmp::Ordering;
@@ -240,9 +241,10 @@ impl ExactApollonius {
     }
 
     /// The orientation recomputed by the plain `ZSqrt` products (the test oracle of the in-place
-    /// sum [`orientation_sum`]): `(reference sum == in-place sum, orientation)`.
+    /// sum [`orientation_sum`] and of [`orientation_filter`]): `(reference sum == in-place sum,
+    /// orientation, the filter's sign of the sum if it decided, the exact sign of the sum)`.
     #[doc(hidden)]
-    pub fn orientation_reference(&self) -> Option<(bool, Sign)> {
+    pub fn orientation_reference(&self) -> Option<(bool, Sign, Option<Sign>, Sign)> {
         let mut vals = Vec::with_capacity(9);
         for s in &self.sites {
             for v in [s.center[0], s.center[1], s.s] {
@@ -261,14 +263,14 @@ impl ExactApollonius {
             .collect();
         let signs: Vec<Sign> = sig.iter().map(|s| s.sign(d)).collect();
         if signs.contains(&Sign::Zero) {
-            return Some((true, Sign::Zero));
+            return Some((true, Sign::Zero, None, Sign::Zero));
         }
         let reference = orientation_sum_reference(&q, &self.den, &self.num, &sig, d);
         let fast = orientation_sum(&q, &self.den, &self.num, &sig, d);
-        let o = reference
-            .sign(d)
-            .times(signs[0].times(signs[1]).times(signs[2]));
-        Some((reference == fast, o))
+        let exact = reference.sign(d);
+        let o = exact.times(signs[0].times(signs[1]).times(signs[2]));
+        let filter = orientation_filter(&q, &self.den, &self.num, d);
+        Some((reference == fast, o, filter, exact))
     }
 
     /// The exact tangent point on site `i` (`None` when undefined: the circle is the bounding
@@ -532,9 +534,10 @@ fn build_root(
     let orientation = if sig_signs.contains(&Sign::Zero) {
         Sign::Zero
     } else {
-        let total = orientation_sum(q, &den, &num, &sig, d);
         let den_sign = sig_signs[0].times(sig_signs[1]).times(sig_signs[2]);
-        total.sign(d).times(den_sign)
+        orientation_filter(q, &den, &num, d)
+            .unwrap_or_else(|| orientation_sum(q, &den, &num, &sig, d).sign(d))
+            .times(den_sign)
     };
     Some(ExactApollonius {
         sites: *sites,
@@ -588,6 +591,38 @@ fn orientation_sum(
     acc_a += &t;
     acc_b += rb * &sum_ca;
     ZSqrt::new(acc_a, acc_b)
+}
+
+/// The sign of [`orientation_sum`] when interval arithmetic decides it (`None` otherwise): the
+/// same sum over `den^3`, `sum_k sigma_k (c_i - p) x (c_j - p)` in units of `2^exp`, from
+/// intervals around the integers (`p = (a + b sqrt(D)) / den`, `sigma_k = rho + s_k`). Every
+/// interval contains the exact value, so a decided sign is exact (tested against the exact
+/// sign through [`ExactApollonius::orientation_reference`]).
+fn orientation_filter(
+    q: &[[Integer; 3]; 3],
+    den: &Integer,
+    num: &[ZSqrt; 3],
+    d: &Integer,
+) -> Option<Sign> {
+    let iv = Interval::of_integer;
+    let sq = iv(d)?.sqrt();
+    let den = iv(den)?;
+    let val = |z: &ZSqrt| -> Option<Interval> {
+        Some(iv(&z.a)?.add(iv(&z.b)?.mul(sq)).div_positive(den))
+    };
+    let (px, py, rho) = (val(&num[0])?, val(&num[1])?, val(&num[2])?);
+    let mut u = [[Interval::point(0.0); 2]; 3];
+    let mut sig = [Interval::point(0.0); 3];
+    for i in 0..3 {
+        u[i] = [iv(&q[i][0])?.sub(px), iv(&q[i][1])?.sub(py)];
+        sig[i] = rho.add(iv(&q[i][2])?);
+    }
+    let cross = |a: &[Interval; 2], b: &[Interval; 2]| a[0].mul(b[1]).sub(a[1].mul(b[0]));
+    let total = sig[2]
+        .mul(cross(&u[0], &u[1]))
+        .add(sig[0].mul(cross(&u[1], &u[2])))
+        .add(sig[1].mul(cross(&u[2], &u[0])));
+    total.sign()
 }
 
 /// [`orientation_sum`] by the plain `ZSqrt` products (the test oracle).
