@@ -143,3 +143,33 @@ proptest! {
         same(&Integer::from(b), &num.clone().max(Integer::from(1)), exp);
     }
 }
+
+/// `ZSqrt::sign` (interval filter first) against the exact comparison of squares, on random
+/// mixed-sign values and on near-cancelling ones (`a = -round(b sqrt(D))` +- small), with a
+/// count that the filter decides the random ones.
+#[test]
+fn zsqrt_sign_filter_matches_the_squares() {
+    use medial_blocks::apollonius::exact::ZSqrt;
+    let mut rng = SplitMix64(53);
+    let (mut decided, n) = (0usize, 20_000usize);
+    for case in 0..n {
+        let d = random_int(&mut rng, 4) + 2u32;
+        let b = random_int(&mut rng, 4) + 1u32;
+        let a = if case % 2 == 0 {
+            -random_int(&mut rng, 6)
+        } else {
+            // -floor(b sqrt(D)) + small: cancels to the last bits.
+            let mut t = Integer::from(&b * &b) * &d;
+            t.sqrt_mut();
+            -t + (rng.next_u64() % 5) as i32 - 2
+        };
+        for z in [ZSqrt::new(a.clone(), b.clone()), ZSqrt::new(-a, -b)] {
+            assert_eq!(z.sign(&d), z.sign_exact(&d), "{z:?} {d}");
+            if let Some(s) = z.sign_filter(&d) {
+                assert_eq!(s, z.sign_exact(&d), "{z:?} {d}");
+                decided += usize::from(case % 2 == 0);
+            }
+        }
+    }
+    assert!(decided * 10 > n * 9, "{decided} of {n}");
+}

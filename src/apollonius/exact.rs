@@ -11,6 +11,7 @@
 //!   `Q(sqrt D)` is a field: every non-zero element has an inverse ([`QSqrt::inv`]).
 //!   [`QSqrt::sign`] and [`eq_across`] are exact for *any* `D >= 0`, square or not.
 
+use super::interval::Interval;
 use rug::{Integer, Rational};
 use std::cmp::Ordering;
 use std::ops::{Add, Neg, Sub};
@@ -511,8 +512,34 @@ impl ZSqrt {
         }
     }
 
-    /// Exact sign, as [`QSqrt::sign`].
+    /// Exact sign, as [`QSqrt::sign`]. When the signs of `a` and `b` differ, an interval
+    /// evaluation of `a + b sqrt(D)` decides first (every interval contains the exact value, so
+    /// a decided sign is exact); the squares are compared only when it contains 0.
     pub fn sign(&self, d: &Integer) -> Sign {
+        let sa: Sign = self.a.cmp0().into();
+        let sb = if d.cmp0() == Ordering::Greater {
+            self.b.cmp0().into()
+        } else {
+            Sign::Zero
+        };
+        if sa != sb && sa != Sign::Zero && sb != Sign::Zero {
+            if let Some(s) = self.sign_filter(d) {
+                return s;
+            }
+        }
+        self.sign_exact(d)
+    }
+
+    /// The interval sign of `a + b sqrt(D)` (`None` when undecided).
+    #[doc(hidden)]
+    pub fn sign_filter(&self, d: &Integer) -> Option<Sign> {
+        let iv = Interval::of_integer;
+        iv(&self.a)?.add(iv(&self.b)?.mul(iv(d)?.sqrt())).sign()
+    }
+
+    /// [`ZSqrt::sign`] by comparing `a^2` with `b^2 D` (the reference).
+    #[doc(hidden)]
+    pub fn sign_exact(&self, d: &Integer) -> Sign {
         let sa: Sign = self.a.cmp0().into();
         let sb = if d.cmp0() == Ordering::Greater {
             self.b.cmp0().into()
