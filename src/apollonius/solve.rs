@@ -288,6 +288,32 @@ impl ExactApollonius {
     /// [`ExactApollonius::to_apollonius`] with the first bracket of `sqrt(D)` given (the same
     /// values).
     fn to_apollonius_with(&self, sq: Option<&SqrtBracket>) -> Result<Apollonius, ApolloniusError> {
+        let tangent_points = self.rounded_tangent_points(sq)?;
+        Ok(Apollonius {
+            center: self.center_f64(),
+            radius: self.radius_f64(),
+            tangent_points,
+            exact: self.clone(),
+        })
+    }
+
+    /// [`ExactApollonius::to_apollonius_with`], moving the exact root into the result instead
+    /// of cloning it.
+    fn into_apollonius_with(self, sq: Option<&SqrtBracket>) -> Result<Apollonius, ApolloniusError> {
+        let tangent_points = self.rounded_tangent_points(sq)?;
+        Ok(Apollonius {
+            center: self.center_f64(),
+            radius: self.radius_f64(),
+            tangent_points,
+            exact: self,
+        })
+    }
+
+    /// The correctly rounded tangent points (first bracket of `sqrt(D)` given, or `None`).
+    fn rounded_tangent_points(
+        &self,
+        sq: Option<&SqrtBracket>,
+    ) -> Result<[[f64; 2]; 3], ApolloniusError> {
         let mut tangent_points = [[0.0; 2]; 3];
         for (i, t) in tangent_points.iter_mut().enumerate() {
             let ([ax, ay], den) = self
@@ -298,12 +324,7 @@ impl ExactApollonius {
                 ay.to_f64_with(&self.disc, &den, self.exp, sq),
             ];
         }
-        Ok(Apollonius {
-            center: self.center_f64(),
-            radius: self.radius_f64(),
-            tangent_points,
-            exact: self.clone(),
-        })
+        Ok(tangent_points)
     }
 }
 
@@ -692,5 +713,5 @@ pub fn apollonius(sites: [Site; 3], choice: Choice) -> Result<Apollonius, Apollo
     let mut root = choose(roots, choice).ok_or(ApolloniusError::NoCircle)?;
     let sq = SqrtBracket::new(&root.disc);
     root.round(sq.as_ref());
-    root.to_apollonius_with(sq.as_ref())
+    root.into_apollonius_with(sq.as_ref())
 }
