@@ -3,14 +3,19 @@
 //! values of the reference path (every root rounded, each rounding with its own square root:
 //! `choose(apollonius_roots(..), choice).to_apollonius()`) and the correctly rounded values of
 //! the exact root computed with the rational arithmetic of `QSqrt::to_f64` (another code path),
-//! on random, near-tangent, co-circular and integer triples and under proptest.
+//! on random, near-tangent, co-circular and integer triples and under proptest. The in-place
+//! tangent points (another formula) and orientation sums equal those of the plain `ZSqrt` formulas, and the rational oracle's
+//! tangent points come from that plain formula.
 
+use medial_blocks::apollonius::exact::ZSqrt;
 use medial_blocks::apollonius::{
     apollonius, apollonius_roots, choose, Apollonius, Choice, ExactApollonius, Site,
 };
 use medial_blocks::layouts::SplitMix64;
 use medial_blocks::Circle;
 use proptest::prelude::*;
+use rug::Integer;
+use std::cell::Cell;
 
 fn hole(x: f64, y: f64, r: f64) -> Site {
     Site::hole(Circle {
@@ -24,6 +29,11 @@ fn bounding(x: f64, y: f64, r: f64) -> Site {
         center: [x, y],
         radius: r,
     })
+}
+
+thread_local! {
+    /// Orientation-filter statistics of this test's `check` calls: (roots, decided).
+    static FILTER: Cell<(usize, usize)> = const { Cell::new((0, 0)) };
 }
 
 fn bits(ap: &Apollonius) -> Vec<u64> {
@@ -60,6 +70,28 @@ fn check(sites: [Site; 3], hint: [f64; 2]) -> bool {
                 assert_eq!(bits(f), bits(&r), "{sites:?} {choice:?}");
                 assert_eq!(f.exact, r.exact, "{sites:?} {choice:?}");
                 assert_eq!(Some(bits(f)), rational_rounding(&f.exact), "{sites:?}");
+                for root in apollonius_roots(&sites).unwrap() {
+                    let (same_sum, o, filter, exact) =
+                        root.orientation_reference().expect("same frame");
+                    assert!(same_sum, "orientation sum {sites:?}");
+                    assert_eq!(o, root.orientation(), "{sites:?}");
+                    assert!(filter.is_none() || filter == Some(exact), "{sites:?}");
+                    FILTER.with(|c| {
+                        let (n, k) = c.get();
+                        c.set((n + 1, k + usize::from(filter.is_some())));
+                    });
+                }
+                for i in 0..3 {
+                    // Same values (reduced rationals), over different denominators.
+                    let value = |t: Option<([ZSqrt; 2], Integer)>| {
+                        t.map(|(xy, den)| xy.map(|z| z.to_qsqrt(&den, 0)))
+                    };
+                    assert_eq!(
+                        value(f.exact.tangent_point_frac(i)),
+                        value(f.exact.tangent_point_frac_reference(i)),
+                        "{sites:?}"
+                    );
+                }
                 found = true;
             }
             (Err(_), Ok(Some(r))) => assert!(r.to_apollonius().is_err(), "{sites:?}"),
@@ -96,6 +128,12 @@ fn random_and_near_tangent_triples() {
         found += usize::from(check(sites, p));
     }
     assert!(found > 1000, "{found}");
+    // The orientation filter decides typical roots (it is not dead code).
+    let (roots, decided) = FILTER.with(Cell::get);
+    assert!(
+        decided * 10 > roots * 9,
+        "orientation filter: {decided} of {roots}"
+    );
 }
 
 #[test]
@@ -142,4 +180,47 @@ proptest! {
         }
         check(sites, [h.0, h.1]);
     }
+}
+
+/// The orientation filter against the exact sign on random triples (every root of each):
+/// 10 000 triples, or 1 000 000 with `MB_APOLLO_MANY=1`; it must decide nearly all of them.
+#[test]
+fn orientation_filter_on_many_random_triples() {
+    let n = if std::env::var_os("MB_APOLLO_MANY").is_some() {
+        1_000_000
+    } else {
+        10_000
+    };
+    let mut rng = SplitMix64(41);
+    let (mut roots, mut decided) = (0usize, 0usize);
+    for case in 0..n {
+        let mut f = |a: f64, b: f64| a + (b - a) * rng.next_f64();
+        let scale = [1.0, 1e-6, 1e6][case % 3];
+        let mut sites = [hole(0.0, 0.0, 0.0); 3];
+        for s in &mut sites {
+            *s = hole(
+                f(-1.0, 1.0) * scale,
+                f(-1.0, 1.0) * scale,
+                f(0.0, 0.3) * scale,
+            );
+        }
+        if case % 5 == 0 {
+            sites[0] = bounding(0.0, 0.0, 3.0 * scale);
+        }
+        let Ok(rs) = apollonius_roots(&sites) else {
+            continue;
+        };
+        for r in rs {
+            let (same_sum, o, filter, exact) = r.orientation_reference().expect("same frame");
+            assert!(same_sum && o == r.orientation(), "{sites:?}");
+            assert!(filter.is_none() || filter == Some(exact), "{sites:?}");
+            roots += 1;
+            decided += usize::from(filter.is_some());
+        }
+    }
+    assert!(roots > n / 2, "{roots}");
+    assert!(
+        decided * 100 > roots * 95,
+        "orientation filter: {decided} of {roots}"
+    );
 }

@@ -11,6 +11,7 @@
 //!   `Q(sqrt D)` is a field: every non-zero element has an inverse ([`QSqrt::inv`]).
 //!   [`QSqrt::sign`] and [`eq_across`] are exact for *any* `D >= 0`, square or not.
 
+use super::interval::Interval;
 use rug::{Integer, Rational};
 use std::cmp::Ordering;
 use std::ops::{Add, Neg, Sub};
@@ -320,13 +321,97 @@ fn pow2(k: i64) -> f64 {
 
 /// The `f64` nearest to the rational `q`, ties to even (IEEE round-to-nearest), with overflow to
 /// `±inf` and gradual underflow. (`rug`'s own `to_f64` truncates.)
+///
+/// Always the exact integer path ([`round_scaled_exact`]): this is the test oracle of the
+/// filtered [`round_scaled`].
 pub fn round_rational(q: &Rational) -> f64 {
-    round_scaled(q.numer(), q.denom(), 0)
+    round_scaled_exact(q.numer(), q.denom(), 0)
 }
 
 /// The `f64` nearest to `num / den * 2^exp` (`den > 0`, the fraction need not be reduced),
 /// ties to even, with overflow to `±inf` and gradual underflow.
+///
+/// A filter first brackets the value between two `u128` quotients of the top 64 bits of `num`
+/// and `den` ([`round_scaled_filter`]); when both round to the same normal `f64`, that is the
+/// answer (rounding is monotone). Otherwise (near a rounding midpoint, or outside the normal
+/// range) the exact integer division decides ([`round_scaled_exact`]). Same value either way.
 pub fn round_scaled(num: &Integer, den: &Integer, exp: i64) -> f64 {
+    round_scaled_filter(num, den, exp).unwrap_or_else(|| round_scaled_exact(num, den, exp))
+}
+
+/// `m` and `s` with `2^63 <= m < 2^64` and `m <= |v| / 2^s < m + 1` (`v != 0`), read from the
+/// top limbs without allocating; `exact` when `|v| = m 2^s`.
+fn top64(v: &Integer) -> (u64, i64, bool) {
+    // 64-bit limbs (x86_64, aarch64): a 32-bit limb target fails to compile here.
+    let limbs: &[u64] = v.as_limbs();
+    let n = limbs.len();
+    let top = limbs[n - 1];
+    let lz = top.leading_zeros();
+    let below = if n >= 2 { limbs[n - 2] } else { 0 };
+    let m = if lz == 0 {
+        top
+    } else {
+        (top << lz) | (below >> (64 - lz))
+    };
+    let s = 64 * (n as i64 - 1) - i64::from(lz);
+    // Bits below the 64 kept ones: the low `64 - lz` bits of `below` (when lz > 0: its low
+    // `64 - lz`; when lz == 0: all of it) and every lower limb.
+    let dropped_below = if n >= 2 {
+        let mask = if lz == 0 {
+            u64::MAX
+        } else {
+            (1u64 << (64 - lz)) - 1
+        };
+        below & mask != 0
+    } else {
+        false
+    };
+    let exact = !dropped_below && limbs[..n.saturating_sub(2)].iter().all(|&l| l == 0);
+    (m, s, exact)
+}
+
+/// The filter of [`round_scaled`]: `Some` only when the correctly rounded value is certain and
+/// normal. With `|num| / 2^sn` in `[N, N + 1)` and `den / 2^sd` in `[D, D + 1)` (top 64 bits),
+/// `|num| / den` lies in `[N / (D + 1), (N + 1) / D] 2^(sn - sd)`; the quotients times `2^64`
+/// are bracketed by `u128` floor/ceiling divisions, whose roundings (`u128 as f64` rounds to
+/// nearest, ties to even; the power-of-two scale is exact for normal results) must agree.
+pub fn round_scaled_filter(num: &Integer, den: &Integer, exp: i64) -> Option<f64> {
+    if num.cmp0() == Ordering::Equal {
+        return Some(0.0);
+    }
+    if den.cmp0() != Ordering::Greater {
+        return None;
+    }
+    let (n, sn, n_exact) = top64(num);
+    let (d, sd, d_exact) = top64(den);
+    let (n, d) = (u128::from(n), u128::from(d));
+    let n_hi = if n_exact { n } else { n + 1 };
+    if n_hi >> 64 != 0 {
+        return None; // (N + 1) 2^64 would not fit
+    }
+    let d_hi = if d_exact { d } else { d + 1 };
+    // lo <= |num| / den * 2^(64 - sn + sd) <= hi.
+    let lo = (n << 64) / d_hi;
+    let hi = (n_hi << 64).div_ceil(d);
+    let e = exp.checked_add(sn)?.checked_sub(sd)?.checked_sub(64)?;
+    // lo >= 2^62 and hi < 2^66: results in [2^(e+62), 2^(e+66)) are normal and finite.
+    if !(-1022..=1023 - 66).contains(&e) {
+        return None;
+    }
+    let scale = pow2(e);
+    let (fl, fh) = (lo as f64 * scale, hi as f64 * scale);
+    if fl != fh {
+        return None;
+    }
+    Some(if num.cmp0() == Ordering::Less {
+        -fl
+    } else {
+        fl
+    })
+}
+
+/// [`round_scaled`] by exact integer division (the reference path).
+pub fn round_scaled_exact(num: &Integer, den: &Integer, exp: i64) -> f64 {
     debug_assert!(den.cmp0() == Ordering::Greater);
     let negative = num.cmp0() == Ordering::Less;
     let n = Integer::from(num.abs_ref());
@@ -427,8 +512,34 @@ impl ZSqrt {
         }
     }
 
-    /// Exact sign, as [`QSqrt::sign`].
+    /// Exact sign, as [`QSqrt::sign`]. When the signs of `a` and `b` differ, an interval
+    /// evaluation of `a + b sqrt(D)` decides first (every interval contains the exact value, so
+    /// a decided sign is exact); the squares are compared only when it contains 0.
     pub fn sign(&self, d: &Integer) -> Sign {
+        let sa: Sign = self.a.cmp0().into();
+        let sb = if d.cmp0() == Ordering::Greater {
+            self.b.cmp0().into()
+        } else {
+            Sign::Zero
+        };
+        if sa != sb && sa != Sign::Zero && sb != Sign::Zero {
+            if let Some(s) = self.sign_filter(d) {
+                return s;
+            }
+        }
+        self.sign_exact(d)
+    }
+
+    /// The interval sign of `a + b sqrt(D)` (`None` when undecided).
+    #[doc(hidden)]
+    pub fn sign_filter(&self, d: &Integer) -> Option<Sign> {
+        let iv = Interval::of_integer;
+        iv(&self.a)?.add(iv(&self.b)?.mul(iv(d)?.sqrt())).sign()
+    }
+
+    /// [`ZSqrt::sign`] by comparing `a^2` with `b^2 D` (the reference).
+    #[doc(hidden)]
+    pub fn sign_exact(&self, d: &Integer) -> Sign {
         let sa: Sign = self.a.cmp0().into();
         let sb = if d.cmp0() == Ordering::Greater {
             self.b.cmp0().into()
@@ -451,20 +562,25 @@ impl ZSqrt {
     }
 
     /// `self * other`.
+    ///
+    /// Accumulated in place (`+= x * y` is GMP's addmul): two allocations, no temporaries.
     pub fn mul(&self, o: &ZSqrt, d: &Integer) -> ZSqrt {
-        let bb = Integer::from(&self.b * &o.b) * d;
-        ZSqrt {
-            a: Integer::from(&self.a * &o.a) + bb,
-            b: Integer::from(&self.a * &o.b) + Integer::from(&o.a * &self.b),
-        }
+        let mut a = Integer::from(&self.b * &o.b);
+        a *= d;
+        a += &self.a * &o.a;
+        let mut b = Integer::from(&self.a * &o.b);
+        b += &o.a * &self.b;
+        ZSqrt { a, b }
     }
 
     /// `self^2`.
     pub fn square(&self, d: &Integer) -> ZSqrt {
-        ZSqrt {
-            a: Integer::from(self.a.square_ref()) + Integer::from(self.b.square_ref()) * d,
-            b: Integer::from(&self.a * &self.b) << 1u32,
-        }
+        let mut a = Integer::from(self.b.square_ref());
+        a *= d;
+        a += &self.a * &self.a;
+        let mut b = Integer::from(&self.a * &self.b);
+        b <<= 1u32;
+        ZSqrt { a, b }
     }
 
     /// `k * self` for an integer `k`.
@@ -545,15 +661,16 @@ impl ZSqrt {
                     (&computed, rem.cmp0() == Ordering::Equal)
                 }
             };
-            let base = Integer::from(&self.a << k);
-            let lo_t = Integer::from(&base + &self.b * t);
-            let hi_t = lo_t.clone() + &self.b;
+            // lo = a 2^k + b t, then hi = lo + b, in one buffer.
+            let mut bound = Integer::from(&self.a << k);
+            bound += &self.b * t;
             let kk = exp - i64::from(k);
-            let fl = round_scaled(&lo_t, den, kk);
+            let fl = round_scaled(&bound, den, kk);
             if exact {
                 return fl; // D is a square: the bracket is exact
             }
-            let fh = round_scaled(&hi_t, den, kk);
+            bound += &self.b;
+            let fh = round_scaled(&bound, den, kk);
             if fl == fh || bits >= 1 << 16 {
                 return fl;
             }
@@ -599,7 +716,39 @@ pub fn shift_rational(q: Rational, exp: i64) -> Rational {
 }
 
 /// `v = n * 2^e` with integer `n` (`None` for non-finite `v`).
+///
+/// In lowest terms (`n` odd, or `n = 0` with `e = 0`) when `e < 0`; for integers `e = 0`. Read
+/// from the bits of `v` (the same pair as the reduced `Rational::from_f64(v)`, tested against
+/// it in `tests/perf_apollonius.rs` via [`dyadic_reference`]).
 pub fn dyadic(v: f64) -> Option<(Integer, i64)> {
+    if !v.is_finite() {
+        return None;
+    }
+    if v == 0.0 {
+        return Some((Integer::new(), 0));
+    }
+    let bits = v.to_bits();
+    let biased = ((bits >> 52) & 0x7ff) as i64;
+    let frac = bits & ((1u64 << 52) - 1);
+    let (mut m, mut e) = if biased == 0 {
+        (frac, -1074)
+    } else {
+        (frac | (1u64 << 52), biased - 1075)
+    };
+    let tz = m.trailing_zeros();
+    m >>= tz;
+    e += i64::from(tz);
+    // Integers: the reduced denominator is 1, numerator m 2^e.
+    let (n, e) = if e > 0 {
+        (Integer::from(m) << (e as u32), 0)
+    } else {
+        (Integer::from(m), e)
+    };
+    Some((if v < 0.0 { -n } else { n }, e))
+}
+
+/// [`dyadic`] through `Rational::from_f64` (the reference).
+pub fn dyadic_reference(v: f64) -> Option<(Integer, i64)> {
     let q = Rational::from_f64(v)?;
     let k = i64::from(q.denom().significant_bits()) - 1; // the denominator is 2^k
     let (n, _) = q.into_numer_denom();

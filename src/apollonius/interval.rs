@@ -67,6 +67,69 @@ impl Interval {
         Interval::widen(self.lo - o.hi, self.hi - o.lo)
     }
 
+    /// An interval containing the integer `v`: its `f64` conversion (within one ulp) widened by
+    /// one ulp each way; `None` when `v` is beyond the `f64` range.
+    pub fn of_integer(v: &rug::Integer) -> Option<Interval> {
+        let x = v.to_f64();
+        x.is_finite().then(|| Interval::around(x))
+    }
+
+    /// The interval with `NaN` endpoints: decides nothing.
+    fn undecided() -> Interval {
+        Interval {
+            lo: f64::NAN,
+            hi: f64::NAN,
+        }
+    }
+
+    /// The product: the extreme endpoint products, widened (a `NaN` product, from `0 * inf`,
+    /// gives the undecided interval rather than being dropped by `min`/`max`).
+    pub fn mul(self, o: Interval) -> Interval {
+        let p = [
+            self.lo * o.lo,
+            self.lo * o.hi,
+            self.hi * o.lo,
+            self.hi * o.hi,
+        ];
+        if p.iter().any(|v| v.is_nan()) {
+            return Interval::undecided();
+        }
+        let lo = p.iter().copied().fold(f64::INFINITY, f64::min);
+        let hi = p.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+        Interval::widen(lo, hi)
+    }
+
+    /// The quotient by an interval of positive numbers (undecided otherwise).
+    pub fn div_positive(self, o: Interval) -> Interval {
+        if o.lo.is_nan() || o.lo <= 0.0 {
+            return Interval::undecided();
+        }
+        let p = [
+            self.lo / o.lo,
+            self.lo / o.hi,
+            self.hi / o.lo,
+            self.hi / o.hi,
+        ];
+        if p.iter().any(|v| v.is_nan()) {
+            return Interval::undecided();
+        }
+        let lo = p.iter().copied().fold(f64::INFINITY, f64::min);
+        let hi = p.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+        Interval::widen(lo, hi)
+    }
+
+    /// The square root of the non-negative part (`sqrt` is correctly rounded: one ulp of
+    /// widening suffices).
+    pub fn sqrt(self) -> Interval {
+        if self.hi.is_nan() || self.lo.is_nan() || self.hi < 0.0 {
+            return Interval::undecided();
+        }
+        Interval {
+            lo: next_down(self.lo.max(0.0).sqrt()).max(0.0),
+            hi: next_up(self.hi.sqrt()),
+        }
+    }
+
     /// `x^2`, which is `>= 0` also when the interval straddles 0.
     pub fn square(self) -> Interval {
         let (a, b) = (self.lo.abs(), self.hi.abs());

@@ -34,6 +34,7 @@
 //! and `Zero` when some `sigma_i = 0`.
 
 use super::exact::{common_scale, dyadic, QSqrt, Sign, SqrtBracket, ZSqrt};
+use super::interval::Interval;
 use super::Site;
 use rug::{Integer, Rational};
 use std::cmp::Ordering;
@@ -141,7 +142,75 @@ impl ExactApollonius {
     /// The tangent point on site `i` as a numerator over `den'` in this root's exponent:
     /// `a_i = p + rho (c_i - p) / sigma_i`, i.e. with `U = den c_i - P`, `S = R + den s_i`,
     /// `a_i = 2^exp (P N(S) + R U conj(S)) / (den N(S))`. `None` when undefined.
-    fn tangent_point_frac(&self, i: usize) -> Option<([ZSqrt; 2], Integer)> {
+    ///
+    /// The same value as [`ExactApollonius::tangent_point_frac_reference`] (tested), by the
+    /// equivalent `a_i = c_i - s_i (c_i - p) / sigma_i` (`c_i - a_i = u (sigma_i - rho) /
+    /// sigma_i`) over the smaller denominator `den' = N(S) 2^up`: with `C` the site's centre
+    /// coordinate, `U = den C - P = Ua - Pb sqrt(D)` and `S = sa + Rb sqrt(D)`,
+    /// `U conj(S) = (Ua sa + Pb Rb D) - (Ua Rb + Pb sa) sqrt(D)`, so the numerator is
+    /// `C N(S) - s (Ua sa + Pb Rb D)` plus `s (Ua Rb + Pb sa) sqrt(D)`.
+    #[doc(hidden)]
+    pub fn tangent_point_frac(&self, i: usize) -> Option<([ZSqrt; 2], Integer)> {
+        let site = self.sites.get(i)?;
+        let vals = [
+            dyadic(site.center[0])?,
+            dyadic(site.center[1])?,
+            dyadic(site.s)?,
+        ];
+        let e = vals.iter().map(|v| v.1).fold(self.exp, i64::min);
+        let ints = vals.map(|(n, ei)| n << ((ei - e) as u32));
+        let up = (self.exp - e) as u32;
+        let shifted;
+        let num = if up == 0 {
+            &self.num
+        } else {
+            shifted = [0, 1, 2].map(|j| self.num[j].shl(up));
+            &shifted
+        };
+        let d = &self.disc;
+        let [px, py, r] = num;
+        if r.sign(d) == Sign::Zero {
+            return Some(([px.clone(), py.clone()], self.den.clone()));
+        }
+        let si = &ints[2];
+        // S = R + den s_i: sa = R_a + den s_i, sb = R_b.
+        let mut sa = Integer::from(&self.den * si);
+        sa += &r.a;
+        let rbd = Integer::from(&r.b * d);
+        let mut n = Integer::from(sa.square_ref());
+        n -= &rbd * &r.b;
+        if n.cmp0() == Ordering::Equal {
+            return None;
+        }
+        let coord = |p: &ZSqrt, c: &Integer| -> ZSqrt {
+            let mut ua = Integer::from(&self.den * c);
+            ua -= &p.a;
+            let mut t = Integer::from(&ua * &sa);
+            t += &p.b * &rbd;
+            t *= si;
+            let mut a = Integer::from(c * &n);
+            a -= &t;
+            let mut b = Integer::from(&ua * &r.b);
+            b += &p.b * &sa;
+            b *= si;
+            ZSqrt::new(a, b)
+        };
+        let (mut ax, mut ay) = (coord(px, &ints[0]), coord(py, &ints[1]));
+        if n.cmp0() == Ordering::Less {
+            n = -n;
+            for z in [&mut ax, &mut ay] {
+                z.a = -std::mem::take(&mut z.a);
+                z.b = -std::mem::take(&mut z.b);
+            }
+        }
+        // The frame exponent e may be below exp: scale the denominator to compensate.
+        n <<= up;
+        Some(([ax, ay], n))
+    }
+
+    /// [`ExactApollonius::tangent_point_frac`] by the plain `ZSqrt` formula (the test oracle).
+    #[doc(hidden)]
+    pub fn tangent_point_frac_reference(&self, i: usize) -> Option<([ZSqrt; 2], Integer)> {
         let site = self.sites.get(i)?;
         let (num, ints, e) = self.rescaled(&[site.center[0], site.center[1], site.s])?;
         let d = &self.disc;
@@ -171,10 +240,43 @@ impl ExactApollonius {
         Some(([ax, ay], den << fix))
     }
 
+    /// The orientation recomputed by the plain `ZSqrt` products (the test oracle of the in-place
+    /// sum [`orientation_sum`] and of [`orientation_filter`]): `(reference sum == in-place sum,
+    /// orientation, the filter's sign of the sum if it decided, the exact sign of the sum)`.
+    #[doc(hidden)]
+    pub fn orientation_reference(&self) -> Option<(bool, Sign, Option<Sign>, Sign)> {
+        let mut vals = Vec::with_capacity(9);
+        for s in &self.sites {
+            for v in [s.center[0], s.center[1], s.s] {
+                vals.push(dyadic(v)?);
+            }
+        }
+        let (ints, exp) = common_scale(&vals);
+        if exp != self.exp {
+            return None;
+        }
+        let q: [[Integer; 3]; 3] = [0, 1, 2].map(|i| [0, 1, 2].map(|c| ints[3 * i + c].clone()));
+        let d = &self.disc;
+        let sig: Vec<ZSqrt> = q
+            .iter()
+            .map(|qi| self.num[2].add_int(&Integer::from(&self.den * &qi[2])))
+            .collect();
+        let signs: Vec<Sign> = sig.iter().map(|s| s.sign(d)).collect();
+        if signs.contains(&Sign::Zero) {
+            return Some((true, Sign::Zero, None, Sign::Zero));
+        }
+        let reference = orientation_sum_reference(&q, &self.den, &self.num, &sig, d);
+        let fast = orientation_sum(&q, &self.den, &self.num, &sig, d);
+        let exact = reference.sign(d);
+        let o = exact.times(signs[0].times(signs[1]).times(signs[2]));
+        let filter = orientation_filter(&q, &self.den, &self.num, d);
+        Some((reference == fast, o, filter, exact))
+    }
+
     /// The exact tangent point on site `i` (`None` when undefined: the circle is the bounding
-    /// circle). For `rho = 0` it is the centre.
+    /// circle). For `rho = 0` it is the centre. (By the reference formula: a test oracle.)
     pub fn tangent_point_exact(&self, i: usize) -> Option<[QSqrt; 2]> {
-        let ([ax, ay], den) = self.tangent_point_frac(i)?;
+        let ([ax, ay], den) = self.tangent_point_frac_reference(i)?;
         Some([ax.to_qsqrt(&den, self.exp), ay.to_qsqrt(&den, self.exp)])
     }
 
@@ -186,6 +288,32 @@ impl ExactApollonius {
     /// [`ExactApollonius::to_apollonius`] with the first bracket of `sqrt(D)` given (the same
     /// values).
     fn to_apollonius_with(&self, sq: Option<&SqrtBracket>) -> Result<Apollonius, ApolloniusError> {
+        let tangent_points = self.rounded_tangent_points(sq)?;
+        Ok(Apollonius {
+            center: self.center_f64(),
+            radius: self.radius_f64(),
+            tangent_points,
+            exact: self.clone(),
+        })
+    }
+
+    /// [`ExactApollonius::to_apollonius_with`], moving the exact root into the result instead
+    /// of cloning it.
+    fn into_apollonius_with(self, sq: Option<&SqrtBracket>) -> Result<Apollonius, ApolloniusError> {
+        let tangent_points = self.rounded_tangent_points(sq)?;
+        Ok(Apollonius {
+            center: self.center_f64(),
+            radius: self.radius_f64(),
+            tangent_points,
+            exact: self,
+        })
+    }
+
+    /// The correctly rounded tangent points (first bracket of `sqrt(D)` given, or `None`).
+    fn rounded_tangent_points(
+        &self,
+        sq: Option<&SqrtBracket>,
+    ) -> Result<[[f64; 2]; 3], ApolloniusError> {
         let mut tangent_points = [[0.0; 2]; 3];
         for (i, t) in tangent_points.iter_mut().enumerate() {
             let ([ax, ay], den) = self
@@ -196,12 +324,7 @@ impl ExactApollonius {
                 ay.to_f64_with(&self.disc, &den, self.exp, sq),
             ];
         }
-        Ok(Apollonius {
-            center: self.center_f64(),
-            radius: self.radius_f64(),
-            tangent_points,
-            exact: self.clone(),
-        })
+        Ok(tangent_points)
     }
 }
 
@@ -248,12 +371,17 @@ impl Choice {
 
 /// 2x2 determinant of two columns.
 fn det(a: [&Integer; 2], b: [&Integer; 2]) -> Integer {
-    Integer::from(a[0] * b[1]) - Integer::from(a[1] * b[0])
+    let mut v = Integer::from(a[0] * b[1]);
+    v -= a[1] * b[0];
+    v
 }
 
 /// Lorentz form `<u, v> = u_x v_x + u_y v_y - u_r v_r`.
 fn lorentz(u: &[Integer; 3], v: &[Integer; 3]) -> Integer {
-    Integer::from(&u[0] * &v[0]) + Integer::from(&u[1] * &v[1]) - Integer::from(&u[2] * &v[2])
+    let mut l = Integer::from(&u[0] * &v[0]);
+    l += &u[1] * &v[1];
+    l -= &u[2] * &v[2];
+    l
 }
 
 /// All valid Apollonius circles of three sites (0, 1 or 2), by increasing radius.
@@ -285,8 +413,10 @@ fn unrounded_roots(sites: &[Site; 3]) -> Result<Vec<ExactApollonius>, Apollonius
     let q: [[Integer; 3]; 3] = [0, 1, 2].map(|i| [0, 1, 2].map(|c| ints[3 * i + c].clone()));
     let k = |i: usize| -> Integer {
         let [x, y, s] = &q[i];
-        Integer::from(x.square_ref()) + Integer::from(y.square_ref())
-            - Integer::from(s.square_ref())
+        let mut k = Integer::from(x.square_ref());
+        k += y * y;
+        k -= s * s;
+        k
     };
     let k0 = k(0);
     let mut m: [[Integer; 3]; 2] = Default::default();
@@ -334,7 +464,9 @@ fn unrounded_roots(sites: &[Site; 3]) -> Result<Vec<ExactApollonius>, Apollonius
     let c = lorentz(&e, &e);
     // Candidate roots: (numerators, den, disc) with u = num / den.
     let combine = |p: &Integer, r: &Integer, i: usize| -> Integer {
-        Integer::from(p * &u0[i]) + Integer::from(r * &u1[i])
+        let mut v = Integer::from(p * &u0[i]);
+        v += r * &u1[i];
+        v
     };
     let mut cands: Vec<([ZSqrt; 3], Integer, Integer)> = Vec::new();
     if a.cmp0() == Ordering::Equal {
@@ -360,8 +492,9 @@ fn unrounded_roots(sites: &[Site; 3]) -> Result<Vec<ExactApollonius>, Apollonius
                 cands.push((num, den, Integer::new()));
             }
             Ordering::Greater => {
-                let (root, rem) = disc.clone().sqrt_rem(Integer::new());
-                if rem.cmp0() == Ordering::Equal {
+                // GMP's residue tests reject almost every non-square without a square root.
+                if disc.is_perfect_square() {
+                    let root = Integer::from(disc.sqrt_ref());
                     for r in [Integer::from(&nb - &root), Integer::from(&nb + &root)] {
                         let num = [0, 1, 2].map(|i| ZSqrt::int(combine(&two_a, &r, i)));
                         cands.push((num, den.clone(), Integer::new()));
@@ -422,24 +555,10 @@ fn build_root(
     let orientation = if sig_signs.contains(&Sign::Zero) {
         Sign::Zero
     } else {
-        // den (c_i - p) / 2^exp.
-        let u: Vec<[ZSqrt; 2]> = q
-            .iter()
-            .map(|qi| {
-                [
-                    ZSqrt::int(Integer::from(&den * &qi[0])) - &num[0],
-                    ZSqrt::int(Integer::from(&den * &qi[1])) - &num[1],
-                ]
-            })
-            .collect();
-        let cross =
-            |a: &[ZSqrt; 2], b: &[ZSqrt; 2]| -> ZSqrt { &a[0].mul(&b[1], d) - &a[1].mul(&b[0], d) };
-        let t0 = sig[2].mul(&cross(&u[0], &u[1]), d);
-        let t1 = sig[0].mul(&cross(&u[1], &u[2]), d);
-        let t2 = sig[1].mul(&cross(&u[2], &u[0]), d);
-        let total = &(&t0 + &t1) + &t2;
         let den_sign = sig_signs[0].times(sig_signs[1]).times(sig_signs[2]);
-        total.sign(d).times(den_sign)
+        orientation_filter(q, &den, &num, d)
+            .unwrap_or_else(|| orientation_sum(q, &den, &num, &sig, d).sign(d))
+            .times(den_sign)
     };
     Some(ExactApollonius {
         sites: *sites,
@@ -450,6 +569,107 @@ fn build_root(
         approx: [0.0; 3],
         orientation,
     })
+}
+
+/// `sigma_2 u_0 x u_1 + sigma_0 u_1 x u_2 + sigma_1 u_2 x u_0` (times `den^3 / 8^exp`), with
+/// `U_i = den c_i - P = (A_i - Bx sqrt(D), C_i - By sqrt(D))` (`P = num[0..2]`, the `sqrt(D)`
+/// parts shared by every `i`), so that `U_i x U_j = (A_i C_j - C_i A_j) + den (By (x_j - x_i) -
+/// Bx (y_j - y_i)) sqrt(D)` (the `D` terms cancel), and every `sigma_k = sa_k + R_b sqrt(D)`
+/// shares `R_b`. The same number as [`orientation_sum_reference`] (tested through
+/// [`ExactApollonius::orientation_reference`]), accumulated in place.
+fn orientation_sum(
+    q: &[[Integer; 3]; 3],
+    den: &Integer,
+    num: &[ZSqrt; 3],
+    sig: &[ZSqrt],
+    d: &Integer,
+) -> ZSqrt {
+    let coord = |i: usize, c: usize| -> Integer {
+        let mut v = Integer::from(den * &q[i][c]);
+        v -= &num[c].a;
+        v
+    };
+    let a = [coord(0, 0), coord(1, 0), coord(2, 0)];
+    let c = [coord(0, 1), coord(1, 1), coord(2, 1)];
+    let (bx, by, rb) = (&num[0].b, &num[1].b, &num[2].b);
+    let (mut acc_a, mut acc_b) = (Integer::new(), Integer::new());
+    let (mut sum_ca, mut sum_cb) = (Integer::new(), Integer::new());
+    for (k, i, j) in [(2, 0, 1), (0, 1, 2), (1, 2, 0)] {
+        let mut ca = Integer::from(&a[i] * &c[j]);
+        ca -= &c[i] * &a[j];
+        let dx = Integer::from(&q[j][0] - &q[i][0]);
+        let dy = Integer::from(&q[j][1] - &q[i][1]);
+        let mut cb = Integer::from(by * &dx);
+        cb -= bx * &dy;
+        cb *= den;
+        acc_a += &sig[k].a * &ca;
+        acc_b += &sig[k].a * &cb;
+        sum_ca += &ca;
+        sum_cb += &cb;
+    }
+    let mut t = Integer::from(rb * &sum_cb);
+    t *= d;
+    acc_a += &t;
+    acc_b += rb * &sum_ca;
+    ZSqrt::new(acc_a, acc_b)
+}
+
+/// The sign of [`orientation_sum`] when interval arithmetic decides it (`None` otherwise): the
+/// same sum over `den^3`, `sum_k sigma_k (c_i - p) x (c_j - p)` in units of `2^exp`, from
+/// intervals around the integers (`p = (a + b sqrt(D)) / den`, `sigma_k = rho + s_k`). Every
+/// interval contains the exact value, so a decided sign is exact (tested against the exact
+/// sign through [`ExactApollonius::orientation_reference`]).
+fn orientation_filter(
+    q: &[[Integer; 3]; 3],
+    den: &Integer,
+    num: &[ZSqrt; 3],
+    d: &Integer,
+) -> Option<Sign> {
+    let iv = Interval::of_integer;
+    let sq = iv(d)?.sqrt();
+    let den = iv(den)?;
+    let val = |z: &ZSqrt| -> Option<Interval> {
+        Some(iv(&z.a)?.add(iv(&z.b)?.mul(sq)).div_positive(den))
+    };
+    let (px, py, rho) = (val(&num[0])?, val(&num[1])?, val(&num[2])?);
+    let mut u = [[Interval::point(0.0); 2]; 3];
+    let mut sig = [Interval::point(0.0); 3];
+    for i in 0..3 {
+        u[i] = [iv(&q[i][0])?.sub(px), iv(&q[i][1])?.sub(py)];
+        sig[i] = rho.add(iv(&q[i][2])?);
+    }
+    let cross = |a: &[Interval; 2], b: &[Interval; 2]| a[0].mul(b[1]).sub(a[1].mul(b[0]));
+    let total = sig[2]
+        .mul(cross(&u[0], &u[1]))
+        .add(sig[0].mul(cross(&u[1], &u[2])))
+        .add(sig[1].mul(cross(&u[2], &u[0])));
+    total.sign()
+}
+
+/// [`orientation_sum`] by the plain `ZSqrt` products (the test oracle).
+fn orientation_sum_reference(
+    q: &[[Integer; 3]; 3],
+    den: &Integer,
+    num: &[ZSqrt; 3],
+    sig: &[ZSqrt],
+    d: &Integer,
+) -> ZSqrt {
+    // den (c_i - p) / 2^exp.
+    let u: Vec<[ZSqrt; 2]> = q
+        .iter()
+        .map(|qi| {
+            [
+                ZSqrt::int(Integer::from(den * &qi[0])) - &num[0],
+                ZSqrt::int(Integer::from(den * &qi[1])) - &num[1],
+            ]
+        })
+        .collect();
+    let cross =
+        |a: &[ZSqrt; 2], b: &[ZSqrt; 2]| -> ZSqrt { &a[0].mul(&b[1], d) - &a[1].mul(&b[0], d) };
+    let t0 = sig[2].mul(&cross(&u[0], &u[1]), d);
+    let t1 = sig[0].mul(&cross(&u[1], &u[2]), d);
+    let t2 = sig[1].mul(&cross(&u[2], &u[0]), d);
+    &(&t0 + &t1) + &t2
 }
 
 /// Pick one root per `choice`: filter by orientation, then nearest to the hint (exact
@@ -493,5 +713,5 @@ pub fn apollonius(sites: [Site; 3], choice: Choice) -> Result<Apollonius, Apollo
     let mut root = choose(roots, choice).ok_or(ApolloniusError::NoCircle)?;
     let sq = SqrtBracket::new(&root.disc);
     root.round(sq.as_ref());
-    root.to_apollonius_with(sq.as_ref())
+    root.into_apollonius_with(sq.as_ref())
 }
