@@ -6,12 +6,13 @@
 //!   here, on thousands of random near-tangent cases;
 //! - filter soundness: whenever the float filter decides, it agrees with the exact path.
 
+mod common;
+
 use medial_blocks::apollonius::{
     apollonius, apollonius_roots, cocircular, is_tangent, same_circle, tangency, tangency_exact,
     tangency_filter, tangency_sign_filtered, ApolloniusError, Choice, ExactApollonius, Path, Sign,
     Site,
 };
-use medial_blocks::Circle;
 use rug::{Integer, Rational};
 
 struct Rng(u64);
@@ -35,17 +36,11 @@ impl Rng {
 }
 
 fn hole(x: f64, y: f64, r: f64) -> Site {
-    Site::hole(Circle {
-        center: [x, y],
-        radius: r,
-    })
+    common::hole_site(x, y, r)
 }
 
 fn bounding(x: f64, y: f64, r: f64) -> Site {
-    Site::bounding(Circle {
-        center: [x, y],
-        radius: r,
-    })
+    common::bounding_site(x, y, r)
 }
 
 fn next_up(x: f64) -> f64 {

@@ -1,11 +1,12 @@
 //! The Apollonius solve: residuals in f64, exact residuals in Q(sqrt D) evaluated with formulas
 //! written here (not the library's arithmetic), root selection, and degenerate inputs.
 
+mod common;
+
 use medial_blocks::apollonius::{
     apollonius, apollonius_roots, Apollonius, ApolloniusError, Choice, ExactApollonius, QSqrt,
     Sign, Site,
 };
-use medial_blocks::Circle;
 use proptest::prelude::*;
 use rug::Rational;
 
@@ -28,17 +29,11 @@ impl Rng {
 }
 
 fn hole(x: f64, y: f64, r: f64) -> Site {
-    Site::hole(Circle {
-        center: [x, y],
-        radius: r,
-    })
+    common::hole_site(x, y, r)
 }
 
 fn bounding(x: f64, y: f64, r: f64) -> Site {
-    Site::bounding(Circle {
-        center: [x, y],
-        radius: r,
-    })
+    common::bounding_site(x, y, r)
 }
 
 /// `F_i = |p - c_i|^2 - (rho + s_i)^2` at the exact root, as `A + B sqrt(D)`, evaluated here from

@@ -7,28 +7,23 @@
 //! tangent points (another formula) and orientation sums equal those of the plain `ZSqrt` formulas, and the rational oracle's
 //! tangent points come from that plain formula.
 
+mod common;
+
 use medial_blocks::apollonius::exact::ZSqrt;
 use medial_blocks::apollonius::{
     apollonius, apollonius_roots, choose, Apollonius, Choice, ExactApollonius, Site,
 };
 use medial_blocks::layouts::SplitMix64;
-use medial_blocks::Circle;
 use proptest::prelude::*;
 use rug::Integer;
 use std::cell::Cell;
 
 fn hole(x: f64, y: f64, r: f64) -> Site {
-    Site::hole(Circle {
-        center: [x, y],
-        radius: r,
-    })
+    common::hole_site(x, y, r)
 }
 
 fn bounding(x: f64, y: f64, r: f64) -> Site {
-    Site::bounding(Circle {
-        center: [x, y],
-        radius: r,
-    })
+    common::bounding_site(x, y, r)
 }
 
 thread_local! {

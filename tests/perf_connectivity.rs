@@ -10,39 +10,17 @@
 //!   is `EdgeUse` with count 3 (of the first side in block order to meet it), a side naming a
 //!   missing edge is `MissingEdge`, a grid count mismatch is `GridCount`.
 
+mod common;
+
 use medial_blocks::connectivity::{connectivity, ConnectivityError, SideKind};
 use medial_blocks::layout::EdgeKind;
-use medial_blocks::periodic::{mesh_periodic, PeriodicDomain};
-use medial_blocks::{layouts, mesh, Circle, Mesh, Mode, Options};
+use medial_blocks::{layouts, mesh, Mesh, Options};
 
 fn meshes() -> Vec<Mesh> {
-    let mut out = vec![
-        mesh(&layouts::hexagon(), &Options::default()).unwrap(),
-        mesh(
-            &layouts::bubbles(30, 2).unwrap(),
-            &Options {
-                mode: Mode::Paper,
-                ..Options::default()
-            },
-        )
-        .unwrap(),
-        mesh(
-            &layouts::bubbles(40, 1).unwrap(),
-            &Options {
-                cells: 4,
-                block_cells: Some(4),
-                ..Options::default()
-            },
-        )
-        .unwrap(),
-    ];
-    let pd = PeriodicDomain::new(
-        [2.0, 1.0],
-        vec![Circle::new(0.1, 0.1, 0.2), Circle::new(1.2, 0.6, 0.25)],
+    common::small_meshes(
+        &layouts::bubbles(30, 2).unwrap(),
+        &layouts::bubbles(40, 1).unwrap(),
     )
-    .unwrap();
-    out.push(mesh_periodic(&pd, &Options::default()).unwrap());
-    out
 }
 
 #[test]

@@ -8,14 +8,15 @@
 //!   `write_files_prepared` with the shared connectivity writes the same files as
 //!   `write_files`.
 
+mod common;
+
 use medial_blocks::connectivity::{
     connectivity, BlockConnectivity, Cgns1to1, Partner, SideConnectivity, SideKind,
 };
 use medial_blocks::output::connectivity::{write_json, File, CHUNK, CONVENTIONS, WAVE};
 use medial_blocks::output::report::Report;
 use medial_blocks::output::{write_files, write_files_prepared, Format};
-use medial_blocks::periodic::{mesh_periodic, PeriodicDomain};
-use medial_blocks::{layouts, mesh, Circle, Mesh, Mode, Options};
+use medial_blocks::{layouts, Mesh};
 
 /// What serde_json's pretty printer writes for `blocks` (plus the final newline).
 fn serde_bytes(blocks: &[BlockConnectivity]) -> Vec<u8> {
@@ -37,33 +38,7 @@ fn written(blocks: &[BlockConnectivity]) -> Vec<u8> {
 
 fn meshes() -> Vec<Mesh> {
     let bubbles = layouts::bubbles(12, 3).unwrap();
-    let mut out = vec![
-        mesh(&layouts::hexagon(), &Options::default()).unwrap(),
-        mesh(
-            &bubbles,
-            &Options {
-                mode: Mode::Paper,
-                ..Options::default()
-            },
-        )
-        .unwrap(),
-        mesh(
-            &bubbles,
-            &Options {
-                cells: 4,
-                block_cells: Some(4),
-                ..Options::default()
-            },
-        )
-        .unwrap(),
-    ];
-    let pd = PeriodicDomain::new(
-        [2.0, 1.0],
-        vec![Circle::new(0.1, 0.1, 0.2), Circle::new(1.2, 0.6, 0.25)],
-    )
-    .unwrap();
-    out.push(mesh_periodic(&pd, &Options::default()).unwrap());
-    out
+    common::small_meshes(&bubbles, &bubbles)
 }
 
 #[test]

@@ -112,3 +112,57 @@ pub fn count_inverted_cells(grids: &[medial_blocks::mesh::BlockGrid]) -> usize {
     }
     bad
 }
+
+/// A small set of meshes covering every kind of block side: the hexagon (exact mode),
+/// `paper` in paper mode, `uniform` with 4 x 4 cells per block, and a periodic box with two
+/// holes (connectivity and writer tests).
+pub fn small_meshes(
+    paper: &medial_blocks::Domain,
+    uniform: &medial_blocks::Domain,
+) -> Vec<medial_blocks::Mesh> {
+    use medial_blocks::periodic::{mesh_periodic, PeriodicDomain};
+    use medial_blocks::{layouts, mesh, Circle, Mode, Options};
+    let mut out = vec![
+        mesh(&layouts::hexagon(), &Options::default()).unwrap(),
+        mesh(
+            paper,
+            &Options {
+                mode: Mode::Paper,
+                ..Options::default()
+            },
+        )
+        .unwrap(),
+        mesh(
+            uniform,
+            &Options {
+                cells: 4,
+                block_cells: Some(4),
+                ..Options::default()
+            },
+        )
+        .unwrap(),
+    ];
+    let pd = PeriodicDomain::new(
+        [2.0, 1.0],
+        vec![Circle::new(0.1, 0.1, 0.2), Circle::new(1.2, 0.6, 0.25)],
+    )
+    .unwrap();
+    out.push(mesh_periodic(&pd, &Options::default()).unwrap());
+    out
+}
+
+/// A hole site for the Apollonius tests.
+pub fn hole_site(x: f64, y: f64, r: f64) -> medial_blocks::apollonius::Site {
+    medial_blocks::apollonius::Site::hole(medial_blocks::Circle {
+        center: [x, y],
+        radius: r,
+    })
+}
+
+/// A bounding-circle site for the Apollonius tests.
+pub fn bounding_site(x: f64, y: f64, r: f64) -> medial_blocks::apollonius::Site {
+    medial_blocks::apollonius::Site::bounding(medial_blocks::Circle {
+        center: [x, y],
+        radius: r,
+    })
+}
