@@ -237,6 +237,40 @@ pub(super) fn cell_field_values(p: &[Point; 4]) -> [f64; 7] {
     ]
 }
 
+/// The four edges of cell `i` between node lines `lo` and `hi`: `p0 -> p1`, `p3 -> p2`,
+/// `p0 -> p3`, `p1 -> p2` (each edge one difference of its two nodes).
+#[inline(always)]
+pub(super) fn row_edges(lo: &[Point], hi: &[Point], i: usize) -> [[f64; 2]; 4] {
+    [
+        [lo[i + 1][0] - lo[i][0], lo[i + 1][1] - lo[i][1]],
+        [hi[i + 1][0] - hi[i][0], hi[i + 1][1] - hi[i][1]],
+        [hi[i][0] - lo[i][0], hi[i][1] - lo[i][1]],
+        [hi[i + 1][0] - lo[i + 1][0], hi[i + 1][1] - lo[i + 1][1]],
+    ]
+}
+
+/// Corner cross and dot products of a cell from its edges `[h, u, v, w]` (`p0 -> p1`,
+/// `p3 -> p2`, `p0 -> p3`, `p1 -> p2`): corner `k` takes `e1 = p[k+1] - p[k]`,
+/// `e2 = p[k-1] - p[k]` (see [`corner_products`]), an edge running the other way negated.
+/// Shared by the row passes so they all form the same products.
+#[inline(always)]
+pub(super) fn cell_products(e: [[f64; 2]; 4]) -> ([f64; 4], [f64; 4]) {
+    let [[hx, hy], [ux, uy], [vx, vy], [wx, wy]] = e;
+    let c = [
+        hx * vy - hy * vx,
+        wx * (-hy) - wy * (-hx),
+        (-ux) * (-wy) - (-uy) * (-wx),
+        (-vx) * uy - (-vy) * ux,
+    ];
+    let d = [
+        hx * vx + hy * vy,
+        wx * (-hx) + wy * (-hy),
+        (-ux) * (-wx) + (-uy) * (-wy),
+        (-vx) * ux + (-vy) * uy,
+    ];
+    (c, d)
+}
+
 /// The cells between node lines `lo` and `hi` (same length) with some corner Jacobian
 /// `<= 0` or not a number: the cross products of [`corner_products`], each edge taken as a
 /// difference of its two nodes in one direction and negated for the other corner. Negation
@@ -265,16 +299,7 @@ fn row_inverted_portable(lo: &[Point], hi: &[Point]) -> usize {
     let mut count = 0;
     for i in 0..n {
         // p0 -> p1, p3 -> p2, p0 -> p3, p1 -> p2.
-        let (hx, hy) = (lo[i + 1][0] - lo[i][0], lo[i + 1][1] - lo[i][1]);
-        let (ux, uy) = (hi[i + 1][0] - hi[i][0], hi[i + 1][1] - hi[i][1]);
-        let (vx, vy) = (hi[i][0] - lo[i][0], hi[i][1] - lo[i][1]);
-        let (wx, wy) = (hi[i + 1][0] - lo[i + 1][0], hi[i + 1][1] - lo[i + 1][1]);
-        let c = [
-            hx * vy - hy * vx,
-            wx * (-hy) - wy * (-hx),
-            (-ux) * (-wy) - (-uy) * (-wx),
-            (-vx) * uy - (-vy) * ux,
-        ];
+        let (c, _) = cell_products(row_edges(lo, hi, i));
         let good = (c[0] > 0.0) & (c[1] > 0.0) & (c[2] > 0.0) & (c[3] > 0.0);
         count += usize::from(!good);
     }
@@ -308,22 +333,7 @@ fn row_corner_below_portable(lo: &[Point], hi: &[Point], t: f64) -> bool {
     let (lo, hi) = (&lo[..=n], &hi[..=n]);
     let mut bad = false;
     for i in 0..n {
-        let (hx, hy) = (lo[i + 1][0] - lo[i][0], lo[i + 1][1] - lo[i][1]);
-        let (ux, uy) = (hi[i + 1][0] - hi[i][0], hi[i + 1][1] - hi[i][1]);
-        let (vx, vy) = (hi[i][0] - lo[i][0], hi[i][1] - lo[i][1]);
-        let (wx, wy) = (hi[i + 1][0] - lo[i + 1][0], hi[i + 1][1] - lo[i + 1][1]);
-        let c = [
-            hx * vy - hy * vx,
-            wx * (-hy) - wy * (-hx),
-            (-ux) * (-wy) - (-uy) * (-wx),
-            (-vx) * uy - (-vy) * ux,
-        ];
-        let d = [
-            hx * vx + hy * vy,
-            wx * (-hx) + wy * (-hy),
-            (-ux) * (-wx) + (-uy) * (-wy),
-            (-vx) * ux + (-vy) * uy,
-        ];
+        let (c, d) = cell_products(row_edges(lo, hi, i));
         for k in 0..4 {
             bad |= c[k].is_nan() | (c[k] <= 0.0) | ((d[k] > 0.0) & (c[k] < t * d[k]));
         }

@@ -24,7 +24,7 @@
 //! bits; sums are taken in cell order.
 
 use super::kernel::{
-    corner_products, length_figures, skewness, BlockFigures, Tables, SQ_MAX, SQ_MIN,
+    cell_products, corner_products, length_figures, skewness, BlockFigures, Tables, SQ_MAX, SQ_MIN,
 };
 use super::{angle_deg, cell_metrics, fold, MetricSummary, QualityMetrics};
 use super::{
@@ -200,19 +200,7 @@ fn row_figures(
         let (ux, uy) = (tx[i], ty[i]);
         let (vx, vy) = (ax[i], ay[i]);
         let (wx, wy) = (qx[i], qy[i]);
-        // Corner k: e1 = p[k+1] - p[k], e2 = p[k-1] - p[k] (see `corner_products`).
-        let c = [
-            hx * vy - hy * vx,
-            wx * (-hy) - wy * (-hx),
-            (-ux) * (-wy) - (-uy) * (-wx),
-            (-vx) * uy - (-vy) * ux,
-        ];
-        let d = [
-            hx * vx + hy * vy,
-            wx * (-hx) + wy * (-hy),
-            (-ux) * (-wx) + (-uy) * (-wy),
-            (-vx) * ux + (-vy) * uy,
-        ];
+        let (c, d) = cell_products([[hx, hy], [ux, uy], [vx, vy], [wx, wy]]);
         let edges = [bl[i], ql[i], tl[i], al[i]];
         // NaN lengths fail `>= 0`; with every length in range the products are finite.
         let fine = (edges[0] >= 0.0)
