@@ -1,8 +1,8 @@
 //! The sub-step densities of one arc piece (`ARC_SUBSTEPS + 1` points of the conic), the
 //! inner loop of exact mode (issue 8).
 //!
-//! [`ArcGeometry::densities_into`] computes the same quantities as the plain formula
-//! ([`ArcGeometry::densities_plain`]: every point from [`ArcGeometry::at`], both wall turns by
+//! `ArcGeometry::densities_into` computes the same quantities as the plain formula
+//! (`ArcGeometry::densities_plain`: every point from `ArcGeometry::at`, both wall turns by
 //! `atan2`) with cheaper arithmetic, so the values agree to rounding, not bit for bit:
 //! - the points are equally spaced in the parametrised wall's angle, so `(cos, sin)` of the
 //!   interior points comes from a rotation by the step, restarted exactly (`sin_cos` of the

@@ -3,15 +3,15 @@
 //! [`crate::mesher`] builds the exact layout several times when local fixes (given-up
 //! collapses, degree-4 merges) or a local resampling are needed, and each rebuild changes only
 //! the pieces around what was fixed. A piece's sub-step densities
-//! ([`super::ArcGeometry::densities`]: 257 points of the conic, most of exact mode's cost) are
-//! a function of its [`super::ArcGeometry`] alone. So a build records, per piece, the
-//! geometry's bit patterns ([`GeomKey`]: every field) with what the counts need from the
+//! (`super::ArcGeometry::densities`: 257 points of the conic, most of exact mode's cost) are
+//! a function of its `super::ArcGeometry` alone. So a build records, per piece, the
+//! geometry's bit patterns (`GeomKey`: every field) with what the counts need from the
 //! densities (lower bound, target for one `nbar`), and the next build takes them instead of
 //! recomputing: the same values bit for bit, so the mesh does not change.
 //!
 //! A piece's two block grids and medial nodes depend on its geometry, its counts (`n` and the
 //! wall-normal count of each side), the clustering of each side and the smoothing sweeps
-//! ([`GridKey`] with the geometry; its corner spokes are its geometry's ends). When the build
+//! (`GridKey` with the geometry; its corner spokes are its geometry's ends). When the build
 //! is rejected (inverted or poor blocks), the mesher hands its grids back ([`PieceCache::keep`])
 //! and the next build moves those of its unchanged pieces into its own mesh: no copy, and the
 //! grids not reused are freed before the new ones are made (peak memory unchanged).
