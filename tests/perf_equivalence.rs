@@ -10,6 +10,8 @@
 //! `PERF_TIMINGS=1 cargo test --release --test perf_equivalence -- --nocapture timings` prints
 //! the triangulation of the pipeline's sample points against spade (no assertion on time).
 
+mod common;
+
 use medial_blocks::geometry::Point;
 use medial_blocks::layout::BlockLayout;
 use medial_blocks::layouts::SplitMix64;
@@ -315,18 +317,10 @@ fn check_grids(grids: &[BlockGrid]) {
 /// A perturbed, sheared, stretched lattice block with random spoilers: a few nodes moved
 /// anywhere, duplicated, scaled to extreme magnitudes or made non-finite.
 fn lattice(rng: &mut SplitMix64, ni: usize, nj: usize, wild: u32) -> BlockGrid {
-    let u = |r: &mut SplitMix64| (r.next_u64() >> 11) as f64 / (1u64 << 53) as f64;
-    let (sx, sy) = (0.01 + 100.0 * u(rng), 0.01 + 3.0 * u(rng));
-    let shear = 2.0 * u(rng) - 1.0;
-    let jitter = 0.45 * u(rng);
-    let mut nodes = Vec::with_capacity((ni + 1) * (nj + 1));
-    for j in 0..=nj {
-        for i in 0..=ni {
-            let x = i as f64 + jitter * (u(rng) - 0.5);
-            let y = j as f64 + jitter * (u(rng) - 0.5);
-            nodes.push([sx * (x + shear * y), sy * y]);
-        }
-    }
+    let (sx, sy) = (0.01 + 100.0 * rng.next_f64(), 0.01 + 3.0 * rng.next_f64());
+    let shear = 2.0 * rng.next_f64() - 1.0;
+    let jitter = 0.45 * rng.next_f64();
+    let mut nodes = common::jittered_lattice(rng, ni, nj, [sx, sy], shear, jitter);
     for _ in 0..wild {
         let k = (rng.next_u64() % nodes.len() as u64) as usize;
         let other = (rng.next_u64() % nodes.len() as u64) as usize;
@@ -338,7 +332,10 @@ fn lattice(rng: &mut SplitMix64, ni: usize, nj: usize, wild: u32) -> BlockGrid {
             4 => [nodes[k][0] * 1e-150, nodes[k][1] * 1e-160],
             5 => [nodes[other][0], nodes[k][1]],
             6 => [0.5 * (nodes[k][0] + nodes[other][0]), nodes[other][1]],
-            _ => [100.0 * (u(rng) - 0.5), 100.0 * (u(rng) - 0.5)],
+            _ => [
+                100.0 * (rng.next_f64() - 0.5),
+                100.0 * (rng.next_f64() - 0.5),
+            ],
         };
     }
     BlockGrid { ni, nj, nodes }

@@ -3,6 +3,8 @@
 //! grids with degenerate, inverted, tiny, huge and non-finite cells; and the same report for 1
 //! and 2 threads.
 
+mod common;
+
 use medial_blocks::geometry::Point;
 use medial_blocks::layout::BlockLayout;
 use medial_blocks::layouts::SplitMix64;
@@ -144,27 +146,16 @@ fn check(grids: &[BlockGrid]) {
     s[4].check(&m.aspect_ratio, "aspect ratio");
 }
 
-fn uniform(r: &mut SplitMix64) -> f64 {
-    (r.next_u64() >> 11) as f64 / (1u64 << 53) as f64
-}
-
 /// A sheared, stretched, jittered lattice at scale `scale`, with `wild` spoiled nodes:
 /// duplicated (zero-length edges), collinear, swapped (inverted cells), scaled to extreme
 /// magnitudes, NaN or infinite.
 fn grid(r: &mut SplitMix64, ni: usize, nj: usize, scale: f64, wild: u32) -> BlockGrid {
     let (sx, sy) = (
-        scale * (0.05 + 20.0 * uniform(r)),
-        scale * (0.05 + 3.0 * uniform(r)),
+        scale * (0.05 + 20.0 * r.next_f64()),
+        scale * (0.05 + 3.0 * r.next_f64()),
     );
-    let (shear, jitter) = (2.0 * uniform(r) - 1.0, 0.6 * uniform(r));
-    let mut nodes = Vec::with_capacity((ni + 1) * (nj + 1));
-    for j in 0..=nj {
-        for i in 0..=ni {
-            let x = i as f64 + jitter * (uniform(r) - 0.5);
-            let y = j as f64 + jitter * (uniform(r) - 0.5);
-            nodes.push([sx * (x + shear * y), sy * y]);
-        }
-    }
+    let (shear, jitter) = (2.0 * r.next_f64() - 1.0, 0.6 * r.next_f64());
+    let mut nodes = common::jittered_lattice(r, ni, nj, [sx, sy], shear, jitter);
     for _ in 0..wild {
         let k = (r.next_u64() % nodes.len() as u64) as usize;
         let o = (r.next_u64() % nodes.len() as u64) as usize;

@@ -166,3 +166,25 @@ pub fn bounding_site(x: f64, y: f64, r: f64) -> medial_blocks::apollonius::Site 
         radius: r,
     })
 }
+
+/// The nodes of an `(ni + 1) x (nj + 1)` lattice, each moved by up to `jitter / 2` in both
+/// directions, sheared by `shear` and stretched by `(sx, sy)`, row by row (quality tests
+/// spoil some of them afterwards).
+pub fn jittered_lattice(
+    r: &mut medial_blocks::layouts::SplitMix64,
+    ni: usize,
+    nj: usize,
+    [sx, sy]: [f64; 2],
+    shear: f64,
+    jitter: f64,
+) -> Vec<[f64; 2]> {
+    let mut nodes = Vec::with_capacity((ni + 1) * (nj + 1));
+    for j in 0..=nj {
+        for i in 0..=ni {
+            let x = i as f64 + jitter * (r.next_f64() - 0.5);
+            let y = j as f64 + jitter * (r.next_f64() - 0.5);
+            nodes.push([sx * (x + shear * y), sy * y]);
+        }
+    }
+    nodes
+}
