@@ -1,7 +1,8 @@
 //! The hand-written `connectivity.json` writer and the shared connectivity of issue #8 against
 //! independent references:
-//! - `connectivity.json` is byte for byte serde_json's pretty printing of the same value (the
-//!   writer it replaced), on real meshes (walls, outer boundary, interfaces, periodic sides
+//! - `connectivity.json` is byte for byte the top level indented as serde_json's pretty printer
+//!   does it, with every block on its own line as `serde_json::to_vec` writes it, and it parses
+//!   back to the serde value of the same file, on real meshes (walls, outer boundary, interfaces, periodic sides
 //!   with translations) and on synthetic blocks (odd floats, negative circles, a name that
 //!   needs escaping, more blocks than one wave of parallel formatting);
 //! - the report built from a shared connectivity equals the one that computes its own, and
@@ -18,14 +19,32 @@ use medial_blocks::output::report::Report;
 use medial_blocks::output::{write_files, write_files_prepared, Format};
 use medial_blocks::{layouts, Mesh};
 
-/// What serde_json's pretty printer writes for `blocks` (plus the final newline).
+/// The file serde_json writes for `blocks`: the pretty-printed top level, one block per line in
+/// serde_json's compact format (plus the final newline).
 fn serde_bytes(blocks: &[BlockConnectivity]) -> Vec<u8> {
-    let mut v = serde_json::to_vec_pretty(&File {
-        conventions: CONVENTIONS,
-        blocks,
-    })
+    let mut v = b"{\n  \"conventions\": ".to_vec();
+    v.extend(serde_json::to_vec(CONVENTIONS).unwrap());
+    v.extend_from_slice(b",\n  \"blocks\": [");
+    for (k, b) in blocks.iter().enumerate() {
+        v.extend_from_slice(if k == 0 { b"\n    " } else { b",\n    " });
+        v.extend(serde_json::to_vec(b).unwrap());
+    }
+    v.extend_from_slice(if blocks.is_empty() { b"]" } else { b"\n  ]" });
+    v.extend_from_slice(b"\n}\n");
+    // The same JSON value as the whole file written by serde (NaN and infinities read back as
+    // null either way).
+    let whole: serde_json::Value = serde_json::from_slice(
+        &serde_json::to_vec_pretty(&File {
+            conventions: CONVENTIONS,
+            blocks,
+        })
+        .unwrap(),
+    )
     .unwrap();
-    v.push(b'\n');
+    assert_eq!(
+        serde_json::from_slice::<serde_json::Value>(&v).unwrap(),
+        whole
+    );
     v
 }
 
@@ -42,7 +61,7 @@ fn meshes() -> Vec<Mesh> {
 }
 
 #[test]
-fn connectivity_json_is_serde_pretty_on_real_meshes() {
+fn connectivity_json_is_serde_on_real_meshes() {
     let mut periodic = false;
     for m in meshes() {
         let conn = connectivity(&m.layout, &m.grids).unwrap();
@@ -113,7 +132,7 @@ fn synthetic_blocks(n: usize) -> Vec<BlockConnectivity> {
 
 /// Synthetic blocks, enough for several waves of parallel formatting.
 #[test]
-fn connectivity_json_is_serde_pretty_on_synthetic_blocks() {
+fn connectivity_json_is_serde_on_synthetic_blocks() {
     assert_eq!(written(&[]), serde_bytes(&[]));
     let blocks = synthetic_blocks(9000);
     assert_eq!(written(&blocks[..1]), serde_bytes(&blocks[..1]));
