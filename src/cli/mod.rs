@@ -4,6 +4,7 @@
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;
 
+mod allocator;
 mod example;
 mod mesh;
 mod sequence;
@@ -91,6 +92,7 @@ fn set_threads(threads: Option<usize>) -> Result<(), Failure> {
 }
 
 pub fn run() -> ExitCode {
+    allocator::keep_freed_memory();
     let cli = Cli::parse();
     let global = Global {
         threads: cli.threads.unwrap_or(0),
