@@ -59,7 +59,6 @@ use crate::mesher::{MeshError, Options};
 use counts::{ArcTarget, CountProblem, Counts, Known};
 use piece_cache::{Entry, GeomKey, GridKey, Params, Payload};
 use rayon::prelude::*;
-use std::collections::HashMap;
 use std::f64::consts::{PI, TAU};
 
 /// Sub-steps used to sample each medial arc for the node distribution.
@@ -916,7 +915,10 @@ pub fn assemble_cached(
             vertices[p.ends[1]].slot(c).unwrap_or(0),
         )
     };
-    let mut spoke_edge: HashMap<(usize, usize), u32> = HashMap::new();
+    // The spoke edge of vertex `v`'s slot `s`, by its tangent vertex (`NO_EDGE` until made): a
+    // lookup, not a hash map (issue 8); edges are numbered in first-use order as before.
+    const NO_EDGE: u32 = u32::MAX;
+    let mut spoke_edge: Vec<u32> = vec![NO_EDGE; layout.vertices.len()];
     let mut medial_edges = Vec::with_capacity(pieces.len());
     let fwd = |edge| SideRef {
         edge,
@@ -940,14 +942,15 @@ pub fn assemble_cached(
             let c = p.circles[side];
             let (s0, s1) = slots(p, side);
             for (v, s) in [(v0, s0), (v1, s1)] {
-                spoke_edge.entry((v, s)).or_insert_with(|| {
+                let t = tangent_vertex(v, s);
+                if spoke_edge[t as usize] == NO_EDGE {
+                    spoke_edge[t as usize] = layout.edges.len() as u32;
                     layout.edges.push(Edge {
-                        ends: [v as u32, tangent_vertex(v, s)],
+                        ends: [v as u32, t],
                         curve: Curve::Segment,
                         kind: EdgeKind::Spoke,
                     });
-                    (layout.edges.len() - 1) as u32
-                });
+                }
             }
             // Wall edge, in the block's side-0 direction.
             let (t_first, t_last) = if side == 0 {
@@ -971,8 +974,8 @@ pub fn assemble_cached(
                 },
                 kind: EdgeKind::Wall(c),
             });
-            let sp0 = spoke_edge[&(v0, s0)];
-            let sp1 = spoke_edge[&(v1, s1)];
+            let sp0 = spoke_edge[tangent_vertex(v0, s0) as usize];
+            let sp1 = spoke_edge[tangent_vertex(v1, s1) as usize];
             layout.blocks.push(if side == 0 {
                 Block {
                     corners: [t_first, t_last, v1 as u32, v0 as u32],
