@@ -3,7 +3,8 @@
 //! from the arc's parametrisation with `sin_cos`, `hypot` and both walls' `atan2`), computed
 //! alongside: on every piece (and both halves of each, as inserted holes split them) of real
 //! layouts (bounded and periodic), and on random arcs between holes and with the bounding
-//! circle.
+//! circle. There also the batched passes against the point-by-point loop they replaced
+//! (`Deviation::batched_bits`): equal bit for bit.
 
 mod common;
 
@@ -24,6 +25,7 @@ fn check(d: Deviation, what: &str) {
     assert!(d.arcs > 0, "{what}");
     assert!(d.sq < TOL && d.ang < TOL, "{what}: {d:?}");
     assert_eq!(d.mismatches, 0, "{what}: {d:?}");
+    assert_eq!(d.batched_bits, 0, "{what}: {d:?}");
 }
 
 fn on_layout(d: &Domain, what: &str) {
@@ -131,10 +133,12 @@ fn random_arcs_match_the_plain_formula() {
         total.sq = total.sq.max(d.sq);
         total.ang = total.ang.max(d.ang);
         total.mismatches += d.mismatches;
+        total.batched_bits += d.batched_bits;
     }
     assert!(long.arcs > 1000 && short.arcs > 300, "{long:?} {short:?}");
     check(long, "random arcs");
     println!("short random arcs: {short:?}");
     assert!(short.sq < 1e-3 && short.ang < 1e-3, "{short:?}");
     assert_eq!(short.mismatches, 0);
+    assert_eq!(short.batched_bits, 0, "{short:?}");
 }

@@ -88,26 +88,34 @@ fn geometric_sum(delta: f64, q: f64, k: usize) -> f64 {
 /// docs): `d[0] = 0`, `d[n] = len`, strictly increasing when `len > 0`. `first` is the absolute
 /// first cell height (or `None`), `growth` the ratio `g`. Never panics; `n = 0` gives `[0]`.
 pub fn spoke_distances(len: f64, n: usize, first: Option<f64>, growth: f64) -> Vec<f64> {
+    let mut d = Vec::with_capacity(n + 1);
+    spoke_distances_into(len, n, first, growth, &mut d);
+    d
+}
+
+/// [`spoke_distances`] into `d` (cleared first): the grid build reuses one buffer for all its
+/// spokes instead of allocating one per spoke.
+pub fn spoke_distances_into(len: f64, n: usize, first: Option<f64>, growth: f64, d: &mut Vec<f64>) {
+    d.clear();
     if n == 0 {
-        return vec![0.0];
+        d.push(0.0);
+        return;
     }
-    let uniform = || -> Vec<f64> {
-        let mut d: Vec<f64> = (0..=n).map(|j| len * (j as f64 / n as f64)).collect();
-        d[n] = len;
-        d
-    };
     let delta = match first {
         Some(delta) if n > 1 && delta.is_finite() && delta > 0.0 && (n as f64) * delta < len => {
             delta
         }
-        _ => return uniform(),
+        _ => {
+            d.extend((0..=n).map(|j| len * (j as f64 / n as f64)));
+            d[n] = len;
+            return;
+        }
     };
     let g = if growth.is_finite() && growth >= 1.0 {
         growth
     } else {
         1.0
     };
-    let mut d = Vec::with_capacity(n + 1);
     if geometric_sum(delta, g, n) < len {
         // q > g: the series of ratio q filling the spoke. Bisection on q in (1, hi].
         let mut lo = 1.0_f64;
@@ -181,7 +189,6 @@ pub fn spoke_distances(len: f64, n: usize, first: Option<f64>, growth: f64) -> V
             d[j] = 0.5 * (d[j - 1] + d[j + 1]);
         }
     }
-    d
 }
 
 /// The number of cells a spoke of typical length `len` needs for a target cell size `h` with

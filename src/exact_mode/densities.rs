@@ -44,9 +44,132 @@ impl ArcGeometry {
         Some((sq, ang))
     }
 
-    /// [`ArcGeometry::densities`] into `sq` and `ang` (cleared first), point by point (see the
-    /// module docs). `None` when a point is not defined.
+    /// [`ArcGeometry::densities`] into `sq` and `ang` (cleared first): the values of
+    /// [`ArcGeometry::densities_into_scalar`] bit for bit, computed in passes over arrays (the
+    /// unit vectors by their recurrence; then every point; then every sub-step) so that the
+    /// divisions and square roots of independent points can run side by side (vector lanes
+    /// round every operation as the scalar code does, and nothing is reassociated or fused).
+    /// `None` when a point is not defined.
     pub(crate) fn densities_into(&self, sq: &mut Vec<f64>, ang: &mut Vec<f64>) -> Option<()> {
+        const K: usize = ARC_SUBSTEPS;
+        const N: usize = K + 1;
+        sq.clear();
+        ang.clear();
+        let p = self.param;
+        let q = 1 - p;
+        let (wp, wq) = (&self.walls[p], &self.walls[q]);
+        let step = self.sweep[p] / K as f64;
+        let (sd, cd) = step.sin_cos();
+        let turn_p = step.abs();
+        let tan_p = turn_p.tan() / (1.0 + 1e-9);
+        // Pass 1: the unit vectors of the interior points (as `densities_into_scalar`).
+        let (mut ux, mut uy) = ([0.0; N], [0.0; N]);
+        let mut u = [1.0, 0.0];
+        for s in 1..K {
+            u = if s == 1 || s % RESTART == 0 {
+                let theta = self.start[p] + (s as f64 / K as f64) * self.sweep[p];
+                [theta.cos(), theta.sin()]
+            } else {
+                [u[0] * cd - u[1] * sd, u[1] * cd + u[0] * sd]
+            };
+            (ux[s], uy[s]) = (u[0], u[1]);
+        }
+        // Pass 2: every point: medial point `m`, radius `r`, touching points `t[wall]` (the
+        // expressions of `medial_point_u` and `project`, written out).
+        let (mut mx, mut my, mut r) = ([0.0; N], [0.0; N], [0.0; N]);
+        let (mut tx, mut ty) = ([[0.0; N]; 2], [[0.0; N]; 2]);
+        let (m0, a0, r0) = self.at(0.0)?;
+        let (m1, a1, r1) = self.at(1.0)?;
+        for (s, (m, a, rho)) in [(0, (m0, a0, r0)), (K, (m1, a1, r1))] {
+            (mx[s], my[s], r[s]) = (m[0], m[1], rho);
+            for w in 0..2 {
+                (tx[w][s], ty[w][s]) = (a[w][0], a[w][1]);
+            }
+        }
+        let neg = wp.s < 0.0;
+        let mut ok = true;
+        {
+            let [tpx, tqx] = if p == 0 {
+                let [a, b] = &mut tx;
+                [a, b]
+            } else {
+                let [b, a] = &mut tx;
+                [a, b]
+            };
+            let [tpy, tqy] = if p == 0 {
+                let [a, b] = &mut ty;
+                [a, b]
+            } else {
+                let [b, a] = &mut ty;
+                [a, b]
+            };
+            for s in 1..K {
+                let (u0, u1) = (ux[s], uy[s]);
+                let a0 = wp.c[0] + wp.r * u0;
+                let a1 = wp.c[1] + wp.r * u1;
+                let (n0, n1) = if neg { (-u0, -u1) } else { (u0, u1) };
+                let d0 = a0 - wq.c[0];
+                let d1 = a1 - wq.c[1];
+                let den = 2.0 * (d0 * n0 + d1 * n1 - wq.s);
+                let rho = (wq.s * wq.s - (d0 * d0 + d1 * d1)) / den;
+                let m0 = a0 + rho * n0;
+                let m1 = a1 + rho * n1;
+                let e0 = m0 - wq.c[0];
+                let e1 = m1 - wq.c[1];
+                let l = (e0 * e0 + e1 * e1).sqrt();
+                let b0 = wq.c[0] + wq.r * e0 / l;
+                let b1 = wq.c[1] + wq.r * e1 / l;
+                ok &= rho.is_finite()
+                    & (rho >= 0.0)
+                    & m0.is_finite()
+                    & m1.is_finite()
+                    & b0.is_finite()
+                    & b1.is_finite();
+                (mx[s], my[s], r[s]) = (m0, m1, rho);
+                (tpx[s], tpy[s], tqx[s], tqy[s]) = (a0, a1, b0, b1);
+            }
+        }
+        if !ok {
+            return None;
+        }
+        // Pass 3: every sub-step's length density and the other wall's turn parts.
+        let (mut sqa, mut ca, mut da) = ([0.0; K], [0.0; K], [0.0; K]);
+        let cq = wq.c;
+        for s in 1..N {
+            let mut ds = 0.0;
+            for w in 0..2 {
+                let x = 0.5 * (mx[s - 1] + tx[w][s - 1]) - 0.5 * (mx[s] + tx[w][s]);
+                let y = 0.5 * (my[s - 1] + ty[w][s - 1]) - 0.5 * (my[s] + ty[w][s]);
+                let l = (x * x + y * y).sqrt();
+                ds = if w == 0 { l } else { ds + l };
+            }
+            let ds = 0.5 * ds;
+            let rho = 0.5 * (r[s - 1] + r[s]);
+            sqa[s - 1] = if rho > 0.0 { ds / rho } else { 0.0 };
+            let (u0, u1) = (tx[q][s - 1] - cq[0], ty[q][s - 1] - cq[1]);
+            let (v0, v1) = (tx[q][s] - cq[0], ty[q][s] - cq[1]);
+            ca[s - 1] = u0 * v1 - u1 * v0;
+            da[s - 1] = u0 * v0 + u1 * v1;
+        }
+        sq.extend_from_slice(&sqa);
+        ang.extend(ca.iter().zip(&da).map(|(&c, &d)| {
+            let turn = if d > 0.0 && c.abs() < tan_p * d {
+                turn_p
+            } else {
+                turn_p.max(c.atan2(d).abs())
+            };
+            turn / MAX_WALL_ANGLE
+        }));
+        Some(())
+    }
+
+    /// The densities point by point, one sub-step after the other (see the module docs): the
+    /// reference [`ArcGeometry::densities_into`] is tested against, bit for bit.
+    pub(crate) fn densities_into_scalar(
+        &self,
+        sq: &mut Vec<f64>,
+        ang: &mut Vec<f64>,
+    ) -> Option<()> {
         let k = ARC_SUBSTEPS;
         sq.clear();
         ang.clear();
@@ -133,6 +256,9 @@ pub struct Deviation {
     pub ang: f64,
     /// Arcs whose lower bound `ceil(sum ang)` differs, or defined by only one of the two.
     pub mismatches: usize,
+    /// Arcs whose fast densities (the batched passes) differ in any bit, or in being defined,
+    /// from the point-by-point ones (`ArcGeometry::densities_into_scalar`): must be 0.
+    pub batched_bits: usize,
 }
 
 impl Deviation {
@@ -141,6 +267,15 @@ impl Deviation {
         use super::counts::ArcTarget;
         self.arcs += 1;
         let (fast, plain) = (g.densities(), g.densities_plain());
+        let (mut ssq, mut sang) = (Vec::new(), Vec::new());
+        let scalar = g
+            .densities_into_scalar(&mut ssq, &mut sang)
+            .map(|()| (ssq, sang));
+        let bits = |v: &(Vec<f64>, Vec<f64>)| {
+            let b = |x: &[f64]| x.iter().map(|y| y.to_bits()).collect::<Vec<u64>>();
+            (b(&v.0), b(&v.1))
+        };
+        self.batched_bits += usize::from(fast.as_ref().map(bits) != scalar.as_ref().map(bits));
         let (Some((fs, fa)), Some((ps, pa))) = (fast.clone(), plain.clone()) else {
             self.mismatches += usize::from(fast.is_some() != plain.is_some());
             return;

@@ -59,7 +59,6 @@ use crate::mesher::{MeshError, Options};
 use counts::{ArcTarget, CountProblem, Counts, Known};
 use piece_cache::{Entry, GeomKey, GridKey, Params, Payload};
 use rayon::prelude::*;
-use std::collections::HashMap;
 use std::f64::consts::{PI, TAU};
 
 /// Sub-steps used to sample each medial arc for the node distribution.
@@ -418,18 +417,35 @@ pub fn validate_options(options: &Options) -> Result<(), MeshError> {
 /// The nodes of one spoke from the wall point `a` (`j = 0`) to the medial point `m`
 /// (`j = n`), `n + 1` nodes with the given clustering; the ends are exactly `a` and `m`.
 fn spoke_nodes(a: Point, m: Point, n: usize, first: Option<f64>, growth: f64) -> Vec<Point> {
-    let len = dist(a, m);
-    let d = clustering::spoke_distances(len, n, first, growth);
-    let mut out: Vec<Point> = d
-        .iter()
-        .map(|&x| {
-            let t = if len > 0.0 { x / len } else { 0.0 };
-            [a[0] + t * (m[0] - a[0]), a[1] + t * (m[1] - a[1])]
-        })
-        .collect();
-    out[0] = a;
-    out[n] = m;
+    let mut out = vec![[0.0; 2]; n + 1];
+    let mut d = Vec::with_capacity(n + 1);
+    spoke_column(a, m, n, first, growth, &mut d, &mut out, 0, 1);
     out
+}
+
+/// [`spoke_nodes`] written into `nodes[i + j * stride]` for `j` in `0..=n` (a grid's column
+/// `i`, without allocating: `d` is the distances' buffer, reused from spoke to spoke). The same
+/// values, bit for bit.
+#[allow(clippy::too_many_arguments)]
+fn spoke_column(
+    a: Point,
+    m: Point,
+    n: usize,
+    first: Option<f64>,
+    growth: f64,
+    d: &mut Vec<f64>,
+    nodes: &mut [Point],
+    i: usize,
+    stride: usize,
+) {
+    let len = dist(a, m);
+    clustering::spoke_distances_into(len, n, first, growth, d);
+    for (j, &x) in d.iter().enumerate() {
+        let t = if len > 0.0 { x / len } else { 0.0 };
+        nodes[i + j * stride] = [a[0] + t * (m[0] - a[0]), a[1] + t * (m[1] - a[1])];
+    }
+    nodes[i] = a;
+    nodes[i + n * stride] = m;
 }
 
 /// `n + 1` parameters in `[0, 1]` equidistributing the sub-step weights `w` (`t_0 = 0`,
@@ -899,7 +915,10 @@ pub fn assemble_cached(
             vertices[p.ends[1]].slot(c).unwrap_or(0),
         )
     };
-    let mut spoke_edge: HashMap<(usize, usize), u32> = HashMap::new();
+    // The spoke edge of vertex `v`'s slot `s`, by its tangent vertex (`NO_EDGE` until made): a
+    // lookup, not a hash map (issue 8); edges are numbered in first-use order as before.
+    const NO_EDGE: u32 = u32::MAX;
+    let mut spoke_edge: Vec<u32> = vec![NO_EDGE; layout.vertices.len()];
     let mut medial_edges = Vec::with_capacity(pieces.len());
     let fwd = |edge| SideRef {
         edge,
@@ -923,14 +942,15 @@ pub fn assemble_cached(
             let c = p.circles[side];
             let (s0, s1) = slots(p, side);
             for (v, s) in [(v0, s0), (v1, s1)] {
-                spoke_edge.entry((v, s)).or_insert_with(|| {
+                let t = tangent_vertex(v, s);
+                if spoke_edge[t as usize] == NO_EDGE {
+                    spoke_edge[t as usize] = layout.edges.len() as u32;
                     layout.edges.push(Edge {
-                        ends: [v as u32, tangent_vertex(v, s)],
+                        ends: [v as u32, t],
                         curve: Curve::Segment,
                         kind: EdgeKind::Spoke,
                     });
-                    (layout.edges.len() - 1) as u32
-                });
+                }
             }
             // Wall edge, in the block's side-0 direction.
             let (t_first, t_last) = if side == 0 {
@@ -954,8 +974,8 @@ pub fn assemble_cached(
                 },
                 kind: EdgeKind::Wall(c),
             });
-            let sp0 = spoke_edge[&(v0, s0)];
-            let sp1 = spoke_edge[&(v1, s1)];
+            let sp0 = spoke_edge[tangent_vertex(v0, s0) as usize];
+            let sp1 = spoke_edge[tangent_vertex(v1, s1) as usize];
             layout.blocks.push(if side == 0 {
                 Block {
                     corners: [t_first, t_last, v1 as u32, v0 as u32],
@@ -1136,28 +1156,25 @@ pub fn assemble_cached(
                 a_nodes[0].push(a[0]);
                 a_nodes[1].push(a[1]);
             }
-            let grid = |side: usize| {
+            let mut d = Vec::new();
+            let mut grid = |side: usize| {
                 let (nj, first, growth) = side_inputs(p, side);
-                // The corner spokes run from the piece's exact ends: its end vertices' tangent
-                // points on this circle and centres (`ends_a`, `ends_m` are taken from them by
-                // the same slots), so every block at a vertex gets the same nodes and the
-                // cache key (the geometry) covers them.
-                let corner =
-                    |end: usize| spoke_nodes(g.ends_a[end][side], g.ends_m[end], nj, first, growth);
-                // Column i is arc node k = i (side 0) or n - i (side 1).
+                // Column i is arc node k = i (side 0) or n - i (side 1). The corner spokes run
+                // from the piece's exact ends: its end vertices' tangent points on this circle
+                // and centres (`ends_a`, `ends_m` are taken from them by the same slots), so
+                // every block at a vertex gets the same nodes and the cache key (the
+                // geometry) covers them.
                 let mut nodes = vec![[0.0; 2]; (n + 1) * (nj + 1)];
                 for i in 0..=n {
                     let k = if side == 0 { i } else { n - i };
-                    let col: Vec<Point> = if k == 0 {
-                        corner(0)
+                    let (a, m) = if k == 0 {
+                        (g.ends_a[0][side], g.ends_m[0])
                     } else if k == n {
-                        corner(1)
+                        (g.ends_a[1][side], g.ends_m[1])
                     } else {
-                        spoke_nodes(a_nodes[side][k], m_nodes[k], nj, first, growth)
+                        (a_nodes[side][k], m_nodes[k])
                     };
-                    for (j, q) in col.into_iter().enumerate() {
-                        nodes[i + j * (n + 1)] = q;
-                    }
+                    spoke_column(a, m, nj, first, growth, &mut d, &mut nodes, i, n + 1);
                 }
                 BlockGrid { ni: n, nj, nodes }
             };
@@ -1335,6 +1352,56 @@ mod tests {
             tested += 1;
         }
         assert!(tested > 100, "{tested}");
+    }
+
+    /// [`spoke_column`] (one distance buffer for every spoke, written in place) against the
+    /// allocating form it replaced, bit for bit: uniform and clustered spokes (both regimes,
+    /// and first heights too large to fit), zero length, one and many cells.
+    #[test]
+    fn spoke_column_matches_the_allocating_spoke() {
+        fn reference(a: Point, m: Point, n: usize, first: Option<f64>, growth: f64) -> Vec<Point> {
+            let len = dist(a, m);
+            let d = clustering::spoke_distances(len, n, first, growth);
+            let mut out: Vec<Point> = d
+                .iter()
+                .map(|&x| {
+                    let t = if len > 0.0 { x / len } else { 0.0 };
+                    [a[0] + t * (m[0] - a[0]), a[1] + t * (m[1] - a[1])]
+                })
+                .collect();
+            out[0] = a;
+            out[n] = m;
+            out
+        }
+        let mut rng = crate::layouts::SplitMix64(5);
+        let mut d = Vec::new();
+        for k in 0..3000 {
+            let a = [rng.next_f64() * 4.0 - 2.0, rng.next_f64() * 4.0 - 2.0];
+            let m = if k % 97 == 0 {
+                a
+            } else {
+                [rng.next_f64() * 4.0 - 2.0, rng.next_f64() * 4.0 - 2.0]
+            };
+            let n = 1 + k % 40;
+            let first = match k % 4 {
+                0 => None,
+                1 => Some(1e-4 * (1.0 + rng.next_f64())),
+                2 => Some(0.05 * rng.next_f64()),
+                _ => Some(2.0),
+            };
+            let growth = 1.0 + 0.5 * rng.next_f64();
+            let want = reference(a, m, n, first, growth);
+            let (ni, i) = (k % 5, k % 5 / 2);
+            let mut nodes = vec![[f64::NAN; 2]; (ni + 1) * (n + 1)];
+            spoke_column(a, m, n, first, growth, &mut d, &mut nodes, i, ni + 1);
+            for (j, w) in want.iter().enumerate() {
+                assert_eq!(
+                    nodes[i + j * (ni + 1)].map(f64::to_bits),
+                    w.map(f64::to_bits)
+                );
+            }
+            assert_eq!(spoke_nodes(a, m, n, first, growth), want);
+        }
     }
 
     #[test]
