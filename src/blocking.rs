@@ -243,30 +243,32 @@ fn blocks_reusing(
         blocks: Vec::with_capacity(2 * medial.arcs.len()),
     };
     let mut vertex_samples: Vec<Option<u32>> = vec![None; layout.vertices.len()];
-    // Indexed by sample id (checked `< samples.len()` below) instead of hashed: the layout
-    // vertex of each sample used as a corner, and per sample the spokes to it as a list of
-    // `(medial vertex, edge, next)` (a sample has a spoke from one to three medial vertices).
-    let mut sample_vertex: Vec<u32> = vec![u32::MAX; samples.len()];
-    let mut spoke_head: Vec<u32> = vec![u32::MAX; samples.len()];
+    // Indexed by sample id (checked `< samples.len()` below) instead of hashed, per sample
+    // `[layout vertex + 1, spoke list head + 1]` (0: none; zero-initialised, so the
+    // allocation maps zero pages instead of filling an array, issue 8): the layout vertex of
+    // each sample used as a corner, and the spokes to it as a list of `(medial vertex, edge,
+    // next + 1)` (a sample has a spoke from one to three medial vertices).
+    let mut slots: Vec<[u32; 2]> = vec![[0; 2]; samples.len()];
     let mut spoke_list: Vec<(u32, u32, u32)> = Vec::with_capacity(3 * medial.vertices.len());
 
-    let mut sample_vertex_of = |s: u32, layout: &mut BlockLayout| -> u32 {
-        let slot = &mut sample_vertex[s as usize];
-        if *slot == u32::MAX {
+    let mut sample_vertex_of = |slots: &mut [[u32; 2]], s: u32, layout: &mut BlockLayout| -> u32 {
+        let slot = &mut slots[s as usize][0];
+        if *slot == 0 {
             layout.vertices.push(samples.points[s as usize]);
             vertex_samples.push(Some(s));
-            *slot = (layout.vertices.len() - 1) as u32;
+            *slot = layout.vertices.len() as u32;
         }
-        *slot
+        *slot - 1
     };
     let add_edge = |layout: &mut BlockLayout, ends: [u32; 2], curve: Curve, kind| -> u32 {
         layout.edges.push(Edge { ends, curve, kind });
         (layout.edges.len() - 1) as u32
     };
-    let mut spoke = |layout: &mut BlockLayout, mv: u32, s: u32, sv: u32| -> u32 {
-        let mut at = spoke_head[s as usize];
-        while at != u32::MAX {
-            let (v, edge, next) = spoke_list[at as usize];
+    let mut spoke = |slots: &mut [[u32; 2]], layout: &mut BlockLayout, mv: u32, s: u32, sv: u32| {
+        let head = &mut slots[s as usize][1];
+        let mut at = *head;
+        while at != 0 {
+            let (v, edge, next) = spoke_list[at as usize - 1];
             if v == mv {
                 return edge;
             }
@@ -278,8 +280,8 @@ fn blocks_reusing(
             kind: EdgeKind::Spoke,
         });
         let edge = (layout.edges.len() - 1) as u32;
-        spoke_list.push((mv, edge, spoke_head[s as usize]));
-        spoke_head[s as usize] = (spoke_list.len() - 1) as u32;
+        spoke_list.push((mv, edge, *head));
+        *head = spoke_list.len() as u32;
         edge
     };
     let fwd = |edge| SideRef {
@@ -314,10 +316,10 @@ fn blocks_reusing(
                 "medial arc with an out-of-range vertex or circle".into(),
             ));
         }
-        let va0 = sample_vertex_of(a0, &mut layout);
-        let va1 = sample_vertex_of(a1, &mut layout);
-        let vb0 = sample_vertex_of(b0, &mut layout);
-        let vb1 = sample_vertex_of(b1, &mut layout);
+        let va0 = sample_vertex_of(&mut slots, a0, &mut layout);
+        let va1 = sample_vertex_of(&mut slots, a1, &mut layout);
+        let vb0 = sample_vertex_of(&mut slots, b0, &mut layout);
+        let vb1 = sample_vertex_of(&mut slots, b1, &mut layout);
         let reused = old.as_mut().and_then(|(old, taken)| {
             let k = *taken.get(a)?;
             (k != u32::MAX)
@@ -335,8 +337,8 @@ fn blocks_reusing(
             None => wall_curve(domain, samples, ca, &arc.c1, expect(ca))?,
         };
         let wall_a = add_edge(&mut layout, [va0, va1], wall_a, EdgeKind::Wall(ca));
-        let s_a1 = spoke(&mut layout, m1, a1, va1);
-        let s_a0 = spoke(&mut layout, m0, a0, va0);
+        let s_a1 = spoke(&mut slots, &mut layout, m1, a1, va1);
+        let s_a0 = spoke(&mut slots, &mut layout, m0, a0, va0);
         layout.blocks.push(Block {
             corners: [va0, va1, m1, m0],
             sides: [fwd(wall_a), rev(s_a1), rev(medial_edge), fwd(s_a0)],
@@ -352,8 +354,8 @@ fn blocks_reusing(
             }
         };
         let wall_b = add_edge(&mut layout, [vb1, vb0], wall_b, EdgeKind::Wall(cb));
-        let s_b0 = spoke(&mut layout, m0, b0, vb0);
-        let s_b1 = spoke(&mut layout, m1, b1, vb1);
+        let s_b0 = spoke(&mut slots, &mut layout, m0, b0, vb0);
+        let s_b1 = spoke(&mut slots, &mut layout, m1, b1, vb1);
         layout.blocks.push(Block {
             corners: [vb1, vb0, m0, m1],
             sides: [fwd(wall_b), rev(s_b0), fwd(medial_edge), fwd(s_b1)],
