@@ -217,14 +217,28 @@ pub fn cocircular_groups(
             }
         }
     }
-    let mut members: std::collections::BTreeMap<u32, Vec<u32>> = Default::default();
-    for v in 0..n as u32 {
-        let r = find(&mut parent, v);
-        members.entry(r).or_default().push(v);
+    // Components of two or more vertices, by increasing root, members in vertex order. A
+    // root is its component's smallest vertex (unions keep the smaller root), so it is met
+    // first: one list per group, not one per vertex (issue 8).
+    let mut size = vec![0u32; n];
+    let roots: Vec<u32> = (0..n as u32).map(|v| find(&mut parent, v)).collect();
+    for &r in &roots {
+        size[r as usize] += 1;
+    }
+    let mut slot = vec![u32::MAX; n];
+    let mut members: Vec<(u32, Vec<u32>)> = Vec::new();
+    for (v, &r) in roots.iter().enumerate() {
+        if size[r as usize] < 2 {
+            continue;
+        }
+        if slot[r as usize] == u32::MAX {
+            slot[r as usize] = members.len() as u32;
+            members.push((r, Vec::with_capacity(size[r as usize] as usize)));
+        }
+        members[slot[r as usize] as usize].1.push(v as u32);
     }
     let mut groups: Vec<CocircularGroup> = members
         .into_iter()
-        .filter(|(_, vs)| vs.len() >= 2)
         .filter_map(|(root, vertices)| {
             let c = circles[root as usize].as_ref()?;
             let mut holes: Vec<CircleId> = vertices

@@ -185,3 +185,83 @@ fn taken_circles_equal_cloned_and_fresh_ones() {
     assert_eq!(again, c0);
     assert_eq!(vertex_circles_taking(&d0, &s0.medial, None), c0);
 }
+
+/// A co-circular group as compared: circles, centre, radius, vertices.
+type Group = (Vec<i32>, [f64; 2], f64, Vec<u32>);
+
+/// The co-circular groups as first written: one list per vertex in a `BTreeMap` by root.
+fn groups_reference(
+    medial: &medial_blocks::medial::MedialGraph,
+    circles: &[Option<medial_blocks::apollonius::Apollonius>],
+) -> Vec<Group> {
+    use medial_blocks::apollonius::same_circle;
+    let n = medial.vertices.len();
+    let mut parent: Vec<u32> = (0..n as u32).collect();
+    fn find(parent: &mut [u32], mut x: u32) -> u32 {
+        while parent[x as usize] != x {
+            x = parent[x as usize];
+        }
+        x
+    }
+    for arc in &medial.arcs {
+        let [a, b] = arc.ends;
+        if a == b {
+            continue;
+        }
+        if let (Some(x), Some(y)) = (&circles[a as usize], &circles[b as usize]) {
+            if same_circle(&x.exact, &y.exact) {
+                let (ra, rb) = (find(&mut parent, a), find(&mut parent, b));
+                if ra != rb {
+                    parent[ra.max(rb) as usize] = ra.min(rb);
+                }
+            }
+        }
+    }
+    let mut members: std::collections::BTreeMap<u32, Vec<u32>> = Default::default();
+    for v in 0..n as u32 {
+        let r = find(&mut parent, v);
+        members.entry(r).or_default().push(v);
+    }
+    let mut groups: Vec<Group> = members
+        .into_iter()
+        .filter(|(_, vs)| vs.len() >= 2)
+        .filter_map(|(root, vertices)| {
+            let c = circles[root as usize].as_ref()?;
+            let mut holes: Vec<i32> = vertices
+                .iter()
+                .flat_map(|&v| medial.vertices[v as usize].circles)
+                .collect();
+            holes.sort_unstable();
+            holes.dedup();
+            Some((holes, c.center, c.radius, vertices))
+        })
+        .collect();
+    groups.sort_by(|a, b| a.0.cmp(&b.0));
+    groups
+}
+
+/// The co-circular groups (one list per group, not per vertex) equal the reference's on the
+/// degenerate lattices (many groups) and bubbles (none).
+#[test]
+fn cocircular_groups_equal_the_reference() {
+    use medial_blocks::cocircular::cocircular_groups;
+    let mut found = 0;
+    let domains = [
+        medial_blocks::layouts::hexagon(),
+        medial_blocks::layouts::lattice().unwrap(),
+        medial_blocks::layouts::square_lattice(16).unwrap(),
+        medial_blocks::layouts::square_lattice(49).unwrap(),
+        medial_blocks::layouts::bubbles(200, 1).unwrap(),
+    ];
+    for d in &domains {
+        let s = sample_and_triangulate(d, &SamplingOptions::default()).unwrap();
+        let circles = vertex_circles(d, &s.medial);
+        let got: Vec<_> = cocircular_groups(&s.medial, &circles)
+            .into_iter()
+            .map(|g| (g.holes, g.center, g.radius, g.vertices))
+            .collect();
+        assert_eq!(got, groups_reference(&s.medial, &circles));
+        found += got.len();
+    }
+    assert!(found >= 10, "{found}");
+}
