@@ -6,7 +6,7 @@ use crate::medial::{MedialArc, MedialGraph, MedialVertex};
 use crate::mesher::MeshError;
 
 /// Contract the arcs marked in `collapse` (one flag per arc; they must form a forest, as
-/// [`select`] guarantees; a cycle or a kept arc with both ends in one cluster is an
+/// [`super::select`] guarantees; a cycle or a kept arc with both ends in one cluster is an
 /// [`MeshError::Internal`]).
 pub fn contract(medial: &MedialGraph, collapse: &[bool]) -> Result<Contracted, MeshError> {
     let n = medial.vertices.len();
