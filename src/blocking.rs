@@ -118,13 +118,7 @@ fn wall_curve(
             samples.index_of[w[0] as usize] as i64,
             samples.index_of[w[1] as usize] as i64,
         );
-        let step = if (i + 1) % n == j {
-            1
-        } else if (j + 1) % n == i {
-            -1
-        } else {
-            0
-        };
+        let step = step_between(i, j, n);
         if step == 0 || (dir != 0 && step != dir) || samples.circle_of[w[1] as usize] != circle {
             return Err(MeshError::Internal(format!(
                 "wall chain on circle {circle} is not a run of consecutive samples"
@@ -133,7 +127,7 @@ fn wall_curve(
         dir = step;
         let (g0, g1) = (samples.grid_index(w[0]), samples.grid_index(w[1]));
         let (from, to) = if step > 0 { (g0, g1) } else { (g1, g0) };
-        grid_steps += (to % grid + grid - from % grid) % grid;
+        grid_steps += grid_distance(from, to, grid);
     }
     if dir != 0 && dir != expected {
         return Err(MeshError::Internal(format!(
@@ -148,12 +142,96 @@ fn wall_curve(
     })
 }
 
+/// `1` when `j` follows `i` counter-clockwise on a circle of `n` samples (`(i + 1) % n == j`),
+/// `-1` when it precedes it (`(j + 1) % n == i`), else `0`. Indices in `0..n` take the branch
+/// without a division (a wall walk does one per sample, issue 8).
+fn step_between(i: i64, j: i64, n: i64) -> i64 {
+    if (0..n).contains(&i) && (0..n).contains(&j) {
+        let last = n - 1;
+        if j == if i == last { 0 } else { i + 1 } {
+            1
+        } else if i == if j == last { 0 } else { j + 1 } {
+            -1
+        } else {
+            0
+        }
+    } else if (i + 1) % n == j {
+        1
+    } else if (j + 1) % n == i {
+        -1
+    } else {
+        0
+    }
+}
+
+/// The grid steps counter-clockwise from `from` to `to` on a grid of `grid` points:
+/// `(to % grid + grid - from % grid) % grid`, without a division for indices below `grid`.
+fn grid_distance(from: u64, to: u64, grid: u64) -> u64 {
+    if from < grid && to < grid {
+        if to >= from {
+            to - from
+        } else {
+            to + grid - from
+        }
+    } else {
+        (to % grid + grid - from % grid) % grid
+    }
+}
+
 /// Blocking2D (Algorithm 2) on a medial graph: the layout and, per layout vertex, the sample
 /// it stands for.
 pub fn blocks(
     domain: &Domain,
     samples: &Samples,
     medial: &MedialGraph,
+) -> Result<(BlockLayout, Vec<Option<u32>>), MeshError> {
+    blocks_reusing(domain, samples, medial, None)
+}
+
+/// The curves of the blocks `2k` and `2k + 1` of `old` (Blocking2D of arc `k` of an earlier
+/// graph), moved out: the medial polyline and the two walls, when they have the shape
+/// Blocking2D gives them (a polyline of `points` points, walls on `circles`).
+fn take_pair_curves(
+    old: &mut BlockLayout,
+    k: usize,
+    points: usize,
+    circles: [CircleId; 2],
+) -> Option<[Curve; 3]> {
+    let (a, b) = (old.blocks.get(2 * k)?, old.blocks.get(2 * k + 1)?);
+    let (medial, wall_a, wall_b) = (a.sides[2].edge, a.sides[0].edge, b.sides[0].edge);
+    if b.sides[2].edge != medial || [a.wall, b.wall] != [Some(circles[0]), Some(circles[1])] {
+        return None;
+    }
+    let ok = |e: u32, kind: EdgeKind, polyline: bool| {
+        old.edges.get(e as usize).is_some_and(|edge| {
+            edge.kind == kind
+                && match &edge.curve {
+                    Curve::Polyline(p) => polyline && p.len() == points,
+                    Curve::Arc { .. } => !polyline,
+                    Curve::Segment => false,
+                }
+        })
+    };
+    if !(ok(medial, EdgeKind::Medial, true)
+        && ok(wall_a, EdgeKind::Wall(circles[0]), false)
+        && ok(wall_b, EdgeKind::Wall(circles[1]), false))
+    {
+        return None;
+    }
+    let mut take = |e: u32| std::mem::replace(&mut old.edges[e as usize].curve, Curve::Segment);
+    Some([take(medial), take(wall_a), take(wall_b)])
+}
+
+/// [`blocks`], taking the curves of arc `a` of `medial` from the pair of blocks `2k, 2k + 1`
+/// of `old` where `taken[a] = k` (`u32::MAX`: computed): the previous Blocking2D of a
+/// contraction that handed arc `k` over unchanged
+/// ([`crate::collapse::Selection::contract_reusing`]), so its polyline and wall chains, hence
+/// its curves, are those of arc `a`. The curves taken are left as segments in `old`.
+fn blocks_reusing(
+    domain: &Domain,
+    samples: &Samples,
+    medial: &MedialGraph,
+    mut old: Option<(&mut BlockLayout, &[u32])>,
 ) -> Result<(BlockLayout, Vec<Option<u32>>), MeshError> {
     // Vertices: the medial ones, then at most four sample corners per arc (reserved once:
     // no doubling of a large vector, issue 8).
@@ -165,30 +243,32 @@ pub fn blocks(
         blocks: Vec::with_capacity(2 * medial.arcs.len()),
     };
     let mut vertex_samples: Vec<Option<u32>> = vec![None; layout.vertices.len()];
-    // Indexed by sample id (checked `< samples.len()` below) instead of hashed: the layout
-    // vertex of each sample used as a corner, and per sample the spokes to it as a list of
-    // `(medial vertex, edge, next)` (a sample has a spoke from one to three medial vertices).
-    let mut sample_vertex: Vec<u32> = vec![u32::MAX; samples.len()];
-    let mut spoke_head: Vec<u32> = vec![u32::MAX; samples.len()];
+    // Indexed by sample id (checked `< samples.len()` below) instead of hashed, per sample
+    // `[layout vertex + 1, spoke list head + 1]` (0: none; zero-initialised, so the
+    // allocation maps zero pages instead of filling an array, issue 8): the layout vertex of
+    // each sample used as a corner, and the spokes to it as a list of `(medial vertex, edge,
+    // next + 1)` (a sample has a spoke from one to three medial vertices).
+    let mut slots: Vec<[u32; 2]> = vec![[0; 2]; samples.len()];
     let mut spoke_list: Vec<(u32, u32, u32)> = Vec::with_capacity(3 * medial.vertices.len());
 
-    let mut sample_vertex_of = |s: u32, layout: &mut BlockLayout| -> u32 {
-        let slot = &mut sample_vertex[s as usize];
-        if *slot == u32::MAX {
+    let mut sample_vertex_of = |slots: &mut [[u32; 2]], s: u32, layout: &mut BlockLayout| -> u32 {
+        let slot = &mut slots[s as usize][0];
+        if *slot == 0 {
             layout.vertices.push(samples.points[s as usize]);
             vertex_samples.push(Some(s));
-            *slot = (layout.vertices.len() - 1) as u32;
+            *slot = layout.vertices.len() as u32;
         }
-        *slot
+        *slot - 1
     };
     let add_edge = |layout: &mut BlockLayout, ends: [u32; 2], curve: Curve, kind| -> u32 {
         layout.edges.push(Edge { ends, curve, kind });
         (layout.edges.len() - 1) as u32
     };
-    let mut spoke = |layout: &mut BlockLayout, mv: u32, s: u32, sv: u32| -> u32 {
-        let mut at = spoke_head[s as usize];
-        while at != u32::MAX {
-            let (v, edge, next) = spoke_list[at as usize];
+    let mut spoke = |slots: &mut [[u32; 2]], layout: &mut BlockLayout, mv: u32, s: u32, sv: u32| {
+        let head = &mut slots[s as usize][1];
+        let mut at = *head;
+        while at != 0 {
+            let (v, edge, next) = spoke_list[at as usize - 1];
             if v == mv {
                 return edge;
             }
@@ -200,8 +280,8 @@ pub fn blocks(
             kind: EdgeKind::Spoke,
         });
         let edge = (layout.edges.len() - 1) as u32;
-        spoke_list.push((mv, edge, spoke_head[s as usize]));
-        spoke_head[s as usize] = (spoke_list.len() - 1) as u32;
+        spoke_list.push((mv, edge, *head));
+        *head = spoke_list.len() as u32;
         edge
     };
     let fwd = |edge| SideRef {
@@ -215,7 +295,7 @@ pub fn blocks(
 
     // One buffer for every arc's reversed C2 chain.
     let mut c2_back: Vec<u32> = Vec::new();
-    for arc in &medial.arcs {
+    for (a, arc) in medial.arcs.iter().enumerate() {
         let [m0, m1] = arc.ends;
         let [ca, cb] = arc.circles;
         let ends = |c: &[u32]| match (c.first(), c.last()) {
@@ -236,34 +316,46 @@ pub fn blocks(
                 "medial arc with an out-of-range vertex or circle".into(),
             ));
         }
-        let va0 = sample_vertex_of(a0, &mut layout);
-        let va1 = sample_vertex_of(a1, &mut layout);
-        let vb0 = sample_vertex_of(b0, &mut layout);
-        let vb1 = sample_vertex_of(b1, &mut layout);
-        let medial_edge = add_edge(
-            &mut layout,
-            [m0, m1],
-            Curve::Polyline(arc.polyline.clone()),
-            EdgeKind::Medial,
-        );
+        let va0 = sample_vertex_of(&mut slots, a0, &mut layout);
+        let va1 = sample_vertex_of(&mut slots, a1, &mut layout);
+        let vb0 = sample_vertex_of(&mut slots, b0, &mut layout);
+        let vb1 = sample_vertex_of(&mut slots, b1, &mut layout);
+        let reused = old.as_mut().and_then(|(old, taken)| {
+            let k = *taken.get(a)?;
+            (k != u32::MAX)
+                .then(|| take_pair_curves(old, k as usize, arc.polyline.len(), arc.circles))?
+        });
+        let (polyline, [reused_a, reused_b]) = match reused {
+            Some([p, wa, wb]) => (p, [Some(wa), Some(wb)]),
+            None => (Curve::Polyline(arc.polyline.clone()), [None, None]),
+        };
+        let medial_edge = add_edge(&mut layout, [m0, m1], polyline, EdgeKind::Medial);
         // Block on A: wall along C1 forward, fluid on the left.
         let expect = |c: CircleId| if c < 0 { 1 } else { -1 };
-        let wall_a = wall_curve(domain, samples, ca, &arc.c1, expect(ca))?;
+        let wall_a = match reused_a {
+            Some(curve) => curve,
+            None => wall_curve(domain, samples, ca, &arc.c1, expect(ca))?,
+        };
         let wall_a = add_edge(&mut layout, [va0, va1], wall_a, EdgeKind::Wall(ca));
-        let s_a1 = spoke(&mut layout, m1, a1, va1);
-        let s_a0 = spoke(&mut layout, m0, a0, va0);
+        let s_a1 = spoke(&mut slots, &mut layout, m1, a1, va1);
+        let s_a0 = spoke(&mut slots, &mut layout, m0, a0, va0);
         layout.blocks.push(Block {
             corners: [va0, va1, m1, m0],
             sides: [fwd(wall_a), rev(s_a1), rev(medial_edge), fwd(s_a0)],
             wall: Some(ca),
         });
         // Block on B: wall along C2 backward.
-        c2_back.clear();
-        c2_back.extend(arc.c2.iter().rev());
-        let wall_b = wall_curve(domain, samples, cb, &c2_back, expect(cb))?;
+        let wall_b = match reused_b {
+            Some(curve) => curve,
+            None => {
+                c2_back.clear();
+                c2_back.extend(arc.c2.iter().rev());
+                wall_curve(domain, samples, cb, &c2_back, expect(cb))?
+            }
+        };
         let wall_b = add_edge(&mut layout, [vb1, vb0], wall_b, EdgeKind::Wall(cb));
-        let s_b0 = spoke(&mut layout, m0, b0, vb0);
-        let s_b1 = spoke(&mut layout, m1, b1, vb1);
+        let s_b0 = spoke(&mut slots, &mut layout, m0, b0, vb0);
+        let s_b1 = spoke(&mut slots, &mut layout, m1, b1, vb1);
         layout.blocks.push(Block {
             corners: [vb1, vb0, m0, m1],
             sides: [fwd(wall_b), rev(s_b0), fwd(medial_edge), fwd(s_b1)],
@@ -881,7 +973,7 @@ pub fn collapsed_blocking_excluding(
     );
     release_triangulation(&mut refined.sampled);
     let (layout, chosen, contracted, excluded) =
-        collapse_and_block(&refined, &selection, &forced, exclude)?;
+        collapse_and_block(&refined, &selection, &forced, exclude, None)?;
     Ok(CollapsedBlocking {
         refined,
         groups,
@@ -921,6 +1013,32 @@ impl CollapsedBlocking {
         force: &[u32],
     ) -> Result<(), MeshError> {
         let _ = options;
+        self.recollapse_with(give_up, force, true)
+    }
+
+    /// [`CollapsedBlocking::recollapse`] building every arc and curve afresh instead of taking
+    /// over those of the current build that the changes cannot reach: the oracle of the tests
+    /// (`tests/perf_blocking.rs`), same result.
+    #[doc(hidden)]
+    pub fn recollapse_from_scratch(
+        &mut self,
+        give_up: &[u32],
+        force: &[u32],
+    ) -> Result<(), MeshError> {
+        self.recollapse_with(give_up, force, false)
+    }
+
+    /// [`CollapsedBlocking::recollapse`]; `reuse`: hand the current contraction and layout
+    /// over to the new build. On an error they are rebuilt (from the flags of
+    /// [`CollapsedBlocking::chosen`], as they were built), so `self` is left as it was but for
+    /// the forced flags.
+    fn recollapse_with(
+        &mut self,
+        give_up: &[u32],
+        force: &[u32],
+        reuse: bool,
+    ) -> Result<(), MeshError> {
+        let before = self.excluded.clone();
         let mut exclude = std::mem::take(&mut self.excluded);
         for &e in give_up {
             if let Some(x) = exclude.get_mut(e as usize) {
@@ -932,35 +1050,88 @@ impl CollapsedBlocking {
                 *f = true;
             }
         }
-        let (layout, chosen, contracted, excluded) =
-            collapse_and_block(&self.refined, &self.selection, &self.forced, exclude)?;
-        self.layout = layout;
-        self.collapsed = chosen.len();
-        self.chosen = chosen;
-        self.contracted = contracted;
-        self.excluded = excluded;
-        Ok(())
+        let medial = &self.refined.sampled.medial;
+        let previous = reuse.then(|| {
+            let mut flags = vec![false; medial.arcs.len()];
+            for c in &self.chosen {
+                if let Some(f) = flags.get_mut(c.arc as usize) {
+                    *f = true;
+                }
+            }
+            let empty = crate::collapse::Contracted {
+                graph: MedialGraph::default(),
+                cluster_of: Vec::new(),
+                kept: Vec::new(),
+                cluster_size: Vec::new(),
+            };
+            let contracted = std::mem::replace(&mut self.contracted, empty);
+            (flags, contracted, std::mem::take(&mut self.layout))
+        });
+        let handed_over = previous.as_ref().map(|p| p.0.clone());
+        match collapse_and_block(
+            &self.refined,
+            &self.selection,
+            &self.forced,
+            exclude,
+            previous,
+        ) {
+            Ok((layout, chosen, contracted, excluded)) => {
+                self.layout = layout;
+                self.collapsed = chosen.len();
+                self.chosen = chosen;
+                self.contracted = contracted;
+                self.excluded = excluded;
+                Ok(())
+            }
+            Err(err) => {
+                self.excluded = before;
+                if let Some(flags) = handed_over {
+                    let rebuilt = self.selection.contract(medial, &flags).and_then(|c| {
+                        let (layout, _) = blocks(
+                            &self.refined.domain,
+                            &self.refined.sampled.samples,
+                            &c.graph,
+                        )?;
+                        Ok((c, layout))
+                    });
+                    if let Ok((contracted, layout)) = rebuilt {
+                        self.contracted = contracted;
+                        self.layout = layout;
+                    }
+                }
+                Err(err)
+            }
+        }
     }
 }
 
+/// What [`collapse_and_block`] returns: the layout, the collapses chosen, the contraction and
+/// the final exclusions.
+type Collapsed = (
+    BlockLayout,
+    Vec<crate::collapse::Candidate>,
+    crate::collapse::Contracted,
+    Vec<bool>,
+);
+
+/// A contraction and its Blocking2D whose unchanged arcs the next one takes over: the collapse
+/// flags, the contraction and the layout.
+type PreviousBuild = (Vec<bool>, crate::collapse::Contracted, BlockLayout);
+
 /// Arc collapse and Blocking2D on the contracted graph, giving up short collapses that leave
 /// a block with non-positive outline area (at most 8 tries); `exclude` the arcs never
-/// collapsed as short ones (grows with the given-up ones).
+/// collapsed as short ones (grows with the given-up ones). Each try takes over from the
+/// previous one (the first from `previous`, an earlier build on the same graph) the arcs and
+/// curves whose collapse flags did not change around them
+/// ([`crate::collapse::Selection::contract_reusing`]); the result is that of building each
+/// try from scratch (`previous` `None`).
 fn collapse_and_block(
     refined: &crate::refine::Refined,
     selection: &crate::collapse::Selection,
     forced: &[bool],
     mut exclude: Vec<bool>,
-) -> Result<
-    (
-        BlockLayout,
-        Vec<crate::collapse::Candidate>,
-        crate::collapse::Contracted,
-        Vec<bool>,
-    ),
-    MeshError,
-> {
-    use crate::collapse;
+    mut previous: Option<PreviousBuild>,
+) -> Result<Collapsed, MeshError> {
     let final_domain = &refined.domain;
     let sampled = &refined.sampled;
     let medial = &sampled.medial;
@@ -973,19 +1144,34 @@ fn collapse_and_block(
         for c in &chosen {
             flags[c.arc as usize] = true;
         }
-        let contracted = collapse::contract(medial, &flags)?;
-        let (layout, _) = blocks(final_domain, &sampled.samples, &contracted.graph)?;
-        let nv = contracted.graph.vertices.len() as u32;
-        let mut bad_clusters: Vec<u32> = Vec::new();
-        let (mut pts, mut outline) = (Vec::new(), Vec::new());
-        for b in 0..layout.blocks.len() {
-            if block_area_with(&layout, b, &mut pts, &mut outline) <= 0.0 {
-                bad_clusters.extend(layout.blocks[b].corners.iter().filter(|&&v| v < nv));
+        let (contracted, layout) = match previous.take() {
+            Some((old_flags, mut old_contracted, mut old_layout)) => {
+                let (contracted, taken) =
+                    selection.contract_reusing(medial, &flags, &old_flags, &mut old_contracted)?;
+                drop(old_contracted);
+                let (layout, _) = blocks_reusing(
+                    final_domain,
+                    &sampled.samples,
+                    &contracted.graph,
+                    Some((&mut old_layout, &taken)),
+                )?;
+                (contracted, layout)
             }
+            None => {
+                let contracted = selection.contract(medial, &flags)?;
+                let (layout, _) = blocks(final_domain, &sampled.samples, &contracted.graph)?;
+                (contracted, layout)
+            }
+        };
+        let nv = contracted.graph.vertices.len() as u32;
+        // Only a block with a corner at a cluster merging a short collapse can make that
+        // collapse given up: the other blocks' areas are not computed (same outcome).
+        let mut short_cluster = vec![false; nv as usize];
+        for c in chosen.iter().filter(|c| !c.zero) {
+            let ends = medial.arcs[c.arc as usize].ends;
+            short_cluster[contracted.cluster_of[ends[0] as usize] as usize] = true;
         }
-        // Sorted for the lookups below (bad blocks can be many on large layouts).
-        bad_clusters.sort_unstable();
-        bad_clusters.dedup();
+        let bad_clusters = bad_clusters(&layout, nv, Some(&short_cluster));
         let mut changed = false;
         for c in &chosen {
             let ends = medial.arcs[c.arc as usize].ends;
@@ -998,7 +1184,31 @@ fn collapse_and_block(
         if !changed || attempt >= 8 {
             return Ok((layout, chosen, contracted, exclude));
         }
+        previous = Some((flags, contracted, layout));
     }
+}
+
+/// The medial corners (`< nv`, sorted, deduplicated) of the blocks with non-positive outline
+/// area ([`block_area`]), among the blocks with a corner `v` flagged in `only` (every block
+/// for `None`).
+fn bad_clusters(layout: &BlockLayout, nv: u32, only: Option<&[bool]>) -> Vec<u32> {
+    let mut bad: Vec<u32> = Vec::new();
+    let (mut pts, mut outline) = (Vec::new(), Vec::new());
+    for (b, block) in layout.blocks.iter().enumerate() {
+        let wanted = only.map_or(true, |only| {
+            block
+                .corners
+                .iter()
+                .any(|&v| v < nv && only.get(v as usize).copied().unwrap_or(false))
+        });
+        if wanted && block_area_with(layout, b, &mut pts, &mut outline) <= 0.0 {
+            bad.extend(block.corners.iter().filter(|&&v| v < nv));
+        }
+    }
+    // Sorted for the lookups of the caller (bad blocks can be many on large layouts).
+    bad.sort_unstable();
+    bad.dedup();
+    bad
 }
 
 /// Last-line guard of [`build_mesh_layout`] (issue 4: "no zero-area block ever reaches the
@@ -1099,4 +1309,52 @@ pub fn build_mesh_layout_with(
         template_blocks,
         min_gaps: refined.min_gaps,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+
+    proptest! {
+        /// The division-free wall steps equal the modulo formulas they replace, indices in and
+        /// out of range.
+        #[test]
+        fn wall_steps_equal_the_modulo_formulas(
+            n in 1i64..50, i in -3i64..60, j in -3i64..60,
+            grid in 1u64..80, from in 0u64..100, to in 0u64..100,
+        ) {
+            let slow = if (i + 1) % n == j { 1 } else if (j + 1) % n == i { -1 } else { 0 };
+            prop_assert_eq!(step_between(i, j, n), slow);
+            prop_assert_eq!(grid_distance(from, to, grid), (to % grid + grid - from % grid) % grid);
+        }
+    }
+
+    /// The area scan restricted to blocks at flagged clusters finds, among the flagged
+    /// clusters, exactly those the full scan finds, on layouts with vertices moved at random
+    /// (so that many blocks have non-positive area).
+    #[test]
+    fn restricted_area_scan_finds_the_flagged_bad_clusters() {
+        let mut rng = crate::layouts::SplitMix64(3);
+        let d = crate::layouts::bubbles(60, 2).unwrap();
+        let b = build_layout(&d, &Options::default()).unwrap();
+        let nv = b.medial.vertices.len() as u32;
+        let mut seen = 0;
+        for round in 0..20 {
+            let mut layout = b.layout.clone();
+            for _ in 0..round {
+                let v = (rng.next_f64() * layout.vertices.len() as f64) as usize;
+                layout.vertices[v] = [rng.next_f64() * 2.0 - 1.0, rng.next_f64() * 2.0 - 1.0];
+            }
+            let only: Vec<bool> = (0..nv).map(|_| rng.next_f64() < 0.3).collect();
+            let full = bad_clusters(&layout, nv, None);
+            let part = bad_clusters(&layout, nv, Some(&only));
+            let flagged = |v: &u32| only[*v as usize];
+            let a: Vec<u32> = full.iter().copied().filter(flagged).collect();
+            let b: Vec<u32> = part.iter().copied().filter(flagged).collect();
+            assert_eq!(a, b);
+            seen += a.len();
+        }
+        assert!(seen >= 10, "{seen}");
+    }
 }

@@ -105,6 +105,54 @@ pub fn vertex_circles_reusing(
         .collect()
 }
 
+/// [`vertex_circles_reusing`], taking the answers out of `previous` instead of cloning them
+/// (refinement drops the previous round right after; a clone copies every exact big-integer
+/// field, issue 8). A previous answer matched by several vertices (never seen: the key names
+/// one vertex) is cloned for each. Same circles as [`vertex_circles_reusing`].
+pub fn vertex_circles_taking(
+    domain: &Domain,
+    medial: &MedialGraph,
+    previous: Option<(&MedialGraph, Vec<Option<Apollonius>>)>,
+) -> Vec<Option<Apollonius>> {
+    let Some((graph, mut circles)) = previous.filter(|(g, c)| g.vertices.len() == c.len()) else {
+        return vertex_circles(domain, medial);
+    };
+    let known: HashMap<([CircleId; 3], [u64; 2]), u32> = graph
+        .vertices
+        .iter()
+        .enumerate()
+        .map(|(i, v)| (solve_key(v), i as u32))
+        .collect();
+    let matched: Vec<Option<u32>> = medial
+        .vertices
+        .par_iter()
+        .map(|v| known.get(&solve_key(v)).copied())
+        .collect();
+    drop(known);
+    let mut uses = vec![0u8; circles.len()];
+    for &i in matched.iter().flatten() {
+        uses[i as usize] = uses[i as usize].saturating_add(1);
+    }
+    let mut out: Vec<Option<Apollonius>> = medial
+        .vertices
+        .par_iter()
+        .zip(matched.par_iter())
+        .map(|(v, m)| match *m {
+            Some(i) if uses[i as usize] > 1 => circles[i as usize].clone(),
+            Some(_) => None,
+            None => vertex_circle(domain, v),
+        })
+        .collect();
+    for (slot, m) in out.iter_mut().zip(&matched) {
+        if let Some(i) = *m {
+            if uses[i as usize] == 1 {
+                *slot = circles[i as usize].take();
+            }
+        }
+    }
+    out
+}
+
 /// `n >= 4` circles tangent to one empty circle (paper section 4.2).
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct CocircularGroup {
@@ -169,14 +217,28 @@ pub fn cocircular_groups(
             }
         }
     }
-    let mut members: std::collections::BTreeMap<u32, Vec<u32>> = Default::default();
-    for v in 0..n as u32 {
-        let r = find(&mut parent, v);
-        members.entry(r).or_default().push(v);
+    // Components of two or more vertices, by increasing root, members in vertex order. A
+    // root is its component's smallest vertex (unions keep the smaller root), so it is met
+    // first: one list per group, not one per vertex (issue 8).
+    let mut size = vec![0u32; n];
+    let roots: Vec<u32> = (0..n as u32).map(|v| find(&mut parent, v)).collect();
+    for &r in &roots {
+        size[r as usize] += 1;
+    }
+    let mut slot = vec![u32::MAX; n];
+    let mut members: Vec<(u32, Vec<u32>)> = Vec::new();
+    for (v, &r) in roots.iter().enumerate() {
+        if size[r as usize] < 2 {
+            continue;
+        }
+        if slot[r as usize] == u32::MAX {
+            slot[r as usize] = members.len() as u32;
+            members.push((r, Vec::with_capacity(size[r as usize] as usize)));
+        }
+        members[slot[r as usize] as usize].1.push(v as u32);
     }
     let mut groups: Vec<CocircularGroup> = members
         .into_iter()
-        .filter(|(_, vs)| vs.len() >= 2)
         .filter_map(|(root, vertices)| {
             let c = circles[root as usize].as_ref()?;
             let mut holes: Vec<CircleId> = vertices

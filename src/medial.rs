@@ -230,6 +230,11 @@ pub fn medial_graph(
         circumcenter(p[0], p[1], p[2])
             .ok_or_else(|| internal(format!("triangle {t} is degenerate")))
     };
+    // One buffer each for the chains, polyline and triangles of the arc being walked, copied
+    // out at exact length (issue 8: growing four fresh vectors per arc was several
+    // reallocations each, and up to twice the memory).
+    let (mut c1, mut c2) = (Vec::new(), Vec::new());
+    let (mut polyline, mut chain) = (Vec::new(), Vec::new());
     for v0 in 0..g.vertices.len() {
         let t0 = g.vertices[v0].triangle as usize;
         for k0 in 0..3 {
@@ -239,10 +244,13 @@ pub fn medial_graph(
             visited[v0][k0] = true;
             let tv = tri.triangle(t0);
             let (mut a, mut b) = (tv[(k0 + 1) % 3], tv[(k0 + 2) % 3]);
-            let mut c1 = vec![a];
-            let mut c2 = vec![b];
-            let mut polyline = vec![g.vertices[v0].position];
-            let mut chain = Vec::new();
+            c1.clear();
+            c1.push(a);
+            c2.clear();
+            c2.push(b);
+            polyline.clear();
+            polyline.push(g.vertices[v0].position);
+            chain.clear();
             let (mut t, mut slot) = (t0, k0);
             let mut steps = 0usize;
             let (v1, k1) = loop {
@@ -311,14 +319,14 @@ pub fn medial_graph(
             g.arcs.push(MedialArc {
                 ends: [v0 as u32, v1],
                 end_slots: [k0 as u8, k1 as u8],
-                triangles: chain,
-                polyline,
+                triangles: chain.to_vec(),
+                polyline: polyline.to_vec(),
                 circles: [
                     samples.circle_of[c1[0] as usize],
                     samples.circle_of[c2[0] as usize],
                 ],
-                c1,
-                c2,
+                c1: c1.to_vec(),
+                c2: c2.to_vec(),
             });
         }
     }

@@ -26,7 +26,7 @@
 //! would be inserted.
 
 use crate::apollonius::Apollonius;
-use crate::cocircular::vertex_circles_reusing;
+use crate::cocircular::vertex_circles_taking;
 use crate::domain::{dist, gap, Circle, Domain, HoleIndex};
 use crate::geometry::Point;
 use crate::medial::{circumcenter, MedialGraph};
@@ -125,12 +125,12 @@ pub fn refine(
     loop {
         let sampled =
             sample_and_triangulate_after(&current, sampling, previous.as_ref().map(|p| &p.0))?;
-        let circles = vertex_circles_reusing(
-            &current,
-            &sampled.medial,
-            previous.as_ref().map(|(s, c)| (&s.medial, c.as_slice())),
-        );
-        drop(previous.take());
+        let circles = match previous.take() {
+            Some((before, circles)) => {
+                vertex_circles_taking(&current, &sampled.medial, Some((&before.medial, circles)))
+            }
+            None => vertex_circles_taking(&current, &sampled.medial, None),
+        };
         // `min_gap(&current)` without a second nearest-gap search: the sampling recorded
         // every circle's nearest gap, in slot order ([`crate::sampling::CircleSamples::gap`]).
         let g = sampled

@@ -114,6 +114,21 @@ pub struct Samples {
     pub grid_counts: Vec<u64>,
 }
 
+/// `(i + 1) % count`, without a division when `i < count` (every index on its circle): the
+/// classification and the invariant checks take a next sample per boundary edge of every
+/// triangle (issue 8).
+fn wrap_next(i: u32, count: u32) -> u32 {
+    if i < count {
+        if i + 1 == count {
+            0
+        } else {
+            i + 1
+        }
+    } else {
+        (i + 1) % count
+    }
+}
+
 /// Accessors taking a sample index or circle id panic when it is out of range, like slice
 /// indexing.
 impl Samples {
@@ -141,7 +156,7 @@ impl Samples {
     /// The next sample counter-clockwise on the same circle.
     pub fn next(&self, s: u32) -> u32 {
         let c = self.of_circle(self.circle_of[s as usize]);
-        c.first + (self.index_of[s as usize] + 1) % c.count
+        c.first + wrap_next(self.index_of[s as usize], c.count)
     }
     /// The previous sample (clockwise) on the same circle.
     pub fn prev(&self, s: u32) -> u32 {
@@ -1021,6 +1036,16 @@ pub fn sample_and_triangulate_after(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The division-free next index equals `(i + 1) % count`, indices on and off the circle.
+    #[test]
+    fn wrap_next_equals_the_modulo() {
+        for count in 1..40u32 {
+            for i in 0..100u32 {
+                assert_eq!(wrap_next(i, count), (i + 1) % count, "{i} {count}");
+            }
+        }
+    }
 
     #[test]
     fn offsets_are_unit_and_symmetric() {

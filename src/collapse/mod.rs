@@ -30,8 +30,12 @@
 use crate::apollonius::Apollonius;
 use crate::cocircular::{arc_length, group_of, is_zero_length, local_radius, CocircularGroup};
 use crate::geometry::{Point, Triangulation};
-use crate::medial::{MedialArc, MedialGraph, MedialVertex};
+use crate::medial::MedialGraph;
 use crate::mesher::MeshError;
+
+mod contraction;
+#[doc(hidden)]
+pub mod reference;
 
 /// One arc chosen for collapse.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -104,6 +108,10 @@ pub struct Selection {
     short: Vec<(f64, u32)>,
     ends: Vec<[u32; 2]>,
     vertices: usize,
+    /// The block after each block end ([`contraction::successors`]), for every contraction
+    /// of this graph; `None` for a malformed graph or two blocks at one corner (the
+    /// contraction then finds the error itself).
+    next: Option<Vec<u32>>,
 }
 
 impl Selection {
@@ -149,7 +157,47 @@ impl Selection {
             short,
             ends: medial.arcs.iter().map(|a| a.ends).collect(),
             vertices: medial.vertices.len(),
+            next: contraction::well_formed(medial)
+                .then(|| contraction::successors(medial).ok())
+                .flatten(),
         }
+    }
+
+    /// [`contract`] of `medial`, the graph this selection was built from, with the block
+    /// successors computed once.
+    pub fn contract(
+        &self,
+        medial: &MedialGraph,
+        collapse: &[bool],
+    ) -> Result<Contracted, MeshError> {
+        let next = self
+            .next
+            .as_deref()
+            .filter(|n| n.len() == 2 * medial.arcs.len());
+        Ok(contraction::contract_with(medial, collapse, next, None)?.0)
+    }
+
+    /// [`Selection::contract`], taking over from `previous` (a contraction of the same graph
+    /// with the collapse flags `previous_flags`) the arcs the changed flags cannot reach; per
+    /// arc of the result, the index of the previous arc taken over (`u32::MAX`: built
+    /// afresh). The arcs taken are left empty in `previous`. Same contraction as
+    /// [`Selection::contract`].
+    pub(crate) fn contract_reusing(
+        &self,
+        medial: &MedialGraph,
+        collapse: &[bool],
+        previous_flags: &[bool],
+        previous: &mut Contracted,
+    ) -> Result<(Contracted, Vec<u32>), MeshError> {
+        let next = self
+            .next
+            .as_deref()
+            .filter(|n| n.len() == 2 * medial.arcs.len());
+        let previous = contraction::Previous {
+            flags: previous_flags,
+            contracted: previous,
+        };
+        contraction::contract_with(medial, collapse, next, Some(previous))
     }
 
     /// [`select_forced`] with these per-arc data.
@@ -266,162 +314,7 @@ fn internal(msg: &str) -> MeshError {
 /// [`select`] guarantees; a cycle or a kept arc with both ends in one cluster is an
 /// [`MeshError::Internal`]).
 pub fn contract(medial: &MedialGraph, collapse: &[bool]) -> Result<Contracted, MeshError> {
-    let n = medial.vertices.len();
-    let m = medial.arcs.len();
-    if collapse.len() != m {
-        return Err(internal("one flag per arc expected"));
-    }
-    let mut parent: Vec<u32> = (0..n as u32).collect();
-    for (e, arc) in medial.arcs.iter().enumerate() {
-        let [a, b] = arc.ends;
-        if a as usize >= n || b as usize >= n || arc.c1.is_empty() || arc.c2.is_empty() {
-            return Err(internal("malformed arc"));
-        }
-        if collapse[e] {
-            let (ra, rb) = (find(&mut parent, a), find(&mut parent, b));
-            if ra == rb {
-                return Err(internal("collapsed arcs form a cycle"));
-            }
-            parent[ra.max(rb) as usize] = ra.min(rb);
-        }
-    }
-    let mut id_of_root = vec![u32::MAX; n];
-    let mut cluster_of = vec![0u32; n];
-    let mut members: Vec<Vec<u32>> = Vec::new();
-    for (v, cluster) in cluster_of.iter_mut().enumerate() {
-        let r = find(&mut parent, v as u32) as usize;
-        if id_of_root[r] == u32::MAX {
-            id_of_root[r] = members.len() as u32;
-            members.push(Vec::new());
-        }
-        *cluster = id_of_root[r];
-        members[id_of_root[r] as usize].push(v as u32);
-    }
-    let vertices: Vec<MedialVertex> = members
-        .iter()
-        .map(|ms| {
-            let mut v = medial.vertices[ms[0] as usize].clone();
-            if ms.len() > 1 {
-                let k = ms.len() as f64;
-                let sx: f64 = ms
-                    .iter()
-                    .map(|&i| medial.vertices[i as usize].position[0])
-                    .sum();
-                let sy: f64 = ms
-                    .iter()
-                    .map(|&i| medial.vertices[i as usize].position[1])
-                    .sum();
-                v.position = [sx / k, sy / k];
-            }
-            v
-        })
-        .collect();
-
-    // Blocks: 2e on C1 (wall c1, from corner (v0, c1[0]) to (v1, c1.last)), 2e + 1 on C2
-    // (wall c2 reversed, from (v1, c2.last) to (v0, c2[0])).
-    let wall = |b: usize| -> Vec<u32> {
-        let arc = &medial.arcs[b / 2];
-        if b % 2 == 0 {
-            arc.c1.clone()
-        } else {
-            arc.c2.iter().rev().copied().collect()
-        }
-    };
-    let corners = |b: usize| -> [(u32, u32); 2] {
-        let arc = &medial.arcs[b / 2];
-        let [v0, v1] = arc.ends;
-        let (c1f, c1l) = (arc.c1[0], arc.c1[arc.c1.len() - 1]);
-        let (c2f, c2l) = (arc.c2[0], arc.c2[arc.c2.len() - 1]);
-        if b % 2 == 0 {
-            [(v0, c1f), (v1, c1l)]
-        } else {
-            [(v1, c2l), (v0, c2f)]
-        }
-    };
-    // The block starting at each corner: sorted by corner, found by binary search (no
-    // hashing of 2m keys, issue 8).
-    let mut start_block: Vec<((u32, u32), usize)> =
-        (0..2 * m).map(|b| (corners(b)[0], b)).collect();
-    start_block.sort_unstable();
-    if start_block.windows(2).any(|w| w[0].0 == w[1].0) {
-        return Err(internal("two blocks start at one corner"));
-    }
-    let block_at = |corner: (u32, u32)| -> Option<usize> {
-        let i = start_block.binary_search_by(|x| x.0.cmp(&corner)).ok()?;
-        Some(start_block[i].1)
-    };
-    let mut ext_end: Vec<Vec<u32>> = vec![Vec::new(); 2 * m];
-    let mut ext_start: Vec<Vec<u32>> = vec![Vec::new(); 2 * m];
-    for p in 0..2 * m {
-        if collapse[p / 2] {
-            continue;
-        }
-        let mut corner = corners(p)[1];
-        let mut run = vec![corner.1];
-        let mut steps = 0;
-        let q = loop {
-            let b = block_at(corner).ok_or_else(|| internal("no block starts at a corner"))?;
-            if !collapse[b / 2] {
-                break b;
-            }
-            steps += 1;
-            if steps > 2 * m {
-                return Err(internal("a sector does not end"));
-            }
-            run.extend_from_slice(&wall(b)[1..]);
-            corner = corners(b)[1];
-        };
-        if run.len() > 1 {
-            let mid = (run.len() - 1) / 2;
-            ext_end[p] = run[1..=mid].to_vec();
-            ext_start[q] = run[mid..run.len() - 1].to_vec();
-        }
-    }
-
-    let mut arcs = Vec::with_capacity(m);
-    let mut kept = Vec::with_capacity(m);
-    for (e, arc) in medial.arcs.iter().enumerate() {
-        if collapse[e] {
-            continue;
-        }
-        let [v0, v1] = arc.ends.map(|v| cluster_of[v as usize]);
-        if v0 == v1 {
-            return Err(internal("a kept arc became a loop"));
-        }
-        let build = |b: usize| -> Vec<u32> {
-            let mut w = ext_start[b].clone();
-            w.extend(wall(b));
-            w.extend_from_slice(&ext_end[b]);
-            w
-        };
-        let c1 = build(2 * e);
-        let mut c2 = build(2 * e + 1);
-        c2.reverse();
-        let mut polyline = arc.polyline.clone();
-        let last = polyline.len() - 1;
-        if members[v0 as usize].len() > 1 {
-            polyline[0] = vertices[v0 as usize].position;
-        }
-        if members[v1 as usize].len() > 1 {
-            polyline[last] = vertices[v1 as usize].position;
-        }
-        arcs.push(MedialArc {
-            ends: [v0, v1],
-            end_slots: arc.end_slots,
-            triangles: arc.triangles.clone(),
-            polyline,
-            circles: arc.circles,
-            c1,
-            c2,
-        });
-        kept.push(e as u32);
-    }
-    Ok(Contracted {
-        graph: MedialGraph { vertices, arcs },
-        cluster_of,
-        kept,
-        cluster_size: members.iter().map(|m| m.len() as u32).collect(),
-    })
+    Ok(contraction::contract_with(medial, collapse, None, None)?.0)
 }
 
 #[cfg(test)]
