@@ -6,7 +6,7 @@
 //! first written ([`super::reference::contract`], the oracle of `tests/perf_blocking.rs`),
 //! errors included.
 
-use super::{find, internal, Contracted};
+use super::{find, internal, union_collapsed, Contracted};
 use crate::medial::{MedialArc, MedialGraph, MedialVertex};
 use crate::mesher::MeshError;
 
@@ -117,23 +117,7 @@ pub(super) fn contract_with(
 ) -> Result<(Contracted, Vec<u32>), MeshError> {
     let n = medial.vertices.len();
     let m = medial.arcs.len();
-    if collapse.len() != m {
-        return Err(internal("one flag per arc expected"));
-    }
-    let mut parent: Vec<u32> = (0..n as u32).collect();
-    for (e, arc) in medial.arcs.iter().enumerate() {
-        let [a, b] = arc.ends;
-        if a as usize >= n || b as usize >= n || arc.c1.is_empty() || arc.c2.is_empty() {
-            return Err(internal("malformed arc"));
-        }
-        if collapse[e] {
-            let (ra, rb) = (find(&mut parent, a), find(&mut parent, b));
-            if ra == rb {
-                return Err(internal("collapsed arcs form a cycle"));
-            }
-            parent[ra.max(rb) as usize] = ra.min(rb);
-        }
-    }
+    let mut parent = union_collapsed(medial, collapse)?;
     // Clusters numbered in order of their smallest vertex; members in vertex order, as one
     // array cut by `start`.
     let mut id_of_root = vec![u32::MAX; n];

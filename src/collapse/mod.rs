@@ -48,6 +48,32 @@ pub struct Candidate {
     pub zero: bool,
 }
 
+/// The union-find forest of the arcs marked in `collapse` (one flag per arc): each root is the
+/// smallest vertex of its cluster once paths are compressed by [`find`]. An
+/// [`MeshError::Internal`] when the flags do not match the arcs, an arc is malformed, or the
+/// marked arcs contain a cycle. Shared by the contraction and its reference.
+fn union_collapsed(medial: &MedialGraph, collapse: &[bool]) -> Result<Vec<u32>, MeshError> {
+    let n = medial.vertices.len();
+    if collapse.len() != medial.arcs.len() {
+        return Err(internal("one flag per arc expected"));
+    }
+    let mut parent: Vec<u32> = (0..n as u32).collect();
+    for (e, arc) in medial.arcs.iter().enumerate() {
+        let [a, b] = arc.ends;
+        if a as usize >= n || b as usize >= n || arc.c1.is_empty() || arc.c2.is_empty() {
+            return Err(internal("malformed arc"));
+        }
+        if collapse[e] {
+            let (ra, rb) = (find(&mut parent, a), find(&mut parent, b));
+            if ra == rb {
+                return Err(internal("collapsed arcs form a cycle"));
+            }
+            parent[ra.max(rb) as usize] = ra.min(rb);
+        }
+    }
+    Ok(parent)
+}
+
 fn find(parent: &mut [u32], mut x: u32) -> u32 {
     while parent[x as usize] != x {
         let up = parent[parent[x as usize] as usize];

@@ -1,7 +1,7 @@
 //! The contraction as first written ([`contract`]): the oracle of the indexed one
 //! ([`super::contract`]), kept for the tests (`tests/perf_blocking.rs`).
 
-use super::{find, internal, Contracted};
+use super::{find, internal, union_collapsed, Contracted};
 use crate::medial::{MedialArc, MedialGraph, MedialVertex};
 use crate::mesher::MeshError;
 
@@ -11,23 +11,7 @@ use crate::mesher::MeshError;
 pub fn contract(medial: &MedialGraph, collapse: &[bool]) -> Result<Contracted, MeshError> {
     let n = medial.vertices.len();
     let m = medial.arcs.len();
-    if collapse.len() != m {
-        return Err(internal("one flag per arc expected"));
-    }
-    let mut parent: Vec<u32> = (0..n as u32).collect();
-    for (e, arc) in medial.arcs.iter().enumerate() {
-        let [a, b] = arc.ends;
-        if a as usize >= n || b as usize >= n || arc.c1.is_empty() || arc.c2.is_empty() {
-            return Err(internal("malformed arc"));
-        }
-        if collapse[e] {
-            let (ra, rb) = (find(&mut parent, a), find(&mut parent, b));
-            if ra == rb {
-                return Err(internal("collapsed arcs form a cycle"));
-            }
-            parent[ra.max(rb) as usize] = ra.min(rb);
-        }
-    }
+    let mut parent = union_collapsed(medial, collapse)?;
     let mut id_of_root = vec![u32::MAX; n];
     let mut cluster_of = vec![0u32; n];
     let mut members: Vec<Vec<u32>> = Vec::new();
