@@ -239,6 +239,9 @@ fn block_stats(
                     .iter()
                     .enumerate()
                     .map(|(k, g)| {
+                        if let Some(l) = layout {
+                            sides::prefetch_edges(l, &l.blocks[c * CHUNK + k]);
+                        }
                         let f = acc.block(g, &tables, scratch);
                         if let Some(plan) = &plan {
                             sd.block(plan, c, k, g, spill);

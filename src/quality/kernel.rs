@@ -170,6 +170,8 @@ pub(super) struct Tables {
     /// The CPU has AVX2: the row loop runs in 4-lane vectors (same bits, see
     /// [`super::rows`]).
     pub wide: bool,
+    /// The CPU has AVX-512 (F, DQ, VL): the row loop runs in 8-lane vectors (same bits).
+    pub wider: bool,
 }
 
 impl Tables {
@@ -181,7 +183,23 @@ impl Tables {
             scaled_jacobian: Bins::new(&JACOBIAN_EDGES, -1.5, 1.5),
             ratio: Bins::new(&RATIO_EDGES, 0.5, 128.5),
             wide: wide(),
+            wider: wider(),
         }
+    }
+}
+
+/// True when the CPU has AVX-512 F, DQ and VL (x86-64 only).
+fn wider() -> bool {
+    #[cfg(target_arch = "x86_64")]
+    {
+        std::arch::is_x86_feature_detected!("avx512f")
+            && std::arch::is_x86_feature_detected!("avx512dq")
+            && std::arch::is_x86_feature_detected!("avx512vl")
+            && std::arch::is_x86_feature_detected!("avx2")
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    {
+        false
     }
 }
 

@@ -122,6 +122,22 @@ fn row(
     row_figures(b, [tx, ty, tl], [vx, vy, vl], out, bins)
 }
 
+/// [`row`] compiled for AVX-512 (8-lane vectors; the same IEEE operations on the same
+/// operands, no fused multiply-add, so the same bits).
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx512f,avx512dq,avx512vl,avx2")]
+fn row_avx512(
+    lo: &[Point],
+    hi: &[Point],
+    b: [&[f64]; 3],
+    t: [&mut [f64]; 3],
+    v: [&mut [f64]; 3],
+    out: &mut [Figures],
+    bins: &Tables,
+) -> RowCounts {
+    row(lo, hi, b, t, v, out, bins)
+}
+
 /// [`row`] compiled for AVX2.
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
@@ -155,7 +171,8 @@ impl Rows {
     /// The row of cells between node lines `lo` and `hi` (`ni + 1` nodes each) into
     /// `self.cells`; the bottom edges must already be in `bx, by, bl`.
     ///
-    /// With [`Tables::wide`] (the CPU has AVX2) loop 1 runs in 4-lane vectors (the same IEEE operations on
+    /// With [`Tables::wider`] (AVX-512) loop 1 runs in 8-lane vectors, with [`Tables::wide`]
+    /// (the CPU has AVX2) in 4-lane vectors (the same IEEE operations on
     /// the same operands, so the same bits as the 2-lane SSE2 build; no fused multiply-add).
     fn figures(&mut self, lo: &[Point], hi: &[Point], bins: &Tables) -> RowCounts {
         let n = lo.len() - 1;
@@ -170,6 +187,11 @@ impl Rows {
         let t = [&mut self.tx[..n], &mut self.ty[..n], &mut self.tl[..n]];
         let v = [&mut self.vx[..=n], &mut self.vy[..=n], &mut self.vl[..=n]];
         let out = &mut self.cells[..n];
+        #[cfg(target_arch = "x86_64")]
+        if bins.wider {
+            // SAFETY: `wider` is only set when the CPU has these features (see `Tables::wider`).
+            return unsafe { row_avx512(lo, hi, b, t, v, out, bins) };
+        }
         #[cfg(target_arch = "x86_64")]
         if bins.wide {
             // SAFETY: `wide` is only set when the CPU has AVX2 (see `Tables::wide`).
@@ -597,8 +619,8 @@ mod tests {
         }
     }
 
-    /// The AVX2 build of a whole row (its edges, then loop 1) gives the bits of the portable
-    /// one, on node lines with repeated, tiny, huge and non-finite nodes.
+    /// The AVX2 and AVX-512 builds of a whole row (its edges, then loop 1) give the bits of
+    /// the portable one, on node lines with repeated, tiny, huge and non-finite nodes.
     #[test]
     fn wide_and_portable_row_edges_agree() {
         let t = Tables::new();
@@ -626,7 +648,7 @@ mod tests {
                     let [x, y, l] = &mut b;
                     along_line(&lo, x, y, l);
                 }
-                let run = |wide: bool| {
+                let run = |wide: u8| {
                     let mut e = vec![vec![0.0; n]; 3];
                     let mut v = vec![vec![0.0; n + 1]; 3];
                     let mut out = vec![Figures::default(); n];
@@ -637,11 +659,12 @@ mod tests {
                         unreachable!()
                     };
                     let (te, ve) = ([&mut tx[..], ty, tl], [&mut vx[..], vy, vl]);
-                    let k = if wide {
+                    let k = match wide {
                         // SAFETY: `t.wide` says the CPU has AVX2.
-                        unsafe { row_avx2(&lo, &hi, refs(&b), te, ve, &mut out, &t) }
-                    } else {
-                        row(&lo, &hi, refs(&b), te, ve, &mut out, &t)
+                        1 => unsafe { row_avx2(&lo, &hi, refs(&b), te, ve, &mut out, &t) },
+                        // SAFETY: `t.wider` says the CPU has the AVX-512 features.
+                        2 => unsafe { row_avx512(&lo, &hi, refs(&b), te, ve, &mut out, &t) },
+                        _ => row(&lo, &hi, refs(&b), te, ve, &mut out, &t),
                     };
                     let bits: Vec<u64> = out
                         .iter()
@@ -652,7 +675,11 @@ mod tests {
                         .collect();
                     (format!("{k:?}"), bits)
                 };
-                assert_eq!(run(false), run(true));
+                let portable = run(0);
+                assert_eq!(portable, run(1));
+                if t.wider {
+                    assert_eq!(portable, run(2));
+                }
             }
         }
     }
