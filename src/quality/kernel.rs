@@ -296,10 +296,22 @@ pub(super) fn cell_products(e: [[f64; 2]; 4]) -> ([f64; 4], [f64; 4]) {
 /// NaN), so the count is that of the reference test.
 pub(super) fn row_inverted(lo: &[Point], hi: &[Point]) -> usize {
     #[cfg(target_arch = "x86_64")]
+    if wider() {
+        // SAFETY: the CPU has the AVX-512 features (checked just above).
+        return unsafe { row_inverted_avx512(lo, hi) };
+    }
+    #[cfg(target_arch = "x86_64")]
     if std::arch::is_x86_feature_detected!("avx2") {
         // SAFETY: the CPU has AVX2 (checked just above).
         return unsafe { row_inverted_avx2(lo, hi) };
     }
+    row_inverted_portable(lo, hi)
+}
+
+/// [`row_inverted`] compiled for AVX-512 (the same comparisons of the same products).
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx512f,avx512dq,avx512vl,avx2")]
+fn row_inverted_avx512(lo: &[Point], hi: &[Point]) -> usize {
     row_inverted_portable(lo, hi)
 }
 
@@ -331,10 +343,22 @@ fn row_inverted_portable(lo: &[Point], hi: &[Point]) -> usize {
 /// of a zero, which neither comparison sees).
 pub(super) fn row_corner_below(lo: &[Point], hi: &[Point], t: f64) -> bool {
     #[cfg(target_arch = "x86_64")]
+    if wider() {
+        // SAFETY: the CPU has the AVX-512 features (checked just above).
+        return unsafe { row_corner_below_avx512(lo, hi, t) };
+    }
+    #[cfg(target_arch = "x86_64")]
     if std::arch::is_x86_feature_detected!("avx2") {
         // SAFETY: the CPU has AVX2 (checked just above).
         return unsafe { row_corner_below_avx2(lo, hi, t) };
     }
+    row_corner_below_portable(lo, hi, t)
+}
+
+/// [`row_corner_below`] compiled for AVX-512 (the same comparisons of the same products).
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx512f,avx512dq,avx512vl,avx2")]
+fn row_corner_below_avx512(lo: &[Point], hi: &[Point], t: f64) -> bool {
     row_corner_below_portable(lo, hi, t)
 }
 
@@ -364,7 +388,7 @@ mod tests {
     use super::*;
     use crate::quality::{ANGLE_EDGES, JACOBIAN_EDGES, RATIO_EDGES, SKEWNESS_EDGES};
 
-    /// The AVX2 and portable builds of the row tests agree, on rows with degenerate,
+    /// The AVX2, AVX-512 and portable builds of the row tests agree, on rows with degenerate,
     /// inverted, signed-zero and non-finite cells.
     #[test]
     fn wide_and_portable_row_tests_agree() {
@@ -395,6 +419,18 @@ mod tests {
                 // SAFETY: AVX2 was detected above.
                 unsafe {
                     assert_eq!(row_inverted_avx2(&lo, &hi), row_inverted_portable(&lo, &hi));
+                    if wider() {
+                        assert_eq!(
+                            row_inverted_avx512(&lo, &hi),
+                            row_inverted_portable(&lo, &hi)
+                        );
+                        for t in [0.1, 1.0] {
+                            assert_eq!(
+                                row_corner_below_avx512(&lo, &hi, t),
+                                row_corner_below_portable(&lo, &hi, t)
+                            );
+                        }
+                    }
                     for t in [0.1, 1.0] {
                         assert_eq!(
                             row_corner_below_avx2(&lo, &hi, t),
