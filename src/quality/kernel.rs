@@ -76,6 +76,41 @@ pub(super) fn skewness(min_angle_deg: f64, max_angle_deg: f64) -> f64 {
     (max_angle_deg - 90.0).max(90.0 - min_angle_deg) / 90.0
 }
 
+/// The angle histogram's bin of a finite angle `x` (degrees), as a float: the rule of
+/// [`bin`] for [`super::ANGLE_EDGES`] (0, 10, ..., 130, 135, 140, ..., 180) by arithmetic
+/// rather than a table, so that the vectorised row loop computes it: the inner edges at or
+/// below `x` are the multiples of 10 from 10 to 180 (`floor(x / 10)` of them, clamped to
+/// `[0, 18]`) and 135 when `x >= 135`, at most 18 in all (the last bin). `floor(x / 10)` is
+/// exact: `floor(x * 0.1)` is off by at most one (the product's relative error is far below
+/// `1 / |x / 10|`), and the two comparisons with the exact multiples `10 q` and `10 (q + 1)`
+/// correct it.
+#[inline(always)]
+pub(super) fn angle_bin(x: f64) -> f64 {
+    let q = (x * 0.1).floor();
+    let q = if 10.0 * q > x { q - 1.0 } else { q };
+    let q = if 10.0 * (q + 1.0) <= x { q + 1.0 } else { q };
+    let q = if q > 0.0 { q } else { 0.0 };
+    let q = if q < 18.0 { q } else { 18.0 };
+    let b = if x >= 135.0 { q + 1.0 } else { q };
+    if b < 18.0 {
+        b
+    } else {
+        18.0
+    }
+}
+
+/// [`angle_bin`] as the float `2⁵² + bin` (as [`Bins::slot`]), for [`bin_of_slot`].
+#[inline(always)]
+pub(super) fn angle_slot(x: f64) -> f64 {
+    angle_bin(x) + ROUND
+}
+
+/// The bin held by a slot of [`angle_slot`] (below 32).
+#[inline(always)]
+pub(super) fn bin_of_slot(slot: f64) -> usize {
+    slot.to_bits() as usize & 31
+}
+
 /// Histogram bin of `x`, the rule of [`super::Histogram::add`] (NaN in the last bin).
 pub(super) fn bin(edges: &[f64], x: f64) -> usize {
     let last = edges.len().saturating_sub(2);
@@ -151,7 +186,9 @@ impl Bins {
     #[inline(always)]
     pub fn bin(&self, slot: f64, x: f64) -> usize {
         let b = self.slot[slot.to_bits() as usize & (SLOTS - 1)] as usize & 31;
-        b + usize::from(x >= self.upper[b])
+        // `upper[b]` is finite only below the last bin (at most 30), so the sum is below 32
+        // and the mask changes nothing; it spares the callers' bounds checks.
+        (b + usize::from(x >= self.upper[b])) & 31
     }
 
     /// The bin of a finite `x` (equal to [`bin`]).
@@ -163,7 +200,6 @@ impl Bins {
 
 /// The bin tables of one measurement.
 pub(super) struct Tables {
-    pub angle: Bins,
     pub skewness: Bins,
     pub scaled_jacobian: Bins,
     pub ratio: Bins,
@@ -176,9 +212,8 @@ pub(super) struct Tables {
 
 impl Tables {
     pub fn new() -> Tables {
-        use super::{ANGLE_EDGES, JACOBIAN_EDGES, RATIO_EDGES, SKEWNESS_EDGES};
+        use super::{JACOBIAN_EDGES, RATIO_EDGES, SKEWNESS_EDGES};
         Tables {
-            angle: Bins::new(&ANGLE_EDGES, -8.0, 376.0),
             skewness: Bins::new(&SKEWNESS_EDGES, -0.5, 2.5),
             scaled_jacobian: Bins::new(&JACOBIAN_EDGES, -1.5, 1.5),
             ratio: Bins::new(&RATIO_EDGES, 0.5, 128.5),
@@ -386,7 +421,7 @@ fn row_corner_below_portable(lo: &[Point], hi: &[Point], t: f64) -> bool {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::quality::{ANGLE_EDGES, JACOBIAN_EDGES, RATIO_EDGES, SKEWNESS_EDGES};
+    use crate::quality::{JACOBIAN_EDGES, RATIO_EDGES, SKEWNESS_EDGES};
 
     /// The AVX2, AVX-512 and portable builds of the row tests agree, on rows with degenerate,
     /// inverted, signed-zero and non-finite cells.
@@ -442,13 +477,48 @@ mod tests {
         }
     }
 
+    /// The arithmetic angle bin equals the search of [`bin`]: at, just around and between
+    /// every edge and every multiple of 10, on a fine sweep and far outside (both rules are
+    /// monotone step functions, so agreeing around every step is agreeing everywhere).
+    #[test]
+    fn angle_bins_equal_the_search() {
+        use crate::quality::ANGLE_EDGES;
+        let mut xs = vec![
+            -1e300,
+            -400.0,
+            -2.0,
+            -0.0,
+            0.0,
+            1e-300,
+            1e300,
+            500.0,
+            f64::MAX,
+        ];
+        for m in -3..=40 {
+            for e in [10.0 * m as f64, 135.0] {
+                for k in -4i64..=4 {
+                    xs.push(f64::from_bits((e.to_bits() as i64 + k) as u64));
+                    xs.push(e + k as f64 * 1e-12);
+                    xs.push(e + k as f64 * 0.3);
+                }
+            }
+        }
+        for s in 0..400_000 {
+            xs.push(-20.0 + 400.0 * s as f64 / 400_000.0);
+        }
+        for x in xs.into_iter().filter(|x| x.is_finite()) {
+            let want = bin(&ANGLE_EDGES, x);
+            assert_eq!(angle_bin(x), want as f64, "{x:e}");
+            assert_eq!(bin_of_slot(angle_slot(x)), want, "{x:e}");
+        }
+    }
+
     /// Values at, just around and between every edge, and far outside, in every table: the
     /// table bin equals the search of [`bin`].
     #[test]
     fn table_bins_equal_the_search() {
         let t = Tables::new();
-        let cases: [(&Bins, &[f64]); 4] = [
-            (&t.angle, &ANGLE_EDGES),
+        let cases: [(&Bins, &[f64]); 3] = [
             (&t.skewness, &SKEWNESS_EDGES),
             (&t.scaled_jacobian, &JACOBIAN_EDGES),
             (&t.ratio, &RATIO_EDGES),

@@ -24,7 +24,8 @@
 //! bits; sums are taken in cell order.
 
 use super::kernel::{
-    cell_products, corner_products, length_figures, skewness, BlockFigures, Tables, SQ_MAX, SQ_MIN,
+    angle_slot, bin_of_slot, cell_products, corner_products, length_figures, skewness,
+    BlockFigures, Tables, SQ_MAX, SQ_MIN,
 };
 use super::{angle_deg, cell_metrics, fold, MetricSummary, QualityMetrics};
 use super::{
@@ -157,11 +158,10 @@ fn row_avx2(
 /// single `&mut` slice: the compiler then needs no aliasing checks to vectorise it).
 #[derive(Debug, Clone, Copy, Default)]
 struct Figures {
-    /// The four corner angles.
-    ang: [f64; 4],
     /// Smallest and largest angle, skewness, scaled Jacobian, edge ratio, aspect ratio.
     fig: [f64; 6],
-    /// [`super::kernel::Bins::slot`] of the four angles and of the figures from skewness on.
+    /// The four angles' [`super::kernel::angle_slot`] (their bins), then the
+    /// [`super::kernel::Bins::slot`] of the figures from skewness on.
     slot: [f64; 8],
     /// 0 for the reference path, 1 for a valid cell, 2 for an inverted one (counted in loop 1).
     flag: f64,
@@ -305,13 +305,12 @@ fn row_figures(
             k.hi[m] = k.hi[m].max(if fine { key(y) } else { i64::MIN });
         }
         out[i] = Figures {
-            ang: a,
             fig: [amin, amax, sk, sj, er, ar],
             slot: [
-                bins.angle.slot(a[0]),
-                bins.angle.slot(a[1]),
-                bins.angle.slot(a[2]),
-                bins.angle.slot(a[3]),
+                angle_slot(a[0]),
+                angle_slot(a[1]),
+                angle_slot(a[2]),
+                angle_slot(a[3]),
                 bins.skewness.slot(sk),
                 bins.scaled_jacobian.slot(sj),
                 bins.ratio.slot(er),
@@ -495,7 +494,7 @@ impl Chunk {
                 f.sum_max += hi;
                 let (c, s) = (&mut self.counts, &cell.slot);
                 for k in 0..4 {
-                    c[k][t.angle.bin(s[k], cell.ang[k])] += 1;
+                    c[k][bin_of_slot(s[k])] += 1;
                 }
                 c[4][t.skewness.bin(s[4], sk)] += 1;
                 c[5][t.scaled_jacobian.bin(s[5], sj)] += 1;
@@ -610,7 +609,7 @@ mod tests {
                 assert_eq!(format!("{k1:?}"), format!("{k2:?}"));
                 let bits = |f: &[Figures]| -> Vec<u64> {
                     f.iter()
-                        .flat_map(|c| c.ang.iter().chain(&c.fig).chain(&c.slot).chain([&c.flag]))
+                        .flat_map(|c| c.fig.iter().chain(&c.slot).chain([&c.flag]))
                         .map(|x| x.to_bits())
                         .collect()
                 };
@@ -668,7 +667,7 @@ mod tests {
                     };
                     let bits: Vec<u64> = out
                         .iter()
-                        .flat_map(|c| c.ang.iter().chain(&c.fig).chain(&c.slot).chain([&c.flag]))
+                        .flat_map(|c| c.fig.iter().chain(&c.slot).chain([&c.flag]))
                         .chain(e.iter().flatten())
                         .chain(v.iter().flatten())
                         .map(|x| x.to_bits())
