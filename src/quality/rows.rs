@@ -5,10 +5,12 @@
 //! 1. straight-line arithmetic over arrays (the compiler vectorises it): the edge vectors and
 //!    lengths (each computed once and shared by the two cells on either side), the corner cross
 //!    and dot products, the four corner angles, the extreme angles and every length figure,
-//!    whether the cell takes this path, the histogram slots, and as reductions over the row the
-//!    acceptance, inverted and cell counts and the row's extremes (integer keys);
-//! 2. per cell, in cell order: the angle sums and the histogram counts ([`super::kernel::Bins`]: a table
-//!    look-up and one comparison), or the reference path.
+//!    whether the cell takes this path, the histogram bins (by arithmetic and comparisons with
+//!    the edges, [`super::kernel::angle_slot`], [`super::kernel::count_slot`]), and as
+//!    reductions over the row the acceptance, inverted and cell counts and the row's extremes
+//!    (integer keys);
+//! 2. per cell, in cell order: the angle sums and the histogram counts (one increment per
+//!    value, into a table per value of the cell), or the reference path.
 //!
 //! Why this gives the reference's numbers: every figure is computed with the reference's own
 //! functions ([`angle_deg`], [`length_figures`], [`skewness`], the `sqrt` length of
@@ -24,7 +26,7 @@
 //! bits; sums are taken in cell order.
 
 use super::kernel::{
-    angle_slot, bin_of_slot, cell_products, corner_products, length_figures, skewness,
+    angle_slot, bin_of_slot, cell_products, corner_products, count_slot, length_figures, skewness,
     BlockFigures, Tables, SQ_MAX, SQ_MIN,
 };
 use super::{angle_deg, cell_metrics, fold, MetricSummary, QualityMetrics};
@@ -32,6 +34,7 @@ use super::{
     ANGLE_ACCEPTABLE, ASPECT_ACCEPTABLE, EDGE_RATIO_ACCEPTABLE, SCALED_JACOBIAN_ACCEPTABLE,
     SKEWNESS_ACCEPTABLE,
 };
+use super::{JACOBIAN_EDGES, RATIO_EDGES, SKEWNESS_EDGES};
 use crate::geometry::Point;
 use crate::mesh::BlockGrid;
 
@@ -114,13 +117,12 @@ fn row(
     t: [&mut [f64]; 3],
     v: [&mut [f64]; 3],
     out: &mut [Figures],
-    bins: &Tables,
 ) -> RowCounts {
     let [tx, ty, tl] = t;
     let [vx, vy, vl] = v;
     line_edges(hi, [&mut *tx, &mut *ty, &mut *tl]);
     cross_edges(lo, hi, [&mut *vx, &mut *vy, &mut *vl]);
-    row_figures(b, [tx, ty, tl], [vx, vy, vl], out, bins)
+    row_figures(b, [tx, ty, tl], [vx, vy, vl], out)
 }
 
 /// [`row`] compiled for AVX-512 (8-lane vectors; the same IEEE operations on the same
@@ -134,9 +136,8 @@ fn row_avx512(
     t: [&mut [f64]; 3],
     v: [&mut [f64]; 3],
     out: &mut [Figures],
-    bins: &Tables,
 ) -> RowCounts {
-    row(lo, hi, b, t, v, out, bins)
+    row(lo, hi, b, t, v, out)
 }
 
 /// [`row`] compiled for AVX2.
@@ -149,9 +150,8 @@ fn row_avx2(
     t: [&mut [f64]; 3],
     v: [&mut [f64]; 3],
     out: &mut [Figures],
-    bins: &Tables,
 ) -> RowCounts {
-    row(lo, hi, b, t, v, out, bins)
+    row(lo, hi, b, t, v, out)
 }
 
 /// The figures of one cell from loop 1 (one record per cell, so that loop 1 writes through a
@@ -160,8 +160,8 @@ fn row_avx2(
 struct Figures {
     /// Smallest and largest angle, skewness, scaled Jacobian, edge ratio, aspect ratio.
     fig: [f64; 6],
-    /// The four angles' [`super::kernel::angle_slot`] (their bins), then the
-    /// [`super::kernel::Bins::slot`] of the figures from skewness on.
+    /// The histogram bins of the four angles ([`super::kernel::angle_slot`]) and of the
+    /// figures from skewness on ([`super::kernel::count_slot`]).
     slot: [f64; 8],
     /// 0 for the reference path, 1 for a valid cell, 2 for an inverted one (counted in loop 1).
     flag: f64,
@@ -190,14 +190,14 @@ impl Rows {
         #[cfg(target_arch = "x86_64")]
         if bins.wider {
             // SAFETY: `wider` is only set when the CPU has these features (see `Tables::wider`).
-            return unsafe { row_avx512(lo, hi, b, t, v, out, bins) };
+            return unsafe { row_avx512(lo, hi, b, t, v, out) };
         }
         #[cfg(target_arch = "x86_64")]
         if bins.wide {
             // SAFETY: `wide` is only set when the CPU has AVX2 (see `Tables::wide`).
-            return unsafe { row_avx2(lo, hi, b, t, v, out, bins) };
+            return unsafe { row_avx2(lo, hi, b, t, v, out) };
         }
-        row(lo, hi, b, t, v, out, bins)
+        row(lo, hi, b, t, v, out)
     }
 }
 
@@ -237,21 +237,14 @@ fn row_figures_avx2(
     t: [&[f64]; 3],
     v: [&[f64]; 3],
     out: &mut [Figures],
-    bins: &Tables,
 ) -> RowCounts {
-    row_figures(b, t, v, out, bins)
+    row_figures(b, t, v, out)
 }
 
 /// Loop 1: the figures of every cell of a row from its edges (`x`, `y`, length): bottom `b`
 /// and top `t` edges (`out.len()` each), the edges `v` across the row (`out.len() + 1`).
 #[inline(always)]
-fn row_figures(
-    b: [&[f64]; 3],
-    t: [&[f64]; 3],
-    v: [&[f64]; 3],
-    out: &mut [Figures],
-    bins: &Tables,
-) -> RowCounts {
+fn row_figures(b: [&[f64]; 3], t: [&[f64]; 3], v: [&[f64]; 3], out: &mut [Figures]) -> RowCounts {
     let n = out.len();
     let mut k = RowCounts {
         lo: [i64::MAX; 5],
@@ -311,10 +304,10 @@ fn row_figures(
                 angle_slot(a[1]),
                 angle_slot(a[2]),
                 angle_slot(a[3]),
-                bins.skewness.slot(sk),
-                bins.scaled_jacobian.slot(sj),
-                bins.ratio.slot(er),
-                bins.ratio.slot(ar),
+                count_slot(sk, &SKEWNESS_EDGES),
+                count_slot(sj, &JACOBIAN_EDGES),
+                count_slot(er, &RATIO_EDGES),
+                count_slot(ar, &RATIO_EDGES),
             ],
             flag: if !fine {
                 0.0
@@ -336,7 +329,7 @@ fn row_figures(
 pub(super) struct Chunk {
     /// The reference path's counts.
     metrics: QualityMetrics,
-    /// The fast path's histogram counts (bins below 32, masked to spare the bounds checks),
+    /// The fast path's histogram counts (bins below 32),
     /// per value of a cell (the four angles, then skewness, scaled Jacobian, edge ratio,
     /// aspect ratio): the four angle increments of a cell (often the same bin) go to
     /// different tables, so they do not wait for each other's stores (measured: 14% of the
@@ -489,17 +482,12 @@ impl Chunk {
                     self.add_reference(&mut f, &[line[i], line[i + 1], next[i + 1], next[i]]);
                     continue;
                 }
-                let [lo, hi, sk, sj, er, ar] = cell.fig;
-                f.sum_min += lo;
-                f.sum_max += hi;
+                f.sum_min += cell.fig[0];
+                f.sum_max += cell.fig[1];
                 let (c, s) = (&mut self.counts, &cell.slot);
-                for k in 0..4 {
+                for k in 0..8 {
                     c[k][bin_of_slot(s[k])] += 1;
                 }
-                c[4][t.skewness.bin(s[4], sk)] += 1;
-                c[5][t.scaled_jacobian.bin(s[5], sj)] += 1;
-                c[6][t.ratio.bin(s[6], er)] += 1;
-                c[7][t.ratio.bin(s[7], ar)] += 1;
             }
             std::mem::swap(&mut rows.bx, &mut rows.tx);
             std::mem::swap(&mut rows.by, &mut rows.ty);
@@ -603,9 +591,9 @@ mod tests {
                 let (b, tt, v) = (edge(n), edge(n), edge(n + 1));
                 let mut one = vec![Figures::default(); n];
                 let mut two = vec![Figures::default(); n];
-                let k1 = row_figures(refs(&b), refs(&tt), refs(&v), &mut one, &t);
+                let k1 = row_figures(refs(&b), refs(&tt), refs(&v), &mut one);
                 // SAFETY: `t.wide` says the CPU has AVX2.
-                let k2 = unsafe { row_figures_avx2(refs(&b), refs(&tt), refs(&v), &mut two, &t) };
+                let k2 = unsafe { row_figures_avx2(refs(&b), refs(&tt), refs(&v), &mut two) };
                 assert_eq!(format!("{k1:?}"), format!("{k2:?}"));
                 let bits = |f: &[Figures]| -> Vec<u64> {
                     f.iter()
@@ -660,10 +648,10 @@ mod tests {
                     let (te, ve) = ([&mut tx[..], ty, tl], [&mut vx[..], vy, vl]);
                     let k = match wide {
                         // SAFETY: `t.wide` says the CPU has AVX2.
-                        1 => unsafe { row_avx2(&lo, &hi, refs(&b), te, ve, &mut out, &t) },
+                        1 => unsafe { row_avx2(&lo, &hi, refs(&b), te, ve, &mut out) },
                         // SAFETY: `t.wider` says the CPU has the AVX-512 features.
-                        2 => unsafe { row_avx512(&lo, &hi, refs(&b), te, ve, &mut out, &t) },
-                        _ => row(&lo, &hi, refs(&b), te, ve, &mut out, &t),
+                        2 => unsafe { row_avx512(&lo, &hi, refs(&b), te, ve, &mut out) },
+                        _ => row(&lo, &hi, refs(&b), te, ve, &mut out),
                     };
                     let bits: Vec<u64> = out
                         .iter()
