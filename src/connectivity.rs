@@ -130,6 +130,9 @@ pub fn connectivity(
     let users = EdgeUsers::new(layout)?;
     let mut out = Vec::with_capacity(layout.blocks.len());
     for (b, block) in layout.blocks.iter().enumerate() {
+        if let Some(ahead) = layout.blocks.get(b + PREFETCH_BLOCKS) {
+            users.prefetch(layout, ahead);
+        }
         let g = &grids[b];
         let side_of = |s: usize| {
             let e = block.sides[s].edge as usize;
@@ -241,6 +244,23 @@ pub fn connectivity(
     Ok(out)
 }
 
+/// How many blocks ahead [`connectivity`] asks for the edges of a block's sides: a side's
+/// edge and its users are far apart in memory (a cache miss each at 1e4 particles, 40% of
+/// the pass), the hint lets the misses of several blocks overlap.
+const PREFETCH_BLOCKS: usize = 8;
+
+/// Ask for the cache line at `p` (a hint: never faults, changes no result).
+#[inline(always)]
+fn prefetch<T>(p: *const T) {
+    #[cfg(target_arch = "x86_64")]
+    // SAFETY: a prefetch never faults, whatever the address.
+    unsafe {
+        std::arch::x86_64::_mm_prefetch::<{ std::arch::x86_64::_MM_HINT_T0 }>(p.cast())
+    };
+    #[cfg(not(target_arch = "x86_64"))]
+    let _ = p;
+}
+
 /// The block sides using each edge, in block then side order: how many, and the first two
 /// (all a valid layout has). Two flat arrays instead of one small `Vec` per edge (issue 8:
 /// 1.2 M edges at 1e5 particles); [`EdgeUsers::of`] is the list the per-edge vectors held,
@@ -294,6 +314,16 @@ impl EdgeUsers {
             }
         }
         Ok(EdgeUsers { count, first })
+    }
+
+    /// Ask for the edges of `block`'s sides and their users to be brought into the cache.
+    fn prefetch(&self, layout: &BlockLayout, block: &crate::layout::Block) {
+        for side in &block.sides {
+            let e = side.edge as usize;
+            prefetch(layout.edges.as_ptr().wrapping_add(e));
+            prefetch(self.count.as_ptr().wrapping_add(e));
+            prefetch(self.first.as_ptr().wrapping_add(e));
+        }
     }
 
     /// The users of edge `e` (`e` in range).

@@ -16,7 +16,7 @@
 
 use crate::connectivity::{connectivity, BlockConnectivity};
 use crate::geometry::Point;
-use crate::layout::{BlockLayout, Curve, EdgeKind};
+use crate::layout::BlockLayout;
 use crate::mesh::BlockGrid;
 use rayon::prelude::*;
 use serde::Serialize;
@@ -24,6 +24,8 @@ use serde::Serialize;
 pub mod atan;
 mod kernel;
 mod rows;
+
+mod sides;
 
 pub use atan::angle_deg;
 
@@ -189,42 +191,86 @@ pub struct Quality {
 /// Blocks are measured in parallel (on the current rayon pool) and reduced in block order:
 /// the means are sums of per-block sums, the same for every thread count.
 pub fn measure(grids: &[BlockGrid]) -> Quality {
-    reduce(&block_stats(grids, None)).0
+    reduce(&block_stats(grids, None, None).chunks).0
 }
 
 /// Blocks per chunk of [`block_stats`]: a fixed number, so that nothing depends on the
 /// thread count.
 const CHUNK: usize = 64;
 
+/// The per-chunk results of [`block_stats`], and what it measured besides the cells.
+struct Stats {
+    chunks: Vec<(Vec<kernel::BlockFigures>, QualityMetrics)>,
+    /// The growth ratios of the interfaces between chunks (with `conn`).
+    spilled: Option<MetricSummary>,
+    /// The wall orthogonality (with `layout`).
+    wall: Option<f64>,
+}
+
 /// [`measure`] and the cell part of [`quality_metrics`] in one pass over the cells: the
 /// figures of every block, and the metrics of every chunk of [`CHUNK`] blocks. With `conn`
-/// (one entry per grid, in grid order), also the growth ratios of the interfaces each block
-/// owns, right after the block (while its nodes are in cache; counts and extremes of growth
-/// ratios do not depend on the order, see [`growth_ratios`]).
+/// (one entry per grid, in grid order), also the growth ratios (the heights of each block's
+/// interface cells right after its cells, while its nodes are in cache, see [`sides`]), and
+/// with `layout` (one block per grid) the wall orthogonality of each block.
 fn block_stats(
     grids: &[BlockGrid],
     conn: Option<&[BlockConnectivity]>,
-) -> Vec<(Vec<kernel::BlockFigures>, QualityMetrics)> {
+    layout: Option<&BlockLayout>,
+) -> Stats {
     let tables = kernel::Tables::new();
-    grids
+    let plan = conn.map(|conn| sides::Plan::new(conn, grids));
+    let mut spill = Vec::new();
+    let chunks = grids.len().div_ceil(CHUNK);
+    let slices = match &plan {
+        Some(plan) => plan.spill_slices(&mut spill),
+        None => (0..chunks).map(|_| &mut [][..]).collect(),
+    };
+    let parts: Vec<_> = grids
         .par_chunks(CHUNK)
+        .zip(slices)
         .enumerate()
-        .map_init(rows::Rows::default, |scratch, (c, chunk)| {
-            let mut acc = rows::Chunk::new();
-            let figs = chunk
-                .iter()
-                .enumerate()
-                .map(|(k, g)| {
-                    let f = acc.block(g, &tables, scratch);
-                    if let Some(bc) = conn.and_then(|conn| conn.get(c * CHUNK + k)) {
-                        block_growth_ratios(bc, grids, acc.growth());
-                    }
-                    f
-                })
-                .collect();
-            (figs, acc.finish())
-        })
-        .collect()
+        .map_init(
+            || (rows::Rows::default(), sides::Sides::default()),
+            |(scratch, sd), (c, (chunk, spill))| {
+                let mut acc = rows::Chunk::new();
+                let mut wall = None;
+                sd.start();
+                let figs = chunk
+                    .iter()
+                    .enumerate()
+                    .map(|(k, g)| {
+                        if let Some(l) = layout {
+                            sides::prefetch_edges(l, &l.blocks[c * CHUNK + k]);
+                        }
+                        let f = acc.block(g, &tables, scratch);
+                        if let Some(plan) = &plan {
+                            sd.block(plan, c, k, g, spill);
+                        }
+                        if let Some(l) = layout {
+                            let b = &l.blocks[c * CHUNK + k];
+                            wall = sides::max_nan(wall, sides::block_wall_orthogonality(l, b, g));
+                        }
+                        f
+                    })
+                    .collect();
+                if let Some(plan) = &plan {
+                    sd.pair_local(plan, c, acc.growth());
+                }
+                ((figs, acc.finish()), wall)
+            },
+        )
+        .collect();
+    let spilled = plan.map(|plan| {
+        let mut m = MetricSummary::new(&GROWTH_EDGES, GROWTH_ACCEPTABLE);
+        plan.pair_spilled(&spill, &mut m);
+        m
+    });
+    let wall = parts.iter().fold(None, |w, p| sides::max_nan(w, p.1));
+    Stats {
+        chunks: parts.into_iter().map(|p| p.0).collect(),
+        spilled,
+        wall,
+    }
 }
 
 /// Reduce per-block results in block order.
@@ -520,151 +566,6 @@ impl QualityMetrics {
     }
 }
 
-/// Side `s` of `grid`: for position `p` along the side (in the side's direction, see
-/// [`crate::layout`]), the node on the side and its neighbour one step into the block.
-fn side_node_and_inward(grid: &BlockGrid, s: usize, p: usize) -> (Point, Point) {
-    let (ni, nj) = (grid.ni, grid.nj);
-    match s {
-        0 => (grid.node(p, 0), grid.node(p, 1)),
-        1 => (grid.node(ni, p), grid.node(ni - 1, p)),
-        2 => (grid.node(ni - p, nj), grid.node(ni - p, nj - 1)),
-        _ => (grid.node(0, nj - p), grid.node(1, nj - p)),
-    }
-}
-
-/// The cell next to side `s` at cell position `p` along the side (in the side's direction):
-/// its height normal to the side (area over its edge length on the side).
-fn side_cell_height(grid: &BlockGrid, s: usize, p: usize) -> f64 {
-    let (ni, nj) = (grid.ni, grid.nj);
-    let (i, j) = match s {
-        0 => (p, 0),
-        1 => (ni - 1, p),
-        2 => (ni - 1 - p, nj - 1),
-        _ => (0, nj - 1 - p),
-    };
-    let q = corners(grid, i, j);
-    let area = 0.5
-        * ((q[2][0] - q[0][0]) * (q[3][1] - q[1][1]) - (q[2][1] - q[0][1]) * (q[3][0] - q[1][0]));
-    // The cell's edge on side `s` runs from corner `s` to corner `s + 1` (in the side's
-    // direction): the nodes `side_node_and_inward(grid, s, p)` and `(.., p + 1)`.
-    let k = s.min(3);
-    let l = len(q[k], q[(k + 1) % 4]);
-    if l > 0.0 {
-        area.abs() / l
-    } else {
-        f64::NAN
-    }
-}
-
-/// The growth ratios across every interface of `conn` (each interface once), counted into
-/// `m`. Blocks are visited in parallel in fixed chunks of [`CHUNK`]; counts and extremes do
-/// not depend on the order (a ratio is at least 1 or infinite: never NaN nor a zero whose
-/// sign a fold could pick), so the result is that of a sequential visit.
-fn growth_ratios(conn: &[BlockConnectivity], grids: &[BlockGrid], m: &mut MetricSummary) {
-    let empty = MetricSummary::new(&m.histogram.edges, m.acceptable);
-    let parts: Vec<MetricSummary> = conn
-        .par_chunks(CHUNK)
-        .map(|chunk| {
-            let mut part = empty.clone();
-            for bc in chunk {
-                block_growth_ratios(bc, grids, &mut part);
-            }
-            part
-        })
-        .collect();
-    for part in &parts {
-        m.merge(part);
-    }
-}
-
-/// The growth ratios across the interfaces of one block that it owns (each interface is
-/// owned by the side with the smaller (block, side)).
-fn block_growth_ratios(
-    bc: &crate::connectivity::BlockConnectivity,
-    grids: &[BlockGrid],
-    m: &mut MetricSummary,
-) {
-    for sc in &bc.sides {
-        let Some(partner) = sc.partner else { continue };
-        if (partner.block, partner.side) < (bc.block, sc.side) {
-            continue;
-        }
-        let (Some(ga), Some(gb)) = (grids.get(bc.block), grids.get(partner.block)) else {
-            continue;
-        };
-        if !well_formed(ga) || !well_formed(gb) {
-            continue;
-        }
-        let n = if sc.side % 2 == 0 { ga.ni } else { ga.nj };
-        let nb = if partner.side % 2 == 0 { gb.ni } else { gb.nj };
-        if n != nb || n == 0 || ga.ni == 0 || ga.nj == 0 || gb.ni == 0 || gb.nj == 0 {
-            continue;
-        }
-        for p in 0..n {
-            let q = if partner.same_direction { p } else { n - 1 - p };
-            let ha = side_cell_height(ga, sc.side, p);
-            let hb = side_cell_height(gb, partner.side, q);
-            m.add(ratio(ha.max(hb), ha.min(hb)));
-        }
-    }
-}
-
-/// NaN-propagating maximum: NaN once either is NaN, else the larger. Associative and
-/// commutative, so a parallel reduction equals the sequential fold.
-fn max_nan(a: Option<f64>, b: Option<f64>) -> Option<f64> {
-    match (a, b) {
-        (None, x) | (x, None) => x,
-        (Some(x), Some(y)) if x.is_nan() || y.is_nan() => Some(f64::NAN),
-        (Some(x), Some(y)) => Some(x.max(y)),
-    }
-}
-
-/// Largest deviation (degrees) from the wall normal of the grid lines leaving wall nodes
-/// (blocks in parallel, reduced with [`max_nan`]: the same for every thread count).
-fn wall_orthogonality(layout: &BlockLayout, grids: &[BlockGrid]) -> Option<f64> {
-    layout
-        .blocks
-        .par_iter()
-        .zip(grids.par_iter())
-        .map(|(block, grid)| block_wall_orthogonality(layout, block, grid))
-        .reduce(|| None, max_nan)
-}
-
-/// [`wall_orthogonality`] of one block.
-fn block_wall_orthogonality(
-    layout: &BlockLayout,
-    block: &crate::layout::Block,
-    grid: &BlockGrid,
-) -> Option<f64> {
-    if !well_formed(grid) || grid.ni == 0 || grid.nj == 0 {
-        return None;
-    }
-    let mut worst: Option<f64> = None;
-    for (s, side) in block.sides.iter().enumerate() {
-        let Some(edge) = layout.edges.get(side.edge as usize) else {
-            continue;
-        };
-        let (EdgeKind::Wall(id), Curve::Arc { center, .. }) = (edge.kind, &edge.curve) else {
-            continue;
-        };
-        let n = if s % 2 == 0 { grid.ni } else { grid.nj };
-        for p in 0..=n {
-            let (w, inner) = side_node_and_inward(grid, s, p);
-            // Into the fluid: away from a hole's center, towards the bounding circle's.
-            let normal = if id < 0 {
-                [center[0] - w[0], center[1] - w[1]]
-            } else {
-                [w[0] - center[0], w[1] - center[1]]
-            };
-            let d = [inner[0] - w[0], inner[1] - w[1]];
-            let cross = normal[0] * d[1] - normal[1] * d[0];
-            let dot = normal[0] * d[0] + normal[1] * d[1];
-            worst = max_nan(worst, Some(angle_deg(cross.abs(), dot)));
-        }
-    }
-    worst
-}
-
 /// The standard metrics of a mesh given by its layout and grids (one grid per block).
 ///
 /// Per-cell metrics are computed block by block in parallel (on the current rayon pool) and
@@ -692,12 +593,16 @@ pub fn measure_all_with(
     // One entry per grid in grid order: the growth ratios go with the cell pass.
     let in_order = conn
         .filter(|c| c.len() == grids.len() && c.iter().enumerate().all(|(b, bc)| bc.block == b));
-    let (q, mut m) = reduce(&block_stats(grids, in_order));
+    let stats = block_stats(grids, in_order, same.then_some(layout));
+    let (q, mut m) = reduce(&stats.chunks);
+    if let Some(spilled) = &stats.spilled {
+        m.interface_growth_ratio.merge(spilled);
+    }
     if let (Some(conn), None) = (conn, in_order) {
-        growth_ratios(conn, grids, &mut m.interface_growth_ratio);
+        sides::growth_ratios(conn, grids, &mut m.interface_growth_ratio);
     }
     if same {
-        m.max_wall_orthogonality_deviation_deg = wall_orthogonality(layout, grids);
+        m.max_wall_orthogonality_deviation_deg = stats.wall;
     }
     (q, m)
 }
@@ -707,7 +612,7 @@ mod tests {
     use super::*;
     use proptest::prelude::*;
 
-    /// The sequential fold [`wall_orthogonality`] used before it ran in parallel.
+    /// The sequential fold [`sides::wall_orthogonality`] used before it ran in parallel.
     fn fold_sequential(values: &[f64]) -> Option<f64> {
         let mut worst: Option<f64> = None;
         for &ang in values {
@@ -723,22 +628,36 @@ mod tests {
         prop_oneof![0.0f64..180.0, Just(f64::NAN), Just(0.0), Just(90.0)]
     }
 
-    /// The growth ratios counted with the cell pass (blocks in grid order) equal those of the
-    /// separate pass over the connectivity, on real meshes of both modes.
+    /// The growth ratios and the wall orthogonality of the cell pass (blocks in grid order:
+    /// interfaces paired within a chunk and across chunks) equal those of the separate passes
+    /// over the connectivity and the layout, on real meshes of both modes; and so do those of
+    /// a connectivity out of grid order (the separate pass).
     #[test]
-    fn growth_ratios_in_the_cell_pass_equal_the_separate_pass() {
-        let domain = crate::layouts::bubbles(30, 3).expect("layout");
+    fn side_figures_of_the_cell_pass_equal_the_separate_passes() {
+        let domain = crate::layouts::bubbles(40, 3).expect("layout");
         for opts in [crate::Options::default(), crate::Options::paper()] {
             let m = crate::mesh(&domain, &opts).expect("mesh");
             let conn = connectivity(&m.layout, &m.grids).expect("connectivity");
-            let (_, got) = measure_all_with(&m.layout, &m.grids, Some(&conn));
+            let (local, spilled) = sides::Plan::new(&conn, &m.grids).sides();
+            assert!(local > 0 && spilled > 0, "{local} {spilled}");
             let mut want = MetricSummary::new(&GROWTH_EDGES, GROWTH_ACCEPTABLE);
-            growth_ratios(&conn, &m.grids, &mut want);
+            sides::growth_ratios(&conn, &m.grids, &mut want);
             assert!(want.samples > 0);
-            assert_eq!(
-                format!("{:?}", got.interface_growth_ratio),
-                format!("{want:?}")
-            );
+            let wall = sides::wall_orthogonality(&m.layout, &m.grids);
+            assert!(wall.is_some());
+            let mut reversed = conn.clone();
+            reversed.reverse();
+            for c in [&conn, &reversed] {
+                let (_, got) = measure_all_with(&m.layout, &m.grids, Some(c));
+                assert_eq!(
+                    format!("{:?}", got.interface_growth_ratio),
+                    format!("{want:?}")
+                );
+                assert_eq!(
+                    got.max_wall_orthogonality_deviation_deg.map(f64::to_bits),
+                    wall.map(f64::to_bits)
+                );
+            }
         }
     }
 
@@ -787,7 +706,7 @@ mod tests {
         ) {
             let cut = cut.min(values.len());
             let (a, b) = values.split_at(cut);
-            let parts = max_nan(fold_sequential(b), fold_sequential(a));
+            let parts = sides::max_nan(fold_sequential(b), fold_sequential(a));
             let want = fold_sequential(&values);
             prop_assert_eq!(parts.map(f64::to_bits), want.map(f64::to_bits));
         }

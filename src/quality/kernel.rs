@@ -1,7 +1,7 @@
 //! The per-cell kernel of [`super`]: the pieces of the reference formulas
 //! ([`super::cell_corners`], [`super::cell_metrics`]) that the per-block pass
-//! ([`super::rows`]) shares with them, so that both give the same bits, and constant-time
-//! exact histogram bins.
+//! ([`super::rows`]) shares with them, so that both give the same bits, and exact histogram
+//! bins without a search (arithmetic or one comparison per edge, vectorised).
 
 use super::{cell_metrics, fold};
 use crate::geometry::Point;
@@ -76,7 +76,44 @@ pub(super) fn skewness(min_angle_deg: f64, max_angle_deg: f64) -> f64 {
     (max_angle_deg - 90.0).max(90.0 - min_angle_deg) / 90.0
 }
 
-/// Histogram bin of `x`, the rule of [`super::Histogram::add`] (NaN in the last bin).
+/// The angle histogram's bin of a finite angle `x` (degrees), as a float: the rule of
+/// [`bin`] for [`super::ANGLE_EDGES`] (0, 10, ..., 130, 135, 140, ..., 180) by arithmetic
+/// rather than a table, so that the vectorised row loop computes it: the inner edges at or
+/// below `x` are the multiples of 10 from 10 to 180 (`floor(x / 10)` of them, clamped to
+/// `[0, 18]`) and 135 when `x >= 135`, at most 18 in all (the last bin). `floor(x / 10)` is
+/// exact: `floor(x * 0.1)` is off by at most one (the product's relative error is far below
+/// `1 / |x / 10|`), and the two comparisons with the exact multiples `10 q` and `10 (q + 1)`
+/// correct it.
+#[inline(always)]
+pub(super) fn angle_bin(x: f64) -> f64 {
+    let q = (x * 0.1).floor();
+    let q = if 10.0 * q > x { q - 1.0 } else { q };
+    let q = if 10.0 * (q + 1.0) <= x { q + 1.0 } else { q };
+    let q = if q > 0.0 { q } else { 0.0 };
+    let q = if q < 18.0 { q } else { 18.0 };
+    let b = if x >= 135.0 { q + 1.0 } else { q };
+    if b < 18.0 {
+        b
+    } else {
+        18.0
+    }
+}
+
+/// [`angle_bin`] as the float `2⁵² + bin` (as [`count_slot`]), for [`bin_of_slot`].
+#[inline(always)]
+pub(super) fn angle_slot(x: f64) -> f64 {
+    angle_bin(x) + ROUND
+}
+
+/// The bin held by a slot of [`angle_slot`] or [`count_slot`] (below 32).
+#[inline(always)]
+pub(super) fn bin_of_slot(slot: f64) -> usize {
+    slot.to_bits() as usize & 31
+}
+
+/// Histogram bin of `x`, the rule of [`super::Histogram::add`] (NaN in the last bin): the
+/// oracle of [`angle_bin`] and [`count_slot`].
+#[cfg(test)]
 pub(super) fn bin(edges: &[f64], x: f64) -> usize {
     let last = edges.len().saturating_sub(2);
     if x.is_nan() {
@@ -85,103 +122,55 @@ pub(super) fn bin(edges: &[f64], x: f64) -> usize {
     edges[1..].partition_point(|&e| e <= x).min(last)
 }
 
-/// Slots of a [`Bins`] table.
-const SLOTS: usize = 2048;
-
-/// Exact histogram bins in constant time, without a search: `x` maps to slot
-/// `s = round(clamp((x - lo) * scale, 0, SLOTS - 1))` (rounded by adding 2⁵², so the slot is
-/// the low bits of a float), whose entry is the bin of `lo + (s - 1.5) / scale` (a slot below
-/// the slot's lower end); the bin of `x` is that entry or the next one, decided by one
-/// comparison with the next bin's lower edge (`+inf` after the last bin). This holds because
-/// bin edges are more than 2.1 slots apart, the first inner edge is more than 3 slots above
-/// `lo` and the last edge more than 3 slots below the table's end (checked when built), and
-/// the computed slot is off by far less than a slot from the exact `(x - lo) * scale`, so `x`
-/// lies above the entry's value and at most one edge lies between them.
-/// Finite `x` only (the fast path's figures); see [`bin`] for the general rule.
-pub(super) struct Bins {
-    lo: f64,
-    scale: f64,
-    /// Per slot: the bin of the value 1.5 slots below the slot's centre.
-    slot: Box<[u8; SLOTS]>,
-    /// Per bin: the lower edge of the next bin (`+inf` for the last), padded to 32 entries.
-    upper: [f64; 32],
-}
-
 /// `2⁵²`: adding it to a float in `[0, 2⁵¹)` rounds it to an integer held in the low bits.
 const ROUND: f64 = 4_503_599_627_370_496.0;
 
-impl Bins {
-    /// Table over `[lo, hi)` for `edges` (increasing, at most 32).
-    pub fn new(edges: &[f64], lo: f64, hi: f64) -> Bins {
-        let scale = SLOTS as f64 / (hi - lo);
-        let w = 1.0 / scale;
-        assert!(edges.len() >= 2 && edges.len() <= 32);
-        assert!(edges.windows(2).all(|p| p[1] - p[0] > 2.1 * w));
-        assert!(edges[1] - lo > 3.0 * w && hi - edges[edges.len() - 1] > 3.0 * w);
-        let mut slot = Box::new([0u8; SLOTS]);
-        for (s, e) in slot.iter_mut().enumerate() {
-            *e = bin(edges, lo + (s as f64 - 1.5) * w) as u8;
-        }
-        let last = edges.len() - 2;
-        let mut upper = [f64::INFINITY; 32];
-        upper[..last].copy_from_slice(&edges[1..=last]);
-        Bins {
-            lo,
-            scale,
-            slot,
-            upper,
-        }
+/// The histogram bin of a finite `x` for the increasing `edges`, as the float `2⁵² + bin`
+/// (for [`bin_of_slot`]): the number of inner edges `edges[1..N - 1]` at or below `x`. That is
+/// the rule of [`bin`] (the number of `edges[1..]` at or below `x`, at most `N - 2`: the last
+/// edge is at or below `x` only when every inner edge is), with one comparison per edge and no
+/// search or table, so that the vectorised row loop computes it.
+#[inline(always)]
+pub(super) fn count_slot<const N: usize>(x: f64, edges: &[f64; N]) -> f64 {
+    // Integer sums (one-cycle additions: the chain of ten is short), the count kept in the
+    // low bits of the float as [`bin_of_slot`] reads them.
+    let mut b = 0u64;
+    for &e in &edges[1..N - 1] {
+        b += u64::from(x >= e);
     }
-
-    /// The slot of a finite `x`, as the float `2⁵² + slot` (computed in the vectorised row
-    /// loop; the clamps are comparisons, one instruction each).
-    #[inline(always)]
-    pub fn slot(&self, x: f64) -> f64 {
-        let t = (x - self.lo) * self.scale;
-        let t = if t > 0.0 { t } else { 0.0 };
-        let t = if t < (SLOTS - 1) as f64 {
-            t
-        } else {
-            (SLOTS - 1) as f64
-        };
-        t + ROUND
-    }
-
-    /// The bin of a finite `x` whose [`Bins::slot`] is `slot` (equal to [`bin`]), below 32.
-    #[inline(always)]
-    pub fn bin(&self, slot: f64, x: f64) -> usize {
-        let b = self.slot[slot.to_bits() as usize & (SLOTS - 1)] as usize & 31;
-        b + usize::from(x >= self.upper[b])
-    }
-
-    /// The bin of a finite `x` (equal to [`bin`]).
-    #[cfg(test)]
-    pub fn of(&self, x: f64) -> usize {
-        self.bin(self.slot(x), x)
-    }
+    f64::from_bits(ROUND.to_bits() | b)
 }
 
-/// The bin tables of one measurement.
+/// The vector builds the CPU can run, detected once per measurement.
 pub(super) struct Tables {
-    pub angle: Bins,
-    pub skewness: Bins,
-    pub scaled_jacobian: Bins,
-    pub ratio: Bins,
     /// The CPU has AVX2: the row loop runs in 4-lane vectors (same bits, see
     /// [`super::rows`]).
     pub wide: bool,
+    /// The CPU has AVX-512 (F, DQ, VL): the row loop runs in 8-lane vectors (same bits).
+    pub wider: bool,
 }
 
 impl Tables {
     pub fn new() -> Tables {
-        use super::{ANGLE_EDGES, JACOBIAN_EDGES, RATIO_EDGES, SKEWNESS_EDGES};
         Tables {
-            angle: Bins::new(&ANGLE_EDGES, -8.0, 376.0),
-            skewness: Bins::new(&SKEWNESS_EDGES, -0.5, 2.5),
-            scaled_jacobian: Bins::new(&JACOBIAN_EDGES, -1.5, 1.5),
-            ratio: Bins::new(&RATIO_EDGES, 0.5, 128.5),
             wide: wide(),
+            wider: wider(),
         }
+    }
+}
+
+/// True when the CPU has AVX-512 F, DQ and VL (x86-64 only).
+fn wider() -> bool {
+    #[cfg(target_arch = "x86_64")]
+    {
+        std::arch::is_x86_feature_detected!("avx512f")
+            && std::arch::is_x86_feature_detected!("avx512dq")
+            && std::arch::is_x86_feature_detected!("avx512vl")
+            && std::arch::is_x86_feature_detected!("avx2")
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    {
+        false
     }
 }
 
@@ -278,10 +267,22 @@ pub(super) fn cell_products(e: [[f64; 2]; 4]) -> ([f64; 4], [f64; 4]) {
 /// NaN), so the count is that of the reference test.
 pub(super) fn row_inverted(lo: &[Point], hi: &[Point]) -> usize {
     #[cfg(target_arch = "x86_64")]
+    if wider() {
+        // SAFETY: the CPU has the AVX-512 features (checked just above).
+        return unsafe { row_inverted_avx512(lo, hi) };
+    }
+    #[cfg(target_arch = "x86_64")]
     if std::arch::is_x86_feature_detected!("avx2") {
         // SAFETY: the CPU has AVX2 (checked just above).
         return unsafe { row_inverted_avx2(lo, hi) };
     }
+    row_inverted_portable(lo, hi)
+}
+
+/// [`row_inverted`] compiled for AVX-512 (the same comparisons of the same products).
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx512f,avx512dq,avx512vl,avx2")]
+fn row_inverted_avx512(lo: &[Point], hi: &[Point]) -> usize {
     row_inverted_portable(lo, hi)
 }
 
@@ -313,10 +314,22 @@ fn row_inverted_portable(lo: &[Point], hi: &[Point]) -> usize {
 /// of a zero, which neither comparison sees).
 pub(super) fn row_corner_below(lo: &[Point], hi: &[Point], t: f64) -> bool {
     #[cfg(target_arch = "x86_64")]
+    if wider() {
+        // SAFETY: the CPU has the AVX-512 features (checked just above).
+        return unsafe { row_corner_below_avx512(lo, hi, t) };
+    }
+    #[cfg(target_arch = "x86_64")]
     if std::arch::is_x86_feature_detected!("avx2") {
         // SAFETY: the CPU has AVX2 (checked just above).
         return unsafe { row_corner_below_avx2(lo, hi, t) };
     }
+    row_corner_below_portable(lo, hi, t)
+}
+
+/// [`row_corner_below`] compiled for AVX-512 (the same comparisons of the same products).
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx512f,avx512dq,avx512vl,avx2")]
+fn row_corner_below_avx512(lo: &[Point], hi: &[Point], t: f64) -> bool {
     row_corner_below_portable(lo, hi, t)
 }
 
@@ -344,9 +357,9 @@ fn row_corner_below_portable(lo: &[Point], hi: &[Point], t: f64) -> bool {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::quality::{ANGLE_EDGES, JACOBIAN_EDGES, RATIO_EDGES, SKEWNESS_EDGES};
+    use crate::quality::{JACOBIAN_EDGES, RATIO_EDGES, SKEWNESS_EDGES};
 
-    /// The AVX2 and portable builds of the row tests agree, on rows with degenerate,
+    /// The AVX2, AVX-512 and portable builds of the row tests agree, on rows with degenerate,
     /// inverted, signed-zero and non-finite cells.
     #[test]
     fn wide_and_portable_row_tests_agree() {
@@ -377,6 +390,18 @@ mod tests {
                 // SAFETY: AVX2 was detected above.
                 unsafe {
                     assert_eq!(row_inverted_avx2(&lo, &hi), row_inverted_portable(&lo, &hi));
+                    if wider() {
+                        assert_eq!(
+                            row_inverted_avx512(&lo, &hi),
+                            row_inverted_portable(&lo, &hi)
+                        );
+                        for t in [0.1, 1.0] {
+                            assert_eq!(
+                                row_corner_below_avx512(&lo, &hi, t),
+                                row_corner_below_portable(&lo, &hi, t)
+                            );
+                        }
+                    }
                     for t in [0.1, 1.0] {
                         assert_eq!(
                             row_corner_below_avx2(&lo, &hi, t),
@@ -388,19 +413,48 @@ mod tests {
         }
     }
 
-    /// Values at, just around and between every edge, and far outside, in every table: the
-    /// table bin equals the search of [`bin`].
+    /// The arithmetic angle bin equals the search of [`bin`]: at, just around and between
+    /// every edge and every multiple of 10, on a fine sweep and far outside (both rules are
+    /// monotone step functions, so agreeing around every step is agreeing everywhere).
     #[test]
-    fn table_bins_equal_the_search() {
-        let t = Tables::new();
-        let cases: [(&Bins, &[f64]); 4] = [
-            (&t.angle, &ANGLE_EDGES),
-            (&t.skewness, &SKEWNESS_EDGES),
-            (&t.scaled_jacobian, &JACOBIAN_EDGES),
-            (&t.ratio, &RATIO_EDGES),
+    fn angle_bins_equal_the_search() {
+        use crate::quality::ANGLE_EDGES;
+        let mut xs = vec![
+            -1e300,
+            -400.0,
+            -2.0,
+            -0.0,
+            0.0,
+            1e-300,
+            1e300,
+            500.0,
+            f64::MAX,
         ];
-        for (bins, edges) in cases {
-            let mut xs = vec![-1e300, -400.0, -2.0, 0.0, 1e-300, 1e300, 500.0, 150.0];
+        for m in -3..=40 {
+            for e in [10.0 * m as f64, 135.0] {
+                for k in -4i64..=4 {
+                    xs.push(f64::from_bits((e.to_bits() as i64 + k) as u64));
+                    xs.push(e + k as f64 * 1e-12);
+                    xs.push(e + k as f64 * 0.3);
+                }
+            }
+        }
+        for s in 0..400_000 {
+            xs.push(-20.0 + 400.0 * s as f64 / 400_000.0);
+        }
+        for x in xs.into_iter().filter(|x| x.is_finite()) {
+            let want = bin(&ANGLE_EDGES, x);
+            assert_eq!(angle_bin(x), want as f64, "{x:e}");
+            assert_eq!(bin_of_slot(angle_slot(x)), want, "{x:e}");
+        }
+    }
+
+    /// Values at, just around and between every edge, and far outside, for every histogram
+    /// counted by [`count_slot`]: its bin equals the search of [`bin`].
+    #[test]
+    fn counted_bins_equal_the_search() {
+        fn check<const N: usize>(edges: &[f64; N]) {
+            let mut xs = vec![-1e300, -400.0, -2.0, 0.0, -0.0, 1e-300, 1e300, 500.0, 150.0];
             for &e in edges {
                 for k in -3i64..=3 {
                     // Neighbouring floats (for 0.0, NaN patterns below it are skipped).
@@ -410,13 +464,20 @@ mod tests {
                     xs.push(e + k as f64 * 0.07);
                 }
             }
-            let (lo, hi) = (edges[0] - 5.0, edges[edges.len() - 1] + 5.0);
+            let (lo, hi) = (edges[0] - 5.0, edges[N - 1] + 5.0);
             for s in 0..100_000 {
                 xs.push(lo + (hi - lo) * s as f64 / 100_000.0);
             }
             for x in xs.into_iter().filter(|x| x.is_finite()) {
-                assert_eq!(bins.of(x), bin(edges, x), "{x:e} in {edges:?}");
+                assert_eq!(
+                    bin_of_slot(count_slot(x, edges)),
+                    bin(edges, x),
+                    "{x:e} in {edges:?}"
+                );
             }
         }
+        check(&SKEWNESS_EDGES);
+        check(&JACOBIAN_EDGES);
+        check(&RATIO_EDGES);
     }
 }

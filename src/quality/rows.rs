@@ -5,10 +5,12 @@
 //! 1. straight-line arithmetic over arrays (the compiler vectorises it): the edge vectors and
 //!    lengths (each computed once and shared by the two cells on either side), the corner cross
 //!    and dot products, the four corner angles, the extreme angles and every length figure,
-//!    whether the cell takes this path, the histogram slots, and as reductions over the row the
-//!    acceptance, inverted and cell counts and the row's extremes (integer keys);
-//! 2. per cell, in cell order: the angle sums and the histogram counts ([`super::kernel::Bins`]: a table
-//!    look-up and one comparison), or the reference path.
+//!    whether the cell takes this path, the histogram bins (by arithmetic and comparisons with
+//!    the edges, [`super::kernel::angle_slot`], [`super::kernel::count_slot`]), and as
+//!    reductions over the row the acceptance, inverted and cell counts and the row's extremes
+//!    (integer keys);
+//! 2. per cell, in cell order: the angle sums and the histogram counts (one increment per
+//!    value, into a table per value of the cell), or the reference path.
 //!
 //! Why this gives the reference's numbers: every figure is computed with the reference's own
 //! functions ([`angle_deg`], [`length_figures`], [`skewness`], the `sqrt` length of
@@ -24,13 +26,15 @@
 //! bits; sums are taken in cell order.
 
 use super::kernel::{
-    cell_products, corner_products, length_figures, skewness, BlockFigures, Tables, SQ_MAX, SQ_MIN,
+    angle_slot, bin_of_slot, cell_products, corner_products, count_slot, length_figures, skewness,
+    BlockFigures, Tables, SQ_MAX, SQ_MIN,
 };
 use super::{angle_deg, cell_metrics, fold, MetricSummary, QualityMetrics};
 use super::{
     ANGLE_ACCEPTABLE, ASPECT_ACCEPTABLE, EDGE_RATIO_ACCEPTABLE, SCALED_JACOBIAN_ACCEPTABLE,
     SKEWNESS_ACCEPTABLE,
 };
+use super::{JACOBIAN_EDGES, RATIO_EDGES, SKEWNESS_EDGES};
 use crate::geometry::Point;
 use crate::mesh::BlockGrid;
 
@@ -55,12 +59,13 @@ pub(super) struct Rows {
 }
 
 /// `sqrt(x² + y²)`, or NaN outside `[SQ_MIN, SQ_MAX]` (where [`super::kernel::edge_len`] takes
-/// `hypot`).
+/// `hypot`); a select rather than a branch, so that the edge loops vectorise.
 #[inline(always)]
 fn checked_len(x: f64, y: f64) -> f64 {
     let sq = x * x + y * y;
+    let l = sq.sqrt();
     if (SQ_MIN..=SQ_MAX).contains(&sq) {
-        sq.sqrt()
+        l
     } else {
         f64::NAN
     }
@@ -72,7 +77,15 @@ fn along_line(line: &[Point], x: &mut Vec<f64>, y: &mut Vec<f64>, l: &mut Vec<f6
     for v in [&mut *x, &mut *y, &mut *l] {
         v.resize(n, 0.0);
     }
-    let (x, y, l) = (&mut x[..n], &mut y[..n], &mut l[..n]);
+    line_edges(line, [&mut x[..n], &mut y[..n], &mut l[..n]]);
+}
+
+/// The edges along a node line into `e` (x, y, [`checked_len`]; `line.len() - 1` each).
+#[inline(always)]
+fn line_edges(line: &[Point], e: [&mut [f64]; 3]) {
+    let [x, y, l] = e;
+    let n = x.len();
+    let (y, l, line) = (&mut y[..n], &mut l[..n], &line[..=n]);
     for i in 0..n {
         let (dx, dy) = (line[i + 1][0] - line[i][0], line[i + 1][1] - line[i][1]);
         x[i] = dx;
@@ -81,15 +94,74 @@ fn along_line(line: &[Point], x: &mut Vec<f64>, y: &mut Vec<f64>, l: &mut Vec<f6
     }
 }
 
+/// The edges from node `lo[i]` to `hi[i]` into `e` (x, y, [`checked_len`]; `lo.len()` each).
+#[inline(always)]
+fn cross_edges(lo: &[Point], hi: &[Point], e: [&mut [f64]; 3]) {
+    let [x, y, l] = e;
+    let n = x.len();
+    let (y, l, lo, hi) = (&mut y[..n], &mut l[..n], &lo[..n], &hi[..n]);
+    for i in 0..n {
+        let (dx, dy) = (hi[i][0] - lo[i][0], hi[i][1] - lo[i][1]);
+        x[i] = dx;
+        y[i] = dy;
+        l[i] = checked_len(dx, dy);
+    }
+}
+
+/// The top edges, the edges across and loop 1 of one row (see [`Rows::figures`]).
+#[inline(always)]
+fn row(
+    lo: &[Point],
+    hi: &[Point],
+    b: [&[f64]; 3],
+    t: [&mut [f64]; 3],
+    v: [&mut [f64]; 3],
+    out: &mut [Figures],
+) -> RowCounts {
+    let [tx, ty, tl] = t;
+    let [vx, vy, vl] = v;
+    line_edges(hi, [&mut *tx, &mut *ty, &mut *tl]);
+    cross_edges(lo, hi, [&mut *vx, &mut *vy, &mut *vl]);
+    row_figures(b, [tx, ty, tl], [vx, vy, vl], out)
+}
+
+/// [`row`] compiled for AVX-512 (8-lane vectors; the same IEEE operations on the same
+/// operands, no fused multiply-add, so the same bits).
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx512f,avx512dq,avx512vl,avx2")]
+fn row_avx512(
+    lo: &[Point],
+    hi: &[Point],
+    b: [&[f64]; 3],
+    t: [&mut [f64]; 3],
+    v: [&mut [f64]; 3],
+    out: &mut [Figures],
+) -> RowCounts {
+    row(lo, hi, b, t, v, out)
+}
+
+/// [`row`] compiled for AVX2.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+fn row_avx2(
+    lo: &[Point],
+    hi: &[Point],
+    b: [&[f64]; 3],
+    t: [&mut [f64]; 3],
+    v: [&mut [f64]; 3],
+    out: &mut [Figures],
+) -> RowCounts {
+    row(lo, hi, b, t, v, out)
+}
+
 /// The figures of one cell from loop 1 (one record per cell, so that loop 1 writes through a
 /// single `&mut` slice: the compiler then needs no aliasing checks to vectorise it).
 #[derive(Debug, Clone, Copy, Default)]
 struct Figures {
-    /// The four corner angles.
-    ang: [f64; 4],
     /// Smallest and largest angle, skewness, scaled Jacobian, edge ratio, aspect ratio.
     fig: [f64; 6],
-    /// [`super::kernel::Bins::slot`] of the four angles and of the figures from skewness on.
+    /// The histogram bins of the four angles ([`super::kernel::angle_slot`]) and of the
+    /// figures from skewness on ([`super::kernel::count_slot`]).
     slot: [f64; 8],
     /// 0 for the reference path, 1 for a valid cell, 2 for an inverted one (counted in loop 1).
     flag: f64,
@@ -99,37 +171,33 @@ impl Rows {
     /// The row of cells between node lines `lo` and `hi` (`ni + 1` nodes each) into
     /// `self.cells`; the bottom edges must already be in `bx, by, bl`.
     ///
-    /// With [`Tables::wide`] (the CPU has AVX2) loop 1 runs in 4-lane vectors (the same IEEE operations on
+    /// With [`Tables::wider`] (AVX-512) loop 1 runs in 8-lane vectors, with [`Tables::wide`]
+    /// (the CPU has AVX2) in 4-lane vectors (the same IEEE operations on
     /// the same operands, so the same bits as the 2-lane SSE2 build; no fused multiply-add).
     fn figures(&mut self, lo: &[Point], hi: &[Point], bins: &Tables) -> RowCounts {
         let n = lo.len() - 1;
-        along_line(hi, &mut self.tx, &mut self.ty, &mut self.tl);
+        for v in [&mut self.tx, &mut self.ty, &mut self.tl] {
+            v.resize(n, 0.0);
+        }
         for v in [&mut self.vx, &mut self.vy, &mut self.vl] {
             v.resize(n + 1, 0.0);
         }
-        {
-            let (vx, vy, vl) = (&mut self.vx[..=n], &mut self.vy[..=n], &mut self.vl[..=n]);
-            let (lo, hi) = (&lo[..=n], &hi[..=n]);
-            for i in 0..=n {
-                let (dx, dy) = (hi[i][0] - lo[i][0], hi[i][1] - lo[i][1]);
-                vx[i] = dx;
-                vy[i] = dy;
-                vl[i] = checked_len(dx, dy);
-            }
-        }
         self.cells.resize(n, Figures::default());
-        let (b, t, v) = (
-            [&self.bx[..], &self.by, &self.bl],
-            [&self.tx[..], &self.ty, &self.tl],
-            [&self.vx[..], &self.vy, &self.vl],
-        );
+        let b = [&self.bx[..n], &self.by[..n], &self.bl[..n]];
+        let t = [&mut self.tx[..n], &mut self.ty[..n], &mut self.tl[..n]];
+        let v = [&mut self.vx[..=n], &mut self.vy[..=n], &mut self.vl[..=n]];
         let out = &mut self.cells[..n];
+        #[cfg(target_arch = "x86_64")]
+        if bins.wider {
+            // SAFETY: `wider` is only set when the CPU has these features (see `Tables::wider`).
+            return unsafe { row_avx512(lo, hi, b, t, v, out) };
+        }
         #[cfg(target_arch = "x86_64")]
         if bins.wide {
             // SAFETY: `wide` is only set when the CPU has AVX2 (see `Tables::wide`).
-            return unsafe { row_figures_avx2(b, t, v, out, bins) };
+            return unsafe { row_avx2(lo, hi, b, t, v, out) };
         }
-        row_figures(b, t, v, out, bins)
+        row(lo, hi, b, t, v, out)
     }
 }
 
@@ -162,28 +230,21 @@ fn unkey(k: i64) -> f64 {
 }
 
 /// [`row_figures`] compiled for AVX2.
-#[cfg(target_arch = "x86_64")]
+#[cfg(all(test, target_arch = "x86_64"))]
 #[target_feature(enable = "avx2")]
 fn row_figures_avx2(
     b: [&[f64]; 3],
     t: [&[f64]; 3],
     v: [&[f64]; 3],
     out: &mut [Figures],
-    bins: &Tables,
 ) -> RowCounts {
-    row_figures(b, t, v, out, bins)
+    row_figures(b, t, v, out)
 }
 
 /// Loop 1: the figures of every cell of a row from its edges (`x`, `y`, length): bottom `b`
 /// and top `t` edges (`out.len()` each), the edges `v` across the row (`out.len() + 1`).
 #[inline(always)]
-fn row_figures(
-    b: [&[f64]; 3],
-    t: [&[f64]; 3],
-    v: [&[f64]; 3],
-    out: &mut [Figures],
-    bins: &Tables,
-) -> RowCounts {
+fn row_figures(b: [&[f64]; 3], t: [&[f64]; 3], v: [&[f64]; 3], out: &mut [Figures]) -> RowCounts {
     let n = out.len();
     let mut k = RowCounts {
         lo: [i64::MAX; 5],
@@ -237,17 +298,16 @@ fn row_figures(
             k.hi[m] = k.hi[m].max(if fine { key(y) } else { i64::MIN });
         }
         out[i] = Figures {
-            ang: a,
             fig: [amin, amax, sk, sj, er, ar],
             slot: [
-                bins.angle.slot(a[0]),
-                bins.angle.slot(a[1]),
-                bins.angle.slot(a[2]),
-                bins.angle.slot(a[3]),
-                bins.skewness.slot(sk),
-                bins.scaled_jacobian.slot(sj),
-                bins.ratio.slot(er),
-                bins.ratio.slot(ar),
+                angle_slot(a[0]),
+                angle_slot(a[1]),
+                angle_slot(a[2]),
+                angle_slot(a[3]),
+                count_slot(sk, &SKEWNESS_EDGES),
+                count_slot(sj, &JACOBIAN_EDGES),
+                count_slot(er, &RATIO_EDGES),
+                count_slot(ar, &RATIO_EDGES),
             ],
             flag: if !fine {
                 0.0
@@ -269,9 +329,12 @@ fn row_figures(
 pub(super) struct Chunk {
     /// The reference path's counts.
     metrics: QualityMetrics,
-    /// The fast path's histogram counts per metric (bins below 32, masked to spare the
-    /// bounds checks).
-    counts: [[u64; 32]; 5],
+    /// The fast path's histogram counts (bins below 32),
+    /// per value of a cell (the four angles, then skewness, scaled Jacobian, edge ratio,
+    /// aspect ratio): the four angle increments of a cell (often the same bin) go to
+    /// different tables, so they do not wait for each other's stores (measured: 14% of the
+    /// report's time; a second set of tables for every other cell was slower).
+    counts: [[u64; 32]; 8],
     /// The fast path's cells outside the acceptable range, per metric.
     outside: [u64; 5],
     /// Cells through the fast path.
@@ -296,7 +359,7 @@ impl Chunk {
     pub fn new() -> Chunk {
         Chunk {
             metrics: QualityMetrics::empty(),
-            counts: [[0; 32]; 5],
+            counts: [[0; 32]; 8],
             outside: [0; 5],
             fast: 0,
             ext: [[f64::INFINITY, f64::NEG_INFINITY]; 5],
@@ -353,8 +416,17 @@ impl Chunk {
             // Only finite values were folded: an infinite bound means none came.
             m.min = lo.is_finite().then_some(lo);
             m.max = hi.is_finite().then_some(hi);
-            for (a, b) in m.histogram.counts.iter_mut().zip(&self.counts[which]) {
-                *a += b;
+            let slots = match which {
+                ANGLE => 0..4,
+                SKEW => 4..5,
+                SJ => 5..6,
+                ER => 6..7,
+                _ => 7..8,
+            };
+            for c in &self.counts[slots] {
+                for (a, b) in m.histogram.counts.iter_mut().zip(c) {
+                    *a += b;
+                }
             }
             m.outside += self.outside[which];
             m.samples += self.fast * if which == ANGLE { 4 } else { 1 };
@@ -410,17 +482,12 @@ impl Chunk {
                     self.add_reference(&mut f, &[line[i], line[i + 1], next[i + 1], next[i]]);
                     continue;
                 }
-                let [lo, hi, sk, sj, er, ar] = cell.fig;
-                f.sum_min += lo;
-                f.sum_max += hi;
+                f.sum_min += cell.fig[0];
+                f.sum_max += cell.fig[1];
                 let (c, s) = (&mut self.counts, &cell.slot);
-                for k in 0..4 {
-                    c[ANGLE][t.angle.bin(s[k], cell.ang[k])] += 1;
+                for k in 0..8 {
+                    c[k][bin_of_slot(s[k])] += 1;
                 }
-                c[SKEW][t.skewness.bin(s[4], sk)] += 1;
-                c[SJ][t.scaled_jacobian.bin(s[5], sj)] += 1;
-                c[ER][t.ratio.bin(s[6], er)] += 1;
-                c[AR][t.ratio.bin(s[7], ar)] += 1;
             }
             std::mem::swap(&mut rows.bx, &mut rows.tx);
             std::mem::swap(&mut rows.by, &mut rows.ty);
@@ -524,17 +591,82 @@ mod tests {
                 let (b, tt, v) = (edge(n), edge(n), edge(n + 1));
                 let mut one = vec![Figures::default(); n];
                 let mut two = vec![Figures::default(); n];
-                let k1 = row_figures(refs(&b), refs(&tt), refs(&v), &mut one, &t);
+                let k1 = row_figures(refs(&b), refs(&tt), refs(&v), &mut one);
                 // SAFETY: `t.wide` says the CPU has AVX2.
-                let k2 = unsafe { row_figures_avx2(refs(&b), refs(&tt), refs(&v), &mut two, &t) };
+                let k2 = unsafe { row_figures_avx2(refs(&b), refs(&tt), refs(&v), &mut two) };
                 assert_eq!(format!("{k1:?}"), format!("{k2:?}"));
                 let bits = |f: &[Figures]| -> Vec<u64> {
                     f.iter()
-                        .flat_map(|c| c.ang.iter().chain(&c.fig).chain(&c.slot).chain([&c.flag]))
+                        .flat_map(|c| c.fig.iter().chain(&c.slot).chain([&c.flag]))
                         .map(|x| x.to_bits())
                         .collect()
                 };
                 assert_eq!(bits(&one), bits(&two));
+            }
+        }
+    }
+
+    /// The AVX2 and AVX-512 builds of a whole row (its edges, then loop 1) give the bits of
+    /// the portable one, on node lines with repeated, tiny, huge and non-finite nodes.
+    #[test]
+    fn wide_and_portable_row_edges_agree() {
+        let t = Tables::new();
+        if !t.wide {
+            return;
+        }
+        let mut r = SplitMix64(7);
+        let mut u = || (r.next_u64() >> 11) as f64 / (1u64 << 53) as f64;
+        for n in [1usize, 2, 3, 5, 8, 16, 17, 33] {
+            for round in 0..200 {
+                let scale = [1.0, 1e-150, 1e150, 1e-3][round % 4];
+                let mut line = || -> Vec<Point> {
+                    (0..=n)
+                        .map(|_| match (u() * 12.0) as u32 {
+                            0 => [0.0, 0.0],
+                            1 => [f64::NAN, 1.0],
+                            2 => [f64::INFINITY, 0.5],
+                            _ => [scale * (2.0 * u() - 1.0), scale * (2.0 * u() - 1.0)],
+                        })
+                        .collect()
+                };
+                let (lo, hi) = (line(), line());
+                let mut b = [Vec::new(), Vec::new(), Vec::new()];
+                {
+                    let [x, y, l] = &mut b;
+                    along_line(&lo, x, y, l);
+                }
+                let run = |wide: u8| {
+                    let mut e = vec![vec![0.0; n]; 3];
+                    let mut v = vec![vec![0.0; n + 1]; 3];
+                    let mut out = vec![Figures::default(); n];
+                    let [tx, ty, tl] = &mut e[..] else {
+                        unreachable!()
+                    };
+                    let [vx, vy, vl] = &mut v[..] else {
+                        unreachable!()
+                    };
+                    let (te, ve) = ([&mut tx[..], ty, tl], [&mut vx[..], vy, vl]);
+                    let k = match wide {
+                        // SAFETY: `t.wide` says the CPU has AVX2.
+                        1 => unsafe { row_avx2(&lo, &hi, refs(&b), te, ve, &mut out) },
+                        // SAFETY: `t.wider` says the CPU has the AVX-512 features.
+                        2 => unsafe { row_avx512(&lo, &hi, refs(&b), te, ve, &mut out) },
+                        _ => row(&lo, &hi, refs(&b), te, ve, &mut out),
+                    };
+                    let bits: Vec<u64> = out
+                        .iter()
+                        .flat_map(|c| c.fig.iter().chain(&c.slot).chain([&c.flag]))
+                        .chain(e.iter().flatten())
+                        .chain(v.iter().flatten())
+                        .map(|x| x.to_bits())
+                        .collect();
+                    (format!("{k:?}"), bits)
+                };
+                let portable = run(0);
+                assert_eq!(portable, run(1));
+                if t.wider {
+                    assert_eq!(portable, run(2));
+                }
             }
         }
     }
