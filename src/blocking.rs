@@ -639,7 +639,7 @@ fn prepare_inserted_hole(layout: &mut BlockLayout, hole: CircleId) -> usize {
             .iter()
             .filter_map(|&b| wall_sweep(layout, b).map(|s| s.abs()))
             .fold(0.0, f64::max);
-        if k % 2 == 0 && k >= 4 && widest <= MAX_TEMPLATE_SWEEP {
+        if k.is_multiple_of(2) && k >= 4 && widest <= MAX_TEMPLATE_SWEEP {
             break;
         }
         // Candidates: blocks on the hole whose partner across the medial arc has a non-empty
@@ -659,7 +659,7 @@ fn prepare_inserted_hole(layout: &mut BlockLayout, hole: CircleId) -> usize {
             let is_wall = matches!(layout.edges[pe].kind, EdgeKind::Wall(_));
             let ok = is_wall && wall_sweep(layout, partner).is_some_and(|s| s != 0.0);
             let sweep = wall_sweep(layout, b).map_or(0.0, f64::abs);
-            if ok && best.map_or(true, |(s, _)| sweep > s) {
+            if ok && best.is_none_or(|(s, _)| sweep > s) {
                 best = Some((sweep, e));
             }
         }
@@ -1195,7 +1195,7 @@ fn bad_clusters(layout: &BlockLayout, nv: u32, only: Option<&[bool]>) -> Vec<u32
     let mut bad: Vec<u32> = Vec::new();
     let (mut pts, mut outline) = (Vec::new(), Vec::new());
     for (b, block) in layout.blocks.iter().enumerate() {
-        let wanted = only.map_or(true, |only| {
+        let wanted = only.is_none_or(|only| {
             block
                 .corners
                 .iter()

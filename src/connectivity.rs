@@ -198,7 +198,7 @@ pub fn connectivity(
                     };
                     let same = layout.blocks[pb].sides[ps].reversed == block.sides[s].reversed;
                     let pg = &grids[pb];
-                    let n = if s % 2 == 0 { g.ni } else { g.nj };
+                    let n = if s.is_multiple_of(2) { g.ni } else { g.nj };
                     let q = |p: usize| if same { p } else { n - p };
                     let (aa, sa) = along(s);
                     let (ab, sb) = along(ps);

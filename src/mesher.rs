@@ -387,7 +387,7 @@ pub(crate) fn short_collapses(
         .iter()
         .filter(|c| !c.zero)
         .filter(|c| {
-            clusters.map_or(true, |cl| {
+            clusters.is_none_or(|cl| {
                 let v = medial.arcs[c.arc as usize].ends[0] as usize;
                 cb.contracted
                     .cluster_of

@@ -523,7 +523,7 @@ pub struct QualityMetrics {
     /// larger over the smaller.
     pub interface_growth_ratio: MetricSummary,
     pub aspect_ratio: MetricSummary,
-    /// Over every node of every wall side (an edge of kind [`EdgeKind::Wall`] that is an arc),
+    /// Over every node of every wall side (an edge of kind [`EdgeKind::Wall`](crate::layout::EdgeKind::Wall) that is an arc),
     /// the angle in degrees between the grid line leaving the wall node into the block and
     /// the circle's normal into the fluid there (0 for an orthogonal grid; `None` without
     /// wall arcs).

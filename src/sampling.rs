@@ -200,7 +200,7 @@ impl Samples {
 /// Hence `u_{n/2 - k} = (-x_k, y_k)`, `u_{n - k} = (x_k, -y_k)` and `u_{n/4 - k} = (y_k, x_k)`
 /// hold bitwise. Returns an empty vector when `n` is not a positive multiple of 8.
 pub fn unit_offsets(n: usize) -> Vec<Point> {
-    if n == 0 || n % 8 != 0 {
+    if n == 0 || !n.is_multiple_of(8) {
         return Vec::new();
     }
     let m = n / 8;
@@ -313,7 +313,7 @@ pub fn sample(domain: &Domain, counts: &[usize], gaps: &[f64]) -> Samples {
 /// `unit_offsets(n)[k % n]` but computed alone (so `n` may be far beyond what a table holds).
 /// `[NaN, NaN]` when `n` is not a positive multiple of 8.
 pub fn unit_offset(k: u64, n: u64) -> Point {
-    if n == 0 || n % 8 != 0 {
+    if n == 0 || !n.is_multiple_of(8) {
         return [f64::NAN; 2];
     }
     let k = k % n;
@@ -384,7 +384,7 @@ fn coarse_count(c: Circle, n: u64, n0: u64) -> u64 {
     let reach = c.radius + c.center[0].abs().max(c.center[1].abs());
     let min_sagitta = 0.5 * f64::EPSILON * reach;
     let mut n = n;
-    while n % 16 == 0 && n / 2 >= n0 {
+    while n.is_multiple_of(16) && n / 2 >= n0 {
         let s = TAU * c.radius / n as f64;
         if s * s / (8.0 * c.radius) >= min_sagitta {
             break;
@@ -408,7 +408,7 @@ fn adaptive_circle(
     near: &[Near],
     cap: usize,
 ) -> Result<(u64, Vec<u64>), ()> {
-    if n0 > cap as u64 || n0 == 0 || n0 % 8 != 0 {
+    if n0 > cap as u64 || n0 == 0 || !n0.is_multiple_of(8) {
         return Err(());
     }
     let coarse = TAU * c.radius / n0 as f64;

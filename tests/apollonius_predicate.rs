@@ -91,13 +91,13 @@ const TRIPLES: [(i64, i64, i64); 7] = [
 fn tangent_site(rng: &mut Rng, p: [f64; 2], rho: f64, is_bounding: bool) -> Site {
     let (a, b, c) = TRIPLES[rng.int(0, TRIPLES.len() as i64 - 1) as usize];
     let (mut a, mut b) = (a, b);
-    if rng.next() % 2 == 0 {
+    if rng.next().is_multiple_of(2) {
         std::mem::swap(&mut a, &mut b);
     }
-    if rng.next() % 2 == 0 {
+    if rng.next().is_multiple_of(2) {
         a = -a;
     }
-    if rng.next() % 2 == 0 {
+    if rng.next().is_multiple_of(2) {
         b = -b;
     }
     let kmin = (rho / c as f64).floor() as i64 + 1;
@@ -548,7 +548,7 @@ fn filter_soundness_near_degenerate() {
             continue;
         };
         for root in &roots {
-            let lb = rng.next() % 4 == 0;
+            let lb = rng.next().is_multiple_of(4);
             let l = tangent_site(&mut rng, p, rho, lb);
             for k in -40i32..=40 {
                 let mut m = l;

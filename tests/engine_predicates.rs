@@ -281,7 +281,7 @@ fn symbolic_incircle(pts: [Point; 4]) -> Ordering {
         }
         for i in 0..k - 1 {
             odd = heap(k - 1, perm, odd, out);
-            if k % 2 == 0 {
+            if k.is_multiple_of(2) {
                 perm.swap(i, k - 1);
             } else {
                 perm.swap(0, k - 1);

@@ -52,7 +52,7 @@ fn check_basic(d: &Domain, s: &Samples) {
     for id in d.circle_ids() {
         let c = d.circle(id);
         let cs = s.of_circle(id);
-        assert!(cs.count % 8 == 0 && cs.count >= 8);
+        assert!(cs.count.is_multiple_of(8) && cs.count >= 8);
         for k in 0..cs.count {
             let g = (cs.first + k) as usize;
             assert_eq!(s.circle_of[g], id);
@@ -233,7 +233,7 @@ mod adaptive {
         for &(id, c) in &circles {
             let cs = s.of_circle(id);
             let n = s.grid_count(id);
-            assert!(cs.count >= 8 && n % 8 == 0);
+            assert!(cs.count >= 8 && n.is_multiple_of(8));
             for k in 0..cs.count {
                 let g = cs.first + k;
                 assert_eq!(s.circle_of[g as usize], id);

@@ -369,7 +369,7 @@ proptest! {
                 let nj = 1 + (rng.next_u64() % 12) as usize;
                 let wild = (rng.next_u64() % 4) as u32;
                 let mut g = lattice(&mut rng, ni, nj, wild);
-                if rng.next_u64() % 10 == 0 {
+                if rng.next_u64().is_multiple_of(10) {
                     g.nodes.pop();
                 }
                 g

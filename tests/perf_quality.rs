@@ -186,7 +186,7 @@ fn grids(seed: u64, blocks: usize) -> Vec<BlockGrid> {
             let scale = [1.0, 1e-120, 1e120, 1e-160, 1e-3][(r.next_u64() % 5) as usize];
             let wild = [0, 0, 1, 3][(r.next_u64() % 4) as usize];
             let mut g = grid(&mut r, ni, nj, scale, wild);
-            if r.next_u64() % 16 == 0 {
+            if r.next_u64().is_multiple_of(16) {
                 g.nodes.pop();
             }
             g

@@ -22,7 +22,7 @@ fn random_int(rng: &mut SplitMix64, max_limbs: u64) -> Integer {
     }
     // Random bit length within the top limb, sometimes sparse (long runs of zeros).
     v >>= (rng.next_u64() % 64) as u32;
-    if rng.next_u64() % 8 == 0 {
+    if rng.next_u64().is_multiple_of(8) {
         v = (v >> 100u32 << 100u32) + 1u32;
     }
     v
@@ -56,7 +56,7 @@ fn random_quotients_round_like_the_exact_division() {
     for _ in 0..n {
         let mut num = random_int(&mut rng, 6);
         let den = random_int(&mut rng, 6) + 1u32;
-        if rng.next_u64() % 2 == 0 {
+        if rng.next_u64().is_multiple_of(2) {
             num = -num;
         }
         let exp = (rng.next_u64() % 400) as i64 - 200;

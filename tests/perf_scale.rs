@@ -246,7 +246,7 @@ fn any_closer_matches_the_scan() {
         let index = HoleIndex::new(&holes);
         for _ in 0..40 {
             // Queries: random, or centred just off an existing hole's boundary.
-            let q = if n > 0 && rng.next_u64() % 2 == 0 {
+            let q = if n > 0 && rng.next_u64().is_multiple_of(2) {
                 let h = holes[(rng.next_u64() % n as u64) as usize];
                 let a = rng.next_f64() * std::f64::consts::TAU;
                 let d = h.radius + rng.next_f64() * 0.3;
@@ -339,7 +339,7 @@ fn holes_layout(
         }
         let v = |i: usize| v0 + (i % k) as u32;
         for i in 0..k {
-            let edge = if rng.next_u64() % 2 == 0 {
+            let edge = if rng.next_u64().is_multiple_of(2) {
                 Edge {
                     ends: [v(i), v(i + 1)],
                     curve: Curve::Arc {
@@ -385,7 +385,7 @@ fn holes_layout(
             ],
             wall: Some(id),
         });
-        if rng.next_u64() % 3 == 0 {
+        if rng.next_u64().is_multiple_of(3) {
             layout.blocks.push(Block {
                 corners: [0, 0, 0, 0],
                 sides: [side(e as u32), side(0), side(0), side(0)],
@@ -413,7 +413,7 @@ fn batched_templates_equal_one_call_per_hole() {
             })
             .collect();
         let (layout, mut holes) = holes_layout(&mut rng, &counts);
-        if rng.next_u64() % 8 == 0 {
+        if rng.next_u64().is_multiple_of(8) {
             // A hole listed twice fails the second time in both.
             holes.push(holes[0]);
         }

@@ -91,7 +91,7 @@ fn synthetic_blocks(n: usize) -> Vec<BlockConnectivity> {
         let i = k % floats.len();
         SideConnectivity {
             side: k % 4,
-            name: if k % 97 == 0 {
+            name: if k.is_multiple_of(97) {
                 "odd \"name\"\n"
             } else {
                 "j_min"
@@ -102,11 +102,11 @@ fn synthetic_blocks(n: usize) -> Vec<BlockConnectivity> {
                 SideKind::Interface,
                 SideKind::Periodic,
             ][k % 4],
-            circle: (k % 3 == 0).then_some(-(k as i32) + 7),
-            partner: (k % 2 == 0).then_some(Partner {
+            circle: k.is_multiple_of(3).then_some(-(k as i32) + 7),
+            partner: k.is_multiple_of(2).then_some(Partner {
                 block: k * 31,
                 side: k % 4,
-                same_direction: k % 5 == 0,
+                same_direction: k.is_multiple_of(5),
             }),
             cgns: (k % 5 != 1).then_some(Cgns1to1 {
                 point_range: [[k, 1], [usize::MAX, 0]],

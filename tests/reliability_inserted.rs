@@ -92,7 +92,11 @@ fn layout(rng: &mut SplitMix64) -> Option<Domain> {
         let p = [a.center[0] + a.radius * u[0], a.center[1] + a.radius * u[1]];
         let curvature = 1.0 / a.radius + 1.0 / b.radius;
         let s = (6.0 * r / curvature).sqrt() * (1.0 + 2.0 * rng.next_f64());
-        let side = if rng.next_u64() % 2 == 0 { 1.0 } else { -1.0 };
+        let side = if rng.next_u64().is_multiple_of(2) {
+            1.0
+        } else {
+            -1.0
+        };
         let c = [p[0] - side * s * u[1], p[1] + side * s * u[0]];
         if fits(&holes, c, r, 1e-7) {
             holes.push(Circle {
@@ -224,7 +228,7 @@ fn near_touching_with_tiny_hole(rng: &mut SplitMix64) -> Option<Domain> {
     let tiny = 1 + (rng.next_u64() % 3) as usize;
     for _ in 0..tiny {
         let r = 1e-4 * (0.5 + rng.next_f64());
-        let c = if holes.len() >= 3 && rng.next_u64() % 3 == 0 {
+        let c = if holes.len() >= 3 && rng.next_u64().is_multiple_of(3) {
             let g = [0, 1, 2].map(|i| holes[i].center);
             let m = [
                 (g[0][0] + g[1][0] + g[2][0]) / 3.0,
@@ -236,7 +240,11 @@ fn near_touching_with_tiny_hole(rng: &mut SplitMix64) -> Option<Domain> {
             let p = [a.center[0] + a.radius, 0.0];
             let curvature = 1.0 / a.radius + 1.0 / b.radius;
             let s = (4.0 * r / curvature).sqrt() * (0.7 + 2.5 * rng.next_f64());
-            let side = if rng.next_u64() % 2 == 0 { 1.0 } else { -1.0 };
+            let side = if rng.next_u64().is_multiple_of(2) {
+                1.0
+            } else {
+                -1.0
+            };
             [p[0] + 0.5 * s * (rng.next_f64() - 0.5), side * s]
         };
         let t = Circle::new(c[0], c[1], r);

@@ -677,7 +677,7 @@ fn orientation_sum_reference(
 pub fn choose(roots: Vec<ExactApollonius>, choice: Choice) -> Option<ExactApollonius> {
     let mut kept: Vec<ExactApollonius> = roots
         .into_iter()
-        .filter(|r| choice.orientation.map_or(true, |o| r.orientation == o))
+        .filter(|r| choice.orientation.is_none_or(|o| r.orientation == o))
         .collect();
     if kept.len() >= 2 {
         if let Some(h) = choice.hint {

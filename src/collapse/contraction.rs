@@ -21,7 +21,7 @@ fn corners(medial: &MedialGraph, b: usize) -> [(u32, u32); 2] {
     let [v0, v1] = arc.ends;
     let (c1f, c1l) = (arc.c1[0], arc.c1[arc.c1.len() - 1]);
     let (c2f, c2l) = (arc.c2[0], arc.c2[arc.c2.len() - 1]);
-    if b % 2 == 0 {
+    if b.is_multiple_of(2) {
         [(v0, c1f), (v1, c1l)]
     } else {
         [(v1, c2l), (v0, c2f)]
@@ -203,7 +203,7 @@ pub(super) fn contract_with(
             }
             // The wall of block `bu` without its first sample.
             let arc = &medial.arcs[bu / 2];
-            if bu % 2 == 0 {
+            if bu.is_multiple_of(2) {
                 run.extend_from_slice(&arc.c1[1..]);
             } else {
                 run.extend(arc.c2.iter().rev().skip(1));

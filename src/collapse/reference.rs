@@ -48,7 +48,7 @@ pub fn contract(medial: &MedialGraph, collapse: &[bool]) -> Result<Contracted, M
     // (wall c2 reversed, from (v1, c2.last) to (v0, c2[0])).
     let wall = |b: usize| -> Vec<u32> {
         let arc = &medial.arcs[b / 2];
-        if b % 2 == 0 {
+        if b.is_multiple_of(2) {
             arc.c1.clone()
         } else {
             arc.c2.iter().rev().copied().collect()
@@ -59,7 +59,7 @@ pub fn contract(medial: &MedialGraph, collapse: &[bool]) -> Result<Contracted, M
         let [v0, v1] = arc.ends;
         let (c1f, c1l) = (arc.c1[0], arc.c1[arc.c1.len() - 1]);
         let (c2f, c2l) = (arc.c2[0], arc.c2[arc.c2.len() - 1]);
-        if b % 2 == 0 {
+        if b.is_multiple_of(2) {
             [(v0, c1f), (v1, c1l)]
         } else {
             [(v1, c2l), (v0, c2f)]

@@ -267,9 +267,7 @@ impl CountProblem {
             loop {
                 let mut u = None;
                 for c in 0..nc {
-                    if !done[c]
-                        && dist[c].is_finite()
-                        && u.map_or(true, |x: usize| dist[c] < dist[x])
+                    if !done[c] && dist[c].is_finite() && u.is_none_or(|x: usize| dist[c] < dist[x])
                     {
                         u = Some(c);
                     }

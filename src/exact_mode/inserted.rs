@@ -97,7 +97,7 @@ pub(crate) fn prepare(
             .collect();
         let k = on.len();
         let widest = on.iter().map(|x| x.1).fold(0.0, f64::max);
-        if k % 2 == 0 && k >= 4 && widest <= MAX_TEMPLATE_SWEEP {
+        if k.is_multiple_of(2) && k >= 4 && widest <= MAX_TEMPLATE_SWEEP {
             break;
         }
         // The widest arc on the hole whose middle is defined (ties: the smallest index). A
@@ -107,8 +107,8 @@ pub(crate) fn prepare(
         let mut best: Option<(f64, usize)> = None;
         for pass in 0..2 {
             for &(e, w) in &on {
-                let allowed = pass == 1 || k % 2 == 0 || !other_fluid(e);
-                if allowed && w > 0.0 && best.map_or(true, |(bw, _)| w > bw) {
+                let allowed = pass == 1 || k.is_multiple_of(2) || !other_fluid(e);
+                if allowed && w > 0.0 && best.is_none_or(|(bw, _)| w > bw) {
                     best = Some((w, e));
                 }
             }

@@ -77,7 +77,7 @@ pub fn decode_points(data: &[u8]) -> Vec<Point> {
             }
             1 => {
                 let mask = b.u16();
-                let r = if b.u8() % 2 == 0 { 1.0 } else { 5.0 };
+                let r = if b.u8().is_multiple_of(2) { 1.0 } else { 5.0 };
                 for (k, &(cx, cy)) in CIRCLE.iter().enumerate() {
                     if mask & (1 << k) != 0 {
                         pts.push([(ox + r * cx) * s, (oy + r * cy) * s]);

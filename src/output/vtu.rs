@@ -84,7 +84,7 @@ fn write_to<W: Write>(w: &mut W, mesh: &Mesh) -> io::Result<()> {
         mesh.grids
             .iter()
             .enumerate()
-            .flat_map(|(b, g)| std::iter::repeat(b).take(g.cells())),
+            .flat_map(|(b, g)| std::iter::repeat_n(b, g.cells())),
     )?;
     writeln!(w, "        </DataArray>")?;
     for (k, name) in super::vtk::CELL_ARRAYS.iter().enumerate() {

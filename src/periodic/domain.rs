@@ -141,7 +141,7 @@ impl PeriodicDomain {
                 if gap <= tol {
                     let j = j % h;
                     let pair = (i.min(j), i.max(j), gap);
-                    if worst.map_or(true, |w| (pair.0, pair.1) < (w.0, w.1)) {
+                    if worst.is_none_or(|w| (pair.0, pair.1) < (w.0, w.1)) {
                         worst = Some(pair);
                     }
                 }

@@ -186,8 +186,8 @@ fn interface_cells(grids: &[BlockGrid], a: usize, sa: usize, b: usize, sb: usize
     if sa >= 4 || sb >= 4 || !well_formed(ga) || !well_formed(gb) {
         return None;
     }
-    let n = if sa % 2 == 0 { ga.ni } else { ga.nj };
-    let nb = if sb % 2 == 0 { gb.ni } else { gb.nj };
+    let n = if sa.is_multiple_of(2) { ga.ni } else { ga.nj };
+    let nb = if sb.is_multiple_of(2) { gb.ni } else { gb.nj };
     let empty = ga.ni == 0 || ga.nj == 0 || gb.ni == 0 || gb.nj == 0;
     (n == nb && n != 0 && !empty).then_some(n)
 }
@@ -321,7 +321,7 @@ impl<'a> Plan<'a> {
 
 /// Cells along side `s` of `grid`.
 fn side_cells(grid: &BlockGrid, s: usize) -> usize {
-    if s % 2 == 0 {
+    if s.is_multiple_of(2) {
         grid.ni
     } else {
         grid.nj
