@@ -417,7 +417,7 @@ fn near_ties_match_the_reference() {
                         1 => -((i + j * ni) as f64),
                         _ => ((i + j) % 2) as f64,
                     };
-                    let r = (rng.next_u64() >> 11) as f64 / (1u64 << 53) as f64;
+                    let r = rng.next_f64();
                     let d = scale * (step + r);
                     let (x, y) = (i as f64 * (1.0 + d), j as f64 * 0.7 * (1.0 - d));
                     nodes.push([x + 0.3 * y, y]);

@@ -570,7 +570,7 @@ mod tests {
             return;
         }
         let mut r = SplitMix64(3);
-        let mut u = || (r.next_u64() >> 11) as f64 / (1u64 << 53) as f64;
+        let mut u = || r.next_f64();
         for n in [1usize, 2, 3, 5, 8, 16, 17, 33] {
             for round in 0..200 {
                 let scale = [1.0, 1e-150, 1e150, 1e-3][round % 4];
@@ -615,7 +615,7 @@ mod tests {
             return;
         }
         let mut r = SplitMix64(7);
-        let mut u = || (r.next_u64() >> 11) as f64 / (1u64 << 53) as f64;
+        let mut u = || r.next_f64();
         for n in [1usize, 2, 3, 5, 8, 16, 17, 33] {
             for round in 0..200 {
                 let scale = [1.0, 1e-150, 1e150, 1e-3][round % 4];
