@@ -16,7 +16,7 @@ pub(super) const NONE: u32 = u32::MAX;
 /// The two corners `(medial vertex, sample)` of block `b` (`2e` on arc `e`'s C1, from
 /// `(v0, c1[0])` to `(v1, c1.last)`; `2e + 1` on C2, from `(v1, c2.last)` to `(v0, c2[0])`).
 /// The arc's chains must not be empty.
-fn corners(medial: &MedialGraph, b: usize) -> [(u32, u32); 2] {
+pub(super) fn corners(medial: &MedialGraph, b: usize) -> [(u32, u32); 2] {
     let arc = &medial.arcs[b / 2];
     let [v0, v1] = arc.ends;
     let (c1f, c1l) = (arc.c1[0], arc.c1[arc.c1.len() - 1]);
@@ -26,6 +26,25 @@ fn corners(medial: &MedialGraph, b: usize) -> [(u32, u32); 2] {
     } else {
         [(v1, c2l), (v0, c2f)]
     }
+}
+
+/// The vertex of a cluster of `medial` vertices (`members`, in vertex order, not empty): its
+/// first member, at the mean position of all members when there are several.
+pub(super) fn merged_vertex(medial: &MedialGraph, members: &[u32]) -> MedialVertex {
+    let mut v = medial.vertices[members[0] as usize].clone();
+    if members.len() > 1 {
+        let k = members.len() as f64;
+        let sx: f64 = members
+            .iter()
+            .map(|&i| medial.vertices[i as usize].position[0])
+            .sum();
+        let sy: f64 = members
+            .iter()
+            .map(|&i| medial.vertices[i as usize].position[1])
+            .sum();
+        v.position = [sx / k, sy / k];
+    }
+    v
 }
 
 /// True when every arc has its ends in range and non-empty chains (what the contraction
@@ -147,25 +166,7 @@ pub(super) fn contract_with(
     }
     drop(fill);
     let members = |c: usize| &member[start[c] as usize..start[c + 1] as usize];
-    let vertices: Vec<MedialVertex> = (0..k)
-        .map(|c| {
-            let ms = members(c);
-            let mut v = medial.vertices[ms[0] as usize].clone();
-            if ms.len() > 1 {
-                let k = ms.len() as f64;
-                let sx: f64 = ms
-                    .iter()
-                    .map(|&i| medial.vertices[i as usize].position[0])
-                    .sum();
-                let sy: f64 = ms
-                    .iter()
-                    .map(|&i| medial.vertices[i as usize].position[1])
-                    .sum();
-                v.position = [sx / k, sy / k];
-            }
-            v
-        })
-        .collect();
+    let vertices: Vec<MedialVertex> = (0..k).map(|c| merged_vertex(medial, members(c))).collect();
 
     let owned;
     let next = match next {

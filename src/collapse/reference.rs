@@ -1,6 +1,7 @@
 //! The contraction as first written ([`contract`]): the oracle of the indexed one
 //! ([`super::contract`]), kept for the tests (`tests/perf_blocking.rs`).
 
+use super::contraction::{self, merged_vertex};
 use super::{find, internal, union_collapsed, Contracted};
 use crate::medial::{MedialArc, MedialGraph, MedialVertex};
 use crate::mesher::MeshError;
@@ -24,25 +25,7 @@ pub fn contract(medial: &MedialGraph, collapse: &[bool]) -> Result<Contracted, M
         *cluster = id_of_root[r];
         members[id_of_root[r] as usize].push(v as u32);
     }
-    let vertices: Vec<MedialVertex> = members
-        .iter()
-        .map(|ms| {
-            let mut v = medial.vertices[ms[0] as usize].clone();
-            if ms.len() > 1 {
-                let k = ms.len() as f64;
-                let sx: f64 = ms
-                    .iter()
-                    .map(|&i| medial.vertices[i as usize].position[0])
-                    .sum();
-                let sy: f64 = ms
-                    .iter()
-                    .map(|&i| medial.vertices[i as usize].position[1])
-                    .sum();
-                v.position = [sx / k, sy / k];
-            }
-            v
-        })
-        .collect();
+    let vertices: Vec<MedialVertex> = members.iter().map(|ms| merged_vertex(medial, ms)).collect();
 
     // Blocks: 2e on C1 (wall c1, from corner (v0, c1[0]) to (v1, c1.last)), 2e + 1 on C2
     // (wall c2 reversed, from (v1, c2.last) to (v0, c2[0])).
@@ -54,17 +37,7 @@ pub fn contract(medial: &MedialGraph, collapse: &[bool]) -> Result<Contracted, M
             arc.c2.iter().rev().copied().collect()
         }
     };
-    let corners = |b: usize| -> [(u32, u32); 2] {
-        let arc = &medial.arcs[b / 2];
-        let [v0, v1] = arc.ends;
-        let (c1f, c1l) = (arc.c1[0], arc.c1[arc.c1.len() - 1]);
-        let (c2f, c2l) = (arc.c2[0], arc.c2[arc.c2.len() - 1]);
-        if b.is_multiple_of(2) {
-            [(v0, c1f), (v1, c1l)]
-        } else {
-            [(v1, c2l), (v0, c2f)]
-        }
-    };
+    let corners = |b: usize| contraction::corners(medial, b);
     // The block starting at each corner: sorted by corner, found by binary search (no
     // hashing of 2m keys, issue 8).
     let mut start_block: Vec<((u32, u32), usize)> =
