@@ -7,22 +7,18 @@
 //! - the local rebuild (`CollapsedBlocking::recollapse`) takes over the arcs and curves its
 //!   changes cannot reach: the same layout, contraction, choice and exclusions as the rebuild
 //!   from scratch, after chains of rebuilds giving up many short collapses and forcing arcs,
-//!   and the counting identity of the collapse;
-//! - refinement takes the Apollonius circles of the previous round instead of cloning them
-//!   (`vertex_circles_taking`): equal to the cloning reuse and to a fresh solve.
+//!   and the counting identity of the collapse.
+
+mod common;
 
 use medial_blocks::blocking::{collapsed_blocking_with, CollapsedBlocking};
-use medial_blocks::cocircular::{vertex_circles, vertex_circles_reusing, vertex_circles_taking};
+use medial_blocks::cocircular::vertex_circles;
 use medial_blocks::collapse::{contract, reference, Contracted};
 use medial_blocks::domain::Domain;
 use medial_blocks::layouts::SplitMix64;
 use medial_blocks::mesher::MeshError;
-use medial_blocks::refine::refine;
 use medial_blocks::sampling::{sample_and_triangulate, SamplingOptions};
 use medial_blocks::Options;
-
-/// A layout whose refinement inserts holes (tiny holes next to larger ones).
-const INSERTING: &str = r#"{"bounding": {"center": [0.0, 0.0], "radius": 1.0}, "holes": [{"center": [0.3191541531691544, -0.3717929964389844], "radius": 0.24464422640973763}, {"center": [-0.11404744597041541, 0.08146095395643421], "radius": 0.11128467651604039}, {"center": [-0.42552889518459386, -0.38974998510540637], "radius": 0.0750062319977368}, {"center": [0.2359704484055954, 0.25273697336967405], "radius": 0.13286706779388338}, {"center": [-0.42666764696355597, -0.6507308368236295], "radius": 0.09961340826274921}, {"center": [-0.23212309121288838, 0.8791544668853195], "radius": 0.05751471364390008}, {"center": [-0.32687904034838855, -0.5760590860014616], "radius": 0.024988992683331306}, {"center": [-0.24251728387830382, 0.7025270240084398], "radius": 0.11940545640071007}, {"center": [-0.4207493523072746, 0.7239570940575171], "radius": 0.060101631399608516}, {"center": [-0.05955622155850428, -0.08922488265519388], "radius": 0.00012118752906053852}, {"center": [-0.07489413579200777, 0.6892364901244837], "radius": 0.00010388535976705469}, {"center": [0.9854949986492719, -0.13332433619018963], "radius": 0.00010024369325342005}]}"#;
 
 /// Bubbles (with many short collapses at 300), the inserting layout and a lattice.
 fn domains() -> Vec<Domain> {
@@ -30,7 +26,7 @@ fn domains() -> Vec<Domain> {
         .iter()
         .map(|&(n, s)| medial_blocks::layouts::bubbles(n, s).unwrap())
         .collect();
-    out.push(Domain::from_json_str(INSERTING).unwrap());
+    out.push(Domain::from_json_str(common::INSERTING).unwrap());
     out.push(medial_blocks::layouts::lattice().unwrap());
     out
 }
@@ -161,29 +157,6 @@ fn recollapse_equals_the_rebuild_from_scratch() {
         given_up >= 300,
         "only {given_up} collapses given up in {steps} steps"
     );
-}
-
-/// Taking the previous round's circles equals cloning them and a fresh solve.
-#[test]
-fn taken_circles_equal_cloned_and_fresh_ones() {
-    let sampling = SamplingOptions::default();
-    let d0 = Domain::from_json_str(INSERTING).unwrap();
-    let r = refine(&d0, Some(2.0), 10_000, &sampling).unwrap();
-    assert!(!r.inserted.is_empty());
-    let s0 = sample_and_triangulate(&d0, &sampling).unwrap();
-    let c0 = vertex_circles(&d0, &s0.medial);
-    let mut holes = d0.holes().to_vec();
-    holes.extend_from_slice(&r.inserted);
-    let d1 = Domain::bounded(d0.bounding(), holes).unwrap();
-    let s1 = sample_and_triangulate(&d1, &sampling).unwrap();
-    let cloned = vertex_circles_reusing(&d1, &s1.medial, Some((&s0.medial, &c0)));
-    let taken = vertex_circles_taking(&d1, &s1.medial, Some((&s0.medial, c0.clone())));
-    assert_eq!(taken, cloned);
-    assert_eq!(taken, vertex_circles(&d1, &s1.medial));
-    // The same graph twice: every vertex is taken over.
-    let again = vertex_circles_taking(&d0, &s0.medial, Some((&s0.medial, c0.clone())));
-    assert_eq!(again, c0);
-    assert_eq!(vertex_circles_taking(&d0, &s0.medial, None), c0);
 }
 
 /// A co-circular group as compared: circles, centre, radius, vertices.

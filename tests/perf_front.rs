@@ -2,7 +2,8 @@
 //! slow references computed alongside.
 //! - refinement reuses the Apollonius solves of the previous round for vertices with the same
 //!   circles and position ([`vertex_circles_reusing`]): the circles it returns equal a fresh
-//!   solve of every vertex of the final graph, and reuse actually happens;
+//!   solve of every vertex of the final graph, and reuse actually happens; taking them
+//!   (moved, [`vertex_circles_taking`]) gives the same circles as cloning them;
 //! - Blocking2D's corner and spoke maps indexed by sample (not hashed), the block area with
 //!   reused buffers and the contraction's sorted corner lookup: checked against hash maps and
 //!   the area as first written, on bubbles and refined layouts;
@@ -14,7 +15,7 @@
 mod common;
 
 use medial_blocks::blocking::{block_area, blocks, collapsed_blocking_with};
-use medial_blocks::cocircular::{vertex_circles, vertex_circles_reusing};
+use medial_blocks::cocircular::{vertex_circles, vertex_circles_reusing, vertex_circles_taking};
 use medial_blocks::collapse::{select_forced, Selection};
 use medial_blocks::domain::{Circle, Domain};
 use medial_blocks::geometry::verify::verify_exact;
@@ -26,9 +27,6 @@ use medial_blocks::sampling::{sample_and_triangulate, SamplingOptions};
 use medial_blocks::Options;
 use proptest::prelude::*;
 use std::collections::HashMap;
-
-/// A layout whose refinement inserts holes (tiny holes next to larger ones).
-const INSERTING: &str = r#"{"bounding": {"center": [0.0, 0.0], "radius": 1.0}, "holes": [{"center": [0.3191541531691544, -0.3717929964389844], "radius": 0.24464422640973763}, {"center": [-0.11404744597041541, 0.08146095395643421], "radius": 0.11128467651604039}, {"center": [-0.42552889518459386, -0.38974998510540637], "radius": 0.0750062319977368}, {"center": [0.2359704484055954, 0.25273697336967405], "radius": 0.13286706779388338}, {"center": [-0.42666764696355597, -0.6507308368236295], "radius": 0.09961340826274921}, {"center": [-0.23212309121288838, 0.8791544668853195], "radius": 0.05751471364390008}, {"center": [-0.32687904034838855, -0.5760590860014616], "radius": 0.024988992683331306}, {"center": [-0.24251728387830382, 0.7025270240084398], "radius": 0.11940545640071007}, {"center": [-0.4207493523072746, 0.7239570940575171], "radius": 0.060101631399608516}, {"center": [-0.05955622155850428, -0.08922488265519388], "radius": 0.00012118752906053852}, {"center": [-0.07489413579200777, 0.6892364901244837], "radius": 0.00010388535976705469}, {"center": [0.9854949986492719, -0.13332433619018963], "radius": 0.00010024369325342005}]}"#;
 
 /// A layout (far from the origin) whose refinement inserts a hole without resampling any
 /// other circle: the samples before are a prefix of the samples after.
@@ -46,7 +44,7 @@ fn bubbles_and_layouts(n: usize) -> Vec<Domain> {
 /// Random layouts with tiny holes near the others, so that refinement often inserts holes.
 fn layouts() -> Vec<Domain> {
     let mut out = vec![
-        Domain::from_json_str(INSERTING).expect("valid layout"),
+        Domain::from_json_str(common::INSERTING).expect("valid layout"),
         Domain::from_json_str(PREFIX).expect("valid layout"),
     ];
     for seed in 0..12u64 {
@@ -91,11 +89,13 @@ fn refinement_circles_equal_fresh_solves() {
 }
 
 /// Reuse across an appended hole: equal to a fresh solve, and most vertices are reused (the
-/// count of vertices with the same circles and position bits, computed here).
+/// count of vertices with the same circles and position bits, computed here). Taking the
+/// previous round's circles (moved, not cloned) gives the same circles; on the same graph
+/// twice every vertex is taken over.
 #[test]
 fn reusing_the_previous_round_is_exact() {
     let sampling = SamplingOptions::default();
-    let d0 = Domain::from_json_str(INSERTING).unwrap();
+    let d0 = Domain::from_json_str(common::INSERTING).unwrap();
     let r = refine(&d0, Some(2.0), 10_000, &sampling).unwrap();
     assert!(!r.inserted.is_empty());
     let s0 = sample_and_triangulate(&d0, &sampling).unwrap();
@@ -107,6 +107,8 @@ fn reusing_the_previous_round_is_exact() {
         let s1 = sample_and_triangulate(&d1, &sampling).unwrap();
         let reused = vertex_circles_reusing(&d1, &s1.medial, Some((&s0.medial, &c0)));
         assert_eq!(reused, vertex_circles(&d1, &s1.medial));
+        let taken = vertex_circles_taking(&d1, &s1.medial, Some((&s0.medial, c0.clone())));
+        assert_eq!(taken, reused);
         let same = s1
             .medial
             .vertices
@@ -120,6 +122,9 @@ fn reusing_the_previous_round_is_exact() {
             .count();
         assert!(same > 0, "no vertex survives the insertion of {k} holes");
     }
+    let again = vertex_circles_taking(&d0, &s0.medial, Some((&s0.medial, c0.clone())));
+    assert_eq!(again, c0);
+    assert_eq!(vertex_circles_taking(&d0, &s0.medial, None), c0);
 }
 
 /// The outline area of a block as first written (a fresh vector per side and per block),
