@@ -47,6 +47,37 @@ pub(super) fn merged_vertex(medial: &MedialGraph, members: &[u32]) -> MedialVert
     v
 }
 
+/// Kept arc `arc` of the sampled graph as an arc of the contraction: its ends the clusters
+/// `ends`, its chains `c1` and `c2` (with the sector extensions), and each end of its polyline
+/// moved to its cluster's merged position where that cluster has several vertices
+/// (`merged`).
+pub(super) fn kept_arc(
+    arc: &MedialArc,
+    ends: [u32; 2],
+    merged: [bool; 2],
+    vertices: &[MedialVertex],
+    c1: Vec<u32>,
+    c2: Vec<u32>,
+) -> MedialArc {
+    let mut polyline = arc.polyline.clone();
+    let last = polyline.len() - 1;
+    if merged[0] {
+        polyline[0] = vertices[ends[0] as usize].position;
+    }
+    if merged[1] {
+        polyline[last] = vertices[ends[1] as usize].position;
+    }
+    MedialArc {
+        ends,
+        end_slots: arc.end_slots,
+        triangles: arc.triangles.clone(),
+        polyline,
+        circles: arc.circles,
+        c1,
+        c2,
+    }
+}
+
 /// True when every arc has its ends in range and non-empty chains (what the contraction
 /// checks first).
 pub(super) fn well_formed(medial: &MedialGraph) -> bool {
@@ -287,23 +318,8 @@ pub(super) fn contract_with(
         c2.extend(after.iter().rev());
         c2.extend_from_slice(&arc.c2);
         c2.extend(before.iter().rev());
-        let mut polyline = arc.polyline.clone();
-        let last = polyline.len() - 1;
-        if cluster_size[v0 as usize] > 1 {
-            polyline[0] = vertices[v0 as usize].position;
-        }
-        if cluster_size[v1 as usize] > 1 {
-            polyline[last] = vertices[v1 as usize].position;
-        }
-        arcs.push(MedialArc {
-            ends: [v0, v1],
-            end_slots: arc.end_slots,
-            triangles: arc.triangles.clone(),
-            polyline,
-            circles: arc.circles,
-            c1,
-            c2,
-        });
+        let merged = [v0, v1].map(|v| cluster_size[v as usize] > 1);
+        arcs.push(kept_arc(arc, [v0, v1], merged, &vertices, c1, c2));
         kept.push(e as u32);
     }
     // Per arc of the result, the previous arc taken over.

@@ -1,9 +1,9 @@
 //! The contraction as first written ([`contract`]): the oracle of the indexed one
 //! ([`super::contract`]), kept for the tests (`tests/perf_blocking.rs`).
 
-use super::contraction::{self, merged_vertex};
+use super::contraction::{self, kept_arc, merged_vertex};
 use super::{find, internal, union_collapsed, Contracted};
-use crate::medial::{MedialArc, MedialGraph, MedialVertex};
+use crate::medial::{MedialGraph, MedialVertex};
 use crate::mesher::MeshError;
 
 /// Contract the arcs marked in `collapse` (one flag per arc; they must form a forest, as
@@ -97,23 +97,8 @@ pub fn contract(medial: &MedialGraph, collapse: &[bool]) -> Result<Contracted, M
         let c1 = build(2 * e);
         let mut c2 = build(2 * e + 1);
         c2.reverse();
-        let mut polyline = arc.polyline.clone();
-        let last = polyline.len() - 1;
-        if members[v0 as usize].len() > 1 {
-            polyline[0] = vertices[v0 as usize].position;
-        }
-        if members[v1 as usize].len() > 1 {
-            polyline[last] = vertices[v1 as usize].position;
-        }
-        arcs.push(MedialArc {
-            ends: [v0, v1],
-            end_slots: arc.end_slots,
-            triangles: arc.triangles.clone(),
-            polyline,
-            circles: arc.circles,
-            c1,
-            c2,
-        });
+        let merged = [v0, v1].map(|v| members[v as usize].len() > 1);
+        arcs.push(kept_arc(arc, [v0, v1], merged, &vertices, c1, c2));
         kept.push(e as u32);
     }
     Ok(Contracted {
