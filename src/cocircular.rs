@@ -85,23 +85,39 @@ pub fn vertex_circles_reusing(
     medial: &MedialGraph,
     previous: Option<(&MedialGraph, &[Option<Apollonius>])>,
 ) -> Vec<Option<Apollonius>> {
-    let known: HashMap<([CircleId; 3], [u64; 2]), usize> = match previous {
-        Some((graph, circles)) if graph.vertices.len() == circles.len() => graph
+    let Some((graph, circles)) = previous.filter(|(g, c)| g.vertices.len() == c.len()) else {
+        // One independent solve per vertex, in parallel, collected in vertex order.
+        return medial
             .vertices
-            .iter()
-            .enumerate()
-            .map(|(i, v)| (solve_key(v), i))
-            .collect(),
-        _ => HashMap::new(),
+            .par_iter()
+            .map(|v| vertex_circle(domain, v))
+            .collect();
     };
-    // One independent solve per vertex, in parallel, collected in vertex order.
+    let matched = matching_vertices(medial, graph);
     medial
         .vertices
         .par_iter()
-        .map(|v| match (known.get(&solve_key(v)), previous) {
-            (Some(&i), Some((_, circles))) => circles[i].clone(),
-            _ => vertex_circle(domain, v),
+        .zip(matched.par_iter())
+        .map(|(v, m)| match *m {
+            Some(i) => circles[i as usize].clone(),
+            None => vertex_circle(domain, v),
         })
+        .collect()
+}
+
+/// For each vertex of `medial`, the vertex of `previous` with the same [`solve_key`] (the
+/// last one when several share it), if any.
+fn matching_vertices(medial: &MedialGraph, previous: &MedialGraph) -> Vec<Option<u32>> {
+    let known: HashMap<([CircleId; 3], [u64; 2]), u32> = previous
+        .vertices
+        .iter()
+        .enumerate()
+        .map(|(i, v)| (solve_key(v), i as u32))
+        .collect();
+    medial
+        .vertices
+        .par_iter()
+        .map(|v| known.get(&solve_key(v)).copied())
         .collect()
 }
 
@@ -117,18 +133,7 @@ pub fn vertex_circles_taking(
     let Some((graph, mut circles)) = previous.filter(|(g, c)| g.vertices.len() == c.len()) else {
         return vertex_circles(domain, medial);
     };
-    let known: HashMap<([CircleId; 3], [u64; 2]), u32> = graph
-        .vertices
-        .iter()
-        .enumerate()
-        .map(|(i, v)| (solve_key(v), i as u32))
-        .collect();
-    let matched: Vec<Option<u32>> = medial
-        .vertices
-        .par_iter()
-        .map(|v| known.get(&solve_key(v)).copied())
-        .collect();
-    drop(known);
+    let matched = matching_vertices(medial, graph);
     let mut uses = vec![0u8; circles.len()];
     for &i in matched.iter().flatten() {
         uses[i as usize] = uses[i as usize].saturating_add(1);
