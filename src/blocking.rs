@@ -1052,22 +1052,12 @@ impl CollapsedBlocking {
         }
         let medial = &self.refined.sampled.medial;
         let previous = reuse.then(|| {
-            let mut flags = vec![false; medial.arcs.len()];
-            for c in &self.chosen {
-                if let Some(f) = flags.get_mut(c.arc as usize) {
-                    *f = true;
-                }
-            }
-            let empty = crate::collapse::Contracted {
-                graph: MedialGraph::default(),
-                cluster_of: Vec::new(),
-                kept: Vec::new(),
-                cluster_size: Vec::new(),
-            };
-            let contracted = std::mem::replace(&mut self.contracted, empty);
-            (flags, contracted, std::mem::take(&mut self.layout))
+            (
+                collapse_flags(&self.chosen, medial.arcs.len()),
+                std::mem::take(&mut self.contracted),
+                std::mem::take(&mut self.layout),
+            )
         });
-        let handed_over = previous.as_ref().map(|p| p.0.clone());
         match collapse_and_block(
             &self.refined,
             &self.selection,
@@ -1085,7 +1075,9 @@ impl CollapsedBlocking {
             }
             Err(err) => {
                 self.excluded = before;
-                if let Some(flags) = handed_over {
+                if reuse {
+                    // `chosen` is unchanged: rebuild what was handed over from its flags.
+                    let flags = collapse_flags(&self.chosen, medial.arcs.len());
                     let rebuilt = self.selection.contract(medial, &flags).and_then(|c| {
                         let (layout, _) = blocks(
                             &self.refined.domain,
@@ -1103,6 +1095,17 @@ impl CollapsedBlocking {
             }
         }
     }
+}
+
+/// One flag per arc (`arcs` of them): collapsed by one of `chosen`.
+fn collapse_flags(chosen: &[crate::collapse::Candidate], arcs: usize) -> Vec<bool> {
+    let mut flags = vec![false; arcs];
+    for c in chosen {
+        if let Some(f) = flags.get_mut(c.arc as usize) {
+            *f = true;
+        }
+    }
+    flags
 }
 
 /// What [`collapse_and_block`] returns: the layout, the collapses chosen, the contraction and
@@ -1140,10 +1143,7 @@ fn collapse_and_block(
     loop {
         attempt += 1;
         let chosen = selection.select(&exclude, forced);
-        let mut flags = vec![false; medial.arcs.len()];
-        for c in &chosen {
-            flags[c.arc as usize] = true;
-        }
+        let flags = collapse_flags(&chosen, medial.arcs.len());
         let (contracted, layout) = match previous.take() {
             Some((old_flags, mut old_contracted, mut old_layout)) => {
                 let (contracted, taken) =

@@ -196,11 +196,7 @@ impl Selection {
         medial: &MedialGraph,
         collapse: &[bool],
     ) -> Result<Contracted, MeshError> {
-        let next = self
-            .next
-            .as_deref()
-            .filter(|n| n.len() == 2 * medial.arcs.len());
-        Ok(contraction::contract_with(medial, collapse, next, None)?.0)
+        Ok(contraction::contract_with(medial, collapse, self.successors(medial), None)?.0)
     }
 
     /// [`Selection::contract`], taking over from `previous` (a contraction of the same graph
@@ -215,15 +211,19 @@ impl Selection {
         previous_flags: &[bool],
         previous: &mut Contracted,
     ) -> Result<(Contracted, Vec<u32>), MeshError> {
-        let next = self
-            .next
-            .as_deref()
-            .filter(|n| n.len() == 2 * medial.arcs.len());
         let previous = contraction::Previous {
             flags: previous_flags,
             contracted: previous,
         };
-        contraction::contract_with(medial, collapse, next, Some(previous))
+        contraction::contract_with(medial, collapse, self.successors(medial), Some(previous))
+    }
+
+    /// The block successor table kept for `medial` (`None` when it is not this graph's: the
+    /// contraction computes its own).
+    fn successors(&self, medial: &MedialGraph) -> Option<&[u32]> {
+        self.next
+            .as_deref()
+            .filter(|n| n.len() == 2 * medial.arcs.len())
     }
 
     /// [`select_forced`] with these per-arc data.
@@ -317,7 +317,7 @@ fn accept(order: impl Iterator<Item = (u32, bool)>, ends: &[[u32; 2]], n: usize)
 }
 
 /// The medial graph with the given arcs contracted.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, Default)]
 pub struct Contracted {
     /// Vertices are clusters (numbered by their smallest original vertex), arcs the kept arcs
     /// in their original order with re-targeted ends, extended sample chains and moved
