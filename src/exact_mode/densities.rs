@@ -35,7 +35,32 @@ fn project(w: &Wall, m: Point) -> Point {
     [w.c[0] + w.r * d[0] / l, w.c[1] + w.r * d[1] / l]
 }
 
+/// The larger of one sub-step's wall turns: `turn_p` of the parametrised wall, or the other
+/// wall's, whose turn has cross and dot products `(c, d)` ([`turn_parts`]). `tan_p` is
+/// `tan(turn_p)` shrunk by a margin: `atan(|c| / d) < turn_p` when `|c| < tan(turn_p) d`
+/// (with a margin for the two roundings of the comparison), and then the `atan2` is skipped.
+fn larger_of_turns(c: f64, d: f64, turn_p: f64, tan_p: f64) -> f64 {
+    if d > 0.0 && c.abs() < tan_p * d {
+        turn_p
+    } else {
+        turn_p.max(c.atan2(d).abs())
+    }
+}
+
 impl ArcGeometry {
+    /// The unit vector of interior sub-step `s` on the parametrised wall, from `u` (that of
+    /// `s - 1`) by the rotation `(cd, sd)` of one step, or computed afresh at `s = 1` and every
+    /// [`RESTART`] sub-steps from the same angle as `at(s / ARC_SUBSTEPS)`.
+    fn next_unit(&self, s: usize, u: Point, cd: f64, sd: f64) -> Point {
+        if s == 1 || s.is_multiple_of(RESTART) {
+            let p = self.param;
+            let theta = self.start[p] + (s as f64 / ARC_SUBSTEPS as f64) * self.sweep[p];
+            [theta.cos(), theta.sin()]
+        } else {
+            [u[0] * cd - u[1] * sd, u[1] * cd + u[0] * sd]
+        }
+    }
+
     /// Sub-step densities for the count problem: `(sq, ang)` per sub-step.
     pub(crate) fn densities(&self) -> Option<(Vec<f64>, Vec<f64>)> {
         let mut sq = Vec::with_capacity(ARC_SUBSTEPS);
@@ -66,12 +91,7 @@ impl ArcGeometry {
         let (mut ux, mut uy) = ([0.0; N], [0.0; N]);
         let mut u = [1.0, 0.0];
         for s in 1..K {
-            u = if s == 1 || s % RESTART == 0 {
-                let theta = self.start[p] + (s as f64 / K as f64) * self.sweep[p];
-                [theta.cos(), theta.sin()]
-            } else {
-                [u[0] * cd - u[1] * sd, u[1] * cd + u[0] * sd]
-            };
+            u = self.next_unit(s, u, cd, sd);
             (ux[s], uy[s]) = (u[0], u[1]);
         }
         // Pass 2: every point: medial point `m`, radius `r`, touching points `t[wall]` (the
@@ -152,14 +172,11 @@ impl ArcGeometry {
             da[s - 1] = u0 * v0 + u1 * v1;
         }
         sq.extend_from_slice(&sqa);
-        ang.extend(ca.iter().zip(&da).map(|(&c, &d)| {
-            let turn = if d > 0.0 && c.abs() < tan_p * d {
-                turn_p
-            } else {
-                turn_p.max(c.atan2(d).abs())
-            };
-            turn / MAX_WALL_ANGLE
-        }));
+        ang.extend(
+            ca.iter()
+                .zip(&da)
+                .map(|(&c, &d)| larger_of_turns(c, d, turn_p, tan_p) / MAX_WALL_ANGLE),
+        );
         Some(())
     }
 
@@ -179,8 +196,6 @@ impl ArcGeometry {
         let step = self.sweep[p] / k as f64;
         let (sd, cd) = step.sin_cos();
         let turn_p = step.abs();
-        // `atan(|c| / d) < turn_p` when `|c| < tan(turn_p) d` (with a margin for the two
-        // roundings of the comparison): then the other wall's turn is the smaller one.
         let tan_p = turn_p.tan() / (1.0 + 1e-9);
         let (mut m0, mut a0, mut r0) = self.at(0.0)?;
         let mut u = [1.0, 0.0];
@@ -188,13 +203,7 @@ impl ArcGeometry {
             let (m1, a1, r1) = if s == k {
                 self.at(1.0)?
             } else {
-                u = if s == 1 || s % RESTART == 0 {
-                    // The same angle as `at(s / k)`.
-                    let theta = self.start[p] + (s as f64 / k as f64) * self.sweep[p];
-                    [theta.cos(), theta.sin()]
-                } else {
-                    [u[0] * cd - u[1] * sd, u[1] * cd + u[0] * sd]
-                };
+                u = self.next_unit(s, u, cd, sd);
                 let (a, m, rho) = medial_point_u(wp, wq, u)?;
                 let b = project(wq, m);
                 if !(b[0].is_finite() && b[1].is_finite()) {
@@ -209,12 +218,7 @@ impl ArcGeometry {
             let rho = 0.5 * (r0 + r1);
             sq.push(if rho > 0.0 { ds / rho } else { 0.0 });
             let (c, d) = turn_parts(wq.c, a0[q], a1[q]);
-            let turn = if d > 0.0 && c.abs() < tan_p * d {
-                turn_p
-            } else {
-                turn_p.max(c.atan2(d).abs())
-            };
-            ang.push(turn / MAX_WALL_ANGLE);
+            ang.push(larger_of_turns(c, d, turn_p, tan_p) / MAX_WALL_ANGLE);
             (m0, a0, r0) = (m1, a1, r1);
         }
         Some(())
