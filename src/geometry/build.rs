@@ -11,7 +11,7 @@
 //! inserted points under the SoS-perturbed lifting (see [`super::predicates`]) and the infinite
 //! triangles close the hull, every hull edge carrying exactly one infinite triangle.
 
-use super::predicates::{incircle_sos, lex_cmp, orient2d};
+use super::predicates::{incircle_sos, incircle_sos_safe, lex_cmp, orient2d, orient2d_safe, safe};
 use super::Point;
 use std::cmp::Ordering;
 
@@ -32,6 +32,9 @@ pub(crate) struct Broken(pub(crate) String);
 
 pub(crate) struct Builder<'a> {
     pts: &'a [Point],
+    /// Every coordinate of `pts` is in the predicates' safe range: the unchecked predicates
+    /// apply (same signs, no per-call range test).
+    all_safe: bool,
     inf: u32,
     pub(crate) tv: Vec<[u32; 3]>,
     pub(crate) adj: Vec<u32>,
@@ -82,9 +85,11 @@ impl<'a> Builder<'a> {
             } else {
                 (c, b)
             };
+        // Reserved once: the triangles, infinite ones included, number 2 (vertices + 1) - 4.
         let cap = 2 * n + 8;
         let mut s = Builder {
             pts,
+            all_safe: pts.iter().all(safe),
             inf,
             tv: Vec::with_capacity(cap),
             adj: Vec::with_capacity(3 * cap),
@@ -98,9 +103,9 @@ impl<'a> Builder<'a> {
             rng: 0x9e37_79b9,
             dups: Vec::new(),
         };
-        s.tv = vec![[a, b, c], [c, b, inf], [a, c, inf], [b, a, inf]];
-        s.adj = vec![u32::MAX; 12];
-        s.mark = vec![0; 4];
+        s.tv.extend_from_slice(&[[a, b, c], [c, b, inf], [a, c, inf], [b, a, inf]]);
+        s.adj.extend_from_slice(&[u32::MAX; 12]);
+        s.mark.extend_from_slice(&[0; 4]);
         // Link the four triangles by matching reversed edges.
         for t in 0..4 {
             for k in 0..3 {
@@ -131,6 +136,7 @@ impl<'a> Builder<'a> {
         let last = tv.iter().position(|v| !v.contains(&inf)).unwrap_or(0) as u32;
         Builder {
             pts,
+            all_safe: pts.iter().all(safe),
             inf,
             mark: vec![0; tv.len()],
             tv,
@@ -149,6 +155,16 @@ impl<'a> Builder<'a> {
     #[inline(always)]
     fn p(&self, v: u32) -> &Point {
         &self.pts[v as usize]
+    }
+
+    /// Exact orientation of three points of `pts`.
+    #[inline(always)]
+    fn orient(&self, a: &Point, b: &Point, c: &Point) -> Ordering {
+        if self.all_safe {
+            orient2d_safe(*a, *b, *c)
+        } else {
+            orient2d(*a, *b, *c)
+        }
     }
 
     #[inline(always)]
@@ -192,11 +208,16 @@ impl<'a> Builder<'a> {
         } else if v[2] == inf {
             (v[0], v[1])
         } else {
-            return incircle_sos(*self.p(v[0]), *self.p(v[1]), *self.p(v[2]), *q)
-                == Ordering::Greater;
+            let (a, b, c) = (*self.p(v[0]), *self.p(v[1]), *self.p(v[2]));
+            let s = if self.all_safe {
+                incircle_sos_safe(a, b, c, *q)
+            } else {
+                incircle_sos(a, b, c, *q)
+            };
+            return s == Ordering::Greater;
         };
         let (pu, pw) = (self.p(u), self.p(w));
-        match orient2d(*pu, *pw, *q) {
+        match self.orient(pu, pw, q) {
             Ordering::Greater => true,
             Ordering::Less => false,
             Ordering::Equal => {
@@ -222,9 +243,9 @@ impl<'a> Builder<'a> {
             } else {
                 (v[0], v[1])
             };
-            return orient2d(*self.p(u), *self.p(w), *q) == Ordering::Greater;
+            return self.orient(self.p(u), self.p(w), q) == Ordering::Greater;
         }
-        (0..3).all(|k| orient2d(*self.p(v[next(k)]), *self.p(v[prev(k)]), *q) != Ordering::Less)
+        (0..3).all(|k| self.orient(self.p(v[next(k)]), self.p(v[prev(k)]), q) != Ordering::Less)
     }
 
     /// Visibility walk towards `q`. `exact` selects exact or plain floating-point orientation.
@@ -247,7 +268,7 @@ impl<'a> Builder<'a> {
                 }
                 let (a, b) = (self.p(v[next(k)]), self.p(v[prev(k)]));
                 let behind = if exact {
-                    orient2d(*a, *b, *q) == Ordering::Less
+                    self.orient(a, b, q) == Ordering::Less
                 } else {
                     orient_fast(a, b, q) < 0.0
                 };

@@ -34,8 +34,9 @@ pub(crate) fn in_safe_range(x: f64) -> bool {
     a == 0.0 || (SAFE_MIN..=SAFE_MAX).contains(&a)
 }
 
+/// True when both coordinates of `p` are in the safe range (see [`in_safe_range`]).
 #[inline(always)]
-fn safe(p: &Point) -> bool {
+pub(crate) fn safe(p: &Point) -> bool {
     in_safe_range(p[0]) & in_safe_range(p[1])
 }
 
@@ -60,10 +61,18 @@ fn coord(p: Point) -> robust::Coord<f64> {
 #[inline]
 pub fn orient2d(a: Point, b: Point, c: Point) -> Ordering {
     if safe(&a) & safe(&b) & safe(&c) {
-        sign(robust::orient2d(coord(a), coord(b), coord(c)))
+        orient2d_safe(a, b, c)
     } else {
         orient2d_exact(a, b, c)
     }
+}
+
+/// [`orient2d`] for points whose coordinates are all in the safe range (unchecked; the caller
+/// knows it, e.g. for every point of a triangulation).
+#[inline]
+pub(crate) fn orient2d_safe(a: Point, b: Point, c: Point) -> Ordering {
+    debug_assert!(safe(&a) & safe(&b) & safe(&c));
+    sign(robust::orient2d(coord(a), coord(b), coord(c)))
 }
 
 /// Exact in-circle test: `Greater` when `d` lies strictly inside the circle through the
@@ -78,6 +87,13 @@ pub fn incircle(a: Point, b: Point, c: Point, d: Point) -> Ordering {
     if !(safe(&a) & safe(&b) & safe(&c) & safe(&d)) {
         return incircle_exact(a, b, c, d);
     }
+    incircle_safe(a, b, c, d)
+}
+
+/// [`incircle`] for points whose coordinates are all in the safe range (unchecked).
+#[inline]
+pub(crate) fn incircle_safe(a: Point, b: Point, c: Point, d: Point) -> Ordering {
+    debug_assert!(safe(&a) & safe(&b) & safe(&c) & safe(&d));
     let (adx, ady) = (a[0] - d[0], a[1] - d[1]);
     let (bdx, bdy) = (b[0] - d[0], b[1] - d[1]);
     let (cdx, cdy) = (c[0] - d[0], c[1] - d[1]);
@@ -123,6 +139,15 @@ pub fn lex_cmp(p: &Point, q: &Point) -> Ordering {
 #[inline]
 pub fn incircle_sos(a: Point, b: Point, c: Point, d: Point) -> Ordering {
     match incircle(a, b, c, d) {
+        Ordering::Equal => incircle_tie(a, b, c, d),
+        s => s,
+    }
+}
+
+/// [`incircle_sos`] for points whose coordinates are all in the safe range (unchecked).
+#[inline]
+pub(crate) fn incircle_sos_safe(a: Point, b: Point, c: Point, d: Point) -> Ordering {
+    match incircle_safe(a, b, c, d) {
         Ordering::Equal => incircle_tie(a, b, c, d),
         s => s,
     }

@@ -1,10 +1,11 @@
 //! A fast exact in-circle evaluation for the common near-degenerate case, in fixed-width
 //! integer arithmetic (no allocation, no expansions).
 //!
-//! When the six coordinate differences `a - d, b - d, c - d` are exact in `f64` and, written as
-//! integers at their smallest common power of two, fit in 62 bits, the determinant is computed
-//! exactly: 2x2 minors and lifts in `i128` (< 2^125), the three lift x minor products in 256-bit
-//! two's complement (< 2^252). Otherwise the caller falls back to the adaptive predicate.
+//! When the six coordinate differences `a - d, b - d, c - d`, written as integers at a common
+//! power of two, fit in 62 bits (see [`incircle_small`] for the two ways of getting them), the
+//! determinant is computed exactly: 2x2 minors and lifts in `i128` (< 2^125), the three lift x
+//! minor products in 256-bit two's complement (< 2^252). Otherwise the caller falls back to the
+//! adaptive predicate.
 
 use super::exact::decompose;
 use super::Point;
@@ -82,9 +83,63 @@ impl I256 {
     }
 }
 
-/// Exact in-circle sign (as [`super::predicates::incircle`]) or `None` when the differences are
-/// not exact or span more than 62 bits. Coordinates must be finite.
+/// Exact in-circle sign (as [`super::predicates::incircle`]) or `None` when neither integer
+/// form below applies. Coordinates must be finite.
+///
+/// Tried in turn: the coordinates themselves as integers at their smallest common power of two
+/// (needs a span of at most 126 bits, so that they fit `i128`; the differences are then exact
+/// integers whatever their `f64` rounding), then the `f64` differences when those are exact.
+/// Either way the differences must fit 62 bits for the 256-bit evaluation.
+#[inline]
 pub(crate) fn incircle_small(a: Point, b: Point, c: Point, d: Point) -> Option<Ordering> {
+    incircle_integer_coords(a, b, c, d).or_else(|| incircle_exact_diffs(a, b, c, d))
+}
+
+/// The coordinates as `i128` at their common lowest power of two; `None` when they span more
+/// than 126 bits or a difference needs more than 62 bits.
+#[inline]
+fn incircle_integer_coords(a: Point, b: Point, c: Point, d: Point) -> Option<Ordering> {
+    let parts = [a[0], a[1], b[0], b[1], c[0], c[1], d[0], d[1]].map(decompose);
+    let mut emin = i32::MAX;
+    let mut top = i32::MIN;
+    for &(m, e) in &parts {
+        if m != 0 {
+            emin = emin.min(e);
+            top = top.max(e + 64 - m.unsigned_abs().leading_zeros() as i32);
+        }
+    }
+    if emin == i32::MAX {
+        return Some(Ordering::Equal); // every coordinate is zero: the four points coincide
+    }
+    // |coordinate| < 2^126, so every difference below fits i128.
+    if top - emin > 126 {
+        return None;
+    }
+    let v = parts.map(|(m, e)| {
+        if m == 0 {
+            0i128
+        } else {
+            i128::from(m) << (e - emin)
+        }
+    });
+    let diffs = [
+        v[0] - v[6],
+        v[1] - v[7],
+        v[2] - v[6],
+        v[3] - v[7],
+        v[4] - v[6],
+        v[5] - v[7],
+    ];
+    let span = diffs.iter().fold(0u128, |acc, x| acc | x.unsigned_abs());
+    if span >> 62 != 0 {
+        return None;
+    }
+    Some(det_sign(diffs.map(|x| x as i64)))
+}
+
+/// The `f64` differences `a - d, b - d, c - d` as integers at their common lowest power of two,
+/// when all six are exact and span at most 62 bits.
+fn incircle_exact_diffs(a: Point, b: Point, c: Point, d: Point) -> Option<Ordering> {
     let diffs = [
         exact_diff(a[0], d[0])?,
         exact_diff(a[1], d[1])?,
@@ -108,24 +163,32 @@ pub(crate) fn incircle_small(a: Point, b: Point, c: Point, d: Point) -> Option<O
     if top - emin > 62 {
         return None;
     }
-    let [adx, ady, bdx, bdy, cdx, cdy] = parts.map(|(m, e)| {
+    Some(det_sign(parts.map(|(m, e)| {
         if m == 0 {
-            0i128
+            0
         } else {
-            i128::from(m << (e - emin))
+            m << (e - emin)
         }
-    });
+    })))
+}
+
+/// Sign of the in-circle determinant from the integer differences
+/// `[adx, ady, bdx, bdy, cdx, cdy]`, each of magnitude below 2^62: 2x2 minors and lifts in
+/// `i128` (< 2^125), the three lift x minor products in 256-bit two's complement (< 2^252).
+#[inline]
+fn det_sign(d: [i64; 6]) -> Ordering {
+    let [adx, ady, bdx, bdy, cdx, cdy] = d.map(i128::from);
     let alift = adx * adx + ady * ady;
     let blift = bdx * bdx + bdy * bdy;
     let clift = cdx * cdx + cdy * cdy;
     let bc = bdx * cdy - cdx * bdy;
     let ca = cdx * ady - adx * cdy;
     let ab = adx * bdy - bdx * ady;
-    let det = I256::ZERO
+    I256::ZERO
         .add(I256::mul(alift, bc))
         .add(I256::mul(blift, ca))
-        .add(I256::mul(clift, ab));
-    Some(det.sign())
+        .add(I256::mul(clift, ab))
+        .sign()
 }
 
 #[cfg(test)]
@@ -163,6 +226,78 @@ mod tests {
                 assert_eq!(s.sign(), Ordering::Equal);
             }
         }
+    }
+
+    /// Four points near one circle: three on it and a fourth at a tiny radial offset, with
+    /// centre and radius spanning magnitudes, so that the `f64` differences are often inexact.
+    fn near_cocircular(seed: u64, count: usize) -> Vec<[Point; 4]> {
+        let mut x = seed | 1;
+        let mut unit = move || {
+            x ^= x << 13;
+            x ^= x >> 7;
+            x ^= x << 17;
+            (x >> 11) as f64 / (1u64 << 53) as f64
+        };
+        (0..count)
+            .map(|i| {
+                let scale = 2f64.powi((i % 40) as i32 - 20);
+                let (cx, cy) = (scale * (unit() - 0.5) * 64.0, scale * (unit() - 0.5) * 64.0);
+                let r = scale * (0.01 + unit());
+                let mut on = |off: f64| {
+                    let a = unit() * std::f64::consts::TAU;
+                    let rr = r * (1.0 + off);
+                    [cx + rr * a.cos(), cy + rr * a.sin()]
+                };
+                let off = [0.0, 1e-17, -1e-16, 1e-15, 3e-13][i % 5];
+                [on(0.0), on(0.0), on(0.0), on(off)]
+            })
+            .collect()
+    }
+
+    #[test]
+    fn both_integer_forms_match_rug() {
+        let mut coords_hits = 0;
+        let mut diffs_hits = 0;
+        for [a, b, c, d] in near_cocircular(0x5eed, 4000) {
+            let want = super::super::exact::incircle_exact(a, b, c, d);
+            if let Some(s) = incircle_integer_coords(a, b, c, d) {
+                assert_eq!(s, want, "{a:?} {b:?} {c:?} {d:?}");
+                coords_hits += 1;
+            }
+            if let Some(s) = incircle_exact_diffs(a, b, c, d) {
+                assert_eq!(s, want, "{a:?} {b:?} {c:?} {d:?}");
+                diffs_hits += 1;
+            }
+            if let Some(s) = incircle_small(a, b, c, d) {
+                assert_eq!(s, want);
+            }
+        }
+        // The coordinate form decides most of these, the difference form far fewer.
+        assert!(coords_hits > 3000, "{coords_hits}");
+        assert!(diffs_hits < coords_hits, "{diffs_hits} {coords_hits}");
+    }
+
+    #[test]
+    fn inexact_differences_are_decided() {
+        // Pipeline sample points on which the difference form failed (inexact `f64`
+        // differences) and the adaptive predicate had to run.
+        let (a, b, c, d) = (
+            [-14.3718714641731, -0.28327305577793394],
+            [-14.46624380935457, -0.2739781910629044],
+            [-14.734993510832537, -0.35550252172670876],
+            [-14.651361823416803, -1.204629293861882],
+        );
+        assert_eq!(incircle_exact_diffs(a, b, c, d), None);
+        let want = super::super::exact::incircle_exact(a, b, c, d);
+        assert_eq!(incircle_integer_coords(a, b, c, d), Some(want));
+        // Coordinates spanning more than 126 bits fall through to the difference form.
+        let tiny = [1.0, 1e-300];
+        assert_eq!(incircle_integer_coords(tiny, b, c, d), None);
+        let same = [0.0, 0.0];
+        assert_eq!(
+            incircle_integer_coords(same, same, same, same),
+            Some(Ordering::Equal)
+        );
     }
 
     #[test]
