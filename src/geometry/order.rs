@@ -9,7 +9,10 @@ use super::Point;
 const HILBERT_ORDER: u32 = 14;
 const MAX_LEVEL: u32 = 15;
 
-/// Hilbert curve index of cell `(x, y)` on a `2^order` grid.
+/// Hilbert curve index of cell `(x, y)` on a `2^order` grid: the classic `xy2d` loop (one
+/// quadrant per bit level, rotating the remaining low bits), kept as the reference for
+/// [`hilbert_fast`].
+#[cfg(test)]
 fn hilbert(mut x: u32, mut y: u32, order: u32) -> u32 {
     let n = 1u32 << order;
     let mut d = 0u32;
@@ -26,6 +29,44 @@ fn hilbert(mut x: u32, mut y: u32, order: u32) -> u32 {
             std::mem::swap(&mut x, &mut y);
         }
         s >>= 1;
+    }
+    d
+}
+
+/// One step of [`hilbert`]'s loop as a table. The rotations applied so far act on the remaining
+/// low bits as a state `(swapped, complemented)` (bit 1, bit 0); indexed by
+/// `state << 2 | x bit << 1 | y bit`, each entry is `digit << 2 | next state`.
+const HILBERT_STEP: [u8; 16] = {
+    let mut t = [0u8; 16];
+    let mut i = 0;
+    while i < 16 {
+        let (swapped, comp) = ((i >> 3) & 1, (i >> 2) & 1);
+        let (bx, by) = ((i >> 1) & 1, i & 1);
+        let (mut rx, mut ry) = if swapped == 1 { (by, bx) } else { (bx, by) };
+        rx ^= comp;
+        ry ^= comp;
+        let digit = (3 * rx) ^ ry;
+        let (mut ns, mut nc) = (swapped, comp);
+        if ry == 0 {
+            nc ^= rx;
+            ns ^= 1;
+        }
+        t[i] = ((digit << 2) | (ns << 1) | nc) as u8;
+        i += 1;
+    }
+    t
+};
+
+/// [`hilbert`] by table: the same index, one lookup per bit level.
+#[inline]
+fn hilbert_fast(x: u32, y: u32, order: u32) -> u32 {
+    let mut d = 0u32;
+    let mut state = 0u32;
+    for b in (0..order).rev() {
+        let e =
+            u32::from(HILBERT_STEP[((state << 2) | ((x >> b) & 1) << 1 | ((y >> b) & 1)) as usize]);
+        d = (d << 2) | (e >> 2);
+        state = e & 3;
     }
     d
 }
@@ -67,7 +108,7 @@ pub(crate) fn insertion_order(pts: &[Point]) -> Vec<u32> {
             let h = splitmix((p[0] + 0.0).to_bits() ^ splitmix((p[1] + 0.0).to_bits()));
             let level = (h.trailing_zeros()).min(MAX_LEVEL);
             let round = u64::from(MAX_LEVEL - level);
-            let hk = u64::from(hilbert(
+            let hk = u64::from(hilbert_fast(
                 quantize(p[0], x0, sx),
                 quantize(p[1], y0, sy),
                 HILBERT_ORDER,
@@ -93,6 +134,28 @@ mod tests {
             }
         }
         assert!(seen.iter().all(|&s| s));
+    }
+
+    #[test]
+    fn table_hilbert_matches_the_loop() {
+        for order in 1..=4 {
+            for x in 0..1u32 << order {
+                for y in 0..1u32 << order {
+                    assert_eq!(hilbert_fast(x, y, order), hilbert(x, y, order));
+                }
+            }
+        }
+        let mut r = 0x2545_f491u32;
+        for _ in 0..100_000 {
+            r ^= r << 13;
+            r ^= r >> 17;
+            r ^= r << 5;
+            let (x, y) = (r & 0x3fff, (r >> 14) & 0x3fff);
+            assert_eq!(
+                hilbert_fast(x, y, HILBERT_ORDER),
+                hilbert(x, y, HILBERT_ORDER)
+            );
+        }
     }
 
     #[test]
