@@ -76,7 +76,10 @@ fn orient_fast(a: &Point, b: &Point, c: &Point) -> f64 {
 
 impl<'a> Builder<'a> {
     /// Start from the triangle `a, b, c` (non-collinear) and its three infinite neighbours.
-    pub(crate) fn new(pts: &'a [Point], a: u32, b: u32, c: u32) -> Self {
+    /// `all_safe`: every coordinate of `pts` is in the predicates' safe range (the caller knows
+    /// it from the coordinate range; checked in debug builds).
+    pub(crate) fn new(pts: &'a [Point], all_safe: bool, a: u32, b: u32, c: u32) -> Self {
+        debug_assert_eq!(all_safe, pts.iter().all(safe));
         let n = pts.len();
         let inf = n as u32;
         let (b, c) =
@@ -89,7 +92,7 @@ impl<'a> Builder<'a> {
         let cap = 2 * n + 8;
         let mut s = Builder {
             pts,
-            all_safe: pts.iter().all(safe),
+            all_safe,
             inf,
             tv: Vec::with_capacity(cap),
             adj: Vec::with_capacity(3 * cap),
@@ -127,16 +130,18 @@ impl<'a> Builder<'a> {
     /// [`Builder::insert`] calls then add points as for a builder that made it.
     pub(crate) fn resume(
         pts: &'a [Point],
+        all_safe: bool,
         tv: Vec<[u32; 3]>,
         adj: Vec<u32>,
         dups: Vec<(u32, u32)>,
     ) -> Self {
+        debug_assert_eq!(all_safe, pts.iter().all(safe));
         let n = pts.len();
         let inf = n as u32;
         let last = tv.iter().position(|v| !v.contains(&inf)).unwrap_or(0) as u32;
         Builder {
             pts,
-            all_safe: pts.iter().all(safe),
+            all_safe,
             inf,
             mark: vec![0; tv.len()],
             tv,

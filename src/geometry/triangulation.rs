@@ -3,6 +3,7 @@
 use super::build::Builder;
 use super::predicates::{incircle, orient2d, SAFE_MAX, SAFE_MIN};
 use super::{exact, Point};
+use std::borrow::Cow;
 use std::cmp::Ordering;
 use std::collections::HashMap;
 
@@ -70,9 +71,8 @@ pub struct Triangulation {
     vertex_tri: Vec<u32>,
 }
 
-/// Power-of-two exponent `s` such that scaling every coordinate by `2^s` keeps all magnitudes in
-/// the adaptive predicates' exact range, if one exists (and is not 0).
-fn safe_shift(points: &[Point]) -> Option<i32> {
+/// Smallest and largest non-zero coordinate magnitude (`(inf, 0)` when every coordinate is 0).
+fn magnitude_range(points: &[Point]) -> (f64, f64) {
     let mut lo = f64::INFINITY;
     let mut hi = 0.0f64;
     for p in points {
@@ -84,6 +84,13 @@ fn safe_shift(points: &[Point]) -> Option<i32> {
             }
         }
     }
+    (lo, hi)
+}
+
+/// Power-of-two exponent `s` such that scaling every coordinate by `2^s` keeps all magnitudes in
+/// the adaptive predicates' exact range, if one exists (and is not 0), for a point set with
+/// [`magnitude_range`] `(lo, hi)`.
+fn shift_for((lo, hi): (f64, f64)) -> Option<i32> {
     if hi == 0.0 || (lo >= SAFE_MIN && hi <= SAFE_MAX) {
         return None;
     }
@@ -96,6 +103,12 @@ fn safe_shift(points: &[Point]) -> Option<i32> {
         return None;
     }
     Some((min_s + max_s) / 2)
+}
+
+/// True when every coordinate lies in the predicates' safe range once scaled by `2^shift`
+/// (`shift` from [`shift_for`] on the same range): either a shift was found, or none was needed.
+fn all_safe_after((lo, hi): (f64, f64), shift: Option<i32>) -> bool {
+    shift.is_some() || hi == 0.0 || (lo >= SAFE_MIN && hi <= SAFE_MAX)
 }
 
 /// `floor(log2(|x|))` for finite non-zero `x` (exact, also for subnormals).
@@ -130,7 +143,8 @@ impl Triangulation {
                 max: MAX_POINTS,
             });
         }
-        let shift = safe_shift(points);
+        let range = magnitude_range(points);
+        let shift = shift_for(range);
         let order = super::order::insertion_order(points);
         // Points in insertion order (vertex ids are positions in it), scaled by 2^shift.
         let work: Vec<Point> = order
@@ -161,7 +175,8 @@ impl Triangulation {
                 TriangulationError::AllCollinear { distinct }
             });
         };
-        let mut builder = Builder::new(&work, 0, b as u32, c as u32);
+        let all_safe = all_safe_after(range, shift);
+        let mut builder = Builder::new(&work, all_safe, 0, b as u32, c as u32);
         for pos in 1..work.len() {
             if pos == b || pos == c {
                 continue;
@@ -170,14 +185,14 @@ impl Triangulation {
                 .insert(pos as u32)
                 .map_err(|e| TriangulationError::Internal { message: e.0 })?;
         }
-        Ok(Self::finish(points, &order, builder))
+        Ok(Self::finish(points, Some(&order), builder))
     }
 
     /// The triangulation of `points`, whose first [`Self::vertex_count`] entries are this
     /// triangulation's points (bit for bit): the new points are inserted into it in input
     /// order instead of triangulating from scratch. `Ok(None)` when `points` does not extend
     /// this triangulation's points, or when the coordinate scaling of the predicates
-    /// (`safe_shift`) would differ.
+    /// (`shift_for`) would differ.
     ///
     /// The triangle *set* is the one [`Self::new`] gives (the Delaunay triangulation under the
     /// lexicographic simulation of simplicity is a function of the point set; duplicates keep
@@ -206,23 +221,31 @@ impl Triangulation {
                 max: MAX_POINTS,
             });
         }
-        let shift = safe_shift(points);
-        if shift != safe_shift(&self.points) || self.tris.is_empty() {
+        // The ranges of the kept and the new points give both shifts in one pass.
+        let (old_lo, old_hi) = magnitude_range(&self.points);
+        let (new_lo, new_hi) = magnitude_range(&points[n0..]);
+        let range = (old_lo.min(new_lo), old_hi.max(new_hi));
+        let shift = shift_for(range);
+        if shift != shift_for((old_lo, old_hi)) || self.tris.is_empty() {
             return Ok(None);
         }
-        let work: Vec<Point> = points
-            .iter()
-            .map(|&p| shift.map_or(p, |s| [scale(p[0], s), scale(p[1], s)]))
-            .collect();
+        // Unscaled points are used in place.
+        let work: Cow<'_, [Point]> = match shift {
+            None => Cow::Borrowed(points),
+            Some(s) => points
+                .iter()
+                .map(|&p| [scale(p[0], s), scale(p[1], s)])
+                .collect(),
+        };
         let (tv, adj) = self.builder_arrays(points.len() as u32);
-        let mut builder = Builder::resume(&work, tv, adj, self.duplicates.clone());
+        let all_safe = all_safe_after(range, shift);
+        let mut builder = Builder::resume(&work, all_safe, tv, adj, self.duplicates.clone());
         for pos in n0..points.len() {
             builder
                 .insert(pos as u32)
                 .map_err(|e| TriangulationError::Internal { message: e.0 })?;
         }
-        let order: Vec<u32> = (0..points.len() as u32).collect();
-        Ok(Some(Self::finish(points, &order, builder)))
+        Ok(Some(Self::finish(points, None, builder)))
     }
 
     /// This triangulation in the builder's layout (see `build`): the finite triangles, then one
@@ -266,22 +289,33 @@ impl Triangulation {
     }
 
     /// Compact the builder into finite triangles with input-index vertices.
-    /// `order[v]` is the input index of builder vertex `v`.
-    fn finish(points: &[Point], order: &[u32], b: Builder<'_>) -> Self {
+    /// `order[v]` is the input index of builder vertex `v`; `None` for the identity (a resumed
+    /// builder, whose vertex ids are input indices).
+    ///
+    /// The finite triangles keep the builder's order. They are compacted inside the builder's
+    /// own triangle array (slot `t` moves to `map[t] <= t`), which saves a fresh array.
+    fn finish(points: &[Point], order: Option<&[u32]>, b: Builder<'_>) -> Self {
         let inf = b.infinite();
-        // Input index of each vertex; for a duplicate group, its smallest input index.
-        let mut input: Vec<u32> = order.to_vec();
+        // Input index of each vertex (empty: the identity); for a duplicate group, its smallest
+        // input index.
+        let mut input: Vec<u32> = order.map_or_else(Vec::new, <[u32]>::to_vec);
+        let input_of = |v: u32| order.map_or(v, |o| o[v as usize]);
         let mut duplicates = Vec::with_capacity(b.dups.len());
         if !b.dups.is_empty() {
             let mut groups: HashMap<u32, Vec<u32>> = HashMap::new();
             for &(v, d) in &b.dups {
-                groups.entry(v).or_default().push(order[d as usize]);
+                groups.entry(v).or_default().push(input_of(d));
             }
             for (v, mut members) in groups {
-                members.push(order[v as usize]);
+                members.push(input_of(v));
                 members.sort_unstable();
                 let first = members[0];
-                input[v as usize] = first;
+                if first != input_of(v) {
+                    if input.is_empty() {
+                        input = (0..inf).collect();
+                    }
+                    input[v as usize] = first;
+                }
                 duplicates.extend(members[1..].iter().map(|&d| (first, d)));
             }
             duplicates.sort_unstable();
@@ -294,21 +328,33 @@ impl Triangulation {
                 count += 1;
             }
         }
-        let mut tris = Vec::with_capacity(count as usize);
+        let Builder {
+            tv: mut tris,
+            adj: half,
+            ..
+        } = b;
         let mut adj = Vec::with_capacity(count as usize);
         let mut vertex_tri = vec![NONE; points.len()];
-        for (t, v) in b.tv.iter().enumerate() {
-            if map[t] == NONE {
+        for t in 0..tris.len() {
+            let m = map[t];
+            if m == NONE {
                 continue;
             }
-            let v = v.map(|x| input[x as usize]);
-            let nb = [0, 1, 2].map(|k| map[(b.adj[3 * t + k] / 3) as usize]);
+            let v = if input.is_empty() {
+                tris[t]
+            } else {
+                tris[t].map(|x| input[x as usize])
+            };
+            let nb = [0, 1, 2].map(|k| map[(half[3 * t + k] / 3) as usize]);
             for &x in &v {
-                vertex_tri[x as usize] = map[t];
+                vertex_tri[x as usize] = m;
             }
-            tris.push(v);
+            tris[m as usize] = v;
             adj.push(nb);
         }
+        tris.truncate(count as usize);
+        drop(half);
+        tris.shrink_to_fit();
         for &(first, d) in &duplicates {
             vertex_tri[d as usize] = vertex_tri[first as usize];
         }

@@ -86,8 +86,8 @@ impl I256 {
 /// Exact in-circle sign (as [`super::predicates::incircle`]) or `None` when neither integer
 /// form below applies. Coordinates must be finite.
 ///
-/// Tried in turn: the coordinates themselves as integers at their smallest common power of two
-/// (needs a span of at most 126 bits, so that they fit `i128`; the differences are then exact
+/// Tried in turn: the coordinates themselves as integers at their lowest exponent (needs
+/// exponents within 73 of each other, so that they fit `i128`; the differences are then exact
 /// integers whatever their `f64` rounding), then the `f64` differences when those are exact.
 /// Either way the differences must fit 62 bits for the 256-bit evaluation.
 #[inline]
@@ -95,33 +95,39 @@ pub(crate) fn incircle_small(a: Point, b: Point, c: Point, d: Point) -> Option<O
     incircle_integer_coords(a, b, c, d).or_else(|| incircle_exact_diffs(a, b, c, d))
 }
 
-/// The coordinates as `i128` at their common lowest power of two; `None` when they span more
-/// than 126 bits or a difference needs more than 62 bits.
+/// `x = m * 2^(e - 1075)` with `m` the full significand (implicit bit included, `0 <= m < 2^53`,
+/// not reduced by trailing zeros) and `e` the biased exponent, `1` for subnormals; `m = 0` for
+/// zero. Branch-free; `x` must be finite.
+#[inline(always)]
+fn raw_parts(x: f64) -> (i64, i32) {
+    let bits = x.to_bits();
+    let biased = ((bits >> 52) & 0x7ff) as i32;
+    let m = (bits & ((1u64 << 52) - 1)) | (u64::from(biased != 0) << 52);
+    let m = m as i64;
+    (if bits >> 63 == 1 { -m } else { m }, biased.max(1))
+}
+
+/// The coordinates as `i128` at the lowest exponent among them; `None` when the exponents span
+/// more than 73 (the integers would not fit below 2^126, so that every difference fits `i128`)
+/// or a difference needs more than 62 bits.
 #[inline]
 fn incircle_integer_coords(a: Point, b: Point, c: Point, d: Point) -> Option<Ordering> {
-    let parts = [a[0], a[1], b[0], b[1], c[0], c[1], d[0], d[1]].map(decompose);
+    let parts = [a[0], a[1], b[0], b[1], c[0], c[1], d[0], d[1]].map(raw_parts);
     let mut emin = i32::MAX;
-    let mut top = i32::MIN;
+    let mut emax = i32::MIN;
     for &(m, e) in &parts {
-        if m != 0 {
-            emin = emin.min(e);
-            top = top.max(e + 64 - m.unsigned_abs().leading_zeros() as i32);
-        }
+        // Zero coordinates fit any exponent.
+        emin = emin.min(if m == 0 { i32::MAX } else { e });
+        emax = emax.max(if m == 0 { i32::MIN } else { e });
     }
     if emin == i32::MAX {
         return Some(Ordering::Equal); // every coordinate is zero: the four points coincide
     }
-    // |coordinate| < 2^126, so every difference below fits i128.
-    if top - emin > 126 {
+    if emax - emin > 73 {
         return None;
     }
-    let v = parts.map(|(m, e)| {
-        if m == 0 {
-            0i128
-        } else {
-            i128::from(m) << (e - emin)
-        }
-    });
+    // m < 2^53 shifted by at most 73: every value below 2^126.
+    let v = parts.map(|(m, e)| i128::from(m) << (e.max(emin) - emin));
     let diffs = [
         v[0] - v[6],
         v[1] - v[7],
@@ -290,7 +296,7 @@ mod tests {
         assert_eq!(incircle_exact_diffs(a, b, c, d), None);
         let want = super::super::exact::incircle_exact(a, b, c, d);
         assert_eq!(incircle_integer_coords(a, b, c, d), Some(want));
-        // Coordinates spanning more than 126 bits fall through to the difference form.
+        // Exponents spanning more than 73 fall through to the difference form.
         let tiny = [1.0, 1e-300];
         assert_eq!(incircle_integer_coords(tiny, b, c, d), None);
         let same = [0.0, 0.0];

@@ -1,0 +1,120 @@
+//! The triangulation's *structure* (triangle numbering and vertex order, adjacency, duplicates,
+//! vertex triangles) is what downstream code numbers everything by. These hashes were computed
+//! by the engine of main 1d23c7f (before the `trifast` speed-ups) on the same inputs: every
+//! change to the engine must keep them, not only the triangle set.
+
+use medial_blocks::geometry::verify::verify_exact;
+use medial_blocks::geometry::{Point, Triangulation};
+use medial_blocks::layouts;
+use medial_blocks::sampling::{sample_and_triangulate, SamplingOptions};
+
+/// FNV-1a over the triangles, neighbours, duplicates and vertex triangles, in order.
+fn structure_hash(t: &Triangulation) -> u64 {
+    let mut h: u64 = 0xcbf2_9ce4_8422_2325;
+    let mut eat = |x: u64| {
+        h ^= x;
+        h = h.wrapping_mul(0x100_0000_01b3);
+    };
+    eat(t.len() as u64);
+    for i in 0..t.len() {
+        for v in t.triangle(i) {
+            eat(u64::from(v));
+        }
+        for m in t.neighbors(i) {
+            eat(m.map_or(u64::MAX, u64::from));
+        }
+    }
+    for &(a, b) in t.duplicates() {
+        eat((u64::from(a) << 32) | u64::from(b));
+    }
+    for v in 0..t.points().len() {
+        eat(t.vertex_triangle(v).map_or(u64::MAX, |x| x as u64));
+    }
+    h
+}
+
+fn samples(holes: usize, seed: u64) -> Vec<Point> {
+    let domain = layouts::bubbles(holes, seed).unwrap();
+    sample_and_triangulate(&domain, &SamplingOptions::default())
+        .unwrap()
+        .samples
+        .points
+}
+
+/// A half-unit lattice (co-circular quadruples, collinear hull points) with every seventh point
+/// repeated, in a scrambled order.
+fn lattice() -> Vec<Point> {
+    let mut pts: Vec<Point> = (0..900)
+        .map(|i| [f64::from(i % 30) * 0.5, f64::from(i / 30) * 0.5])
+        .collect();
+    let dups: Vec<Point> = pts.iter().step_by(7).copied().collect();
+    pts.extend(dups);
+    let n = pts.len();
+    (0..n).map(|i| pts[(i * 337) % n]).collect()
+}
+
+/// Every `(name, triangulation, expected hash)` is exactly valid and hashes as expected (all
+/// hashes reported before failing).
+fn check(cases: &[(&str, Triangulation, u64)]) {
+    let mut wrong = Vec::new();
+    for (name, dt, want) in cases {
+        verify_exact(dt).unwrap();
+        let got = structure_hash(dt);
+        if got != *want {
+            wrong.push(format!("{name}: structure hash {got:#018x}"));
+        }
+    }
+    assert!(wrong.is_empty(), "{wrong:?}");
+}
+
+#[test]
+fn pipeline_samples_keep_their_structure() {
+    let pts = samples(300, 1);
+    // The prefix extended by the remaining points (numbering of `extended`).
+    let cut = pts.len() - pts.len() / 20;
+    let prefix = Triangulation::new(&pts[..cut]).unwrap();
+    let ext = prefix.extended(&pts).unwrap().unwrap();
+    check(&[
+        (
+            "bubbles 300",
+            Triangulation::new(&pts).unwrap(),
+            0xb7a8_ade8_4e69_d9f0,
+        ),
+        ("bubbles 300 extended", ext, 0xdb9d_eecc_3dcc_5001),
+    ]);
+}
+
+#[test]
+fn degenerate_sets_keep_their_structure() {
+    let pts = lattice();
+    // Scaled out of the predicates' range (the shift path) and mixed magnitudes (the checked,
+    // partly rug-evaluated predicates).
+    let tiny: Vec<Point> = pts.iter().map(|p| [p[0] * 1e-200, p[1] * 1e-200]).collect();
+    let mut mixed = pts.clone();
+    mixed.push([1e-160, 3.0]);
+    mixed.push([7.25, 1e250]);
+    let cut = pts.len() * 2 / 3;
+    let prefix = Triangulation::new(&pts[..cut]).unwrap();
+    let ext = prefix.extended(&pts).unwrap().unwrap();
+    let tiny_prefix = Triangulation::new(&tiny[..cut]).unwrap();
+    let tiny_ext = tiny_prefix.extended(&tiny).unwrap().unwrap();
+    check(&[
+        (
+            "lattice",
+            Triangulation::new(&pts).unwrap(),
+            0x57ad_5c81_d573_3567,
+        ),
+        (
+            "lattice tiny",
+            Triangulation::new(&tiny).unwrap(),
+            0x93f3_cd02_2e6d_f559,
+        ),
+        (
+            "lattice mixed",
+            Triangulation::new(&mixed).unwrap(),
+            0x7978_0b63_46dc_e3cc,
+        ),
+        ("lattice extended", ext, 0xfb2b_0c3b_16b7_3ac9),
+        ("lattice tiny extended", tiny_ext, 0xf453_db86_515b_9331),
+    ]);
+}
