@@ -334,24 +334,41 @@ impl Triangulation {
             ..
         } = b;
         let mut adj = Vec::with_capacity(count as usize);
+        // A vertex's triangle is the last (highest) one having it. Recorded per builder vertex
+        // (local in the builder's order) and moved to input indices once per vertex: vertices
+        // map to distinct input indices (a duplicate's own builder position is no vertex).
         let mut vertex_tri = vec![NONE; points.len()];
+        let mut by_vertex = if input.is_empty() {
+            Vec::new()
+        } else {
+            vec![NONE; inf as usize]
+        };
         for t in 0..tris.len() {
             let m = map[t];
             if m == NONE {
                 continue;
             }
-            let v = if input.is_empty() {
-                tris[t]
+            let mut v = tris[t];
+            if input.is_empty() {
+                for &x in &v {
+                    vertex_tri[x as usize] = m;
+                }
             } else {
-                tris[t].map(|x| input[x as usize])
-            };
-            let nb = [0, 1, 2].map(|k| map[(half[3 * t + k] / 3) as usize]);
-            for &x in &v {
-                vertex_tri[x as usize] = m;
+                for x in &mut v {
+                    by_vertex[*x as usize] = m;
+                    *x = input[*x as usize];
+                }
             }
+            let nb = [0, 1, 2].map(|k| map[(half[3 * t + k] / 3) as usize]);
             tris[m as usize] = v;
             adj.push(nb);
         }
+        for (v, &m) in by_vertex.iter().enumerate() {
+            if m != NONE {
+                vertex_tri[input[v] as usize] = m;
+            }
+        }
+        drop(by_vertex);
         tris.truncate(count as usize);
         drop(half);
         tris.shrink_to_fit();
