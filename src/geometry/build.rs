@@ -396,11 +396,6 @@ impl<'a> Builder<'a> {
         Ok(())
     }
 
-    /// Number of triangles including infinite ones.
-    pub(crate) fn triangle_count(&self) -> usize {
-        self.tv.len()
-    }
-
     pub(crate) fn infinite(&self) -> u32 {
         self.inf
     }

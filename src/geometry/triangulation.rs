@@ -1,6 +1,7 @@
 //! The public Delaunay triangulation type.
 
 use super::build::Builder;
+use super::compact::Compaction;
 use super::predicates::{incircle, orient2d, SAFE_MAX, SAFE_MIN};
 use super::{exact, Point};
 use std::borrow::Cow;
@@ -254,8 +255,13 @@ impl Triangulation {
     fn builder_arrays(&self, inf: u32) -> (Vec<[u32; 3]>, Vec<u32>) {
         let next = |k: usize| (k + 1) % 3;
         let prev = |k: usize| (k + 2) % 3;
-        let mut tv = self.tris.clone();
-        let mut adj = vec![NONE; 3 * tv.len()];
+        // Reserved once for the infinite triangles (at most one per kept point) and the two new
+        // triangles per inserted point; pages beyond those used are never touched.
+        let cap = self.tris.len() + self.points.len() + 2 * (inf as usize - self.points.len()) + 8;
+        let mut tv = Vec::with_capacity(cap);
+        tv.extend_from_slice(&self.tris);
+        let mut adj = Vec::with_capacity(3 * cap);
+        adj.resize(3 * tv.len(), NONE);
         // The infinite triangle whose first vertex is `u`, per vertex.
         let mut hull_from: Vec<u32> = vec![NONE; self.points.len()];
         for (t, nb) in self.adj.iter().enumerate() {
@@ -263,10 +269,16 @@ impl Triangulation {
             for k in 0..3 {
                 let (a, b) = (v[next(k)], v[prev(k)]);
                 if nb[k] != NONE {
+                    // Both half-edges of an interior edge are linked from its lower triangle,
+                    // which reads the other triangle once instead of twice.
                     let m = nb[k] as usize;
+                    if m < t {
+                        continue;
+                    }
                     let w = self.tris[m];
                     if let Some(j) = (0..3).find(|&j| w[next(j)] == b && w[prev(j)] == a) {
                         adj[3 * t + k] = (3 * m + j) as u32;
+                        adj[3 * m + j] = (3 * t + k) as u32;
                     }
                 } else {
                     let s = tv.len();
@@ -293,7 +305,7 @@ impl Triangulation {
     /// builder, whose vertex ids are input indices).
     ///
     /// The finite triangles keep the builder's order. They are compacted inside the builder's
-    /// own triangle array (slot `t` moves to `map[t] <= t`), which saves a fresh array.
+    /// own triangle array (slot `t` moves to its id, at most `t`), which saves a fresh array.
     fn finish(points: &[Point], order: Option<&[u32]>, b: Builder<'_>) -> Self {
         let inf = b.infinite();
         // Input index of each vertex (empty: the identity); for a duplicate group, its smallest
@@ -320,14 +332,8 @@ impl Triangulation {
             }
             duplicates.sort_unstable();
         }
-        let mut map = vec![NONE; b.triangle_count()];
-        let mut count = 0u32;
-        for (t, v) in b.tv.iter().enumerate() {
-            if !v.contains(&inf) {
-                map[t] = count;
-                count += 1;
-            }
-        }
+        let map = Compaction::new(&b.tv, inf);
+        let count = map.count();
         let Builder {
             tv: mut tris,
             adj: half,
@@ -344,7 +350,7 @@ impl Triangulation {
             vec![NONE; inf as usize]
         };
         for t in 0..tris.len() {
-            let m = map[t];
+            let m = map.id(t as u32, NONE);
             if m == NONE {
                 continue;
             }
@@ -359,7 +365,7 @@ impl Triangulation {
                     *x = input[*x as usize];
                 }
             }
-            let nb = [0, 1, 2].map(|k| map[(half[3 * t + k] / 3) as usize]);
+            let nb = [0, 1, 2].map(|k| map.id(half[3 * t + k] / 3, NONE));
             tris[m as usize] = v;
             adj.push(nb);
         }
