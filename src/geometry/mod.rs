@@ -6,7 +6,6 @@
 //! - [`verify`]: an independent exact checker (integer arithmetic) used by tests and fuzzing.
 
 mod build;
-mod compact;
 pub mod exact;
 #[doc(hidden)]
 pub mod fuzzing;

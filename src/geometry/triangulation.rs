@@ -1,7 +1,6 @@
 //! The public Delaunay triangulation type.
 
 use super::build::Builder;
-use super::compact::Compaction;
 use super::predicates::{incircle, orient2d, SAFE_MAX, SAFE_MIN};
 use super::{exact, Point};
 use std::borrow::Cow;
@@ -305,7 +304,7 @@ impl Triangulation {
     /// builder, whose vertex ids are input indices).
     ///
     /// The finite triangles keep the builder's order. They are compacted inside the builder's
-    /// own triangle array (slot `t` moves to its id, at most `t`), which saves a fresh array.
+    /// own triangle array (slot `t` moves to `map[t] <= t`), which saves a fresh array.
     fn finish(points: &[Point], order: Option<&[u32]>, b: Builder<'_>) -> Self {
         let inf = b.infinite();
         // Input index of each vertex (empty: the identity); for a duplicate group, its smallest
@@ -332,8 +331,14 @@ impl Triangulation {
             }
             duplicates.sort_unstable();
         }
-        let map = Compaction::new(&b.tv, inf);
-        let count = map.count();
+        let mut map = vec![NONE; b.tv.len()];
+        let mut count = 0u32;
+        for (t, v) in b.tv.iter().enumerate() {
+            if !v.contains(&inf) {
+                map[t] = count;
+                count += 1;
+            }
+        }
         let Builder {
             tv: mut tris,
             adj: half,
@@ -350,7 +355,7 @@ impl Triangulation {
             vec![NONE; inf as usize]
         };
         for t in 0..tris.len() {
-            let m = map.id(t as u32, NONE);
+            let m = map[t];
             if m == NONE {
                 continue;
             }
@@ -365,7 +370,7 @@ impl Triangulation {
                     *x = input[*x as usize];
                 }
             }
-            let nb = [0, 1, 2].map(|k| map.id(half[3 * t + k] / 3, NONE));
+            let nb = [0, 1, 2].map(|k| map[(half[3 * t + k] / 3) as usize]);
             tris[m as usize] = v;
             adj.push(nb);
         }
