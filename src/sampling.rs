@@ -24,7 +24,7 @@
 
 use crate::domain::{circle_name, dist, Circle, CircleId, Domain, HoleIndex, BOUNDING};
 use crate::geometry::{Point, Triangulation};
-use crate::medial::{classify, medial_graph, MedialGraph, TriangleKind};
+use crate::medial::{classify, medial_graph, reuse, MedialGraph, TriangleKind};
 use crate::mesher::MeshError;
 use std::collections::{HashMap, HashSet};
 use std::f64::consts::{FRAC_1_SQRT_2, FRAC_PI_4, TAU};
@@ -951,18 +951,47 @@ pub fn sample_and_triangulate_after(
                 ),
             });
         }
-        let triangulation = crate::timings::span("triangulation", || {
+        let (triangulation, extended) = crate::timings::span("triangulation", || {
             let extended = match previous {
                 Some(p) => p.triangulation.extended(&samples.points)?,
                 None => None,
             };
-            extended.map_or_else(|| Triangulation::new(&samples.points), Ok)
+            match extended {
+                Some(t) => Ok((t, true)),
+                None => Triangulation::new(&samples.points).map(|t| (t, false)),
+            }
         })?;
-        let kinds = classify(&samples, &triangulation);
-        let hard = check_invariants(&samples, &triangulation, &kinds);
+        // The round before, when the new triangulation extends its own and every earlier
+        // circle is sampled as before: its classes, checks and medial arcs are reused where
+        // the insertion kept the triangles ([`crate::medial::reuse`]).
+        let reuse = previous
+            .filter(|p| {
+                extended
+                    && p.kinds.len() == p.triangulation.len()
+                    && reuse::same_earlier_circles(&p.samples, &samples)
+            })
+            .map(|p| (p, reuse::Kept::new(&p.triangulation, &triangulation)));
+        let kinds = match &reuse {
+            Some((p, kept)) => reuse::classify_after(&samples, &triangulation, &p.kinds, kept),
+            None => classify(&samples, &triangulation),
+        };
+        let hard = match &reuse {
+            Some((p, kept))
+                if reuse::invariants_hold_after(&samples, &triangulation, &kinds, p, kept) =>
+            {
+                Vec::new()
+            }
+            _ => check_invariants(&samples, &triangulation, &kinds),
+        };
         let (violations, soft_result) = if hard.is_empty() {
             let (medial, soft) = crate::timings::span("medial_graph", || {
-                let medial = medial_graph(&samples, &triangulation, &kinds)?;
+                let reused = reuse.as_ref().and_then(|(p, kept)| {
+                    reuse::medial_graph_after(&samples, &triangulation, &kinds, p, kept)
+                });
+                let medial = match reused {
+                    Some(m) => m,
+                    None => medial_graph(&samples, &triangulation, &kinds)?,
+                };
                 let soft = thin_walls(&triangulation, &medial);
                 Ok::<_, MeshError>((medial, soft))
             })?;
