@@ -1,10 +1,11 @@
-//! Issue #8, the sampling round after refinement inserted holes: when the new samples extend
-//! the earlier ones, the triangulation is extended and the classes, the invariant check and
-//! the medial graph reuse the earlier round where the insertion kept the triangles
-//! (`medial::reuse`). Each is checked against the full computation on the same extended
-//! triangulation (the oracle): same classes, the check empty exactly when the full one is, the
-//! same medial graph (vertices, arcs, numbering, bit for bit); and the reuse happens (most
-//! triangles and arcs kept).
+//! Issue #8, the sampling round after refinement inserted holes. The sampling takes over the
+//! samples of circles whose sampling cannot differ (`sampling::sample_adaptive_after`, also
+//! where the samples do not extend the earlier ones); when they do, the triangulation is
+//! extended and the classes, the invariant check and the medial graph reuse the earlier round
+//! where the insertion kept the triangles (`medial::reuse`). Each is checked against the full
+//! computation (on the same extended triangulation): the same samples, the same classes, the
+//! check empty exactly when the full one is, the same medial graph (vertices, arcs, numbering,
+//! bit for bit); and the reuse happens (most circles taken over, most arcs kept).
 
 mod common;
 
@@ -16,8 +17,8 @@ use medial_blocks::medial::reuse::{
 use medial_blocks::medial::{classify, medial_graph};
 use medial_blocks::refine::refine;
 use medial_blocks::sampling::{
-    check_invariants, sample_and_triangulate, sample_and_triangulate_after, SampledDomain,
-    SamplingOptions,
+    check_invariants, nearest_gaps, sample_adaptive, sample_adaptive_after, sample_and_triangulate,
+    sample_and_triangulate_after, SampledDomain, SamplingOptions,
 };
 
 /// Domains with holes appended to `d0`: refinement's inserted holes (each prefix of them),
@@ -82,6 +83,7 @@ fn reuse_equals_the_full_computation() {
     let opts = SamplingOptions::default();
     let mut rng = SplitMix64(11);
     let (mut extended, mut walked, mut kept_arcs) = (0, 0, 0);
+    let (mut circles, mut circles_taken) = (0, 0);
     for d0 in domains() {
         let s0 = sample_and_triangulate(&d0, &opts).unwrap();
         for d1 in extensions(&d0, &mut rng) {
@@ -89,13 +91,12 @@ fn reuse_equals_the_full_computation() {
                 continue;
             };
             // The first sampling of d1, as the pipeline's round 0 sees it.
-            let samples = medial_blocks::sampling::sample_adaptive(
-                &d1,
-                &opts,
-                &medial_blocks::sampling::nearest_gaps(&d1),
-                &[],
-            )
-            .unwrap();
+            let gaps = nearest_gaps(&d1);
+            let samples = sample_adaptive(&d1, &opts, &gaps, &[]).unwrap();
+            let (again, taken) = sample_adaptive_after(&d1, &opts, &gaps, &[], Some(&s0)).unwrap();
+            assert_eq!(again, samples);
+            circles_taken += taken;
+            circles += d0.hole_count() + 1;
             let Some(tri) = s0.triangulation.extended(&samples.points).unwrap() else {
                 continue;
             };
@@ -130,6 +131,10 @@ fn reuse_equals_the_full_computation() {
         }
     }
     assert!(extended >= 5, "only {extended} extensions");
+    assert!(
+        circles_taken > circles / 2,
+        "{circles_taken} of {circles} circles taken over"
+    );
     assert!(kept_arcs > walked, "{kept_arcs} kept, {walked} walked");
 }
 
