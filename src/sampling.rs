@@ -24,8 +24,11 @@
 
 use crate::domain::{circle_name, dist, Circle, CircleId, Domain, HoleIndex, BOUNDING};
 use crate::geometry::{Point, Triangulation};
-use crate::medial::{classify, medial_graph, reuse, MedialGraph, TriangleKind};
+use crate::medial::{medial_graph, reuse, MedialGraph, TriangleKind};
+
+mod fused;
 use crate::mesher::MeshError;
+pub use fused::classify_and_check;
 use std::collections::{HashMap, HashSet};
 use std::f64::consts::{FRAC_1_SQRT_2, FRAC_PI_4, TAU};
 
@@ -1055,17 +1058,18 @@ pub fn sample_and_triangulate_after(
                     && reuse::same_earlier_circles(&p.samples, &samples)
             })
             .map(|p| (p, reuse::Kept::new(&p.triangulation, &triangulation)));
-        let kinds = match &reuse {
-            Some((p, kept)) => reuse::classify_after(&samples, &triangulation, &p.kinds, kept),
-            None => classify(&samples, &triangulation),
-        };
-        let hard = match &reuse {
-            Some((p, kept))
-                if reuse::invariants_hold_after(&samples, &triangulation, &kinds, p, kept) =>
-            {
-                Vec::new()
+        let (kinds, hard) = match &reuse {
+            Some((p, kept)) => {
+                let kinds = reuse::classify_after(&samples, &triangulation, &p.kinds, kept);
+                let hard =
+                    if reuse::invariants_hold_after(&samples, &triangulation, &kinds, p, kept) {
+                        Vec::new()
+                    } else {
+                        check_invariants(&samples, &triangulation, &kinds)
+                    };
+                (kinds, hard)
             }
-            _ => check_invariants(&samples, &triangulation, &kinds),
+            None => classify_and_check(&samples, &triangulation),
         };
         let (violations, soft_result) = if hard.is_empty() {
             let (medial, soft) = crate::timings::span("medial_graph", || {

@@ -17,8 +17,8 @@ use medial_blocks::medial::reuse::{
 use medial_blocks::medial::{classify, medial_graph};
 use medial_blocks::refine::refine;
 use medial_blocks::sampling::{
-    check_invariants, nearest_gaps, sample_adaptive, sample_adaptive_after, sample_and_triangulate,
-    sample_and_triangulate_after, SampledDomain, SamplingOptions,
+    check_invariants, classify_and_check, nearest_gaps, sample_adaptive, sample_adaptive_after,
+    sample_and_triangulate, sample_and_triangulate_after, SampledDomain, SamplingOptions,
 };
 
 /// Domains with holes appended to `d0`: refinement's inserted holes (each prefix of them),
@@ -105,8 +105,12 @@ fn reuse_equals_the_full_computation() {
             let kept = Kept::new(&s0.triangulation, &tri);
             assert!(kept.changed().len() < tri.len() / 2);
             let kinds = classify(&samples, &tri);
-            assert_eq!(classify_after(&samples, &tri, &s0.kinds, &kept), kinds);
             let full = check_invariants(&samples, &tri, &kinds);
+            assert_eq!(
+                classify_and_check(&samples, &tri),
+                (kinds.clone(), full.clone())
+            );
+            assert_eq!(classify_after(&samples, &tri, &s0.kinds, &kept), kinds);
             let holds = invariants_hold_after(&samples, &tri, &kinds, &s0, &kept);
             assert_eq!(holds, full.is_empty(), "{full:?}");
             if !holds {
@@ -207,6 +211,10 @@ fn the_reusing_check_refuses_what_the_full_check_finds() {
                 let kinds = classify_after(&samples, &tri, &s0.kinds, &kept);
                 assert_eq!(kinds, classify(&samples, &tri));
                 let full = check_invariants(&samples, &tri, &kinds);
+                assert_eq!(
+                    classify_and_check(&samples, &tri),
+                    (kinds.clone(), full.clone())
+                );
                 let holds = invariants_hold_after(&samples, &tri, &kinds, &s0, &kept);
                 assert_eq!(holds, full.is_empty(), "{full:?}");
                 broken += usize::from(!holds);
@@ -220,4 +228,56 @@ fn the_reusing_check_refuses_what_the_full_check_finds() {
         }
     }
     assert!(broken >= 5 && broken < cases, "{broken} of {cases} broken");
+}
+
+/// The fused pass on coarse uniform samplings (8 to 32 per circle) and on random points
+/// dealt to five "circles" (the classes are combinatorial), which break every invariant
+/// somewhere: the classes and violations of the two separate functions, in order.
+#[test]
+fn classify_and_check_is_classify_then_check() {
+    use medial_blocks::geometry::Triangulation;
+    use medial_blocks::sampling::{sample, CircleSamples, Samples};
+    let mut cases: Vec<Samples> = Vec::new();
+    for d in domains() {
+        for n in [8, 16, 32] {
+            let gaps = nearest_gaps(&d);
+            cases.push(sample(&d, &vec![n; d.hole_count() + 1], &gaps));
+        }
+    }
+    let mut rng = SplitMix64(5);
+    for per in [3u32, 5, 12, 40] {
+        let mut s = Samples {
+            points: Vec::new(),
+            circle_of: Vec::new(),
+            index_of: Vec::new(),
+            circles: Vec::new(),
+            grid: Vec::new(),
+            grid_counts: Vec::new(),
+        };
+        for id in -1..4 {
+            s.circles.push(CircleSamples {
+                circle: id,
+                first: s.points.len() as u32,
+                count: per,
+                gap: 0.0,
+            });
+            for k in 0..per {
+                s.points.push([rng.next_f64(), rng.next_f64()]);
+                s.circle_of.push(id);
+                s.index_of.push(k);
+            }
+        }
+        cases.push(s);
+    }
+    let mut kinds_seen = std::collections::HashSet::new();
+    for samples in cases {
+        let Ok(tri) = Triangulation::new(&samples.points) else {
+            continue;
+        };
+        let kinds = classify(&samples, &tri);
+        let full = check_invariants(&samples, &tri, &kinds);
+        kinds_seen.extend(full.iter().map(|v| std::mem::discriminant(&v.kind)));
+        assert_eq!(classify_and_check(&samples, &tri), (kinds, full));
+    }
+    assert!(kinds_seen.len() >= 3, "{} kinds of violation", kinds_seen.len());
 }
