@@ -204,7 +204,6 @@ pub fn medial_graph(
             tri.points().len()
         )));
     }
-    let mut vertex_of = vec![u32::MAX; n];
     let mut g = MedialGraph::default();
     for (t, kind) in kinds.iter().enumerate() {
         if *kind == TriangleKind::Interior {
@@ -212,7 +211,6 @@ pub fn medial_graph(
             let p = v.map(|s| samples.points[s as usize]);
             let position = circumcenter(p[0], p[1], p[2])
                 .ok_or_else(|| internal(format!("interior triangle {t} is degenerate")))?;
-            vertex_of[t] = g.vertices.len() as u32;
             g.vertices.push(MedialVertex {
                 triangle: t as u32,
                 position,
@@ -226,6 +224,10 @@ pub fn medial_graph(
     // 24 bytes x 2 per sample, zeroed): a boundary triangle is walked through once (by the
     // one arc it belongs to), and an interior one's is its vertex's `position`, the same
     // computation on the same points.
+    // The vertex of an interior triangle: vertices are in triangle order, so a binary search
+    // (issue 8: a per-triangle table was 4 bytes per triangle of fresh memory, for 2 interior
+    // triangles per hole among about 2 per sample).
+    let vertex_of = |t: usize| vertex_of(&g.vertices, kinds, t);
     let mut walk = Walk::default();
     for v0 in 0..g.vertices.len() {
         for k0 in 0..3 {
@@ -233,7 +235,7 @@ pub fn medial_graph(
                 continue;
             }
             visited[v0][k0] = true;
-            let arc = walk.arc(samples, tri, kinds, &g.vertices, |t| vertex_of[t], v0, k0)?;
+            let arc = walk.arc(samples, tri, kinds, &g.vertices, vertex_of, v0, k0)?;
             let [v1, k1] = [arc.ends[1] as usize, arc.end_slots[1] as usize];
             if visited[v1][k1] {
                 return Err(internal(format!(
@@ -245,6 +247,17 @@ pub fn medial_graph(
         }
     }
     Ok(g)
+}
+
+/// The vertex of triangle `t` among `vertices` (sorted by triangle), `u32::MAX` when it is not
+/// an interior triangle.
+fn vertex_of(vertices: &[MedialVertex], kinds: &[TriangleKind], t: usize) -> u32 {
+    if kinds[t] != TriangleKind::Interior {
+        return u32::MAX;
+    }
+    vertices
+        .binary_search_by_key(&(t as u32), |v| v.triangle)
+        .map_or(u32::MAX, |v| v as u32)
 }
 
 /// The buffers of one medial walk: the chains, polyline and triangles of the arc being

@@ -217,14 +217,7 @@ pub fn medial_graph_after(
         }
         start_at[ends[0] as usize][arc.end_slots[0] as usize] = e as u32;
     }
-    let vertex_of = |t: usize| -> u32 {
-        if kinds[t] != TriangleKind::Interior {
-            return u32::MAX;
-        }
-        g.vertices
-            .binary_search_by_key(&(t as u32), |v| v.triangle)
-            .map_or(u32::MAX, |v| v as u32)
-    };
+    let vertex_of = |t: usize| super::vertex_of(&g.vertices, kinds, t);
     let mut visited = vec![[false; 3]; g.vertices.len()];
     let mut arcs: Vec<MedialArc> = Vec::with_capacity(old.arcs.len());
     let mut walk = Walk::default();
