@@ -126,12 +126,13 @@ pub struct MedialVertex {
 }
 
 /// A medial arc: the chain of boundary triangles between two interior triangles.
+/// (`Default`: an empty placeholder, what a taken arc leaves.)
 ///
 /// Orientation (paper Algorithm 2): the arc leaves `ends[0]` through the edge `(a, b)` of its
 /// triangle, `a` on `circles[0]` (the paper's `C1` side) and `b` on `circles[1]` (`C2`).
 /// Walking from `ends[0]` to `ends[1]`, `circles[0]` is on the right and `circles[1]` on the
 /// left.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, Default, PartialEq)]
 pub struct MedialArc {
     /// Medial vertex ids of its start and end.
     pub ends: [u32; 2],

@@ -979,6 +979,35 @@ pub fn sample_and_triangulate_after(
     opts: &SamplingOptions,
     previous: Option<&SampledDomain>,
 ) -> Result<SampledDomain, MeshError> {
+    sample_and_triangulate_impl(domain, opts, previous, None)
+}
+
+/// [`sample_and_triangulate_after`], moving the medial arcs the new graph keeps out of
+/// `previous` instead of cloning them ([`reuse::medial_graph_taking`]): `previous.medial.arcs`
+/// is left empty. For macro refinement, which reads only the earlier graph's vertices
+/// afterwards. The same result.
+pub fn sample_and_triangulate_taking(
+    domain: &Domain,
+    opts: &SamplingOptions,
+    previous: Option<&mut SampledDomain>,
+) -> Result<SampledDomain, MeshError> {
+    match previous {
+        Some(p) => {
+            let arcs = std::mem::take(&mut p.medial.arcs);
+            sample_and_triangulate_impl(domain, opts, Some(p), Some(arcs))
+        }
+        None => sample_and_triangulate_impl(domain, opts, None, None),
+    }
+}
+
+/// [`sample_and_triangulate_after`], with the earlier graph's arcs apart (`taken`, moved
+/// into the new graph where kept) when the caller gave them up.
+fn sample_and_triangulate_impl(
+    domain: &Domain,
+    opts: &SamplingOptions,
+    previous: Option<&SampledDomain>,
+    mut taken: Option<Vec<crate::medial::MedialArc>>,
+) -> Result<SampledDomain, MeshError> {
     let _stage = crate::timings::enter("sampling");
     let gaps = nearest_gaps(domain);
     let radii: Vec<f64> = domain
@@ -1073,8 +1102,18 @@ pub fn sample_and_triangulate_after(
         };
         let (violations, soft_result) = if hard.is_empty() {
             let (medial, soft) = crate::timings::span("medial_graph", || {
-                let reused = reuse.as_ref().and_then(|(p, kept)| {
-                    reuse::medial_graph_after(&samples, &triangulation, &kinds, p, kept)
+                // Taken arcs serve one attempt (a later round walks every arc again).
+                let arcs = taken.take();
+                let reused = reuse.as_ref().and_then(|(p, kept)| match arcs {
+                    Some(mut arcs) => reuse::medial_graph_taking(
+                        &samples,
+                        &triangulation,
+                        &kinds,
+                        &p.medial.vertices,
+                        &mut arcs,
+                        kept,
+                    ),
+                    None => reuse::medial_graph_after(&samples, &triangulation, &kinds, p, kept),
                 });
                 let medial = match reused {
                     Some(m) => m,

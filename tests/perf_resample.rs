@@ -12,13 +12,15 @@ mod common;
 use medial_blocks::domain::{Circle, Domain};
 use medial_blocks::layouts::SplitMix64;
 use medial_blocks::medial::reuse::{
-    classify_after, invariants_hold_after, medial_graph_after, same_earlier_circles, Kept,
+    classify_after, invariants_hold_after, medial_graph_after, medial_graph_taking,
+    same_earlier_circles, Kept,
 };
 use medial_blocks::medial::{classify, medial_graph};
 use medial_blocks::refine::refine;
 use medial_blocks::sampling::{
     check_invariants, classify_and_check, nearest_gaps, sample_adaptive, sample_adaptive_after,
-    sample_and_triangulate, sample_and_triangulate_after, SampledDomain, SamplingOptions,
+    sample_and_triangulate, sample_and_triangulate_after, sample_and_triangulate_taking,
+    SampledDomain, SamplingOptions,
 };
 
 /// Domains with holes appended to `d0`: refinement's inserted holes (each prefix of them),
@@ -119,6 +121,16 @@ fn reuse_equals_the_full_computation() {
             let graph = medial_graph(&samples, &tri, &kinds).unwrap();
             let reused = medial_graph_after(&samples, &tri, &kinds, &s0, &kept).unwrap();
             assert_eq!(reused, graph);
+            let mut arcs = s0.medial.arcs.clone();
+            let taken = medial_graph_taking(
+                &samples,
+                &tri,
+                &kinds,
+                &s0.medial.vertices,
+                &mut arcs,
+                &kept,
+            );
+            assert_eq!(taken.unwrap(), graph);
             let same = graph
                 .arcs
                 .iter()
@@ -131,6 +143,13 @@ fn reuse_equals_the_full_computation() {
             let after = sample_and_triangulate_after(&d1, &opts, Some(&s0)).unwrap();
             assert_eq!(after.samples, fresh.samples);
             check_pipeline(&after);
+            let mut given = s0.clone();
+            let moved = sample_and_triangulate_taking(&d1, &opts, Some(&mut given)).unwrap();
+            assert_eq!(
+                (&moved.samples, &moved.kinds, &moved.medial, moved.rounds),
+                (&after.samples, &after.kinds, &after.medial, after.rounds)
+            );
+            assert_eq!(moved.thin_walls, after.thin_walls);
             assert_eq!(after.medial.arcs.len(), fresh.medial.arcs.len());
         }
     }
@@ -279,5 +298,9 @@ fn classify_and_check_is_classify_then_check() {
         kinds_seen.extend(full.iter().map(|v| std::mem::discriminant(&v.kind)));
         assert_eq!(classify_and_check(&samples, &tri), (kinds, full));
     }
-    assert!(kinds_seen.len() >= 3, "{} kinds of violation", kinds_seen.len());
+    assert!(
+        kinds_seen.len() >= 3,
+        "{} kinds of violation",
+        kinds_seen.len()
+    );
 }

@@ -163,21 +163,74 @@ pub fn medial_graph_after(
     kept: &Kept,
 ) -> Option<MedialGraph> {
     let old = &before.medial;
+    reusing(
+        samples,
+        tri,
+        kinds,
+        &old.vertices,
+        Arcs::Cloned(&old.arcs),
+        kept,
+    )
+}
+
+/// [`medial_graph_after`] with the earlier graph's `vertices` and `arcs` given apart, moving
+/// the kept arcs out of `arcs` (left empty in their place) instead of cloning them: for a
+/// caller that drops the earlier arcs anyway (macro refinement; issue 8: cloning was four
+/// allocations and copies per arc). The same graph.
+pub fn medial_graph_taking(
+    samples: &Samples,
+    tri: &Triangulation,
+    kinds: &[TriangleKind],
+    vertices: &[MedialVertex],
+    arcs: &mut [MedialArc],
+    kept: &Kept,
+) -> Option<MedialGraph> {
+    reusing(samples, tri, kinds, vertices, Arcs::Taken(arcs), kept)
+}
+
+/// Where the kept arcs come from.
+enum Arcs<'a> {
+    Cloned(&'a [MedialArc]),
+    Taken(&'a mut [MedialArc]),
+}
+
+impl Arcs<'_> {
+    fn all(&self) -> &[MedialArc] {
+        match self {
+            Arcs::Cloned(a) => a,
+            Arcs::Taken(a) => a,
+        }
+    }
+    fn get(&mut self, e: usize) -> MedialArc {
+        match self {
+            Arcs::Cloned(a) => a[e].clone(),
+            Arcs::Taken(a) => std::mem::take(&mut a[e]),
+        }
+    }
+}
+
+fn reusing(
+    samples: &Samples,
+    tri: &Triangulation,
+    kinds: &[TriangleKind],
+    old_vertices: &[MedialVertex],
+    mut old_arcs: Arcs,
+    kept: &Kept,
+) -> Option<MedialGraph> {
     if kinds.len() != tri.len() || samples.len() != tri.points().len() {
         return None;
     }
     // Vertices in triangle order: the earlier vertices of kept triangles merged with the
     // interior triangles among the changed ones (both sorted by triangle id).
     let mut g = MedialGraph::default();
-    let mut new_of_old = vec![u32::MAX; old.vertices.len()];
+    let mut new_of_old = vec![u32::MAX; old_vertices.len()];
     let mut fresh = kept
         .changed()
         .iter()
         .copied()
         .filter(|&t| kinds[t as usize] == TriangleKind::Interior)
         .peekable();
-    let mut earlier = old
-        .vertices
+    let mut earlier = old_vertices
         .iter()
         .enumerate()
         .filter(|(_, v)| kept.contains(v.triangle as usize))
@@ -210,7 +263,7 @@ pub fn medial_graph_after(
     }
     // Earlier arcs whose triangles are all kept, by their new start (vertex, slot).
     let mut start_at = vec![[u32::MAX; 3]; g.vertices.len()];
-    for (e, arc) in old.arcs.iter().enumerate() {
+    for (e, arc) in old_arcs.all().iter().enumerate() {
         let ends = arc.ends.map(|v| new_of_old[v as usize]);
         if ends.contains(&u32::MAX) || !arc.triangles.iter().all(|&t| kept.contains(t as usize)) {
             continue;
@@ -219,7 +272,7 @@ pub fn medial_graph_after(
     }
     let vertex_of = |t: usize| super::vertex_of(&g.vertices, kinds, t);
     let mut visited = vec![[false; 3]; g.vertices.len()];
-    let mut arcs: Vec<MedialArc> = Vec::with_capacity(old.arcs.len());
+    let mut arcs: Vec<MedialArc> = Vec::with_capacity(old_arcs.all().len());
     let mut walk = Walk::default();
     for v0 in 0..g.vertices.len() {
         for k0 in 0..3 {
@@ -232,11 +285,9 @@ pub fn medial_graph_after(
                     .arc(samples, tri, kinds, &g.vertices, vertex_of, v0, k0)
                     .ok()?,
                 e => {
-                    let earlier = &old.arcs[e as usize];
-                    MedialArc {
-                        ends: earlier.ends.map(|v| new_of_old[v as usize]),
-                        ..earlier.clone()
-                    }
+                    let mut arc = old_arcs.get(e as usize);
+                    arc.ends = arc.ends.map(|v| new_of_old[v as usize]);
+                    arc
                 }
             };
             let [v1, k1] = [arc.ends[1] as usize, arc.end_slots[1] as usize];
