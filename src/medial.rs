@@ -24,6 +24,8 @@ use crate::geometry::{Point, Triangulation};
 use crate::mesher::MeshError;
 use crate::sampling::Samples;
 
+pub mod reuse;
+
 /// The class of one Delaunay triangle (see the module documentation).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum TriangleKind {
@@ -56,33 +58,36 @@ impl TriangleKind {
 /// pipeline ([`crate::sampling::sample_and_triangulate`]) always passes a matching pair.
 pub fn classify(samples: &Samples, tri: &Triangulation) -> Vec<TriangleKind> {
     (0..tri.len())
-        .map(|t| {
-            let v = tri.triangle(t);
-            let c = v.map(|s| samples.circle_of[s as usize]);
-            if c[0] == c[1] && c[1] == c[2] {
-                // All samples of one circle are (nearly) co-circular; 3 vertices on a hole
-                // means inside it.
-                return if c[0] < 0 {
-                    TriangleKind::Outside
-                } else {
-                    TriangleKind::Hole(c[0])
-                };
-            }
-            let mut count = 0;
-            let mut edge = 0u8;
-            for k in 0..3 {
-                if samples.is_boundary_edge(v[(k + 1) % 3], v[(k + 2) % 3]) {
-                    count += 1;
-                    edge = k as u8;
-                }
-            }
-            match count {
-                0 => TriangleKind::Interior,
-                1 => TriangleKind::Boundary { edge },
-                _ => TriangleKind::MultiBoundary,
-            }
-        })
+        .map(|t| classify_one(samples, tri.triangle(t)))
         .collect()
+}
+
+/// The class of the triangle with vertices `v` (sample indices): a function of the circles,
+/// indices on their circles and circle counts of its three samples only.
+pub fn classify_one(samples: &Samples, v: [u32; 3]) -> TriangleKind {
+    let c = v.map(|s| samples.circle_of[s as usize]);
+    if c[0] == c[1] && c[1] == c[2] {
+        // All samples of one circle are (nearly) co-circular; 3 vertices on a hole
+        // means inside it.
+        return if c[0] < 0 {
+            TriangleKind::Outside
+        } else {
+            TriangleKind::Hole(c[0])
+        };
+    }
+    let mut count = 0;
+    let mut edge = 0u8;
+    for k in 0..3 {
+        if samples.is_boundary_edge(v[(k + 1) % 3], v[(k + 2) % 3]) {
+            count += 1;
+            edge = k as u8;
+        }
+    }
+    match count {
+        0 => TriangleKind::Interior,
+        1 => TriangleKind::Boundary { edge },
+        _ => TriangleKind::MultiBoundary,
+    }
 }
 
 /// The circumcentre of triangle `abc`, computed relative to `a` with the determinant from
@@ -121,12 +126,13 @@ pub struct MedialVertex {
 }
 
 /// A medial arc: the chain of boundary triangles between two interior triangles.
+/// (`Default`: an empty placeholder, what a taken arc leaves.)
 ///
 /// Orientation (paper Algorithm 2): the arc leaves `ends[0]` through the edge `(a, b)` of its
 /// triangle, `a` on `circles[0]` (the paper's `C1` side) and `b` on `circles[1]` (`C2`).
 /// Walking from `ends[0]` to `ends[1]`, `circles[0]` is on the right and `circles[1]` on the
 /// left.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, Default, PartialEq)]
 pub struct MedialArc {
     /// Medial vertex ids of its start and end.
     pub ends: [u32; 2],
@@ -199,7 +205,6 @@ pub fn medial_graph(
             tri.points().len()
         )));
     }
-    let mut vertex_of = vec![u32::MAX; n];
     let mut g = MedialGraph::default();
     for (t, kind) in kinds.iter().enumerate() {
         if *kind == TriangleKind::Interior {
@@ -207,7 +212,6 @@ pub fn medial_graph(
             let p = v.map(|s| samples.points[s as usize]);
             let position = circumcenter(p[0], p[1], p[2])
                 .ok_or_else(|| internal(format!("interior triangle {t} is degenerate")))?;
-            vertex_of[t] = g.vertices.len() as u32;
             g.vertices.push(MedialVertex {
                 triangle: t as u32,
                 position,
@@ -221,114 +225,165 @@ pub fn medial_graph(
     // 24 bytes x 2 per sample, zeroed): a boundary triangle is walked through once (by the
     // one arc it belongs to), and an interior one's is its vertex's `position`, the same
     // computation on the same points.
-    let cc = |t: usize| -> Result<Point, MeshError> {
-        if vertex_of[t] != u32::MAX {
-            return Ok(g.vertices[vertex_of[t] as usize].position);
-        }
-        let v = tri.triangle(t);
-        let p = v.map(|s| samples.points[s as usize]);
-        circumcenter(p[0], p[1], p[2])
-            .ok_or_else(|| internal(format!("triangle {t} is degenerate")))
-    };
-    // One buffer each for the chains, polyline and triangles of the arc being walked, copied
-    // out at exact length (issue 8: growing four fresh vectors per arc was several
-    // reallocations each, and up to twice the memory).
-    let (mut c1, mut c2) = (Vec::new(), Vec::new());
-    let (mut polyline, mut chain) = (Vec::new(), Vec::new());
+    // The vertex of an interior triangle: vertices are in triangle order, so a binary search
+    // (issue 8: a per-triangle table was 4 bytes per triangle of fresh memory, for 2 interior
+    // triangles per hole among about 2 per sample).
+    let vertex_of = |t: usize| vertex_of(&g.vertices, kinds, t);
+    let mut walk = Walk::default();
     for v0 in 0..g.vertices.len() {
-        let t0 = g.vertices[v0].triangle as usize;
         for k0 in 0..3 {
             if visited[v0][k0] {
                 continue;
             }
             visited[v0][k0] = true;
-            let tv = tri.triangle(t0);
-            let (mut a, mut b) = (tv[(k0 + 1) % 3], tv[(k0 + 2) % 3]);
-            c1.clear();
-            c1.push(a);
-            c2.clear();
-            c2.push(b);
-            polyline.clear();
-            polyline.push(g.vertices[v0].position);
-            chain.clear();
-            let (mut t, mut slot) = (t0, k0);
-            let mut steps = 0usize;
-            let (v1, k1) = loop {
-                steps += 1;
-                if steps > n + 1 {
-                    return Err(internal(format!(
-                        "medial walk from triangle {t0} does not end"
-                    )));
-                }
-                let nt = tri.neighbors(t)[slot].ok_or_else(|| {
-                    internal(format!(
-                        "medial walk crossed the convex hull at triangle {t} edge {slot}"
-                    ))
-                })? as usize;
-                let w = tri.triangle(nt);
-                // The mirror edge (b, a) in the CCW order of the next triangle: w = (p, b, a)
-                // up to rotation.
-                let kp = (0..3)
-                    .find(|&k| w[(k + 1) % 3] == b && w[(k + 2) % 3] == a)
-                    .ok_or_else(|| {
-                        internal(format!("triangles {t} and {nt} do not share edge {a}-{b}"))
-                    })?;
-                let p = w[kp];
-                polyline.push(cc(nt)?);
-                match kinds[nt] {
-                    TriangleKind::Interior => {
-                        let v1 = vertex_of[nt];
-                        if v1 == u32::MAX {
-                            return Err(internal(format!("triangle {nt} has no medial vertex")));
-                        }
-                        break (v1, kp);
-                    }
-                    TriangleKind::Boundary { edge } => {
-                        // lambda1 = (a, p) is opposite b (slot kp + 1), lambda2 = (p, b)
-                        // is opposite a (slot kp + 2).
-                        let (kb, ka) = ((kp + 1) % 3, (kp + 2) % 3);
-                        if edge as usize == kb {
-                            c1.push(p);
-                            a = p;
-                            slot = ka;
-                        } else if edge as usize == ka {
-                            c2.push(p);
-                            b = p;
-                            slot = kb;
-                        } else {
-                            return Err(internal(format!(
-                                "medial walk entered triangle {nt} through its boundary edge"
-                            )));
-                        }
-                        chain.push(nt as u32);
-                        t = nt;
-                    }
-                    other => {
-                        return Err(internal(format!(
-                            "medial walk from triangle {t0} reached triangle {nt} of kind {other:?}"
-                        )))
-                    }
-                }
-            };
-            if visited[v1 as usize][k1] {
+            let arc = walk.arc(samples, tri, kinds, &g.vertices, vertex_of, v0, k0)?;
+            let [v1, k1] = [arc.ends[1] as usize, arc.end_slots[1] as usize];
+            if visited[v1][k1] {
                 return Err(internal(format!(
                     "medial arc into vertex {v1} slot {k1} found twice"
                 )));
             }
-            visited[v1 as usize][k1] = true;
-            g.arcs.push(MedialArc {
-                ends: [v0 as u32, v1],
-                end_slots: [k0 as u8, k1 as u8],
-                triangles: chain.to_vec(),
-                polyline: polyline.to_vec(),
-                circles: [
-                    samples.circle_of[c1[0] as usize],
-                    samples.circle_of[c2[0] as usize],
-                ],
-                c1: c1.to_vec(),
-                c2: c2.to_vec(),
-            });
+            visited[v1][k1] = true;
+            g.arcs.push(arc);
         }
     }
     Ok(g)
+}
+
+/// The vertex of triangle `t` among `vertices` (sorted by triangle), `u32::MAX` when it is not
+/// an interior triangle.
+fn vertex_of(vertices: &[MedialVertex], kinds: &[TriangleKind], t: usize) -> u32 {
+    if kinds[t] != TriangleKind::Interior {
+        return u32::MAX;
+    }
+    vertices
+        .binary_search_by_key(&(t as u32), |v| v.triangle)
+        .map_or(u32::MAX, |v| v as u32)
+}
+
+/// The buffers of one medial walk: the chains, polyline and triangles of the arc being
+/// walked, copied out at exact length (issue 8: growing four fresh vectors per arc was several
+/// reallocations each, and up to twice the memory).
+#[derive(Debug, Default)]
+pub(crate) struct Walk {
+    c1: Vec<u32>,
+    c2: Vec<u32>,
+    polyline: Vec<Point>,
+    chain: Vec<u32>,
+}
+
+impl Walk {
+    /// The arc leaving medial vertex `v0` of `vertices` through edge slot `k0` of its triangle
+    /// (Algorithm 1): `vertex_of(t)` is the vertex of interior triangle `t` (`u32::MAX` for
+    /// none). Errors as [`medial_graph`]'s.
+    #[allow(clippy::too_many_arguments)]
+    pub(crate) fn arc(
+        &mut self,
+        samples: &Samples,
+        tri: &Triangulation,
+        kinds: &[TriangleKind],
+        vertices: &[MedialVertex],
+        vertex_of: impl Fn(usize) -> u32,
+        v0: usize,
+        k0: usize,
+    ) -> Result<MedialArc, MeshError> {
+        let n = tri.len();
+        let cc = |t: usize| -> Result<Point, MeshError> {
+            let v = vertex_of(t);
+            if v != u32::MAX {
+                return Ok(vertices[v as usize].position);
+            }
+            let v = tri.triangle(t);
+            let p = v.map(|s| samples.points[s as usize]);
+            circumcenter(p[0], p[1], p[2])
+                .ok_or_else(|| internal(format!("triangle {t} is degenerate")))
+        };
+        let Walk {
+            c1,
+            c2,
+            polyline,
+            chain,
+        } = self;
+        let t0 = vertices[v0].triangle as usize;
+        let tv = tri.triangle(t0);
+        let (mut a, mut b) = (tv[(k0 + 1) % 3], tv[(k0 + 2) % 3]);
+        c1.clear();
+        c1.push(a);
+        c2.clear();
+        c2.push(b);
+        polyline.clear();
+        polyline.push(vertices[v0].position);
+        chain.clear();
+        let (mut t, mut slot) = (t0, k0);
+        let mut steps = 0usize;
+        let (v1, k1) = loop {
+            steps += 1;
+            if steps > n + 1 {
+                return Err(internal(format!(
+                    "medial walk from triangle {t0} does not end"
+                )));
+            }
+            let nt = tri.neighbors(t)[slot].ok_or_else(|| {
+                internal(format!(
+                    "medial walk crossed the convex hull at triangle {t} edge {slot}"
+                ))
+            })? as usize;
+            let w = tri.triangle(nt);
+            // The mirror edge (b, a) in the CCW order of the next triangle: w = (p, b, a)
+            // up to rotation.
+            let kp = (0..3)
+                .find(|&k| w[(k + 1) % 3] == b && w[(k + 2) % 3] == a)
+                .ok_or_else(|| {
+                    internal(format!("triangles {t} and {nt} do not share edge {a}-{b}"))
+                })?;
+            let p = w[kp];
+            polyline.push(cc(nt)?);
+            match kinds[nt] {
+                TriangleKind::Interior => {
+                    let v1 = vertex_of(nt);
+                    if v1 == u32::MAX {
+                        return Err(internal(format!("triangle {nt} has no medial vertex")));
+                    }
+                    break (v1, kp);
+                }
+                TriangleKind::Boundary { edge } => {
+                    // lambda1 = (a, p) is opposite b (slot kp + 1), lambda2 = (p, b)
+                    // is opposite a (slot kp + 2).
+                    let (kb, ka) = ((kp + 1) % 3, (kp + 2) % 3);
+                    if edge as usize == kb {
+                        c1.push(p);
+                        a = p;
+                        slot = ka;
+                    } else if edge as usize == ka {
+                        c2.push(p);
+                        b = p;
+                        slot = kb;
+                    } else {
+                        return Err(internal(format!(
+                            "medial walk entered triangle {nt} through its boundary edge"
+                        )));
+                    }
+                    chain.push(nt as u32);
+                    t = nt;
+                }
+                other => {
+                    return Err(internal(format!(
+                        "medial walk from triangle {t0} reached triangle {nt} of kind {other:?}"
+                    )))
+                }
+            }
+        };
+        Ok(MedialArc {
+            ends: [v0 as u32, v1],
+            end_slots: [k0 as u8, k1 as u8],
+            triangles: chain.to_vec(),
+            polyline: polyline.to_vec(),
+            circles: [
+                samples.circle_of[c1[0] as usize],
+                samples.circle_of[c2[0] as usize],
+            ],
+            c1: c1.to_vec(),
+            c2: c2.to_vec(),
+        })
+    }
 }

@@ -31,7 +31,9 @@ use crate::domain::{dist, gap, Circle, Domain, HoleIndex};
 use crate::geometry::Point;
 use crate::medial::{circumcenter, MedialGraph};
 use crate::mesher::MeshError;
-use crate::sampling::{nearest_gaps, sample_and_triangulate_after, SampledDomain, SamplingOptions};
+use crate::sampling::{
+    nearest_gaps, sample_and_triangulate_taking, SampledDomain, SamplingOptions,
+};
 use std::collections::HashSet;
 
 /// The poorness ratio `circumradius / shortest edge` of medial vertex `v`: from the tangent
@@ -123,8 +125,10 @@ pub fn refine(
     // triangulation (the same triangles, renumbered).
     let mut previous: Option<(SampledDomain, Vec<Option<Apollonius>>)> = None;
     loop {
+        // The earlier round's arcs are moved into the new graph (only its vertices are read
+        // below, to match the vertex circles).
         let sampled =
-            sample_and_triangulate_after(&current, sampling, previous.as_ref().map(|p| &p.0))?;
+            sample_and_triangulate_taking(&current, sampling, previous.as_mut().map(|p| &mut p.0))?;
         let circles = match previous.take() {
             Some((before, circles)) => {
                 vertex_circles_taking(&current, &sampled.medial, Some((&before.medial, circles)))

@@ -24,8 +24,11 @@
 
 use crate::domain::{circle_name, dist, Circle, CircleId, Domain, HoleIndex, BOUNDING};
 use crate::geometry::{Point, Triangulation};
-use crate::medial::{classify, medial_graph, MedialGraph, TriangleKind};
+use crate::medial::{medial_graph, reuse, MedialGraph, TriangleKind};
+
+mod fused;
 use crate::mesher::MeshError;
+pub use fused::classify_and_check;
 use std::collections::{HashMap, HashSet};
 use std::f64::consts::{FRAC_1_SQRT_2, FRAC_PI_4, TAU};
 
@@ -532,6 +535,34 @@ pub fn sample_adaptive(
     gaps: &[f64],
     density: &[u32],
 ) -> Result<Samples, TooManySamples> {
+    sample_adaptive_after(domain, opts, gaps, density, None).map(|(s, _)| s)
+}
+
+/// [`sample_adaptive`], taking from `previous` (a sampling of an earlier domain) the samples
+/// of every circle whose sampling cannot differ: the same circle in the same slot, sampled with
+/// the same options and density, with the same nearest gap (bitwise), and no circle of
+/// `domain` beyond the earlier ones within its reach (its set of close circles is then the
+/// earlier one: [`HoleIndex::within_gap`] is a pairwise predicate). Every earlier slot before
+/// it then has the same samples, so the same budget is left, and [`adaptive_circle`] is
+/// deterministic. Returns the samples and how many circles were taken over (the same samples
+/// as [`sample_adaptive`]; tested in `tests/perf_resample.rs`).
+#[doc(hidden)]
+pub fn sample_adaptive_after(
+    domain: &Domain,
+    opts: &SamplingOptions,
+    gaps: &[f64],
+    density: &[u32],
+    previous: Option<&SampledDomain>,
+) -> Result<(Samples, usize), TooManySamples> {
+    // The earlier sampling, when it was made with these options; its circles in slot order.
+    let earlier = previous.and_then(|p| {
+        let inputs = p.inputs.as_ref()?;
+        (inputs.options == *opts && inputs.circles.len() == p.samples.circles.len())
+            .then_some((p, inputs))
+    });
+    let old_slots = earlier.map_or(0, |(_, i)| i.circles.len());
+    let old_holes = old_slots.saturating_sub(1);
+    let mut reused = 0;
     let holes = domain.holes();
     let b = domain.bounding();
     let index = HoleIndex::new(holes);
@@ -559,6 +590,8 @@ pub fn sample_adaptive(
         let c = domain.circle(id);
         let g = gaps.get(slot).copied().unwrap_or(f64::NAN);
         let x = reach(slot, c.radius);
+        // The close holes (increasing), for a hole.
+        let mut close: Vec<usize> = Vec::new();
         let near: Vec<Near> = if id == BOUNDING {
             holes
                 .iter()
@@ -571,10 +604,10 @@ pub fn sample_adaptive(
                 .collect()
         } else {
             let i = (id) as usize;
-            let mut v: Vec<Near> = index
-                .within_gap(i, x)
-                .into_iter()
-                .map(|j| Near {
+            close = index.within_gap(i, x);
+            let mut v: Vec<Near> = close
+                .iter()
+                .map(|&j| Near {
                     center: holes[j].center,
                     radius: holes[j].radius,
                     outer: false,
@@ -589,6 +622,46 @@ pub fn sample_adaptive(
             }
             v
         };
+        let bits = |c: &Circle| [c.center[0], c.center[1], c.radius].map(f64::to_bits);
+        // A sampling within the budget is the same under any budget it fits (the limit only
+        // turns a longer one into an error).
+        let fits =
+            |count: u32| count as usize <= cap.min(opts.max_total.saturating_sub(s.points.len()));
+        let same = earlier.filter(|(p, inputs)| {
+            slot < old_slots
+                && bits(&inputs.circles[slot]) == bits(&c)
+                && fits(p.samples.circles[slot].count)
+                && inputs.density.get(slot).copied().unwrap_or(0)
+                    == density.get(slot).copied().unwrap_or(0)
+                && p.samples.circles[slot].gap.to_bits() == g.to_bits()
+                && p.samples.circles[slot].circle == id
+                && !p.samples.grid.is_empty()
+        });
+        let new_near = if id == BOUNDING {
+            holes[old_holes.min(holes.len())..]
+                .iter()
+                .any(|h| b.radius - dist(h.center, b.center) - h.radius < x)
+        } else {
+            close.last().is_some_and(|&j| j >= old_holes)
+        };
+        if let (Some((p, _)), false) = (same, new_near) {
+            let cs = p.samples.circles[slot];
+            let range = cs.first as usize..(cs.first + cs.count) as usize;
+            s.circles.push(CircleSamples {
+                circle: id,
+                first: s.points.len() as u32,
+                count: cs.count,
+                gap: g,
+            });
+            s.grid_counts.push(p.samples.grid_counts[slot]);
+            s.points.extend_from_slice(&p.samples.points[range.clone()]);
+            s.grid.extend_from_slice(&p.samples.grid[range]);
+            s.circle_of
+                .extend(std::iter::repeat_n(id, cs.count as usize));
+            s.index_of.extend(0..cs.count);
+            reused += 1;
+            continue;
+        }
         // Resampling doubles the density everywhere on the circle: the coarse count too.
         let k = density.get(slot).copied().unwrap_or(0).min(MAX_LEVELS);
         // The total budget bounds every circle too, so memory stays within `max_total`.
@@ -623,7 +696,7 @@ pub fn sample_adaptive(
             s.grid.push(k);
         }
     }
-    Ok(s)
+    Ok((s, reused))
 }
 
 /// What broke one of the sampling invariants.
@@ -859,6 +932,18 @@ pub struct SampledDomain {
     /// Violations of the soft invariant (d) ([`thin_walls`]) left when the rounds or the
     /// per-circle limit ran out; their blocks have a zero-length wall.
     pub thin_walls: Vec<Violation>,
+    /// What the samples were made from (for [`sample_adaptive_after`]); `None` for a
+    /// sampling made otherwise.
+    inputs: Option<SamplingInputs>,
+}
+
+/// The inputs of an adaptive sampling besides the gaps it records: the options, the density
+/// doublings per slot, and the circles in slot order.
+#[derive(Debug, Clone)]
+struct SamplingInputs {
+    options: SamplingOptions,
+    density: Vec<u32>,
+    circles: Vec<Circle>,
 }
 
 /// Sample, triangulate, check the invariants, and resample offending circles until they
@@ -894,6 +979,35 @@ pub fn sample_and_triangulate_after(
     opts: &SamplingOptions,
     previous: Option<&SampledDomain>,
 ) -> Result<SampledDomain, MeshError> {
+    sample_and_triangulate_impl(domain, opts, previous, None)
+}
+
+/// [`sample_and_triangulate_after`], moving the medial arcs the new graph keeps out of
+/// `previous` instead of cloning them ([`reuse::medial_graph_taking`]): `previous.medial.arcs`
+/// is left empty. For macro refinement, which reads only the earlier graph's vertices
+/// afterwards. The same result.
+pub fn sample_and_triangulate_taking(
+    domain: &Domain,
+    opts: &SamplingOptions,
+    previous: Option<&mut SampledDomain>,
+) -> Result<SampledDomain, MeshError> {
+    match previous {
+        Some(p) => {
+            let arcs = std::mem::take(&mut p.medial.arcs);
+            sample_and_triangulate_impl(domain, opts, Some(p), Some(arcs))
+        }
+        None => sample_and_triangulate_impl(domain, opts, None, None),
+    }
+}
+
+/// [`sample_and_triangulate_after`], with the earlier graph's arcs apart (`taken`, moved
+/// into the new graph where kept) when the caller gave them up.
+fn sample_and_triangulate_impl(
+    domain: &Domain,
+    opts: &SamplingOptions,
+    previous: Option<&SampledDomain>,
+    mut taken: Option<Vec<crate::medial::MedialArc>>,
+) -> Result<SampledDomain, MeshError> {
     let _stage = crate::timings::enter("sampling");
     let gaps = nearest_gaps(domain);
     let radii: Vec<f64> = domain
@@ -919,21 +1033,23 @@ pub fn sample_and_triangulate_after(
     }
     let mut round = 0;
     loop {
-        let samples =
-            sample_adaptive(domain, opts, &gaps, &density).map_err(|e| MeshError::Sampling {
-                circle: e.circle,
-                message: if e.total {
-                    format!(
-                        "more samples would be needed in total than the limit {}",
-                        e.limit
-                    )
-                } else {
-                    format!(
-                        "the circle would need more than the most samples allowed ({}): its \
+        let (samples, _) =
+            sample_adaptive_after(domain, opts, &gaps, &density, previous).map_err(|e| {
+                MeshError::Sampling {
+                    circle: e.circle,
+                    message: if e.total {
+                        format!(
+                            "more samples would be needed in total than the limit {}",
+                            e.limit
+                        )
+                    } else {
+                        format!(
+                            "the circle would need more than the most samples allowed ({}): its \
                          gap to a neighbour is too small for the sampling",
-                        e.limit
-                    )
-                },
+                            e.limit
+                        )
+                    },
+                }
             })?;
         let total = samples.len();
         if total > opts.max_total {
@@ -951,18 +1067,58 @@ pub fn sample_and_triangulate_after(
                 ),
             });
         }
-        let triangulation = crate::timings::span("triangulation", || {
+        let (triangulation, extended) = crate::timings::span("triangulation", || {
             let extended = match previous {
                 Some(p) => p.triangulation.extended(&samples.points)?,
                 None => None,
             };
-            extended.map_or_else(|| Triangulation::new(&samples.points), Ok)
+            match extended {
+                Some(t) => Ok((t, true)),
+                None => Triangulation::new(&samples.points).map(|t| (t, false)),
+            }
         })?;
-        let kinds = classify(&samples, &triangulation);
-        let hard = check_invariants(&samples, &triangulation, &kinds);
+        // The round before, when the new triangulation extends its own and every earlier
+        // circle is sampled as before: its classes, checks and medial arcs are reused where
+        // the insertion kept the triangles ([`crate::medial::reuse`]).
+        let reuse = previous
+            .filter(|p| {
+                extended
+                    && p.kinds.len() == p.triangulation.len()
+                    && reuse::same_earlier_circles(&p.samples, &samples)
+            })
+            .map(|p| (p, reuse::Kept::new(&p.triangulation, &triangulation)));
+        let (kinds, hard) = match &reuse {
+            Some((p, kept)) => {
+                let kinds = reuse::classify_after(&samples, &triangulation, &p.kinds, kept);
+                let hard =
+                    if reuse::invariants_hold_after(&samples, &triangulation, &kinds, p, kept) {
+                        Vec::new()
+                    } else {
+                        check_invariants(&samples, &triangulation, &kinds)
+                    };
+                (kinds, hard)
+            }
+            None => classify_and_check(&samples, &triangulation),
+        };
         let (violations, soft_result) = if hard.is_empty() {
             let (medial, soft) = crate::timings::span("medial_graph", || {
-                let medial = medial_graph(&samples, &triangulation, &kinds)?;
+                // Taken arcs serve one attempt (a later round walks every arc again).
+                let arcs = taken.take();
+                let reused = reuse.as_ref().and_then(|(p, kept)| match arcs {
+                    Some(mut arcs) => reuse::medial_graph_taking(
+                        &samples,
+                        &triangulation,
+                        &kinds,
+                        &p.medial.vertices,
+                        &mut arcs,
+                        kept,
+                    ),
+                    None => reuse::medial_graph_after(&samples, &triangulation, &kinds, p, kept),
+                });
+                let medial = match reused {
+                    Some(m) => m,
+                    None => medial_graph(&samples, &triangulation, &kinds)?,
+                };
                 let soft = thin_walls(&triangulation, &medial);
                 Ok::<_, MeshError>((medial, soft))
             })?;
@@ -973,6 +1129,11 @@ pub fn sample_and_triangulate_after(
                 medial,
                 rounds: round,
                 thin_walls: soft.clone(),
+                inputs: Some(SamplingInputs {
+                    options: opts.clone(),
+                    density: density.clone(),
+                    circles: domain.circle_ids().map(|c| domain.circle(c)).collect(),
+                }),
             };
             if soft.is_empty() || round >= opts.max_rounds || !opts.soft_rounds {
                 return Ok(done);

@@ -28,10 +28,6 @@ use medial_blocks::Options;
 use proptest::prelude::*;
 use std::collections::HashMap;
 
-/// A layout (far from the origin) whose refinement inserts a hole without resampling any
-/// other circle: the samples before are a prefix of the samples after.
-const PREFIX: &str = r#"{"bounding": {"center": [99.80518032777042, 222.13404102732048], "radius": 1.0}, "holes": [{"center": [100.01448901478783, 222.33167266433094], "radius": 0.20821141244148114}, {"center": [99.15416679567457, 222.4725675840845], "radius": 0.24053959701870642}, {"center": [100.49276751007557, 221.92556284706956], "radius": 0.00010638887682197367}, {"center": [100.68302868175985, 221.93803595726027], "radius": 0.00014962206114609836}, {"center": [99.46589073326423, 222.3685354043989], "radius": 0.0001105205087575796}]}"#;
-
 /// `n` random bubbles for seeds 1 to 3, then [`layouts`].
 fn bubbles_and_layouts(n: usize) -> Vec<Domain> {
     let mut domains: Vec<Domain> = (1..=3)
@@ -45,7 +41,7 @@ fn bubbles_and_layouts(n: usize) -> Vec<Domain> {
 fn layouts() -> Vec<Domain> {
     let mut out = vec![
         Domain::from_json_str(common::INSERTING).expect("valid layout"),
-        Domain::from_json_str(PREFIX).expect("valid layout"),
+        Domain::from_json_str(common::PREFIX).expect("valid layout"),
     ];
     for seed in 0..12u64 {
         let mut rng = SplitMix64(seed);

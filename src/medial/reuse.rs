@@ -1,0 +1,303 @@
+//! The sampling round after macro refinement inserted holes, reusing the round before
+//! (issue 8).
+//!
+//! When no circle was resampled, the new samples extend the earlier ones and the triangulation
+//! is the earlier one with the new samples inserted ([`Triangulation::extended`]). A triangle
+//! whose id and three vertices (in order) are those of an earlier triangle ([`Kept`]) has the
+//! same class ([`classify_one`] reads only the circles, indices and circle counts of its
+//! samples, unchanged for every earlier sample), the same circumcentre, and the same
+//! neighbours across each of its edges (a directed edge lies in one triangle only). So only
+//! the triangles the insertion changed are classified and checked again, and a medial arc
+//! whose triangles are all kept is the earlier arc, renumbered: vertices are interior
+//! triangles in id order, and kept triangles keep their ids, so the earlier vertex order (and
+//! with it every kept arc's orientation and place in the walk order) is kept. Each function
+//! here equals the full computation of [`crate::medial`] and
+//! [`crate::sampling::check_invariants`] (tested against them in `tests/perf_front.rs`); the
+//! numbering of the extended triangulation only decides how much is reused.
+
+use super::{circumcenter, classify_one, MedialArc, MedialGraph, MedialVertex};
+use super::{TriangleKind, Walk};
+use crate::geometry::Triangulation;
+use crate::sampling::{SampledDomain, Samples};
+use std::collections::HashSet;
+
+/// The triangles of `after` that are those of `before` (same id, same vertices in the same
+/// order), as a bit set, and the others in increasing id order.
+#[derive(Debug, Clone)]
+pub struct Kept {
+    bits: Vec<u64>,
+    changed: Vec<u32>,
+}
+
+impl Kept {
+    /// Compare the two triangulations triangle by triangle.
+    pub fn new(before: &Triangulation, after: &Triangulation) -> Kept {
+        let n = after.len();
+        let mut bits = vec![0u64; n.div_ceil(64)];
+        let mut changed = Vec::new();
+        for t in 0..n {
+            if t < before.len() && before.triangle(t) == after.triangle(t) {
+                bits[t / 64] |= 1 << (t % 64);
+            } else {
+                changed.push(t as u32);
+            }
+        }
+        Kept { bits, changed }
+    }
+    /// True when triangle `t` of the later triangulation is kept.
+    pub fn contains(&self, t: usize) -> bool {
+        self.bits
+            .get(t / 64)
+            .is_some_and(|w| w >> (t % 64) & 1 == 1)
+    }
+    /// The triangles that are not kept, in increasing order.
+    pub fn changed(&self) -> &[u32] {
+        &self.changed
+    }
+}
+
+/// True when every circle of `before` is sampled in `after` exactly as in `before` (same
+/// circle, first sample and count, slot by slot): then every earlier sample has the same
+/// circle, index on it and successor. The caller guarantees the points themselves (the
+/// triangulation was extended from `before`'s, which compares them bit for bit).
+pub fn same_earlier_circles(before: &Samples, after: &Samples) -> bool {
+    before.circles.len() <= after.circles.len()
+        && before.len() <= after.len()
+        && before
+            .circles
+            .iter()
+            .zip(&after.circles)
+            .all(|(a, b)| a.circle == b.circle && a.first == b.first && a.count == b.count)
+}
+
+/// [`crate::medial::classify`] of `tri`: kept triangles take their class in `before`.
+pub fn classify_after(
+    samples: &Samples,
+    tri: &Triangulation,
+    before: &[TriangleKind],
+    kept: &Kept,
+) -> Vec<TriangleKind> {
+    (0..tri.len())
+        .map(|t| match before.get(t) {
+            Some(&k) if kept.contains(t) => k,
+            _ => classify_one(samples, tri.triangle(t)),
+        })
+        .collect()
+}
+
+/// True when [`crate::sampling::check_invariants`] of `tri` (classified by `kinds`) finds
+/// nothing, decided from the changed triangles; `false` when it may find something (the
+/// caller then runs it). `before` is a result of the sampling (its triangulation met every
+/// hard invariant) and `tri` extends its triangulation.
+///
+/// Kept triangles have their earlier class and circles, so the per-triangle conditions need
+/// checking only on changed ones. A boundary edge lies in at most two triangles; an earlier
+/// one is still present when one of the earlier triangles holding it is kept, or when a changed
+/// triangle holds it (a kept triangle holding it is one of the earlier two, by its id). New
+/// samples lie in changed triangles only.
+pub fn invariants_hold_after(
+    samples: &Samples,
+    tri: &Triangulation,
+    kinds: &[TriangleKind],
+    before: &SampledDomain,
+    kept: &Kept,
+) -> bool {
+    if !tri.duplicates().is_empty() || !before.triangulation.duplicates().is_empty() {
+        return false;
+    }
+    // Boundary edges (by their first sample) held by changed triangles.
+    let mut held: HashSet<u32> = HashSet::new();
+    let from = |a: u32, b: u32| if samples.next(a) == b { a } else { b };
+    for &t in kept.changed() {
+        let t = t as usize;
+        let v = tri.triangle(t);
+        match kinds.get(t) {
+            Some(TriangleKind::Hole(_) | TriangleKind::Boundary { .. }) => {}
+            Some(TriangleKind::Interior) => {
+                let c = v.map(|s| samples.circle_of[s as usize]);
+                if c[0] == c[1] || c[0] == c[2] || c[1] == c[2] {
+                    return false;
+                }
+            }
+            _ => return false,
+        }
+        for k in 0..3 {
+            let (a, b) = (v[(k + 1) % 3], v[(k + 2) % 3]);
+            if samples.is_boundary_edge(a, b) {
+                held.insert(from(a, b));
+            }
+        }
+    }
+    let old = &before.triangulation;
+    let n0 = before.samples.len() as u32;
+    // Earlier boundary edges of earlier triangles that were replaced.
+    for &t in kept
+        .changed()
+        .iter()
+        .take_while(|&&t| (t as usize) < old.len())
+    {
+        let t = t as usize;
+        let v = old.triangle(t);
+        let nb = old.neighbors(t);
+        for k in 0..3 {
+            let (a, b) = (v[(k + 1) % 3], v[(k + 2) % 3]);
+            if samples.is_boundary_edge(a, b)
+                && !nb[k].is_some_and(|m| kept.contains(m as usize))
+                && !held.contains(&from(a, b))
+            {
+                return false;
+            }
+        }
+    }
+    (n0..samples.len() as u32).all(|s| held.contains(&s))
+}
+
+/// [`crate::medial::medial_graph`] of `tri` (classified by `kinds`), reusing the medial graph
+/// of `before` (see the module documentation). `None` when the walk meets anything the full
+/// construction would report as an error (the caller then runs it, for its error).
+pub fn medial_graph_after(
+    samples: &Samples,
+    tri: &Triangulation,
+    kinds: &[TriangleKind],
+    before: &SampledDomain,
+    kept: &Kept,
+) -> Option<MedialGraph> {
+    let old = &before.medial;
+    reusing(
+        samples,
+        tri,
+        kinds,
+        &old.vertices,
+        Arcs::Cloned(&old.arcs),
+        kept,
+    )
+}
+
+/// [`medial_graph_after`] with the earlier graph's `vertices` and `arcs` given apart, moving
+/// the kept arcs out of `arcs` (left empty in their place) instead of cloning them: for a
+/// caller that drops the earlier arcs anyway (macro refinement; issue 8: cloning was four
+/// allocations and copies per arc). The same graph.
+pub fn medial_graph_taking(
+    samples: &Samples,
+    tri: &Triangulation,
+    kinds: &[TriangleKind],
+    vertices: &[MedialVertex],
+    arcs: &mut [MedialArc],
+    kept: &Kept,
+) -> Option<MedialGraph> {
+    reusing(samples, tri, kinds, vertices, Arcs::Taken(arcs), kept)
+}
+
+/// Where the kept arcs come from.
+enum Arcs<'a> {
+    Cloned(&'a [MedialArc]),
+    Taken(&'a mut [MedialArc]),
+}
+
+impl Arcs<'_> {
+    fn all(&self) -> &[MedialArc] {
+        match self {
+            Arcs::Cloned(a) => a,
+            Arcs::Taken(a) => a,
+        }
+    }
+    fn get(&mut self, e: usize) -> MedialArc {
+        match self {
+            Arcs::Cloned(a) => a[e].clone(),
+            Arcs::Taken(a) => std::mem::take(&mut a[e]),
+        }
+    }
+}
+
+fn reusing(
+    samples: &Samples,
+    tri: &Triangulation,
+    kinds: &[TriangleKind],
+    old_vertices: &[MedialVertex],
+    mut old_arcs: Arcs,
+    kept: &Kept,
+) -> Option<MedialGraph> {
+    if kinds.len() != tri.len() || samples.len() != tri.points().len() {
+        return None;
+    }
+    // Vertices in triangle order: the earlier vertices of kept triangles merged with the
+    // interior triangles among the changed ones (both sorted by triangle id).
+    let mut g = MedialGraph::default();
+    let mut new_of_old = vec![u32::MAX; old_vertices.len()];
+    let mut fresh = kept
+        .changed()
+        .iter()
+        .copied()
+        .filter(|&t| kinds[t as usize] == TriangleKind::Interior)
+        .peekable();
+    let mut earlier = old_vertices
+        .iter()
+        .enumerate()
+        .filter(|(_, v)| kept.contains(v.triangle as usize))
+        .peekable();
+    loop {
+        let next_fresh = fresh.peek().copied();
+        let next_kept = earlier.peek().map(|(_, v)| v.triangle);
+        match (next_fresh, next_kept) {
+            (None, None) => break,
+            (Some(t), k) if k.is_none_or(|k| t < k) => {
+                fresh.next();
+                let v = tri.triangle(t as usize);
+                let p = v.map(|s| samples.points[s as usize]);
+                g.vertices.push(MedialVertex {
+                    triangle: t,
+                    position: circumcenter(p[0], p[1], p[2])?,
+                    samples: v,
+                    circles: v.map(|s| samples.circle_of[s as usize]),
+                });
+            }
+            _ => {
+                let (i, v) = earlier.next()?;
+                if kinds[v.triangle as usize] != TriangleKind::Interior {
+                    return None;
+                }
+                new_of_old[i] = g.vertices.len() as u32;
+                g.vertices.push(v.clone());
+            }
+        }
+    }
+    // Earlier arcs whose triangles are all kept, by their new start (vertex, slot).
+    let mut start_at = vec![[u32::MAX; 3]; g.vertices.len()];
+    for (e, arc) in old_arcs.all().iter().enumerate() {
+        let ends = arc.ends.map(|v| new_of_old[v as usize]);
+        if ends.contains(&u32::MAX) || !arc.triangles.iter().all(|&t| kept.contains(t as usize)) {
+            continue;
+        }
+        start_at[ends[0] as usize][arc.end_slots[0] as usize] = e as u32;
+    }
+    let vertex_of = |t: usize| super::vertex_of(&g.vertices, kinds, t);
+    let mut visited = vec![[false; 3]; g.vertices.len()];
+    let mut arcs: Vec<MedialArc> = Vec::with_capacity(old_arcs.all().len());
+    let mut walk = Walk::default();
+    for v0 in 0..g.vertices.len() {
+        for k0 in 0..3 {
+            if visited[v0][k0] {
+                continue;
+            }
+            visited[v0][k0] = true;
+            let arc = match start_at[v0][k0] {
+                u32::MAX => walk
+                    .arc(samples, tri, kinds, &g.vertices, vertex_of, v0, k0)
+                    .ok()?,
+                e => {
+                    let mut arc = old_arcs.get(e as usize);
+                    arc.ends = arc.ends.map(|v| new_of_old[v as usize]);
+                    arc
+                }
+            };
+            let [v1, k1] = [arc.ends[1] as usize, arc.end_slots[1] as usize];
+            if visited[v1][k1] {
+                return None;
+            }
+            visited[v1][k1] = true;
+            arcs.push(arc);
+        }
+    }
+    g.arcs = arcs;
+    Some(g)
+}

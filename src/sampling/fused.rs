@@ -1,0 +1,114 @@
+//! The triangle classes and the sampling invariants in one pass (issue 8).
+
+use super::{Samples, Violation, ViolationKind};
+use crate::domain::BOUNDING;
+use crate::geometry::Triangulation;
+use crate::medial::TriangleKind;
+use std::collections::HashSet;
+
+/// [`crate::medial::classify`] and [`super::check_invariants`] of `tri` in one pass over the
+/// triangles: the same classes and the same violations in the same order (tested in
+/// `tests/perf_resample.rs`). Each triangle's circles and boundary edges are looked up once
+/// (issue 8: the samples' circles, indices and counts are read in triangle order, scattered
+/// over the sample arrays, and the two functions each read them for every triangle).
+///
+/// # Panics
+/// When `tri` is not a triangulation of `samples.points`, as both.
+pub fn classify_and_check(
+    samples: &Samples,
+    tri: &Triangulation,
+) -> (Vec<TriangleKind>, Vec<Violation>) {
+    let mut out = Vec::new();
+    for &(first, duplicate) in tri.duplicates() {
+        out.push(Violation {
+            circle: samples.circle_of[duplicate as usize],
+            kind: ViolationKind::Duplicate { first, duplicate },
+        });
+    }
+    let mut seen = vec![false; samples.len()];
+    let mut kinds = Vec::with_capacity(tri.len());
+    for t in 0..tri.len() {
+        let v = tri.triangle(t);
+        let c = v.map(|s| samples.circle_of[s as usize]);
+        // Per edge k (opposite vertex k), its first sample when it is a boundary edge.
+        let mut from = [u32::MAX; 3];
+        let mut count = 0;
+        let mut edge = 0u8;
+        for k in 0..3 {
+            let (i, j) = ((k + 1) % 3, (k + 2) % 3);
+            let (a, b) = (v[i], v[j]);
+            if c[i] == c[j] && a != b {
+                if samples.next(a) == b {
+                    from[k] = a;
+                } else if samples.next(b) == a {
+                    from[k] = b;
+                }
+            }
+            if from[k] != u32::MAX {
+                seen[from[k] as usize] = true;
+                count += 1;
+                edge = k as u8;
+            }
+        }
+        let kind = if c[0] == c[1] && c[1] == c[2] {
+            if c[0] < 0 {
+                TriangleKind::Outside
+            } else {
+                TriangleKind::Hole(c[0])
+            }
+        } else {
+            match count {
+                0 => TriangleKind::Interior,
+                1 => TriangleKind::Boundary { edge },
+                _ => TriangleKind::MultiBoundary,
+            }
+        };
+        kinds.push(kind);
+        let tt = t as u32;
+        match kind {
+            TriangleKind::Outside => out.push(Violation {
+                circle: BOUNDING,
+                kind: ViolationKind::Outside { triangle: tt },
+            }),
+            TriangleKind::MultiBoundary => {
+                // Blame the circle of a vertex shared by two boundary edges (the edges
+                // `(v[k], v[k + 1])` and `(v[k], v[k + 2])` are opposite `k + 2` and `k + 1`).
+                let circle = (0..3)
+                    .find(|&k| from[(k + 2) % 3] != u32::MAX && from[(k + 1) % 3] != u32::MAX)
+                    .map(|k| c[k])
+                    .unwrap_or(c[0]);
+                out.push(Violation {
+                    circle,
+                    kind: ViolationKind::TwoBoundaryEdges { triangle: tt },
+                });
+            }
+            TriangleKind::Interior => {
+                let repeated = if c[0] == c[1] || c[0] == c[2] {
+                    Some(c[0])
+                } else if c[1] == c[2] {
+                    Some(c[1])
+                } else {
+                    None
+                };
+                if let Some(circle) = repeated {
+                    out.push(Violation {
+                        circle,
+                        kind: ViolationKind::InteriorRepeatsCircle { triangle: tt },
+                    });
+                }
+            }
+            TriangleKind::Hole(_) | TriangleKind::Boundary { .. } => {}
+        }
+    }
+    let duplicated: HashSet<u32> = tri.duplicates().iter().map(|&(_, d)| d).collect();
+    for (s, &ok) in seen.iter().enumerate() {
+        let s = s as u32;
+        if !ok && !duplicated.contains(&s) && !duplicated.contains(&samples.next(s)) {
+            out.push(Violation {
+                circle: samples.circle_of[s as usize],
+                kind: ViolationKind::MissingBoundaryEdge { from: s },
+            });
+        }
+    }
+    (kinds, out)
+}
