@@ -13,6 +13,7 @@
 use crate::domain::CircleId;
 use crate::layout::{BlockLayout, EdgeKind};
 use crate::mesh::BlockGrid;
+use rayon::prelude::*;
 use serde::Serialize;
 
 /// Names of the four sides in index terms, by side number (see [`crate::layout`]).
@@ -117,6 +118,10 @@ fn side_node(s: usize, p: usize, ni: usize, nj: usize) -> [usize; 2] {
 }
 
 /// Compute the connectivity of every block.
+///
+/// The blocks are visited in parallel (on the current rayon pool); each block's entry depends
+/// only on the layout, the grids and the edge users, so the result, and the error (that of the
+/// first failing block in block order), is the same for every thread count.
 pub fn connectivity(
     layout: &BlockLayout,
     grids: &[BlockGrid],
@@ -128,11 +133,64 @@ pub fn connectivity(
         });
     }
     let users = EdgeUsers::new(layout)?;
+    // Blocks in parallel, written in place in block order; an error keeps the one of the
+    // smallest block (the one a visit in block order meets first: each block's result does not
+    // depend on the others), the placeholder entries are then dropped.
+    let first_error = std::sync::Mutex::new(None::<(usize, ConnectivityError)>);
     let mut out = Vec::with_capacity(layout.blocks.len());
-    for (b, block) in layout.blocks.iter().enumerate() {
-        if let Some(ahead) = layout.blocks.get(b + PREFETCH_BLOCKS) {
-            users.prefetch(layout, ahead);
-        }
+    (0..layout.blocks.len())
+        .into_par_iter()
+        .with_min_len(PARALLEL_BLOCKS)
+        .map(|b| {
+            if let Some(ahead) = layout.blocks.get(b + PREFETCH_BLOCKS) {
+                users.prefetch(layout, ahead);
+            }
+            block_connectivity(layout, grids, &users, b).unwrap_or_else(|e| {
+                let mut first = first_error.lock().unwrap_or_else(|p| p.into_inner());
+                if first.as_ref().is_none_or(|(at, _)| b < *at) {
+                    *first = Some((b, e));
+                }
+                placeholder()
+            })
+        })
+        .collect_into_vec(&mut out);
+    match first_error.into_inner().unwrap_or_else(|p| p.into_inner()) {
+        Some((_, e)) => Err(e),
+        None => Ok(out),
+    }
+}
+
+/// Blocks per task of [`connectivity`]'s parallel loop (each block is cheap: a task of this
+/// many amortises the scheduling).
+const PARALLEL_BLOCKS: usize = 512;
+
+/// The entry written for a block whose connectivity failed (never returned).
+fn placeholder() -> BlockConnectivity {
+    let side = SideConnectivity {
+        side: 0,
+        name: SIDE_NAMES[0],
+        kind: SideKind::Wall,
+        circle: None,
+        partner: None,
+        cgns: None,
+        translation: None,
+    };
+    BlockConnectivity {
+        block: usize::MAX,
+        dims: [0, 0],
+        sides: [side; 4],
+    }
+}
+
+/// The connectivity of block `b` (the body of [`connectivity`]'s loop).
+fn block_connectivity(
+    layout: &BlockLayout,
+    grids: &[BlockGrid],
+    users: &EdgeUsers,
+    b: usize,
+) -> Result<BlockConnectivity, ConnectivityError> {
+    {
+        let block = &layout.blocks[b];
         let g = &grids[b];
         let side_of = |s: usize| {
             let e = block.sides[s].edge as usize;
@@ -235,13 +293,12 @@ pub fn connectivity(
                 }
             }
         };
-        out.push(BlockConnectivity {
+        Ok(BlockConnectivity {
             block: b,
             dims: [g.ni + 1, g.nj + 1],
             sides: [side_of(0)?, side_of(1)?, side_of(2)?, side_of(3)?],
-        });
+        })
     }
-    Ok(out)
 }
 
 /// How many blocks ahead [`connectivity`] asks for the edges of a block's sides: a side's

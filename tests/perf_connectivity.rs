@@ -124,3 +124,61 @@ fn broken_layouts_give_the_same_errors() {
         }
     );
 }
+
+/// The blocks are visited in parallel: with several broken blocks far apart (in different
+/// tasks), the error is still that of the first side in block order with a wrong user count
+/// (found here by a plain sequential count), on 1, 2 and 3 threads.
+#[test]
+fn parallel_visit_reports_the_first_error_in_block_order() {
+    let m = mesh(&layouts::bubbles(300, 4).unwrap(), &Options::default()).unwrap();
+    let nb = m.layout.blocks.len();
+    assert!(nb > 1500, "{nb} blocks");
+    let conn = connectivity(&m.layout, &m.grids).unwrap();
+    let sides = |from: usize, kind: SideKind| {
+        (from..nb)
+            .flat_map(|b| (0..4).map(move |s| (b, s)))
+            .find(|&(b, s)| conn[b].sides[s].kind == kind)
+            .unwrap()
+    };
+    let run = |layout: &medial_blocks::BlockLayout, threads: usize| {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap()
+            .install(|| connectivity(layout, &m.grids).unwrap_err())
+    };
+    for (early, late) in [(nb / 3, nb - 5), (10, nb / 2), (nb - 40, nb - 2)] {
+        let mut layout = m.layout.clone();
+        for at in [late, early] {
+            let i = sides(at, SideKind::Interface);
+            let w = sides(at, SideKind::Wall);
+            layout.blocks[w.0].sides[w.1].edge = layout.blocks[i.0].sides[i.1].edge;
+        }
+        let mut users = vec![0usize; layout.edges.len()];
+        for b in &layout.blocks {
+            for s in &b.sides {
+                users[s.edge as usize] += 1;
+            }
+        }
+        let e = layout
+            .blocks
+            .iter()
+            .flat_map(|b| b.sides.iter().map(|s| s.edge as usize))
+            .find(|&e| {
+                let want = if matches!(layout.edges[e].kind, EdgeKind::Wall(_)) {
+                    1
+                } else {
+                    2
+                };
+                users[e] != want
+            })
+            .unwrap();
+        let want = ConnectivityError::EdgeUse {
+            edge: e,
+            count: users[e],
+        };
+        for threads in [1, 2, 3] {
+            assert_eq!(run(&layout, threads), want, "{threads} threads");
+        }
+    }
+}

@@ -10,7 +10,8 @@ use medial_blocks::layout::BlockLayout;
 use medial_blocks::layouts::SplitMix64;
 use medial_blocks::mesh::BlockGrid;
 use medial_blocks::quality::{
-    cell_corners, cell_metrics, measure_all, Histogram, MetricSummary, Quality, QualityMetrics,
+    cell_corners, cell_metrics, inverted_blocks, inverted_blocks_among, measure_all, Histogram,
+    MetricSummary, Quality, QualityMetrics,
 };
 use proptest::prelude::*;
 
@@ -196,6 +197,30 @@ fn grids(seed: u64, blocks: usize) -> Vec<BlockGrid> {
 
 proptest! {
     #![proptest_config(ProptestConfig::with_cases(200))]
+
+    /// The check restricted to some grids (any order, repeats, indices past the end) finds
+    /// exactly the inverted blocks of the full check among them, and they are inverted by the
+    /// cell-by-cell reference.
+    #[test]
+    fn inverted_among_some_grids_equals_the_full_check(
+        seed in any::<u64>(),
+        blocks in 1usize..40,
+        which in proptest::collection::vec(0usize..45, 0..30),
+    ) {
+        let g = grids(seed, blocks);
+        let all = inverted_blocks(&g);
+        let mut want: Vec<usize> = all.iter().copied().filter(|b| which.contains(b)).collect();
+        want.dedup();
+        prop_assert_eq!(inverted_blocks_among(&g, &which), want);
+        for &b in &all {
+            let gr = &g[b];
+            let bad = (0..gr.nj).flat_map(|j| (0..gr.ni).map(move |i| (i, j))).any(|(i, j)| {
+                let p = [gr.node(i, j), gr.node(i + 1, j), gr.node(i + 1, j + 1), gr.node(i, j + 1)];
+                cell_corners(p).jacobian.iter().any(|&x| x.is_nan() || x <= 0.0)
+            });
+            prop_assert!(bad, "block {}", b);
+        }
+    }
 
     #[test]
     fn report_equals_a_loop_over_cell_metrics(seed in any::<u64>(), blocks in 1usize..8) {

@@ -67,6 +67,44 @@ pub(super) fn length_figures(cross: &[f64; 4], edges: &[f64; 4]) -> (f64, f64, f
     )
 }
 
+/// The smallest scaled Jacobian of a cell with positive edge lengths `edges` (in range: the
+/// products of two are finite and positive) and non-zero finite cross products `cross`, with
+/// one division: that of [`length_figures`] at the corner it picks, so the same bits when the
+/// flag returned with it is true (the pick is certain).
+///
+/// Why: the reference figure is `min_k fl(c_k / P_k)` with `P_k = fl(la lb)` (see
+/// [`length_figures`]). Rounding is monotone, so the exact quotient order gives the order of
+/// the rounded quotients (ties may round together, never cross), and `c_a / P_a < c_b / P_b`
+/// exactly iff `c_a P_b < c_b P_a` (`P > 0`). The computed products are rounded too, but again
+/// monotonically: `fl(c_a P_b) < fl(c_b P_a)` implies `c_a P_b < c_b P_a`. So a strict
+/// comparison of the computed products decides the pair; products that compare equal decide
+/// nothing, except when `c_a = c_b` and `P_a = P_b` (the same quotient, either pick). The pick
+/// of a 2-round tournament is then a corner whose quotient is the least, and its one division
+/// is the reference's minimum, bit for bit, unless it is a zero: `-0.0` and `+0.0` compare
+/// equal and the reference keeps the first in corner order, so a zero is not certain either.
+#[inline(always)]
+pub(super) fn least_scaled_jacobian(cross: &[f64; 4], edges: &[f64; 4]) -> (f64, bool) {
+    let p = [
+        edges[0] * edges[3],
+        edges[1] * edges[0],
+        edges[2] * edges[1],
+        edges[3] * edges[2],
+    ];
+    // Pick the lesser of corners a and b: (corner's c, corner's P), certain.
+    #[inline(always)]
+    fn pick(a: (f64, f64), b: (f64, f64)) -> ((f64, f64), bool) {
+        let (x, y) = (a.0 * b.1, b.0 * a.1);
+        let same = (a.0 == b.0) & (a.1 == b.1);
+        let certain = (x != y) | same;
+        (if y < x { b } else { a }, certain)
+    }
+    let (w01, k01) = pick((cross[0], p[0]), (cross[1], p[1]));
+    let (w23, k23) = pick((cross[2], p[2]), (cross[3], p[3]));
+    let (w, k) = pick(w01, w23);
+    let s = w.0 / w.1;
+    (s, k01 & k23 & k & (s != 0.0))
+}
+
 /// Equiangle skewness `max((θmax - 90) / 90, (90 - θmin) / 90)` with one division: dividing
 /// by 90 is monotone and neither difference of finite angles is `-0.0`, so the larger quotient
 /// is the quotient of the larger difference. This expression is the reference (for NaN angles
@@ -141,6 +179,62 @@ pub(super) fn count_slot<const N: usize>(x: f64, edges: &[f64; N]) -> f64 {
     f64::from_bits(ROUND.to_bits() | b)
 }
 
+/// The smallest float `x` (in the order of [`f64::total_cmp`], `-inf` to `+inf`, NaN
+/// excluded) with `pred(x)`, for a `pred` that is monotone in that order (false up to some
+/// point, true from there on; `+inf` if it is never true). A bisection over the ordered bit
+/// patterns: exact, whatever the rounding inside `pred`.
+pub(super) fn first_where(pred: impl Fn(f64) -> bool) -> f64 {
+    // Keys ordered as the floats: negative floats mirrored below zero.
+    let key = |x: f64| -> i64 {
+        let b = x.to_bits() as i64;
+        b ^ (((b >> 63) as u64) >> 1) as i64
+    };
+    let float = |k: i64| f64::from_bits((k ^ (((k >> 63) as u64) >> 1) as i64) as u64);
+    let (mut lo, mut hi) = (key(f64::NEG_INFINITY), key(f64::INFINITY));
+    if pred(f64::NEG_INFINITY) {
+        return f64::NEG_INFINITY;
+    }
+    // Invariant: !pred(float(lo)), and pred(float(hi)) or hi is +inf's key.
+    while i128::from(hi) - i128::from(lo) > 1 {
+        // The midpoint without overflow (the keys span more than `i64`'s half range).
+        let mid = ((i128::from(lo) + i128::from(hi)) / 2) as i64;
+        if pred(float(mid)) {
+            hi = mid;
+        } else {
+            lo = mid;
+        }
+    }
+    float(hi)
+}
+
+/// The skewness figures as thresholds on `D = max(θmax - 90, 90 - θmin)`, the dividend of
+/// [`skewness`]: `D / 90` is a correctly rounded division by a positive constant, so it is
+/// monotone in `D`, and `D / 90 >= e` holds exactly from the first `D` where it holds
+/// ([`first_where`] of the very expression). Comparing `D` with these thresholds gives the bins
+/// and the acceptance of the skewness without dividing, and the extremes of the skewness are
+/// the quotients of the extremes of `D` (monotone: `min(D) / 90 = min(D / 90)`).
+pub(super) struct SkewThresholds {
+    /// Per inner edge `e` of [`super::SKEWNESS_EDGES`] (0.1 to 1.0): the least `D` with
+    /// `D / 90 >= e`.
+    pub bins: [f64; 10],
+    /// The least `D` with `D / 90 >= 0` (the acceptable range's low end).
+    pub lo: f64,
+    /// The least `D` with `D / 90 > 0.5` (above the acceptable range's high end).
+    pub above: f64,
+}
+
+impl SkewThresholds {
+    pub fn new() -> SkewThresholds {
+        let at_least = |e: f64| first_where(|d| d / 90.0 >= e);
+        let [lo, hi] = super::SKEWNESS_ACCEPTABLE;
+        SkewThresholds {
+            bins: std::array::from_fn(|k| at_least(super::SKEWNESS_EDGES[k + 1])),
+            lo: at_least(lo),
+            above: first_where(|d| d / 90.0 > hi),
+        }
+    }
+}
+
 /// The vector builds the CPU can run, detected once per measurement.
 pub(super) struct Tables {
     /// The CPU has AVX2: the row loop runs in 4-lane vectors (same bits, see
@@ -148,6 +242,8 @@ pub(super) struct Tables {
     pub wide: bool,
     /// The CPU has AVX-512 (F, DQ, VL): the row loop runs in 8-lane vectors (same bits).
     pub wider: bool,
+    /// The skewness thresholds.
+    pub skew: SkewThresholds,
 }
 
 impl Tables {
@@ -155,6 +251,7 @@ impl Tables {
         Tables {
             wide: wide(),
             wider: wider(),
+            skew: SkewThresholds::new(),
         }
     }
 }
@@ -447,6 +544,146 @@ mod tests {
             assert_eq!(angle_bin(x), want as f64, "{x:e}");
             assert_eq!(bin_of_slot(angle_slot(x)), want, "{x:e}");
         }
+    }
+
+    /// Each skewness threshold is the first dividend where its test holds (and it fails on
+    /// the float just below); and on dividends around every threshold, every bin edge times 90
+    /// and a sweep, the thresholds give the bin and the acceptance of the divided skewness.
+    #[test]
+    fn skew_thresholds_equal_the_division() {
+        use crate::quality::{SKEWNESS_ACCEPTABLE, SKEWNESS_EDGES};
+        let th = SkewThresholds::new();
+        let below = |x: f64| {
+            if x == 0.0 {
+                -f64::from_bits(1)
+            } else if x > 0.0 {
+                f64::from_bits(x.to_bits() - 1)
+            } else {
+                f64::from_bits(x.to_bits() + 1)
+            }
+        };
+        for (k, &t) in th.bins.iter().enumerate() {
+            let e = SKEWNESS_EDGES[k + 1];
+            assert!(t / 90.0 >= e && below(t) / 90.0 < e, "{t:e} for {e}");
+        }
+        assert!(th.lo / 90.0 >= 0.0 && below(th.lo) / 90.0 < 0.0);
+        assert!(th.above / 90.0 > 0.5 && below(th.above) / 90.0 <= 0.5);
+        let mut ds = vec![0.0, -0.0, 1e-310, -1e-310, -1.0, 400.0, 1e300, -1e300];
+        for &t in th.bins.iter().chain([&th.lo, &th.above]) {
+            let mut x = t;
+            for _ in 0..4 {
+                x = below(x);
+            }
+            for _ in 0..9 {
+                ds.push(x);
+                x = -below(-x);
+            }
+        }
+        for &e in &SKEWNESS_EDGES {
+            ds.push(90.0 * e);
+        }
+        for s in 0..200_000 {
+            ds.push(-10.0 + 200.0 * s as f64 / 200_000.0);
+        }
+        for d in ds {
+            let sk = d / 90.0;
+            let by_threshold = th.bins.iter().filter(|&&t| d >= t).count();
+            assert_eq!(by_threshold, bin(&SKEWNESS_EDGES, sk), "{d:e}");
+            let [lo, hi] = SKEWNESS_ACCEPTABLE;
+            assert_eq!(
+                (d >= th.lo) & (d < th.above),
+                (sk >= lo) & (sk <= hi),
+                "{d:e}"
+            );
+        }
+    }
+
+    /// Corners of cells that tie or nearly tie: exact squares and rectangles (axis-aligned,
+    /// rotated), mirror-symmetric trapezoids, kites, random cells on a coarse integer lattice
+    /// (many equal products) and at several scales.
+    fn tie_prone_cell(r: &mut crate::layouts::SplitMix64) -> [Point; 4] {
+        let mut u = || r.next_f64();
+        let scale = [1.0, 1e-100, 1e100, 3.0e-7, 0.1][(u() * 5.0) as usize];
+        let p: [Point; 4] = match (u() * 6.0) as u32 {
+            0 => {
+                let (w, h) = (
+                    (1.0 + (u() * 4.0).floor()) * 0.25,
+                    (1.0 + (u() * 4.0).floor()) * 0.5,
+                );
+                [[0.0, 0.0], [w, 0.0], [w, h], [0.0, h]]
+            }
+            1 => {
+                let (a, w, h) = (u() * 6.3, 0.1 + u(), 0.1 + u());
+                let (c, s) = (a.cos(), a.sin());
+                [
+                    [0.0, 0.0],
+                    [w * c, w * s],
+                    [w * c - h * s, w * s + h * c],
+                    [-h * s, h * c],
+                ]
+            }
+            2 => {
+                let (b, t, h) = (0.5 + u(), 0.1 + u(), 0.1 + u());
+                [[-b, 0.0], [b, 0.0], [t, h], [-t, h]]
+            }
+            3 => {
+                let (a, b, w) = (0.1 + u(), 0.1 + u(), 0.1 + u());
+                [[0.0, -a], [w, 0.0], [0.0, b], [-w, 0.0]]
+            }
+            4 => {
+                let mut q = || (u() * 4.0).floor() - 1.0;
+                [
+                    [q(), q()],
+                    [q() + 3.0, q()],
+                    [q() + 3.0, q() + 3.0],
+                    [q(), q() + 3.0],
+                ]
+            }
+            _ => {
+                let mut q = || u() * 2.0 - 1.0;
+                [
+                    [q(), q()],
+                    [q() + 2.0, q()],
+                    [q() + 2.0, q() + 2.0],
+                    [q(), q() + 2.0],
+                ]
+            }
+        };
+        let o = [u() * 8.0 - 4.0, u() * 8.0 - 4.0];
+        p.map(|[x, y]| [scale * (x + o[0]), scale * (y + o[1])])
+    }
+
+    /// [`least_scaled_jacobian`] gives the bits of [`length_figures`] whenever it says it is
+    /// certain, on tie-prone, inverted and random cells (and it is certain on most of them).
+    #[test]
+    fn least_scaled_jacobian_equals_the_four_divisions() {
+        let mut r = crate::layouts::SplitMix64(11);
+        let (mut certain, mut total) = (0, 0);
+        for round in 0..300_000 {
+            let mut p = tie_prone_cell(&mut r);
+            if round % 7 == 0 {
+                p.swap(1, 3);
+            }
+            let (cross, _) = corner_products(&p);
+            let edges = [0, 1, 2, 3].map(|k| {
+                let (a, b) = (p[k], p[(k + 1) % 4]);
+                edge_len(b[0] - a[0], b[1] - a[1])
+            });
+            let ok = edges.iter().all(|&l| (SQ_MIN..=SQ_MAX).contains(&(l * l)))
+                && cross.iter().all(|&c| c != 0.0 && c.is_finite());
+            if !ok {
+                continue;
+            }
+            total += 1;
+            let (want, _, _) = length_figures(&cross, &edges);
+            let (got, sure) = least_scaled_jacobian(&cross, &edges);
+            if sure {
+                certain += 1;
+                assert_eq!(got.to_bits(), want.to_bits(), "{p:?}");
+            }
+        }
+        // About half of these tie-prone cells are decided (rotated rectangles mostly not).
+        assert!(certain * 3 > total, "{certain} of {total}");
     }
 
     /// Values at, just around and between every edge, and far outside, for every histogram

@@ -8,9 +8,14 @@
 //!    whether the cell takes this path, the histogram bins (by arithmetic and comparisons with
 //!    the edges, [`super::kernel::angle_slot`], [`super::kernel::count_slot`]), and as
 //!    reductions over the row the acceptance, inverted and cell counts and the row's extremes
-//!    (integer keys);
+//!    (integer keys); per cell it stores only what loop 2 reads (the two extreme angles and the
+//!    eight bins packed in one word: contiguous stores, where a wider record took scatters);
 //! 2. per cell, in cell order: the angle sums and the histogram counts (one increment per
 //!    value, into a table per value of the cell), or the reference path.
+//!
+//! Two figures skip divisions with the same results: the skewness is compared and reduced
+//! through its dividend ([`SkewThresholds`]), the scaled Jacobian divides at one corner
+//! ([`least_scaled_jacobian`]; a cell whose corner pick is uncertain takes the reference path).
 //!
 //! Why this gives the reference's numbers: every figure is computed with the reference's own
 //! functions ([`angle_deg`], [`length_figures`], [`skewness`], the `sqrt` length of
@@ -26,15 +31,14 @@
 //! bits; sums are taken in cell order.
 
 use super::kernel::{
-    angle_slot, bin_of_slot, cell_products, corner_products, count_slot, length_figures, skewness,
-    BlockFigures, Tables, SQ_MAX, SQ_MIN,
+    angle_slot, bin_of_slot, cell_products, corner_products, count_slot, least_scaled_jacobian,
+    BlockFigures, SkewThresholds, Tables, SQ_MAX, SQ_MIN,
 };
-use super::{angle_deg, cell_metrics, fold, MetricSummary, QualityMetrics};
+use super::{angle_deg, cell_metrics, fold, ratio, MetricSummary, QualityMetrics};
 use super::{
     ANGLE_ACCEPTABLE, ASPECT_ACCEPTABLE, EDGE_RATIO_ACCEPTABLE, SCALED_JACOBIAN_ACCEPTABLE,
-    SKEWNESS_ACCEPTABLE,
 };
-use super::{JACOBIAN_EDGES, RATIO_EDGES, SKEWNESS_EDGES};
+use super::{JACOBIAN_EDGES, RATIO_EDGES};
 use crate::geometry::Point;
 use crate::mesh::BlockGrid;
 
@@ -116,13 +120,14 @@ fn row(
     b: [&[f64]; 3],
     t: [&mut [f64]; 3],
     v: [&mut [f64]; 3],
+    th: &SkewThresholds,
     out: &mut [Figures],
 ) -> RowCounts {
     let [tx, ty, tl] = t;
     let [vx, vy, vl] = v;
     line_edges(hi, [&mut *tx, &mut *ty, &mut *tl]);
     cross_edges(lo, hi, [&mut *vx, &mut *vy, &mut *vl]);
-    row_figures(b, [tx, ty, tl], [vx, vy, vl], out)
+    row_figures(b, [tx, ty, tl], [vx, vy, vl], th, out)
 }
 
 /// [`row`] compiled for AVX-512 (8-lane vectors; the same IEEE operations on the same
@@ -135,9 +140,10 @@ fn row_avx512(
     b: [&[f64]; 3],
     t: [&mut [f64]; 3],
     v: [&mut [f64]; 3],
+    th: &SkewThresholds,
     out: &mut [Figures],
 ) -> RowCounts {
-    row(lo, hi, b, t, v, out)
+    row(lo, hi, b, t, v, th, out)
 }
 
 /// [`row`] compiled for AVX2.
@@ -149,23 +155,26 @@ fn row_avx2(
     b: [&[f64]; 3],
     t: [&mut [f64]; 3],
     v: [&mut [f64]; 3],
+    th: &SkewThresholds,
     out: &mut [Figures],
 ) -> RowCounts {
-    row(lo, hi, b, t, v, out)
+    row(lo, hi, b, t, v, th, out)
 }
 
 /// The figures of one cell from loop 1 (one record per cell, so that loop 1 writes through a
 /// single `&mut` slice: the compiler then needs no aliasing checks to vectorise it).
 #[derive(Debug, Clone, Copy, Default)]
 struct Figures {
-    /// Smallest and largest angle, skewness, scaled Jacobian, edge ratio, aspect ratio.
-    fig: [f64; 6],
+    /// Smallest and largest angle (the only per-cell values loop 2 sums).
+    fig: [f64; 2],
     /// The histogram bins of the four angles ([`super::kernel::angle_slot`]) and of the
-    /// figures from skewness on ([`super::kernel::count_slot`]).
-    slot: [f64; 8],
-    /// 0 for the reference path, 1 for a valid cell, 2 for an inverted one (counted in loop 1).
-    flag: f64,
+    /// figures from skewness on ([`super::kernel::count_slot`]), 5 bits each (bin `k` in bits
+    /// `5k..5k + 5`), and [`FAST`] when the cell takes the fast path (0: the reference path).
+    bins: u64,
 }
+
+/// The bit of [`Figures::bins`] set for a cell of the fast path.
+const FAST: u64 = 1 << 40;
 
 impl Rows {
     /// The row of cells between node lines `lo` and `hi` (`ni + 1` nodes each) into
@@ -190,14 +199,14 @@ impl Rows {
         #[cfg(target_arch = "x86_64")]
         if bins.wider {
             // SAFETY: `wider` is only set when the CPU has these features (see `Tables::wider`).
-            return unsafe { row_avx512(lo, hi, b, t, v, out) };
+            return unsafe { row_avx512(lo, hi, b, t, v, &bins.skew, out) };
         }
         #[cfg(target_arch = "x86_64")]
         if bins.wide {
             // SAFETY: `wide` is only set when the CPU has AVX2 (see `Tables::wide`).
-            return unsafe { row_avx2(lo, hi, b, t, v, out) };
+            return unsafe { row_avx2(lo, hi, b, t, v, &bins.skew, out) };
         }
-        row(lo, hi, b, t, v, out)
+        row(lo, hi, b, t, v, &bins.skew, out)
     }
 }
 
@@ -236,15 +245,27 @@ fn row_figures_avx2(
     b: [&[f64]; 3],
     t: [&[f64]; 3],
     v: [&[f64]; 3],
+    th: &SkewThresholds,
     out: &mut [Figures],
 ) -> RowCounts {
-    row_figures(b, t, v, out)
+    row_figures(b, t, v, th, out)
 }
 
 /// Loop 1: the figures of every cell of a row from its edges (`x`, `y`, length): bottom `b`
 /// and top `t` edges (`out.len()` each), the edges `v` across the row (`out.len() + 1`).
+///
+/// The skewness is not divided per cell: its bins, acceptance and extremes come from its
+/// dividend `D` ([`SkewThresholds`]); the scaled Jacobian takes one division at the corner
+/// [`least_scaled_jacobian`] picks (a cell whose pick is not certain takes the reference
+/// path).
 #[inline(always)]
-fn row_figures(b: [&[f64]; 3], t: [&[f64]; 3], v: [&[f64]; 3], out: &mut [Figures]) -> RowCounts {
+fn row_figures(
+    b: [&[f64]; 3],
+    t: [&[f64]; 3],
+    v: [&[f64]; 3],
+    th: &SkewThresholds,
+    out: &mut [Figures],
+) -> RowCounts {
     let n = out.len();
     let mut k = RowCounts {
         lo: [i64::MAX; 5],
@@ -263,6 +284,7 @@ fn row_figures(b: [&[f64]; 3], t: [&[f64]; 3], v: [&[f64]; 3], out: &mut [Figure
         let (wx, wy) = (qx[i], qy[i]);
         let (c, d) = cell_products([[hx, hy], [ux, uy], [vx, vy], [wx, wy]]);
         let edges = [bl[i], ql[i], tl[i], al[i]];
+        let (sj, certain) = least_scaled_jacobian(&c, &edges);
         // NaN lengths fail `>= 0`; with every length in range the products are finite.
         let fine = (edges[0] >= 0.0)
             & (edges[1] >= 0.0)
@@ -271,7 +293,8 @@ fn row_figures(b: [&[f64]; 3], t: [&[f64]; 3], v: [&[f64]; 3], out: &mut [Figure
             & (c[0] != 0.0)
             & (c[1] != 0.0)
             & (c[2] != 0.0)
-            & (c[3] != 0.0);
+            & (c[3] != 0.0)
+            & certain;
         let inverted = (c[0] < 0.0) | (c[1] < 0.0) | (c[2] < 0.0) | (c[3] < 0.0);
         let a = [
             angle_deg(c[0], d[0]),
@@ -280,45 +303,69 @@ fn row_figures(b: [&[f64]; 3], t: [&[f64]; 3], v: [&[f64]; 3], out: &mut [Figure
             angle_deg(c[3], d[3]),
         ];
         let (amin, amax) = (fold(a, f64::min), fold(a, f64::max));
-        let (sj, er, ar) = length_figures(&c, &edges);
-        let sk = skewness(amin, amax);
+        let (er, ar) = edge_ratios(&edges);
+        // The dividend of `skewness(amin, amax)`.
+        let sd = (amax - 90.0).max(90.0 - amin);
         k.fast += u64::from(fine);
         k.inverted += u64::from(fine & inverted);
         k.outside[ANGLE] +=
             u64::from(fine & (outside(amin, ANGLE_ACCEPTABLE) | outside(amax, ANGLE_ACCEPTABLE)));
-        k.outside[SKEW] += u64::from(fine & outside(sk, SKEWNESS_ACCEPTABLE));
+        k.outside[SKEW] += u64::from(fine & !((sd >= th.lo) & (sd < th.above)));
         k.outside[SJ] += u64::from(fine & outside(sj, SCALED_JACOBIAN_ACCEPTABLE));
         k.outside[ER] += u64::from(fine & outside(er, EDGE_RATIO_ACCEPTABLE));
         k.outside[AR] += u64::from(fine & outside(ar, ASPECT_ACCEPTABLE));
-        for (m, (x, y)) in [(amin, amax), (sk, sk), (sj, sj), (er, er), (ar, ar)]
+        for (m, (x, y)) in [(amin, amax), (sd, sd), (sj, sj), (er, er), (ar, ar)]
             .into_iter()
             .enumerate()
         {
             k.lo[m] = k.lo[m].min(if fine { key(x) } else { i64::MAX });
             k.hi[m] = k.hi[m].max(if fine { key(y) } else { i64::MIN });
         }
+        let mut skew_bin = 0u64;
+        for &e in &th.bins {
+            skew_bin += u64::from(sd >= e);
+        }
+        let slots = [
+            angle_slot(a[0]),
+            angle_slot(a[1]),
+            angle_slot(a[2]),
+            angle_slot(a[3]),
+        ];
+        let mut bins = if fine { FAST } else { 0 };
+        for (k, s) in slots.into_iter().enumerate() {
+            bins |= (bin_of_slot(s) as u64) << (5 * k);
+        }
+        bins |= skew_bin << 20;
+        for (k, s) in [
+            count_slot(sj, &JACOBIAN_EDGES),
+            count_slot(er, &RATIO_EDGES),
+            count_slot(ar, &RATIO_EDGES),
+        ]
+        .into_iter()
+        .enumerate()
+        {
+            bins |= (bin_of_slot(s) as u64) << (5 * k + 25);
+        }
         out[i] = Figures {
-            fig: [amin, amax, sk, sj, er, ar],
-            slot: [
-                angle_slot(a[0]),
-                angle_slot(a[1]),
-                angle_slot(a[2]),
-                angle_slot(a[3]),
-                count_slot(sk, &SKEWNESS_EDGES),
-                count_slot(sj, &JACOBIAN_EDGES),
-                count_slot(er, &RATIO_EDGES),
-                count_slot(ar, &RATIO_EDGES),
-            ],
-            flag: if !fine {
-                0.0
-            } else if inverted {
-                2.0
-            } else {
-                1.0
-            },
+            fig: [amin, amax],
+            bins,
         };
     }
+    // The skewness extremes: the quotients of the extremes of its dividend.
+    if k.fast > 0 {
+        k.lo[SKEW] = key(unkey(k.lo[SKEW]) / 90.0);
+        k.hi[SKEW] = key(unkey(k.hi[SKEW]) / 90.0);
+    }
     k
+}
+
+/// Edge ratio and aspect ratio from the edge lengths, the expressions of [`length_figures`].
+#[inline(always)]
+fn edge_ratios(edges: &[f64; 4]) -> (f64, f64) {
+    let (lo, hi) = (fold(*edges, f64::min), fold(*edges, f64::max));
+    let li = 0.5 * (edges[0] + edges[2]);
+    let lj = 0.5 * (edges[1] + edges[3]);
+    (ratio(hi, lo), ratio(li.max(lj), li.min(lj)))
 }
 
 /// Running figures of a chunk of blocks, in visiting order: the fast path's histogram counts,
@@ -478,15 +525,15 @@ impl Chunk {
                 min_sj(&mut f, unkey(k.lo[SJ]));
             }
             for (i, cell) in rows.cells[..ni].iter().enumerate() {
-                if cell.flag == 0.0 {
+                if cell.bins & FAST == 0 {
                     self.add_reference(&mut f, &[line[i], line[i + 1], next[i + 1], next[i]]);
                     continue;
                 }
                 f.sum_min += cell.fig[0];
                 f.sum_max += cell.fig[1];
-                let (c, s) = (&mut self.counts, &cell.slot);
-                for k in 0..8 {
-                    c[k][bin_of_slot(s[k])] += 1;
+                let (c, s) = (&mut self.counts, cell.bins);
+                for (k, c) in c.iter_mut().enumerate() {
+                    c[(s >> (5 * k)) as usize & 31] += 1;
                 }
             }
             std::mem::swap(&mut rows.bx, &mut rows.tx);
@@ -591,14 +638,14 @@ mod tests {
                 let (b, tt, v) = (edge(n), edge(n), edge(n + 1));
                 let mut one = vec![Figures::default(); n];
                 let mut two = vec![Figures::default(); n];
-                let k1 = row_figures(refs(&b), refs(&tt), refs(&v), &mut one);
+                let k1 = row_figures(refs(&b), refs(&tt), refs(&v), &t.skew, &mut one);
                 // SAFETY: `t.wide` says the CPU has AVX2.
-                let k2 = unsafe { row_figures_avx2(refs(&b), refs(&tt), refs(&v), &mut two) };
+                let k2 =
+                    unsafe { row_figures_avx2(refs(&b), refs(&tt), refs(&v), &t.skew, &mut two) };
                 assert_eq!(format!("{k1:?}"), format!("{k2:?}"));
                 let bits = |f: &[Figures]| -> Vec<u64> {
                     f.iter()
-                        .flat_map(|c| c.fig.iter().chain(&c.slot).chain([&c.flag]))
-                        .map(|x| x.to_bits())
+                        .flat_map(|c| c.fig.iter().map(|x| x.to_bits()).chain([c.bins]))
                         .collect()
                 };
                 assert_eq!(bits(&one), bits(&two));
@@ -648,17 +695,16 @@ mod tests {
                     let (te, ve) = ([&mut tx[..], ty, tl], [&mut vx[..], vy, vl]);
                     let k = match wide {
                         // SAFETY: `t.wide` says the CPU has AVX2.
-                        1 => unsafe { row_avx2(&lo, &hi, refs(&b), te, ve, &mut out) },
+                        1 => unsafe { row_avx2(&lo, &hi, refs(&b), te, ve, &t.skew, &mut out) },
                         // SAFETY: `t.wider` says the CPU has the AVX-512 features.
-                        2 => unsafe { row_avx512(&lo, &hi, refs(&b), te, ve, &mut out) },
-                        _ => row(&lo, &hi, refs(&b), te, ve, &mut out),
+                        2 => unsafe { row_avx512(&lo, &hi, refs(&b), te, ve, &t.skew, &mut out) },
+                        _ => row(&lo, &hi, refs(&b), te, ve, &t.skew, &mut out),
                     };
                     let bits: Vec<u64> = out
                         .iter()
-                        .flat_map(|c| c.fig.iter().chain(&c.slot).chain([&c.flag]))
-                        .chain(e.iter().flatten())
-                        .chain(v.iter().flatten())
-                        .map(|x| x.to_bits())
+                        .flat_map(|c| c.fig.iter().map(|x| x.to_bits()).chain([c.bins]))
+                        .chain(e.iter().flatten().map(|x| x.to_bits()))
+                        .chain(v.iter().flatten().map(|x| x.to_bits()))
                         .collect();
                     (format!("{k:?}"), bits)
                 };
