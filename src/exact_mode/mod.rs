@@ -532,6 +532,10 @@ pub struct ExactMesh {
     pub split_arcs: usize,
     /// Blocks inside inserted holes (the last ones of the layout).
     pub template_blocks: usize,
+    /// The blocks with an inverted cell, in increasing order: [`crate::quality::inverted_blocks`]
+    /// of `grids`, found as each grid is made (a grid taken from the memo keeps the finding
+    /// of the build that made it), so the mesher's check needs no pass over every grid.
+    pub inverted_blocks: Vec<usize>,
 }
 
 /// Sweeps at most this small (radians) count as zero when checking orientations (a
@@ -1085,7 +1089,9 @@ pub fn assemble_cached(
         })
         .collect();
     let reuse: Vec<Option<Payload>> = cache.take_grids(&keys, &grid_keys);
-    type PieceGrids = Result<(Vec<Point>, [BlockGrid; 2], Entry, bool), MeshError>;
+    // Per piece: medial nodes, grids, memo entry and, once known, which of the two grids has
+    // an inverted cell (checked here while the grid is in cache; `None` until smoothed).
+    type PieceGrids = Result<(Vec<Point>, [BlockGrid; 2], Entry, Option<[bool; 2]>), MeshError>;
     let per_piece: Vec<PieceGrids> = pieces
         .par_iter()
         .zip(arc_targets.into_par_iter())
@@ -1101,12 +1107,12 @@ pub fn assemble_cached(
                 min_cells: t.min_cells(),
                 target: None,
             };
-            if let Some((m_nodes, pair)) = reused {
+            if let Some((m_nodes, pair, inverted)) = reused {
                 if !uniform {
                     known.target = t.known_target(nbar).map(|x| (nbar, x));
                 }
                 let entry = Entry { known, grids: None };
-                return Ok((m_nodes, pair, entry, true));
+                return Ok((m_nodes, pair, entry, Some(inverted)));
             }
             let cached = match first {
                 Some((nb, m, params)) if nb.to_bits() == nbar.to_bits() && m == n => Some(params),
@@ -1180,34 +1186,46 @@ pub fn assemble_cached(
             };
             let pair = [grid(0), grid(1)];
             let entry = Entry { known, grids: None };
-            Ok((m_nodes, pair, entry, false))
+            let inverted = (options.smooth == 0).then(|| pair.each_ref().map(has_inverted_cell));
+            Ok((m_nodes, pair, entry, inverted))
         })
         .collect();
     let mut grids = Vec::with_capacity(layout.blocks.len());
     let mut entries = Vec::with_capacity(per_piece.len());
-    let mut smoothed = Vec::with_capacity(per_piece.len());
+    let mut checked: Vec<Option<[bool; 2]>> = Vec::with_capacity(per_piece.len());
     for (e, r) in per_piece.into_iter().enumerate() {
-        let (m_nodes, pair, entry, done) = r?;
+        let (m_nodes, pair, entry, inverted) = r?;
         layout.edges[medial_edges[e] as usize].curve = Curve::Polyline(m_nodes);
         grids.extend(pair);
         entries.push(entry);
-        smoothed.push(done);
+        checked.push(inverted);
     }
     cache.replace(keys, entries, medial_edges.clone(), grid_keys, reused);
-    if options.smooth > 0 {
-        // Each block smooths alone (its sides fixed): in parallel, same result for any pool.
-        // Grids taken from the cache were smoothed by the build that made them.
-        grids.par_iter_mut().enumerate().for_each(|(b, g)| {
-            if !smoothed[b / 2] {
-                let rows = smoothing::boundary_layer_rows(g);
-                smoothing::winslow(g, options.smooth, rows);
-            }
+    // Which medial blocks have an inverted cell: known for every piece but those still to
+    // smooth (grids taken from the cache were smoothed and checked by the build that made
+    // them). Each block smooths alone (its sides fixed): in parallel, same result for any pool.
+    let mut inverted: Vec<bool> = vec![false; grids.len()];
+    grids
+        .par_iter_mut()
+        .zip(inverted.par_iter_mut())
+        .enumerate()
+        .for_each(|(b, (g, bad))| {
+            *bad = match checked[b / 2] {
+                Some(pair) => pair[b % 2],
+                None => {
+                    let rows = smoothing::boundary_layer_rows(g);
+                    smoothing::winslow(g, options.smooth, rows);
+                    has_inverted_cell(g)
+                }
+            };
         });
-    }
+    drop(checked);
     if template_blocks > 0 {
         let t = inserted::template_grids(&layout, &grids, first_template, h)?;
+        inverted.extend(t.iter().map(has_inverted_cell));
         grids.extend(t);
     }
+    let inverted_blocks = (0..inverted.len()).filter(|&b| inverted[b]).collect();
     Ok(ExactMesh {
         layout,
         grids,
@@ -1217,7 +1235,13 @@ pub fn assemble_cached(
         inconsistent_arcs,
         split_arcs,
         template_blocks,
+        inverted_blocks,
     })
+}
+
+/// True when `g` has an inverted cell: `g` is one of [`crate::quality::inverted_blocks`].
+fn has_inverted_cell(g: &BlockGrid) -> bool {
+    crate::quality::inverted_cells(std::slice::from_ref(g)) > 0
 }
 
 #[cfg(test)]

@@ -92,8 +92,9 @@ impl GridKey {
 /// `(nbar, n, parameters)`: a piece's `n + 1` arc-node parameters for that `nbar` and count.
 pub(crate) type Params = (f64, usize, Vec<f64>);
 
-/// A piece's medial nodes and its two block grids (smoothed when asked).
-pub(crate) type Payload = (Vec<Point>, [BlockGrid; 2]);
+/// A piece's medial nodes, its two block grids (smoothed when asked) and which of them has an
+/// inverted cell.
+pub(crate) type Payload = (Vec<Point>, [BlockGrid; 2], [bool; 2]);
 
 /// What one build computed for one piece geometry.
 #[derive(Debug, Clone, PartialEq)]
@@ -247,15 +248,24 @@ impl PieceCache {
         let medial_edges = std::mem::take(&mut self.medial_edges);
         let grid_keys = std::mem::take(&mut self.grid_keys);
         let ExactMesh {
-            mut layout, grids, ..
+            mut layout,
+            grids,
+            inverted_blocks,
+            ..
         } = mesh;
+        let mut inverted = vec![false; grids.len()];
+        for &b in &inverted_blocks {
+            if let Some(x) = inverted.get_mut(b) {
+                *x = true;
+            }
+        }
         let n = self.pieces.len();
         if grids.len() < 2 * n || medial_edges.len() != n || grid_keys.len() != n {
             return;
         }
         let mut it = grids.into_iter();
         let all = self.pieces.iter_mut().zip(&medial_edges).zip(&grid_keys);
-        for (((_, entry), &edge), gk) in all {
+        for (e, (((_, entry), &edge), gk)) in all.enumerate() {
             let (Some(g0), Some(g1)) = (it.next(), it.next()) else {
                 return;
             };
@@ -269,7 +279,8 @@ impl PieceCache {
                 },
                 None => continue,
             };
-            entry.grids = Some(Box::new((*gk, (nodes, [g0, g1]))));
+            let bad = [inverted[2 * e], inverted[2 * e + 1]];
+            entry.grids = Some(Box::new((*gk, (nodes, [g0, g1], bad))));
         }
     }
 
