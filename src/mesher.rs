@@ -414,7 +414,7 @@ fn poor_merged_blocks(
     grids: &[crate::mesh::BlockGrid],
 ) -> Vec<usize> {
     let medial = &cb.refined.sampled.medial;
-    let mut merged: Vec<u32> = cb
+    let merged: Vec<u32> = cb
         .chosen
         .iter()
         .filter(|c| !c.zero)
@@ -426,9 +426,14 @@ fn poor_merged_blocks(
     if merged.is_empty() {
         return Vec::new();
     }
-    merged.sort_unstable();
-    merged.dedup();
-    let nc = cb.contracted.graph.vertices.len() as u32;
+    // Merged contracted vertices by id (a lookup per block corner, not a search).
+    let nc = cb.contracted.graph.vertices.len();
+    let mut is_merged = vec![false; nc];
+    for v in merged {
+        if let Some(x) = is_merged.get_mut(v as usize) {
+            *x = true;
+        }
+    }
     layout
         .blocks
         .iter()
@@ -436,7 +441,7 @@ fn poor_merged_blocks(
         .filter(|(_, b)| {
             b.corners
                 .iter()
-                .any(|&v| v < nc && merged.binary_search(&v).is_ok())
+                .any(|&v| is_merged.get(v as usize).copied().unwrap_or(false))
         })
         .filter(|&(b, _)| {
             grids

@@ -57,7 +57,7 @@ use crate::layout::{Block, BlockLayout, Curve, Edge, EdgeKind, SideRef};
 use crate::mesh::BlockGrid;
 use crate::mesher::{MeshError, Options};
 use counts::{ArcTarget, CountProblem, Counts, Known};
-use piece_cache::{Entry, GeomKey, GridKey, Params, Payload};
+use piece_cache::{GeomKey, GridKey, Params, Payload};
 use rayon::prelude::*;
 use std::f64::consts::{PI, TAU};
 
@@ -559,6 +559,9 @@ pub(crate) struct Piece {
     /// Vertex ids (into the exact vertices) of its start and end.
     pub ends: [usize; 2],
     pub circles: [CircleId; 2],
+    /// `slots[side][end]`: the slot of `circles[side]` in end vertex `ends[end]`
+    /// ([`ExactVertex::slot`], looked up once).
+    pub slots: [[usize; 2]; 2],
     pub geom: ArcGeometry,
 }
 
@@ -631,6 +634,7 @@ fn pieces_of(sk: &Skeleton<'_>) -> Result<(Vec<Piece>, Vec<usize>), MeshError> {
             }
             let walls = arc.circles.map(|c| Wall::of(domain, c));
             let mut ends_a = [[[0.0; 2]; 2]; 2];
+            let mut slots = [[0; 2]; 2];
             for (side, &c) in arc.circles.iter().enumerate() {
                 let (Some(s0), Some(s1)) = (x0.slot(c), x1.slot(c)) else {
                     return Err(internal(format!(
@@ -639,6 +643,7 @@ fn pieces_of(sk: &Skeleton<'_>) -> Result<(Vec<Piece>, Vec<usize>), MeshError> {
                 };
                 ends_a[0][side] = x0.tangent[s0];
                 ends_a[1][side] = x1.tangent[s1];
+                slots[side] = [s0, s1];
             }
             let hint_a = wall_hint(sk.sampled, 2 * e)
                 .ok_or_else(|| internal(format!("arc {e}: no sampled wall")))?;
@@ -647,6 +652,7 @@ fn pieces_of(sk: &Skeleton<'_>) -> Result<(Vec<Piece>, Vec<usize>), MeshError> {
             Ok(Piece {
                 ends: [v0, v1],
                 circles: arc.circles,
+                slots,
                 geom: ArcGeometry::new(walls, [x0.center, x1.center], ends_a, [hint_a, -hint_b]),
             })
         })
@@ -706,7 +712,7 @@ pub fn assemble_cached(
     // A split for one hole can change a neighbouring inserted hole's count: repeat until no
     // hole asks for a split (bounded).
     if !sk.fluid.is_empty() {
-        let mut index = inserted::PiecesByCircle::new(&pieces, ncirc);
+        let mut index = inserted::PiecesByCircle::new(&pieces, &is_fluid);
         for _round in 0..4 {
             let before = split_arcs;
             for &c in &sk.fluid {
@@ -783,6 +789,8 @@ pub fn assemble_cached(
         None => circle_problem(h).circle_counts(),
     };
     let keys: Vec<GeomKey> = pieces.par_iter().map(|p| GeomKey::of(&p.geom)).collect();
+    // The latest build's piece of each geometry, looked up once for the summaries and grids.
+    let found = cache.find_all(&keys);
     type Summary = (ArcTarget, Option<Params>);
     let scratch = || ArcTarget {
         circles: [0, 0],
@@ -792,10 +800,10 @@ pub fn assemble_cached(
     };
     let summaries: Vec<Option<Summary>> = pieces
         .par_iter()
-        .zip(&keys)
-        .map_init(scratch, |scratch, (p, key)| {
+        .zip(&found)
+        .map_init(scratch, |scratch, (p, &at)| {
             let circles = p.circles.map(cidx);
-            if let Some(known) = cache.known(key) {
+            if let Some(known) = cache.known(at) {
                 let t = ArcTarget {
                     circles,
                     sq: Vec::new(),
@@ -912,13 +920,7 @@ pub fn assemble_cached(
         layout.vertices.extend_from_slice(&v.tangent);
     }
     let tangent_vertex = |v: usize, slot: usize| (tangent_base[v] + slot) as u32;
-    let slots = |p: &Piece, side: usize| -> (usize, usize) {
-        let c = p.circles[side];
-        (
-            vertices[p.ends[0]].slot(c).unwrap_or(0),
-            vertices[p.ends[1]].slot(c).unwrap_or(0),
-        )
-    };
+    let slots = |p: &Piece, side: usize| -> (usize, usize) { (p.slots[side][0], p.slots[side][1]) };
     // The spoke edge of vertex `v`'s slot `s`, by its tangent vertex (`NO_EDGE` until made): a
     // lookup, not a hash map (issue 8); edges are numbered in first-use order as before.
     const NO_EDGE: u32 = u32::MAX;
@@ -1003,8 +1005,14 @@ pub fn assemble_cached(
     crate::templates::fill_inserted_holes(&mut layout, &holes)
         .map_err(|(c, m)| internal(format!("inserted hole {c}: {m}")))?;
     let template_blocks = layout.blocks.len() - first_template;
+    // The conformity classes, once: the edges and blocks do not change from here on.
+    let classes = if template_blocks > 0 {
+        crate::grid::edge_classes(&layout)
+    } else {
+        (Vec::new(), 0)
+    };
     if template_blocks > 0 {
-        inserted::tie_counts(&layout, &medial_edges, &mut counts.arc);
+        inserted::tie_counts(&classes, &medial_edges, &mut counts.arc);
     }
 
     // Limits before allocating. The default target size is the median Apollonius radius over
@@ -1042,7 +1050,7 @@ pub fn assemble_cached(
             let largest = radii_max / options.cells.max(1) as f64;
             let mut c = solve_counts(largest.max(h), &mut targets)?;
             if template_blocks > 0 {
-                inserted::tie_counts(&layout, &medial_edges, &mut c.arc);
+                inserted::tie_counts(&classes, &medial_edges, &mut c.arc);
             }
             user_sized = total_of(&c) > MAX_TOTAL_NODES;
         }
@@ -1059,7 +1067,7 @@ pub fn assemble_cached(
         coarsened += 1;
         counts = solve_counts(h, &mut targets)?;
         if template_blocks > 0 {
-            inserted::tie_counts(&layout, &medial_edges, &mut counts.arc);
+            inserted::tie_counts(&classes, &medial_edges, &mut counts.arc);
         }
     }
 
@@ -1088,10 +1096,11 @@ pub fn assemble_cached(
             GridKey::of(counts.arc[e], sides, options.smooth)
         })
         .collect();
-    let reuse: Vec<Option<Payload>> = cache.take_grids(&keys, &grid_keys);
-    // Per piece: medial nodes, grids, memo entry and, once known, which of the two grids has
+    let reuse: Vec<Option<Payload>> = cache.take_grids(&found, &grid_keys);
+    drop(found);
+    // Per piece: medial nodes, grids, what the memo keeps and, once known, which of the two grids has
     // an inverted cell (checked here while the grid is in cache; `None` until smoothed).
-    type PieceGrids = Result<(Vec<Point>, [BlockGrid; 2], Entry, Option<[bool; 2]>), MeshError>;
+    type PieceGrids = Result<(Vec<Point>, [BlockGrid; 2], Known, Option<[bool; 2]>), MeshError>;
     let per_piece: Vec<PieceGrids> = pieces
         .par_iter()
         .zip(arc_targets.into_par_iter())
@@ -1111,8 +1120,7 @@ pub fn assemble_cached(
                 if !uniform {
                     known.target = t.known_target(nbar).map(|x| (nbar, x));
                 }
-                let entry = Entry { known, grids: None };
-                return Ok((m_nodes, pair, entry, Some(inverted)));
+                return Ok((m_nodes, pair, known, Some(inverted)));
             }
             let cached = match first {
                 Some((nb, m, params)) if nb.to_bits() == nbar.to_bits() && m == n => Some(params),
@@ -1185,9 +1193,8 @@ pub fn assemble_cached(
                 BlockGrid { ni: n, nj, nodes }
             };
             let pair = [grid(0), grid(1)];
-            let entry = Entry { known, grids: None };
             let inverted = (options.smooth == 0).then(|| pair.each_ref().map(has_inverted_cell));
-            Ok((m_nodes, pair, entry, inverted))
+            Ok((m_nodes, pair, known, inverted))
         })
         .collect();
     let mut grids = Vec::with_capacity(layout.blocks.len());
@@ -1221,7 +1228,7 @@ pub fn assemble_cached(
         });
     drop(checked);
     if template_blocks > 0 {
-        let t = inserted::template_grids(&layout, &grids, first_template, h)?;
+        let t = inserted::template_grids(&layout, &classes, &grids, first_template, h)?;
         inverted.extend(t.iter().map(has_inverted_cell));
         grids.extend(t);
     }
