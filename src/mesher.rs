@@ -434,9 +434,11 @@ fn poor_merged_blocks(
             *x = true;
         }
     }
+    // In parallel, collected in block order.
+    use rayon::prelude::*;
     layout
         .blocks
-        .iter()
+        .par_iter()
         .enumerate()
         .filter(|(_, b)| {
             b.corners
