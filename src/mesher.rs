@@ -414,7 +414,7 @@ fn poor_merged_blocks(
     grids: &[crate::mesh::BlockGrid],
 ) -> Vec<usize> {
     let medial = &cb.refined.sampled.medial;
-    let mut merged: Vec<u32> = cb
+    let merged: Vec<u32> = cb
         .chosen
         .iter()
         .filter(|c| !c.zero)
@@ -426,17 +426,24 @@ fn poor_merged_blocks(
     if merged.is_empty() {
         return Vec::new();
     }
-    merged.sort_unstable();
-    merged.dedup();
-    let nc = cb.contracted.graph.vertices.len() as u32;
+    // Merged contracted vertices by id (a lookup per block corner, not a search).
+    let nc = cb.contracted.graph.vertices.len();
+    let mut is_merged = vec![false; nc];
+    for v in merged {
+        if let Some(x) = is_merged.get_mut(v as usize) {
+            *x = true;
+        }
+    }
+    // In parallel, collected in block order.
+    use rayon::prelude::*;
     layout
         .blocks
-        .iter()
+        .par_iter()
         .enumerate()
         .filter(|(_, b)| {
             b.corners
                 .iter()
-                .any(|&v| v < nc && merged.binary_search(&v).is_ok())
+                .any(|&v| is_merged.get(v as usize).copied().unwrap_or(false))
         })
         .filter(|&(b, _)| {
             grids
@@ -520,9 +527,10 @@ fn exact_on_sampling(
             Err(err) => return Err(err),
         };
         around_merged = None;
-        let inverted = timings::span("quality_check", || {
-            crate::quality::inverted_blocks(&m.grids)
-        });
+        // Found while the grids were made (`ExactMesh::inverted_blocks`): the same list as
+        // `quality::inverted_blocks`, which the debug builds check.
+        let inverted = m.inverted_blocks.clone();
+        debug_assert_eq!(inverted, crate::quality::inverted_blocks(&m.grids));
         // Nearly flat cells at a vertex merged by short-arc collapse: fixed like inverted ones.
         let poor = timings::span("quality_check", || {
             poor_merged_blocks(cb, &m.layout, &m.grids)

@@ -1,7 +1,8 @@
 //! Exact mode's per-piece memo across rebuilds ([`medial_blocks::exact_mode::piece_cache`],
 //! issue #8): a rebuild with the memo of the previous build gives bit for bit the mesh a
 //! build from scratch gives (the oracle: `build_collapsed_on`, which starts from an empty
-//! memo every time), and does reuse work.
+//! memo every time), and does reuse work; the inverted blocks a build finds as it makes (or
+//! takes) its grids are those of a pass over the finished grids.
 
 mod common;
 
@@ -29,13 +30,22 @@ fn single(cb: &CollapsedBlocking) -> Vec<ExactVertex> {
     .unwrap()
 }
 
-/// Everything a build returns, compared bit for bit (floats by their bit patterns).
-fn assert_same(a: &Result<ExactMesh, String>, b: &Result<ExactMesh, String>, what: &str) {
+/// Everything a build returns, compared bit for bit (floats by their bit patterns), and the
+/// inverted blocks each build found as it made its grids against a pass over the finished
+/// grids (`quality::inverted_blocks`). Returns how many blocks are inverted (0 on errors).
+fn assert_same(a: &Result<ExactMesh, String>, b: &Result<ExactMesh, String>, what: &str) -> usize {
     let (a, b) = match (a, b) {
         (Ok(a), Ok(b)) => (a, b),
-        (Err(x), Err(y)) => return assert_eq!(x, y, "{what}"),
+        (Err(x), Err(y)) => {
+            assert_eq!(x, y, "{what}");
+            return 0;
+        }
         _ => panic!("{what}: one build failed, the other did not"),
     };
+    for m in [a, b] {
+        let pass = medial_blocks::quality::inverted_blocks(&m.grids);
+        assert_eq!(m.inverted_blocks, pass, "{what}: inverted blocks");
+    }
     assert_eq!(a.counts, b.counts, "{what}");
     assert_eq!(a.grids.len(), b.grids.len(), "{what}");
     for (k, (ga, gb)) in a.grids.iter().zip(&b.grids).enumerate() {
@@ -65,6 +75,7 @@ fn assert_same(a: &Result<ExactMesh, String>, b: &Result<ExactMesh, String>, wha
         (&b.inconsistent_arcs, b.split_arcs, b.template_blocks),
         "{what}"
     );
+    a.inverted_blocks.len()
 }
 
 fn build(
@@ -82,24 +93,24 @@ fn build(
 
 /// First build (empty memo), then a rebuild after giving up every short collapse, each with
 /// the memo and from scratch. Returns how many pieces the rebuild reused (0 when there was
-/// nothing to give up).
-fn rebuild_matches(d: &Domain, o: &Options, what: &str) -> usize {
+/// nothing to give up) and how many inverted blocks the builds found.
+fn rebuild_matches(d: &Domain, o: &Options, what: &str) -> (usize, usize) {
     let mut cb = collapsed_blocking_excluding(d, o, &exact_sampling(), false, &[]).unwrap();
     let mut cache = PieceCache::default();
     let first = build(&cb, o, Some(&mut cache));
-    assert_same(&first, &build(&cb, o, None), what);
+    let mut inverted = assert_same(&first, &build(&cb, o, None), what);
     if first.is_err() {
-        return 0;
+        return (0, inverted);
     }
     // The same skeleton again: every piece is reused, grids included once handed back.
     let again = build(&cb, o, Some(&mut cache));
-    assert_same(&again, &first, what);
+    inverted += assert_same(&again, &first, what);
     let pieces = first.as_ref().unwrap().counts.arc.len();
     assert_eq!(cache.reused(), pieces, "{what}: identical rebuild");
     assert_eq!(cache.reused_grids(), 0, "{what}: no grids handed back");
     cache.keep(again.unwrap());
     let third = build(&cb, o, Some(&mut cache));
-    assert_same(&third, &first, what);
+    inverted += assert_same(&third, &first, what);
     assert_eq!(cache.reused_grids(), pieces, "{what}: grids handed back");
     cache.keep(third.unwrap());
     let short: Vec<u32> = cb
@@ -109,12 +120,12 @@ fn rebuild_matches(d: &Domain, o: &Options, what: &str) -> usize {
         .map(|c| c.arc)
         .collect();
     if short.is_empty() || cb.recollapse(o, &short, &[]).is_err() {
-        return 0;
+        return (0, inverted);
     }
     let cached = build(&cb, o, Some(&mut cache));
-    assert_same(&cached, &build(&cb, o, None), &format!("{what} (given up)"));
+    inverted += assert_same(&cached, &build(&cb, o, None), &format!("{what} (given up)"));
     assert!(cache.reused_grids() <= cache.reused());
-    cache.reused_grids()
+    (cache.reused_grids(), inverted)
 }
 
 fn random_layout(seed: u64, h: usize, min_gap: f64) -> Domain {
@@ -173,9 +184,12 @@ fn rebuilds_with_the_memo_equal_builds_from_scratch() {
     }
     let mut reused = 0;
     let mut inserted = 0;
+    let mut inverted = 0;
     for (name, d) in &domains {
         for (oname, o) in option_sets() {
-            reused += rebuild_matches(d, &o, &format!("{name}, {oname}"));
+            let (r, i) = rebuild_matches(d, &o, &format!("{name}, {oname}"));
+            reused += r;
+            inverted += i;
         }
         let cb =
             collapsed_blocking_excluding(d, &Options::default(), &exact_sampling(), false, &[])
@@ -183,6 +197,7 @@ fn rebuilds_with_the_memo_equal_builds_from_scratch() {
         inserted += cb.refined.inserted.len();
     }
     assert!(reused > 0, "no rebuild reused a piece");
+    assert!(inverted > 0, "no build had an inverted block");
     assert!(inserted > 0, "no layout had inserted holes");
 }
 

@@ -27,6 +27,7 @@ use crate::blocking::CollapsedBlocking;
 use crate::domain::{CircleId, Domain};
 use crate::geometry::Point;
 use crate::mesher::{MeshError, Options};
+use rayon::prelude::*;
 
 /// The exact vertices of the contracted graph of `cb` (see the module docs). A cluster's
 /// circles are those of its kept arcs, each of which must appear on exactly two of them (one
@@ -56,20 +57,44 @@ pub fn cluster_vertices_on(
         ));
     }
     let nclusters = contracted.graph.vertices.len();
-    let mut members: Vec<Vec<usize>> = vec![Vec::new(); nclusters];
+    // Members of each cluster, in vertex order (offsets into one array, not a vector per
+    // cluster: issue 8).
+    let mut start = vec![0usize; nclusters + 1];
     for (v, &c) in contracted.cluster_of.iter().enumerate() {
-        members
-            .get_mut(c as usize)
-            .ok_or_else(|| internal(format!("vertex {v} in an unknown cluster {c}")))?
-            .push(v);
+        match start.get_mut(c as usize + 1) {
+            Some(n) => *n += 1,
+            None => return Err(internal(format!("vertex {v} in an unknown cluster {c}"))),
+        }
     }
-    // Circles of each cluster from its kept arcs, with how many arcs touch each.
-    let mut around: Vec<Vec<(CircleId, usize)>> = vec![Vec::new(); nclusters];
+    for k in 0..nclusters {
+        start[k + 1] += start[k];
+    }
+    let mut members = vec![0usize; contracted.cluster_of.len()];
+    let mut next = start.clone();
+    for (v, &c) in contracted.cluster_of.iter().enumerate() {
+        members[next[c as usize]] = v;
+        next[c as usize] += 1;
+    }
+    drop(next);
+    let members_of = |k: usize| &members[start[k]..start[k + 1]];
+    // Circles of each collapsed cluster (two or more members) from its kept arcs, with how
+    // many arcs touch each; a single vertex keeps its own circles.
+    let mut list_of = vec![usize::MAX; nclusters];
+    let mut around: Vec<Vec<(CircleId, usize)>> = Vec::new();
+    for (k, slot) in list_of.iter_mut().enumerate() {
+        if members_of(k).len() > 1 {
+            *slot = around.len();
+            around.push(Vec::new());
+        }
+    }
     for arc in &contracted.graph.arcs {
         for &v in &arc.ends {
-            let list = around
-                .get_mut(v as usize)
+            let i = *list_of
+                .get(v as usize)
                 .ok_or_else(|| internal("a kept arc ends at an unknown cluster".into()))?;
+            let Some(list) = around.get_mut(i) else {
+                continue;
+            };
             for &c in &arc.circles {
                 match list.iter_mut().find(|x| x.0 == c) {
                     Some(x) => x.1 += 1,
@@ -79,32 +104,37 @@ pub fn cluster_vertices_on(
         }
     }
     let group_of = crate::cocircular::group_of(medial, &cb.groups);
-    let mut out = Vec::with_capacity(nclusters);
-    for (k, ms) in members.iter().enumerate() {
-        if ms.len() == 1 {
-            out.push(single[ms[0]].clone());
-            continue;
-        }
-        if let Some(&(c, n)) = around[k].iter().find(|x| x.1 != 2) {
-            return Err(internal(format!(
-                "collapsed vertex {k}: circle {c} has {n} spokes there"
-            )));
-        }
-        let circles: Vec<CircleId> = around[k].iter().map(|x| x.0).collect();
-        let group = group_of.get(ms[0]).copied().flatten();
-        let one_group = group.is_some() && ms.iter().all(|&v| group_of.get(v) == Some(&group));
-        let center: Point = match group {
-            Some(g) if one_group => cb.groups[g].center,
-            _ => {
-                let n = ms.len() as f64;
-                let sx: f64 = ms.iter().map(|&v| single[v].center[0]).sum();
-                let sy: f64 = ms.iter().map(|&v| single[v].center[1]).sum();
-                [sx / n, sy / n]
+    // One vertex per cluster, in parallel, collected in cluster order (the first error in
+    // cluster order is returned, whatever the thread count).
+    let out: Vec<Result<ExactVertex, MeshError>> = (0..nclusters)
+        .into_par_iter()
+        .map(|k| {
+            let ms = members_of(k);
+            if ms.len() == 1 {
+                return Ok(single[ms[0]].clone());
             }
-        };
-        out.push(merged(domain, center, circles, k)?);
-    }
-    Ok(out)
+            let around = around.get(list_of[k]).map_or(&[][..], |v| v.as_slice());
+            if let Some(&(c, n)) = around.iter().find(|x| x.1 != 2) {
+                return Err(internal(format!(
+                    "collapsed vertex {k}: circle {c} has {n} spokes there"
+                )));
+            }
+            let circles: Vec<CircleId> = around.iter().map(|x| x.0).collect();
+            let group = ms.first().and_then(|&v| group_of.get(v).copied().flatten());
+            let one_group = group.is_some() && ms.iter().all(|&v| group_of.get(v) == Some(&group));
+            let center: Point = match group {
+                Some(g) if one_group => cb.groups[g].center,
+                _ => {
+                    let n = ms.len() as f64;
+                    let sx: f64 = ms.iter().map(|&v| single[v].center[0]).sum();
+                    let sy: f64 = ms.iter().map(|&v| single[v].center[1]).sum();
+                    [sx / n, sy / n]
+                }
+            };
+            merged(domain, center, circles, k)
+        })
+        .collect();
+    out.into_iter().collect()
 }
 
 /// The vertex at `center` touching `circles` by radial projection; radius the smallest gap.

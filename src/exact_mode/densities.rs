@@ -18,6 +18,49 @@ use super::{dist, larger_turn, medial_point_u, mid, turn_parts, ArcGeometry, Wal
 use super::{ARC_SUBSTEPS, MAX_WALL_ANGLE};
 use crate::geometry::Point;
 
+/// Which compiled build of the batched densities runs ([`ArcGeometry::densities_into`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum Lanes {
+    /// The baseline build (SSE2 on x86-64).
+    Base,
+    /// AVX2, 4 lanes.
+    Avx2,
+    /// AVX-512 F, DQ and VL, 8 lanes.
+    Avx512,
+}
+
+impl Lanes {
+    /// Every build, narrowest first.
+    pub(crate) const ALL: [Lanes; 3] = [Lanes::Base, Lanes::Avx2, Lanes::Avx512];
+
+    /// True when the CPU can run this build.
+    pub(crate) fn available(self) -> bool {
+        #[cfg(target_arch = "x86_64")]
+        {
+            use std::arch::is_x86_feature_detected as has;
+            match self {
+                Lanes::Base => true,
+                Lanes::Avx2 => has!("avx2"),
+                Lanes::Avx512 => {
+                    has!("avx512f") && has!("avx512dq") && has!("avx512vl") && has!("avx2")
+                }
+            }
+        }
+        #[cfg(not(target_arch = "x86_64"))]
+        {
+            self == Lanes::Base
+        }
+    }
+
+    /// The widest build the CPU can run.
+    pub(crate) fn best() -> Lanes {
+        [Lanes::Avx512, Lanes::Avx2]
+            .into_iter()
+            .find(|l| l.available())
+            .unwrap_or(Lanes::Base)
+    }
+}
+
 /// Sub-steps between exact restarts of the rotation recurrence.
 pub const RESTART: usize = 16;
 
@@ -75,7 +118,51 @@ impl ArcGeometry {
     /// divisions and square roots of independent points can run side by side (vector lanes
     /// round every operation as the scalar code does, and nothing is reassociated or fused).
     /// `None` when a point is not defined.
+    ///
+    /// Compiled three times ([`Lanes`]): for AVX-512 or AVX2 when the CPU has them, else for
+    /// the baseline (SSE2): the same IEEE operations on the same operands in every build (no
+    /// fused multiply-add, nothing reassociated; `sin`, `cos`, `tan`, `atan2` are the same
+    /// library calls), so the same bits, in wider vectors.
     pub(crate) fn densities_into(&self, sq: &mut Vec<f64>, ang: &mut Vec<f64>) -> Option<()> {
+        self.densities_with(Lanes::best(), sq, ang)
+    }
+
+    /// [`ArcGeometry::densities_into`] in the build `lanes` (the baseline when the CPU lacks
+    /// it): the test hook that compares the builds.
+    pub(crate) fn densities_with(
+        &self,
+        lanes: Lanes,
+        sq: &mut Vec<f64>,
+        ang: &mut Vec<f64>,
+    ) -> Option<()> {
+        #[cfg(target_arch = "x86_64")]
+        match lanes {
+            // SAFETY: `Lanes::available` checked the CPU's features.
+            Lanes::Avx512 if lanes.available() => return unsafe { self.densities_avx512(sq, ang) },
+            // SAFETY: as above.
+            Lanes::Avx2 if lanes.available() => return unsafe { self.densities_avx2(sq, ang) },
+            _ => {}
+        }
+        self.densities_batched(sq, ang)
+    }
+
+    /// [`ArcGeometry::densities_batched`] compiled for AVX-512 (8-lane vectors).
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx512f,avx512dq,avx512vl,avx2")]
+    fn densities_avx512(&self, sq: &mut Vec<f64>, ang: &mut Vec<f64>) -> Option<()> {
+        self.densities_batched(sq, ang)
+    }
+
+    /// [`ArcGeometry::densities_batched`] compiled for AVX2 (4-lane vectors).
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    fn densities_avx2(&self, sq: &mut Vec<f64>, ang: &mut Vec<f64>) -> Option<()> {
+        self.densities_batched(sq, ang)
+    }
+
+    /// The body of [`ArcGeometry::densities_into`], inlined into each build.
+    #[inline(always)]
+    fn densities_batched(&self, sq: &mut Vec<f64>, ang: &mut Vec<f64>) -> Option<()> {
         const K: usize = ARC_SUBSTEPS;
         const N: usize = K + 1;
         sq.clear();
@@ -280,6 +367,13 @@ impl Deviation {
             (b(&v.0), b(&v.1))
         };
         self.batched_bits += usize::from(fast.as_ref().map(bits) != scalar.as_ref().map(bits));
+        for lanes in Lanes::ALL {
+            let (mut bsq, mut bang) = (Vec::new(), Vec::new());
+            let built = g
+                .densities_with(lanes, &mut bsq, &mut bang)
+                .map(|()| (bsq, bang));
+            self.batched_bits += usize::from(built.as_ref().map(bits) != scalar.as_ref().map(bits));
+        }
         let (Some((fs, fa)), Some((ps, pa))) = (fast.clone(), plain.clone()) else {
             self.mismatches += usize::from(fast.is_some() != plain.is_some());
             return;

@@ -18,7 +18,7 @@ use super::{internal, Clustering, ExactVertex, Piece};
 use crate::blocking::MAX_TEMPLATE_SWEEP;
 use crate::domain::CircleId;
 use crate::geometry::Point;
-use crate::grid::{edge_classes, tfi};
+use crate::grid::tfi;
 use crate::layout::{BlockLayout, Curve};
 use crate::mesh::BlockGrid;
 use crate::mesher::MeshError;
@@ -33,15 +33,27 @@ pub const FLUID_CLUSTERING: Clustering = Clustering {
 /// The most arcs split around one inserted hole.
 pub const MAX_SPLITS_PER_HOLE: usize = 16;
 
-/// The pieces on each circle, by circle slot (`c + 1`), in increasing piece index: what a
-/// scan `pieces.iter().enumerate().filter(|p| p.circles.contains(&c))` lists, without the
-/// scan (issue 8: [`prepare`] ran it per inserted hole and per split, O(holes x arcs)).
-/// Kept up to date by [`prepare`] as it appends split halves.
-pub(crate) struct PiecesByCircle(Vec<Vec<usize>>);
+/// The pieces on each inserted hole, in increasing piece index: what a scan
+/// `pieces.iter().enumerate().filter(|p| p.circles.contains(&c))` lists for an inserted hole
+/// `c`, without the scan (issue 8: [`prepare`] ran it per inserted hole and per split,
+/// O(holes x arcs)). Only the inserted holes get a list (one allocation per hole, not per
+/// circle). Kept up to date by [`prepare`] as it appends split halves.
+pub(crate) struct PiecesByCircle {
+    /// Per circle slot (`c + 1`): its list in `lists`, or `usize::MAX` (not an inserted hole).
+    list_of: Vec<usize>,
+    lists: Vec<Vec<usize>>,
+}
 
 impl PiecesByCircle {
-    pub(crate) fn new(pieces: &[Piece], ncirc: usize) -> Self {
-        let mut index = PiecesByCircle(vec![Vec::new(); ncirc]);
+    /// The lists of the circles `is_fluid` marks (by circle slot).
+    pub(crate) fn new(pieces: &[Piece], is_fluid: &[bool]) -> Self {
+        let mut list_of = vec![usize::MAX; is_fluid.len()];
+        let mut lists = Vec::new();
+        for (slot, _) in is_fluid.iter().enumerate().filter(|x| *x.1) {
+            list_of[slot] = lists.len();
+            lists.push(Vec::new());
+        }
+        let mut index = PiecesByCircle { list_of, lists };
         for (e, p) in pieces.iter().enumerate() {
             index.push(e, p.circles);
         }
@@ -53,15 +65,22 @@ impl PiecesByCircle {
             if k == 1 && circles[0] == c {
                 continue;
             }
-            if let Some(list) = usize::try_from(c + 1).ok().and_then(|i| self.0.get_mut(i)) {
-                list.push(e);
+            if let Some(&i) = usize::try_from(c + 1)
+                .ok()
+                .and_then(|s| self.list_of.get(s))
+            {
+                if let Some(list) = self.lists.get_mut(i) {
+                    list.push(e);
+                }
             }
         }
     }
+    /// The pieces on inserted hole `c` (empty for any other circle).
     fn on(&self, c: CircleId) -> &[usize] {
         usize::try_from(c + 1)
             .ok()
-            .and_then(|i| self.0.get(i))
+            .and_then(|s| self.list_of.get(s))
+            .and_then(|&i| self.lists.get(i))
             .map_or(&[], |v| v.as_slice())
     }
 }
@@ -129,11 +148,15 @@ pub(crate) fn prepare(
         });
         let end = pieces[e].ends[1];
         let circles = pieces[e].circles;
+        let slots = pieces[e].slots;
+        let mid = circles.map(|x| vertices[v].slot(x).unwrap_or(0));
         pieces[e].ends[1] = v;
+        pieces[e].slots = [[slots[0][0], mid[0]], [slots[1][0], mid[1]]];
         pieces[e].geom = first;
         pieces.push(Piece {
             ends: [v, end],
             circles,
+            slots: [[mid[0], slots[0][1]], [mid[1], slots[1][1]]],
             geom: second,
         });
         index.push(pieces.len() - 1, circles);
@@ -142,10 +165,11 @@ pub(crate) fn prepare(
     splits
 }
 
-/// Give every conformity class of `layout` ([`edge_classes`]: opposite block sides) one arc
-/// count, the largest of its arcs' (`medial_edge[e]` is the medial edge of arc `e`).
-pub(crate) fn tie_counts(layout: &BlockLayout, medial_edge: &[u32], arc: &mut [usize]) {
-    let (class, n) = edge_classes(layout);
+/// Give every conformity class of a layout (`classes`: its [`crate::grid::edge_classes`], opposite block
+/// sides) one arc count, the largest of its arcs' (`medial_edge[e]` is the medial edge of arc
+/// `e`).
+pub(crate) fn tie_counts(classes: &(Vec<usize>, usize), medial_edge: &[u32], arc: &mut [usize]) {
+    let (class, n) = (&classes.0, classes.1);
     let mut best = vec![0usize; n];
     for (e, &m) in medial_edge.iter().enumerate() {
         if let (Some(&k), Some(&c)) = (class.get(m as usize), arc.get(e)) {
@@ -163,14 +187,17 @@ pub(crate) fn tie_counts(layout: &BlockLayout, medial_edge: &[u32], arc: &mut [u
 /// medial blocks (`grids[b]` for `b < first`) are copied bit for bit, the straight template
 /// edges get equally spaced nodes with their class's count (the gridded member's, else the
 /// longest member's length over `h`, at least 1), and the interior is transfinite
-/// interpolation. Errors when a class gets two different counts (a broken tie).
+/// interpolation. Errors when a class gets two different counts (a broken tie). `classes` are
+/// the layout's [`crate::grid::edge_classes`] (computed once per build: the layout's edges and blocks do
+/// not change after the templates are filled).
 pub(crate) fn template_grids(
     layout: &BlockLayout,
+    classes: &(Vec<usize>, usize),
     grids: &[BlockGrid],
     first: usize,
     h: f64,
 ) -> Result<Vec<BlockGrid>, MeshError> {
-    let (class, ncls) = edge_classes(layout);
+    let (class, ncls) = (&classes.0, classes.1);
     // The edges the template blocks lie on: only their gridded nodes are copied (copying
     // every gridded side of a large layout cost more than the templates themselves).
     let mut on_template = vec![false; layout.edges.len()];

@@ -57,7 +57,7 @@ use crate::layout::{Block, BlockLayout, Curve, Edge, EdgeKind, SideRef};
 use crate::mesh::BlockGrid;
 use crate::mesher::{MeshError, Options};
 use counts::{ArcTarget, CountProblem, Counts, Known};
-use piece_cache::{Entry, GeomKey, GridKey, Params, Payload};
+use piece_cache::{GeomKey, GridKey, Params, Payload};
 use rayon::prelude::*;
 use std::f64::consts::{PI, TAU};
 
@@ -373,8 +373,10 @@ fn median(mut v: Vec<f64>) -> Option<f64> {
     if v.is_empty() {
         return None;
     }
-    v.sort_by(f64::total_cmp);
-    Some(v[v.len() / 2])
+    // The element a full sort by `total_cmp` puts at `len / 2` (a total order: the same
+    // value, bit for bit), found in linear time.
+    let k = v.len() / 2;
+    Some(*v.select_nth_unstable_by(k, f64::total_cmp).1)
 }
 
 /// The clustering of circle `id`: a per-circle override, else the domain's.
@@ -532,6 +534,10 @@ pub struct ExactMesh {
     pub split_arcs: usize,
     /// Blocks inside inserted holes (the last ones of the layout).
     pub template_blocks: usize,
+    /// The blocks with an inverted cell, in increasing order: [`crate::quality::inverted_blocks`]
+    /// of `grids`, found as each grid is made (a grid taken from the memo keeps the finding
+    /// of the build that made it), so the mesher's check needs no pass over every grid.
+    pub inverted_blocks: Vec<usize>,
 }
 
 /// Sweeps at most this small (radians) count as zero when checking orientations (a
@@ -555,6 +561,9 @@ pub(crate) struct Piece {
     /// Vertex ids (into the exact vertices) of its start and end.
     pub ends: [usize; 2],
     pub circles: [CircleId; 2],
+    /// `slots[side][end]`: the slot of `circles[side]` in end vertex `ends[end]`
+    /// ([`ExactVertex::slot`], looked up once).
+    pub slots: [[usize; 2]; 2],
     pub geom: ArcGeometry,
 }
 
@@ -627,6 +636,7 @@ fn pieces_of(sk: &Skeleton<'_>) -> Result<(Vec<Piece>, Vec<usize>), MeshError> {
             }
             let walls = arc.circles.map(|c| Wall::of(domain, c));
             let mut ends_a = [[[0.0; 2]; 2]; 2];
+            let mut slots = [[0; 2]; 2];
             for (side, &c) in arc.circles.iter().enumerate() {
                 let (Some(s0), Some(s1)) = (x0.slot(c), x1.slot(c)) else {
                     return Err(internal(format!(
@@ -635,6 +645,7 @@ fn pieces_of(sk: &Skeleton<'_>) -> Result<(Vec<Piece>, Vec<usize>), MeshError> {
                 };
                 ends_a[0][side] = x0.tangent[s0];
                 ends_a[1][side] = x1.tangent[s1];
+                slots[side] = [s0, s1];
             }
             let hint_a = wall_hint(sk.sampled, 2 * e)
                 .ok_or_else(|| internal(format!("arc {e}: no sampled wall")))?;
@@ -643,6 +654,7 @@ fn pieces_of(sk: &Skeleton<'_>) -> Result<(Vec<Piece>, Vec<usize>), MeshError> {
             Ok(Piece {
                 ends: [v0, v1],
                 circles: arc.circles,
+                slots,
                 geom: ArcGeometry::new(walls, [x0.center, x1.center], ends_a, [hint_a, -hint_b]),
             })
         })
@@ -702,7 +714,7 @@ pub fn assemble_cached(
     // A split for one hole can change a neighbouring inserted hole's count: repeat until no
     // hole asks for a split (bounded).
     if !sk.fluid.is_empty() {
-        let mut index = inserted::PiecesByCircle::new(&pieces, ncirc);
+        let mut index = inserted::PiecesByCircle::new(&pieces, &is_fluid);
         for _round in 0..4 {
             let before = split_arcs;
             for &c in &sk.fluid {
@@ -779,6 +791,8 @@ pub fn assemble_cached(
         None => circle_problem(h).circle_counts(),
     };
     let keys: Vec<GeomKey> = pieces.par_iter().map(|p| GeomKey::of(&p.geom)).collect();
+    // The latest build's piece of each geometry, looked up once for the summaries and grids.
+    let found = cache.find_all(&keys);
     type Summary = (ArcTarget, Option<Params>);
     let scratch = || ArcTarget {
         circles: [0, 0],
@@ -788,10 +802,10 @@ pub fn assemble_cached(
     };
     let summaries: Vec<Option<Summary>> = pieces
         .par_iter()
-        .zip(&keys)
-        .map_init(scratch, |scratch, (p, key)| {
+        .zip(&found)
+        .map_init(scratch, |scratch, (p, &at)| {
             let circles = p.circles.map(cidx);
-            if let Some(known) = cache.known(key) {
+            if let Some(known) = cache.known(at) {
                 let t = ArcTarget {
                     circles,
                     sq: Vec::new(),
@@ -908,13 +922,7 @@ pub fn assemble_cached(
         layout.vertices.extend_from_slice(&v.tangent);
     }
     let tangent_vertex = |v: usize, slot: usize| (tangent_base[v] + slot) as u32;
-    let slots = |p: &Piece, side: usize| -> (usize, usize) {
-        let c = p.circles[side];
-        (
-            vertices[p.ends[0]].slot(c).unwrap_or(0),
-            vertices[p.ends[1]].slot(c).unwrap_or(0),
-        )
-    };
+    let slots = |p: &Piece, side: usize| -> (usize, usize) { (p.slots[side][0], p.slots[side][1]) };
     // The spoke edge of vertex `v`'s slot `s`, by its tangent vertex (`NO_EDGE` until made): a
     // lookup, not a hash map (issue 8); edges are numbered in first-use order as before.
     const NO_EDGE: u32 = u32::MAX;
@@ -999,8 +1007,14 @@ pub fn assemble_cached(
     crate::templates::fill_inserted_holes(&mut layout, &holes)
         .map_err(|(c, m)| internal(format!("inserted hole {c}: {m}")))?;
     let template_blocks = layout.blocks.len() - first_template;
+    // The conformity classes, once: the edges and blocks do not change from here on.
+    let classes = if template_blocks > 0 {
+        crate::grid::edge_classes(&layout)
+    } else {
+        (Vec::new(), 0)
+    };
     if template_blocks > 0 {
-        inserted::tie_counts(&layout, &medial_edges, &mut counts.arc);
+        inserted::tie_counts(&classes, &medial_edges, &mut counts.arc);
     }
 
     // Limits before allocating. The default target size is the median Apollonius radius over
@@ -1038,7 +1052,7 @@ pub fn assemble_cached(
             let largest = radii_max / options.cells.max(1) as f64;
             let mut c = solve_counts(largest.max(h), &mut targets)?;
             if template_blocks > 0 {
-                inserted::tie_counts(&layout, &medial_edges, &mut c.arc);
+                inserted::tie_counts(&classes, &medial_edges, &mut c.arc);
             }
             user_sized = total_of(&c) > MAX_TOTAL_NODES;
         }
@@ -1055,7 +1069,7 @@ pub fn assemble_cached(
         coarsened += 1;
         counts = solve_counts(h, &mut targets)?;
         if template_blocks > 0 {
-            inserted::tie_counts(&layout, &medial_edges, &mut counts.arc);
+            inserted::tie_counts(&classes, &medial_edges, &mut counts.arc);
         }
     }
 
@@ -1084,8 +1098,11 @@ pub fn assemble_cached(
             GridKey::of(counts.arc[e], sides, options.smooth)
         })
         .collect();
-    let reuse: Vec<Option<Payload>> = cache.take_grids(&keys, &grid_keys);
-    type PieceGrids = Result<(Vec<Point>, [BlockGrid; 2], Entry, bool), MeshError>;
+    let reuse: Vec<Option<Payload>> = cache.take_grids(&found, &grid_keys);
+    drop(found);
+    // Per piece: medial nodes, grids, what the memo keeps and, once known, which of the two grids has
+    // an inverted cell (checked here while the grid is in cache; `None` until smoothed).
+    type PieceGrids = Result<(Vec<Point>, [BlockGrid; 2], Known, Option<[bool; 2]>), MeshError>;
     let per_piece: Vec<PieceGrids> = pieces
         .par_iter()
         .zip(arc_targets.into_par_iter())
@@ -1101,12 +1118,11 @@ pub fn assemble_cached(
                 min_cells: t.min_cells(),
                 target: None,
             };
-            if let Some((m_nodes, pair)) = reused {
+            if let Some((m_nodes, pair, inverted)) = reused {
                 if !uniform {
                     known.target = t.known_target(nbar).map(|x| (nbar, x));
                 }
-                let entry = Entry { known, grids: None };
-                return Ok((m_nodes, pair, entry, true));
+                return Ok((m_nodes, pair, known, Some(inverted)));
             }
             let cached = match first {
                 Some((nb, m, params)) if nb.to_bits() == nbar.to_bits() && m == n => Some(params),
@@ -1179,35 +1195,46 @@ pub fn assemble_cached(
                 BlockGrid { ni: n, nj, nodes }
             };
             let pair = [grid(0), grid(1)];
-            let entry = Entry { known, grids: None };
-            Ok((m_nodes, pair, entry, false))
+            let inverted = (options.smooth == 0).then(|| pair.each_ref().map(has_inverted_cell));
+            Ok((m_nodes, pair, known, inverted))
         })
         .collect();
     let mut grids = Vec::with_capacity(layout.blocks.len());
     let mut entries = Vec::with_capacity(per_piece.len());
-    let mut smoothed = Vec::with_capacity(per_piece.len());
+    let mut checked: Vec<Option<[bool; 2]>> = Vec::with_capacity(per_piece.len());
     for (e, r) in per_piece.into_iter().enumerate() {
-        let (m_nodes, pair, entry, done) = r?;
+        let (m_nodes, pair, entry, inverted) = r?;
         layout.edges[medial_edges[e] as usize].curve = Curve::Polyline(m_nodes);
         grids.extend(pair);
         entries.push(entry);
-        smoothed.push(done);
+        checked.push(inverted);
     }
     cache.replace(keys, entries, medial_edges.clone(), grid_keys, reused);
-    if options.smooth > 0 {
-        // Each block smooths alone (its sides fixed): in parallel, same result for any pool.
-        // Grids taken from the cache were smoothed by the build that made them.
-        grids.par_iter_mut().enumerate().for_each(|(b, g)| {
-            if !smoothed[b / 2] {
-                let rows = smoothing::boundary_layer_rows(g);
-                smoothing::winslow(g, options.smooth, rows);
-            }
+    // Which medial blocks have an inverted cell: known for every piece but those still to
+    // smooth (grids taken from the cache were smoothed and checked by the build that made
+    // them). Each block smooths alone (its sides fixed): in parallel, same result for any pool.
+    let mut inverted: Vec<bool> = vec![false; grids.len()];
+    grids
+        .par_iter_mut()
+        .zip(inverted.par_iter_mut())
+        .enumerate()
+        .for_each(|(b, (g, bad))| {
+            *bad = match checked[b / 2] {
+                Some(pair) => pair[b % 2],
+                None => {
+                    let rows = smoothing::boundary_layer_rows(g);
+                    smoothing::winslow(g, options.smooth, rows);
+                    has_inverted_cell(g)
+                }
+            };
         });
-    }
+    drop(checked);
     if template_blocks > 0 {
-        let t = inserted::template_grids(&layout, &grids, first_template, h)?;
+        let t = inserted::template_grids(&layout, &classes, &grids, first_template, h)?;
+        inverted.extend(t.iter().map(has_inverted_cell));
         grids.extend(t);
     }
+    let inverted_blocks = (0..inverted.len()).filter(|&b| inverted[b]).collect();
     Ok(ExactMesh {
         layout,
         grids,
@@ -1217,7 +1244,13 @@ pub fn assemble_cached(
         inconsistent_arcs,
         split_arcs,
         template_blocks,
+        inverted_blocks,
     })
+}
+
+/// True when `g` has an inverted cell: `g` is one of [`crate::quality::inverted_blocks`].
+fn has_inverted_cell(g: &BlockGrid) -> bool {
+    crate::quality::inverted_cells(std::slice::from_ref(g)) > 0
 }
 
 #[cfg(test)]
@@ -1259,6 +1292,29 @@ mod tests {
             assert!((dist(a, b.c) - 3.0).abs() < 1e-12);
             assert!(((dist(m2, p.c) + dist(m2, b.c)) - 3.3).abs() < 1e-12);
             assert!((dist(m2, p.c) - 0.3 - rho2).abs() < 1e-12);
+        }
+    }
+
+    /// [`median`] (selection) against the sorted list's middle element, bit for bit: ties,
+    /// signed zeros, infinities and NaNs (dropped) included.
+    #[test]
+    fn median_is_the_middle_of_the_sorted_list() {
+        let mut rng = crate::layouts::SplitMix64(9);
+        for n in 0..300usize {
+            let v: Vec<f64> = (0..n)
+                .map(|k| match k % 7 {
+                    0 => 0.0,
+                    1 => -0.0,
+                    2 => (rng.next_f64() * 4.0).round(),
+                    3 if n % 3 == 0 => f64::NAN,
+                    4 if n % 5 == 0 => f64::INFINITY,
+                    _ => rng.next_f64() - 0.5,
+                })
+                .collect();
+            let mut sorted: Vec<f64> = v.iter().copied().filter(|x| x.is_finite()).collect();
+            sorted.sort_by(f64::total_cmp);
+            let want = sorted.get(sorted.len() / 2).map(|x| x.to_bits());
+            assert_eq!(median(v).map(f64::to_bits), want, "n = {n}");
         }
     }
 

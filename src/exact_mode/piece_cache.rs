@@ -12,14 +12,16 @@
 //! A piece's two block grids and medial nodes depend on its geometry, its counts (`n` and the
 //! wall-normal count of each side), the clustering of each side and the smoothing sweeps
 //! (`GridKey` with the geometry; its corner spokes are its geometry's ends). When the build
-//! is rejected (inverted or poor blocks), the mesher hands its grids back ([`PieceCache::keep`])
-//! and the next build moves those of its unchanged pieces into its own mesh: no copy, and the
-//! grids not reused are freed before the new ones are made (peak memory unchanged).
+//! is rejected (inverted or poor blocks), the mesher hands its mesh back ([`PieceCache::keep`],
+//! kept whole: nothing is moved then) and the next build moves the grids and medial nodes of
+//! its unchanged pieces out of it into its own mesh: no copy, and the grids not reused are
+//! freed before the new ones are made (peak memory unchanged).
 //!
-//! Only the latest build's entries are kept (about 250 bytes per piece besides the grids
+//! Only the latest build's entries are kept (about 300 bytes per piece besides the mesh
 //! handed back, not the densities nor the node parameters: a piece without its grids
-//! computes its densities again). Entries are written in piece order and read by key, so
-//! nothing depends on the thread count.
+//! computes its densities again). Entries are written in piece order and read by key (the
+//! lookups of one build are made once, in parallel, [`PieceCache::find_all`]), so nothing
+//! depends on the thread count.
 
 use super::counts::Known;
 use super::{ArcGeometry, ExactMesh};
@@ -92,28 +94,34 @@ impl GridKey {
 /// `(nbar, n, parameters)`: a piece's `n + 1` arc-node parameters for that `nbar` and count.
 pub(crate) type Params = (f64, usize, Vec<f64>);
 
-/// A piece's medial nodes and its two block grids (smoothed when asked).
-pub(crate) type Payload = (Vec<Point>, [BlockGrid; 2]);
+/// A piece's medial nodes, its two block grids (smoothed when asked) and which of them has an
+/// inverted cell.
+pub(crate) type Payload = (Vec<Point>, [BlockGrid; 2], [bool; 2]);
 
-/// What one build computed for one piece geometry.
-#[derive(Debug, Clone, PartialEq)]
-pub(crate) struct Entry {
-    /// The densities' lower bound and (size-driven counts only) the target for one `nbar`.
-    pub(crate) known: Known,
-    /// Once handed back: the grid inputs besides the geometry, and the grids.
-    pub(crate) grids: Option<Box<(GridKey, Payload)>>,
+/// The grids of the latest build, handed back by the mesher ([`PieceCache::keep`]).
+#[derive(Debug)]
+struct Kept {
+    /// Per piece: its medial nodes (empty when its medial edge was not a polyline).
+    nodes: Vec<Vec<Point>>,
+    grids: Vec<BlockGrid>,
+    /// Per block: it has an inverted cell.
+    inverted: Vec<bool>,
 }
 
 /// The memo (see the module docs). `PieceCache::default()` is empty: a build with it computes
 /// everything, as without a memo.
 #[derive(Debug, Default)]
 pub struct PieceCache {
-    /// The latest build's pieces, in piece order: geometry key and entry.
-    pieces: Vec<(GeomKey, Entry)>,
+    /// The latest build's pieces, in piece order: geometry key, and what the counts need from
+    /// the densities (lower bound and, size-driven counts only, the target for one `nbar`).
+    keys: Vec<GeomKey>,
+    known: Vec<Known>,
     /// Their medial edges in the latest build's layout and their grid inputs, while its grids
     /// may be handed back.
     medial_edges: Vec<u32>,
     grid_keys: Vec<GridKey>,
+    /// The latest build's mesh once handed back.
+    kept: Option<Kept>,
     /// Hash of a geometry key -> the last piece with that hash; lookups compare the full key,
     /// so a hash collision is a miss, never a wrong entry.
     index: HashMap<u64, u32, BuildHasherDefault<PassThrough>>,
@@ -183,94 +191,142 @@ impl PieceCache {
             return None;
         }
         let i = *self.index.get(&hash_of(key))? as usize;
-        (self.pieces.get(i)?.0 == *key).then_some(i)
+        (self.keys.get(i)? == key).then_some(i)
     }
 
-    /// What an earlier build knew of geometry `key`'s densities.
-    pub(crate) fn known(&self, key: &GeomKey) -> Option<Known> {
-        self.find(key).map(|i| self.pieces[i].1.known)
+    /// The latest build's piece with geometry `keys[e]`, for every `e` (in parallel; a key
+    /// met twice in that build is found at its last piece).
+    pub(crate) fn find_all(&self, keys: &[GeomKey]) -> Vec<Option<u32>> {
+        use rayon::prelude::*;
+        keys.par_iter()
+            .map(|k| self.find(k).map(|i| i as u32))
+            .collect()
     }
 
-    /// The grids handed back for piece `e` of a new build (geometry `keys[e]`, other inputs
-    /// `grid_keys[e]`), moved out of the memo; then the memo is emptied until
-    /// [`PieceCache::replace`].
+    /// What the latest build knew of the densities of its piece `i` ([`PieceCache::find_all`]).
+    pub(crate) fn known(&self, i: Option<u32>) -> Option<Known> {
+        self.known.get(i? as usize).copied()
+    }
+
+    /// The grids handed back for piece `e` of a new build (the latest build's piece
+    /// `found[e]`, [`PieceCache::find_all`]; other inputs `grid_keys[e]`), moved out of the
+    /// memo (each piece's at most once, to the first new piece that asks); then the memo is
+    /// emptied until [`PieceCache::replace`]. Only the grids of a piece whose grid inputs are
+    /// unchanged are taken, and only when the mesh handed back has them (counts as recorded).
     pub(crate) fn take_grids(
         &mut self,
-        keys: &[GeomKey],
+        found: &[Option<u32>],
         grid_keys: &[GridKey],
     ) -> Vec<Option<Payload>> {
-        let out: Vec<Option<Payload>> = keys
+        let kept = self.kept.take();
+        let old_keys = std::mem::take(&mut self.grid_keys);
+        let n = self.keys.len();
+        // Nothing else is read before `replace`: free the entries before the new grids are
+        // made (and, below, every grid not taken).
+        self.keys = Vec::new();
+        self.known = Vec::new();
+        self.index = HashMap::default();
+        self.reused_grids = 0;
+        let Some(mut kept) = kept else {
+            return vec![None; found.len()];
+        };
+        if kept.grids.len() < 2 * n || kept.nodes.len() != n || old_keys.len() != n {
+            return vec![None; found.len()];
+        }
+        let mut taken = vec![false; n];
+        let empty = || BlockGrid {
+            ni: 0,
+            nj: 0,
+            nodes: Vec::new(),
+        };
+        let out: Vec<Option<Payload>> = found
             .iter()
             .zip(grid_keys)
-            .map(|(k, gk)| {
-                let i = self.find(k)?;
-                let e = &mut self.pieces[i].1;
-                match e.grids.take() {
-                    Some(b) if b.0 == *gk => Some(b.1),
-                    _ => None,
+            .map(|(&i, gk)| {
+                let i = i? as usize;
+                if taken[i] || old_keys[i] != *gk {
+                    return None;
                 }
+                taken[i] = true;
+                let w = gk.0;
+                let (g0, g1) = (&kept.grids[2 * i], &kept.grids[2 * i + 1]);
+                let fits = (g0.ni, g0.nj, g1.ni, g1.nj)
+                    == (w[0] as usize, w[1] as usize, w[0] as usize, w[5] as usize);
+                if !(fits && kept.nodes[i].len() == g0.ni + 1) {
+                    return None;
+                }
+                let nodes = std::mem::take(&mut kept.nodes[i]);
+                let pair = [
+                    std::mem::replace(&mut kept.grids[2 * i], empty()),
+                    std::mem::replace(&mut kept.grids[2 * i + 1], empty()),
+                ];
+                let bad = [kept.inverted[2 * i], kept.inverted[2 * i + 1]];
+                Some((nodes, pair, bad))
             })
             .collect();
-        // Nothing else is read before `replace`: free the entries (and every grid not taken)
-        // before the new grids are made.
-        self.pieces = Vec::new();
-        self.index = HashMap::default();
+        drop(kept);
         self.reused_grids = out.iter().filter(|x| x.is_some()).count();
         out
     }
 
-    /// Replace the entries by those of the build that just finished (pieces `keys`, medial
-    /// edges `medial_edges`, grid inputs `grid_keys`, `reused` of them computed no densities).
-    /// A key met twice is found at its last piece.
+    /// Replace the entries by those of the build that just finished (pieces `keys` with what
+    /// the counts need `known`, medial edges `medial_edges`, grid inputs `grid_keys`, `reused`
+    /// of them computed no densities). A key met twice is found at its last piece.
     pub(crate) fn replace(
         &mut self,
         keys: Vec<GeomKey>,
-        entries: Vec<Entry>,
+        known: Vec<Known>,
         medial_edges: Vec<u32>,
         grid_keys: Vec<GridKey>,
         reused: usize,
     ) {
         self.grid_keys = grid_keys;
         self.index.clear();
+        self.index.reserve(keys.len());
         self.index
             .extend(keys.iter().enumerate().map(|(i, k)| (hash_of(k), i as u32)));
-        self.pieces = keys.into_iter().zip(entries).collect();
+        self.keys = keys;
+        self.known = known;
         self.medial_edges = medial_edges;
         self.reused = reused;
+        self.kept = None;
     }
 
-    /// Hand back the grids of `mesh`, which must be what the latest build with this memo
-    /// returned (the mesher rejected it and builds again): the next build moves those of its
-    /// unchanged pieces instead of computing them. A mesh whose pieces do not match the
-    /// latest build's counts is ignored.
+    /// Hand back `mesh`, which must be what the latest build with this memo returned (the
+    /// mesher rejected it and builds again): the next build moves the grids and medial nodes
+    /// of its unchanged pieces out of it instead of computing them. A mesh whose pieces do not
+    /// match the latest build's counts is not used.
     pub fn keep(&mut self, mesh: ExactMesh) {
-        let medial_edges = std::mem::take(&mut self.medial_edges);
-        let grid_keys = std::mem::take(&mut self.grid_keys);
         let ExactMesh {
-            mut layout, grids, ..
+            mut layout,
+            grids,
+            inverted_blocks,
+            ..
         } = mesh;
-        let n = self.pieces.len();
-        if grids.len() < 2 * n || medial_edges.len() != n || grid_keys.len() != n {
-            return;
-        }
-        let mut it = grids.into_iter();
-        let all = self.pieces.iter_mut().zip(&medial_edges).zip(&grid_keys);
-        for (((_, entry), &edge), gk) in all {
-            let (Some(g0), Some(g1)) = (it.next(), it.next()) else {
-                return;
-            };
-            let w = gk.0;
-            let fits = (g0.ni, g0.nj, g1.ni, g1.nj)
-                == (w[0] as usize, w[1] as usize, w[0] as usize, w[5] as usize);
-            let nodes = match layout.edges.get_mut(edge as usize) {
+        // The medial nodes of each piece; the rest of the layout is freed now.
+        let medial_edges = std::mem::take(&mut self.medial_edges);
+        let nodes = medial_edges
+            .iter()
+            .map(|&edge| match layout.edges.get_mut(edge as usize) {
                 Some(e) => match std::mem::replace(&mut e.curve, Curve::Segment) {
-                    Curve::Polyline(v) if fits && v.len() == g0.ni + 1 => v,
-                    _ => continue,
+                    Curve::Polyline(v) => v,
+                    _ => Vec::new(),
                 },
-                None => continue,
-            };
-            entry.grids = Some(Box::new((*gk, (nodes, [g0, g1]))));
+                None => Vec::new(),
+            })
+            .collect();
+        drop(layout);
+        let mut inverted = vec![false; grids.len()];
+        for &b in &inverted_blocks {
+            if let Some(x) = inverted.get_mut(b) {
+                *x = true;
+            }
         }
+        self.kept = Some(Kept {
+            nodes,
+            grids,
+            inverted,
+        });
     }
 
     /// How many pieces the latest build took from the memo without computing their densities
@@ -286,12 +342,12 @@ impl PieceCache {
 
     /// Number of pieces held.
     pub fn len(&self) -> usize {
-        self.pieces.len()
+        self.keys.len()
     }
 
     /// True when nothing is held.
     pub fn is_empty(&self) -> bool {
-        self.pieces.is_empty()
+        self.keys.is_empty()
     }
 }
 
@@ -317,16 +373,13 @@ mod tests {
         let keys: Vec<GeomKey> = (0..20_000)
             .map(|_| GeomKey(std::array::from_fn(|_| rng.next_f64().to_bits())))
             .collect();
-        let entry = Entry {
-            known: Known {
-                min_cells: 1,
-                target: None,
-            },
-            grids: None,
+        let known = Known {
+            min_cells: 1,
+            target: None,
         };
         let mut cache = PieceCache::default();
         let n = keys.len();
-        cache.replace(keys.clone(), vec![entry; n], vec![0; n], vec![], 0);
+        cache.replace(keys.clone(), vec![known; n], vec![0; n], vec![], 0);
         for (i, k) in keys.iter().enumerate() {
             assert_eq!(cache.find(k), Some(i));
         }
