@@ -158,23 +158,6 @@ pub fn inverted_blocks(grids: &[BlockGrid]) -> Vec<usize> {
         .collect()
 }
 
-/// [`inverted_blocks`] restricted to the grids `which` (indices into `grids`; any order,
-/// repeats and indices past the end allowed): those of them with at least one inverted cell,
-/// in increasing order, without a repeat. For a caller that rebuilt some blocks and knows the
-/// others' grids unchanged since a full check: the inverted blocks are then the unchanged
-/// ones found inverted before and the result over the rebuilt ones, and only their cells are
-/// visited.
-pub fn inverted_blocks_among(grids: &[BlockGrid], which: &[usize]) -> Vec<usize> {
-    let mut which: Vec<usize> = which.iter().copied().filter(|&b| b < grids.len()).collect();
-    which.sort_unstable();
-    which.dedup();
-    which
-        .par_iter()
-        .copied()
-        .filter(|&b| grid_inverted_cells(&grids[b]) > 0)
-        .collect()
-}
-
 fn fold(v: [f64; 4], op: fn(f64, f64) -> f64) -> f64 {
     op(op(v[0], v[1]), op(v[2], v[3]))
 }

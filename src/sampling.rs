@@ -100,7 +100,7 @@ pub struct CircleSamples {
 /// The boundary samples of all circles: the bounding circle's first, then the holes in order.
 /// Sample `s` is the `index_of[s]`-th (counter-clockwise from angle 0) of circle
 /// `circle_of[s]`.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, Default, PartialEq)]
 pub struct Samples {
     pub points: Vec<Point>,
     pub circle_of: Vec<CircleId>,
@@ -764,13 +764,7 @@ pub fn check_invariants(
     tri: &Triangulation,
     kinds: &[TriangleKind],
 ) -> Vec<Violation> {
-    let mut out = Vec::new();
-    for &(first, duplicate) in tri.duplicates() {
-        out.push(Violation {
-            circle: samples.circle_of[duplicate as usize],
-            kind: ViolationKind::Duplicate { first, duplicate },
-        });
-    }
+    let mut out = duplicate_violations(samples, tri);
     // (a): mark the boundary edge starting at `a` (the edge a -> next(a)).
     let mut seen = vec![false; samples.len()];
     for t in 0..tri.len() {
@@ -804,23 +798,53 @@ pub fn check_invariants(
             }
             TriangleKind::Interior => {
                 let c = v.map(|s| samples.circle_of[s as usize]);
-                let repeated = if c[0] == c[1] || c[0] == c[2] {
-                    Some(c[0])
-                } else if c[1] == c[2] {
-                    Some(c[1])
-                } else {
-                    None
-                };
-                if let Some(c) = repeated {
-                    out.push(Violation {
-                        circle: c,
-                        kind: ViolationKind::InteriorRepeatsCircle { triangle: tt },
-                    });
-                }
+                push_repeated_circle(&mut out, c, tt);
             }
             TriangleKind::Hole(_) | TriangleKind::Boundary { .. } => {}
         }
     }
+    push_missing_edges(&mut out, samples, tri, &seen);
+    out
+}
+
+/// Invariant check, first part: one [`ViolationKind::Duplicate`] per duplicate sample of
+/// `tri`, in the triangulation's order.
+fn duplicate_violations(samples: &Samples, tri: &Triangulation) -> Vec<Violation> {
+    tri.duplicates()
+        .iter()
+        .map(|&(first, duplicate)| Violation {
+            circle: samples.circle_of[duplicate as usize],
+            kind: ViolationKind::Duplicate { first, duplicate },
+        })
+        .collect()
+}
+
+/// Invariant (c) at interior triangle `triangle` with vertex circles `c`: a violation blaming
+/// the circle that appears twice, if one does.
+fn push_repeated_circle(out: &mut Vec<Violation>, c: [CircleId; 3], triangle: u32) {
+    let repeated = if c[0] == c[1] || c[0] == c[2] {
+        Some(c[0])
+    } else if c[1] == c[2] {
+        Some(c[1])
+    } else {
+        None
+    };
+    if let Some(circle) = repeated {
+        out.push(Violation {
+            circle,
+            kind: ViolationKind::InteriorRepeatsCircle { triangle },
+        });
+    }
+}
+
+/// Invariant (a), last part: every boundary edge `s -> next(s)` not marked in `seen` is
+/// missing, unless one of its ends is a duplicate sample (which has no edges of its own).
+fn push_missing_edges(
+    out: &mut Vec<Violation>,
+    samples: &Samples,
+    tri: &Triangulation,
+    seen: &[bool],
+) {
     let duplicated: HashSet<u32> = tri.duplicates().iter().map(|&(_, d)| d).collect();
     for (s, &ok) in seen.iter().enumerate() {
         let s = s as u32;
@@ -831,7 +855,6 @@ pub fn check_invariants(
             });
         }
     }
-    out
 }
 
 /// Soft invariant (d): every medial arc with at least one boundary triangle has a wall of at

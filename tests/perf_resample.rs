@@ -265,14 +265,7 @@ fn classify_and_check_is_classify_then_check() {
     }
     let mut rng = SplitMix64(5);
     for per in [3u32, 5, 12, 40] {
-        let mut s = Samples {
-            points: Vec::new(),
-            circle_of: Vec::new(),
-            index_of: Vec::new(),
-            circles: Vec::new(),
-            grid: Vec::new(),
-            grid_counts: Vec::new(),
-        };
+        let mut s = Samples::default();
         for id in -1..4 {
             s.circles.push(CircleSamples {
                 circle: id,

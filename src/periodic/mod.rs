@@ -211,14 +211,7 @@ impl Tiling {
     /// Samples of the tiling: orbit counts `counts[k]` for hole `k`, `bounding_count` for the
     /// bounding circle.
     fn samples(&self, counts: &[usize], bounding_count: usize, gaps: &[f64]) -> Samples {
-        let mut s = Samples {
-            points: Vec::new(),
-            circle_of: Vec::new(),
-            index_of: Vec::new(),
-            circles: Vec::new(),
-            grid: Vec::new(),
-            grid_counts: Vec::new(),
-        };
+        let mut s = Samples::default();
         let b = self.domain.bounding();
         let push_circle = |s: &mut Samples, id: CircleId, pts: Vec<Point>, gap: f64| {
             s.circles.push(CircleSamples {

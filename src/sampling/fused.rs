@@ -4,7 +4,6 @@ use super::{Samples, Violation, ViolationKind};
 use crate::domain::BOUNDING;
 use crate::geometry::Triangulation;
 use crate::medial::TriangleKind;
-use std::collections::HashSet;
 
 /// [`crate::medial::classify`] and [`super::check_invariants`] of `tri` in one pass over the
 /// triangles: the same classes and the same violations in the same order (tested in
@@ -18,13 +17,7 @@ pub fn classify_and_check(
     samples: &Samples,
     tri: &Triangulation,
 ) -> (Vec<TriangleKind>, Vec<Violation>) {
-    let mut out = Vec::new();
-    for &(first, duplicate) in tri.duplicates() {
-        out.push(Violation {
-            circle: samples.circle_of[duplicate as usize],
-            kind: ViolationKind::Duplicate { first, duplicate },
-        });
-    }
+    let mut out = super::duplicate_violations(samples, tri);
     let mut seen = vec![false; samples.len()];
     let mut kinds = Vec::with_capacity(tri.len());
     for t in 0..tri.len() {
@@ -82,33 +75,10 @@ pub fn classify_and_check(
                     kind: ViolationKind::TwoBoundaryEdges { triangle: tt },
                 });
             }
-            TriangleKind::Interior => {
-                let repeated = if c[0] == c[1] || c[0] == c[2] {
-                    Some(c[0])
-                } else if c[1] == c[2] {
-                    Some(c[1])
-                } else {
-                    None
-                };
-                if let Some(circle) = repeated {
-                    out.push(Violation {
-                        circle,
-                        kind: ViolationKind::InteriorRepeatsCircle { triangle: tt },
-                    });
-                }
-            }
+            TriangleKind::Interior => super::push_repeated_circle(&mut out, c, tt),
             TriangleKind::Hole(_) | TriangleKind::Boundary { .. } => {}
         }
     }
-    let duplicated: HashSet<u32> = tri.duplicates().iter().map(|&(_, d)| d).collect();
-    for (s, &ok) in seen.iter().enumerate() {
-        let s = s as u32;
-        if !ok && !duplicated.contains(&s) && !duplicated.contains(&samples.next(s)) {
-            out.push(Violation {
-                circle: samples.circle_of[s as usize],
-                kind: ViolationKind::MissingBoundaryEdge { from: s },
-            });
-        }
-    }
+    super::push_missing_edges(&mut out, samples, tri, &seen);
     (kinds, out)
 }
