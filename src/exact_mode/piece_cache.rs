@@ -20,7 +20,7 @@
 //! Only the latest build's entries are kept (about 300 bytes per piece besides the mesh
 //! handed back, not the densities nor the node parameters: a piece without its grids
 //! computes its densities again). Entries are written in piece order and read by key (the
-//! lookups of one build are made once, in parallel, [`PieceCache::find_all`]), so nothing
+//! lookups of one build are made once, in parallel, `PieceCache::find_all`), so nothing
 //! depends on the thread count.
 
 use super::counts::Known;
