@@ -67,6 +67,7 @@ pub mod exact_mode;
 pub mod fuzzing;
 pub mod grid;
 pub mod input;
+mod lanes;
 pub mod layout;
 pub mod layouts;
 pub mod medial;

@@ -5,6 +5,7 @@
 
 use super::{cell_metrics, fold};
 use crate::geometry::Point;
+use crate::lanes::Lanes;
 
 /// Squared edge lengths inside this range take `sqrt(x² + y²)` (no underflow or overflow in
 /// the squares or in the products of two lengths); outside it, and for NaN, `hypot`.
@@ -258,29 +259,12 @@ impl Tables {
 
 /// True when the CPU has AVX-512 F, DQ and VL (x86-64 only).
 fn wider() -> bool {
-    #[cfg(target_arch = "x86_64")]
-    {
-        std::arch::is_x86_feature_detected!("avx512f")
-            && std::arch::is_x86_feature_detected!("avx512dq")
-            && std::arch::is_x86_feature_detected!("avx512vl")
-            && std::arch::is_x86_feature_detected!("avx2")
-    }
-    #[cfg(not(target_arch = "x86_64"))]
-    {
-        false
-    }
+    Lanes::Avx512.available()
 }
 
 /// True when the CPU has AVX2 (x86-64 only).
 fn wide() -> bool {
-    #[cfg(target_arch = "x86_64")]
-    {
-        std::arch::is_x86_feature_detected!("avx2")
-    }
-    #[cfg(not(target_arch = "x86_64"))]
-    {
-        false
-    }
+    Lanes::Avx2.available()
 }
 
 /// Per-block partial results of [`super::measure`] (small; the metrics of
@@ -369,7 +353,7 @@ pub(super) fn row_inverted(lo: &[Point], hi: &[Point]) -> usize {
         return unsafe { row_inverted_avx512(lo, hi) };
     }
     #[cfg(target_arch = "x86_64")]
-    if std::arch::is_x86_feature_detected!("avx2") {
+    if wide() {
         // SAFETY: the CPU has AVX2 (checked just above).
         return unsafe { row_inverted_avx2(lo, hi) };
     }
@@ -416,7 +400,7 @@ pub(super) fn row_corner_below(lo: &[Point], hi: &[Point], t: f64) -> bool {
         return unsafe { row_corner_below_avx512(lo, hi, t) };
     }
     #[cfg(target_arch = "x86_64")]
-    if std::arch::is_x86_feature_detected!("avx2") {
+    if wide() {
         // SAFETY: the CPU has AVX2 (checked just above).
         return unsafe { row_corner_below_avx2(lo, hi, t) };
     }
@@ -460,7 +444,7 @@ mod tests {
     /// inverted, signed-zero and non-finite cells.
     #[test]
     fn wide_and_portable_row_tests_agree() {
-        if !std::arch::is_x86_feature_detected!("avx2") {
+        if !wide() {
             return;
         }
         let mut r = crate::layouts::SplitMix64(5);
