@@ -220,7 +220,6 @@ pub fn medial_graph(
             });
         }
     }
-    let mut visited = vec![[false; 3]; g.vertices.len()];
     // The circumcentre of a walked triangle: no cache (issue 8: a per-triangle cache was
     // 24 bytes x 2 per sample, zeroed): a boundary triangle is walked through once (by the
     // one arc it belongs to), and an interior one's is its vertex's `position`, the same
@@ -230,24 +229,43 @@ pub fn medial_graph(
     // triangles per hole among about 2 per sample).
     let vertex_of = |t: usize| vertex_of(&g.vertices, kinds, t);
     let mut walk = Walk::default();
-    for v0 in 0..g.vertices.len() {
+    g.arcs = arcs_in_walk_order(
+        g.vertices.len(),
+        |v0, k0| walk.arc(samples, tri, kinds, &g.vertices, vertex_of, v0, k0),
+        |v1, k1| internal(format!("medial arc into vertex {v1} slot {k1} found twice")),
+    )?;
+    Ok(g)
+}
+
+/// The arcs of a graph of `n` vertices in walking order: for each vertex slot `(v, k)` not yet
+/// reached, in vertex then slot order, the arc `arc_from(v, k)` that starts there, whose far
+/// end `(ends[1], end_slots[1])` is then reached too. Every slot ends exactly one arc, so the
+/// result has `3n / 2` arcs; an arc into a slot already reached gives `Err(twice(v1, k1))`.
+/// Shared by the full construction and the reusing one ([`reuse`]), which takes some arcs
+/// from an earlier graph instead of walking them.
+fn arcs_in_walk_order<E>(
+    n: usize,
+    mut arc_from: impl FnMut(usize, usize) -> Result<MedialArc, E>,
+    twice: impl Fn(usize, usize) -> E,
+) -> Result<Vec<MedialArc>, E> {
+    let mut visited = vec![[false; 3]; n];
+    let mut arcs = Vec::with_capacity(3 * n / 2);
+    for v0 in 0..n {
         for k0 in 0..3 {
             if visited[v0][k0] {
                 continue;
             }
             visited[v0][k0] = true;
-            let arc = walk.arc(samples, tri, kinds, &g.vertices, vertex_of, v0, k0)?;
+            let arc = arc_from(v0, k0)?;
             let [v1, k1] = [arc.ends[1] as usize, arc.end_slots[1] as usize];
             if visited[v1][k1] {
-                return Err(internal(format!(
-                    "medial arc into vertex {v1} slot {k1} found twice"
-                )));
+                return Err(twice(v1, k1));
             }
             visited[v1][k1] = true;
-            g.arcs.push(arc);
+            arcs.push(arc);
         }
     }
-    Ok(g)
+    Ok(arcs)
 }
 
 /// The vertex of triangle `t` among `vertices` (sorted by triangle), `u32::MAX` when it is not

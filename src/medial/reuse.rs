@@ -271,33 +271,21 @@ fn reusing(
         start_at[ends[0] as usize][arc.end_slots[0] as usize] = e as u32;
     }
     let vertex_of = |t: usize| super::vertex_of(&g.vertices, kinds, t);
-    let mut visited = vec![[false; 3]; g.vertices.len()];
-    let mut arcs: Vec<MedialArc> = Vec::with_capacity(old_arcs.all().len());
     let mut walk = Walk::default();
-    for v0 in 0..g.vertices.len() {
-        for k0 in 0..3 {
-            if visited[v0][k0] {
-                continue;
+    g.arcs = super::arcs_in_walk_order(
+        g.vertices.len(),
+        |v0, k0| match start_at[v0][k0] {
+            u32::MAX => walk
+                .arc(samples, tri, kinds, &g.vertices, vertex_of, v0, k0)
+                .map_err(|_| ()),
+            e => {
+                let mut arc = old_arcs.get(e as usize);
+                arc.ends = arc.ends.map(|v| new_of_old[v as usize]);
+                Ok(arc)
             }
-            visited[v0][k0] = true;
-            let arc = match start_at[v0][k0] {
-                u32::MAX => walk
-                    .arc(samples, tri, kinds, &g.vertices, vertex_of, v0, k0)
-                    .ok()?,
-                e => {
-                    let mut arc = old_arcs.get(e as usize);
-                    arc.ends = arc.ends.map(|v| new_of_old[v as usize]);
-                    arc
-                }
-            };
-            let [v1, k1] = [arc.ends[1] as usize, arc.end_slots[1] as usize];
-            if visited[v1][k1] {
-                return None;
-            }
-            visited[v1][k1] = true;
-            arcs.push(arc);
-        }
-    }
-    g.arcs = arcs;
+        },
+        |_, _| (),
+    )
+    .ok()?;
     Some(g)
 }
