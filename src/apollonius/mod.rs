@@ -33,7 +33,9 @@
 //! assert_eq!(tangency(&ap.exact, &smaller).unwrap(), Sign::Positive);
 //! ```
 
+mod ball;
 pub mod exact;
+mod fast;
 mod interval;
 pub mod predicate;
 pub mod solve;
@@ -46,7 +48,8 @@ pub use predicate::{cocircular, is_tangent, same_circle, tangency};
 #[doc(hidden)]
 pub use predicate::{tangency_exact, tangency_filter, tangency_sign_filtered, Path};
 pub use solve::{
-    apollonius, apollonius_roots, choose, Apollonius, ApolloniusError, Choice, ExactApollonius,
+    apollonius, apollonius_exact, apollonius_fast, apollonius_roots, choose, Apollonius,
+    ApolloniusError, Choice, ExactApollonius,
 };
 
 /// A circle with a tangency sense: `s = +r` for a hole, `s = -R` for the bounding circle.

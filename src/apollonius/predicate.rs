@@ -133,16 +133,15 @@ pub fn cocircular(sites: [Site; 4]) -> Result<bool, ApolloniusError> {
 /// Exact equality of two Apollonius circles, possibly from different triples and quadratic
 /// fields: equal centres and radii as real numbers.
 pub fn same_circle(x: &ExactApollonius, y: &ExactApollonius) -> bool {
-    let (dx, dy) = (x.d(), y.d());
-    let eq = |a: &QSqrt, b: &QSqrt| eq_across(a, &dx, b, &dy);
     // Cheap rejection on the rounded values: equal reals round to equal floats (to within one
-    // ulp even if a conversion hit its precision cap).
+    // ulp even if a conversion hit its precision cap). Before any exact value is read: a root
+    // of the fast path builds its exact frame only when asked.
     let near = |a: f64, b: f64| a == b || next_up(a) == b || next_down(a) == b;
     let (cx, cy) = (x.center_f64(), y.center_f64());
-    near(cx[0], cy[0])
-        && near(cx[1], cy[1])
-        && near(x.radius_f64(), y.radius_f64())
-        && eq(&x.rho(), &y.rho())
-        && eq(&x.x(), &y.x())
-        && eq(&x.y(), &y.y())
+    if !(near(cx[0], cy[0]) && near(cx[1], cy[1]) && near(x.radius_f64(), y.radius_f64())) {
+        return false;
+    }
+    let (dx, dy) = (x.d(), y.d());
+    let eq = |a: &QSqrt, b: &QSqrt| eq_across(a, &dx, b, &dy);
+    eq(&x.rho(), &y.rho()) && eq(&x.x(), &y.x()) && eq(&x.y(), &y.y())
 }

@@ -34,10 +34,12 @@
 //! and `Zero` when some `sigma_i = 0`.
 
 use super::exact::{common_scale, dyadic, QSqrt, Sign, SqrtBracket, ZSqrt};
+use super::fast;
 use super::interval::Interval;
 use super::Site;
 use rug::{Integer, Rational};
 use std::cmp::Ordering;
+use std::sync::OnceLock;
 
 /// Why the Apollonius solve (or a derived query) has no single answer.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, thiserror::Error)]
@@ -63,15 +65,38 @@ pub enum ApolloniusError {
 /// with integers `a, b`, a shared `den > 0` and an integer `disc >= 0` that is `0` or not a
 /// perfect square. Built only by [`apollonius_roots`], so it is always a *valid* root (see the
 /// module docs); the `f64` approximations are the correctly rounded values of the exact ones.
-#[derive(Debug, Clone, PartialEq)]
+///
+/// A root found by the certified fast path ([`apollonius`]) holds its rounded values and
+/// orientation, and builds its integer frame only when a query needs it (the exact solve's
+/// `index`-th valid root: the same root, see `fast.rs`).
+#[derive(Debug, Clone)]
 pub struct ExactApollonius {
     sites: [Site; 3],
+    approx: [f64; 3],
+    orientation: Sign,
+    /// Position among the valid roots of the sites, by increasing radius.
+    index: u8,
+    frame: OnceLock<Frame>,
+}
+
+/// The integer frame of an exact root (see [`ExactApollonius`]).
+#[derive(Debug, Clone, PartialEq)]
+struct Frame {
     exp: i64,
     disc: Integer,
     den: Integer,
     num: [ZSqrt; 3],
-    approx: [f64; 3],
-    orientation: Sign,
+}
+
+/// Equal sites, rounded values, orientation and exact values (a lazily built frame is built
+/// for the comparison).
+impl PartialEq for ExactApollonius {
+    fn eq(&self, o: &ExactApollonius) -> bool {
+        self.sites == o.sites
+            && self.approx == o.approx
+            && self.orientation == o.orientation
+            && self.f() == o.f()
+    }
 }
 
 impl ExactApollonius {
@@ -82,19 +107,19 @@ impl ExactApollonius {
     /// The radicand `D >= 0` of [`x`](Self::x), [`y`](Self::y), [`rho`](Self::rho) (`0` when the
     /// root is rational; otherwise not the square of a rational).
     pub fn d(&self) -> Rational {
-        Rational::from(&self.disc)
+        Rational::from(&self.f().disc)
     }
     /// Centre x-coordinate, `a + b sqrt(D)`.
     pub fn x(&self) -> QSqrt {
-        self.num[0].to_qsqrt(&self.den, self.exp)
+        self.f().num[0].to_qsqrt(&self.f().den, self.f().exp)
     }
     /// Centre y-coordinate.
     pub fn y(&self) -> QSqrt {
-        self.num[1].to_qsqrt(&self.den, self.exp)
+        self.f().num[1].to_qsqrt(&self.f().den, self.f().exp)
     }
     /// Radius `rho >= 0`.
     pub fn rho(&self) -> QSqrt {
-        self.num[2].to_qsqrt(&self.den, self.exp)
+        self.f().num[2].to_qsqrt(&self.f().den, self.f().exp)
     }
     /// The correctly rounded centre.
     pub fn center_f64(&self) -> [f64; 2] {
@@ -112,13 +137,29 @@ impl ExactApollonius {
 
     /// Set the rounded centre and radius (`approx`) from the exact ones.
     fn round(&mut self, sq: Option<&SqrtBracket>) {
-        let (d, den, exp) = (&self.disc, &self.den, self.exp);
-        self.approx = [0, 1, 2].map(|i| self.num[i].to_f64_with(d, den, exp, sq));
+        let f = self.f();
+        let approx = [0, 1, 2].map(|i| f.num[i].to_f64_with(&f.disc, &f.den, f.exp, sq));
+        self.approx = approx;
+    }
+
+    /// The integer frame, built on first use for a root of the fast path.
+    fn f(&self) -> &Frame {
+        self.frame.get_or_init(|| {
+            let roots = unrounded_roots(&self.sites).unwrap_or_default();
+            let root = roots
+                .into_iter()
+                .nth(usize::from(self.index))
+                .expect("the fast path's root is a root of the exact solve");
+            debug_assert_eq!(root.orientation, self.orientation);
+            root.frame
+                .into_inner()
+                .expect("exact roots carry their frame")
+        })
     }
 
     /// The integer frame: `(exp, disc, den, [x, y, rho] numerators)`.
     pub(crate) fn frame(&self) -> (i64, &Integer, &Integer, &[ZSqrt; 3]) {
-        (self.exp, &self.disc, &self.den, &self.num)
+        (self.f().exp, &self.f().disc, &self.f().den, &self.f().num)
     }
 
     /// Numerators of `x, y, rho` and integers for `extra` values, in one frame of exponent
@@ -128,13 +169,13 @@ impl ExactApollonius {
             .iter()
             .map(|&v| dyadic(v))
             .collect::<Option<Vec<_>>>()?;
-        let e = vals.iter().map(|v| v.1).fold(self.exp, i64::min);
+        let e = vals.iter().map(|v| v.1).fold(self.f().exp, i64::min);
         let (ints, _) = common_scale(&[vals, vec![(Integer::new(), e)]].concat());
-        let up = (self.exp - e) as u32;
+        let up = (self.f().exp - e) as u32;
         let num = [
-            self.num[0].shl(up),
-            self.num[1].shl(up),
-            self.num[2].shl(up),
+            self.f().num[0].shl(up),
+            self.f().num[1].shl(up),
+            self.f().num[2].shl(up),
         ];
         Some((num, ints[..extra.len()].to_vec(), e))
     }
@@ -157,24 +198,24 @@ impl ExactApollonius {
             dyadic(site.center[1])?,
             dyadic(site.s)?,
         ];
-        let e = vals.iter().map(|v| v.1).fold(self.exp, i64::min);
+        let e = vals.iter().map(|v| v.1).fold(self.f().exp, i64::min);
         let ints = vals.map(|(n, ei)| n << ((ei - e) as u32));
-        let up = (self.exp - e) as u32;
+        let up = (self.f().exp - e) as u32;
         let shifted;
         let num = if up == 0 {
-            &self.num
+            &self.f().num
         } else {
-            shifted = [0, 1, 2].map(|j| self.num[j].shl(up));
+            shifted = [0, 1, 2].map(|j| self.f().num[j].shl(up));
             &shifted
         };
-        let d = &self.disc;
+        let d = &self.f().disc;
         let [px, py, r] = num;
         if r.sign(d) == Sign::Zero {
-            return Some(([px.clone(), py.clone()], self.den.clone()));
+            return Some(([px.clone(), py.clone()], self.f().den.clone()));
         }
         let si = &ints[2];
         // S = R + den s_i: sa = R_a + den s_i, sb = R_b.
-        let mut sa = Integer::from(&self.den * si);
+        let mut sa = Integer::from(&self.f().den * si);
         sa += &r.a;
         let rbd = Integer::from(&r.b * d);
         let mut n = Integer::from(sa.square_ref());
@@ -183,7 +224,7 @@ impl ExactApollonius {
             return None;
         }
         let coord = |p: &ZSqrt, c: &Integer| -> ZSqrt {
-            let mut ua = Integer::from(&self.den * c);
+            let mut ua = Integer::from(&self.f().den * c);
             ua -= &p.a;
             let mut t = Integer::from(&ua * &sa);
             t += &p.b * &rbd;
@@ -213,30 +254,30 @@ impl ExactApollonius {
     pub fn tangent_point_frac_reference(&self, i: usize) -> Option<([ZSqrt; 2], Integer)> {
         let site = self.sites.get(i)?;
         let (num, ints, e) = self.rescaled(&[site.center[0], site.center[1], site.s])?;
-        let d = &self.disc;
+        let d = &self.f().disc;
         let [px, py, r] = num;
         if r.sign(d) == Sign::Zero {
-            return Some(([px, py], self.den.clone()));
+            return Some(([px, py], self.f().den.clone()));
         }
-        let sig = r.add_int(&Integer::from(&self.den * &ints[2]));
+        let sig = r.add_int(&Integer::from(&self.f().den * &ints[2]));
         let n = sig.norm(d);
         if n.cmp0() == Ordering::Equal {
             return None;
         }
         let f = r.mul(&sig.conj(), d);
         let coord = |p: &ZSqrt, c: &Integer| -> ZSqrt {
-            let u = ZSqrt::int(Integer::from(&self.den * c)) - p;
+            let u = ZSqrt::int(Integer::from(&self.f().den * c)) - p;
             &p.scale(&n) + &u.mul(&f, d)
         };
         let (mut ax, mut ay) = (coord(&px, &ints[0]), coord(&py, &ints[1]));
-        let mut den = Integer::from(&self.den * &n);
+        let mut den = Integer::from(&self.f().den * &n);
         if den.cmp0() == Ordering::Less {
             den = -den;
             ax = ZSqrt::new(-ax.a, -ax.b);
             ay = ZSqrt::new(-ay.a, -ay.b);
         }
         // The frame exponent e may be below exp: scale the denominator to compensate.
-        let fix = (self.exp - e) as u32;
+        let fix = (self.f().exp - e) as u32;
         Some(([ax, ay], den << fix))
     }
 
@@ -252,24 +293,24 @@ impl ExactApollonius {
             }
         }
         let (ints, exp) = common_scale(&vals);
-        if exp != self.exp {
+        if exp != self.f().exp {
             return None;
         }
         let q: [[Integer; 3]; 3] = [0, 1, 2].map(|i| [0, 1, 2].map(|c| ints[3 * i + c].clone()));
-        let d = &self.disc;
+        let d = &self.f().disc;
         let sig: Vec<ZSqrt> = q
             .iter()
-            .map(|qi| self.num[2].add_int(&Integer::from(&self.den * &qi[2])))
+            .map(|qi| self.f().num[2].add_int(&Integer::from(&self.f().den * &qi[2])))
             .collect();
         let signs: Vec<Sign> = sig.iter().map(|s| s.sign(d)).collect();
         if signs.contains(&Sign::Zero) {
             return Some((true, Sign::Zero, None, Sign::Zero));
         }
-        let reference = orientation_sum_reference(&q, &self.den, &self.num, &sig, d);
-        let fast = orientation_sum(&q, &self.den, &self.num, &sig, d);
+        let reference = orientation_sum_reference(&q, &self.f().den, &self.f().num, &sig, d);
+        let fast = orientation_sum(&q, &self.f().den, &self.f().num, &sig, d);
         let exact = reference.sign(d);
         let o = exact.times(signs[0].times(signs[1]).times(signs[2]));
-        let filter = orientation_filter(&q, &self.den, &self.num, d);
+        let filter = orientation_filter(&q, &self.f().den, &self.f().num, d);
         Some((reference == fast, o, filter, exact))
     }
 
@@ -277,7 +318,10 @@ impl ExactApollonius {
     /// circle). For `rho = 0` it is the centre. (By the reference formula: a test oracle.)
     pub fn tangent_point_exact(&self, i: usize) -> Option<[QSqrt; 2]> {
         let ([ax, ay], den) = self.tangent_point_frac_reference(i)?;
-        Some([ax.to_qsqrt(&den, self.exp), ay.to_qsqrt(&den, self.exp)])
+        Some([
+            ax.to_qsqrt(&den, self.f().exp),
+            ay.to_qsqrt(&den, self.f().exp),
+        ])
     }
 
     /// The rounded [`Apollonius`] circle with its tangent points.
@@ -320,8 +364,8 @@ impl ExactApollonius {
                 .tangent_point_frac(i)
                 .ok_or(ApolloniusError::UndefinedTangentPoint)?;
             *t = [
-                ax.to_f64_with(&self.disc, &den, self.exp, sq),
-                ay.to_f64_with(&self.disc, &den, self.exp, sq),
+                ax.to_f64_with(&self.f().disc, &den, self.f().exp, sq),
+                ay.to_f64_with(&self.f().disc, &den, self.f().exp, sq),
             ];
         }
         Ok(tangent_points)
@@ -515,7 +559,10 @@ fn unrounded_roots(sites: &[Site; 3]) -> Result<Vec<ExactApollonius>, Apollonius
         .filter_map(|(num, den, disc)| build_root(sites, &q, exp, disc, den, num))
         .collect();
     // Roots of one solve share den and disc (both positive after normalisation).
-    roots.sort_by(|r1, r2| Ordering::from((&r1.num[2] - &r2.num[2]).sign(&r1.disc)));
+    roots.sort_by(|r1, r2| Ordering::from((&r1.f().num[2] - &r2.f().num[2]).sign(&r1.f().disc)));
+    for (i, r) in roots.iter_mut().enumerate() {
+        r.index = i as u8;
+    }
     Ok(roots)
 }
 
@@ -562,12 +609,15 @@ fn build_root(
     };
     Some(ExactApollonius {
         sites: *sites,
-        exp,
-        disc,
-        den,
-        num,
         approx: [0.0; 3],
         orientation,
+        index: 0,
+        frame: OnceLock::from(Frame {
+            exp,
+            disc,
+            den,
+            num,
+        }),
     })
 }
 
@@ -685,14 +735,14 @@ pub fn choose(roots: Vec<ExactApollonius>, choice: Choice) -> Option<ExactApollo
             // exp, den and disc, so the frames agree.
             let dist2 = |r: &ExactApollonius| -> Option<ZSqrt> {
                 let (num, hs, _) = r.rescaled(&h)?;
-                let dx = num[0].add_int(&(-Integer::from(&r.den * &hs[0])));
-                let dy = num[1].add_int(&(-Integer::from(&r.den * &hs[1])));
-                Some(&dx.square(&r.disc) + &dy.square(&r.disc))
+                let dx = num[0].add_int(&(-Integer::from(&r.f().den * &hs[0])));
+                let dy = num[1].add_int(&(-Integer::from(&r.f().den * &hs[1])));
+                Some(&dx.square(&r.f().disc) + &dy.square(&r.f().disc))
             };
             let keyed: Option<Vec<ZSqrt>> = kept.iter().map(dist2).collect();
             if let Some(keys) = keyed {
                 let mut idx: Vec<usize> = (0..kept.len()).collect();
-                let disc = kept[0].disc.clone();
+                let disc = kept[0].f().disc.clone();
                 // Stable: ties keep the smaller radius first.
                 idx.sort_by(|&i, &j| Ordering::from((&keys[i] - &keys[j]).sign(&disc)));
                 let first = idx[0];
@@ -705,13 +755,47 @@ pub fn choose(roots: Vec<ExactApollonius>, choice: Choice) -> Option<ExactApollo
 
 /// The Apollonius circle of three sites selected by `choice`, rounded, with tangent points.
 ///
-/// Only the chosen root is rounded, and all its roundings share one square root of `D`: the
-/// same values as `choose(apollonius_roots(&sites)?, choice)?.to_apollonius()` (tested in
-/// `tests/apollonius_solve.rs`).
+/// First by the certified double-double path ([`apollonius_fast`], about a tenth of the exact
+/// solve's work; issue 8), which answers nearly every call; otherwise by the exact solve
+/// ([`apollonius_exact`]). The same values either way: those of
+/// `choose(apollonius_roots(&sites)?, choice)?.to_apollonius()` (tested in
+/// `tests/apollonius_solve.rs` and `tests/perf_apollonius_fast.rs`).
 pub fn apollonius(sites: [Site; 3], choice: Choice) -> Result<Apollonius, ApolloniusError> {
+    match apollonius_fast(sites, choice) {
+        Some(ap) => Ok(ap),
+        None => apollonius_exact(sites, choice),
+    }
+}
+
+/// The certified fast path of [`apollonius`] alone (`fast.rs`): `Some` only when every
+/// decision and rounding is certain, and then equal to [`apollonius_exact`] (its exact root
+/// is built from the exact solve on first use).
+#[doc(hidden)]
+pub fn apollonius_fast(sites: [Site; 3], choice: Choice) -> Option<Apollonius> {
+    let f = fast::solve(&sites, choice)?;
+    Some(Apollonius {
+        center: [f.approx[0], f.approx[1]],
+        radius: f.approx[2],
+        tangent_points: f.tangent_points,
+        exact: ExactApollonius {
+            sites,
+            approx: f.approx,
+            orientation: f.orientation,
+            index: f.index,
+            frame: OnceLock::new(),
+        },
+    })
+}
+
+/// [`apollonius`] by the exact solve alone (the fallback of the certified fast path, and its
+/// test oracle).
+///
+/// Only the chosen root is rounded, and all its roundings share one square root of `D`.
+#[doc(hidden)]
+pub fn apollonius_exact(sites: [Site; 3], choice: Choice) -> Result<Apollonius, ApolloniusError> {
     let roots = unrounded_roots(&sites)?;
     let mut root = choose(roots, choice).ok_or(ApolloniusError::NoCircle)?;
-    let sq = SqrtBracket::new(&root.disc);
+    let sq = SqrtBracket::new(&root.f().disc);
     root.round(sq.as_ref());
     root.into_apollonius_with(sq.as_ref())
 }
