@@ -10,7 +10,10 @@
 //! - [`apollonius_roots`] returns every valid circle tangent to three sites, exactly: centre and
 //!   radius in `Q(sqrt D)` ([`exact::QSqrt`]), with correctly rounded `f64` copies.
 //! - [`apollonius`] selects one root (orientation of the tangent points, then nearest to a hint)
-//!   and rounds it with its tangent points.
+//!   and rounds it with its tangent points: first by a certified double-double evaluation
+//!   (`fast.rs`, `ball.rs`) that decides every sign, the choice and the correct roundings or
+//!   gives up, then (rarely) by the exact solve; the exact root of a fast answer is built only
+//!   when a query needs it.
 //! - [`tangency`] decides exactly whether a fourth site is clear of, tangent to or cutting that
 //!   circle; a floating-point interval filter answers all but near-degenerate calls.
 //! - [`same_circle`] and [`cocircular`] compare circles exactly (co-circular group detection).
