@@ -203,3 +203,42 @@ proptest! {
         check(sites, [h.0 * s, h.1 * s]);
     }
 }
+
+/// On the sampled medial graphs of the pipeline's layouts (degenerate lattices with many
+/// co-circular groups, bubbles), every vertex circle of `vertex_circles` (fast path first)
+/// equals the exact solve's with the same sites and choice, exact root included, and the
+/// fast path answers nearly every bubble vertex.
+#[test]
+fn vertex_circles_of_layouts_equal_the_exact_solve() {
+    use medial_blocks::cocircular::{site, vertex_circles};
+    use medial_blocks::sampling::{sample_and_triangulate, SamplingOptions};
+    let domains = [
+        (medial_blocks::layouts::hexagon(), false),
+        (medial_blocks::layouts::lattice().unwrap(), false),
+        (medial_blocks::layouts::square_lattice(16).unwrap(), false),
+        (medial_blocks::layouts::bubbles(300, 2).unwrap(), true),
+    ];
+    for (d, typical) in &domains {
+        let s = sample_and_triangulate(d, &SamplingOptions::default()).unwrap();
+        let circles = vertex_circles(d, &s.medial);
+        let (mut fast, mut solved) = (0, 0);
+        for (v, got) in s.medial.vertices.iter().zip(&circles) {
+            if v.circles
+                .iter()
+                .any(|&c| c < -1 || c >= d.hole_count() as i32)
+            {
+                continue;
+            }
+            let sites = v.circles.map(|c| site(d, c));
+            let choice = Choice::ccw().near(v.position);
+            let exact = apollonius_exact(sites, choice).ok();
+            assert_eq!(got.as_ref().map(bits), exact.as_ref().map(bits));
+            assert_eq!(got, &exact);
+            solved += usize::from(exact.is_some());
+            fast += usize::from(apollonius_fast(sites, choice).is_some());
+        }
+        if *typical {
+            assert!(fast * 100 >= solved * 99, "fast path {fast} of {solved}");
+        }
+    }
+}
