@@ -464,11 +464,20 @@ impl Chunk {
 
     /// Fold [`Chunk::pairs`] into [`Chunk::counts`] (row and column sums) and clear it.
     fn flush(&mut self) {
+        // The entries a field pair can reach: angle bins are at most 18, skewness and scaled
+        // Jacobian bins at most 10, ratio bins at most 9.
+        const USED: [usize; 4] = [
+            18 + 32 * 18 + 1,
+            18 + 32 * 18 + 1,
+            10 + 32 * 10 + 1,
+            9 + 32 * 9 + 1,
+        ];
         for (t, table) in self.pairs.iter_mut().enumerate() {
             let [lo, hi] = &mut self.counts[2 * t..2 * t + 2] else {
                 unreachable!()
             };
-            for (k, v) in table.iter_mut().enumerate() {
+            debug_assert!(table[USED[t]..].iter().all(|&v| v == 0));
+            for (k, v) in table[..USED[t]].iter_mut().enumerate() {
                 let n = u64::from(std::mem::take(v));
                 lo[k & 31] += n;
                 hi[k >> 5] += n;
