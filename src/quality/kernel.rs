@@ -115,21 +115,21 @@ pub(super) fn skewness(min_angle_deg: f64, max_angle_deg: f64) -> f64 {
     (max_angle_deg - 90.0).max(90.0 - min_angle_deg) / 90.0
 }
 
-/// The angle histogram's bin of a finite angle `x` (degrees), as a float: the rule of
-/// [`bin`] for [`super::ANGLE_EDGES`] (0, 10, ..., 130, 135, 140, ..., 180) by arithmetic
-/// rather than a table, so that the vectorised row loop computes it: the inner edges at or
-/// below `x` are the multiples of 10 from 10 to 180 (`floor(x / 10)` of them, clamped to
-/// `[0, 18]`) and 135 when `x >= 135`, at most 18 in all (the last bin). `floor(x / 10)` is
-/// exact: `floor(x * 0.1)` is off by at most one (the product's relative error is far below
-/// `1 / |x / 10|`), and the two comparisons with the exact multiples `10 q` and `10 (q + 1)`
-/// correct it.
+/// The angle histogram's bin of an angle `x >= +0` (degrees), as a float: the rule of [`bin`]
+/// for [`super::ANGLE_EDGES`] (0, 10, ..., 130, 135, 140, ..., 180): the inner edges at or below `x`
+/// are the multiples of 10 from 10 up (`floor(x / 10)` of them) and 135 when `x >= 135`, at
+/// most 18 in all (the last bin): `min(floor(x / 10) + [x >= 135], 18)`, by arithmetic rather
+/// than a search, so that the vectorised row loop computes it.
+///
+/// Why `floor(fl(x / 10))` is `floor(x / 10)` for every finite `x >= 0`: when `x / 10` is an
+/// integer `k` the quotient is exact; otherwise let `k` be the next integer above it. `10 k`
+/// is a float (`k < 2⁵⁰`), so `x <= pred(10 k)`, and `k - x / 10` is at least a tenth of
+/// the float spacing below `10 k`, which is at least 8 times the spacing `u` below `k`
+/// (`10 k > 8 k`): so `k - x / 10 >= 0.8 u > u / 2`, and rounding to nearest stays below
+/// `k`. Infinity gives 18; NaN (not on the path that counts the bin) gives 18 too.
 #[inline(always)]
-pub(super) fn angle_bin(x: f64) -> f64 {
-    let q = (x * 0.1).floor();
-    let q = if 10.0 * q > x { q - 1.0 } else { q };
-    let q = if 10.0 * (q + 1.0) <= x { q + 1.0 } else { q };
-    let q = if q > 0.0 { q } else { 0.0 };
-    let q = if q < 18.0 { q } else { 18.0 };
+pub(super) fn angle_bin_unsigned(x: f64) -> f64 {
+    let q = (x / 10.0).floor();
     let b = if x >= 135.0 { q + 1.0 } else { q };
     if b < 18.0 {
         b
@@ -138,20 +138,43 @@ pub(super) fn angle_bin(x: f64) -> f64 {
     }
 }
 
-/// [`angle_bin`] as the float `2⁵² + bin` (as [`count_slot`]), for [`bin_of_slot`].
+/// `weight` times the number of inner edges `edges[1..N - 1]` at or below `x`: for a finite
+/// `x`, the rule of [`bin`] (the number of `edges[1..]` at or below `x`, at most `N - 2`: the
+/// last edge is at or below `x` only when every inner edge is), scaled. With weights `32ᵏ` the bins
+/// of several values add up, exactly (integers below `2⁵³`), into one packed word of 5-bit
+/// fields, see [`PACK`]: one comparison and one masked addition per edge, no packing.
 #[inline(always)]
-pub(super) fn angle_slot(x: f64) -> f64 {
-    angle_bin(x) + ROUND
+pub(super) fn weighted_bin<const N: usize>(x: f64, edges: &[f64; N], weight: f64) -> f64 {
+    let mut b = 0.0;
+    for &e in &edges[1..N - 1] {
+        b = if x >= e { b + weight } else { b };
+    }
+    b
 }
 
-/// The bin held by a slot of [`angle_slot`] or [`count_slot`] (below 32).
+/// The weights `32ᵏ` of the 5-bit fields of a packed word of bins (field `k` in bits
+/// `5k..5k + 5`): the float `ROUND + Σ binₖ 32ᵏ` (every term an integer, the sum below `2⁵³`
+/// for 8 fields of bins below 32, so exact in any order) holds the word in the low bits of
+/// its representation ([`packed_bins`]).
+pub(super) const PACK: [f64; 8] = [
+    1.0,
+    32.0,
+    1024.0,
+    32768.0,
+    1_048_576.0,
+    33_554_432.0,
+    1_073_741_824.0,
+    34_359_738_368.0,
+];
+
+/// The packed word of bins (40 bits) held by `ROUND + Σ binₖ 32ᵏ` (see [`PACK`]).
 #[inline(always)]
-pub(super) fn bin_of_slot(slot: f64) -> usize {
-    slot.to_bits() as usize & 31
+pub(super) fn packed_bins(sum: f64) -> u64 {
+    (sum + ROUND).to_bits() & ((1 << 40) - 1)
 }
 
 /// Histogram bin of `x`, the rule of [`super::Histogram::add`] (NaN in the last bin): the
-/// oracle of [`angle_bin`] and [`count_slot`].
+/// oracle of [`angle_bin_unsigned`] and [`weighted_bin`].
 #[cfg(test)]
 pub(super) fn bin(edges: &[f64], x: f64) -> usize {
     let last = edges.len().saturating_sub(2);
@@ -161,24 +184,9 @@ pub(super) fn bin(edges: &[f64], x: f64) -> usize {
     edges[1..].partition_point(|&e| e <= x).min(last)
 }
 
-/// `2⁵²`: adding it to a float in `[0, 2⁵¹)` rounds it to an integer held in the low bits.
+/// `2⁵²`: adding it to an integer float in `[0, 2⁵²)` gives a float whose low bits hold that
+/// integer.
 const ROUND: f64 = 4_503_599_627_370_496.0;
-
-/// The histogram bin of a finite `x` for the increasing `edges`, as the float `2⁵² + bin`
-/// (for [`bin_of_slot`]): the number of inner edges `edges[1..N - 1]` at or below `x`. That is
-/// the rule of [`bin`] (the number of `edges[1..]` at or below `x`, at most `N - 2`: the last
-/// edge is at or below `x` only when every inner edge is), with one comparison per edge and no
-/// search or table, so that the vectorised row loop computes it.
-#[inline(always)]
-pub(super) fn count_slot<const N: usize>(x: f64, edges: &[f64; N]) -> f64 {
-    // Integer sums (one-cycle additions: the chain of ten is short), the count kept in the
-    // low bits of the float as [`bin_of_slot`] reads them.
-    let mut b = 0u64;
-    for &e in &edges[1..N - 1] {
-        b += u64::from(x >= e);
-    }
-    f64::from_bits(ROUND.to_bits() | b)
-}
 
 /// The smallest float `x` (in the order of [`f64::total_cmp`], `-inf` to `+inf`, NaN
 /// excluded) with `pred(x)`, for a `pred` that is monotone in that order (false up to some
@@ -525,8 +533,9 @@ mod tests {
         }
         for x in xs.into_iter().filter(|x| x.is_finite()) {
             let want = bin(&ANGLE_EDGES, x);
-            assert_eq!(angle_bin(x), want as f64, "{x:e}");
-            assert_eq!(bin_of_slot(angle_slot(x)), want, "{x:e}");
+            if x >= 0.0 {
+                assert_eq!(angle_bin_unsigned(x), want as f64, "{x:e}");
+            }
         }
     }
 
@@ -670,8 +679,28 @@ mod tests {
         assert!(certain * 3 > total, "{certain} of {total}");
     }
 
+    /// Bins weighted by [`PACK`] and summed in any grouping give, through [`packed_bins`],
+    /// the 5-bit fields packed with shifts (every bin value, extreme words included).
+    #[test]
+    fn packed_sums_equal_the_shifted_fields() {
+        let mut r = crate::layouts::SplitMix64(13);
+        for round in 0..20_000 {
+            let b: [u64; 8] = std::array::from_fn(|k| match round % 3 {
+                0 => r.next_u64() % 32,
+                1 => [0, 31][(r.next_u64() % 2) as usize],
+                _ => [18, 10, 9, k as u64][(r.next_u64() % 4) as usize],
+            });
+            let want = (0..8).fold(0, |w, k| w | b[k] << (5 * k));
+            let t: [f64; 8] = std::array::from_fn(|k| b[k] as f64 * PACK[k]);
+            let grouped = ((t[0] + t[1]) + (t[2] + t[3])) + (t[4] + ((t[5] + t[6]) + t[7]));
+            let serial = t.iter().fold(0.0, |s, x| s + x);
+            assert_eq!(packed_bins(grouped), want, "{b:?}");
+            assert_eq!(packed_bins(serial), want, "{b:?}");
+        }
+    }
+
     /// Values at, just around and between every edge, and far outside, for every histogram
-    /// counted by [`count_slot`]: its bin equals the search of [`bin`].
+    /// counted by [`weighted_bin`]: its bin equals the search of [`bin`].
     #[test]
     fn counted_bins_equal_the_search() {
         fn check<const N: usize>(edges: &[f64; N]) {
@@ -691,8 +720,8 @@ mod tests {
             }
             for x in xs.into_iter().filter(|x| x.is_finite()) {
                 assert_eq!(
-                    bin_of_slot(count_slot(x, edges)),
-                    bin(edges, x),
+                    weighted_bin(x, edges, 1.0),
+                    bin(edges, x) as f64,
                     "{x:e} in {edges:?}"
                 );
             }

@@ -6,12 +6,13 @@
 //!    lengths (each computed once and shared by the two cells on either side), the corner cross
 //!    and dot products, the four corner angles, the extreme angles and every length figure,
 //!    whether the cell takes this path, the histogram bins (by arithmetic and comparisons with
-//!    the edges, [`super::kernel::angle_slot`], [`super::kernel::count_slot`]), and as
+//!    the edges, [`super::kernel::angle_bin_unsigned`], [`super::kernel::weighted_bin`], summed
+//!    into one packed word, [`super::kernel::PACK`]), and as
 //!    reductions over the row the acceptance, inverted and cell counts and the row's extremes
 //!    (integer keys); per cell it stores only what loop 2 reads (the two extreme angles and the
 //!    eight bins packed in one word: contiguous stores, where a wider record took scatters);
 //! 2. per cell, in cell order: the angle sums and the histogram counts (one increment per
-//!    value, into a table per value of the cell), or the reference path.
+//!    pair of values, into a table per pair, see [`Chunk`]), or the reference path.
 //!
 //! Two figures skip divisions with the same results: the skewness is compared and reduced
 //! through its dividend ([`SkewThresholds`]), the scaled Jacobian divides at one corner
@@ -31,8 +32,8 @@
 //! bits; sums are taken in cell order.
 
 use super::kernel::{
-    angle_slot, bin_of_slot, cell_products, corner_products, count_slot, least_scaled_jacobian,
-    BlockFigures, SkewThresholds, Tables, SQ_MAX, SQ_MIN,
+    angle_bin_unsigned, cell_products, corner_products, least_scaled_jacobian, packed_bins,
+    weighted_bin, BlockFigures, SkewThresholds, Tables, PACK, SQ_MAX, SQ_MIN,
 };
 use super::{angle_deg, cell_metrics, fold, ratio, MetricSummary, QualityMetrics};
 use super::{
@@ -167,9 +168,10 @@ fn row_avx2(
 struct Figures {
     /// Smallest and largest angle (the only per-cell values loop 2 sums).
     fig: [f64; 2],
-    /// The histogram bins of the four angles ([`super::kernel::angle_slot`]) and of the
-    /// figures from skewness on ([`super::kernel::count_slot`]), 5 bits each (bin `k` in bits
-    /// `5k..5k + 5`), and [`FAST`] when the cell takes the fast path (0: the reference path).
+    /// The histogram bins of the four angles ([`super::kernel::angle_bin_unsigned`]) and of
+    /// the figures from skewness on ([`super::kernel::weighted_bin`]), 5 bits each (bin `k` in
+    /// bits `5k..5k + 5`), and [`FAST`] when the cell takes the fast path (0: the reference
+    /// path).
     bins: u64,
 }
 
@@ -231,6 +233,13 @@ struct RowCounts {
 fn key(x: f64) -> i64 {
     let b = x.to_bits() as i64;
     b ^ (((b >> 63) as u64) >> 1) as i64
+}
+
+/// [`key`] of an `x` with the sign bit clear (`>= +0`, or a NaN of that sign): its bits (the
+/// exclusive or of [`key`] is then with 0).
+#[inline(always)]
+fn key_unsigned(x: f64) -> i64 {
+    x.to_bits() as i64
 }
 
 /// The float of a [`key`].
@@ -314,38 +323,30 @@ fn row_figures(
         k.outside[SJ] += u64::from(fine & outside(sj, SCALED_JACOBIAN_ACCEPTABLE));
         k.outside[ER] += u64::from(fine & outside(er, EDGE_RATIO_ACCEPTABLE));
         k.outside[AR] += u64::from(fine & outside(ar, ASPECT_ACCEPTABLE));
-        for (m, (x, y)) in [(amin, amax), (sd, sd), (sj, sj), (er, er), (ar, ar)]
-            .into_iter()
-            .enumerate()
-        {
-            k.lo[m] = k.lo[m].min(if fine { key(x) } else { i64::MAX });
-            k.hi[m] = k.hi[m].max(if fine { key(y) } else { i64::MIN });
-        }
-        let mut skew_bin = 0u64;
-        for &e in &th.bins {
-            skew_bin += u64::from(sd >= e);
-        }
-        let slots = [
-            angle_slot(a[0]),
-            angle_slot(a[1]),
-            angle_slot(a[2]),
-            angle_slot(a[3]),
+        // Angles, edge and aspect ratios are `>= +0` (see the module doc): their keys are
+        // their bits.
+        let keys = [
+            (key_unsigned(amin), key_unsigned(amax)),
+            (key(sd), key(sd)),
+            (key(sj), key(sj)),
+            (key_unsigned(er), key_unsigned(er)),
+            (key_unsigned(ar), key_unsigned(ar)),
         ];
-        let mut bins = if fine { FAST } else { 0 };
-        for (k, s) in slots.into_iter().enumerate() {
-            bins |= (bin_of_slot(s) as u64) << (5 * k);
+        for (m, (x, y)) in keys.into_iter().enumerate() {
+            k.lo[m] = k.lo[m].min(if fine { x } else { i64::MAX });
+            k.hi[m] = k.hi[m].max(if fine { y } else { i64::MIN });
         }
-        bins |= skew_bin << 20;
-        for (k, s) in [
-            count_slot(sj, &JACOBIAN_EDGES),
-            count_slot(er, &RATIO_EDGES),
-            count_slot(ar, &RATIO_EDGES),
-        ]
-        .into_iter()
-        .enumerate()
-        {
-            bins |= (bin_of_slot(s) as u64) << (5 * k + 25);
+        // The eight bins packed in one float sum (see `PACK`), in four independent parts.
+        let angles = (angle_bin_unsigned(a[0]) + angle_bin_unsigned(a[1]) * PACK[1])
+            + (angle_bin_unsigned(a[2]) * PACK[2] + angle_bin_unsigned(a[3]) * PACK[3]);
+        let mut skew = 0.0;
+        for &e in &th.bins {
+            skew = if sd >= e { skew + PACK[4] } else { skew };
         }
+        let sj_bin = weighted_bin(sj, &JACOBIAN_EDGES, PACK[5]);
+        let ratios =
+            weighted_bin(er, &RATIO_EDGES, PACK[6]) + weighted_bin(ar, &RATIO_EDGES, PACK[7]);
+        let bins = packed_bins((angles + skew) + (sj_bin + ratios)) | if fine { FAST } else { 0 };
         out[i] = Figures {
             fig: [amin, amax],
             bins,
@@ -376,12 +377,21 @@ fn edge_ratios(edges: &[f64; 4]) -> (f64, f64) {
 pub(super) struct Chunk {
     /// The reference path's counts.
     metrics: QualityMetrics,
-    /// The fast path's histogram counts (bins below 32),
-    /// per value of a cell (the four angles, then skewness, scaled Jacobian, edge ratio,
-    /// aspect ratio): the four angle increments of a cell (often the same bin) go to
-    /// different tables, so they do not wait for each other's stores (measured: 14% of the
-    /// report's time; a second set of tables for every other cell was slower).
+    /// The fast path's histogram counts (bins below 32), per value of a cell (the four
+    /// angles, then skewness, scaled Jacobian, edge ratio, aspect ratio), folded in from
+    /// [`Chunk::pairs`] by [`Chunk::flush`].
     counts: [[u64; 32]; 8],
+    /// The fast path's histogram counts per pair of values of a cell (angles 0 and 1, angles
+    /// 2 and 3, skewness and scaled Jacobian, edge ratio and aspect ratio): entry `a + 32 b`
+    /// of table `t` counts the cells whose values `2t` and `2t + 1` fall in bins `a` and `b`,
+    /// which is the 10-bit field `t` of [`Figures::bins`]. One increment per pair rather than
+    /// per value halves the scattered increments of the cell loop (each one a load, add and
+    /// store, chained through memory when consecutive cells hit the same entry); each value's
+    /// counts are the table's row or column sums. `u32` entries: flushed before
+    /// [`Chunk::pending`] could exceed `u32::MAX`.
+    pairs: Box<[[u32; 1024]; 4]>,
+    /// Cells counted in [`Chunk::pairs`] since the last flush.
+    pending: u64,
     /// The fast path's cells outside the acceptable range, per metric.
     outside: [u64; 5],
     /// Cells through the fast path.
@@ -407,6 +417,8 @@ impl Chunk {
         Chunk {
             metrics: QualityMetrics::empty(),
             counts: [[0; 32]; 8],
+            pairs: Box::new([[0; 1024]; 4]),
+            pending: 0,
             outside: [0; 5],
             fast: 0,
             ext: [[f64::INFINITY, f64::NEG_INFINITY]; 5],
@@ -450,6 +462,30 @@ impl Chunk {
         }
     }
 
+    /// Fold [`Chunk::pairs`] into [`Chunk::counts`] (row and column sums) and clear it.
+    fn flush(&mut self) {
+        // The entries a field pair can reach: angle bins are at most 18, skewness and scaled
+        // Jacobian bins at most 10, ratio bins at most 9.
+        const USED: [usize; 4] = [
+            18 + 32 * 18 + 1,
+            18 + 32 * 18 + 1,
+            10 + 32 * 10 + 1,
+            9 + 32 * 9 + 1,
+        ];
+        for (t, table) in self.pairs.iter_mut().enumerate() {
+            let [lo, hi] = &mut self.counts[2 * t..2 * t + 2] else {
+                unreachable!()
+            };
+            debug_assert!(table[USED[t]..].iter().all(|&v| v == 0));
+            for (k, v) in table[..USED[t]].iter_mut().enumerate() {
+                let n = u64::from(std::mem::take(v));
+                lo[k & 31] += n;
+                hi[k >> 5] += n;
+            }
+        }
+        self.pending = 0;
+    }
+
     /// The growth ratios of the chunk (counted by the caller).
     pub fn growth(&mut self) -> &mut MetricSummary {
         &mut self.metrics.interface_growth_ratio
@@ -457,6 +493,7 @@ impl Chunk {
 
     /// The metrics of every block measured.
     pub fn finish(mut self) -> QualityMetrics {
+        self.flush();
         for which in [ANGLE, SKEW, SJ, ER, AR] {
             let [lo, hi] = self.ext[which];
             let m = Self::summary(&mut self.metrics, which);
@@ -507,6 +544,10 @@ impl Chunk {
         for j in 0..nj {
             let (line, next) = (&n[j * w..(j + 1) * w], &n[(j + 1) * w..(j + 2) * w]);
             let k = rows.figures(line, next, t);
+            if self.pending + k.fast > u64::from(u32::MAX) {
+                self.flush();
+            }
+            self.pending += k.fast;
             if k.fast > 0 {
                 // Extremes of the row's fast cells: no NaN, no zero, so merging them here
                 // rather than cell by cell gives the same bits.
@@ -531,9 +572,9 @@ impl Chunk {
                 }
                 f.sum_min += cell.fig[0];
                 f.sum_max += cell.fig[1];
-                let (c, s) = (&mut self.counts, cell.bins);
-                for (k, c) in c.iter_mut().enumerate() {
-                    c[(s >> (5 * k)) as usize & 31] += 1;
+                let (c, s) = (&mut *self.pairs, cell.bins);
+                for (t, c) in c.iter_mut().enumerate() {
+                    c[(s >> (10 * t)) as usize & 1023] += 1;
                 }
             }
             std::mem::swap(&mut rows.bx, &mut rows.tx);

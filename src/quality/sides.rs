@@ -26,7 +26,9 @@ fn side_node_and_inward(grid: &BlockGrid, s: usize, p: usize) -> (Point, Point) 
 }
 
 /// The cell next to side `s` at cell position `p` along the side (in the side's direction):
-/// its height normal to the side (area over its edge length on the side).
+/// its height normal to the side (area over its edge length on the side). Inlined into the
+/// loops over a side, so that the choice of side is made once per side.
+#[inline(always)]
 fn side_cell_height(grid: &BlockGrid, s: usize, p: usize) -> f64 {
     let (ni, nj) = (grid.ni, grid.nj);
     let (i, j) = match s {
@@ -336,7 +338,9 @@ fn side_cells(grid: &BlockGrid, s: usize) -> usize {
 #[inline]
 fn pair(ha: &[f64], hb: &[f64], same_direction: bool, m: &mut MetricSummary) {
     let n = ha.len();
-    let edges = &m.histogram.edges[1..];
+    // Always the growth histogram: its edges as a constant, so that the count unrolls.
+    debug_assert_eq!(m.histogram.edges, super::GROWTH_EDGES);
+    let edges = &super::GROWTH_EDGES[1..];
     let last = m.histogram.counts.len() - 1;
     let (lo, hi) = (m.acceptable[0], m.acceptable[1]);
     let (mut min, mut max) = (f64::INFINITY, f64::NEG_INFINITY);
