@@ -588,6 +588,28 @@ pub(crate) struct Piece {
 }
 
 impl Piece {
+    /// The entry [`pieces_of`] writes for an arc whose piece failed (never returned).
+    fn placeholder() -> Piece {
+        let wall = Wall {
+            c: [0.0; 2],
+            r: 0.0,
+            s: 0.0,
+        };
+        Piece {
+            ends: [0; 2],
+            circles: [0; 2],
+            slots: [[0; 2]; 2],
+            geom: ArcGeometry {
+                walls: [wall; 2],
+                param: 0,
+                start: [0.0; 2],
+                sweep: [0.0; 2],
+                ends_m: [[0.0; 2]; 2],
+                ends_a: [[[0.0; 2]; 2]; 2],
+            },
+        }
+    }
+
     /// True when both walls run the way their blocks need (see [`expected_sign`]).
     fn consistent(&self) -> bool {
         let wrong = |w: f64, c: CircleId| w.abs() > ZERO_SWEEP && w * expected_sign(c) < 0.0;
@@ -640,54 +662,61 @@ pub fn build(
 fn pieces_of(sk: &Skeleton<'_>) -> Result<(Vec<Piece>, Vec<usize>), MeshError> {
     let (domain, vertices) = (sk.domain, &sk.vertices);
     let ncirc = domain.hole_count() + 1;
-    // Geometry of every arc: independent per arc, computed in parallel and collected in arc
-    // order (the first error in arc order is returned), so nothing depends on the thread count.
-    let mut geometry: Vec<Result<Piece, MeshError>> = sk
-        .arcs
+    // Geometry of every arc: independent per arc, computed in parallel and written in arc
+    // order into one vector of pieces (not a vector of results copied into another). The error
+    // returned is that of the first failing arc in arc order (each arc's result does not
+    // depend on the others; a failed arc leaves a placeholder, never returned), so nothing
+    // depends on the thread count.
+    let first_error = std::sync::Mutex::new(None::<(usize, MeshError)>);
+    let piece = |e: usize, arc: &crate::medial::MedialArc| -> Result<Piece, MeshError> {
+        let [v0, v1] = arc.ends.map(|v| v as usize);
+        let (Some(x0), Some(x1)) = (vertices.get(v0), vertices.get(v1)) else {
+            return Err(internal(format!("arc {e} has an unknown end vertex")));
+        };
+        if arc.circles.iter().any(|&c| c < -1 || cidx(c) >= ncirc) {
+            return Err(internal(format!("arc {e} has an unknown circle")));
+        }
+        let walls = arc.circles.map(|c| Wall::of(domain, c));
+        let mut ends_a = [[[0.0; 2]; 2]; 2];
+        let mut slots = [[0; 2]; 2];
+        for (side, &c) in arc.circles.iter().enumerate() {
+            let (Some(s0), Some(s1)) = (x0.slot(c), x1.slot(c)) else {
+                return Err(internal(format!(
+                    "arc {e}: an end vertex does not touch circle {c}"
+                )));
+            };
+            ends_a[0][side] = x0.tangent[s0];
+            ends_a[1][side] = x1.tangent[s1];
+            slots[side] = [s0, s1];
+        }
+        let hint_a = wall_hint(sk.sampled, 2 * e)
+            .ok_or_else(|| internal(format!("arc {e}: no sampled wall")))?;
+        let hint_b = wall_hint(sk.sampled, 2 * e + 1)
+            .ok_or_else(|| internal(format!("arc {e}: no sampled wall")))?;
+        Ok(Piece {
+            ends: [v0, v1],
+            circles: arc.circles,
+            slots,
+            geom: ArcGeometry::new(walls, [x0.center, x1.center], ends_a, [hint_a, -hint_b]),
+        })
+    };
+    let mut pieces = Vec::new();
+    sk.arcs
         .par_iter()
         .enumerate()
         .map(|(e, arc)| {
-            let [v0, v1] = arc.ends.map(|v| v as usize);
-            let (Some(x0), Some(x1)) = (vertices.get(v0), vertices.get(v1)) else {
-                return Err(internal(format!("arc {e} has an unknown end vertex")));
-            };
-            if arc.circles.iter().any(|&c| c < -1 || cidx(c) >= ncirc) {
-                return Err(internal(format!("arc {e} has an unknown circle")));
-            }
-            let walls = arc.circles.map(|c| Wall::of(domain, c));
-            let mut ends_a = [[[0.0; 2]; 2]; 2];
-            let mut slots = [[0; 2]; 2];
-            for (side, &c) in arc.circles.iter().enumerate() {
-                let (Some(s0), Some(s1)) = (x0.slot(c), x1.slot(c)) else {
-                    return Err(internal(format!(
-                        "arc {e}: an end vertex does not touch circle {c}"
-                    )));
-                };
-                ends_a[0][side] = x0.tangent[s0];
-                ends_a[1][side] = x1.tangent[s1];
-                slots[side] = [s0, s1];
-            }
-            let hint_a = wall_hint(sk.sampled, 2 * e)
-                .ok_or_else(|| internal(format!("arc {e}: no sampled wall")))?;
-            let hint_b = wall_hint(sk.sampled, 2 * e + 1)
-                .ok_or_else(|| internal(format!("arc {e}: no sampled wall")))?;
-            Ok(Piece {
-                ends: [v0, v1],
-                circles: arc.circles,
-                slots,
-                geom: ArcGeometry::new(walls, [x0.center, x1.center], ends_a, [hint_a, -hint_b]),
+            piece(e, arc).unwrap_or_else(|err| {
+                let mut first = first_error.lock().unwrap_or_else(|p| p.into_inner());
+                if first.as_ref().is_none_or(|(at, _)| e < *at) {
+                    *first = Some((e, err));
+                }
+                Piece::placeholder()
             })
         })
-        .collect();
-    if let Some(e) = geometry.iter().position(Result::is_err) {
-        return Err(geometry
-            .swap_remove(e)
-            .err()
-            .unwrap_or_else(|| internal(String::new())));
+        .collect_into_vec(&mut pieces);
+    if let Some((_, err)) = first_error.into_inner().unwrap_or_else(|p| p.into_inner()) {
+        return Err(err);
     }
-    // Every entry is a piece: taken out in place (the same allocation, no second vector of
-    // all pieces; issue 8).
-    let pieces: Vec<Piece> = geometry.into_iter().filter_map(Result::ok).collect();
     let inconsistent_arcs = (0..pieces.len())
         .filter(|&e| !pieces[e].consistent())
         .collect();
@@ -940,11 +969,13 @@ pub fn assemble_cached(
     // Layout skeleton and grids (stage "grids" until the end).
     let _grids = crate::timings::enter("grids");
     let nv = vertices.len();
-    let mut layout = BlockLayout {
-        vertices: vertices.iter().map(|v| v.center).collect(),
-        edges: Vec::with_capacity(3 * pieces.len() + 3 * nv),
-        blocks: Vec::with_capacity(2 * pieces.len()),
-    };
+    // Into the rejected mesh's vectors when there is one ([`PieceCache::keep`]).
+    let mut layout = cache.spare_layout();
+    let tangents: usize = vertices.iter().map(|v| v.tangent.len()).sum();
+    layout.vertices.reserve_exact(nv + tangents);
+    layout.vertices.extend(vertices.iter().map(|v| v.center));
+    layout.edges.reserve_exact(3 * pieces.len() + 3 * nv);
+    layout.blocks.reserve_exact(2 * pieces.len());
     let mut tangent_base = Vec::with_capacity(nv);
     for v in &vertices {
         tangent_base.push(layout.vertices.len());
@@ -1239,7 +1270,8 @@ pub fn assemble_cached(
             },
         )
         .collect();
-    let mut grids = Vec::with_capacity(layout.blocks.len());
+    let mut grids = cache.spare_grids();
+    grids.reserve_exact(layout.blocks.len());
     let mut entries = Vec::with_capacity(per_piece.len());
     let mut checked: Vec<Option<[bool; 2]>> = Vec::with_capacity(per_piece.len());
     for (e, r) in per_piece.into_iter().enumerate() {
