@@ -1270,8 +1270,7 @@ pub fn assemble_cached(
             },
         )
         .collect();
-    let mut grids = cache.spare_grids();
-    grids.reserve_exact(layout.blocks.len());
+    let mut grids = Vec::with_capacity(layout.blocks.len());
     let mut entries = Vec::with_capacity(per_piece.len());
     let mut checked: Vec<Option<[bool; 2]>> = Vec::with_capacity(per_piece.len());
     for (e, r) in per_piece.into_iter().enumerate() {

@@ -109,7 +109,8 @@ struct Kept {
 }
 
 /// Vectors of a rejected build, emptied, that the next build fills instead of allocating its
-/// own: the layout's vertices, edges and blocks and the grid list. Issue 8: a rebuild allocated
+/// own: the layout's vertices, edges and blocks (taken before the grids are made, so they do
+/// not add to the peak). Issue 8: a rebuild allocated
 /// about as much as the build it replaces freed (at 1e5 particles ~700 MB per rebuild, large
 /// vectors the allocator takes from and returns to the kernel), and every such page is
 /// faulted in and zeroed again. Only capacity is kept: every vector here is empty, so what a
@@ -117,7 +118,6 @@ struct Kept {
 #[derive(Debug, Default)]
 struct Spare {
     layout: BlockLayout,
-    grids: Vec<BlockGrid>,
 }
 
 /// The memo (see the module docs). `PieceCache::default()` is empty: a build with it computes
@@ -278,10 +278,8 @@ impl PieceCache {
                 Some((nodes, pair, bad))
             })
             .collect();
-        // The grids not taken are freed now (before the new grids are made); the list's own
-        // allocation serves the next build's grid list.
-        kept.grids.clear();
-        self.spare.grids = std::mem::take(&mut kept.grids);
+        // The grids not taken are freed now, before the new grids are made (the list too: kept
+        // for the new list, it would be held while the grids are made, the peak).
         drop(kept);
         self.reused_grids = out.iter().filter(|x| x.is_some()).count();
         out
@@ -356,20 +354,12 @@ impl PieceCache {
     #[doc(hidden)]
     pub fn spare_capacity(&self) -> usize {
         let l = &self.spare.layout;
-        l.vertices.capacity()
-            + l.edges.capacity()
-            + l.blocks.capacity()
-            + self.spare.grids.capacity()
+        l.vertices.capacity() + l.edges.capacity() + l.blocks.capacity()
     }
 
     /// An empty layout, holding the allocations of the latest rejected mesh's layout if any.
     pub(crate) fn spare_layout(&mut self) -> BlockLayout {
         std::mem::take(&mut self.spare.layout)
-    }
-
-    /// An empty grid list, holding the allocation of the latest rejected mesh's list if any.
-    pub(crate) fn spare_grids(&mut self) -> Vec<BlockGrid> {
-        std::mem::take(&mut self.spare.grids)
     }
 
     /// How many pieces the latest build took from the memo without computing their densities
