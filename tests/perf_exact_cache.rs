@@ -108,8 +108,13 @@ fn rebuild_matches(d: &Domain, o: &Options, what: &str) -> (usize, usize) {
     let pieces = first.as_ref().unwrap().counts.arc.len();
     assert_eq!(cache.reused(), pieces, "{what}: identical rebuild");
     assert_eq!(cache.reused_grids(), 0, "{what}: no grids handed back");
+    assert_eq!(cache.spare_capacity(), 0, "{what}: nothing handed back yet");
     cache.keep(again.unwrap());
+    // The handed-back layout's vectors wait, empty, for the next build, which fills them
+    // (`assert_same` compares its contents with the build from scratch).
+    assert!(cache.spare_capacity() > 0, "{what}: layout kept for reuse");
     let third = build(&cb, o, Some(&mut cache));
+    assert_eq!(cache.spare_capacity(), 0, "{what}: spare vectors taken");
     inverted += assert_same(&third, &first, what);
     assert_eq!(cache.reused_grids(), pieces, "{what}: grids handed back");
     cache.keep(third.unwrap());

@@ -453,13 +453,21 @@ fn spoke_column(
 /// `n + 1` parameters in `[0, 1]` equidistributing the sub-step weights `w` (`t_0 = 0`,
 /// `t_n = 1` exactly; equal steps when the weights vanish).
 fn equidistribute(w: &[f64], n: usize) -> Vec<f64> {
+    let mut t = Vec::with_capacity(n + 1);
+    equidistribute_into(w, n, &mut t);
+    t
+}
+
+/// [`equidistribute`] written into `t` (cleared first): the same values, in a buffer reused
+/// from piece to piece.
+fn equidistribute_into(w: &[f64], n: usize, t: &mut Vec<f64>) {
+    t.clear();
     let k = w.len();
     let total: f64 = w.iter().sum();
-    let mut t = Vec::with_capacity(n + 1);
     if !(total.is_finite() && total > 0.0) || k == 0 {
         t.extend((0..=n).map(|i| i as f64 / n as f64));
         t[n] = 1.0;
-        return t;
+        return;
     }
     t.push(0.0);
     let mut cum = 0.0;
@@ -480,7 +488,19 @@ fn equidistribute(w: &[f64], n: usize) -> Vec<f64> {
         t.push(ti.max(last));
     }
     t.push(1.0);
-    t
+}
+
+/// Per-task buffers of the grid loop of [`assemble_cached`] (rayon's `map_init`): the arc
+/// nodes' touching points, the spoke scratch, the weights and node parameters of a piece
+/// whose parameters are computed there. Reused from piece to piece instead of allocated and
+/// freed by each (issue 8: the allocator's lock was contended between the threads); nothing
+/// in them outlives a piece.
+#[derive(Default)]
+struct PieceScratch {
+    a_nodes: [Vec<Point>; 2],
+    spoke: Vec<f64>,
+    weights: Vec<f64>,
+    params: Vec<f64>,
 }
 
 /// A piece's densities reduced to what its counts and nodes need: the lower bound and the
@@ -568,6 +588,28 @@ pub(crate) struct Piece {
 }
 
 impl Piece {
+    /// The entry [`pieces_of`] writes for an arc whose piece failed (never returned).
+    fn placeholder() -> Piece {
+        let wall = Wall {
+            c: [0.0; 2],
+            r: 0.0,
+            s: 0.0,
+        };
+        Piece {
+            ends: [0; 2],
+            circles: [0; 2],
+            slots: [[0; 2]; 2],
+            geom: ArcGeometry {
+                walls: [wall; 2],
+                param: 0,
+                start: [0.0; 2],
+                sweep: [0.0; 2],
+                ends_m: [[0.0; 2]; 2],
+                ends_a: [[[0.0; 2]; 2]; 2],
+            },
+        }
+    }
+
     /// True when both walls run the way their blocks need (see [`expected_sign`]).
     fn consistent(&self) -> bool {
         let wrong = |w: f64, c: CircleId| w.abs() > ZERO_SWEEP && w * expected_sign(c) < 0.0;
@@ -620,54 +662,64 @@ pub fn build(
 fn pieces_of(sk: &Skeleton<'_>) -> Result<(Vec<Piece>, Vec<usize>), MeshError> {
     let (domain, vertices) = (sk.domain, &sk.vertices);
     let ncirc = domain.hole_count() + 1;
-    // Geometry of every arc: independent per arc, computed in parallel and collected in arc
-    // order (the first error in arc order is returned), so nothing depends on the thread count.
-    let geometry: Vec<Result<Piece, MeshError>> = sk
-        .arcs
+    // Geometry of every arc: independent per arc, computed in parallel and written in arc
+    // order into one vector of pieces (not a vector of results copied into another). The error
+    // returned is that of the first failing arc in arc order (each arc's result does not
+    // depend on the others; a failed arc leaves a placeholder, never returned), so nothing
+    // depends on the thread count.
+    let first_error = std::sync::Mutex::new(None::<(usize, MeshError)>);
+    let piece = |e: usize, arc: &crate::medial::MedialArc| -> Result<Piece, MeshError> {
+        let [v0, v1] = arc.ends.map(|v| v as usize);
+        let (Some(x0), Some(x1)) = (vertices.get(v0), vertices.get(v1)) else {
+            return Err(internal(format!("arc {e} has an unknown end vertex")));
+        };
+        if arc.circles.iter().any(|&c| c < -1 || cidx(c) >= ncirc) {
+            return Err(internal(format!("arc {e} has an unknown circle")));
+        }
+        let walls = arc.circles.map(|c| Wall::of(domain, c));
+        let mut ends_a = [[[0.0; 2]; 2]; 2];
+        let mut slots = [[0; 2]; 2];
+        for (side, &c) in arc.circles.iter().enumerate() {
+            let (Some(s0), Some(s1)) = (x0.slot(c), x1.slot(c)) else {
+                return Err(internal(format!(
+                    "arc {e}: an end vertex does not touch circle {c}"
+                )));
+            };
+            ends_a[0][side] = x0.tangent[s0];
+            ends_a[1][side] = x1.tangent[s1];
+            slots[side] = [s0, s1];
+        }
+        let hint_a = wall_hint(sk.sampled, 2 * e)
+            .ok_or_else(|| internal(format!("arc {e}: no sampled wall")))?;
+        let hint_b = wall_hint(sk.sampled, 2 * e + 1)
+            .ok_or_else(|| internal(format!("arc {e}: no sampled wall")))?;
+        Ok(Piece {
+            ends: [v0, v1],
+            circles: arc.circles,
+            slots,
+            geom: ArcGeometry::new(walls, [x0.center, x1.center], ends_a, [hint_a, -hint_b]),
+        })
+    };
+    let mut pieces = Vec::new();
+    sk.arcs
         .par_iter()
         .enumerate()
         .map(|(e, arc)| {
-            let [v0, v1] = arc.ends.map(|v| v as usize);
-            let (Some(x0), Some(x1)) = (vertices.get(v0), vertices.get(v1)) else {
-                return Err(internal(format!("arc {e} has an unknown end vertex")));
-            };
-            if arc.circles.iter().any(|&c| c < -1 || cidx(c) >= ncirc) {
-                return Err(internal(format!("arc {e} has an unknown circle")));
-            }
-            let walls = arc.circles.map(|c| Wall::of(domain, c));
-            let mut ends_a = [[[0.0; 2]; 2]; 2];
-            let mut slots = [[0; 2]; 2];
-            for (side, &c) in arc.circles.iter().enumerate() {
-                let (Some(s0), Some(s1)) = (x0.slot(c), x1.slot(c)) else {
-                    return Err(internal(format!(
-                        "arc {e}: an end vertex does not touch circle {c}"
-                    )));
-                };
-                ends_a[0][side] = x0.tangent[s0];
-                ends_a[1][side] = x1.tangent[s1];
-                slots[side] = [s0, s1];
-            }
-            let hint_a = wall_hint(sk.sampled, 2 * e)
-                .ok_or_else(|| internal(format!("arc {e}: no sampled wall")))?;
-            let hint_b = wall_hint(sk.sampled, 2 * e + 1)
-                .ok_or_else(|| internal(format!("arc {e}: no sampled wall")))?;
-            Ok(Piece {
-                ends: [v0, v1],
-                circles: arc.circles,
-                slots,
-                geom: ArcGeometry::new(walls, [x0.center, x1.center], ends_a, [hint_a, -hint_b]),
+            piece(e, arc).unwrap_or_else(|err| {
+                let mut first = first_error.lock().unwrap_or_else(|p| p.into_inner());
+                if first.as_ref().is_none_or(|(at, _)| e < *at) {
+                    *first = Some((e, err));
+                }
+                Piece::placeholder()
             })
         })
-        .collect();
-    let mut pieces = Vec::with_capacity(sk.arcs.len());
-    let mut inconsistent_arcs = Vec::new();
-    for (e, piece) in geometry.into_iter().enumerate() {
-        let piece = piece?;
-        if !piece.consistent() {
-            inconsistent_arcs.push(e);
-        }
-        pieces.push(piece);
+        .collect_into_vec(&mut pieces);
+    if let Some((_, err)) = first_error.into_inner().unwrap_or_else(|p| p.into_inner()) {
+        return Err(err);
     }
+    let inconsistent_arcs = (0..pieces.len())
+        .filter(|&e| !pieces[e].consistent())
+        .collect();
     Ok((pieces, inconsistent_arcs))
 }
 
@@ -800,7 +852,7 @@ pub fn assemble_cached(
         ang: Vec::with_capacity(ARC_SUBSTEPS),
         known: None,
     };
-    let summaries: Vec<Option<Summary>> = pieces
+    let mut summaries: Vec<Option<Summary>> = pieces
         .par_iter()
         .zip(&found)
         .map_init(scratch, |scratch, (p, &at)| {
@@ -842,14 +894,20 @@ pub fn assemble_cached(
                 .is_some_and(|s| s.1.is_none() && !s.0.holds_densities())
         })
         .count();
-    let mut targets = Vec::with_capacity(pieces.len());
-    let mut first_params = Vec::with_capacity(pieces.len());
-    for (e, s) in summaries.into_iter().enumerate() {
-        let (t, params) =
-            s.ok_or_else(|| internal(format!("arc {e}: the exact medial arc is not defined")))?;
-        targets.push(t);
-        first_params.push(params);
+    if let Some(e) = summaries.iter().position(Option::is_none) {
+        return Err(internal(format!(
+            "arc {e}: the exact medial arc is not defined"
+        )));
     }
+    // The parameters taken out, then the targets in place (no second vector of all targets).
+    let first_params: Vec<Option<Params>> = summaries
+        .iter_mut()
+        .map(|s| s.as_mut().and_then(|s| s.1.take()))
+        .collect();
+    let mut targets: Vec<ArcTarget> = summaries
+        .into_iter()
+        .filter_map(|s| s.map(|s| s.0))
+        .collect();
 
     // The node counts for target cell size `h`.
     // The arc targets are lent to each count problem and given back (no copy: an arc whose
@@ -911,11 +969,13 @@ pub fn assemble_cached(
     // Layout skeleton and grids (stage "grids" until the end).
     let _grids = crate::timings::enter("grids");
     let nv = vertices.len();
-    let mut layout = BlockLayout {
-        vertices: vertices.iter().map(|v| v.center).collect(),
-        edges: Vec::with_capacity(3 * pieces.len() + 3 * nv),
-        blocks: Vec::with_capacity(2 * pieces.len()),
-    };
+    // Into the rejected mesh's vectors when there is one ([`PieceCache::keep`]).
+    let mut layout = cache.spare_layout();
+    let tangents: usize = vertices.iter().map(|v| v.tangent.len()).sum();
+    layout.vertices.reserve_exact(nv + tangents);
+    layout.vertices.extend(vertices.iter().map(|v| v.center));
+    layout.edges.reserve_exact(3 * pieces.len() + 3 * nv);
+    layout.blocks.reserve_exact(2 * pieces.len());
     let mut tangent_base = Vec::with_capacity(nv);
     for v in &vertices {
         tangent_base.push(layout.vertices.len());
@@ -1109,95 +1169,106 @@ pub fn assemble_cached(
         .zip(reuse.into_par_iter())
         .zip(first_params.into_par_iter())
         .enumerate()
-        .map(|(e, (((p, t), reused), first))| {
-            let g = &p.geom;
-            let n = counts.arc[e];
-            let nbar = 0.5
-                * (counts.circle[cidx(p.circles[0])] + counts.circle[cidx(p.circles[1])]) as f64;
-            let mut known = Known {
-                min_cells: t.min_cells(),
-                target: None,
-            };
-            if let Some((m_nodes, pair, inverted)) = reused {
-                if !uniform {
-                    known.target = t.known_target(nbar).map(|x| (nbar, x));
-                }
-                return Ok((m_nodes, pair, known, Some(inverted)));
-            }
-            let cached = match first {
-                Some((nb, m, params)) if nb.to_bits() == nbar.to_bits() && m == n => Some(params),
-                _ => None,
-            };
-            let params = match cached {
-                Some(params) => {
+        .map_init(
+            PieceScratch::default,
+            |scratch, (e, (((p, t), reused), first))| {
+                let g = &p.geom;
+                let n = counts.arc[e];
+                let nbar = 0.5
+                    * (counts.circle[cidx(p.circles[0])] + counts.circle[cidx(p.circles[1])])
+                        as f64;
+                let mut known = Known {
+                    min_cells: t.min_cells(),
+                    target: None,
+                };
+                if let Some((m_nodes, pair, inverted)) = reused {
                     if !uniform {
                         known.target = t.known_target(nbar).map(|x| (nbar, x));
                     }
-                    params
+                    return Ok((m_nodes, pair, known, Some(inverted)));
                 }
-                None => {
-                    let t = if t.holds_densities() {
-                        t
-                    } else {
-                        let (sq, ang) = g.densities().ok_or_else(|| {
-                            internal(format!("arc {e}: the exact medial arc is not defined"))
-                        })?;
-                        ArcTarget {
-                            sq,
-                            ang,
-                            known: None,
-                            ..t
-                        }
-                    };
-                    if !uniform {
-                        known.target = Some((nbar, t.target(nbar)));
+                let cached = match first {
+                    Some((nb, m, params)) if nb.to_bits() == nbar.to_bits() && m == n => {
+                        Some(params)
                     }
-                    let weights: Vec<f64> =
-                        t.sq.iter()
-                            .zip(&t.ang)
-                            .map(|(s, a)| (nbar * s).max(*a))
-                            .collect();
-                    drop(t);
-                    equidistribute(&weights, n)
+                    _ => None,
+                };
+                let params = match cached {
+                    Some(params) => {
+                        if !uniform {
+                            known.target = t.known_target(nbar).map(|x| (nbar, x));
+                        }
+                        params
+                    }
+                    None => {
+                        let t = if t.holds_densities() {
+                            t
+                        } else {
+                            let (sq, ang) = g.densities().ok_or_else(|| {
+                                internal(format!("arc {e}: the exact medial arc is not defined"))
+                            })?;
+                            ArcTarget {
+                                sq,
+                                ang,
+                                known: None,
+                                ..t
+                            }
+                        };
+                        if !uniform {
+                            known.target = Some((nbar, t.target(nbar)));
+                        }
+                        let weights = &mut scratch.weights;
+                        weights.clear();
+                        weights.extend(t.sq.iter().zip(&t.ang).map(|(s, a)| (nbar * s).max(*a)));
+                        drop(t);
+                        equidistribute_into(weights, n, &mut scratch.params);
+                        std::mem::take(&mut scratch.params)
+                    }
+                };
+                let mut m_nodes = Vec::with_capacity(n + 1);
+                let PieceScratch {
+                    a_nodes, spoke: d, ..
+                } = scratch;
+                for a in a_nodes.iter_mut() {
+                    a.clear();
                 }
-            };
-            let mut m_nodes = Vec::with_capacity(n + 1);
-            let mut a_nodes: [Vec<Point>; 2] =
-                [Vec::with_capacity(n + 1), Vec::with_capacity(n + 1)];
-            for &t in &params {
-                let (m, a, _) = g
-                    .at(t)
-                    .ok_or_else(|| internal(format!("arc {e}: a medial node is not defined")))?;
-                m_nodes.push(m);
-                a_nodes[0].push(a[0]);
-                a_nodes[1].push(a[1]);
-            }
-            let mut d = Vec::new();
-            let mut grid = |side: usize| {
-                let (nj, first, growth) = side_inputs(p, side);
-                // Column i is arc node k = i (side 0) or n - i (side 1). The corner spokes run
-                // from the piece's exact ends: its end vertices' tangent points on this circle
-                // and centres (`ends_a`, `ends_m` are taken from them by the same slots), so
-                // every block at a vertex gets the same nodes and the cache key (the
-                // geometry) covers them.
-                let mut nodes = vec![[0.0; 2]; (n + 1) * (nj + 1)];
-                for i in 0..=n {
-                    let k = if side == 0 { i } else { n - i };
-                    let (a, m) = if k == 0 {
-                        (g.ends_a[0][side], g.ends_m[0])
-                    } else if k == n {
-                        (g.ends_a[1][side], g.ends_m[1])
-                    } else {
-                        (a_nodes[side][k], m_nodes[k])
-                    };
-                    spoke_column(a, m, nj, first, growth, &mut d, &mut nodes, i, n + 1);
+                for &t in &params {
+                    let (m, a, _) = g.at(t).ok_or_else(|| {
+                        internal(format!("arc {e}: a medial node is not defined"))
+                    })?;
+                    m_nodes.push(m);
+                    a_nodes[0].push(a[0]);
+                    a_nodes[1].push(a[1]);
                 }
-                BlockGrid { ni: n, nj, nodes }
-            };
-            let pair = [grid(0), grid(1)];
-            let inverted = (options.smooth == 0).then(|| pair.each_ref().map(has_inverted_cell));
-            Ok((m_nodes, pair, known, inverted))
-        })
+                // The parameters go back to the scratch (their buffer serves the next piece).
+                scratch.params = params;
+                let mut grid = |side: usize| {
+                    let (nj, first, growth) = side_inputs(p, side);
+                    // Column i is arc node k = i (side 0) or n - i (side 1). The corner spokes run
+                    // from the piece's exact ends: its end vertices' tangent points on this circle
+                    // and centres (`ends_a`, `ends_m` are taken from them by the same slots), so
+                    // every block at a vertex gets the same nodes and the cache key (the
+                    // geometry) covers them.
+                    let mut nodes = vec![[0.0; 2]; (n + 1) * (nj + 1)];
+                    for i in 0..=n {
+                        let k = if side == 0 { i } else { n - i };
+                        let (a, m) = if k == 0 {
+                            (g.ends_a[0][side], g.ends_m[0])
+                        } else if k == n {
+                            (g.ends_a[1][side], g.ends_m[1])
+                        } else {
+                            (a_nodes[side][k], m_nodes[k])
+                        };
+                        spoke_column(a, m, nj, first, growth, d, &mut nodes, i, n + 1);
+                    }
+                    BlockGrid { ni: n, nj, nodes }
+                };
+                let pair = [grid(0), grid(1)];
+                let inverted =
+                    (options.smooth == 0).then(|| pair.each_ref().map(has_inverted_cell));
+                Ok((m_nodes, pair, known, inverted))
+            },
+        )
         .collect();
     let mut grids = Vec::with_capacity(layout.blocks.len());
     let mut entries = Vec::with_capacity(per_piece.len());
@@ -1315,6 +1386,31 @@ mod tests {
             sorted.sort_by(f64::total_cmp);
             let want = sorted.get(sorted.len() / 2).map(|x| x.to_bits());
             assert_eq!(median(v).map(f64::to_bits), want, "n = {n}");
+        }
+    }
+
+    /// [`equidistribute_into`] on a buffer left over from another piece (longer, shorter,
+    /// holding other values) gives the fresh [`equidistribute`] values bit for bit.
+    #[test]
+    fn equidistribution_into_a_used_buffer_is_the_fresh_one() {
+        let mut rng = crate::layouts::SplitMix64(4);
+        let mut buf: Vec<f64> = vec![f64::NAN; 40];
+        for case in 0..200usize {
+            let k = case % 13;
+            let w: Vec<f64> = (0..k)
+                .map(|i| match (case + i) % 5 {
+                    0 => 0.0,
+                    _ => rng.next_f64() * 3.0,
+                })
+                .collect();
+            let n = 1 + case % 23;
+            equidistribute_into(&w, n, &mut buf);
+            let fresh = equidistribute(&w, n);
+            assert_eq!(buf.len(), n + 1);
+            assert!(buf
+                .iter()
+                .zip(&fresh)
+                .all(|(a, b)| a.to_bits() == b.to_bits()));
         }
     }
 

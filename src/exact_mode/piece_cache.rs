@@ -26,7 +26,7 @@
 use super::counts::Known;
 use super::{ArcGeometry, ExactMesh};
 use crate::geometry::Point;
-use crate::layout::Curve;
+use crate::layout::{BlockLayout, Curve};
 use crate::mesh::BlockGrid;
 use std::collections::HashMap;
 use std::hash::{BuildHasherDefault, Hasher};
@@ -108,6 +108,18 @@ struct Kept {
     inverted: Vec<bool>,
 }
 
+/// Vectors of a rejected build, emptied, that the next build fills instead of allocating its
+/// own: the layout's vertices, edges and blocks (taken before the grids are made, so they do
+/// not add to the peak). Issue 8: a rebuild allocated
+/// about as much as the build it replaces freed (at 1e5 particles ~700 MB per rebuild, large
+/// vectors the allocator takes from and returns to the kernel), and every such page is
+/// faulted in and zeroed again. Only capacity is kept: every vector here is empty, so what a
+/// build computes does not depend on it.
+#[derive(Debug, Default)]
+struct Spare {
+    layout: BlockLayout,
+}
+
 /// The memo (see the module docs). `PieceCache::default()` is empty: a build with it computes
 /// everything, as without a memo.
 #[derive(Debug, Default)]
@@ -122,6 +134,8 @@ pub struct PieceCache {
     grid_keys: Vec<GridKey>,
     /// The latest build's mesh once handed back.
     kept: Option<Kept>,
+    /// Emptied vectors of earlier builds, for the next build to fill ([`Spare`]).
+    spare: Spare,
     /// Hash of a geometry key -> the last piece with that hash; lookups compare the full key,
     /// so a hash collision is a miss, never a wrong entry.
     index: HashMap<u64, u32, BuildHasherDefault<PassThrough>>,
@@ -264,6 +278,8 @@ impl PieceCache {
                 Some((nodes, pair, bad))
             })
             .collect();
+        // The grids not taken are freed now, before the new grids are made (the list too: kept
+        // for the new list, it would be held while the grids are made, the peak).
         drop(kept);
         self.reused_grids = out.iter().filter(|x| x.is_some()).count();
         out
@@ -315,7 +331,11 @@ impl PieceCache {
                 None => Vec::new(),
             })
             .collect();
-        drop(layout);
+        // The rest of the layout is freed now; its vectors' allocations serve the next build.
+        layout.vertices.clear();
+        layout.edges.clear();
+        layout.blocks.clear();
+        self.spare.layout = layout;
         let mut inverted = vec![false; grids.len()];
         for &b in &inverted_blocks {
             if let Some(x) = inverted.get_mut(b) {
@@ -327,6 +347,19 @@ impl PieceCache {
             grids,
             inverted,
         });
+    }
+
+    /// How many entries the spare vectors have room for (for tests: a mesh handed back leaves
+    /// its layout's vectors here, the next build takes them).
+    #[doc(hidden)]
+    pub fn spare_capacity(&self) -> usize {
+        let l = &self.spare.layout;
+        l.vertices.capacity() + l.edges.capacity() + l.blocks.capacity()
+    }
+
+    /// An empty layout, holding the allocations of the latest rejected mesh's layout if any.
+    pub(crate) fn spare_layout(&mut self) -> BlockLayout {
+        std::mem::take(&mut self.spare.layout)
     }
 
     /// How many pieces the latest build took from the memo without computing their densities
