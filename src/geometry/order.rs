@@ -8,7 +8,7 @@ use super::Point;
 use rayon::prelude::*;
 
 /// Fewest points keyed and sorted on several threads.
-const PARALLEL_MIN: usize = 1 << 14;
+const PARALLEL_MIN: usize = 1 << 17;
 
 const HILBERT_ORDER: u32 = 14;
 const MAX_LEVEL: u32 = 15;

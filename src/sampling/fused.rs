@@ -28,7 +28,7 @@ pub fn classify_and_check(
 }
 
 /// Fewest triangles classified on several threads.
-const PARALLEL_MIN: usize = 1 << 15;
+const PARALLEL_MIN: usize = 1 << 18;
 
 /// [`classify_and_check`] by `parts` ranges of triangles, on the thread pool when more than
 /// one: each range fills its own part of the classes (allocated here, so no worker's malloc
