@@ -24,7 +24,6 @@ use crate::geometry::{Point, Triangulation};
 use crate::mesher::MeshError;
 use crate::sampling::Samples;
 
-pub mod parallel;
 pub mod reuse;
 
 /// The class of one Delaunay triangle (see the module documentation).
@@ -192,20 +191,6 @@ pub fn medial_graph(
     tri: &Triangulation,
     kinds: &[TriangleKind],
 ) -> Result<MedialGraph, MeshError> {
-    if let Some(g) = parallel::medial_graph_split(samples, tri, kinds) {
-        return Ok(g);
-    }
-    medial_graph_serial(samples, tri, kinds)
-}
-
-/// [`medial_graph`] on one thread, in the order its documentation states: the reference the
-/// split construction ([`medial_graph`] on several threads) must equal, and what runs when the
-/// split one meets anything unexpected (so errors are this function's, first one first).
-pub fn medial_graph_serial(
-    samples: &Samples,
-    tri: &Triangulation,
-    kinds: &[TriangleKind],
-) -> Result<MedialGraph, MeshError> {
     let n = tri.len();
     if kinds.len() != n {
         return Err(internal(format!(
@@ -223,10 +208,16 @@ pub fn medial_graph_serial(
     let mut g = MedialGraph::default();
     for (t, kind) in kinds.iter().enumerate() {
         if *kind == TriangleKind::Interior {
-            g.vertices.push(
-                interior_vertex(samples, tri, t)
-                    .ok_or_else(|| internal(format!("interior triangle {t} is degenerate")))?,
-            );
+            let v = tri.triangle(t);
+            let p = v.map(|s| samples.points[s as usize]);
+            let position = circumcenter(p[0], p[1], p[2])
+                .ok_or_else(|| internal(format!("interior triangle {t} is degenerate")))?;
+            g.vertices.push(MedialVertex {
+                triangle: t as u32,
+                position,
+                samples: v,
+                circles: v.map(|s| samples.circle_of[s as usize]),
+            });
         }
     }
     // The circumcentre of a walked triangle: no cache (issue 8: a per-triangle cache was
@@ -244,18 +235,6 @@ pub fn medial_graph_serial(
         |v1, k1| internal(format!("medial arc into vertex {v1} slot {k1} found twice")),
     )?;
     Ok(g)
-}
-
-/// The medial vertex of interior triangle `t`, `None` when it is degenerate.
-fn interior_vertex(samples: &Samples, tri: &Triangulation, t: usize) -> Option<MedialVertex> {
-    let v = tri.triangle(t);
-    let p = v.map(|s| samples.points[s as usize]);
-    Some(MedialVertex {
-        triangle: t as u32,
-        position: circumcenter(p[0], p[1], p[2])?,
-        samples: v,
-        circles: v.map(|s| samples.circle_of[s as usize]),
-    })
 }
 
 /// The arcs of a graph of `n` vertices in walking order: for each vertex slot `(v, k)` not yet
