@@ -29,6 +29,8 @@ use crate::medial::{medial_graph, reuse, MedialGraph, TriangleKind};
 mod fused;
 use crate::mesher::MeshError;
 pub use fused::classify_and_check;
+#[doc(hidden)]
+pub use fused::classify_and_check_in;
 use std::collections::{HashMap, HashSet};
 use std::f64::consts::{FRAC_1_SQRT_2, FRAC_PI_4, TAU};
 

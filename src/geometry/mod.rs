@@ -11,6 +11,7 @@ pub mod exact;
 pub mod fuzzing;
 mod order;
 pub mod predicates;
+mod sparse;
 pub mod triangulation;
 pub mod verify;
 mod wide;

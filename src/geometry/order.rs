@@ -5,6 +5,10 @@
 //! and a Hilbert cell and are ordered by input index: the first occurrence is inserted first.
 
 use super::Point;
+use rayon::prelude::*;
+
+/// Fewest points keyed and sorted on several threads.
+const PARALLEL_MIN: usize = 1 << 17;
 
 const HILBERT_ORDER: u32 = 14;
 const MAX_LEVEL: u32 = 15;
@@ -80,6 +84,15 @@ fn splitmix(mut z: u64) -> u64 {
 
 /// Point indices in insertion order. Points must be finite and fewer than 2^32.
 pub(crate) fn insertion_order(pts: &[Point]) -> Vec<u32> {
+    insertion_order_on(
+        pts,
+        pts.len() >= PARALLEL_MIN && rayon::current_num_threads() > 1,
+    )
+}
+
+/// [`insertion_order`], keyed and sorted on the thread pool when `parallel`: the keys are
+/// distinct (each ends with its index), so both give the same order.
+fn insertion_order_on(pts: &[Point], parallel: bool) -> Vec<u32> {
     let (mut x0, mut y0, mut x1, mut y1) = (f64::MAX, f64::MAX, f64::MIN, f64::MIN);
     for p in pts {
         x0 = x0.min(p[0]);
@@ -100,25 +113,28 @@ pub(crate) fn insertion_order(pts: &[Point]) -> Vec<u32> {
             0
         }
     };
-    let mut keys: Vec<u64> = pts
-        .iter()
-        .enumerate()
-        .map(|(i, p)| {
-            // `+ 0.0` maps -0.0 to 0.0 so that duplicates hash alike.
-            let h = splitmix((p[0] + 0.0).to_bits() ^ splitmix((p[1] + 0.0).to_bits()));
-            let level = (h.trailing_zeros()).min(MAX_LEVEL);
-            let round = u64::from(MAX_LEVEL - level);
-            let hk = u64::from(hilbert_fast(
-                quantize(p[0], x0, sx),
-                quantize(p[1], y0, sy),
-                HILBERT_ORDER,
-            ));
-            // round (4 bits) | hilbert (28 bits) | index (32 bits)
-            (round << 60) | (hk << 32) | i as u64
-        })
-        .collect();
-    keys.sort_unstable();
-    keys.into_iter().map(|k| k as u32).collect()
+    let key = |(i, p): (usize, &Point)| {
+        // `+ 0.0` maps -0.0 to 0.0 so that duplicates hash alike.
+        let h = splitmix((p[0] + 0.0).to_bits() ^ splitmix((p[1] + 0.0).to_bits()));
+        let level = (h.trailing_zeros()).min(MAX_LEVEL);
+        let round = u64::from(MAX_LEVEL - level);
+        let hk = u64::from(hilbert_fast(
+            quantize(p[0], x0, sx),
+            quantize(p[1], y0, sy),
+            HILBERT_ORDER,
+        ));
+        // round (4 bits) | hilbert (28 bits) | index (32 bits)
+        (round << 60) | (hk << 32) | i as u64
+    };
+    if parallel {
+        let mut keys: Vec<u64> = pts.par_iter().enumerate().map(key).collect();
+        keys.par_sort_unstable();
+        keys.into_par_iter().map(|k| k as u32).collect()
+    } else {
+        let mut keys: Vec<u64> = pts.iter().enumerate().map(key).collect();
+        keys.sort_unstable();
+        keys.into_iter().map(|k| k as u32).collect()
+    }
 }
 
 #[cfg(test)]
@@ -156,6 +172,25 @@ mod tests {
                 hilbert(x, y, HILBERT_ORDER)
             );
         }
+    }
+
+    #[test]
+    fn parallel_order_equals_the_serial_one() {
+        let mut r = 0x2545_f491u32;
+        let mut unit = || {
+            r ^= r << 13;
+            r ^= r >> 17;
+            r ^= r << 5;
+            f64::from(r) / f64::from(u32::MAX)
+        };
+        let mut pts: Vec<Point> = (0..40_000).map(|_| [unit(), unit() - 0.5]).collect();
+        // Duplicates (also through -0.0) and a coarse lattice share keys but for the index.
+        pts.extend_from_within(..500);
+        pts.extend((0..2_000).map(|i| [f64::from(i % 7) * -0.0, f64::from(i / 7)]));
+        assert_eq!(
+            insertion_order_on(&pts, true),
+            insertion_order_on(&pts, false)
+        );
     }
 
     #[test]

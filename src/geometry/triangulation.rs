@@ -25,7 +25,18 @@ pub enum TriangulationError {
 /// Largest accepted input size (keeps every internal half-edge id inside `u32`).
 pub const MAX_POINTS: usize = 300_000_000;
 
-const NONE: u32 = u32::MAX;
+pub(super) const NONE: u32 = u32::MAX;
+
+/// How [`Triangulation::extended`] inserts the new points.
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum Extension {
+    /// The sparse replay, else the builder.
+    Auto,
+    /// The resumed builder over the whole triangulation.
+    Full,
+    /// The sparse replay or nothing.
+    Sparse,
+}
 
 /// The Delaunay triangulation of a finite planar point set, computed with exact predicates.
 ///
@@ -199,6 +210,30 @@ impl Triangulation {
     /// their smallest index); the triangle *numbering* differs: kept triangles keep their ids,
     /// new ones follow. Deterministic.
     pub fn extended(&self, points: &[Point]) -> Result<Option<Self>, TriangulationError> {
+        self.extended_on(points, Extension::Auto)
+    }
+
+    /// [`Self::extended`] always by the resumed builder over the whole triangulation (the
+    /// reference for the sparse replay [`Self::extended`] takes when it can; same result).
+    #[doc(hidden)]
+    pub fn extended_full(&self, points: &[Point]) -> Result<Option<Self>, TriangulationError> {
+        self.extended_on(points, Extension::Full)
+    }
+
+    /// [`Self::extended`] by the sparse replay only: `Ok(None)` also where it gives up (tests
+    /// count how often it applies).
+    #[doc(hidden)]
+    pub fn extended_sparse(&self, points: &[Point]) -> Result<Option<Self>, TriangulationError> {
+        self.extended_on(points, Extension::Sparse)
+    }
+
+    /// [`Self::extended`] by the way `how` says: the sparse replay on copies of this
+    /// triangulation's arrays (`sparse::extend`) gives the builder's result or nothing.
+    fn extended_on(
+        &self,
+        points: &[Point],
+        how: Extension,
+    ) -> Result<Option<Self>, TriangulationError> {
         let n0 = self.points.len();
         let bits = |p: &Point| p.map(f64::to_bits);
         if points.len() < n0
@@ -237,8 +272,38 @@ impl Triangulation {
                 .map(|&p| [scale(p[0], s), scale(p[1], s)])
                 .collect(),
         };
-        let (tv, adj) = self.builder_arrays(points.len() as u32);
         let all_safe = all_safe_after(range, shift);
+        if how != Extension::Full {
+            let arrays = super::sparse::Arrays {
+                tris: self.tris.clone(),
+                adj: self.adj.clone(),
+                vertex_tri: self.vertex_tri.clone(),
+            };
+            debug_assert_eq!(
+                2 * self.vertex_count() - 2 - self.tris.len(),
+                self.adj.iter().flatten().filter(|&&m| m == NONE).count()
+            );
+            if let Some(a) = super::sparse::extend(
+                &work,
+                all_safe,
+                arrays,
+                self.vertex_count(),
+                n0,
+                &self.duplicates,
+            ) {
+                return Ok(Some(Triangulation {
+                    points: points.to_vec(),
+                    tris: a.tris,
+                    adj: a.adj,
+                    duplicates: self.duplicates.clone(),
+                    vertex_tri: a.vertex_tri,
+                }));
+            }
+            if how == Extension::Sparse {
+                return Ok(None);
+            }
+        }
+        let (tv, adj) = self.builder_arrays(points.len() as u32);
         let mut builder = Builder::resume(&work, all_safe, tv, adj, self.duplicates.clone());
         for pos in n0..points.len() {
             builder

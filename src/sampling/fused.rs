@@ -4,6 +4,8 @@ use super::{Samples, Violation, ViolationKind};
 use crate::domain::BOUNDING;
 use crate::geometry::Triangulation;
 use crate::medial::TriangleKind;
+use rayon::prelude::*;
+use std::sync::atomic::{AtomicBool, Ordering};
 
 /// [`crate::medial::classify`] and [`super::check_invariants`] of `tri` in one pass over the
 /// triangles: the same classes and the same violations in the same order (tested in
@@ -17,10 +19,55 @@ pub fn classify_and_check(
     samples: &Samples,
     tri: &Triangulation,
 ) -> (Vec<TriangleKind>, Vec<Violation>) {
+    let parts = if tri.len() >= PARALLEL_MIN {
+        2 * rayon::current_num_threads()
+    } else {
+        1
+    };
+    classify_and_check_in(samples, tri, parts)
+}
+
+/// Fewest triangles classified on several threads.
+const PARALLEL_MIN: usize = 1 << 18;
+
+/// [`classify_and_check`] by `parts` ranges of triangles, on the thread pool when more than
+/// one: each range fills its own part of the classes (allocated here, so no worker's malloc
+/// arena holds them) and lists its violations in triangle order; the boundary edges seen are
+/// marked in one shared array (a mark is only ever set). The ranges' violations, in range
+/// order, are the single pass's, so the result does not depend on `parts` (tests vary it).
+#[doc(hidden)]
+pub fn classify_and_check_in(
+    samples: &Samples,
+    tri: &Triangulation,
+    parts: usize,
+) -> (Vec<TriangleKind>, Vec<Violation>) {
     let mut out = super::duplicate_violations(samples, tri);
-    let mut seen = vec![false; samples.len()];
-    let mut kinds = Vec::with_capacity(tri.len());
-    for t in 0..tri.len() {
+    let seen: Vec<AtomicBool> = (0..samples.len()).map(|_| AtomicBool::new(false)).collect();
+    let mut kinds = vec![TriangleKind::Interior; tri.len()];
+    let step = tri.len().div_ceil(parts.max(1)).max(1);
+    let found: Vec<Vec<Violation>> = kinds
+        .par_chunks_mut(step)
+        .enumerate()
+        .map(|(i, chunk)| classify_range(samples, tri, i * step, chunk, &seen))
+        .collect();
+    out.extend(found.into_iter().flatten());
+    let seen: Vec<bool> = seen.into_iter().map(AtomicBool::into_inner).collect();
+    super::push_missing_edges(&mut out, samples, tri, &seen);
+    (kinds, out)
+}
+
+/// Classes of triangles `first..first + kinds.len()` into `kinds`, boundary edges marked in
+/// `seen`; the violations of those triangles, in order.
+fn classify_range(
+    samples: &Samples,
+    tri: &Triangulation,
+    first: usize,
+    kinds: &mut [TriangleKind],
+    seen: &[AtomicBool],
+) -> Vec<Violation> {
+    let mut out = Vec::new();
+    for (i, slot) in kinds.iter_mut().enumerate() {
+        let t = first + i;
         let v = tri.triangle(t);
         let c = v.map(|s| samples.circle_of[s as usize]);
         // Per edge k (opposite vertex k), its first sample when it is a boundary edge.
@@ -38,7 +85,7 @@ pub fn classify_and_check(
                 }
             }
             if from[k] != u32::MAX {
-                seen[from[k] as usize] = true;
+                seen[from[k] as usize].store(true, Ordering::Relaxed);
                 count += 1;
                 edge = k as u8;
             }
@@ -56,7 +103,7 @@ pub fn classify_and_check(
                 _ => TriangleKind::MultiBoundary,
             }
         };
-        kinds.push(kind);
+        *slot = kind;
         let tt = t as u32;
         match kind {
             TriangleKind::Outside => out.push(Violation {
@@ -79,6 +126,5 @@ pub fn classify_and_check(
             TriangleKind::Hole(_) | TriangleKind::Boundary { .. } => {}
         }
     }
-    super::push_missing_edges(&mut out, samples, tri, &seen);
-    (kinds, out)
+    out
 }

@@ -1,0 +1,326 @@
+//! [`Triangulation::extended`] without rebuilding the whole triangulation (issue 8: at 1e5
+//! particles refinement inserts a few hundred samples into 6 M triangles, and the builder's
+//! half-edge arrays cost a second or so to rebuild and compact).
+//!
+//! [`extend`] replays what the resumed builder ([`super::build::Builder::resume`] then
+//! [`super::build::Builder::insert`], then the compaction of `Triangulation::finish`) does, on
+//! copies of the finished arrays: the same walks (the same random edge order, the same step
+//! caps), the same cavity search in the same order, the same slots reused and appended. In the
+//! builder's layout the kept triangles come first, then one infinite triangle per hull edge,
+//! then the appended ones; the compaction drops the infinite ones, so a builder slot
+//! `F + H + j` becomes `F + j`, which is where this appends. It gives up (`None`, the caller
+//! runs the builder) wherever the replay would need the infinite triangles themselves: a walk
+//! crossing the hull, a point outside the hull or on it, an exact duplicate, a failed location
+//! or a broken cavity. So the result is the builder's whenever it is given.
+
+use super::predicates::{incircle_sos, incircle_sos_safe, orient2d, orient2d_safe};
+use super::triangulation::NONE;
+use super::Point;
+use std::cmp::Ordering;
+use std::collections::HashMap;
+
+/// The finished arrays of a triangulation, as `Triangulation` holds them.
+pub(super) struct Arrays {
+    pub(super) tris: Vec<[u32; 3]>,
+    pub(super) adj: Vec<[u32; 3]>,
+    pub(super) vertex_tri: Vec<u32>,
+}
+
+#[inline(always)]
+fn next(k: usize) -> usize {
+    if k == 2 {
+        0
+    } else {
+        k + 1
+    }
+}
+
+#[inline(always)]
+fn prev(k: usize) -> usize {
+    if k == 0 {
+        2
+    } else {
+        k - 1
+    }
+}
+
+/// The replay gave up: the builder must run.
+struct GiveUp;
+
+struct Sparse<'a> {
+    pts: &'a [Point],
+    all_safe: bool,
+    a: Arrays,
+    /// Number of hull edges: the builder holds that many infinite triangles besides these.
+    hull: usize,
+    last: u32,
+    rng: u32,
+    seen: Vec<(u32, bool)>,
+    stack: Vec<u32>,
+    cavity: Vec<u32>,
+    /// `(u, w, outside triangle or NONE, its edge slot)` per cavity boundary edge `u -> w`.
+    boundary: Vec<(u32, u32, u32, u8)>,
+    /// A current triangle of each vertex whose star changed.
+    touched: HashMap<u32, u32>,
+}
+
+/// The triangulation arrays after inserting `pts[n0..]` (in order) into the finished arrays
+/// `a` of the triangulation of `pts[..n0]` with `vertices` distinct points, as the resumed
+/// builder gives them after compaction; `None` where the builder must run (module docs).
+/// `pts` are the points as the predicates see them (scaled), `all_safe` as for the builder.
+pub(super) fn extend(
+    pts: &[Point],
+    all_safe: bool,
+    a: Arrays,
+    vertices: usize,
+    n0: usize,
+    duplicates: &[(u32, u32)],
+) -> Option<Arrays> {
+    // Euler: a triangulation of V points with H hull vertices has 2V - 2 - H triangles.
+    let hull = (2 * vertices).checked_sub(2 + a.tris.len())?;
+    if a.tris.is_empty() || a.adj.len() != a.tris.len() {
+        return None;
+    }
+    let mut s = Sparse {
+        pts,
+        all_safe,
+        a,
+        hull,
+        last: 0,
+        rng: 0x9e37_79b9,
+        seen: Vec::new(),
+        stack: Vec::new(),
+        cavity: Vec::new(),
+        boundary: Vec::new(),
+        touched: HashMap::new(),
+    };
+    for pi in n0..pts.len() {
+        s.insert(pi as u32).ok()?;
+    }
+    s.finish(duplicates)
+}
+
+impl Sparse<'_> {
+    #[inline(always)]
+    fn p(&self, v: u32) -> &Point {
+        &self.pts[v as usize]
+    }
+
+    #[inline(always)]
+    fn orient(&self, a: &Point, b: &Point, c: &Point) -> Ordering {
+        if self.all_safe {
+            orient2d_safe(*a, *b, *c)
+        } else {
+            orient2d(*a, *b, *c)
+        }
+    }
+
+    #[inline(always)]
+    fn random3(&mut self) -> usize {
+        self.rng ^= self.rng << 13;
+        self.rng ^= self.rng >> 17;
+        self.rng ^= self.rng << 5;
+        (self.rng % 3) as usize
+    }
+
+    /// The builder's triangle count (its infinite triangles included).
+    fn builder_len(&self) -> usize {
+        self.a.tris.len() + self.hull
+    }
+
+    /// The builder's visibility walk from finite `start`; crossing the hull gives up.
+    fn walk(&mut self, start: u32, q: &Point, exact: bool, cap: usize) -> Result<u32, GiveUp> {
+        let mut t = start;
+        let mut came_from = u32::MAX;
+        'step: for _ in 0..cap {
+            let v = self.a.tris[t as usize];
+            let r = self.random3();
+            for i in 0..3 {
+                let k = (r + i) % 3;
+                let m = self.a.adj[t as usize][k];
+                // An infinite neighbour is never the finite triangle the walk came from.
+                if m != NONE && m == came_from {
+                    continue;
+                }
+                let (a, b) = (self.p(v[next(k)]), self.p(v[prev(k)]));
+                let behind = if exact {
+                    self.orient(a, b, q) == Ordering::Less
+                } else {
+                    let (a, b) = (*a, *b);
+                    (b[0] - a[0]) * (q[1] - a[1]) - (b[1] - a[1]) * (q[0] - a[0]) < 0.0
+                };
+                if behind {
+                    if m == NONE {
+                        return Err(GiveUp);
+                    }
+                    came_from = t;
+                    t = m;
+                    continue 'step;
+                }
+            }
+            return Ok(t);
+        }
+        Err(GiveUp)
+    }
+
+    fn contains_exact(&self, t: u32, q: &Point) -> bool {
+        let v = self.a.tris[t as usize];
+        (0..3).all(|k| self.orient(self.p(v[next(k)]), self.p(v[prev(k)]), q) != Ordering::Less)
+    }
+
+    /// The builder's `locate`: the fast walk, then the exact one, both from the last triangle.
+    /// (The builder's fast walk hitting its cap falls through to the exact walk; here that
+    /// gives up, as does every case the builder would finish by a scan.)
+    fn locate(&mut self, q: &Point) -> Result<u32, GiveUp> {
+        let n_tri = self.builder_len();
+        let fast_cap = 64 + 4 * (n_tri as f64).sqrt() as usize;
+        let t = self.walk(self.last, q, false, fast_cap)?;
+        let t = if self.contains_exact(t, q) {
+            t
+        } else {
+            let t = self.walk(self.last, q, true, 4 * n_tri + 16)?;
+            if !self.contains_exact(t, q) {
+                return Err(GiveUp);
+            }
+            t
+        };
+        if self.a.tris[t as usize].iter().any(|&v| self.p(v) == q) {
+            return Err(GiveUp);
+        }
+        Ok(t)
+    }
+
+    /// The edge slot of triangle `m` holding the directed edge `b -> a`.
+    fn mirror(&self, m: u32, a: u32, b: u32) -> Result<u8, GiveUp> {
+        let w = self.a.tris[m as usize];
+        (0..3)
+            .find(|&j| w[next(j)] == b && w[prev(j)] == a)
+            .map(|j| j as u8)
+            .ok_or(GiveUp)
+    }
+
+    /// The builder's `insert` of point `pi`, in this numbering.
+    fn insert(&mut self, pi: u32) -> Result<(), GiveUp> {
+        let q = *self.p(pi);
+        let seed = self.locate(&q)?;
+        self.seen.clear();
+        self.cavity.clear();
+        self.boundary.clear();
+        self.seen.push((seed, true));
+        self.cavity.push(seed);
+        self.stack.push(seed);
+        while let Some(t) = self.stack.pop() {
+            let v = self.a.tris[t as usize];
+            for k in 0..3 {
+                let (a, b) = (v[next(k)], v[prev(k)]);
+                let m = self.a.adj[t as usize][k];
+                if m == NONE {
+                    // The infinite triangle (b, a, inf): in conflict when q is outside the
+                    // hull edge or on it, where the builder would change the hull.
+                    if self.orient(self.p(b), self.p(a), &q) != Ordering::Less {
+                        self.stack.clear();
+                        return Err(GiveUp);
+                    }
+                    self.boundary.push((a, b, NONE, 0));
+                    continue;
+                }
+                let conflict = match self.seen.iter().find(|e| e.0 == m) {
+                    Some(&(_, true)) => continue,
+                    Some(&(_, false)) => false,
+                    None => {
+                        let w = self.a.tris[m as usize];
+                        let (pa, pb, pc) = (*self.p(w[0]), *self.p(w[1]), *self.p(w[2]));
+                        let s = if self.all_safe {
+                            incircle_sos_safe(pa, pb, pc, q)
+                        } else {
+                            incircle_sos(pa, pb, pc, q)
+                        };
+                        s == Ordering::Greater
+                    }
+                };
+                if conflict {
+                    self.seen.push((m, true));
+                    self.cavity.push(m);
+                    self.stack.push(m);
+                } else {
+                    self.seen.push((m, false));
+                    let j = self.mirror(m, a, b)?;
+                    self.boundary.push((a, b, m, j));
+                }
+            }
+        }
+        if self.boundary.len() != self.cavity.len() + 2 {
+            return Err(GiveUp);
+        }
+        // The builder's slots: cavity triangles in order, then appended ones.
+        let nc = self.cavity.len();
+        let mut slots = Vec::with_capacity(self.boundary.len());
+        for i in 0..self.boundary.len() {
+            let (u, w, m, j) = self.boundary[i];
+            let s = if i < nc {
+                self.cavity[i]
+            } else {
+                self.a.tris.push([0; 3]);
+                self.a.adj.push([NONE; 3]);
+                (self.a.tris.len() - 1) as u32
+            };
+            self.a.tris[s as usize] = [u, w, pi];
+            self.a.adj[s as usize][2] = m;
+            if m != NONE {
+                self.a.adj[m as usize][j as usize] = s;
+            }
+            slots.push(s);
+            self.last = s;
+        }
+        // Across (w, pi): the new triangle starting at w (the builder's `start_at[w]`, last
+        // written wins).
+        for i in 0..self.boundary.len() {
+            let s = slots[i];
+            let w = self.boundary[i].1;
+            let n = (0..self.boundary.len())
+                .rev()
+                .find(|&i2| self.boundary[i2].0 == w)
+                .map(|i2| slots[i2])
+                .ok_or(GiveUp)?;
+            self.a.adj[s as usize][0] = n;
+            self.a.adj[n as usize][1] = s;
+        }
+        for (i, &(u, _, _, _)) in self.boundary.iter().enumerate() {
+            self.touched.insert(u, slots[i]);
+        }
+        self.touched.insert(pi, slots[0]);
+        Ok(())
+    }
+
+    /// The highest triangle having each vertex whose star changed (as the compaction records
+    /// it), by a walk around the vertex; then the duplicates take their first's.
+    fn finish(mut self, duplicates: &[(u32, u32)]) -> Option<Arrays> {
+        self.a.vertex_tri.resize(self.pts.len(), NONE);
+        let cap = self.a.tris.len();
+        for (&v, &t0) in &self.touched {
+            let mut best = t0;
+            for dir in [next, prev] {
+                let mut t = t0;
+                for step in 0.. {
+                    if step > cap {
+                        return None;
+                    }
+                    let i = self.a.tris[t as usize].iter().position(|&x| x == v)?;
+                    t = self.a.adj[t as usize][dir(i)];
+                    if t == NONE || t == t0 {
+                        break;
+                    }
+                    best = best.max(t);
+                }
+                if t == t0 {
+                    break;
+                }
+            }
+            self.a.vertex_tri[v as usize] = best;
+        }
+        for &(first, d) in duplicates {
+            self.a.vertex_tri[d as usize] = self.a.vertex_tri[first as usize];
+        }
+        Some(self.a)
+    }
+}
