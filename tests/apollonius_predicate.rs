@@ -449,10 +449,10 @@ fn random_cases_against_newton_oracle() {
             let t = rng.range(0.0, std::f64::consts::TAU);
             *s = if i == 0 && case % 3 == 0 {
                 let gap = rng.range(0.1, 5.0);
-                bounding(p[0] + gap * t.cos(), p[1] + gap * t.sin(), rho + gap)
+                common::bounding_tangent(p, rho, t, gap)
             } else {
                 let r = rng.range(0.01, 2.0);
-                hole(p[0] + (rho + r) * t.cos(), p[1] + (rho + r) * t.sin(), r)
+                common::hole_tangent(p, rho, t, r)
             };
         }
         let Some(u) = newton(&sites, p, rho) else {

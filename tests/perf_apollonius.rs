@@ -114,10 +114,10 @@ fn random_and_near_tangent_triples() {
             let t = f(0.0, std::f64::consts::TAU);
             if i == 0 && case % 4 == 0 {
                 let gap = f(0.1, 5.0);
-                *s = bounding(p[0] + gap * t.cos(), p[1] + gap * t.sin(), rho + gap);
+                *s = common::bounding_tangent(p, rho, t, gap);
             } else {
                 let r = f(0.01, 2.0);
-                *s = hole(p[0] + (rho + r) * t.cos(), p[1] + (rho + r) * t.sin(), r);
+                *s = common::hole_tangent(p, rho, t, r);
             }
         }
         found += usize::from(check(sites, p));

@@ -84,10 +84,10 @@ fn random_near_tangent_and_bounding_triples() {
             let t = f(0.0, std::f64::consts::TAU);
             if i == case % 3 && case % 5 == 0 {
                 let gap = f(0.1, 5.0);
-                *s = bounding(p[0] + gap * t.cos(), p[1] + gap * t.sin(), rho + gap);
+                *s = common::bounding_tangent(p, rho, t, gap);
             } else {
                 let r = [f(0.01, 2.0), f(1e-8, 1e-6), f(1e2, 1e4)][(case / 4 + i) % 3];
-                *s = hole(p[0] + (rho + r) * t.cos(), p[1] + (rho + r) * t.sin(), r);
+                *s = common::hole_tangent(p, rho, t, r);
             }
         }
         let (a, c) = check(sites, p);

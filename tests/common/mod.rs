@@ -167,6 +167,24 @@ pub fn bounding_site(x: f64, y: f64, r: f64) -> medial_blocks::apollonius::Site 
     })
 }
 
+/// The hole of radius `r` externally tangent, at the angle `t`, to the circle of centre `p`
+/// and radius `rho` (random Apollonius triples are three of these around one circle).
+pub fn hole_tangent(p: [f64; 2], rho: f64, t: f64, r: f64) -> medial_blocks::apollonius::Site {
+    let d = rho + r;
+    hole_site(p[0] + d * t.cos(), p[1] + d * t.sin(), r)
+}
+
+/// The bounding circle of radius `rho + gap` internally tangent, at the angle `t`, to the
+/// circle of centre `p` and radius `rho` (its centre is `gap` from `p`).
+pub fn bounding_tangent(
+    p: [f64; 2],
+    rho: f64,
+    t: f64,
+    gap: f64,
+) -> medial_blocks::apollonius::Site {
+    bounding_site(p[0] + gap * t.cos(), p[1] + gap * t.sin(), rho + gap)
+}
+
 /// The nodes of an `(ni + 1) x (nj + 1)` lattice, each moved by up to `jitter / 2` in both
 /// directions, sheared by `shear` and stretched by `(sx, sy)`, row by row (quality tests
 /// spoil some of them afterwards).
