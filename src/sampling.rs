@@ -1004,13 +1004,14 @@ pub fn sample_and_triangulate_after(
     opts: &SamplingOptions,
     previous: Option<&SampledDomain>,
 ) -> Result<SampledDomain, MeshError> {
-    sample_and_triangulate_impl(domain, opts, previous, None)
+    sample_and_triangulate_impl(domain, opts, previous, None, None)
 }
 
 /// [`sample_and_triangulate_after`], moving the medial arcs the new graph keeps out of
-/// `previous` instead of cloning them ([`reuse::medial_graph_taking`]): `previous.medial.arcs`
-/// is left empty. For macro refinement, which reads only the earlier graph's vertices
-/// afterwards. The same result.
+/// `previous` instead of cloning them ([`reuse::medial_graph_taking`]), and the earlier
+/// triangulation's arrays into the new one ([`Triangulation::extended_taking`]) instead of
+/// copying them: `previous.medial.arcs` and `previous.triangulation` are left empty. For macro
+/// refinement, which reads only the earlier graph's vertices afterwards. The same result.
 pub fn sample_and_triangulate_taking(
     domain: &Domain,
     opts: &SamplingOptions,
@@ -1019,19 +1020,24 @@ pub fn sample_and_triangulate_taking(
     match previous {
         Some(p) => {
             let arcs = std::mem::take(&mut p.medial.arcs);
-            sample_and_triangulate_impl(domain, opts, Some(p), Some(arcs))
+            let tri = std::mem::take(&mut p.triangulation);
+            sample_and_triangulate_impl(domain, opts, Some(p), Some(arcs), Some(tri))
         }
-        None => sample_and_triangulate_impl(domain, opts, None, None),
+        None => sample_and_triangulate_impl(domain, opts, None, None, None),
     }
 }
 
 /// [`sample_and_triangulate_after`], with the earlier graph's arcs apart (`taken`, moved
-/// into the new graph where kept) when the caller gave them up.
+/// into the new graph where kept) when the caller gave them up, and likewise the earlier
+/// triangulation (`owned`, then `previous.triangulation` is not read): its arrays move into an
+/// extension, and come back ([`crate::geometry::Changes::undo`]) when a further attempt needs
+/// them.
 fn sample_and_triangulate_impl(
     domain: &Domain,
     opts: &SamplingOptions,
     previous: Option<&SampledDomain>,
     mut taken: Option<Vec<crate::medial::MedialArc>>,
+    mut owned: Option<Triangulation>,
 ) -> Result<SampledDomain, MeshError> {
     let _stage = crate::timings::enter("sampling");
     let gaps = nearest_gaps(domain);
@@ -1092,10 +1098,19 @@ fn sample_and_triangulate_impl(
                 ),
             });
         }
+        // What the arrays taken from `owned` changed, while the new triangulation holds them.
+        let mut changes = None;
         let (triangulation, extended) = crate::timings::span("triangulation", || {
-            let extended = match previous {
-                Some(p) => p.triangulation.extended(&samples.points)?,
-                None => None,
+            let extended = match (owned.as_mut(), previous) {
+                (Some(t), _) => match t.extended_taking(&samples.points)? {
+                    Some((t, c)) => {
+                        changes = Some(c);
+                        Some(t)
+                    }
+                    None => t.extended(&samples.points)?,
+                },
+                (None, Some(p)) => p.triangulation.extended(&samples.points)?,
+                (None, None) => None,
             };
             match extended {
                 Some(t) => Ok((t, true)),
@@ -1105,13 +1120,26 @@ fn sample_and_triangulate_impl(
         // The round before, when the new triangulation extends its own and every earlier
         // circle is sampled as before: its classes, checks and medial arcs are reused where
         // the insertion kept the triangles ([`crate::medial::reuse`]).
+        let before_len = match (&changes, &owned, previous) {
+            (Some(c), _, _) => c.before_len(),
+            (None, Some(t), _) => t.len(),
+            (None, None, Some(p)) => p.triangulation.len(),
+            (None, None, None) => 0,
+        };
         let reuse = previous
             .filter(|p| {
                 extended
-                    && p.kinds.len() == p.triangulation.len()
+                    && p.kinds.len() == before_len
                     && reuse::same_earlier_circles(&p.samples, &samples)
             })
-            .map(|p| (p, reuse::Kept::new(&p.triangulation, &triangulation)));
+            .map(|p| {
+                let kept = match (&changes, &owned) {
+                    (Some(c), _) => reuse::Kept::from_changes(c, &triangulation),
+                    (None, Some(t)) => reuse::Kept::new(t, &triangulation),
+                    (None, None) => reuse::Kept::new(&p.triangulation, &triangulation),
+                };
+                (p, kept)
+            });
         let (kinds, hard) = match &reuse {
             Some((p, kept)) => {
                 let kinds = reuse::classify_after(&samples, &triangulation, &p.kinds, kept);
@@ -1125,7 +1153,7 @@ fn sample_and_triangulate_impl(
             }
             None => classify_and_check(&samples, &triangulation),
         };
-        let (violations, soft_result) = if hard.is_empty() {
+        let (violations, soft_result, spare) = if hard.is_empty() {
             let (medial, soft) = crate::timings::span("medial_graph", || {
                 // Taken arcs serve one attempt (a later round walks every arc again).
                 let arcs = taken.take();
@@ -1163,7 +1191,7 @@ fn sample_and_triangulate_impl(
             if soft.is_empty() || round >= opts.max_rounds || !opts.soft_rounds {
                 return Ok(done);
             }
-            (soft, Some(done))
+            (soft, Some(done), None)
         } else {
             if let Some(v) = hard
                 .iter()
@@ -1184,7 +1212,7 @@ fn sample_and_triangulate_impl(
                     ),
                 });
             }
-            (hard, None)
+            (hard, None, Some(triangulation))
         };
         // Refinement factor 2^k per (radius, gap) group, the largest any member needs.
         let mut keys: HashMap<(u64, u64), u32> = HashMap::new();
@@ -1213,6 +1241,13 @@ fn sample_and_triangulate_impl(
         if !refined {
             if let Some(done) = soft_result {
                 return Ok(done);
+            }
+        }
+        // This attempt's triangulation is dropped: the arrays it took go back to `owned`
+        // for the next attempt.
+        if let Some(c) = changes {
+            if let Some(t) = spare.or(soft_result.map(|d| d.triangulation)) {
+                owned = Some(c.undo(t));
             }
         }
         round += 1;

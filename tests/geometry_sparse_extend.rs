@@ -3,11 +3,14 @@
 //! the builder's triangulation (`extended_full`, the reference computed alongside): the same
 //! triangles in the same order, the same neighbours, vertex triangles and duplicates; and pass
 //! the exact verifier. Where it gives up (points outside the hull, duplicates), `extended`
-//! still equals the reference.
+//! still equals the reference. `extended_taking` (the replay on the taken arrays themselves)
+//! gives the same triangulation, leaves the original unchanged where it gives up, gives it back
+//! by `Changes::undo`, and its changes give the same `Kept` as comparing both triangulations.
 
 use medial_blocks::geometry::verify::verify_exact;
 use medial_blocks::geometry::{Point, Triangulation};
 use medial_blocks::layouts;
+use medial_blocks::medial::reuse::Kept;
 use medial_blocks::refine::refine;
 use medial_blocks::sampling::{sample_and_triangulate, SamplingOptions};
 use proptest::prelude::*;
@@ -24,6 +27,34 @@ fn same(a: &Triangulation, b: &Triangulation) {
         assert_eq!(a.vertex_triangle(v), b.vertex_triangle(v), "vertex {v}");
     }
     assert_eq!(a.duplicates(), b.duplicates());
+}
+
+/// `extended_taking` of a copy of `prefix` against `extended_sparse` of `prefix` (the
+/// replay on copies), the `Kept` of its changes against the comparison of both
+/// triangulations, and its undo against `prefix`. True when it applied.
+fn taking_agrees(prefix: &Triangulation, pts: &[Point]) -> bool {
+    let mut taken = prefix.clone();
+    let sparse = prefix.extended_sparse(pts).unwrap();
+    match taken.extended_taking(pts).unwrap() {
+        Some((after, changes)) => {
+            same(
+                &after,
+                sparse.as_ref().expect("the replay on copies applies too"),
+            );
+            assert_eq!(taken.len(), 0, "the arrays were taken");
+            assert_eq!(
+                Kept::from_changes(&changes, &after),
+                Kept::new(prefix, &after)
+            );
+            same(&changes.undo(after), prefix);
+            true
+        }
+        None => {
+            assert!(sparse.is_none());
+            same(&taken, prefix);
+            false
+        }
+    }
 }
 
 /// Points on a coarse lattice (co-circular quadruples, collinear points, duplicates) or spread
@@ -51,6 +82,7 @@ proptest! {
                 same(&sparse, &full);
             }
         }
+        taking_agrees(&prefix, &pts);
     }
 }
 
@@ -73,6 +105,7 @@ fn sparse_extension_applies_inside_the_hull() {
             applied += 1;
         }
         same(&prefix.extended(&pts).unwrap().unwrap(), &full);
+        taking_agrees(&prefix, &pts);
     }
     assert!(applied >= 18, "the replay applied {applied} times of 20");
 }
@@ -98,6 +131,7 @@ fn sparse_extension_on_refinement_samples() {
         if let Some(sparse) = s0.triangulation.extended_sparse(p1).unwrap() {
             same(&sparse, &full);
             verify_exact(&sparse).unwrap();
+            assert!(taking_agrees(&s0.triangulation, p1));
             applied += usize::from(p1.len() > s0.samples.points.len());
         }
     }

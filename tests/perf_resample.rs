@@ -10,6 +10,7 @@
 mod common;
 
 use medial_blocks::domain::{Circle, Domain};
+use medial_blocks::geometry::Triangulation;
 use medial_blocks::layouts::SplitMix64;
 use medial_blocks::medial::reuse::{
     classify_after, invariants_hold_after, medial_graph_after, medial_graph_taking,
@@ -86,6 +87,7 @@ fn reuse_equals_the_full_computation() {
     let mut rng = SplitMix64(11);
     let (mut extended, mut walked, mut kept_arcs) = (0, 0, 0);
     let (mut circles, mut circles_taken) = (0, 0);
+    let mut later_rounds = 0;
     for d0 in domains() {
         let s0 = sample_and_triangulate(&d0, &opts).unwrap();
         for d1 in extensions(&d0, &mut rng) {
@@ -150,6 +152,11 @@ fn reuse_equals_the_full_computation() {
                 (&after.samples, &after.kinds, &after.medial, after.rounds)
             );
             assert_eq!(moved.thin_walls, after.thin_walls);
+            // The arrays moved out of `given` give the same triangulation, also after a
+            // further attempt (soft rounds) had them given back.
+            same_triangulation(&moved.triangulation, &after.triangulation);
+            assert_eq!(given.triangulation.len(), 0);
+            later_rounds += usize::from(after.rounds > 0);
             assert_eq!(after.medial.arcs.len(), fresh.medial.arcs.len());
         }
     }
@@ -159,6 +166,21 @@ fn reuse_equals_the_full_computation() {
         "{circles_taken} of {circles} circles taken over"
     );
     assert!(kept_arcs > walked, "{kept_arcs} kept, {walked} walked");
+    eprintln!("{later_rounds} extensions with later sampling rounds");
+}
+
+/// Everything a triangulation exposes, for equality.
+fn same_triangulation(a: &Triangulation, b: &Triangulation) {
+    assert_eq!(a.points(), b.points());
+    assert_eq!(a.len(), b.len());
+    for t in 0..a.len() {
+        assert_eq!(a.triangle(t), b.triangle(t), "triangle {t}");
+        assert_eq!(a.neighbors(t), b.neighbors(t), "neighbours of {t}");
+    }
+    for v in 0..=a.points().len() {
+        assert_eq!(a.vertex_triangle(v), b.vertex_triangle(v), "vertex {v}");
+    }
+    assert_eq!(a.duplicates(), b.duplicates());
 }
 
 /// The pipeline's result is the full computation on its own samples and triangulation.

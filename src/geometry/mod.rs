@@ -19,4 +19,4 @@ mod wide;
 /// A point in the plane, `[x, y]`.
 pub type Point = [f64; 2];
 
-pub use triangulation::{Triangulation, TriangulationError, MAX_POINTS};
+pub use triangulation::{Changes, Triangulation, TriangulationError, MAX_POINTS};

@@ -47,7 +47,40 @@ fn prev(k: usize) -> usize {
 /// The replay gave up: the builder must run.
 struct GiveUp;
 
+/// What [`extend`] wrote over the arrays it was given: enough to give back the earlier
+/// arrays ([`Log::undo`]) and the earlier triangle and neighbours of every changed slot.
+pub(super) struct Log {
+    /// Triangle count of the earlier arrays.
+    pub(super) base: usize,
+    /// Point count of the earlier arrays (`vertex_tri` length).
+    pub(super) points: usize,
+    /// `(slot, triangle, neighbours)` before each write to an earlier slot, in write order.
+    pub(super) slots: Vec<(u32, [u32; 3], [u32; 3])>,
+    /// `(vertex, triangle)` before each write to an earlier vertex's triangle.
+    pub(super) vertices: Vec<(u32, u32)>,
+    /// The slots whose triangle was written (cavity slots and appended ones), increasing.
+    pub(super) changed: Vec<u32>,
+}
+
+impl Log {
+    /// The arrays given to [`extend`], from the ones it returned with this log.
+    pub(super) fn undo(&self, mut a: Arrays) -> Arrays {
+        for &(s, t, n) in self.slots.iter().rev() {
+            a.tris[s as usize] = t;
+            a.adj[s as usize] = n;
+        }
+        a.tris.truncate(self.base);
+        a.adj.truncate(self.base);
+        for &(v, t) in self.vertices.iter().rev() {
+            a.vertex_tri[v as usize] = t;
+        }
+        a.vertex_tri.truncate(self.points);
+        a
+    }
+}
+
 struct Sparse<'a> {
+    log: Log,
     pts: &'a [Point],
     all_safe: bool,
     a: Arrays,
@@ -68,6 +101,8 @@ struct Sparse<'a> {
 /// `a` of the triangulation of `pts[..n0]` with `vertices` distinct points, as the resumed
 /// builder gives them after compaction; `None` where the builder must run (module docs).
 /// `pts` are the points as the predicates see them (scaled), `all_safe` as for the builder.
+/// Works in place: on success the arrays come back with the [`Log`] of what was written over
+/// them; where it gives up, `Err` gives back `a` as it was.
 pub(super) fn extend(
     pts: &[Point],
     all_safe: bool,
@@ -75,13 +110,23 @@ pub(super) fn extend(
     vertices: usize,
     n0: usize,
     duplicates: &[(u32, u32)],
-) -> Option<Arrays> {
+) -> Result<(Arrays, Log), Arrays> {
     // Euler: a triangulation of V points with H hull vertices has 2V - 2 - H triangles.
-    let hull = (2 * vertices).checked_sub(2 + a.tris.len())?;
+    let Some(hull) = (2 * vertices).checked_sub(2 + a.tris.len()) else {
+        return Err(a);
+    };
     if a.tris.is_empty() || a.adj.len() != a.tris.len() {
-        return None;
+        return Err(a);
     }
+    let log = Log {
+        base: a.tris.len(),
+        points: a.vertex_tri.len(),
+        slots: Vec::new(),
+        vertices: Vec::new(),
+        changed: Vec::new(),
+    };
     let mut s = Sparse {
+        log,
         pts,
         all_safe,
         a,
@@ -95,7 +140,9 @@ pub(super) fn extend(
         touched: HashMap::new(),
     };
     for pi in n0..pts.len() {
-        s.insert(pi as u32).ok()?;
+        if s.insert(pi as u32).is_err() {
+            return Err(s.log.undo(s.a));
+        }
     }
     s.finish(duplicates)
 }
@@ -121,6 +168,15 @@ impl Sparse<'_> {
         self.rng ^= self.rng >> 17;
         self.rng ^= self.rng << 5;
         (self.rng % 3) as usize
+    }
+
+    /// Log slot `s` before a write, when it is an earlier one.
+    #[inline(always)]
+    fn save(&mut self, s: u32) {
+        if (s as usize) < self.log.base {
+            let i = s as usize;
+            self.log.slots.push((s, self.a.tris[i], self.a.adj[i]));
+        }
     }
 
     /// The builder's triangle count (its infinite triangles included).
@@ -264,9 +320,12 @@ impl Sparse<'_> {
                 self.a.adj.push([NONE; 3]);
                 (self.a.tris.len() - 1) as u32
             };
+            self.save(s);
+            self.log.changed.push(s);
             self.a.tris[s as usize] = [u, w, pi];
             self.a.adj[s as usize][2] = m;
             if m != NONE {
+                self.save(m);
                 self.a.adj[m as usize][j as usize] = s;
             }
             slots.push(s);
@@ -282,7 +341,9 @@ impl Sparse<'_> {
                 .find(|&i2| self.boundary[i2].0 == w)
                 .map(|i2| slots[i2])
                 .ok_or(GiveUp)?;
+            self.save(s);
             self.a.adj[s as usize][0] = n;
+            self.save(n);
             self.a.adj[n as usize][1] = s;
         }
         for (i, &(u, _, _, _)) in self.boundary.iter().enumerate() {
@@ -294,18 +355,22 @@ impl Sparse<'_> {
 
     /// The highest triangle having each vertex whose star changed (as the compaction records
     /// it), by a walk around the vertex; then the duplicates take their first's.
-    fn finish(mut self, duplicates: &[(u32, u32)]) -> Option<Arrays> {
-        self.a.vertex_tri.resize(self.pts.len(), NONE);
+    fn finish(mut self, duplicates: &[(u32, u32)]) -> Result<(Arrays, Log), Arrays> {
         let cap = self.a.tris.len();
+        // Every vertex's triangle first, written only once all are found (so giving up
+        // leaves `vertex_tri` as it was).
+        let mut found = Vec::with_capacity(self.touched.len());
         for (&v, &t0) in &self.touched {
             let mut best = t0;
             for dir in [next, prev] {
                 let mut t = t0;
                 for step in 0.. {
                     if step > cap {
-                        return None;
+                        return Err(self.log.undo(self.a));
                     }
-                    let i = self.a.tris[t as usize].iter().position(|&x| x == v)?;
+                    let Some(i) = self.a.tris[t as usize].iter().position(|&x| x == v) else {
+                        return Err(self.log.undo(self.a));
+                    };
                     t = self.a.adj[t as usize][dir(i)];
                     if t == NONE || t == t0 {
                         break;
@@ -316,11 +381,25 @@ impl Sparse<'_> {
                     break;
                 }
             }
-            self.a.vertex_tri[v as usize] = best;
+            found.push((v, best));
+        }
+        self.a.vertex_tri.resize(self.pts.len(), NONE);
+        let points = self.log.points;
+        let set = |a: &mut Arrays, log: &mut Log, v: u32, t: u32| {
+            if (v as usize) < points {
+                log.vertices.push((v, a.vertex_tri[v as usize]));
+            }
+            a.vertex_tri[v as usize] = t;
+        };
+        for (v, t) in found {
+            set(&mut self.a, &mut self.log, v, t);
         }
         for &(first, d) in duplicates {
-            self.a.vertex_tri[d as usize] = self.a.vertex_tri[first as usize];
+            let t = self.a.vertex_tri[first as usize];
+            set(&mut self.a, &mut self.log, d, t);
         }
-        Some(self.a)
+        self.log.changed.sort_unstable();
+        self.log.changed.dedup();
+        Ok((self.a, self.log))
     }
 }

@@ -82,6 +82,54 @@ pub struct Triangulation {
     vertex_tri: Vec<u32>,
 }
 
+/// What [`Triangulation::extended_taking`] changed in the triangulation it took.
+pub struct Changes {
+    log: super::sparse::Log,
+    /// Per changed earlier slot (in [`Self::changed`] order), its earlier triangle and
+    /// neighbours.
+    before: Vec<([u32; 3], [Option<u32>; 3])>,
+    before_duplicates: bool,
+}
+
+impl Changes {
+    /// The triangles of the extension that are not those of the earlier triangulation (same
+    /// id, same vertices in the same order), in increasing order: every slot the insertion
+    /// wrote (a written triangle has a new point, which no earlier one has).
+    pub fn changed(&self) -> &[u32] {
+        &self.log.changed
+    }
+    /// The earlier triangle count.
+    pub fn before_len(&self) -> usize {
+        self.log.base
+    }
+    /// The earlier triangle and neighbours of the `i`-th changed slot, for the changed slots
+    /// below [`Self::before_len`] (the others are new).
+    pub fn before(&self, i: usize) -> ([u32; 3], [Option<u32>; 3]) {
+        self.before[i]
+    }
+    /// True when the earlier triangulation had duplicates.
+    pub fn before_had_duplicates(&self) -> bool {
+        self.before_duplicates
+    }
+    /// The earlier triangulation, from `after` (the extension these changes came with).
+    pub fn undo(self, after: Triangulation) -> Triangulation {
+        let a = self.log.undo(super::sparse::Arrays {
+            tris: after.tris,
+            adj: after.adj,
+            vertex_tri: after.vertex_tri,
+        });
+        let mut points = after.points;
+        points.truncate(self.log.points);
+        Triangulation {
+            points,
+            tris: a.tris,
+            adj: a.adj,
+            duplicates: after.duplicates,
+            vertex_tri: a.vertex_tri,
+        }
+    }
+}
+
 /// Smallest and largest non-zero coordinate magnitude (`(inf, 0)` when every coordinate is 0).
 fn magnitude_range(points: &[Point]) -> (f64, f64) {
     let mut lo = f64::INFINITY;
@@ -227,13 +275,13 @@ impl Triangulation {
         self.extended_on(points, Extension::Sparse)
     }
 
-    /// [`Self::extended`] by the way `how` says: the sparse replay on copies of this
-    /// triangulation's arrays (`sparse::extend`) gives the builder's result or nothing.
-    fn extended_on(
+    /// The checks of [`Self::extended`] on `points`, and the points as the predicates see them
+    /// with their `all_safe`; `Ok(None)` where it gives `Ok(None)`.
+    #[allow(clippy::type_complexity)]
+    fn extension_points<'p>(
         &self,
-        points: &[Point],
-        how: Extension,
-    ) -> Result<Option<Self>, TriangulationError> {
+        points: &'p [Point],
+    ) -> Result<Option<(Cow<'p, [Point]>, bool)>, TriangulationError> {
         let n0 = self.points.len();
         let bits = |p: &Point| p.map(f64::to_bits);
         if points.len() < n0
@@ -272,7 +320,20 @@ impl Triangulation {
                 .map(|&p| [scale(p[0], s), scale(p[1], s)])
                 .collect(),
         };
-        let all_safe = all_safe_after(range, shift);
+        Ok(Some((work, all_safe_after(range, shift))))
+    }
+
+    /// [`Self::extended`] by the way `how` says: the sparse replay on copies of this
+    /// triangulation's arrays (`sparse::extend`) gives the builder's result or nothing.
+    fn extended_on(
+        &self,
+        points: &[Point],
+        how: Extension,
+    ) -> Result<Option<Self>, TriangulationError> {
+        let n0 = self.points.len();
+        let Some((work, all_safe)) = self.extension_points(points)? else {
+            return Ok(None);
+        };
         if how != Extension::Full {
             let arrays = super::sparse::Arrays {
                 tris: self.tris.clone(),
@@ -283,7 +344,7 @@ impl Triangulation {
                 2 * self.vertex_count() - 2 - self.tris.len(),
                 self.adj.iter().flatten().filter(|&&m| m == NONE).count()
             );
-            if let Some(a) = super::sparse::extend(
+            if let Ok((a, _)) = super::sparse::extend(
                 &work,
                 all_safe,
                 arrays,
@@ -311,6 +372,71 @@ impl Triangulation {
                 .map_err(|e| TriangulationError::Internal { message: e.0 })?;
         }
         Ok(Some(Self::finish(points, None, builder)))
+    }
+
+    /// [`Self::extended`] by the sparse replay, moving this triangulation's arrays into the
+    /// result instead of copying them (issue 8: at 1e5 particles the copies were some 220 MB
+    /// of fresh pages). On `Ok(Some)` this triangulation is left empty, and the [`Changes`]
+    /// give it back ([`Changes::undo`]) and tell which triangles changed. On `Ok(None)` (the
+    /// replay gave up, or [`Self::extended`] would give `Ok(None)`) and on `Err` it is
+    /// unchanged. The result equals [`Self::extended`]'s (`tests/geometry_sparse_extend.rs`).
+    pub fn extended_taking(
+        &mut self,
+        points: &[Point],
+    ) -> Result<Option<(Self, Changes)>, TriangulationError> {
+        let n0 = self.points.len();
+        let Some((work, all_safe)) = self.extension_points(points)? else {
+            return Ok(None);
+        };
+        let vertices = self.vertex_count();
+        let arrays = super::sparse::Arrays {
+            tris: std::mem::take(&mut self.tris),
+            adj: std::mem::take(&mut self.adj),
+            vertex_tri: std::mem::take(&mut self.vertex_tri),
+        };
+        match super::sparse::extend(&work, all_safe, arrays, vertices, n0, &self.duplicates) {
+            Ok((a, log)) => {
+                let mut pts = std::mem::take(&mut self.points);
+                pts.extend_from_slice(&points[n0..]);
+                let duplicates = std::mem::take(&mut self.duplicates);
+                let before_duplicates = !duplicates.is_empty();
+                // The first save of a slot holds its earlier value (every changed earlier
+                // slot was saved before its first write).
+                let mut first: HashMap<u32, ([u32; 3], [u32; 3])> = HashMap::new();
+                for &(t, tri, adj) in &log.slots {
+                    first.entry(t).or_insert((tri, adj));
+                }
+                let before = log
+                    .changed
+                    .iter()
+                    .take_while(|&&t| (t as usize) < log.base)
+                    .map(|t| {
+                        let (tri, adj) = first[t];
+                        (tri, adj.map(|m| (m != NONE).then_some(m)))
+                    })
+                    .collect();
+                Ok(Some((
+                    Triangulation {
+                        points: pts,
+                        tris: a.tris,
+                        adj: a.adj,
+                        duplicates,
+                        vertex_tri: a.vertex_tri,
+                    },
+                    Changes {
+                        log,
+                        before,
+                        before_duplicates,
+                    },
+                )))
+            }
+            Err(a) => {
+                self.tris = a.tris;
+                self.adj = a.adj;
+                self.vertex_tri = a.vertex_tri;
+                Ok(None)
+            }
+        }
     }
 
     /// This triangulation in the builder's layout (see `build`): the finite triangles, then one

@@ -17,16 +17,21 @@
 
 use super::{circumcenter, classify_one, MedialArc, MedialGraph, MedialVertex};
 use super::{TriangleKind, Walk};
-use crate::geometry::Triangulation;
+use crate::geometry::{Changes, Triangulation};
 use crate::sampling::{SampledDomain, Samples};
 use std::collections::HashSet;
 
 /// The triangles of `after` that are those of `before` (same id, same vertices in the same
-/// order), as a bit set, and the others in increasing id order.
-#[derive(Debug, Clone)]
+/// order), as a bit set, and the others in increasing id order; with what is read of `before`
+/// afterwards (the earlier triangle and neighbours of each changed earlier slot, whether it
+/// had duplicates), so that `before` itself may be gone.
+#[derive(Debug, Clone, PartialEq)]
 pub struct Kept {
     bits: Vec<u64>,
     changed: Vec<u32>,
+    /// Per changed slot below `before.len()`, in order: its triangle and neighbours there.
+    before: Vec<([u32; 3], [Option<u32>; 3])>,
+    before_duplicates: bool,
 }
 
 impl Kept {
@@ -42,7 +47,40 @@ impl Kept {
                 changed.push(t as u32);
             }
         }
-        Kept { bits, changed }
+        let old = changed
+            .iter()
+            .take_while(|&&t| (t as usize) < before.len())
+            .map(|&t| (before.triangle(t as usize), before.neighbors(t as usize)))
+            .collect();
+        Kept {
+            bits,
+            changed,
+            before: old,
+            before_duplicates: !before.duplicates().is_empty(),
+        }
+    }
+    /// [`Self::new`] of the triangulation [`Triangulation::extended_taking`] took and `after`,
+    /// its result, from the `changes` it gave (the same value, without the earlier
+    /// triangulation: tested in `tests/geometry_sparse_extend.rs`).
+    pub fn from_changes(changes: &Changes, after: &Triangulation) -> Kept {
+        let n = after.len();
+        let mut bits = vec![u64::MAX; n.div_ceil(64)];
+        if !n.is_multiple_of(64) {
+            *bits.last_mut().expect("n > 0") = (1 << (n % 64)) - 1;
+        }
+        for &t in changes.changed() {
+            bits[t as usize / 64] &= !(1 << (t % 64));
+        }
+        let old = changes
+            .changed()
+            .iter()
+            .take_while(|&&t| (t as usize) < changes.before_len());
+        Kept {
+            bits,
+            changed: changes.changed().to_vec(),
+            before: (0..old.count()).map(|i| changes.before(i)).collect(),
+            before_duplicates: changes.before_had_duplicates(),
+        }
     }
     /// True when triangle `t` of the later triangulation is kept.
     pub fn contains(&self, t: usize) -> bool {
@@ -88,7 +126,8 @@ pub fn classify_after(
 /// True when [`crate::sampling::check_invariants`] of `tri` (classified by `kinds`) finds
 /// nothing, decided from the changed triangles; `false` when it may find something (the
 /// caller then runs it). `before` is a result of the sampling (its triangulation met every
-/// hard invariant) and `tri` extends its triangulation.
+/// hard invariant) and `tri` extends its triangulation; what is needed of that triangulation
+/// is in `kept` (`before.triangulation` is not read: it may have been taken).
 ///
 /// Kept triangles have their earlier class and circles, so the per-triangle conditions need
 /// checking only on changed ones. A boundary edge lies in at most two triangles; an earlier
@@ -102,7 +141,7 @@ pub fn invariants_hold_after(
     before: &SampledDomain,
     kept: &Kept,
 ) -> bool {
-    if !tri.duplicates().is_empty() || !before.triangulation.duplicates().is_empty() {
+    if !tri.duplicates().is_empty() || kept.before_duplicates {
         return false;
     }
     // Boundary edges (by their first sample) held by changed triangles.
@@ -128,17 +167,9 @@ pub fn invariants_hold_after(
             }
         }
     }
-    let old = &before.triangulation;
     let n0 = before.samples.len() as u32;
     // Earlier boundary edges of earlier triangles that were replaced.
-    for &t in kept
-        .changed()
-        .iter()
-        .take_while(|&&t| (t as usize) < old.len())
-    {
-        let t = t as usize;
-        let v = old.triangle(t);
-        let nb = old.neighbors(t);
+    for &(v, nb) in &kept.before {
         for k in 0..3 {
             let (a, b) = (v[(k + 1) % 3], v[(k + 2) % 3]);
             if samples.is_boundary_edge(a, b)
