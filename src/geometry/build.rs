@@ -50,8 +50,9 @@ pub(crate) struct Builder<'a> {
     pub(crate) dups: Vec<(u32, u32)>,
 }
 
+/// The next edge slot of a triangle (`k + 1 mod 3`).
 #[inline(always)]
-fn next(k: usize) -> usize {
+pub(super) fn next(k: usize) -> usize {
     if k == 2 {
         0
     } else {
@@ -59,8 +60,9 @@ fn next(k: usize) -> usize {
     }
 }
 
+/// The previous edge slot of a triangle (`k + 2 mod 3`).
 #[inline(always)]
-fn prev(k: usize) -> usize {
+pub(super) fn prev(k: usize) -> usize {
     if k == 0 {
         2
     } else {

@@ -13,6 +13,7 @@
 //! crossing the hull, a point outside the hull or on it, an exact duplicate, a failed location
 //! or a broken cavity. So the result is the builder's whenever it is given.
 
+use super::build::{next, prev};
 use super::predicates::{incircle_sos, incircle_sos_safe, orient2d, orient2d_safe};
 use super::triangulation::NONE;
 use super::Point;
@@ -24,24 +25,6 @@ pub(super) struct Arrays {
     pub(super) tris: Vec<[u32; 3]>,
     pub(super) adj: Vec<[u32; 3]>,
     pub(super) vertex_tri: Vec<u32>,
-}
-
-#[inline(always)]
-fn next(k: usize) -> usize {
-    if k == 2 {
-        0
-    } else {
-        k + 1
-    }
-}
-
-#[inline(always)]
-fn prev(k: usize) -> usize {
-    if k == 0 {
-        2
-    } else {
-        k - 1
-    }
 }
 
 /// The replay gave up: the builder must run.
