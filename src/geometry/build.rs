@@ -45,7 +45,7 @@ pub(crate) struct Builder<'a> {
     cavity: Vec<u32>,
     boundary: Vec<(u32, u32, u32)>,
     last: u32,
-    rng: u32,
+    rng: WalkRng,
     /// `(existing vertex, duplicate input index)` pairs found during insertion.
     pub(crate) dups: Vec<(u32, u32)>,
 }
@@ -70,9 +70,58 @@ pub(super) fn prev(k: usize) -> usize {
     }
 }
 
+/// The walk's random choice of the first edge to test: xorshift32 from a fixed seed, one draw
+/// per walk step. The sparse replay (`sparse.rs`) draws from the same generator so that it
+/// takes the builder's steps.
+#[derive(Clone, Copy)]
+pub(super) struct WalkRng(u32);
+
+impl WalkRng {
+    pub(super) fn new() -> WalkRng {
+        WalkRng(0x9e37_79b9)
+    }
+
+    /// The next edge slot to test first, in `0..3`.
+    #[inline(always)]
+    pub(super) fn next3(&mut self) -> usize {
+        self.0 ^= self.0 << 13;
+        self.0 ^= self.0 >> 17;
+        self.0 ^= self.0 << 5;
+        (self.0 % 3) as usize
+    }
+}
+
+/// Step caps of point location in a triangulation of `n_tri` triangles (infinite ones
+/// included): the floating-point walk, then the exact walk.
+#[inline(always)]
+pub(super) fn walk_caps(n_tri: usize) -> (usize, usize) {
+    (64 + 4 * (n_tri as f64).sqrt() as usize, 4 * n_tri + 16)
+}
+
+/// Exact orientation, unchecked when every point is known to be in the predicates' safe
+/// range (`all_safe`).
+#[inline(always)]
+pub(super) fn orient_with(all_safe: bool, a: &Point, b: &Point, c: &Point) -> Ordering {
+    if all_safe {
+        orient2d_safe(*a, *b, *c)
+    } else {
+        orient2d(*a, *b, *c)
+    }
+}
+
+/// Exact in-circle test under SoS, unchecked when `all_safe` (as [`orient_with`]).
+#[inline(always)]
+pub(super) fn incircle_with(all_safe: bool, a: Point, b: Point, c: Point, d: Point) -> Ordering {
+    if all_safe {
+        incircle_sos_safe(a, b, c, d)
+    } else {
+        incircle_sos(a, b, c, d)
+    }
+}
+
 /// Plain floating-point orientation, used only to guide the walk.
 #[inline(always)]
-fn orient_fast(a: &Point, b: &Point, c: &Point) -> f64 {
+pub(super) fn orient_fast(a: &Point, b: &Point, c: &Point) -> f64 {
     (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0])
 }
 
@@ -105,7 +154,7 @@ impl<'a> Builder<'a> {
             cavity: Vec::new(),
             boundary: Vec::new(),
             last: 0,
-            rng: 0x9e37_79b9,
+            rng: WalkRng::new(),
             dups: Vec::new(),
         };
         s.tv.extend_from_slice(&[[a, b, c], [c, b, inf], [a, c, inf], [b, a, inf]]);
@@ -154,7 +203,7 @@ impl<'a> Builder<'a> {
             cavity: Vec::new(),
             boundary: Vec::new(),
             last,
-            rng: 0x9e37_79b9,
+            rng: WalkRng::new(),
             dups,
         }
     }
@@ -167,25 +216,13 @@ impl<'a> Builder<'a> {
     /// Exact orientation of three points of `pts`.
     #[inline(always)]
     fn orient(&self, a: &Point, b: &Point, c: &Point) -> Ordering {
-        if self.all_safe {
-            orient2d_safe(*a, *b, *c)
-        } else {
-            orient2d(*a, *b, *c)
-        }
+        orient_with(self.all_safe, a, b, c)
     }
 
     #[inline(always)]
     fn is_infinite(&self, t: u32) -> bool {
         let v = self.tv[t as usize];
         v[0] == self.inf || v[1] == self.inf || v[2] == self.inf
-    }
-
-    #[inline(always)]
-    fn random3(&mut self) -> usize {
-        self.rng ^= self.rng << 13;
-        self.rng ^= self.rng >> 17;
-        self.rng ^= self.rng << 5;
-        (self.rng % 3) as usize
     }
 
     /// The finite triangle across the hull edge of infinite triangle `t`.
@@ -216,12 +253,7 @@ impl<'a> Builder<'a> {
             (v[0], v[1])
         } else {
             let (a, b, c) = (*self.p(v[0]), *self.p(v[1]), *self.p(v[2]));
-            let s = if self.all_safe {
-                incircle_sos_safe(a, b, c, *q)
-            } else {
-                incircle_sos(a, b, c, *q)
-            };
-            return s == Ordering::Greater;
+            return incircle_with(self.all_safe, a, b, c, *q) == Ordering::Greater;
         };
         let (pu, pw) = (self.p(u), self.p(w));
         match self.orient(pu, pw, q) {
@@ -265,7 +297,7 @@ impl<'a> Builder<'a> {
         let mut came_from = u32::MAX;
         'step: for _ in 0..cap {
             let v = self.tv[t as usize];
-            let r = self.random3();
+            let r = self.rng.next3();
             for i in 0..3 {
                 let k = (r + i) % 3;
                 let h = self.adj[3 * t as usize + k];
@@ -295,14 +327,14 @@ impl<'a> Builder<'a> {
 
     fn locate(&mut self, q: &Point) -> Result<Located, Broken> {
         let n_tri = self.tv.len();
-        let fast_cap = 64 + 4 * (n_tri as f64).sqrt() as usize;
+        let (fast_cap, exact_cap) = walk_caps(n_tri);
         let mut found = self
             .walk(self.last, q, false, fast_cap)
             .filter(|&t| self.contains_exact(t, q));
         if found.is_none() {
             let from = self.last;
             found = self
-                .walk(from, q, true, 4 * n_tri + 16)
+                .walk(from, q, true, exact_cap)
                 .filter(|&t| self.contains_exact(t, q));
         }
         if found.is_none() {

@@ -13,8 +13,7 @@
 //! crossing the hull, a point outside the hull or on it, an exact duplicate, a failed location
 //! or a broken cavity. So the result is the builder's whenever it is given.
 
-use super::build::{next, prev};
-use super::predicates::{incircle_sos, incircle_sos_safe, orient2d, orient2d_safe};
+use super::build::{incircle_with, next, orient_fast, orient_with, prev, walk_caps, WalkRng};
 use super::triangulation::NONE;
 use super::Point;
 use std::cmp::Ordering;
@@ -70,7 +69,7 @@ struct Sparse<'a> {
     /// Number of hull edges: the builder holds that many infinite triangles besides these.
     hull: usize,
     last: u32,
-    rng: u32,
+    rng: WalkRng,
     seen: Vec<(u32, bool)>,
     stack: Vec<u32>,
     cavity: Vec<u32>,
@@ -115,7 +114,7 @@ pub(super) fn extend(
         a,
         hull,
         last: 0,
-        rng: 0x9e37_79b9,
+        rng: WalkRng::new(),
         seen: Vec::new(),
         stack: Vec::new(),
         cavity: Vec::new(),
@@ -138,19 +137,7 @@ impl Sparse<'_> {
 
     #[inline(always)]
     fn orient(&self, a: &Point, b: &Point, c: &Point) -> Ordering {
-        if self.all_safe {
-            orient2d_safe(*a, *b, *c)
-        } else {
-            orient2d(*a, *b, *c)
-        }
-    }
-
-    #[inline(always)]
-    fn random3(&mut self) -> usize {
-        self.rng ^= self.rng << 13;
-        self.rng ^= self.rng >> 17;
-        self.rng ^= self.rng << 5;
-        (self.rng % 3) as usize
+        orient_with(self.all_safe, a, b, c)
     }
 
     /// Log slot `s` before a write, when it is an earlier one.
@@ -173,7 +160,7 @@ impl Sparse<'_> {
         let mut came_from = u32::MAX;
         'step: for _ in 0..cap {
             let v = self.a.tris[t as usize];
-            let r = self.random3();
+            let r = self.rng.next3();
             for i in 0..3 {
                 let k = (r + i) % 3;
                 let m = self.a.adj[t as usize][k];
@@ -185,8 +172,7 @@ impl Sparse<'_> {
                 let behind = if exact {
                     self.orient(a, b, q) == Ordering::Less
                 } else {
-                    let (a, b) = (*a, *b);
-                    (b[0] - a[0]) * (q[1] - a[1]) - (b[1] - a[1]) * (q[0] - a[0]) < 0.0
+                    orient_fast(a, b, q) < 0.0
                 };
                 if behind {
                     if m == NONE {
@@ -211,13 +197,12 @@ impl Sparse<'_> {
     /// (The builder's fast walk hitting its cap falls through to the exact walk; here that
     /// gives up, as does every case the builder would finish by a scan.)
     fn locate(&mut self, q: &Point) -> Result<u32, GiveUp> {
-        let n_tri = self.builder_len();
-        let fast_cap = 64 + 4 * (n_tri as f64).sqrt() as usize;
+        let (fast_cap, exact_cap) = walk_caps(self.builder_len());
         let t = self.walk(self.last, q, false, fast_cap)?;
         let t = if self.contains_exact(t, q) {
             t
         } else {
-            let t = self.walk(self.last, q, true, 4 * n_tri + 16)?;
+            let t = self.walk(self.last, q, true, exact_cap)?;
             if !self.contains_exact(t, q) {
                 return Err(GiveUp);
             }
@@ -269,12 +254,7 @@ impl Sparse<'_> {
                     None => {
                         let w = self.a.tris[m as usize];
                         let (pa, pb, pc) = (*self.p(w[0]), *self.p(w[1]), *self.p(w[2]));
-                        let s = if self.all_safe {
-                            incircle_sos_safe(pa, pb, pc, q)
-                        } else {
-                            incircle_sos(pa, pb, pc, q)
-                        };
-                        s == Ordering::Greater
+                        incircle_with(self.all_safe, pa, pb, pc, q) == Ordering::Greater
                     }
                 };
                 if conflict {
