@@ -7,6 +7,8 @@
 //! gives the same triangulation, leaves the original unchanged where it gives up, gives it back
 //! by `Changes::undo`, and its changes give the same `Kept` as comparing both triangulations.
 
+mod common;
+
 use medial_blocks::geometry::verify::verify_exact;
 use medial_blocks::geometry::{Point, Triangulation};
 use medial_blocks::layouts;
@@ -14,20 +16,6 @@ use medial_blocks::medial::reuse::Kept;
 use medial_blocks::refine::refine;
 use medial_blocks::sampling::{sample_and_triangulate, SamplingOptions};
 use proptest::prelude::*;
-
-/// Everything a triangulation exposes, for equality.
-fn same(a: &Triangulation, b: &Triangulation) {
-    assert_eq!(a.points(), b.points());
-    assert_eq!(a.len(), b.len());
-    for t in 0..a.len() {
-        assert_eq!(a.triangle(t), b.triangle(t), "triangle {t}");
-        assert_eq!(a.neighbors(t), b.neighbors(t), "neighbours of {t}");
-    }
-    for v in 0..a.points().len() + 1 {
-        assert_eq!(a.vertex_triangle(v), b.vertex_triangle(v), "vertex {v}");
-    }
-    assert_eq!(a.duplicates(), b.duplicates());
-}
 
 /// `extended_taking` of a copy of `prefix` against `extended_sparse` of `prefix` (the
 /// replay on copies), the `Kept` of its changes against the comparison of both
@@ -37,7 +25,7 @@ fn taking_agrees(prefix: &Triangulation, pts: &[Point]) -> bool {
     let sparse = prefix.extended_sparse(pts).unwrap();
     match taken.extended_taking(pts).unwrap() {
         Some((after, changes)) => {
-            same(
+            common::assert_same_triangulation(
                 &after,
                 sparse.as_ref().expect("the replay on copies applies too"),
             );
@@ -46,12 +34,12 @@ fn taking_agrees(prefix: &Triangulation, pts: &[Point]) -> bool {
                 Kept::from_changes(&changes, &after),
                 Kept::new(prefix, &after)
             );
-            same(&changes.undo(after), prefix);
+            common::assert_same_triangulation(&changes.undo(after), prefix);
             true
         }
         None => {
             assert!(sparse.is_none());
-            same(&taken, prefix);
+            common::assert_same_triangulation(&taken, prefix);
             false
         }
     }
@@ -76,10 +64,10 @@ proptest! {
         let auto = prefix.extended(&pts).unwrap();
         prop_assert_eq!(full.is_some(), auto.is_some());
         if let (Some(full), Some(auto)) = (full, auto) {
-            same(&auto, &full);
+            common::assert_same_triangulation(&auto, &full);
             prop_assert!(verify_exact(&auto).is_ok(), "{:?}", verify_exact(&auto));
             if let Some(sparse) = prefix.extended_sparse(&pts).unwrap() {
-                same(&sparse, &full);
+                common::assert_same_triangulation(&sparse, &full);
             }
         }
         taking_agrees(&prefix, &pts);
@@ -101,10 +89,10 @@ fn sparse_extension_applies_inside_the_hull() {
         );
         let full = prefix.extended_full(&pts).unwrap().unwrap();
         if let Some(sparse) = prefix.extended_sparse(&pts).unwrap() {
-            same(&sparse, &full);
+            common::assert_same_triangulation(&sparse, &full);
             applied += 1;
         }
-        same(&prefix.extended(&pts).unwrap().unwrap(), &full);
+        common::assert_same_triangulation(&prefix.extended(&pts).unwrap().unwrap(), &full);
         taking_agrees(&prefix, &pts);
     }
     assert!(applied >= 18, "the replay applied {applied} times of 20");
@@ -129,7 +117,7 @@ fn sparse_extension_on_refinement_samples() {
             continue;
         };
         if let Some(sparse) = s0.triangulation.extended_sparse(p1).unwrap() {
-            same(&sparse, &full);
+            common::assert_same_triangulation(&sparse, &full);
             verify_exact(&sparse).unwrap();
             assert!(taking_agrees(&s0.triangulation, p1));
             applied += usize::from(p1.len() > s0.samples.points.len());

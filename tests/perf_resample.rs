@@ -10,7 +10,6 @@
 mod common;
 
 use medial_blocks::domain::{Circle, Domain};
-use medial_blocks::geometry::Triangulation;
 use medial_blocks::layouts::SplitMix64;
 use medial_blocks::medial::reuse::{
     classify_after, invariants_hold_after, medial_graph_after, medial_graph_taking,
@@ -154,7 +153,7 @@ fn reuse_equals_the_full_computation() {
             assert_eq!(moved.thin_walls, after.thin_walls);
             // The arrays moved out of `given` give the same triangulation, also after a
             // further attempt (soft rounds) had them given back.
-            same_triangulation(&moved.triangulation, &after.triangulation);
+            common::assert_same_triangulation(&moved.triangulation, &after.triangulation);
             assert_eq!(given.triangulation.len(), 0);
             later_rounds += usize::from(after.rounds > 0);
             assert_eq!(after.medial.arcs.len(), fresh.medial.arcs.len());
@@ -167,20 +166,6 @@ fn reuse_equals_the_full_computation() {
     );
     assert!(kept_arcs > walked, "{kept_arcs} kept, {walked} walked");
     eprintln!("{later_rounds} extensions with later sampling rounds");
-}
-
-/// Everything a triangulation exposes, for equality.
-fn same_triangulation(a: &Triangulation, b: &Triangulation) {
-    assert_eq!(a.points(), b.points());
-    assert_eq!(a.len(), b.len());
-    for t in 0..a.len() {
-        assert_eq!(a.triangle(t), b.triangle(t), "triangle {t}");
-        assert_eq!(a.neighbors(t), b.neighbors(t), "neighbours of {t}");
-    }
-    for v in 0..=a.points().len() {
-        assert_eq!(a.vertex_triangle(v), b.vertex_triangle(v), "vertex {v}");
-    }
-    assert_eq!(a.duplicates(), b.duplicates());
 }
 
 /// The pipeline's result is the full computation on its own samples and triangulation.

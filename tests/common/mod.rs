@@ -151,6 +151,24 @@ pub fn small_meshes(
     out
 }
 
+/// Everything a triangulation exposes (points, triangles in order, neighbours, vertex
+/// triangles, duplicates) is equal.
+pub fn assert_same_triangulation(
+    a: &medial_blocks::geometry::Triangulation,
+    b: &medial_blocks::geometry::Triangulation,
+) {
+    assert_eq!(a.points(), b.points());
+    assert_eq!(a.len(), b.len());
+    for t in 0..a.len() {
+        assert_eq!(a.triangle(t), b.triangle(t), "triangle {t}");
+        assert_eq!(a.neighbors(t), b.neighbors(t), "neighbours of {t}");
+    }
+    for v in 0..=a.points().len() {
+        assert_eq!(a.vertex_triangle(v), b.vertex_triangle(v), "vertex {v}");
+    }
+    assert_eq!(a.duplicates(), b.duplicates());
+}
+
 /// A hole site for the Apollonius tests.
 pub fn hole_site(x: f64, y: f64, r: f64) -> medial_blocks::apollonius::Site {
     medial_blocks::apollonius::Site::hole(medial_blocks::Circle {
