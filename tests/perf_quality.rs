@@ -236,6 +236,20 @@ fn squares_sit_on_bin_edges() {
     }]);
 }
 
+/// Blocks too wide or tall for one band of rows (the block pass measures a band of about 512
+/// nodes at once, one row at a time when a row alone is longer), with spoiled nodes: the
+/// report of the loop over `cell_metrics`.
+#[test]
+fn wide_and_tall_blocks_in_bands() {
+    let mut r = SplitMix64(5);
+    let shapes = [(600, 2, 0), (700, 1, 3), (300, 5, 2), (40, 30, 1), (16, 16, 0), (1, 600, 3)];
+    let g: Vec<BlockGrid> = shapes
+        .iter()
+        .map(|&(ni, nj, wild)| grid(&mut r, ni, nj, 1.0, wild))
+        .collect();
+    check(&g);
+}
+
 /// Several chunks of blocks (the parallel unit), on 1 and 2 threads: the same report, bit for
 /// bit, and that of the loop over `cell_metrics`.
 #[test]

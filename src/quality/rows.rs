@@ -1,14 +1,17 @@
 //! The per-block pass of [`super::measure_all`]: every cell of a block, row by row, with the
 //! reference formulas ([`super::cell_corners`], [`super::cell_metrics`]) bit for bit.
 //!
-//! A row of cells is measured in two loops:
-//! 1. straight-line arithmetic over arrays (the compiler vectorises it): the edge vectors and
+//! A band of rows of cells (a whole block when it is small, [`BAND_NODES`]) is measured in two
+//! loops:
+//! 1. straight-line arithmetic over arrays (the compiler vectorises it), over every cell of
+//!    the band at once (flat node indices, see [`band`]: the reductions and the loop set-up are
+//!    paid once per band, not per row of 16 cells): the edge vectors and
 //!    lengths (each computed once and shared by the two cells on either side), the corner cross
 //!    and dot products, the four corner angles, the extreme angles and every length figure,
 //!    whether the cell takes this path, the histogram bins (by arithmetic and comparisons with
 //!    the edges, [`super::kernel::angle_bin_unsigned`], [`super::kernel::weighted_bin`], summed
 //!    into one packed word, [`super::kernel::PACK`]), and as
-//!    reductions over the row the acceptance, inverted and cell counts and the row's extremes
+//!    reductions over the band the acceptance, inverted and cell counts and the band's extremes
 //!    (integer keys); per cell it stores only what loop 2 reads (the two extreme angles and the
 //!    eight bins packed in one word: contiguous stores, where a wider record took scatters);
 //! 2. per cell, in cell order: the angle sums and the histogram counts (one increment per
@@ -43,25 +46,32 @@ use super::{JACOBIAN_EDGES, RATIO_EDGES};
 use crate::geometry::Point;
 use crate::mesh::BlockGrid;
 
-/// Scratch arrays of one row of cells (reused from block to block).
+/// Scratch arrays of one band of rows of cells (reused from band to band and block to block),
+/// indexed by the flat node index `p = r w + i` of the band's nodes (`w = ni + 1` per line).
 #[derive(Default)]
 pub(super) struct Rows {
-    /// Edges from node `(i, j)` to `(i + 1, j)` of the row's bottom (`b`) and top (`t`) node
-    /// lines: x, y and the `sqrt` length (NaN when the squared length is outside
-    /// `[SQ_MIN, SQ_MAX]` or not a number: the cell takes the reference path).
-    bx: Vec<f64>,
-    by: Vec<f64>,
-    bl: Vec<f64>,
-    tx: Vec<f64>,
-    ty: Vec<f64>,
-    tl: Vec<f64>,
-    /// Edges from node `(i, j)` to `(i, j + 1)`, `i` in `0..=ni`.
+    /// Edges from node `p` to `p + 1` (x, y and the `sqrt` length, NaN when the squared length
+    /// is outside `[SQ_MIN, SQ_MAX]` or not a number: the cell takes the reference path): the
+    /// bottom edge of cell `p` and the top edge of cell `p - w`. At the end of a node line
+    /// (`i = ni`) this joins two lines: its length is set to NaN.
+    hx: Vec<f64>,
+    hy: Vec<f64>,
+    hl: Vec<f64>,
+    /// Edges from node `p` to `p + w`: the left edge of cell `p`, the right one of `p - 1`.
     vx: Vec<f64>,
     vy: Vec<f64>,
     vl: Vec<f64>,
-    /// Per cell of the row: its figures.
+    /// Per cell `p` (`i < ni`; the slots `i = ni` and the padding hold no cell): its figures.
     cells: Vec<Figures>,
 }
+
+/// A band of rows of a block has about this many nodes (its scratch arrays stay in the
+/// first-level cache; a 16 x 16 block is one band).
+const BAND_NODES: usize = 512;
+
+/// Loop 1 runs over a multiple of this many cells (the vector loops then end without a
+/// scalar remainder: the padding cells have NaN edges and count nowhere).
+const PAD: usize = 16;
 
 /// `sqrt(x² + y²)`, or NaN outside `[SQ_MIN, SQ_MAX]` (where [`super::kernel::edge_len`] takes
 /// `hypot`); a select rather than a branch, so that the edge loops vectorise.
@@ -74,15 +84,6 @@ fn checked_len(x: f64, y: f64) -> f64 {
     } else {
         f64::NAN
     }
-}
-
-/// The edges along a node line: `n[i + 1] - n[i]`.
-fn along_line(line: &[Point], x: &mut Vec<f64>, y: &mut Vec<f64>, l: &mut Vec<f64>) {
-    let n = line.len() - 1;
-    for v in [&mut *x, &mut *y, &mut *l] {
-        v.resize(n, 0.0);
-    }
-    line_edges(line, [&mut x[..n], &mut y[..n], &mut l[..n]]);
 }
 
 /// The edges along a node line into `e` (x, y, [`checked_len`]; `line.len() - 1` each).
@@ -113,53 +114,73 @@ fn cross_edges(lo: &[Point], hi: &[Point], e: [&mut [f64]; 3]) {
     }
 }
 
-/// The top edges, the edges across and loop 1 of one row (see [`Rows::figures`]).
+/// The edges and loop 1 of a band of `nb` rows of cells: `nodes` the band's `nb + 1` node
+/// lines of `w` nodes, `h` and `v` as [`Rows::hx`] and [`Rows::vx`] (at least `m + w` and
+/// `m + 1` long), `out` the `m` cells of loop 1 (`m >= nb w - 1`, a multiple of [`PAD`]).
+///
+/// Cell `p = r w + i` has the bottom edge `h[p]`, the top edge `h[p + w]`, the left edge
+/// `v[p]` and the right edge `v[p + 1]`: loop 1 runs over every `p` of the band at once (one
+/// reduction of its counts per band, not per row); the slots `i = ni` and the padding get a
+/// NaN edge, so they are not on the fast path and count nowhere.
 #[inline(always)]
-fn row(
-    lo: &[Point],
-    hi: &[Point],
-    b: [&[f64]; 3],
-    t: [&mut [f64]; 3],
+fn band(
+    nodes: &[Point],
+    w: usize,
+    nb: usize,
+    h: [&mut [f64]; 3],
     v: [&mut [f64]; 3],
     th: &SkewThresholds,
     out: &mut [Figures],
 ) -> RowCounts {
-    let [tx, ty, tl] = t;
+    let [hx, hy, hl] = h;
     let [vx, vy, vl] = v;
-    line_edges(hi, [&mut *tx, &mut *ty, &mut *tl]);
-    cross_edges(lo, hi, [&mut *vx, &mut *vy, &mut *vl]);
-    row_figures(b, [tx, ty, tl], [vx, vy, vl], th, out)
+    let m = out.len();
+    let (nh, nv) = ((nb + 1) * w - 1, nb * w);
+    line_edges(&nodes[..=nh], [&mut hx[..nh], &mut hy[..nh], &mut hl[..nh]]);
+    cross_edges(
+        &nodes[..nv],
+        &nodes[w..w + nv],
+        [&mut vx[..nv], &mut vy[..nv], &mut vl[..nv]],
+    );
+    hl[nh..m + w].fill(f64::NAN);
+    vl[nv..=m].fill(f64::NAN);
+    for r in 0..nb {
+        hl[r * w + w - 1] = f64::NAN;
+    }
+    let b = [&hx[..m], &hy[..m], &hl[..m]];
+    let t = [&hx[w..w + m], &hy[w..w + m], &hl[w..w + m]];
+    row_figures(b, t, [&vx[..=m], &vy[..=m], &vl[..=m]], th, out)
 }
 
-/// [`row`] compiled for AVX-512 (8-lane vectors; the same IEEE operations on the same
+/// [`band`] compiled for AVX-512 (8-lane vectors; the same IEEE operations on the same
 /// operands, no fused multiply-add, so the same bits).
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx512f,avx512dq,avx512vl,avx2")]
-fn row_avx512(
-    lo: &[Point],
-    hi: &[Point],
-    b: [&[f64]; 3],
-    t: [&mut [f64]; 3],
+fn band_avx512(
+    nodes: &[Point],
+    w: usize,
+    nb: usize,
+    h: [&mut [f64]; 3],
     v: [&mut [f64]; 3],
     th: &SkewThresholds,
     out: &mut [Figures],
 ) -> RowCounts {
-    row(lo, hi, b, t, v, th, out)
+    band(nodes, w, nb, h, v, th, out)
 }
 
-/// [`row`] compiled for AVX2.
+/// [`band`] compiled for AVX2.
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
-fn row_avx2(
-    lo: &[Point],
-    hi: &[Point],
-    b: [&[f64]; 3],
-    t: [&mut [f64]; 3],
+fn band_avx2(
+    nodes: &[Point],
+    w: usize,
+    nb: usize,
+    h: [&mut [f64]; 3],
     v: [&mut [f64]; 3],
     th: &SkewThresholds,
     out: &mut [Figures],
 ) -> RowCounts {
-    row(lo, hi, b, t, v, th, out)
+    band(nodes, w, nb, h, v, th, out)
 }
 
 /// The figures of one cell from loop 1 (one record per cell, so that loop 1 writes through a
@@ -179,36 +200,35 @@ struct Figures {
 const FAST: u64 = 1 << 40;
 
 impl Rows {
-    /// The row of cells between node lines `lo` and `hi` (`ni + 1` nodes each) into
-    /// `self.cells`; the bottom edges must already be in `bx, by, bl`.
+    /// The `nb` rows of cells between the `nb + 1` node lines `nodes` (`w` nodes each) into
+    /// `self.cells` (cell `(i, r)` at `r w + i`), see [`band`].
     ///
     /// With [`Tables::wider`] (AVX-512) loop 1 runs in 8-lane vectors, with [`Tables::wide`]
     /// (the CPU has AVX2) in 4-lane vectors (the same IEEE operations on
     /// the same operands, so the same bits as the 2-lane SSE2 build; no fused multiply-add).
-    fn figures(&mut self, lo: &[Point], hi: &[Point], bins: &Tables) -> RowCounts {
-        let n = lo.len() - 1;
-        for v in [&mut self.tx, &mut self.ty, &mut self.tl] {
-            v.resize(n, 0.0);
+    fn figures(&mut self, nodes: &[Point], w: usize, nb: usize, bins: &Tables) -> RowCounts {
+        let m = (nb * w - 1).next_multiple_of(PAD);
+        for v in [&mut self.hx, &mut self.hy, &mut self.hl] {
+            v.resize(m + w, 0.0);
         }
         for v in [&mut self.vx, &mut self.vy, &mut self.vl] {
-            v.resize(n + 1, 0.0);
+            v.resize(m + 1, 0.0);
         }
-        self.cells.resize(n, Figures::default());
-        let b = [&self.bx[..n], &self.by[..n], &self.bl[..n]];
-        let t = [&mut self.tx[..n], &mut self.ty[..n], &mut self.tl[..n]];
-        let v = [&mut self.vx[..=n], &mut self.vy[..=n], &mut self.vl[..=n]];
-        let out = &mut self.cells[..n];
+        self.cells.resize(m, Figures::default());
+        let h = [&mut self.hx[..], &mut self.hy[..], &mut self.hl[..]];
+        let v = [&mut self.vx[..], &mut self.vy[..], &mut self.vl[..]];
+        let out = &mut self.cells[..m];
         #[cfg(target_arch = "x86_64")]
         if bins.wider {
             // SAFETY: `wider` is only set when the CPU has these features (see `Tables::wider`).
-            return unsafe { row_avx512(lo, hi, b, t, v, &bins.skew, out) };
+            return unsafe { band_avx512(nodes, w, nb, h, v, &bins.skew, out) };
         }
         #[cfg(target_arch = "x86_64")]
         if bins.wide {
             // SAFETY: `wide` is only set when the CPU has AVX2 (see `Tables::wide`).
-            return unsafe { row_avx2(lo, hi, b, t, v, &bins.skew, out) };
+            return unsafe { band_avx2(nodes, w, nb, h, v, &bins.skew, out) };
         }
-        row(lo, hi, b, t, v, &bins.skew, out)
+        band(nodes, w, nb, h, v, &bins.skew, out)
     }
 }
 
@@ -539,18 +559,19 @@ impl Chunk {
             return f;
         }
         let w = ni + 1;
-        let n = &grid.nodes;
-        along_line(&n[..w], &mut rows.bx, &mut rows.by, &mut rows.bl);
-        for j in 0..nj {
-            let (line, next) = (&n[j * w..(j + 1) * w], &n[(j + 1) * w..(j + 2) * w]);
-            let k = rows.figures(line, next, t);
+        let per_band = (BAND_NODES / w).max(1);
+        for j0 in (0..nj).step_by(per_band) {
+            let nb = per_band.min(nj - j0);
+            let nodes = &grid.nodes[j0 * w..(j0 + nb + 1) * w];
+            let k = rows.figures(nodes, w, nb, t);
             if self.pending + k.fast > u64::from(u32::MAX) {
                 self.flush();
             }
             self.pending += k.fast;
             if k.fast > 0 {
-                // Extremes of the row's fast cells: no NaN, no zero, so merging them here
-                // rather than cell by cell gives the same bits.
+                // Extremes of the band's fast cells: no NaN, no zero, so merging them here
+                // (before the band's reference cells) rather than cell by cell gives the same
+                // bits.
                 self.fast += k.fast;
                 f.cells += k.fast as usize;
                 f.inverted += k.inverted as usize;
@@ -565,21 +586,22 @@ impl Chunk {
                 f.max_angle_deg = more(unkey(k.hi[ANGLE]), f.max_angle_deg);
                 min_sj(&mut f, unkey(k.lo[SJ]));
             }
-            for (i, cell) in rows.cells[..ni].iter().enumerate() {
-                if cell.bins & FAST == 0 {
-                    self.add_reference(&mut f, &[line[i], line[i + 1], next[i + 1], next[i]]);
-                    continue;
-                }
-                f.sum_min += cell.fig[0];
-                f.sum_max += cell.fig[1];
-                let (c, s) = (&mut *self.pairs, cell.bins);
-                for (t, c) in c.iter_mut().enumerate() {
-                    c[(s >> (10 * t)) as usize & 1023] += 1;
+            // Loop 2, in cell order.
+            for r in 0..nb {
+                let (line, next) = (&nodes[r * w..(r + 1) * w], &nodes[(r + 1) * w..(r + 2) * w]);
+                for (i, cell) in rows.cells[r * w..r * w + ni].iter().enumerate() {
+                    if cell.bins & FAST == 0 {
+                        self.add_reference(&mut f, &[line[i], line[i + 1], next[i + 1], next[i]]);
+                        continue;
+                    }
+                    f.sum_min += cell.fig[0];
+                    f.sum_max += cell.fig[1];
+                    let (c, s) = (&mut *self.pairs, cell.bins);
+                    for (t, c) in c.iter_mut().enumerate() {
+                        c[(s >> (10 * t)) as usize & 1023] += 1;
+                    }
                 }
             }
-            std::mem::swap(&mut rows.bx, &mut rows.tx);
-            std::mem::swap(&mut rows.by, &mut rows.ty);
-            std::mem::swap(&mut rows.bl, &mut rows.tl);
         }
         f
     }
@@ -694,58 +716,56 @@ mod tests {
         }
     }
 
-    /// The AVX2 and AVX-512 builds of a whole row (its edges, then loop 1) give the bits of
-    /// the portable one, on node lines with repeated, tiny, huge and non-finite nodes.
+    /// The AVX2 and AVX-512 builds of a whole band (its edges, then loop 1) give the bits of
+    /// the portable one, on node lines with repeated, tiny, huge and non-finite nodes; and the
+    /// slots between node lines and the padding are never on the fast path.
     #[test]
-    fn wide_and_portable_row_edges_agree() {
+    fn wide_and_portable_bands_agree() {
         let t = Tables::new();
         if !t.wide {
             return;
         }
         let mut r = SplitMix64(7);
         let mut u = || r.next_f64();
-        for n in [1usize, 2, 3, 5, 8, 16, 17, 33] {
-            for round in 0..200 {
+        for (ni, nb) in [
+            (1usize, 1usize),
+            (2, 3),
+            (3, 1),
+            (5, 2),
+            (8, 4),
+            (16, 16),
+            (17, 2),
+        ] {
+            let w = ni + 1;
+            for round in 0..100 {
                 let scale = [1.0, 1e-150, 1e150, 1e-3][round % 4];
-                let mut line = || -> Vec<Point> {
-                    (0..=n)
-                        .map(|_| match (u() * 12.0) as u32 {
-                            0 => [0.0, 0.0],
-                            1 => [f64::NAN, 1.0],
-                            2 => [f64::INFINITY, 0.5],
-                            _ => [scale * (2.0 * u() - 1.0), scale * (2.0 * u() - 1.0)],
-                        })
-                        .collect()
-                };
-                let (lo, hi) = (line(), line());
-                let mut b = [Vec::new(), Vec::new(), Vec::new()];
-                {
-                    let [x, y, l] = &mut b;
-                    along_line(&lo, x, y, l);
-                }
+                let nodes: Vec<Point> = (0..(nb + 1) * w)
+                    .map(|_| match (u() * 12.0) as u32 {
+                        0 => [0.0, 0.0],
+                        1 => [f64::NAN, 1.0],
+                        2 => [f64::INFINITY, 0.5],
+                        _ => [scale * (2.0 * u() - 1.0), scale * (2.0 * u() - 1.0)],
+                    })
+                    .collect();
                 let run = |wide: u8| {
-                    let mut e = vec![vec![0.0; n]; 3];
-                    let mut v = vec![vec![0.0; n + 1]; 3];
-                    let mut out = vec![Figures::default(); n];
-                    let [tx, ty, tl] = &mut e[..] else {
-                        unreachable!()
+                    let mut rows = Rows::default();
+                    let tables = Tables {
+                        wide: wide >= 1,
+                        wider: wide >= 2,
+                        skew: SkewThresholds::new(),
                     };
-                    let [vx, vy, vl] = &mut v[..] else {
-                        unreachable!()
-                    };
-                    let (te, ve) = ([&mut tx[..], ty, tl], [&mut vx[..], vy, vl]);
-                    let k = match wide {
-                        // SAFETY: `t.wide` says the CPU has AVX2.
-                        1 => unsafe { row_avx2(&lo, &hi, refs(&b), te, ve, &t.skew, &mut out) },
-                        // SAFETY: `t.wider` says the CPU has the AVX-512 features.
-                        2 => unsafe { row_avx512(&lo, &hi, refs(&b), te, ve, &t.skew, &mut out) },
-                        _ => row(&lo, &hi, refs(&b), te, ve, &t.skew, &mut out),
-                    };
-                    let bits: Vec<u64> = out
+                    let k = rows.figures(&nodes, w, nb, &tables);
+                    for (p, c) in rows.cells.iter().enumerate() {
+                        if p % w == ni || p >= nb * w {
+                            assert_eq!(c.bins & FAST, 0, "slot {p} is no cell");
+                        }
+                    }
+                    let bits: Vec<u64> = rows
+                        .cells
                         .iter()
-                        .flat_map(|c| c.fig.iter().map(|x| x.to_bits()).chain([c.bins]))
-                        .chain(e.iter().flatten().map(|x| x.to_bits()))
-                        .chain(v.iter().flatten().map(|x| x.to_bits()))
+                        .enumerate()
+                        .filter(|&(p, _)| p % w != ni && p < nb * w)
+                        .flat_map(|(_, c)| c.fig.iter().map(|x| x.to_bits()).chain([c.bins]))
                         .collect();
                     (format!("{k:?}"), bits)
                 };
