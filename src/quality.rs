@@ -27,7 +27,7 @@ mod rows;
 
 mod sides;
 
-pub use atan::angle_deg;
+pub use atan::{angle_deg, angle_deg_nonzero};
 
 /// Angles (degrees) and Jacobians of the four corners of one quadrilateral `[p0, p1, p2, p3]`
 /// (see the module doc for the conventions).

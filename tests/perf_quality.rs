@@ -242,7 +242,14 @@ fn squares_sit_on_bin_edges() {
 #[test]
 fn wide_and_tall_blocks_in_bands() {
     let mut r = SplitMix64(5);
-    let shapes = [(600, 2, 0), (700, 1, 3), (300, 5, 2), (40, 30, 1), (16, 16, 0), (1, 600, 3)];
+    let shapes = [
+        (600, 2, 0),
+        (700, 1, 3),
+        (300, 5, 2),
+        (40, 30, 1),
+        (16, 16, 0),
+        (1, 600, 3),
+    ];
     let g: Vec<BlockGrid> = shapes
         .iter()
         .map(|&(ni, nj, wild)| grid(&mut r, ni, nj, 1.0, wild))

@@ -98,9 +98,116 @@ pub fn angle_deg(y: f64, x: f64) -> f64 {
     m + s * a
 }
 
+/// [`angle_deg`] of a corner of the quality pass's fast path: `y` not zero and both
+/// arguments finite, at most `1e300` in magnitude. The same bits: the selects that only
+/// matter outside that range are left out (a zero `y`, the scaling of huge arguments, the
+/// `0 / 0` of `(0, 0)`, a `t` of the diagonals that the division gives as `+0` anyway).
+///
+/// Why the same: with `ay > 0`, `ay == 0.0` adds nothing to `small`; `k` is 1 and multiplying
+/// by 1 is exact; the divisor is positive on every branch (`ax > 0` when `small`, `ay > 0`
+/// else), so `t` is never `0 / 0`, and when `ax == ay` the middle branch divides `+0` by
+/// `2 ay`, the `+0` that [`angle_deg`] sets. `ax == 0.0` stays in `large` (`TAN_PI_8 * ay`
+/// may underflow to 0 for a subnormal `ay`).
+#[inline(always)]
+pub fn angle_deg_nonzero(y: f64, x: f64) -> f64 {
+    let (ax, ay) = (x.abs(), y.abs());
+    let small = ay < TAN_PI_8 * ax;
+    let large = !small & ((ax < TAN_PI_8 * ay) | (ax == 0.0));
+    let (n, d) = if small {
+        (ay, ax)
+    } else if large {
+        (ax, ay)
+    } else {
+        (ay - ax, ay + ax)
+    };
+    let t = n / d;
+    let a = atan_reduced(t).to_degrees();
+    // First quadrant: c + sa * a.
+    let c = if small {
+        0.0
+    } else if large {
+        90.0
+    } else {
+        45.0
+    };
+    let sa = if large { -1.0 } else { 1.0 };
+    // Quadrant: base + φ or base - φ.
+    let (xn, yn) = (x < 0.0, y < 0.0);
+    let base = if xn {
+        180.0
+    } else if yn {
+        360.0
+    } else {
+        0.0
+    };
+    let neg = xn != yn;
+    let m = if neg { base - c } else { base + c };
+    let s = if neg { -sa } else { sa };
+    m + s * a
+}
+
 #[cfg(test)]
 mod tests {
-    use super::angle_deg;
+    use super::{angle_deg, angle_deg_nonzero};
+
+    /// The fast-path angle gives [`angle_deg`]'s bits on its domain: random and hard inputs
+    /// (axes, diagonals, the reduction thresholds, subnormal, tiny and huge magnitudes up to
+    /// `1e300`, every quadrant).
+    #[test]
+    fn nonzero_angle_equals_angle_deg() {
+        let mut r = crate::layouts::SplitMix64(11);
+        let t = super::TAN_PI_8;
+        let specials = [
+            0.0,
+            -0.0,
+            1.0,
+            -1.0,
+            t,
+            -t,
+            1.0 / t,
+            5e-324,
+            -5e-324,
+            1e-310,
+            2.2e-308,
+            1e300,
+            -1e300,
+            1e-300,
+            0.999_999_999_999_999_9,
+        ];
+        let mut count = 0;
+        let mut check = |y: f64, x: f64| {
+            if y == 0.0 || !(y.abs() <= 1e300 && x.abs() <= 1e300) {
+                return;
+            }
+            let (want, got) = (angle_deg(y, x), angle_deg_nonzero(y, x));
+            assert_eq!(got.to_bits(), want.to_bits(), "({y:e}, {x:e})");
+            count += 1;
+        };
+        for &y in &specials {
+            for &x in &specials {
+                check(y, x);
+                check(y, x * 3.0);
+                check(y * t, x);
+                check(y, y * t);
+                check(y, y);
+                check(y, -y);
+            }
+        }
+        for _ in 0..200_000 {
+            let mag = |r: &mut crate::layouts::SplitMix64| {
+                let e = (r.next_f64() * 1200.0 - 600.0).clamp(-1074.0, 996.0);
+                (2.0 * r.next_f64() - 1.0) * e.exp2()
+            };
+            let (y, x) = (mag(&mut r), mag(&mut r));
+            check(y, x);
+            // Near the reduction thresholds and the diagonals.
+            let near = x * t * (1.0 + (r.next_f64() - 0.5) * 1e-15);
+            check(near, x);
+            check(x, near);
+            check(x * (1.0 + (r.next_f64() - 0.5) * 1e-15), x);
+        }
+        assert!(count > 400_000);
+    }
 
     #[test]
     fn axes_and_diagonals_are_exact() {

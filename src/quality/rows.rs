@@ -22,12 +22,12 @@
 //! ([`least_scaled_jacobian`]; a cell whose corner pick is uncertain takes the reference path).
 //!
 //! Why this gives the reference's numbers: every figure is computed with the reference's own
-//! functions ([`angle_deg`], [`length_figures`], [`skewness`], the `sqrt` length of
+//! functions ([`angle_deg`](super::angle_deg), [`length_figures`], [`skewness`], the `sqrt` length of
 //! [`super::kernel::edge_len`]) on the same operands, except that the reference forms a
 //! corner's two edge vectors as differences `a - o` where this pass may use the negated
 //! difference `-(o - a)` of the neighbouring corner: the two are equal except possibly for the
 //! sign of a zero component, so products and sums agree except possibly for the sign of a zero
-//! result. A zero cross product sends the cell to the reference path; [`angle_deg`] does not
+//! result. A zero cross product sends the cell to the reference path; [`angle_deg`](super::angle_deg) does not
 //! look at the sign of a zero; lengths only use squares. Cells with an edge whose squared
 //! length is outside `[SQ_MIN, SQ_MAX]` (or not a number) take the reference path too. On this
 //! path no figure is NaN or a zero of either sign (angles are `M + s a` with `M = 0` only for
@@ -38,7 +38,7 @@ use super::kernel::{
     angle_bin_unsigned, cell_products, corner_products, least_scaled_jacobian, packed_bins,
     weighted_bin, BlockFigures, SkewThresholds, Tables, PACK, SQ_MAX, SQ_MIN,
 };
-use super::{angle_deg, cell_metrics, fold, ratio, MetricSummary, QualityMetrics};
+use super::{angle_deg_nonzero, cell_metrics, fold, MetricSummary, QualityMetrics};
 use super::{
     ANGLE_ACCEPTABLE, ASPECT_ACCEPTABLE, EDGE_RATIO_ACCEPTABLE, SCALED_JACOBIAN_ACCEPTABLE,
 };
@@ -325,16 +325,19 @@ fn row_figures(
             & (c[3] != 0.0)
             & certain;
         let inverted = (c[0] < 0.0) | (c[1] < 0.0) | (c[2] < 0.0) | (c[3] < 0.0);
+        // On the fast path (`fine`) the cross products are not zero and every product is
+        // finite, below `2e280` (lengths in range): [`angle_deg_nonzero`] is [`angle_deg`](super::angle_deg).
         let a = [
-            angle_deg(c[0], d[0]),
-            angle_deg(c[1], d[1]),
-            angle_deg(c[2], d[2]),
-            angle_deg(c[3], d[3]),
+            angle_deg_nonzero(c[0], d[0]),
+            angle_deg_nonzero(c[1], d[1]),
+            angle_deg_nonzero(c[2], d[2]),
+            angle_deg_nonzero(c[3], d[3]),
         ];
-        let (amin, amax) = (fold(a, f64::min), fold(a, f64::max));
+        // No NaN and no `-0.0` on the fast path: the plain compares are `f64::min` / `max`.
+        let (amin, amax) = (fold(a, less), fold(a, more));
         let (er, ar) = edge_ratios(&edges);
         // The dividend of `skewness(amin, amax)`.
-        let sd = (amax - 90.0).max(90.0 - amin);
+        let sd = more(amax - 90.0, 90.0 - amin);
         k.fast += u64::from(fine);
         k.inverted += u64::from(fine & inverted);
         k.outside[ANGLE] +=
@@ -380,13 +383,16 @@ fn row_figures(
     k
 }
 
-/// Edge ratio and aspect ratio from the edge lengths, the expressions of [`length_figures`].
+/// Edge ratio and aspect ratio from the edge lengths, the expressions of [`length_figures`]
+/// for the fast path's positive finite lengths (elsewhere the results are not used): no NaN,
+/// no zero, so the plain compares are `f64::min` / `max` and [`super::ratio`] is the
+/// division.
 #[inline(always)]
 fn edge_ratios(edges: &[f64; 4]) -> (f64, f64) {
-    let (lo, hi) = (fold(*edges, f64::min), fold(*edges, f64::max));
+    let (lo, hi) = (fold(*edges, less), fold(*edges, more));
     let li = 0.5 * (edges[0] + edges[2]);
     let lj = 0.5 * (edges[1] + edges[3]);
-    (ratio(hi, lo), ratio(li.max(lj), li.min(lj)))
+    (hi / lo, more(li, lj) / less(li, lj))
 }
 
 /// Running figures of a chunk of blocks, in visiting order: the fast path's histogram counts,
