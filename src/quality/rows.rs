@@ -1,4 +1,4 @@
-//! The per-block pass of [`super::measure_all`]: every cell of a block, row by row, with the
+//! The per-block pass of [`super::measure_all`]: every cell of a block, band of rows by band, with the
 //! reference formulas ([`super::cell_corners`], [`super::cell_metrics`]) bit for bit.
 //!
 //! A band of rows of cells (a whole block when it is small, [`BAND_NODES`]) is measured in two
