@@ -1,5 +1,6 @@
-//! The per-block pass of [`super::measure_all`]: every cell of a block, band of rows by band, with the
-//! reference formulas ([`super::cell_corners`], [`super::cell_metrics`]) bit for bit.
+//! The per-block pass of [`super::measure_all`]: every cell of a block, a band of rows at a
+//! time, with the reference formulas ([`super::cell_corners`], [`super::cell_metrics`]) bit for
+//! bit.
 //!
 //! A band of rows of cells (a whole block when it is small, [`BAND_NODES`]) is measured in two
 //! loops:
