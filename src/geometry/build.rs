@@ -113,9 +113,47 @@ pub(super) fn orient_with(all_safe: bool, a: &Point, b: &Point, c: &Point) -> Or
 #[inline(always)]
 pub(super) fn incircle_with(all_safe: bool, a: Point, b: Point, c: Point, d: Point) -> Ordering {
     if all_safe {
-        incircle_sos_safe(a, b, c, d)
+        incircle_sos_safe(&a, &b, &c, &d)
     } else {
         incircle_sos(a, b, c, d)
+    }
+}
+
+/// True when triangle `v` (vertex ids into `pts`, `inf` the infinite one) is in conflict with
+/// point `q`: finite triangle, `q` inside its circumcircle under SoS; infinite triangle, `q`
+/// strictly outside its hull edge, or on its open segment. Takes the builder's parts, so that
+/// the cavity search can hold them borrowed apart.
+#[inline(always)]
+fn conflict(pts: &[Point], all_safe: bool, inf: u32, v: [u32; 3], q: &Point) -> bool {
+    let (u, w) = if v[0] == inf {
+        (v[1], v[2])
+    } else if v[1] == inf {
+        (v[2], v[0])
+    } else if v[2] == inf {
+        (v[0], v[1])
+    } else {
+        let (a, b, c) = (
+            &pts[v[0] as usize],
+            &pts[v[1] as usize],
+            &pts[v[2] as usize],
+        );
+        return if all_safe {
+            incircle_sos_safe(a, b, c, q) == Ordering::Greater
+        } else {
+            incircle_sos(*a, *b, *c, *q) == Ordering::Greater
+        };
+    };
+    let (pu, pw) = (&pts[u as usize], &pts[w as usize]);
+    match orient_with(all_safe, pu, pw, q) {
+        Ordering::Greater => true,
+        Ordering::Less => false,
+        Ordering::Equal => {
+            // Collinear with the hull edge: inside the open segment iff lexicographically
+            // between its ends.
+            let a = lex_cmp(pu, q);
+            let b = lex_cmp(q, pw);
+            a == b && a != Ordering::Equal
+        }
     }
 }
 
@@ -239,36 +277,6 @@ impl<'a> Builder<'a> {
         self.adj[3 * t as usize + k] / 3
     }
 
-    /// True when `t` is in conflict with point `q` (finite triangle: `q` inside its circumcircle
-    /// under SoS; infinite triangle: `q` strictly outside its hull edge, or on its open segment).
-    #[inline]
-    fn in_conflict(&self, t: u32, q: &Point) -> bool {
-        let v = self.tv[t as usize];
-        let inf = self.inf;
-        let (u, w) = if v[0] == inf {
-            (v[1], v[2])
-        } else if v[1] == inf {
-            (v[2], v[0])
-        } else if v[2] == inf {
-            (v[0], v[1])
-        } else {
-            let (a, b, c) = (*self.p(v[0]), *self.p(v[1]), *self.p(v[2]));
-            return incircle_with(self.all_safe, a, b, c, *q) == Ordering::Greater;
-        };
-        let (pu, pw) = (self.p(u), self.p(w));
-        match self.orient(pu, pw, q) {
-            Ordering::Greater => true,
-            Ordering::Less => false,
-            Ordering::Equal => {
-                // Collinear with the hull edge: inside the open segment iff lexicographically
-                // between its ends.
-                let a = lex_cmp(pu, q);
-                let b = lex_cmp(q, pw);
-                a == b && a != Ordering::Equal
-            }
-        }
-    }
-
     /// Exact check that the walk ended right: `q` in the closed finite triangle `t`, or strictly
     /// outside the hull edge of infinite triangle `t`.
     fn contains_exact(&self, t: u32, q: &Point) -> bool {
@@ -370,22 +378,26 @@ impl<'a> Builder<'a> {
         self.boundary.clear();
         self.cavity.push(seed);
         self.stack.push(seed);
+        // Borrowed apart: the search reads the triangles and writes only the marks and lists.
+        let (pts, all_safe, inf) = (self.pts, self.all_safe, self.inf);
+        let (tv, adj, mark) = (&self.tv[..], &self.adj[..], &mut self.mark[..]);
         while let Some(t) = self.stack.pop() {
-            for k in 0..3 {
-                let h = self.adj[3 * t as usize + k];
-                let m = h / 3;
-                let mk = self.mark[m as usize];
+            let t = t as usize;
+            let ht: [u32; 3] = adj[3 * t..3 * t + 3].try_into().expect("three half-edges");
+            for (k, &h) in ht.iter().enumerate() {
+                let m = (h / 3) as usize;
+                let mk = mark[m];
                 if mk == stamp {
                     continue;
                 }
-                if mk != stamp | OUTSIDE && self.in_conflict(m, &q) {
-                    self.mark[m as usize] = stamp;
-                    self.cavity.push(m);
-                    self.stack.push(m);
+                if mk != stamp | OUTSIDE && conflict(pts, all_safe, inf, tv[m], &q) {
+                    mark[m] = stamp;
+                    self.cavity.push(m as u32);
+                    self.stack.push(m as u32);
                     continue;
                 }
-                self.mark[m as usize] = stamp | OUTSIDE;
-                let v = self.tv[t as usize];
+                mark[m] = stamp | OUTSIDE;
+                let v = tv[t];
                 self.boundary.push((v[next(k)], v[prev(k)], h));
             }
         }
