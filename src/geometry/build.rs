@@ -302,31 +302,40 @@ impl<'a> Builder<'a> {
         if self.is_infinite(t) {
             t = self.finite_neighbor(t);
         }
+        // Borrowed apart from the generator, which every step advances.
+        let (pts, tv, adj, all_safe, inf) = (
+            self.pts,
+            &self.tv[..],
+            &self.adj[..],
+            self.all_safe,
+            self.inf,
+        );
+        let mut v = tv[t as usize];
         let mut came_from = u32::MAX;
         'step: for _ in 0..cap {
-            let v = self.tv[t as usize];
-            let r = self.rng.next3();
-            for i in 0..3 {
-                let k = (r + i) % 3;
-                let h = self.adj[3 * t as usize + k];
+            // Edges tested in the order r, r + 1, r + 2 (mod 3).
+            let mut k = self.rng.next3();
+            for _ in 0..3 {
+                let h = adj[3 * t as usize + k];
                 let m = h / 3;
-                if m == came_from {
-                    continue;
-                }
-                let (a, b) = (self.p(v[next(k)]), self.p(v[prev(k)]));
-                let behind = if exact {
-                    self.orient(a, b, q) == Ordering::Less
-                } else {
-                    orient_fast(a, b, q) < 0.0
-                };
-                if behind {
-                    came_from = t;
-                    t = m;
-                    if self.is_infinite(t) {
-                        return Some(t);
+                if m != came_from {
+                    let (a, b) = (&pts[v[next(k)] as usize], &pts[v[prev(k)] as usize]);
+                    let behind = if exact {
+                        orient_with(all_safe, a, b, q) == Ordering::Less
+                    } else {
+                        orient_fast(a, b, q) < 0.0
+                    };
+                    if behind {
+                        came_from = t;
+                        t = m;
+                        v = tv[t as usize];
+                        if v[0] == inf || v[1] == inf || v[2] == inf {
+                            return Some(t);
+                        }
+                        continue 'step;
                     }
-                    continue 'step;
                 }
+                k = next(k);
             }
             return Some(t);
         }
@@ -408,35 +417,31 @@ impl<'a> Builder<'a> {
                 self.boundary.len()
             )));
         }
+        // The boundary has two edges more than the cavity has triangles: the first edges take
+        // the cavity's slots in order, the last two get two new slots. `cavity` then lists
+        // the slot of every boundary edge.
+        let first_new = self.tv.len() as u32;
+        self.tv.extend_from_slice(&[[0; 3]; 2]);
+        self.adj.extend_from_slice(&[u32::MAX; 6]);
+        self.mark.extend_from_slice(&[0; 2]);
+        self.cavity.extend_from_slice(&[first_new, first_new + 1]);
+        let inf = self.inf;
+        let (tv, adj, start_at) = (&mut self.tv[..], &mut self.adj[..], &mut self.start_at[..]);
         let mut last = 0;
-        for i in 0..self.boundary.len() {
-            let (u, w, h) = self.boundary[i];
-            let s = if i < self.cavity.len() {
-                self.cavity[i]
-            } else {
-                self.tv.push([0; 3]);
-                self.adj.extend_from_slice(&[u32::MAX; 3]);
-                self.mark.push(0);
-                (self.tv.len() - 1) as u32
-            };
-            self.tv[s as usize] = [u, w, pi];
-            self.adj[3 * s as usize + 2] = h;
-            self.adj[h as usize] = 3 * s + 2;
-            self.start_at[u as usize] = s;
-            if u != self.inf && w != self.inf {
+        for (&(u, w, h), &s) in self.boundary.iter().zip(&self.cavity) {
+            tv[s as usize] = [u, w, pi];
+            adj[3 * s as usize + 2] = h;
+            adj[h as usize] = 3 * s + 2;
+            start_at[u as usize] = s;
+            if u != inf && w != inf {
                 last = s;
             }
         }
-        for i in 0..self.boundary.len() {
-            let s = if i < self.cavity.len() {
-                self.cavity[i]
-            } else {
-                (self.tv.len() - (self.boundary.len() - i)) as u32
-            };
-            let w = self.tv[s as usize][1];
-            let n = self.start_at[w as usize];
-            self.adj[3 * s as usize] = 3 * n + 1;
-            self.adj[3 * n as usize + 1] = 3 * s;
+        // Across `(w, pi)`: the new triangle starting at `w`.
+        for (&(_, w, _), &s) in self.boundary.iter().zip(&self.cavity) {
+            let n = start_at[w as usize];
+            adj[3 * s as usize] = 3 * n + 1;
+            adj[3 * n as usize + 1] = 3 * s;
         }
         self.last = last;
         Ok(())
