@@ -614,7 +614,39 @@ const LEAF: usize = 8;
 pub struct HoleIndex<'a> {
     holes: &'a [Circle],
     order: Vec<u32>,
+    /// `holes[order[k]]` at `k`: a leaf's circles side by side (bitwise copies, so every gap
+    /// is the one computed from `holes`), instead of one scattered cache line each.
+    sorted: Vec<Circle>,
     nodes: Vec<Node>,
+}
+
+/// Most nodes pending in a query: the tree is at most 65 levels deep and a visit pushes two
+/// children, so the pending nodes never exceed two per level.
+const STACK: usize = 2 * 66;
+
+/// A query's pending nodes, on the stack instead of a heap allocation per query.
+struct Pending {
+    nodes: [u32; STACK],
+    len: usize,
+}
+
+impl Pending {
+    fn root() -> Self {
+        Pending {
+            nodes: [0; STACK],
+            len: 1,
+        }
+    }
+    #[inline]
+    fn push(&mut self, n: u32) {
+        self.nodes[self.len] = n;
+        self.len += 1;
+    }
+    #[inline]
+    fn pop(&mut self) -> Option<u32> {
+        self.len = self.len.checked_sub(1)?;
+        Some(self.nodes[self.len])
+    }
 }
 
 #[derive(Debug, Clone)]
@@ -633,11 +665,13 @@ impl<'a> HoleIndex<'a> {
         let mut idx = HoleIndex {
             holes,
             order: (0..holes.len() as u32).collect(),
+            sorted: Vec::new(),
             nodes: Vec::with_capacity(2 * holes.len() / LEAF + 1),
         };
         if !holes.is_empty() {
             idx.build(0, holes.len(), 0);
         }
+        idx.sorted = idx.order.iter().map(|&k| holes[k as usize]).collect();
         idx
     }
 
@@ -688,7 +722,7 @@ impl<'a> HoleIndex<'a> {
         // Safety margin on the lower bound, so floating-point rounding never prunes the
         // true minimum.
         let slack = |v: f64| v.abs() * 1e-12;
-        let mut stack = vec![0u32];
+        let mut stack = Pending::root();
         while let Some(n) = stack.pop() {
             let node = &self.nodes[n as usize];
             let dx = (node.lo[0] - q.center[0])
@@ -706,12 +740,13 @@ impl<'a> HoleIndex<'a> {
             }
             match node.children {
                 None => {
-                    for &k in &self.order[node.start as usize..node.end as usize] {
+                    let (s, e) = (node.start as usize, node.end as usize);
+                    for (&k, c) in self.order[s..e].iter().zip(&self.sorted[s..e]) {
                         let j = k as usize;
                         if j == i {
                             continue;
                         }
-                        let g = gap(&q, &self.holes[j]);
+                        let g = gap(&q, c);
                         let better = match best {
                             None => true,
                             Some((bj, bg)) => g < bg || (g == bg && j < bj),
@@ -740,6 +775,19 @@ impl<'a> HoleIndex<'a> {
 }
 
 impl HoleIndex<'_> {
+    /// [`HoleIndex::nearest_gap`] of every hole, indexed by hole. The queries run in the
+    /// tree's order (neighbouring holes one after the other, so that they find the same nodes
+    /// in cache); each answer is that of its own query.
+    pub fn nearest_gap_each(&self) -> Vec<Option<(usize, f64)>> {
+        let mut out = vec![None; self.holes.len()];
+        for &k in &self.order {
+            out[k as usize] = self.nearest_gap(k as usize);
+        }
+        out
+    }
+}
+
+impl HoleIndex<'_> {
     /// Every hole `j != i` whose gap to hole `i` is below `max_gap`, in increasing order of
     /// `j` (range query with the same branch and bound as [`HoleIndex::nearest_gap`]).
     pub fn within_gap(&self, i: usize, max_gap: f64) -> Vec<usize> {
@@ -750,7 +798,7 @@ impl HoleIndex<'_> {
         if self.nodes.is_empty() || max_gap.is_nan() {
             return out;
         }
-        let mut stack = vec![0u32];
+        let mut stack = Pending::root();
         while let Some(n) = stack.pop() {
             let node = &self.nodes[n as usize];
             let lb = box_dist2(node, q.center).sqrt() - q.radius - node.max_r;
@@ -758,12 +806,16 @@ impl HoleIndex<'_> {
                 continue;
             }
             match node.children {
-                None => out.extend(
-                    self.order[node.start as usize..node.end as usize]
-                        .iter()
-                        .map(|&k| k as usize)
-                        .filter(|&j| j != i && gap(&q, &self.holes[j]) < max_gap),
-                ),
+                None => {
+                    let (s, e) = (node.start as usize, node.end as usize);
+                    out.extend(
+                        self.order[s..e]
+                            .iter()
+                            .zip(&self.sorted[s..e])
+                            .filter(|&(&k, c)| k as usize != i && gap(&q, c) < max_gap)
+                            .map(|(&k, _)| k as usize),
+                    );
+                }
                 Some((l, r)) => {
                     stack.push(l);
                     stack.push(r);
@@ -793,7 +845,7 @@ impl HoleIndex<'_> {
         if self.nodes.is_empty() {
             return false;
         }
-        let mut stack = vec![0u32];
+        let mut stack = Pending::root();
         while let Some(n) = stack.pop() {
             let node = &self.nodes[n as usize];
             let lb = box_dist2(node, q.center).sqrt() - q.radius - node.max_r;
@@ -802,11 +854,11 @@ impl HoleIndex<'_> {
             }
             match node.children {
                 None => {
-                    let leaf = &self.order[node.start as usize..node.end as usize];
-                    if leaf.iter().any(|&k| {
+                    let leaf = &self.sorted[node.start as usize..node.end as usize];
+                    if leaf.iter().any(|c| {
                         // `!(gap >= max_gap)`: a NaN gap counts as closer, as in the scan.
                         matches!(
-                            gap(&self.holes[k as usize], q).partial_cmp(&max_gap),
+                            gap(c, q).partial_cmp(&max_gap),
                             None | Some(std::cmp::Ordering::Less)
                         )
                     }) {
@@ -847,13 +899,19 @@ mod tests {
             holes.push(Circle::new(rnd() * 10.0, rnd() * 10.0, rnd() * 0.3));
         }
         holes.push(Circle::new(5.0, 5.0, 3.0));
+        // Exact ties of the gap (the smaller index wins).
+        holes.push(Circle::new(20.0, 0.0, 1.0));
+        holes.push(Circle::new(23.0, 0.0, 1.0));
+        holes.push(Circle::new(17.0, 0.0, 1.0));
         let idx = HoleIndex::new(&holes);
+        let each = idx.nearest_gap_each();
         for i in 0..holes.len() {
+            assert_eq!(each[i], idx.nearest_gap(i), "hole {i}");
             let mut best = (usize::MAX, f64::INFINITY);
             for j in 0..holes.len() {
                 if j != i {
                     let g = gap(&holes[i], &holes[j]);
-                    if g < best.1 {
+                    if g < best.1 || (g == best.1 && j < best.0) {
                         best = (j, g);
                     }
                 }

@@ -239,10 +239,11 @@ pub fn nearest_gaps(domain: &Domain) -> Vec<f64> {
     let mut gaps = Vec::with_capacity(holes.len() + 1);
     gaps.push(b.radius);
     let mut bmin = f64::INFINITY;
-    for (i, h) in holes.iter().enumerate() {
+    let nearest = index.nearest_gap_each();
+    for (h, nearest) in holes.iter().zip(nearest) {
         let to_bounding = b.radius - dist(h.center, b.center) - h.radius;
         bmin = bmin.min(to_bounding);
-        let g = match index.nearest_gap(i) {
+        let g = match nearest {
             Some((_, g)) => g.min(to_bounding),
             None => to_bounding,
         };

@@ -113,9 +113,47 @@ pub(super) fn orient_with(all_safe: bool, a: &Point, b: &Point, c: &Point) -> Or
 #[inline(always)]
 pub(super) fn incircle_with(all_safe: bool, a: Point, b: Point, c: Point, d: Point) -> Ordering {
     if all_safe {
-        incircle_sos_safe(a, b, c, d)
+        incircle_sos_safe(&a, &b, &c, &d)
     } else {
         incircle_sos(a, b, c, d)
+    }
+}
+
+/// True when triangle `v` (vertex ids into `pts`, `inf` the infinite one) is in conflict with
+/// point `q`: finite triangle, `q` inside its circumcircle under SoS; infinite triangle, `q`
+/// strictly outside its hull edge, or on its open segment. Takes the builder's parts, so that
+/// the cavity search can hold them borrowed apart.
+#[inline(always)]
+fn conflict(pts: &[Point], all_safe: bool, inf: u32, v: [u32; 3], q: &Point) -> bool {
+    let (u, w) = if v[0] == inf {
+        (v[1], v[2])
+    } else if v[1] == inf {
+        (v[2], v[0])
+    } else if v[2] == inf {
+        (v[0], v[1])
+    } else {
+        let (a, b, c) = (
+            &pts[v[0] as usize],
+            &pts[v[1] as usize],
+            &pts[v[2] as usize],
+        );
+        return if all_safe {
+            incircle_sos_safe(a, b, c, q) == Ordering::Greater
+        } else {
+            incircle_sos(*a, *b, *c, *q) == Ordering::Greater
+        };
+    };
+    let (pu, pw) = (&pts[u as usize], &pts[w as usize]);
+    match orient_with(all_safe, pu, pw, q) {
+        Ordering::Greater => true,
+        Ordering::Less => false,
+        Ordering::Equal => {
+            // Collinear with the hull edge: inside the open segment iff lexicographically
+            // between its ends.
+            let a = lex_cmp(pu, q);
+            let b = lex_cmp(q, pw);
+            a == b && a != Ordering::Equal
+        }
     }
 }
 
@@ -239,36 +277,6 @@ impl<'a> Builder<'a> {
         self.adj[3 * t as usize + k] / 3
     }
 
-    /// True when `t` is in conflict with point `q` (finite triangle: `q` inside its circumcircle
-    /// under SoS; infinite triangle: `q` strictly outside its hull edge, or on its open segment).
-    #[inline]
-    fn in_conflict(&self, t: u32, q: &Point) -> bool {
-        let v = self.tv[t as usize];
-        let inf = self.inf;
-        let (u, w) = if v[0] == inf {
-            (v[1], v[2])
-        } else if v[1] == inf {
-            (v[2], v[0])
-        } else if v[2] == inf {
-            (v[0], v[1])
-        } else {
-            let (a, b, c) = (*self.p(v[0]), *self.p(v[1]), *self.p(v[2]));
-            return incircle_with(self.all_safe, a, b, c, *q) == Ordering::Greater;
-        };
-        let (pu, pw) = (self.p(u), self.p(w));
-        match self.orient(pu, pw, q) {
-            Ordering::Greater => true,
-            Ordering::Less => false,
-            Ordering::Equal => {
-                // Collinear with the hull edge: inside the open segment iff lexicographically
-                // between its ends.
-                let a = lex_cmp(pu, q);
-                let b = lex_cmp(q, pw);
-                a == b && a != Ordering::Equal
-            }
-        }
-    }
-
     /// Exact check that the walk ended right: `q` in the closed finite triangle `t`, or strictly
     /// outside the hull edge of infinite triangle `t`.
     fn contains_exact(&self, t: u32, q: &Point) -> bool {
@@ -294,31 +302,40 @@ impl<'a> Builder<'a> {
         if self.is_infinite(t) {
             t = self.finite_neighbor(t);
         }
+        // Borrowed apart from the generator, which every step advances.
+        let (pts, tv, adj, all_safe, inf) = (
+            self.pts,
+            &self.tv[..],
+            &self.adj[..],
+            self.all_safe,
+            self.inf,
+        );
+        let mut v = tv[t as usize];
         let mut came_from = u32::MAX;
         'step: for _ in 0..cap {
-            let v = self.tv[t as usize];
-            let r = self.rng.next3();
-            for i in 0..3 {
-                let k = (r + i) % 3;
-                let h = self.adj[3 * t as usize + k];
+            // Edges tested in the order r, r + 1, r + 2 (mod 3).
+            let mut k = self.rng.next3();
+            for _ in 0..3 {
+                let h = adj[3 * t as usize + k];
                 let m = h / 3;
-                if m == came_from {
-                    continue;
-                }
-                let (a, b) = (self.p(v[next(k)]), self.p(v[prev(k)]));
-                let behind = if exact {
-                    self.orient(a, b, q) == Ordering::Less
-                } else {
-                    orient_fast(a, b, q) < 0.0
-                };
-                if behind {
-                    came_from = t;
-                    t = m;
-                    if self.is_infinite(t) {
-                        return Some(t);
+                if m != came_from {
+                    let (a, b) = (&pts[v[next(k)] as usize], &pts[v[prev(k)] as usize]);
+                    let behind = if exact {
+                        orient_with(all_safe, a, b, q) == Ordering::Less
+                    } else {
+                        orient_fast(a, b, q) < 0.0
+                    };
+                    if behind {
+                        came_from = t;
+                        t = m;
+                        v = tv[t as usize];
+                        if v[0] == inf || v[1] == inf || v[2] == inf {
+                            return Some(t);
+                        }
+                        continue 'step;
                     }
-                    continue 'step;
                 }
+                k = next(k);
             }
             return Some(t);
         }
@@ -370,22 +387,26 @@ impl<'a> Builder<'a> {
         self.boundary.clear();
         self.cavity.push(seed);
         self.stack.push(seed);
+        // Borrowed apart: the search reads the triangles and writes only the marks and lists.
+        let (pts, all_safe, inf) = (self.pts, self.all_safe, self.inf);
+        let (tv, adj, mark) = (&self.tv[..], &self.adj[..], &mut self.mark[..]);
         while let Some(t) = self.stack.pop() {
-            for k in 0..3 {
-                let h = self.adj[3 * t as usize + k];
-                let m = h / 3;
-                let mk = self.mark[m as usize];
+            let t = t as usize;
+            let ht: [u32; 3] = adj[3 * t..3 * t + 3].try_into().expect("three half-edges");
+            for (k, &h) in ht.iter().enumerate() {
+                let m = (h / 3) as usize;
+                let mk = mark[m];
                 if mk == stamp {
                     continue;
                 }
-                if mk != stamp | OUTSIDE && self.in_conflict(m, &q) {
-                    self.mark[m as usize] = stamp;
-                    self.cavity.push(m);
-                    self.stack.push(m);
+                if mk != stamp | OUTSIDE && conflict(pts, all_safe, inf, tv[m], &q) {
+                    mark[m] = stamp;
+                    self.cavity.push(m as u32);
+                    self.stack.push(m as u32);
                     continue;
                 }
-                self.mark[m as usize] = stamp | OUTSIDE;
-                let v = self.tv[t as usize];
+                mark[m] = stamp | OUTSIDE;
+                let v = tv[t];
                 self.boundary.push((v[next(k)], v[prev(k)], h));
             }
         }
@@ -396,35 +417,31 @@ impl<'a> Builder<'a> {
                 self.boundary.len()
             )));
         }
+        // The boundary has two edges more than the cavity has triangles: the first edges take
+        // the cavity's slots in order, the last two get two new slots. `cavity` then lists
+        // the slot of every boundary edge.
+        let first_new = self.tv.len() as u32;
+        self.tv.extend_from_slice(&[[0; 3]; 2]);
+        self.adj.extend_from_slice(&[u32::MAX; 6]);
+        self.mark.extend_from_slice(&[0; 2]);
+        self.cavity.extend_from_slice(&[first_new, first_new + 1]);
+        let inf = self.inf;
+        let (tv, adj, start_at) = (&mut self.tv[..], &mut self.adj[..], &mut self.start_at[..]);
         let mut last = 0;
-        for i in 0..self.boundary.len() {
-            let (u, w, h) = self.boundary[i];
-            let s = if i < self.cavity.len() {
-                self.cavity[i]
-            } else {
-                self.tv.push([0; 3]);
-                self.adj.extend_from_slice(&[u32::MAX; 3]);
-                self.mark.push(0);
-                (self.tv.len() - 1) as u32
-            };
-            self.tv[s as usize] = [u, w, pi];
-            self.adj[3 * s as usize + 2] = h;
-            self.adj[h as usize] = 3 * s + 2;
-            self.start_at[u as usize] = s;
-            if u != self.inf && w != self.inf {
+        for (&(u, w, h), &s) in self.boundary.iter().zip(&self.cavity) {
+            tv[s as usize] = [u, w, pi];
+            adj[3 * s as usize + 2] = h;
+            adj[h as usize] = 3 * s + 2;
+            start_at[u as usize] = s;
+            if u != inf && w != inf {
                 last = s;
             }
         }
-        for i in 0..self.boundary.len() {
-            let s = if i < self.cavity.len() {
-                self.cavity[i]
-            } else {
-                (self.tv.len() - (self.boundary.len() - i)) as u32
-            };
-            let w = self.tv[s as usize][1];
-            let n = self.start_at[w as usize];
-            self.adj[3 * s as usize] = 3 * n + 1;
-            self.adj[3 * n as usize + 1] = 3 * s;
+        // Across `(w, pi)`: the new triangle starting at `w`.
+        for (&(_, w, _), &s) in self.boundary.iter().zip(&self.cavity) {
+            let n = start_at[w as usize];
+            adj[3 * s as usize] = 3 * n + 1;
+            adj[3 * n as usize + 1] = 3 * s;
         }
         self.last = last;
         Ok(())

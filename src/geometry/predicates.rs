@@ -93,7 +93,15 @@ pub fn incircle(a: Point, b: Point, c: Point, d: Point) -> Ordering {
 /// [`incircle`] for points whose coordinates are all in the safe range (unchecked).
 #[inline]
 pub(crate) fn incircle_safe(a: Point, b: Point, c: Point, d: Point) -> Ordering {
-    debug_assert!(safe(&a) & safe(&b) & safe(&c) & safe(&d));
+    incircle_filter(&a, &b, &c, &d).unwrap_or_else(|| incircle_safe_exact(a, b, c, d))
+}
+
+/// The first stage of [`incircle_safe`]: the sign when the floating-point determinant clears
+/// Shewchuk's first-stage error bound, else `None`. Inlined into its callers (the builder's
+/// cavity search makes some ten calls per inserted point; about nine in ten are decided here).
+#[inline(always)]
+fn incircle_filter(a: &Point, b: &Point, c: &Point, d: &Point) -> Option<Ordering> {
+    debug_assert!(safe(a) & safe(b) & safe(c) & safe(d));
     let (adx, ady) = (a[0] - d[0], a[1] - d[1]);
     let (bdx, bdy) = (b[0] - d[0], b[1] - d[1]);
     let (cdx, cdy) = (c[0] - d[0], c[1] - d[1]);
@@ -109,11 +117,18 @@ pub(crate) fn incircle_safe(a: Point, b: Point, c: Point, d: Point) -> Ordering 
         + (adxbdy.abs() + bdxady.abs()) * clift;
     let errbound = ICC_ERRBOUND_A * permanent;
     if det > errbound {
-        return Ordering::Greater;
+        return Some(Ordering::Greater);
     }
     if -det > errbound {
-        return Ordering::Less;
+        return Some(Ordering::Less);
     }
+    None
+}
+
+/// The exact stages of [`incircle_safe`], out of line: fixed-width integers when they apply,
+/// else robust's adaptive stages.
+#[inline(never)]
+fn incircle_safe_exact(a: Point, b: Point, c: Point, d: Point) -> Ordering {
     match super::wide::incircle_small(a, b, c, d) {
         Some(s) => s,
         None => sign(robust::incircle(coord(a), coord(b), coord(c), coord(d))),
@@ -145,9 +160,16 @@ pub fn incircle_sos(a: Point, b: Point, c: Point, d: Point) -> Ordering {
 }
 
 /// [`incircle_sos`] for points whose coordinates are all in the safe range (unchecked).
-#[inline]
-pub(crate) fn incircle_sos_safe(a: Point, b: Point, c: Point, d: Point) -> Ordering {
-    match incircle_safe(a, b, c, d) {
+/// The filter is inlined; the exact stages and the tie-break (a tie is exact) are not.
+#[inline(always)]
+pub(crate) fn incircle_sos_safe(a: &Point, b: &Point, c: &Point, d: &Point) -> Ordering {
+    incircle_filter(a, b, c, d).unwrap_or_else(|| incircle_sos_safe_exact(*a, *b, *c, *d))
+}
+
+/// The exact stages of [`incircle_sos_safe`] and its tie-break, out of line.
+#[inline(never)]
+fn incircle_sos_safe_exact(a: Point, b: Point, c: Point, d: Point) -> Ordering {
+    match incircle_safe_exact(a, b, c, d) {
         Ordering::Equal => incircle_tie(a, b, c, d),
         s => s,
     }
