@@ -38,6 +38,7 @@ pub mod clustering;
 pub mod collapsed;
 pub mod counts;
 pub mod densities;
+pub mod grid_nodes;
 pub mod imposed;
 pub mod inserted;
 pub mod metrics;
@@ -491,14 +492,14 @@ fn equidistribute_into(w: &[f64], n: usize, t: &mut Vec<f64>) {
 }
 
 /// Per-task buffers of the grid loop of [`assemble_cached`] (rayon's `map_init`): the arc
-/// nodes' touching points, the spoke scratch, the weights and node parameters of a piece
-/// whose parameters are computed there. Reused from piece to piece instead of allocated and
+/// nodes' touching points, the block columns (`grid_nodes::GridScratch`), the weights and
+/// node parameters of a piece whose parameters are computed there. Reused from piece to piece instead of allocated and
 /// freed by each (issue 8: the allocator's lock was contended between the threads); nothing
 /// in them outlives a piece.
 #[derive(Default)]
 struct PieceScratch {
     a_nodes: [Vec<Point>; 2],
-    spoke: Vec<f64>,
+    grid: grid_nodes::GridScratch,
     weights: Vec<f64>,
     params: Vec<f64>,
 }
@@ -1227,7 +1228,7 @@ pub fn assemble_cached(
                 };
                 let mut m_nodes = Vec::with_capacity(n + 1);
                 let PieceScratch {
-                    a_nodes, spoke: d, ..
+                    a_nodes, grid: gs, ..
                 } = scratch;
                 for a in a_nodes.iter_mut() {
                     a.clear();
@@ -1249,7 +1250,7 @@ pub fn assemble_cached(
                     // and centres (`ends_a`, `ends_m` are taken from them by the same slots), so
                     // every block at a vertex gets the same nodes and the cache key (the
                     // geometry) covers them.
-                    let mut nodes = vec![[0.0; 2]; (n + 1) * (nj + 1)];
+                    gs.clear();
                     for i in 0..=n {
                         let k = if side == 0 { i } else { n - i };
                         let (a, m) = if k == 0 {
@@ -1259,8 +1260,9 @@ pub fn assemble_cached(
                         } else {
                             (a_nodes[side][k], m_nodes[k])
                         };
-                        spoke_column(a, m, nj, first, growth, d, &mut nodes, i, n + 1);
+                        gs.push(a, m);
                     }
+                    let nodes = gs.nodes(nj, first, growth);
                     BlockGrid { ni: n, nj, nodes }
                 };
                 let pair = [grid(0), grid(1)];
