@@ -82,3 +82,45 @@ proptest! {
         prop_assert!(same(&fast, &slow));
     }
 }
+
+/// The node parameters from the weights' running sums (`exact_mode::equidistribution`)
+/// against the sum-then-scan form, bit for bit: random weights with zeros, runs of zeros,
+/// tiny and huge values, negative, infinite and NaN entries, all counts up to 40 and empty
+/// weights.
+#[test]
+fn equidistribution_matches_the_sum_then_scan() {
+    use medial_blocks::exact_mode::equidistribution::{
+        equidistribute_bits, equidistribute_reference,
+    };
+    let mut rng = SplitMix64(23);
+    for case in 0..20_000u64 {
+        let k = (case % 300) as usize;
+        let mode = case % 7;
+        let w: Vec<f64> = (0..k)
+            .map(|i| {
+                let r = rng.next_f64();
+                match (mode, (i as u64 + case) % 11) {
+                    (0, _) => r,
+                    (1, 0..=4) => 0.0,
+                    (2, 0) => 1e300 * r,
+                    (2, 1) => 1e-300 * r,
+                    (3, 0) if case % 50 == 3 => -r,
+                    (4, 0) if case % 40 == 4 => f64::INFINITY,
+                    (5, 0) if case % 30 == 5 => f64::NAN,
+                    (6, _) => (r * 4.0).floor(),
+                    _ => r * r,
+                }
+            })
+            .collect();
+        let n = 1 + (case % 40) as usize;
+        let want: Vec<u64> = equidistribute_reference(&w, n)
+            .iter()
+            .map(|x| x.to_bits())
+            .collect();
+        assert_eq!(
+            equidistribute_bits(&w, n),
+            want,
+            "case {case} n {n} w {w:?}"
+        );
+    }
+}
