@@ -25,10 +25,10 @@ pub(crate) fn equidistribute_into(w: &[f64], n: usize, t: &mut Vec<f64>, prefix:
     prefix.reserve(w.len() + 1);
     let mut cum = 0.0;
     prefix.push(cum);
-    for &x in w {
+    prefix.extend(w.iter().map(|&x| {
         cum += x;
-        prefix.push(cum);
-    }
+        cum
+    }));
     fill(w, prefix, n, t);
 }
 
