@@ -48,6 +48,43 @@ fn larger_of_turns(c: f64, d: f64, turn_p: f64, tan_p: f64) -> f64 {
     }
 }
 
+/// The arrays of the batched densities' passes (`ArcGeometry::densities_into`): 24 KB, kept
+/// per thread instead of zeroed on the stack at each call (issue 8).
+struct Passes {
+    ux: [f64; ARC_SUBSTEPS + 1],
+    uy: [f64; ARC_SUBSTEPS + 1],
+    mx: [f64; ARC_SUBSTEPS + 1],
+    my: [f64; ARC_SUBSTEPS + 1],
+    r: [f64; ARC_SUBSTEPS + 1],
+    tx: [[f64; ARC_SUBSTEPS + 1]; 2],
+    ty: [[f64; ARC_SUBSTEPS + 1]; 2],
+    sqa: [f64; ARC_SUBSTEPS],
+    ca: [f64; ARC_SUBSTEPS],
+    da: [f64; ARC_SUBSTEPS],
+}
+
+impl Default for Passes {
+    fn default() -> Self {
+        Passes {
+            ux: [0.0; ARC_SUBSTEPS + 1],
+            uy: [0.0; ARC_SUBSTEPS + 1],
+            mx: [0.0; ARC_SUBSTEPS + 1],
+            my: [0.0; ARC_SUBSTEPS + 1],
+            r: [0.0; ARC_SUBSTEPS + 1],
+            tx: [[0.0; ARC_SUBSTEPS + 1]; 2],
+            ty: [[0.0; ARC_SUBSTEPS + 1]; 2],
+            sqa: [0.0; ARC_SUBSTEPS],
+            ca: [0.0; ARC_SUBSTEPS],
+            da: [0.0; ARC_SUBSTEPS],
+        }
+    }
+}
+
+thread_local! {
+    /// This thread's [`Passes`].
+    static PASSES: std::cell::RefCell<Box<Passes>> = std::cell::RefCell::new(Box::default());
+}
+
 impl ArcGeometry {
     /// The unit vector of interior sub-step `s` on the parametrised wall, from `u` (that of
     /// `s - 1`) by the rotation `(cd, sd)` of one step, or computed afresh at `s = 1` and every
@@ -93,36 +130,78 @@ impl ArcGeometry {
         sq: &mut Vec<f64>,
         ang: &mut Vec<f64>,
     ) -> Option<()> {
+        PASSES.with(|b| match b.try_borrow_mut() {
+            Ok(mut b) => self.densities_on(lanes, &mut b, sq, ang),
+            // Never reentered; a fresh set of buffers if it were.
+            Err(_) => self.densities_on(lanes, &mut Box::default(), sq, ang),
+        })
+    }
+
+    /// [`ArcGeometry::densities_with`] on the buffers `b` (the dispatch happens once the
+    /// buffers are borrowed, so the whole body is compiled in each build).
+    fn densities_on(
+        &self,
+        lanes: Lanes,
+        b: &mut Passes,
+        sq: &mut Vec<f64>,
+        ang: &mut Vec<f64>,
+    ) -> Option<()> {
         #[cfg(target_arch = "x86_64")]
         match lanes {
             // SAFETY: `Lanes::available` checked the CPU's features.
-            Lanes::Avx512 if lanes.available() => return unsafe { self.densities_avx512(sq, ang) },
+            Lanes::Avx512 if lanes.available() => {
+                return unsafe { self.densities_avx512(b, sq, ang) }
+            }
             // SAFETY: as above.
-            Lanes::Avx2 if lanes.available() => return unsafe { self.densities_avx2(sq, ang) },
+            Lanes::Avx2 if lanes.available() => return unsafe { self.densities_avx2(b, sq, ang) },
             _ => {}
         }
-        self.densities_batched(sq, ang)
+        self.densities_batched(b, sq, ang)
     }
 
     /// [`ArcGeometry::densities_batched`] compiled for AVX-512 (8-lane vectors).
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx512f,avx512dq,avx512vl,avx2")]
-    fn densities_avx512(&self, sq: &mut Vec<f64>, ang: &mut Vec<f64>) -> Option<()> {
-        self.densities_batched(sq, ang)
+    fn densities_avx512(
+        &self,
+        b: &mut Passes,
+        sq: &mut Vec<f64>,
+        ang: &mut Vec<f64>,
+    ) -> Option<()> {
+        self.densities_batched(b, sq, ang)
     }
 
     /// [`ArcGeometry::densities_batched`] compiled for AVX2 (4-lane vectors).
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2")]
-    fn densities_avx2(&self, sq: &mut Vec<f64>, ang: &mut Vec<f64>) -> Option<()> {
-        self.densities_batched(sq, ang)
+    fn densities_avx2(&self, b: &mut Passes, sq: &mut Vec<f64>, ang: &mut Vec<f64>) -> Option<()> {
+        self.densities_batched(b, sq, ang)
     }
 
-    /// The body of [`ArcGeometry::densities_into`], inlined into each build.
+    /// The body of [`ArcGeometry::densities_into`], inlined into each build, on this thread's
+    /// [`Passes`] buffers `b` (every entry read is written first in the same call: nothing of
+    /// an earlier call is seen).
     #[inline(always)]
-    fn densities_batched(&self, sq: &mut Vec<f64>, ang: &mut Vec<f64>) -> Option<()> {
+    fn densities_batched(
+        &self,
+        b: &mut Passes,
+        sq: &mut Vec<f64>,
+        ang: &mut Vec<f64>,
+    ) -> Option<()> {
         const K: usize = ARC_SUBSTEPS;
         const N: usize = K + 1;
+        let Passes {
+            ux,
+            uy,
+            mx,
+            my,
+            r,
+            tx,
+            ty,
+            sqa,
+            ca,
+            da,
+        } = b;
         sq.clear();
         ang.clear();
         let p = self.param;
@@ -133,7 +212,6 @@ impl ArcGeometry {
         let turn_p = step.abs();
         let tan_p = turn_p.tan() / (1.0 + 1e-9);
         // Pass 1: the unit vectors of the interior points (as `densities_into_scalar`).
-        let (mut ux, mut uy) = ([0.0; N], [0.0; N]);
         let mut u = [1.0, 0.0];
         for s in 1..K {
             u = self.next_unit(s, u, cd, sd);
@@ -141,8 +219,6 @@ impl ArcGeometry {
         }
         // Pass 2: every point: medial point `m`, radius `r`, touching points `t[wall]` (the
         // expressions of `medial_point_u` and `project`, written out).
-        let (mut mx, mut my, mut r) = ([0.0; N], [0.0; N], [0.0; N]);
-        let (mut tx, mut ty) = ([[0.0; N]; 2], [[0.0; N]; 2]);
         let (m0, a0, r0) = self.at(0.0)?;
         let (m1, a1, r1) = self.at(1.0)?;
         for (s, (m, a, rho)) in [(0, (m0, a0, r0)), (K, (m1, a1, r1))] {
@@ -155,17 +231,17 @@ impl ArcGeometry {
         let mut ok = true;
         {
             let [tpx, tqx] = if p == 0 {
-                let [a, b] = &mut tx;
+                let [a, b] = tx;
                 [a, b]
             } else {
-                let [b, a] = &mut tx;
+                let [b, a] = tx;
                 [a, b]
             };
             let [tpy, tqy] = if p == 0 {
-                let [a, b] = &mut ty;
+                let [a, b] = ty;
                 [a, b]
             } else {
-                let [b, a] = &mut ty;
+                let [b, a] = ty;
                 [a, b]
             };
             for s in 1..K {
@@ -198,7 +274,6 @@ impl ArcGeometry {
             return None;
         }
         // Pass 3: every sub-step's length density and the other wall's turn parts.
-        let (mut sqa, mut ca, mut da) = ([0.0; K], [0.0; K], [0.0; K]);
         let cq = wq.c;
         for s in 1..N {
             let mut ds = 0.0;
@@ -216,10 +291,10 @@ impl ArcGeometry {
             ca[s - 1] = u0 * v1 - u1 * v0;
             da[s - 1] = u0 * v0 + u1 * v1;
         }
-        sq.extend_from_slice(&sqa);
+        sq.extend_from_slice(&sqa[..]);
         ang.extend(
             ca.iter()
-                .zip(&da)
+                .zip(da.iter())
                 .map(|(&c, &d)| larger_of_turns(c, d, turn_p, tan_p) / MAX_WALL_ANGLE),
         );
         Some(())

@@ -38,6 +38,8 @@ pub mod clustering;
 pub mod collapsed;
 pub mod counts;
 pub mod densities;
+pub mod equidistribution;
+pub mod grid_nodes;
 pub mod imposed;
 pub mod inserted;
 pub mod metrics;
@@ -57,6 +59,7 @@ use crate::layout::{Block, BlockLayout, Curve, Edge, EdgeKind, SideRef};
 use crate::mesh::BlockGrid;
 use crate::mesher::{MeshError, Options};
 use counts::{ArcTarget, CountProblem, Counts, Known};
+use equidistribution::{equidistribute, equidistribute_into};
 use piece_cache::{GeomKey, GridKey, Params, Payload};
 use rayon::prelude::*;
 use std::f64::consts::{PI, TAU};
@@ -450,56 +453,17 @@ fn spoke_column(
     nodes[i + n * stride] = m;
 }
 
-/// `n + 1` parameters in `[0, 1]` equidistributing the sub-step weights `w` (`t_0 = 0`,
-/// `t_n = 1` exactly; equal steps when the weights vanish).
-fn equidistribute(w: &[f64], n: usize) -> Vec<f64> {
-    let mut t = Vec::with_capacity(n + 1);
-    equidistribute_into(w, n, &mut t);
-    t
-}
-
-/// [`equidistribute`] written into `t` (cleared first): the same values, in a buffer reused
-/// from piece to piece.
-fn equidistribute_into(w: &[f64], n: usize, t: &mut Vec<f64>) {
-    t.clear();
-    let k = w.len();
-    let total: f64 = w.iter().sum();
-    if !(total.is_finite() && total > 0.0) || k == 0 {
-        t.extend((0..=n).map(|i| i as f64 / n as f64));
-        t[n] = 1.0;
-        return;
-    }
-    t.push(0.0);
-    let mut cum = 0.0;
-    let mut s = 0;
-    for i in 1..n {
-        let target = total * (i as f64 / n as f64);
-        while s < k && cum + w[s] < target {
-            cum += w[s];
-            s += 1;
-        }
-        let frac = if s < k && w[s] > 0.0 {
-            ((target - cum) / w[s]).clamp(0.0, 1.0)
-        } else {
-            0.0
-        };
-        let ti = ((s.min(k) as f64 + frac) / k as f64).clamp(0.0, 1.0);
-        let last = t[t.len() - 1];
-        t.push(ti.max(last));
-    }
-    t.push(1.0);
-}
-
 /// Per-task buffers of the grid loop of [`assemble_cached`] (rayon's `map_init`): the arc
-/// nodes' touching points, the spoke scratch, the weights and node parameters of a piece
-/// whose parameters are computed there. Reused from piece to piece instead of allocated and
+/// nodes' touching points, the block columns (`grid_nodes::GridScratch`), the weights, their
+/// running sums and node parameters of a piece whose parameters are computed there. Reused from piece to piece instead of allocated and
 /// freed by each (issue 8: the allocator's lock was contended between the threads); nothing
 /// in them outlives a piece.
 #[derive(Default)]
 struct PieceScratch {
     a_nodes: [Vec<Point>; 2],
-    spoke: Vec<f64>,
+    grid: grid_nodes::GridScratch,
     weights: Vec<f64>,
+    prefix: Vec<f64>,
     params: Vec<f64>,
 }
 
@@ -531,7 +495,10 @@ fn summarize(
         min_cells: lb,
         target: Some((nbar, target)),
     };
-    Some((known, (nbar, n, equidistribute(&scratch.sq, n))))
+    // `ang` is read no more: it holds the weights' running sums.
+    let mut params = Vec::with_capacity(n + 1);
+    equidistribute_into(&scratch.sq, n, &mut params, &mut scratch.ang);
+    Some((known, (nbar, n, params)))
 }
 
 /// What exact mode built, beyond the mesh.
@@ -1001,9 +968,11 @@ pub fn assemble_cached(
         let [v0, v1] = p.ends;
         let medial_edge = layout.edges.len() as u32;
         medial_edges.push(medial_edge);
+        // The medial nodes replace the empty polyline once the grids are made (nothing reads
+        // it before: one allocation and one free per piece fewer in this serial loop).
         layout.edges.push(Edge {
             ends: [v0 as u32, v1 as u32],
-            curve: Curve::Polyline(vec![g.ends_m[0], g.ends_m[1]]),
+            curve: Curve::Polyline(Vec::new()),
             kind: EdgeKind::Medial,
         });
         for side in 0..2 {
@@ -1151,7 +1120,7 @@ pub fn assemble_cached(
         (counts.circle[cidx(c)], first, cl.growth)
     };
     let grid_keys: Vec<GridKey> = pieces
-        .iter()
+        .par_iter()
         .enumerate()
         .map(|(e, p)| {
             let sides = [side_inputs(p, 0), side_inputs(p, 1)];
@@ -1221,13 +1190,13 @@ pub fn assemble_cached(
                         weights.clear();
                         weights.extend(t.sq.iter().zip(&t.ang).map(|(s, a)| (nbar * s).max(*a)));
                         drop(t);
-                        equidistribute_into(weights, n, &mut scratch.params);
+                        equidistribute_into(weights, n, &mut scratch.params, &mut scratch.prefix);
                         std::mem::take(&mut scratch.params)
                     }
                 };
                 let mut m_nodes = Vec::with_capacity(n + 1);
                 let PieceScratch {
-                    a_nodes, spoke: d, ..
+                    a_nodes, grid: gs, ..
                 } = scratch;
                 for a in a_nodes.iter_mut() {
                     a.clear();
@@ -1249,7 +1218,7 @@ pub fn assemble_cached(
                     // and centres (`ends_a`, `ends_m` are taken from them by the same slots), so
                     // every block at a vertex gets the same nodes and the cache key (the
                     // geometry) covers them.
-                    let mut nodes = vec![[0.0; 2]; (n + 1) * (nj + 1)];
+                    gs.clear();
                     for i in 0..=n {
                         let k = if side == 0 { i } else { n - i };
                         let (a, m) = if k == 0 {
@@ -1259,8 +1228,9 @@ pub fn assemble_cached(
                         } else {
                             (a_nodes[side][k], m_nodes[k])
                         };
-                        spoke_column(a, m, nj, first, growth, d, &mut nodes, i, n + 1);
+                        gs.push(a, m);
                     }
+                    let nodes = gs.nodes(nj, first, growth);
                     BlockGrid { ni: n, nj, nodes }
                 };
                 let pair = [grid(0), grid(1)];
@@ -1395,6 +1365,7 @@ mod tests {
     fn equidistribution_into_a_used_buffer_is_the_fresh_one() {
         let mut rng = crate::layouts::SplitMix64(4);
         let mut buf: Vec<f64> = vec![f64::NAN; 40];
+        let mut prefix: Vec<f64> = vec![f64::NAN; 3];
         for case in 0..200usize {
             let k = case % 13;
             let w: Vec<f64> = (0..k)
@@ -1404,7 +1375,7 @@ mod tests {
                 })
                 .collect();
             let n = 1 + case % 23;
-            equidistribute_into(&w, n, &mut buf);
+            equidistribute_into(&w, n, &mut buf, &mut prefix);
             let fresh = equidistribute(&w, n);
             assert_eq!(buf.len(), n + 1);
             assert!(buf
