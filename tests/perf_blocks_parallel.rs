@@ -55,10 +55,7 @@ fn parallel_curves_give_the_one_by_one_layout() {
         let (layout, _) = blocks(&r.domain, &r.sampled.samples, &cb.contracted.graph).unwrap();
         assert!(layout == cb.layout);
     }
-    assert!(
-        arcs > 2 * 2048,
-        "three waves of arcs covered ({arcs} arcs)"
-    );
+    assert!(arcs > 2 * 2048, "three waves of arcs covered ({arcs} arcs)");
 }
 
 /// A way of breaking arc `e` of a graph.
@@ -107,4 +104,41 @@ fn broken_arcs_give_the_one_by_one_error() {
         }
     }
     assert!(failed > 30, "only {failed} broken graphs failed");
+}
+
+/// The collapse selection's per-arc data computed in parallel equal those computed one arc
+/// after the other, for the collapse fractions of the pipeline, none and NaN, with one and
+/// two threads.
+#[test]
+fn parallel_selection_equals_the_one_by_one_selection() {
+    use medial_blocks::collapse::Selection;
+    for d in domains() {
+        let cb =
+            collapsed_blocking_with(&d, &Options::default(), &SamplingOptions::default(), false)
+                .unwrap();
+        let s = sample_and_triangulate(&cb.refined.domain, &SamplingOptions::default()).unwrap();
+        let circles = medial_blocks::cocircular::vertex_circles(&cb.refined.domain, &s.medial);
+        let groups = medial_blocks::cocircular::cocircular_groups(&s.medial, &circles);
+        for fraction in [Options::default().collapse_fraction, 0.0, 0.5, f64::NAN] {
+            let args = (&s.medial, &s.triangulation, &circles[..], &groups[..]);
+            let reference = Selection::new_one_by_one(
+                args.0,
+                args.1,
+                args.2,
+                args.3,
+                &s.samples.points,
+                fraction,
+            );
+            for threads in [1, 2] {
+                let pool = rayon::ThreadPoolBuilder::new()
+                    .num_threads(threads)
+                    .build()
+                    .unwrap();
+                let got = pool.install(|| {
+                    Selection::new(args.0, args.1, args.2, args.3, &s.samples.points, fraction)
+                });
+                assert!(got == reference, "fraction {fraction}, {threads} threads");
+            }
+        }
+    }
 }
