@@ -976,13 +976,16 @@ fn collapse_and_block(
             Some((old_flags, mut old_contracted, mut old_layout)) => {
                 let (contracted, taken) =
                     selection.contract_reusing(medial, &flags, &old_flags, &mut old_contracted)?;
-                drop(old_contracted);
+                // The rest of the previous build is freed on the pool, off this thread (many
+                // small vectors: the numbering of the blocks below runs on this thread alone).
+                rayon::spawn(move || drop(old_contracted));
                 let (layout, _) = blocks_reusing(
                     final_domain,
                     &sampled.samples,
                     &contracted.graph,
                     Some((&mut old_layout, &taken)),
                 )?;
+                rayon::spawn(move || drop(old_layout));
                 (contracted, layout)
             }
             None => {
