@@ -216,7 +216,11 @@ pub fn medial_graph(
     // The vertex of an interior triangle: vertices are in triangle order, so a binary search
     // (issue 8: a per-triangle table was 4 bytes per triangle of fresh memory, for 2 interior
     // triangles per hole among about 2 per sample).
-    let parallel = medial_arcs_parallel(samples, tri, kinds, &g.vertices, ARC_CHUNK);
+    // Below three cells' worth of vertices the grid has one cell: the one-by-one walk, without
+    // the parallel walk's bookkeeping.
+    let parallel = (g.vertices.len() >= 3 * ARC_CHUNK)
+        .then(|| medial_arcs_parallel(samples, tri, kinds, &g.vertices, ARC_CHUNK))
+        .flatten();
     g.arcs = match parallel {
         Some(arcs) => arcs,
         None => medial_arcs_serial(samples, tri, kinds, &g.vertices)?,
