@@ -70,40 +70,58 @@ pub(super) fn blocks_reusing(
 ) -> Result<(BlockLayout, Vec<Option<u32>>), MeshError> {
     let m = medial.arcs.len();
     let mut asm = Assembly::new(samples, medial);
-    let mut reused = |range: std::ops::Range<usize>| -> Vec<Option<[Curve; 3]>> {
-        range
-            .map(|a| {
-                let arc = &medial.arcs[a];
-                let (old, taken) = old.as_mut()?;
-                let k = *taken.get(a)?;
-                (k != u32::MAX)
-                    .then(|| take_pair_curves(old, k as usize, arc.polyline.len(), arc.circles))?
-            })
-            .collect()
+    // Two buffers of curves (the wave being numbered, the wave being computed) and one of
+    // curves taken over, allocated once and reused by every wave (a fresh ~300 KB per wave
+    // was fresh pages to fault in, issue 8).
+    let mut reused_buf: Vec<Option<[Curve; 3]>> = Vec::with_capacity(WAVE.min(m));
+    let mut reused = |mut buf: Vec<Option<[Curve; 3]>>,
+                      range: std::ops::Range<usize>|
+     -> Vec<Option<[Curve; 3]>> {
+        buf.clear();
+        buf.extend(range.map(|a| {
+            let arc = &medial.arcs[a];
+            let (old, taken) = old.as_mut()?;
+            let k = *taken.get(a)?;
+            (k != u32::MAX)
+                .then(|| take_pair_curves(old, k as usize, arc.polyline.len(), arc.circles))?
+        }));
+        buf
     };
-    let compute =
-        |start: usize, reused: Vec<Option<[Curve; 3]>>| -> Vec<Result<[Curve; 3], MeshError>> {
-            reused
-                .into_par_iter()
-                .enumerate()
-                .with_min_len(64)
-                .map_init(Vec::new, |back, (i, r)| {
-                    arc_curves(domain, samples, medial, start + i, r, back)
-                })
-                .collect()
-        };
+    let compute = |start: usize,
+                   mut reused: Vec<Option<[Curve; 3]>>,
+                   out: &mut Vec<Result<[Curve; 3], MeshError>>| {
+        reused
+            .par_drain(..)
+            .enumerate()
+            .with_min_len(64)
+            .map_init(Vec::new, |back, (i, r)| {
+                arc_curves(domain, samples, medial, start + i, r, back)
+            })
+            .collect_into_vec(out);
+        reused
+    };
     let waves = m.div_ceil(WAVE);
     let wave = |w: usize| w * WAVE..((w + 1) * WAVE).min(m);
-    let mut pending = (waves > 0).then(|| compute(0, reused(wave(0))));
+    let mut current = Vec::with_capacity(WAVE.min(m));
+    let mut next_out = Vec::with_capacity(WAVE.min(m));
+    if waves > 0 {
+        let r = reused(std::mem::take(&mut reused_buf), wave(0));
+        reused_buf = compute(0, r, &mut current);
+    }
     for w in 0..waves {
-        let current = pending.take().unwrap_or_default();
-        let next = (w + 1 < waves).then(|| (wave(w + 1).start, reused(wave(w + 1))));
-        let (added, computed) = rayon::join(
-            || asm.add(wave(w).start, current),
-            || next.map(|(start, r)| compute(start, r)),
+        let next = (w + 1 < waves).then(|| {
+            let buf = std::mem::take(&mut reused_buf);
+            (wave(w + 1).start, reused(buf, wave(w + 1)))
+        });
+        let (added, back) = rayon::join(
+            || asm.add(wave(w).start, &mut current),
+            || next.map(|(start, r)| compute(start, r, &mut next_out)),
         );
         added?;
-        pending = computed;
+        if let Some(back) = back {
+            reused_buf = back;
+        }
+        std::mem::swap(&mut current, &mut next_out);
     }
     Ok((asm.layout, asm.vertex_samples))
 }
@@ -230,13 +248,13 @@ impl<'a> Assembly<'a> {
     }
 
     /// Number the arcs from `start` on, with their curves (or their errors, the first one
-    /// returned).
+    /// returned), taken out of `curves` (left empty, its capacity kept).
     fn add(
         &mut self,
         start: usize,
-        curves: Vec<Result<[Curve; 3], MeshError>>,
+        curves: &mut Vec<Result<[Curve; 3], MeshError>>,
     ) -> Result<(), MeshError> {
-        for (i, c) in curves.into_iter().enumerate() {
+        for (i, c) in curves.drain(..).enumerate() {
             let medial = self.medial;
             self.add_pair(&medial.arcs[start + i], c?);
         }
