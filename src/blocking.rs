@@ -32,6 +32,11 @@ use crate::sampling::{sample_and_triangulate, Samples, SamplingOptions};
 use std::collections::HashMap;
 use std::f64::consts::TAU;
 
+mod pairs;
+#[doc(hidden)]
+pub use pairs::blocks_one_by_one;
+use pairs::blocks_reusing;
+
 /// Everything the front end of the pipeline produced.
 #[derive(Debug, Clone)]
 pub struct Blocking {
@@ -186,183 +191,6 @@ pub fn blocks(
     medial: &MedialGraph,
 ) -> Result<(BlockLayout, Vec<Option<u32>>), MeshError> {
     blocks_reusing(domain, samples, medial, None)
-}
-
-/// The curves of the blocks `2k` and `2k + 1` of `old` (Blocking2D of arc `k` of an earlier
-/// graph), moved out: the medial polyline and the two walls, when they have the shape
-/// Blocking2D gives them (a polyline of `points` points, walls on `circles`).
-fn take_pair_curves(
-    old: &mut BlockLayout,
-    k: usize,
-    points: usize,
-    circles: [CircleId; 2],
-) -> Option<[Curve; 3]> {
-    let (a, b) = (old.blocks.get(2 * k)?, old.blocks.get(2 * k + 1)?);
-    let (medial, wall_a, wall_b) = (a.sides[2].edge, a.sides[0].edge, b.sides[0].edge);
-    if b.sides[2].edge != medial || [a.wall, b.wall] != [Some(circles[0]), Some(circles[1])] {
-        return None;
-    }
-    let ok = |e: u32, kind: EdgeKind, polyline: bool| {
-        old.edges.get(e as usize).is_some_and(|edge| {
-            edge.kind == kind
-                && match &edge.curve {
-                    Curve::Polyline(p) => polyline && p.len() == points,
-                    Curve::Arc { .. } => !polyline,
-                    Curve::Segment => false,
-                }
-        })
-    };
-    if !(ok(medial, EdgeKind::Medial, true)
-        && ok(wall_a, EdgeKind::Wall(circles[0]), false)
-        && ok(wall_b, EdgeKind::Wall(circles[1]), false))
-    {
-        return None;
-    }
-    let mut take = |e: u32| std::mem::replace(&mut old.edges[e as usize].curve, Curve::Segment);
-    Some([take(medial), take(wall_a), take(wall_b)])
-}
-
-/// [`blocks`], taking the curves of arc `a` of `medial` from the pair of blocks `2k, 2k + 1`
-/// of `old` where `taken[a] = k` (`u32::MAX`: computed): the previous Blocking2D of a
-/// contraction that handed arc `k` over unchanged
-/// ([`crate::collapse::Selection::contract_reusing`]), so its polyline and wall chains, hence
-/// its curves, are those of arc `a`. The curves taken are left as segments in `old`.
-fn blocks_reusing(
-    domain: &Domain,
-    samples: &Samples,
-    medial: &MedialGraph,
-    mut old: Option<(&mut BlockLayout, &[u32])>,
-) -> Result<(BlockLayout, Vec<Option<u32>>), MeshError> {
-    // Vertices: the medial ones, then at most four sample corners per arc (reserved once:
-    // no doubling of a large vector, issue 8).
-    let mut vertices = Vec::with_capacity(medial.vertices.len() + 4 * medial.arcs.len());
-    vertices.extend(medial.vertices.iter().map(|v| v.position));
-    let mut layout = BlockLayout {
-        vertices,
-        edges: Vec::with_capacity(5 * medial.arcs.len()),
-        blocks: Vec::with_capacity(2 * medial.arcs.len()),
-    };
-    let mut vertex_samples: Vec<Option<u32>> = vec![None; layout.vertices.len()];
-    // Indexed by sample id (checked `< samples.len()` below) instead of hashed, per sample
-    // `[layout vertex + 1, spoke list head + 1]` (0: none; zero-initialised, so the
-    // allocation maps zero pages instead of filling an array, issue 8): the layout vertex of
-    // each sample used as a corner, and the spokes to it as a list of `(medial vertex, edge,
-    // next + 1)` (a sample has a spoke from one to three medial vertices).
-    let mut slots: Vec<[u32; 2]> = vec![[0; 2]; samples.len()];
-    let mut spoke_list: Vec<(u32, u32, u32)> = Vec::with_capacity(3 * medial.vertices.len());
-
-    let mut sample_vertex_of = |slots: &mut [[u32; 2]], s: u32, layout: &mut BlockLayout| -> u32 {
-        let slot = &mut slots[s as usize][0];
-        if *slot == 0 {
-            layout.vertices.push(samples.points[s as usize]);
-            vertex_samples.push(Some(s));
-            *slot = layout.vertices.len() as u32;
-        }
-        *slot - 1
-    };
-    let add_edge = |layout: &mut BlockLayout, ends: [u32; 2], curve: Curve, kind| -> u32 {
-        layout.edges.push(Edge { ends, curve, kind });
-        (layout.edges.len() - 1) as u32
-    };
-    let mut spoke = |slots: &mut [[u32; 2]], layout: &mut BlockLayout, mv: u32, s: u32, sv: u32| {
-        let head = &mut slots[s as usize][1];
-        let mut at = *head;
-        while at != 0 {
-            let (v, edge, next) = spoke_list[at as usize - 1];
-            if v == mv {
-                return edge;
-            }
-            at = next;
-        }
-        layout.edges.push(Edge {
-            ends: [mv, sv],
-            curve: Curve::Segment,
-            kind: EdgeKind::Spoke,
-        });
-        let edge = (layout.edges.len() - 1) as u32;
-        spoke_list.push((mv, edge, *head));
-        *head = spoke_list.len() as u32;
-        edge
-    };
-    let fwd = |edge| SideRef {
-        edge,
-        reversed: false,
-    };
-    let rev = |edge| SideRef {
-        edge,
-        reversed: true,
-    };
-
-    // One buffer for every arc's reversed C2 chain.
-    let mut c2_back: Vec<u32> = Vec::new();
-    for (a, arc) in medial.arcs.iter().enumerate() {
-        let [m0, m1] = arc.ends;
-        let [ca, cb] = arc.circles;
-        let ends = |c: &[u32]| match (c.first(), c.last()) {
-            (Some(&f), Some(&l)) if (f.max(l) as usize) < samples.len() => Ok((f, l)),
-            _ => Err(MeshError::Internal(
-                "medial arc with an empty or out-of-range sample chain".into(),
-            )),
-        };
-        let (a0, a1) = ends(&arc.c1)?;
-        let (b0, b1) = ends(&arc.c2)?;
-        if m0.max(m1) as usize >= medial.vertices.len()
-            || arc
-                .circles
-                .iter()
-                .any(|&c| c < -1 || c >= domain.hole_count() as CircleId)
-        {
-            return Err(MeshError::Internal(
-                "medial arc with an out-of-range vertex or circle".into(),
-            ));
-        }
-        let va0 = sample_vertex_of(&mut slots, a0, &mut layout);
-        let va1 = sample_vertex_of(&mut slots, a1, &mut layout);
-        let vb0 = sample_vertex_of(&mut slots, b0, &mut layout);
-        let vb1 = sample_vertex_of(&mut slots, b1, &mut layout);
-        let reused = old.as_mut().and_then(|(old, taken)| {
-            let k = *taken.get(a)?;
-            (k != u32::MAX)
-                .then(|| take_pair_curves(old, k as usize, arc.polyline.len(), arc.circles))?
-        });
-        let (polyline, [reused_a, reused_b]) = match reused {
-            Some([p, wa, wb]) => (p, [Some(wa), Some(wb)]),
-            None => (Curve::Polyline(arc.polyline.clone()), [None, None]),
-        };
-        let medial_edge = add_edge(&mut layout, [m0, m1], polyline, EdgeKind::Medial);
-        // Block on A: wall along C1 forward, fluid on the left.
-        let expect = |c: CircleId| if c < 0 { 1 } else { -1 };
-        let wall_a = match reused_a {
-            Some(curve) => curve,
-            None => wall_curve(domain, samples, ca, &arc.c1, expect(ca))?,
-        };
-        let wall_a = add_edge(&mut layout, [va0, va1], wall_a, EdgeKind::Wall(ca));
-        let s_a1 = spoke(&mut slots, &mut layout, m1, a1, va1);
-        let s_a0 = spoke(&mut slots, &mut layout, m0, a0, va0);
-        layout.blocks.push(Block {
-            corners: [va0, va1, m1, m0],
-            sides: [fwd(wall_a), rev(s_a1), rev(medial_edge), fwd(s_a0)],
-            wall: Some(ca),
-        });
-        // Block on B: wall along C2 backward.
-        let wall_b = match reused_b {
-            Some(curve) => curve,
-            None => {
-                c2_back.clear();
-                c2_back.extend(arc.c2.iter().rev());
-                wall_curve(domain, samples, cb, &c2_back, expect(cb))?
-            }
-        };
-        let wall_b = add_edge(&mut layout, [vb1, vb0], wall_b, EdgeKind::Wall(cb));
-        let s_b0 = spoke(&mut slots, &mut layout, m0, b0, vb0);
-        let s_b1 = spoke(&mut slots, &mut layout, m1, b1, vb1);
-        layout.blocks.push(Block {
-            corners: [vb1, vb0, m0, m1],
-            sides: [fwd(wall_b), rev(s_b0), fwd(medial_edge), fwd(s_b1)],
-            wall: Some(cb),
-        });
-    }
-    Ok((layout, vertex_samples))
 }
 
 /// The points of edge `e` along a block side, into `pts` (cleared first; one buffer reused over
@@ -1148,13 +976,16 @@ fn collapse_and_block(
             Some((old_flags, mut old_contracted, mut old_layout)) => {
                 let (contracted, taken) =
                     selection.contract_reusing(medial, &flags, &old_flags, &mut old_contracted)?;
-                drop(old_contracted);
+                // The rest of the previous build is freed on the pool, off this thread (many
+                // small vectors: the numbering of the blocks below runs on this thread alone).
+                rayon::spawn(move || drop(old_contracted));
                 let (layout, _) = blocks_reusing(
                     final_domain,
                     &sampled.samples,
                     &contracted.graph,
                     Some((&mut old_layout, &taken)),
                 )?;
+                rayon::spawn(move || drop(old_layout));
                 (contracted, layout)
             }
             None => {

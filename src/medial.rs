@@ -205,21 +205,10 @@ pub fn medial_graph(
             tri.points().len()
         )));
     }
-    let mut g = MedialGraph::default();
-    for (t, kind) in kinds.iter().enumerate() {
-        if *kind == TriangleKind::Interior {
-            let v = tri.triangle(t);
-            let p = v.map(|s| samples.points[s as usize]);
-            let position = circumcenter(p[0], p[1], p[2])
-                .ok_or_else(|| internal(format!("interior triangle {t} is degenerate")))?;
-            g.vertices.push(MedialVertex {
-                triangle: t as u32,
-                position,
-                samples: v,
-                circles: v.map(|s| samples.circle_of[s as usize]),
-            });
-        }
-    }
+    let mut g = MedialGraph {
+        vertices: medial_vertices(samples, tri, kinds)?,
+        arcs: Vec::new(),
+    };
     // The circumcentre of a walked triangle: no cache (issue 8: a per-triangle cache was
     // 24 bytes x 2 per sample, zeroed): a boundary triangle is walked through once (by the
     // one arc it belongs to), and an interior one's is its vertex's `position`, the same
@@ -227,14 +216,243 @@ pub fn medial_graph(
     // The vertex of an interior triangle: vertices are in triangle order, so a binary search
     // (issue 8: a per-triangle table was 4 bytes per triangle of fresh memory, for 2 interior
     // triangles per hole among about 2 per sample).
-    let vertex_of = |t: usize| vertex_of(&g.vertices, kinds, t);
-    let mut walk = Walk::default();
-    g.arcs = arcs_in_walk_order(
-        g.vertices.len(),
-        |v0, k0| walk.arc(samples, tri, kinds, &g.vertices, vertex_of, v0, k0),
-        |v1, k1| internal(format!("medial arc into vertex {v1} slot {k1} found twice")),
-    )?;
+    // Below three cells' worth of vertices the grid has one cell: the one-by-one walk, without
+    // the parallel walk's bookkeeping.
+    let parallel = (g.vertices.len() >= 3 * ARC_CHUNK)
+        .then(|| medial_arcs_parallel(samples, tri, kinds, &g.vertices, ARC_CHUNK))
+        .flatten();
+    g.arcs = match parallel {
+        Some(arcs) => arcs,
+        None => medial_arcs_serial(samples, tri, kinds, &g.vertices)?,
+    };
     Ok(g)
+}
+
+/// The medial vertices of [`medial_graph`]: the interior triangles in triangle order, with
+/// their circumcentres. Triangles are read in parallel in fixed chunks of [`VERTEX_CHUNK`] and
+/// the chunks joined in order, so the vertices, and the error (that of the first degenerate
+/// interior triangle), are those of one pass in triangle order, for every thread count.
+fn medial_vertices(
+    samples: &Samples,
+    tri: &Triangulation,
+    kinds: &[TriangleKind],
+) -> Result<Vec<MedialVertex>, MeshError> {
+    use rayon::prelude::*;
+    let chunks: Vec<Result<Vec<MedialVertex>, MeshError>> = kinds
+        .par_chunks(VERTEX_CHUNK)
+        .enumerate()
+        .map(|(ci, chunk)| {
+            let mut out = Vec::new();
+            for (k, kind) in chunk.iter().enumerate() {
+                if *kind == TriangleKind::Interior {
+                    let t = ci * VERTEX_CHUNK + k;
+                    let v = tri.triangle(t);
+                    let p = v.map(|s| samples.points[s as usize]);
+                    let position = circumcenter(p[0], p[1], p[2])
+                        .ok_or_else(|| internal(format!("interior triangle {t} is degenerate")))?;
+                    out.push(MedialVertex {
+                        triangle: t as u32,
+                        position,
+                        samples: v,
+                        circles: v.map(|s| samples.circle_of[s as usize]),
+                    });
+                }
+            }
+            Ok(out)
+        })
+        .collect();
+    let mut vertices =
+        Vec::with_capacity(chunks.iter().map(|c| c.as_ref().map_or(0, Vec::len)).sum());
+    for chunk in chunks {
+        vertices.extend(chunk?);
+    }
+    Ok(vertices)
+}
+
+/// Triangles per parallel task of [`medial_vertices`].
+const VERTEX_CHUNK: usize = 1 << 15;
+
+/// The arcs of [`medial_graph`] walked one after the other ([`arcs_in_walk_order`]): the
+/// reference of the parallel walk ([`arcs_in_walk_order_par`]), and the construction that
+/// reports the error when the parallel walk finds anything wrong.
+#[doc(hidden)]
+pub fn medial_arcs_serial(
+    samples: &Samples,
+    tri: &Triangulation,
+    kinds: &[TriangleKind],
+    vertices: &[MedialVertex],
+) -> Result<Vec<MedialArc>, MeshError> {
+    let vertex_of = |t: usize| vertex_of(vertices, kinds, t);
+    let mut walk = Walk::default();
+    arcs_in_walk_order(
+        vertices.len(),
+        |v0, k0| walk.arc(samples, tri, kinds, vertices, vertex_of, v0, k0),
+        |v1, k1| internal(format!("medial arc into vertex {v1} slot {k1} found twice")),
+    )
+}
+
+/// The arcs of [`medial_graph`] walked in parallel ([`arcs_in_walk_order_par`] with cells of
+/// about `per_cell` vertices), `None` when the one-by-one walk ([`medial_arcs_serial`]) might
+/// give anything else (an error). Public for the tests, which compare the two.
+#[doc(hidden)]
+pub fn medial_arcs_parallel(
+    samples: &Samples,
+    tri: &Triangulation,
+    kinds: &[TriangleKind],
+    vertices: &[MedialVertex],
+    per_cell: usize,
+) -> Option<Vec<MedialArc>> {
+    let vertex_of = |t: usize| vertex_of(vertices, kinds, t);
+    let positions: Vec<Point> = vertices.iter().map(|v| v.position).collect();
+    arcs_in_walk_order_par(&positions, per_cell.max(1), |walk, v0, k0| {
+        walk.arc(samples, tri, kinds, vertices, vertex_of, v0, k0)
+    })
+}
+
+/// Vertices per parallel task of [`arcs_in_walk_order_par`] (on average: the tasks are the
+/// cells of a square grid over the vertices).
+const ARC_CHUNK: usize = 2048;
+
+/// [`arcs_in_walk_order`] with the walks done in parallel, `None` whenever the one-by-one
+/// construction might differ (then the caller runs it, for its result or its error).
+///
+/// In the one-by-one walk each arc is walked from the smaller (in vertex then slot order) of
+/// its two end slots, and the arcs come out in the order of that slot, provided every slot
+/// ends exactly one arc. Here the vertices are cut into spatial cells (vertex ids, interior
+/// triangle ids, carry no locality) of about `per_cell` vertices, and each cell does the
+/// one-by-one walk on its own slots in increasing order; an arc ending in another cell is
+/// kept when it starts at its smaller slot, else dropped (the other cell keeps it): only the
+/// few arcs crossing a cell boundary are walked twice. The kept arcs are then put in
+/// start-slot order. They are the one-by-one walk's when they cover every slot exactly once
+/// (checked): by induction on the slots, the one-by-one walk then walks exactly the kept arcs,
+/// from the same slots, with the same deterministic `arc_from`. Any walk error or slot met
+/// twice gives `None`, so the result never depends on the thread count.
+fn arcs_in_walk_order_par<E>(
+    positions: &[Point],
+    per_cell: usize,
+    arc_from: impl Fn(&mut Walk, usize, usize) -> Result<MedialArc, E> + Sync,
+) -> Option<Vec<MedialArc>> {
+    use rayon::prelude::*;
+    let n = positions.len();
+    let cells = spatial_cells(positions, per_cell);
+    let (cell_of, members) = (&cells.cell_of, &cells.members);
+    let chunks: Vec<Option<Vec<MedialArc>>> = (0..cells.starts.len() - 1)
+        .into_par_iter()
+        .map(|c| {
+            let own = &members[cells.starts[c] as usize..cells.starts[c + 1] as usize];
+            let mut visited = vec![[false; 3]; own.len()];
+            let local = |v: usize| own.binary_search(&(v as u32)).ok();
+            let mut walk = Walk::default();
+            let mut kept = Vec::with_capacity(3 * own.len() / 2 + 16);
+            for (i0, &v0) in own.iter().enumerate() {
+                for k0 in 0..3 {
+                    if visited[i0][k0] {
+                        continue;
+                    }
+                    visited[i0][k0] = true;
+                    let arc = arc_from(&mut walk, v0 as usize, k0).ok()?;
+                    let [v1, k1] = [arc.ends[1] as usize, arc.end_slots[1] as usize];
+                    if k1 >= 3 || v1 >= n {
+                        return None;
+                    }
+                    if cell_of[v1] as usize == c {
+                        let i1 = local(v1)?;
+                        if visited[i1][k1] {
+                            return None;
+                        }
+                        visited[i1][k1] = true;
+                        kept.push(arc);
+                    } else if (v1, k1) > (v0 as usize, k0) {
+                        kept.push(arc);
+                    }
+                }
+            }
+            Some(kept)
+        })
+        .collect();
+    // Flat index + 1 (among the kept arcs, cell by cell) of the arc starting at each slot.
+    let mut start = vec![[0u32; 3]; n];
+    let mut covered = vec![[false; 3]; n];
+    let mut total = 0u32;
+    for chunk in &chunks {
+        for arc in chunk.as_ref()? {
+            for end in 0..2 {
+                let (v, k) = (arc.ends[end] as usize, arc.end_slots[end] as usize);
+                let slot = covered.get_mut(v)?.get_mut(k)?;
+                if *slot {
+                    return None;
+                }
+                *slot = true;
+            }
+            total += 1;
+            start[arc.ends[0] as usize][arc.end_slots[0] as usize] = total;
+        }
+    }
+    if 2 * total as usize != 3 * n {
+        return None;
+    }
+    let mut all: Vec<MedialArc> = Vec::with_capacity(total as usize);
+    for chunk in chunks {
+        all.extend(chunk?);
+    }
+    let mut arcs = Vec::with_capacity(all.len());
+    for slots in &start {
+        for &at in slots.iter().filter(|&&at| at != 0) {
+            arcs.push(std::mem::take(&mut all[at as usize - 1]));
+        }
+    }
+    Some(arcs)
+}
+
+/// Points cut into the cells of a square grid over their bounding box, about `per_cell` a
+/// cell on average: the cell of each point, and the points of cell `c` in increasing order at
+/// `members[starts[c]..starts[c + 1]]`.
+struct SpatialCells {
+    cell_of: Vec<u32>,
+    members: Vec<u32>,
+    starts: Vec<u32>,
+}
+
+fn spatial_cells(points: &[Point], per_cell: usize) -> SpatialCells {
+    let n = points.len();
+    let side = ((n as f64 / per_cell as f64).sqrt().round() as usize).clamp(1, 1 << 10);
+    let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
+    for p in points {
+        for d in 0..2 {
+            lo[d] = lo[d].min(p[d]);
+            hi[d] = hi[d].max(p[d]);
+        }
+    }
+    let index = |x: f64, d: usize| -> usize {
+        let f = (x - lo[d]) / (hi[d] - lo[d]) * side as f64;
+        if f.is_finite() {
+            (f.max(0.0) as usize).min(side - 1)
+        } else {
+            0
+        }
+    };
+    let cell_of: Vec<u32> = points
+        .iter()
+        .map(|p| (index(p[1], 1) * side + index(p[0], 0)) as u32)
+        .collect();
+    let mut starts = vec![0u32; side * side + 1];
+    for &c in &cell_of {
+        starts[c as usize + 1] += 1;
+    }
+    for c in 0..side * side {
+        starts[c + 1] += starts[c];
+    }
+    let mut next = starts.clone();
+    let mut members = vec![0u32; n];
+    for (v, &c) in cell_of.iter().enumerate() {
+        members[next[c as usize] as usize] = v as u32;
+        next[c as usize] += 1;
+    }
+    SpatialCells {
+        cell_of,
+        members,
+        starts,
+    }
 }
 
 /// The arcs of a graph of `n` vertices in walking order: for each vertex slot `(v, k)` not yet

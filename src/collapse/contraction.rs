@@ -278,18 +278,21 @@ pub(super) fn contract_with(
         }
     }
 
-    let kept_count = collapse.iter().filter(|&&c| !c).count();
-    let mut arcs = Vec::with_capacity(kept_count);
-    let mut kept = Vec::with_capacity(kept_count);
-    for (e, arc) in medial.arcs.iter().enumerate() {
-        if collapse[e] {
-            continue;
-        }
+    // The kept arcs in arc order: loops checked and previous arcs taken over one after the
+    // other (the first loop's error, the takes in arc order, as the one-by-one construction),
+    // then the others built in parallel (each a function of its arc, the clusters and the
+    // extensions alone) into their places.
+    let mut kept: Vec<u32> = Vec::with_capacity(collapse.iter().filter(|&&c| !c).count());
+    kept.extend((0..m as u32).filter(|&e| !collapse[e as usize]));
+    let mut arcs: Vec<MedialArc> = Vec::with_capacity(kept.len());
+    let mut build = vec![false; kept.len()];
+    for (at_kept, &e) in kept.iter().enumerate() {
+        let arc = &medial.arcs[e as usize];
         let [v0, v1] = arc.ends.map(|v| cluster_of[v as usize]);
         if v0 == v1 {
             return Err(internal("a kept arc became a loop"));
         }
-        if let (Some(p), Some(&at)) = (previous.as_mut(), take_from.get(e)) {
+        if let (Some(p), Some(&at)) = (previous.as_mut(), take_from.get(e as usize)) {
             let old = p.contracted.graph.arcs.get_mut(at as usize);
             if let Some(old) = old.filter(|o| !o.c1.is_empty() && !o.c2.is_empty()) {
                 arcs.push(MedialArc {
@@ -301,26 +304,38 @@ pub(super) fn contract_with(
                     c1: std::mem::take(&mut old.c1),
                     c2: std::mem::take(&mut old.c2),
                 });
-                kept.push(e as u32);
                 continue;
             }
         }
-        // Block 2e: extension before, C1, extension after.
-        let (before, after) = (ext(ext_start[2 * e]), ext(ext_end[2 * e]));
-        let mut c1 = Vec::with_capacity(before.len() + arc.c1.len() + after.len());
-        c1.extend_from_slice(before);
-        c1.extend_from_slice(&arc.c1);
-        c1.extend_from_slice(after);
-        // Block 2e + 1 runs along C2 backwards: C2 is its wall reversed, with the reversed
-        // extensions swapped.
-        let (before, after) = (ext(ext_start[2 * e + 1]), ext(ext_end[2 * e + 1]));
-        let mut c2 = Vec::with_capacity(before.len() + arc.c2.len() + after.len());
-        c2.extend(after.iter().rev());
-        c2.extend_from_slice(&arc.c2);
-        c2.extend(before.iter().rev());
-        let merged = [v0, v1].map(|v| cluster_size[v as usize] > 1);
-        arcs.push(kept_arc(arc, [v0, v1], merged, &vertices, c1, c2));
-        kept.push(e as u32);
+        arcs.push(MedialArc::default());
+        build[at_kept] = true;
+    }
+    {
+        use rayon::prelude::*;
+        let (vertices, cluster_of, cluster_size) = (&vertices, &cluster_of, &cluster_size);
+        arcs.par_iter_mut()
+            .zip(kept.par_iter().zip(build.par_iter()))
+            .with_min_len(256)
+            .filter(|(_, (_, &b))| b)
+            .for_each(|(slot, (&e, _))| {
+                let (e, arc) = (e as usize, &medial.arcs[e as usize]);
+                let [v0, v1] = arc.ends.map(|v| cluster_of[v as usize]);
+                // Block 2e: extension before, C1, extension after.
+                let (before, after) = (ext(ext_start[2 * e]), ext(ext_end[2 * e]));
+                let mut c1 = Vec::with_capacity(before.len() + arc.c1.len() + after.len());
+                c1.extend_from_slice(before);
+                c1.extend_from_slice(&arc.c1);
+                c1.extend_from_slice(after);
+                // Block 2e + 1 runs along C2 backwards: C2 is its wall reversed, with the
+                // reversed extensions swapped.
+                let (before, after) = (ext(ext_start[2 * e + 1]), ext(ext_end[2 * e + 1]));
+                let mut c2 = Vec::with_capacity(before.len() + arc.c2.len() + after.len());
+                c2.extend(after.iter().rev());
+                c2.extend_from_slice(&arc.c2);
+                c2.extend(before.iter().rev());
+                let merged = [v0, v1].map(|v| cluster_size[v as usize] > 1);
+                *slot = kept_arc(arc, [v0, v1], merged, vertices, c1, c2);
+            });
     }
     // Per arc of the result, the previous arc taken over.
     let taken: Vec<u32> = if take_from.is_empty() {

@@ -142,7 +142,79 @@ pub struct Selection {
 
 impl Selection {
     /// The per-arc data of [`select_forced`] (same arguments less `exclude` and `forced`).
+    ///
+    /// Each arc's zero-length test, sampled length and relative length are functions of the
+    /// arc alone, computed in parallel (and the block successors meanwhile), then gathered in
+    /// arc order: the selection of [`Selection::new_one_by_one`] (tested equal in
+    /// `tests/perf_blocks_parallel.rs`), for every thread count.
     pub fn new(
+        medial: &MedialGraph,
+        tri: &Triangulation,
+        circles: &[Option<Apollonius>],
+        groups: &[CocircularGroup],
+        points: &[Point],
+        fraction: f64,
+    ) -> Selection {
+        use rayon::prelude::*;
+        let group = group_of(medial, groups);
+        let m = medial.arcs.len();
+        let relative = fraction > 0.0;
+        // Per arc: zero-length, sampled length, relative length (NaN when not asked for).
+        let (per_arc, next): (Vec<(bool, f64, f64)>, _) = rayon::join(
+            || {
+                medial
+                    .arcs
+                    .par_iter()
+                    .with_min_len(1024)
+                    .map(|arc| {
+                        if is_zero_length(arc, medial, tri, &group) {
+                            return (true, 0.0, f64::NAN);
+                        }
+                        let length = arc_length(arc);
+                        if !relative {
+                            return (false, length, f64::NAN);
+                        }
+                        let r = local_radius(medial, circles, points, arc.ends[0])
+                            .min(local_radius(medial, circles, points, arc.ends[1]));
+                        (false, length, length / r)
+                    })
+                    .collect()
+            },
+            || {
+                contraction::well_formed(medial)
+                    .then(|| contraction::successors(medial).ok())
+                    .flatten()
+            },
+        );
+        let (mut zero, mut is_zero) = (Vec::new(), vec![false; m]);
+        let mut length = vec![0.0; m];
+        let mut short: Vec<(f64, u32)> = Vec::new();
+        for (e, &(z, len, rel)) in per_arc.iter().enumerate() {
+            if z {
+                zero.push(e as u32);
+                is_zero[e] = true;
+                continue;
+            }
+            length[e] = len;
+            if rel.is_finite() && rel < fraction {
+                short.push((rel, e as u32));
+            }
+        }
+        short.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+        Selection {
+            zero,
+            is_zero,
+            length,
+            short,
+            ends: medial.arcs.iter().map(|a| a.ends).collect(),
+            vertices: medial.vertices.len(),
+            next,
+        }
+    }
+
+    /// [`Selection::new`] one arc after the other, as first written: the oracle of the tests.
+    #[doc(hidden)]
+    pub fn new_one_by_one(
         medial: &MedialGraph,
         tri: &Triangulation,
         circles: &[Option<Apollonius>],

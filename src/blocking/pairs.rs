@@ -1,0 +1,457 @@
+//! Blocking2D's pairs of blocks ([`super::blocks`]): the curves of each arc (its medial
+//! polyline and two walls, the costly part) computed in parallel, the layout vertices, spokes,
+//! edges and blocks numbered one arc after the other as before (issue 8).
+
+use super::wall_curve;
+use crate::domain::{CircleId, Domain};
+use crate::layout::{Block, BlockLayout, Curve, Edge, EdgeKind, SideRef};
+use crate::medial::{MedialArc, MedialGraph};
+use crate::mesher::MeshError;
+use crate::sampling::Samples;
+use rayon::prelude::*;
+
+/// The curves of the blocks `2k` and `2k + 1` of `old` (Blocking2D of arc `k` of an earlier
+/// graph), moved out: the medial polyline and the two walls, when they have the shape
+/// Blocking2D gives them (a polyline of `points` points, walls on `circles`).
+fn take_pair_curves(
+    old: &mut BlockLayout,
+    k: usize,
+    points: usize,
+    circles: [CircleId; 2],
+) -> Option<[Curve; 3]> {
+    let (a, b) = (old.blocks.get(2 * k)?, old.blocks.get(2 * k + 1)?);
+    let (medial, wall_a, wall_b) = (a.sides[2].edge, a.sides[0].edge, b.sides[0].edge);
+    if b.sides[2].edge != medial || [a.wall, b.wall] != [Some(circles[0]), Some(circles[1])] {
+        return None;
+    }
+    let ok = |e: u32, kind: EdgeKind, polyline: bool| {
+        old.edges.get(e as usize).is_some_and(|edge| {
+            edge.kind == kind
+                && match &edge.curve {
+                    Curve::Polyline(p) => polyline && p.len() == points,
+                    Curve::Arc { .. } => !polyline,
+                    Curve::Segment => false,
+                }
+        })
+    };
+    if !(ok(medial, EdgeKind::Medial, true)
+        && ok(wall_a, EdgeKind::Wall(circles[0]), false)
+        && ok(wall_b, EdgeKind::Wall(circles[1]), false))
+    {
+        return None;
+    }
+    let mut take = |e: u32| std::mem::replace(&mut old.edges[e as usize].curve, Curve::Segment);
+    Some([take(medial), take(wall_a), take(wall_b)])
+}
+
+/// Arcs per wave of [`blocks_reusing`]: the curves of one wave are computed (in parallel)
+/// while the previous wave is numbered into the layout, and at most two waves of curves are
+/// held at once.
+const WAVE: usize = 2048;
+
+/// [`super::blocks`], taking the curves of arc `a` of `medial` from the pair of blocks
+/// `2k, 2k + 1` of `old` where `taken[a] = k` (`u32::MAX`: computed): the previous Blocking2D
+/// of a contraction that handed arc `k` over unchanged
+/// ([`crate::collapse::Selection::contract_reusing`]), so its polyline and wall chains, hence
+/// its curves, are those of arc `a`. The curves taken are left as segments in `old`.
+///
+/// Arcs go in waves of [`WAVE`]: the curves taken from `old` (one after the other, in arc
+/// order, as the one-by-one construction takes them), then the others computed in parallel
+/// ([`arc_curves`], a function of the arc alone, its checks and errors included), while the
+/// wave before is numbered into the layout one arc after the other ([`Assembly::add`]). The
+/// layout and the error (the first failing arc's, its checks in the one-by-one order) are
+/// those of [`one_by_one_reusing`] for every thread count (tested in
+/// `tests/perf_blocks_parallel.rs`).
+pub(super) fn blocks_reusing(
+    domain: &Domain,
+    samples: &Samples,
+    medial: &MedialGraph,
+    mut old: Option<(&mut BlockLayout, &[u32])>,
+) -> Result<(BlockLayout, Vec<Option<u32>>), MeshError> {
+    let m = medial.arcs.len();
+    let mut asm = Assembly::new(samples, medial);
+    // Two buffers of curves (the wave being numbered, the wave being computed) and one of
+    // curves taken over, allocated once and reused by every wave (a fresh ~300 KB per wave
+    // was fresh pages to fault in, issue 8).
+    let mut reused_buf: Vec<Option<[Curve; 3]>> = Vec::with_capacity(WAVE.min(m));
+    let mut reused = |mut buf: Vec<Option<[Curve; 3]>>,
+                      range: std::ops::Range<usize>|
+     -> Vec<Option<[Curve; 3]>> {
+        buf.clear();
+        buf.extend(range.map(|a| {
+            let arc = &medial.arcs[a];
+            let (old, taken) = old.as_mut()?;
+            let k = *taken.get(a)?;
+            (k != u32::MAX)
+                .then(|| take_pair_curves(old, k as usize, arc.polyline.len(), arc.circles))?
+        }));
+        buf
+    };
+    let compute = |start: usize,
+                   mut reused: Vec<Option<[Curve; 3]>>,
+                   out: &mut Vec<Result<[Curve; 3], MeshError>>| {
+        reused
+            .par_drain(..)
+            .enumerate()
+            .with_min_len(64)
+            .map_init(Vec::new, |back, (i, r)| {
+                arc_curves(domain, samples, medial, start + i, r, back)
+            })
+            .collect_into_vec(out);
+        reused
+    };
+    let waves = m.div_ceil(WAVE);
+    let wave = |w: usize| w * WAVE..((w + 1) * WAVE).min(m);
+    let mut current = Vec::with_capacity(WAVE.min(m));
+    let mut next_out = Vec::with_capacity(WAVE.min(m));
+    if waves > 0 {
+        let r = reused(std::mem::take(&mut reused_buf), wave(0));
+        reused_buf = compute(0, r, &mut current);
+    }
+    for w in 0..waves {
+        let next = (w + 1 < waves).then(|| {
+            let buf = std::mem::take(&mut reused_buf);
+            (wave(w + 1).start, reused(buf, wave(w + 1)))
+        });
+        let (added, back) = rayon::join(
+            || asm.add(wave(w).start, &mut current),
+            || next.map(|(start, r)| compute(start, r, &mut next_out)),
+        );
+        added?;
+        if let Some(back) = back {
+            reused_buf = back;
+        }
+        std::mem::swap(&mut current, &mut next_out);
+    }
+    Ok((asm.layout, asm.vertex_samples))
+}
+
+/// The first and last samples of a wall chain, checked non-empty and in range.
+fn chain_ends(samples: &Samples, c: &[u32]) -> Result<(u32, u32), MeshError> {
+    match (c.first(), c.last()) {
+        (Some(&f), Some(&l)) if (f.max(l) as usize) < samples.len() => Ok((f, l)),
+        _ => Err(MeshError::Internal(
+            "medial arc with an empty or out-of-range sample chain".into(),
+        )),
+    }
+}
+
+/// The checks of arc `a` and its curves `[medial polyline, wall on circles[0] (C1 forward),
+/// wall on circles[1] (C2 backward)]`, `reused` when given: what the one-by-one construction
+/// checks and computes for the arc, in its order (chains, vertex and circle range, wall A,
+/// wall B). `back`: a buffer for the reversed C2 chain.
+fn arc_curves(
+    domain: &Domain,
+    samples: &Samples,
+    medial: &MedialGraph,
+    a: usize,
+    reused: Option<[Curve; 3]>,
+    back: &mut Vec<u32>,
+) -> Result<[Curve; 3], MeshError> {
+    let arc = &medial.arcs[a];
+    chain_ends(samples, &arc.c1)?;
+    chain_ends(samples, &arc.c2)?;
+    let [m0, m1] = arc.ends;
+    if m0.max(m1) as usize >= medial.vertices.len()
+        || arc
+            .circles
+            .iter()
+            .any(|&c| c < -1 || c >= domain.hole_count() as CircleId)
+    {
+        return Err(MeshError::Internal(
+            "medial arc with an out-of-range vertex or circle".into(),
+        ));
+    }
+    if let Some(curves) = reused {
+        return Ok(curves);
+    }
+    let [ca, cb] = arc.circles;
+    let expect = |c: CircleId| if c < 0 { 1 } else { -1 };
+    let polyline = Curve::Polyline(arc.polyline.clone());
+    let wall_a = wall_curve(domain, samples, ca, &arc.c1, expect(ca))?;
+    back.clear();
+    back.extend(arc.c2.iter().rev());
+    let wall_b = wall_curve(domain, samples, cb, back, expect(cb))?;
+    Ok([polyline, wall_a, wall_b])
+}
+
+/// The layout being numbered: vertices (the medial ones, then one per sample corner in order
+/// of first use), edges and blocks, one arc after the other.
+struct Assembly<'a> {
+    samples: &'a Samples,
+    medial: &'a MedialGraph,
+    layout: BlockLayout,
+    vertex_samples: Vec<Option<u32>>,
+    /// Indexed by sample id (checked `< samples.len()`) instead of hashed, per sample
+    /// `[layout vertex + 1, spoke list head + 1]` (0: none; zero-initialised, so the
+    /// allocation maps zero pages instead of filling an array, issue 8): the layout vertex of
+    /// each sample used as a corner, and the spokes to it as a list in `spoke_list`.
+    slots: Vec<[u32; 2]>,
+    /// `(medial vertex, edge, next + 1)`: a sample has a spoke from one to three medial
+    /// vertices.
+    spoke_list: Vec<(u32, u32, u32)>,
+}
+
+impl<'a> Assembly<'a> {
+    fn new(samples: &'a Samples, medial: &'a MedialGraph) -> Assembly<'a> {
+        // Vertices: the medial ones, then at most four sample corners per arc (reserved once:
+        // no doubling of a large vector, issue 8).
+        let mut vertices = Vec::with_capacity(medial.vertices.len() + 4 * medial.arcs.len());
+        vertices.extend(medial.vertices.iter().map(|v| v.position));
+        let vertex_samples = vec![None; vertices.len()];
+        Assembly {
+            samples,
+            medial,
+            layout: BlockLayout {
+                vertices,
+                edges: Vec::with_capacity(5 * medial.arcs.len()),
+                blocks: Vec::with_capacity(2 * medial.arcs.len()),
+            },
+            vertex_samples,
+            slots: vec![[0; 2]; samples.len()],
+            spoke_list: Vec::with_capacity(3 * medial.vertices.len()),
+        }
+    }
+
+    /// The layout vertex of sample `s` (`< samples.len()`), added at its first use.
+    fn sample_vertex(&mut self, s: u32) -> u32 {
+        let slot = &mut self.slots[s as usize][0];
+        if *slot == 0 {
+            self.layout.vertices.push(self.samples.points[s as usize]);
+            self.vertex_samples.push(Some(s));
+            *slot = self.layout.vertices.len() as u32;
+        }
+        *slot - 1
+    }
+
+    fn edge(&mut self, ends: [u32; 2], curve: Curve, kind: EdgeKind) -> u32 {
+        self.layout.edges.push(Edge { ends, curve, kind });
+        (self.layout.edges.len() - 1) as u32
+    }
+
+    /// The spoke from medial vertex `mv` to sample `s` (layout vertex `sv`), added at its
+    /// first use.
+    fn spoke(&mut self, mv: u32, s: u32, sv: u32) -> u32 {
+        let mut at = self.slots[s as usize][1];
+        while at != 0 {
+            let (v, edge, next) = self.spoke_list[at as usize - 1];
+            if v == mv {
+                return edge;
+            }
+            at = next;
+        }
+        let edge = self.edge([mv, sv], Curve::Segment, EdgeKind::Spoke);
+        let head = &mut self.slots[s as usize][1];
+        self.spoke_list.push((mv, edge, *head));
+        *head = self.spoke_list.len() as u32;
+        edge
+    }
+
+    /// Number the arcs from `start` on, with their curves (or their errors, the first one
+    /// returned), taken out of `curves` (left empty, its capacity kept).
+    fn add(
+        &mut self,
+        start: usize,
+        curves: &mut Vec<Result<[Curve; 3], MeshError>>,
+    ) -> Result<(), MeshError> {
+        for (i, c) in curves.drain(..).enumerate() {
+            let medial = self.medial;
+            self.add_pair(&medial.arcs[start + i], c?);
+        }
+        Ok(())
+    }
+
+    /// The two blocks of `arc` (checked by [`arc_curves`]), with its curves.
+    fn add_pair(&mut self, arc: &MedialArc, [polyline, wall_a, wall_b]: [Curve; 3]) {
+        let fwd = |edge| SideRef {
+            edge,
+            reversed: false,
+        };
+        let rev = |edge| SideRef {
+            edge,
+            reversed: true,
+        };
+        let [m0, m1] = arc.ends;
+        let [ca, cb] = arc.circles;
+        let (a0, a1) = (arc.c1[0], arc.c1[arc.c1.len() - 1]);
+        let (b0, b1) = (arc.c2[0], arc.c2[arc.c2.len() - 1]);
+        let va0 = self.sample_vertex(a0);
+        let va1 = self.sample_vertex(a1);
+        let vb0 = self.sample_vertex(b0);
+        let vb1 = self.sample_vertex(b1);
+        let medial_edge = self.edge([m0, m1], polyline, EdgeKind::Medial);
+        // Block on A: wall along C1 forward, fluid on the left.
+        let wall_a = self.edge([va0, va1], wall_a, EdgeKind::Wall(ca));
+        let s_a1 = self.spoke(m1, a1, va1);
+        let s_a0 = self.spoke(m0, a0, va0);
+        self.layout.blocks.push(Block {
+            corners: [va0, va1, m1, m0],
+            sides: [fwd(wall_a), rev(s_a1), rev(medial_edge), fwd(s_a0)],
+            wall: Some(ca),
+        });
+        // Block on B: wall along C2 backward.
+        let wall_b = self.edge([vb1, vb0], wall_b, EdgeKind::Wall(cb));
+        let s_b0 = self.spoke(m0, b0, vb0);
+        let s_b1 = self.spoke(m1, b1, vb1);
+        self.layout.blocks.push(Block {
+            corners: [vb1, vb0, m0, m1],
+            sides: [fwd(wall_b), rev(s_b0), fwd(medial_edge), fwd(s_b1)],
+            wall: Some(cb),
+        });
+    }
+}
+
+/// [`super::blocks`] as first written, one arc after the other ([`one_by_one_reusing`]
+/// without an earlier layout): the oracle of the parallel construction in the tests.
+#[doc(hidden)]
+pub fn blocks_one_by_one(
+    domain: &Domain,
+    samples: &Samples,
+    medial: &MedialGraph,
+) -> Result<(BlockLayout, Vec<Option<u32>>), MeshError> {
+    one_by_one_reusing(domain, samples, medial, None)
+}
+
+/// The one-by-one Blocking2D [`blocks_reusing`] replaces (its oracle): [`super::blocks`],
+/// taking the curves of arc `a` of `medial` from the pair of blocks `2k, 2k + 1`
+/// of `old` where `taken[a] = k` (`u32::MAX`: computed): the previous Blocking2D of a
+/// contraction that handed arc `k` over unchanged
+/// ([`crate::collapse::Selection::contract_reusing`]), so its polyline and wall chains, hence
+/// its curves, are those of arc `a`. The curves taken are left as segments in `old`.
+fn one_by_one_reusing(
+    domain: &Domain,
+    samples: &Samples,
+    medial: &MedialGraph,
+    mut old: Option<(&mut BlockLayout, &[u32])>,
+) -> Result<(BlockLayout, Vec<Option<u32>>), MeshError> {
+    // Vertices: the medial ones, then at most four sample corners per arc (reserved once:
+    // no doubling of a large vector, issue 8).
+    let mut vertices = Vec::with_capacity(medial.vertices.len() + 4 * medial.arcs.len());
+    vertices.extend(medial.vertices.iter().map(|v| v.position));
+    let mut layout = BlockLayout {
+        vertices,
+        edges: Vec::with_capacity(5 * medial.arcs.len()),
+        blocks: Vec::with_capacity(2 * medial.arcs.len()),
+    };
+    let mut vertex_samples: Vec<Option<u32>> = vec![None; layout.vertices.len()];
+    // Indexed by sample id (checked `< samples.len()` below) instead of hashed, per sample
+    // `[layout vertex + 1, spoke list head + 1]` (0: none; zero-initialised, so the
+    // allocation maps zero pages instead of filling an array, issue 8): the layout vertex of
+    // each sample used as a corner, and the spokes to it as a list of `(medial vertex, edge,
+    // next + 1)` (a sample has a spoke from one to three medial vertices).
+    let mut slots: Vec<[u32; 2]> = vec![[0; 2]; samples.len()];
+    let mut spoke_list: Vec<(u32, u32, u32)> = Vec::with_capacity(3 * medial.vertices.len());
+
+    let mut sample_vertex_of = |slots: &mut [[u32; 2]], s: u32, layout: &mut BlockLayout| -> u32 {
+        let slot = &mut slots[s as usize][0];
+        if *slot == 0 {
+            layout.vertices.push(samples.points[s as usize]);
+            vertex_samples.push(Some(s));
+            *slot = layout.vertices.len() as u32;
+        }
+        *slot - 1
+    };
+    let add_edge = |layout: &mut BlockLayout, ends: [u32; 2], curve: Curve, kind| -> u32 {
+        layout.edges.push(Edge { ends, curve, kind });
+        (layout.edges.len() - 1) as u32
+    };
+    let mut spoke = |slots: &mut [[u32; 2]], layout: &mut BlockLayout, mv: u32, s: u32, sv: u32| {
+        let head = &mut slots[s as usize][1];
+        let mut at = *head;
+        while at != 0 {
+            let (v, edge, next) = spoke_list[at as usize - 1];
+            if v == mv {
+                return edge;
+            }
+            at = next;
+        }
+        layout.edges.push(Edge {
+            ends: [mv, sv],
+            curve: Curve::Segment,
+            kind: EdgeKind::Spoke,
+        });
+        let edge = (layout.edges.len() - 1) as u32;
+        spoke_list.push((mv, edge, *head));
+        *head = spoke_list.len() as u32;
+        edge
+    };
+    let fwd = |edge| SideRef {
+        edge,
+        reversed: false,
+    };
+    let rev = |edge| SideRef {
+        edge,
+        reversed: true,
+    };
+
+    // One buffer for every arc's reversed C2 chain.
+    let mut c2_back: Vec<u32> = Vec::new();
+    for (a, arc) in medial.arcs.iter().enumerate() {
+        let [m0, m1] = arc.ends;
+        let [ca, cb] = arc.circles;
+        let ends = |c: &[u32]| match (c.first(), c.last()) {
+            (Some(&f), Some(&l)) if (f.max(l) as usize) < samples.len() => Ok((f, l)),
+            _ => Err(MeshError::Internal(
+                "medial arc with an empty or out-of-range sample chain".into(),
+            )),
+        };
+        let (a0, a1) = ends(&arc.c1)?;
+        let (b0, b1) = ends(&arc.c2)?;
+        if m0.max(m1) as usize >= medial.vertices.len()
+            || arc
+                .circles
+                .iter()
+                .any(|&c| c < -1 || c >= domain.hole_count() as CircleId)
+        {
+            return Err(MeshError::Internal(
+                "medial arc with an out-of-range vertex or circle".into(),
+            ));
+        }
+        let va0 = sample_vertex_of(&mut slots, a0, &mut layout);
+        let va1 = sample_vertex_of(&mut slots, a1, &mut layout);
+        let vb0 = sample_vertex_of(&mut slots, b0, &mut layout);
+        let vb1 = sample_vertex_of(&mut slots, b1, &mut layout);
+        let reused = old.as_mut().and_then(|(old, taken)| {
+            let k = *taken.get(a)?;
+            (k != u32::MAX)
+                .then(|| take_pair_curves(old, k as usize, arc.polyline.len(), arc.circles))?
+        });
+        let (polyline, [reused_a, reused_b]) = match reused {
+            Some([p, wa, wb]) => (p, [Some(wa), Some(wb)]),
+            None => (Curve::Polyline(arc.polyline.clone()), [None, None]),
+        };
+        let medial_edge = add_edge(&mut layout, [m0, m1], polyline, EdgeKind::Medial);
+        // Block on A: wall along C1 forward, fluid on the left.
+        let expect = |c: CircleId| if c < 0 { 1 } else { -1 };
+        let wall_a = match reused_a {
+            Some(curve) => curve,
+            None => wall_curve(domain, samples, ca, &arc.c1, expect(ca))?,
+        };
+        let wall_a = add_edge(&mut layout, [va0, va1], wall_a, EdgeKind::Wall(ca));
+        let s_a1 = spoke(&mut slots, &mut layout, m1, a1, va1);
+        let s_a0 = spoke(&mut slots, &mut layout, m0, a0, va0);
+        layout.blocks.push(Block {
+            corners: [va0, va1, m1, m0],
+            sides: [fwd(wall_a), rev(s_a1), rev(medial_edge), fwd(s_a0)],
+            wall: Some(ca),
+        });
+        // Block on B: wall along C2 backward.
+        let wall_b = match reused_b {
+            Some(curve) => curve,
+            None => {
+                c2_back.clear();
+                c2_back.extend(arc.c2.iter().rev());
+                wall_curve(domain, samples, cb, &c2_back, expect(cb))?
+            }
+        };
+        let wall_b = add_edge(&mut layout, [vb1, vb0], wall_b, EdgeKind::Wall(cb));
+        let s_b0 = spoke(&mut slots, &mut layout, m0, b0, vb0);
+        let s_b1 = spoke(&mut slots, &mut layout, m1, b1, vb1);
+        layout.blocks.push(Block {
+            corners: [vb1, vb0, m0, m1],
+            sides: [fwd(wall_b), rev(s_b0), fwd(medial_edge), fwd(s_b1)],
+            wall: Some(cb),
+        });
+    }
+    Ok((layout, vertex_samples))
+}

@@ -1,0 +1,144 @@
+//! Blocking2D with the curves of each wave of arcs computed in parallel
+//! (`blocking::blocks`) against the one-arc-after-the-other construction it replaces
+//! (`blocking::blocks_one_by_one`): the same layout and vertex samples on sampled and
+//! contracted medial graphs (several waves of arcs), with one and two threads, and the same
+//! error on graphs broken at arcs early, late and across waves.
+
+use medial_blocks::blocking::{blocks, blocks_one_by_one, collapsed_blocking_with};
+use medial_blocks::domain::Domain;
+use medial_blocks::medial::MedialGraph;
+use medial_blocks::sampling::{sample_and_triangulate, Samples, SamplingOptions};
+use medial_blocks::Options;
+
+fn domains() -> Vec<Domain> {
+    vec![
+        medial_blocks::layouts::hexagon(),
+        medial_blocks::layouts::square_lattice(16).unwrap(),
+        medial_blocks::layouts::bubbles(30, 1).unwrap(),
+        medial_blocks::layouts::bubbles(1500, 2).unwrap(),
+    ]
+}
+
+fn same(domain: &Domain, samples: &Samples, g: &MedialGraph) -> bool {
+    let reference = blocks_one_by_one(domain, samples, g);
+    for threads in [1, 2] {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap();
+        let got = pool.install(|| blocks(domain, samples, g));
+        match (&got, &reference) {
+            (Ok(a), Ok(b)) => assert!(a == b, "{threads} threads: layouts differ"),
+            (Err(a), Err(b)) => assert_eq!(a.to_string(), b.to_string(), "{threads} threads"),
+            _ => panic!(
+                "{threads} threads: {:?} / {:?}",
+                got.is_ok(),
+                reference.is_ok()
+            ),
+        }
+    }
+    reference.is_ok()
+}
+
+#[test]
+fn parallel_curves_give_the_one_by_one_layout() {
+    let mut arcs = 0;
+    for d in domains() {
+        let s = sample_and_triangulate(&d, &SamplingOptions::default()).unwrap();
+        assert!(same(&d, &s.samples, &s.medial));
+        arcs = arcs.max(s.medial.arcs.len());
+        let cb =
+            collapsed_blocking_with(&d, &Options::default(), &SamplingOptions::default(), false)
+                .unwrap();
+        let r = &cb.refined;
+        assert!(same(&r.domain, &r.sampled.samples, &cb.contracted.graph));
+        let (layout, _) = blocks(&r.domain, &r.sampled.samples, &cb.contracted.graph).unwrap();
+        assert!(layout == cb.layout);
+    }
+    assert!(arcs > 2 * 2048, "three waves of arcs covered ({arcs} arcs)");
+}
+
+/// A way of breaking arc `e` of a graph.
+type Break = Box<dyn Fn(&mut MedialGraph, usize)>;
+
+/// Arcs broken in each way the construction checks (an empty chain, a sample out of range, a
+/// vertex or circle out of range, a wall chain that is not a run of consecutive samples, one
+/// running the wrong way round), alone or two at once in different waves.
+#[test]
+fn broken_arcs_give_the_one_by_one_error() {
+    let d = medial_blocks::layouts::bubbles(1500, 3).unwrap();
+    let s = sample_and_triangulate(&d, &SamplingOptions::default()).unwrap();
+    let g = &s.medial;
+    let m = g.arcs.len();
+    let breaks: Vec<Break> = vec![
+        Box::new(|g, e| g.arcs[e].c1.clear()),
+        Box::new(|g, e| g.arcs[e].c2.clear()),
+        Box::new(|g, e| *g.arcs[e].c2.last_mut().unwrap() = u32::MAX),
+        Box::new(|g, e| g.arcs[e].ends[1] = u32::MAX),
+        Box::new(|g, e| g.arcs[e].circles[0] = 1 << 30),
+        Box::new(|g, e| {
+            let c = &mut g.arcs[e].c1;
+            let first = c[0];
+            c.push(first);
+        }),
+        Box::new(|g, e| g.arcs[e].c2.reverse()),
+        Box::new(|g, e| {
+            let c = g.arcs[e].c1.clone();
+            g.arcs[e].c1 = c.into_iter().rev().collect();
+        }),
+    ];
+    let mut failed = 0;
+    for (k, brk) in breaks.iter().enumerate() {
+        for at in [0, 1, 2047, 2048, m / 2, m - 1] {
+            let mut broken = g.clone();
+            brk(&mut broken, at);
+            if !same(&d, &s.samples, &broken) {
+                failed += 1;
+            }
+            // A second break in a later wave: the first one's error wins.
+            let later = (at + 2 * 2048 + 5) % m;
+            brk(&mut broken, later);
+            let other = &breaks[(k + 1) % breaks.len()];
+            other(&mut broken, (at + 3000) % m);
+            same(&d, &s.samples, &broken);
+        }
+    }
+    assert!(failed > 30, "only {failed} broken graphs failed");
+}
+
+/// The collapse selection's per-arc data computed in parallel equal those computed one arc
+/// after the other, for the collapse fractions of the pipeline, none and NaN, with one and
+/// two threads.
+#[test]
+fn parallel_selection_equals_the_one_by_one_selection() {
+    use medial_blocks::collapse::Selection;
+    for d in domains() {
+        let cb =
+            collapsed_blocking_with(&d, &Options::default(), &SamplingOptions::default(), false)
+                .unwrap();
+        let s = sample_and_triangulate(&cb.refined.domain, &SamplingOptions::default()).unwrap();
+        let circles = medial_blocks::cocircular::vertex_circles(&cb.refined.domain, &s.medial);
+        let groups = medial_blocks::cocircular::cocircular_groups(&s.medial, &circles);
+        for fraction in [Options::default().collapse_fraction, 0.0, 0.5, f64::NAN] {
+            let args = (&s.medial, &s.triangulation, &circles[..], &groups[..]);
+            let reference = Selection::new_one_by_one(
+                args.0,
+                args.1,
+                args.2,
+                args.3,
+                &s.samples.points,
+                fraction,
+            );
+            for threads in [1, 2] {
+                let pool = rayon::ThreadPoolBuilder::new()
+                    .num_threads(threads)
+                    .build()
+                    .unwrap();
+                let got = pool.install(|| {
+                    Selection::new(args.0, args.1, args.2, args.3, &s.samples.points, fraction)
+                });
+                assert!(got == reference, "fraction {fraction}, {threads} threads");
+            }
+        }
+    }
+}
