@@ -15,8 +15,9 @@
 //! per particle and the growth exponent `ln(t2 / t1) / ln(n2 / n1)` between sizes.
 //!
 //! Then, in this process, the triangulation engine vs spade (`bulk_load`) vs delaunator on
-//! the pipeline's own final sample points of the same layouts (best of a few runs each,
-//! interleaved), up to `--tri-max` (default: `--max`).
+//! the sample points the exact pipeline triangulates (its first sampling of the same layouts:
+//! `SamplingOptions { soft_rounds: false, .. }`, as `mesher` samples in exact mode; best of a
+//! few runs each, interleaved), up to `--tri-max` (default: `--max`).
 //!
 //! Before running the largest sizes it projects the peak memory from the previous size's bytes
 //! per particle and skips a size that would not fit in 85% of `MemAvailable` (`--force` runs
@@ -331,7 +332,12 @@ fn triangulation_table(max: usize, seed: u64) {
         let Ok(domain) = layouts::bubbles(n, seed) else {
             continue;
         };
-        let sampled = match sample_and_triangulate(&domain, &SamplingOptions::default()) {
+        // Exact mode's sampling (the mode of the table above): no soft resampling rounds.
+        let exact_mode = SamplingOptions {
+            soft_rounds: false,
+            ..SamplingOptions::default()
+        };
+        let sampled = match sample_and_triangulate(&domain, &exact_mode) {
             Ok(s) => s,
             Err(e) => {
                 eprintln!("sampling of {n} bubbles failed: {e}");
