@@ -33,9 +33,9 @@ use std::collections::HashMap;
 use std::f64::consts::TAU;
 
 mod pairs;
-#[doc(hidden)]
-pub use pairs::blocks_one_by_one;
 use pairs::blocks_reusing;
+#[doc(hidden)]
+pub use pairs::{blocks_in_waves, blocks_one_by_one};
 
 /// Everything the front end of the pipeline produced.
 #[derive(Debug, Clone)]

@@ -4,7 +4,9 @@
 //! contracted medial graphs (several waves of arcs), with one and two threads, and the same
 //! error on graphs broken at arcs early, late and across waves.
 
-use medial_blocks::blocking::{blocks, blocks_one_by_one, collapsed_blocking_with};
+use medial_blocks::blocking::{
+    blocks, blocks_in_waves, blocks_one_by_one, collapsed_blocking_with,
+};
 use medial_blocks::domain::Domain;
 use medial_blocks::medial::MedialGraph;
 use medial_blocks::sampling::{sample_and_triangulate, Samples, SamplingOptions};
@@ -26,15 +28,24 @@ fn same(domain: &Domain, samples: &Samples, g: &MedialGraph) -> bool {
             .num_threads(threads)
             .build()
             .unwrap();
-        let got = pool.install(|| blocks(domain, samples, g));
-        match (&got, &reference) {
-            (Ok(a), Ok(b)) => assert!(a == b, "{threads} threads: layouts differ"),
-            (Err(a), Err(b)) => assert_eq!(a.to_string(), b.to_string(), "{threads} threads"),
-            _ => panic!(
-                "{threads} threads: {:?} / {:?}",
-                got.is_ok(),
-                reference.is_ok()
-            ),
+        // `blocks` itself (one by one below 8192 arcs, in waves of 2048 above), and the
+        // waves forced on graphs of every size, the pipeline's wave and small ones.
+        for wave in [None, Some(2048), Some(97)] {
+            let got = pool.install(|| match wave {
+                None => blocks(domain, samples, g),
+                Some(w) => blocks_in_waves(domain, samples, g, w),
+            });
+            match (&got, &reference) {
+                (Ok(a), Ok(b)) => assert!(a == b, "{threads} threads, {wave:?}: layouts differ"),
+                (Err(a), Err(b)) => {
+                    assert_eq!(a.to_string(), b.to_string(), "{threads} threads, {wave:?}")
+                }
+                _ => panic!(
+                    "{threads} threads, {wave:?}: {:?} / {:?}",
+                    got.is_ok(),
+                    reference.is_ok()
+                ),
+            }
         }
     }
     reference.is_ok()
@@ -56,6 +67,49 @@ fn parallel_curves_give_the_one_by_one_layout() {
         assert!(layout == cb.layout);
     }
     assert!(arcs > 2 * 2048, "three waves of arcs covered ({arcs} arcs)");
+}
+
+/// A graph large enough for `blocks` to go in waves (8192 arcs and more), in a local rebuild
+/// that takes the unchanged arcs' curves over from the previous layout: the layout is the
+/// rebuild from scratch's, with one and two threads.
+#[test]
+fn local_rebuild_in_waves_equals_the_rebuild_from_scratch() {
+    let d = medial_blocks::layouts::bubbles(3000, 4).unwrap();
+    let cb = collapsed_blocking_with(&d, &Options::default(), &SamplingOptions::default(), false)
+        .unwrap();
+    let m = cb.contracted.graph.arcs.len();
+    assert!(
+        m >= 4 * 2048,
+        "{m} kept arcs: the rebuild would not go in waves"
+    );
+    let give_up: Vec<u32> = cb
+        .chosen
+        .iter()
+        .filter(|c| !c.zero)
+        .map(|c| c.arc)
+        .step_by(3)
+        .collect();
+    assert!(!give_up.is_empty());
+    let mut slow = cb.clone();
+    slow.recollapse_from_scratch(&give_up, &[]).unwrap();
+    for threads in [1, 2] {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap();
+        let mut fast = cb.clone();
+        pool.install(|| fast.recollapse(&Options::default(), &give_up, &[]))
+            .unwrap();
+        assert!(
+            fast.layout == slow.layout,
+            "{threads} threads: the layouts differ"
+        );
+        assert!(fast.contracted == slow.contracted, "{threads} threads");
+        assert_eq!(
+            fast.layout.blocks.len(),
+            2 * fast.contracted.graph.arcs.len()
+        );
+    }
 }
 
 /// A way of breaking arc `e` of a graph.

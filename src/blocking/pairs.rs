@@ -62,18 +62,53 @@ const WAVE: usize = 2048;
 /// layout and the error (the first failing arc's, its checks in the one-by-one order) are
 /// those of [`one_by_one_reusing`] for every thread count (tested in
 /// `tests/perf_blocks_parallel.rs`).
+///
+/// Graphs of fewer than [`PARALLEL_FROM`] arcs take [`one_by_one_reusing`] itself: with at
+/// most a few waves there is little to overlap, and the buffers and joins cost more than they
+/// save (measured at 1e3 bubbles, about 3 000 arcs: 9.7 ms in waves, 8.6 ms one by one).
 pub(super) fn blocks_reusing(
     domain: &Domain,
     samples: &Samples,
     medial: &MedialGraph,
+    old: Option<(&mut BlockLayout, &[u32])>,
+) -> Result<(BlockLayout, Vec<Option<u32>>), MeshError> {
+    if medial.arcs.len() < PARALLEL_FROM {
+        one_by_one_reusing(domain, samples, medial, old)
+    } else {
+        in_waves(domain, samples, medial, old, WAVE)
+    }
+}
+
+/// Arc count from which [`blocks_reusing`] goes in waves.
+const PARALLEL_FROM: usize = 4 * WAVE;
+
+/// [`super::blocks`] in waves of `wave` arcs (at least 1) whatever the graph's size: what
+/// [`blocks_reusing`] does from [`PARALLEL_FROM`] arcs on, for the tests to compare with
+/// [`blocks_one_by_one`] on small graphs too.
+#[doc(hidden)]
+pub fn blocks_in_waves(
+    domain: &Domain,
+    samples: &Samples,
+    medial: &MedialGraph,
+    wave: usize,
+) -> Result<(BlockLayout, Vec<Option<u32>>), MeshError> {
+    in_waves(domain, samples, medial, None, wave.max(1))
+}
+
+/// The wave construction of [`blocks_reusing`] with waves of `wave_len >= 1` arcs.
+fn in_waves(
+    domain: &Domain,
+    samples: &Samples,
+    medial: &MedialGraph,
     mut old: Option<(&mut BlockLayout, &[u32])>,
+    wave_len: usize,
 ) -> Result<(BlockLayout, Vec<Option<u32>>), MeshError> {
     let m = medial.arcs.len();
     let mut asm = Assembly::new(samples, medial);
     // Two buffers of curves (the wave being numbered, the wave being computed) and one of
     // curves taken over, allocated once and reused by every wave (a fresh ~300 KB per wave
     // was fresh pages to fault in, issue 8).
-    let mut reused_buf: Vec<Option<[Curve; 3]>> = Vec::with_capacity(WAVE.min(m));
+    let mut reused_buf: Vec<Option<[Curve; 3]>> = Vec::with_capacity(wave_len.min(m));
     let mut reused = |mut buf: Vec<Option<[Curve; 3]>>,
                       range: std::ops::Range<usize>|
      -> Vec<Option<[Curve; 3]>> {
@@ -100,10 +135,10 @@ pub(super) fn blocks_reusing(
             .collect_into_vec(out);
         reused
     };
-    let waves = m.div_ceil(WAVE);
-    let wave = |w: usize| w * WAVE..((w + 1) * WAVE).min(m);
-    let mut current = Vec::with_capacity(WAVE.min(m));
-    let mut next_out = Vec::with_capacity(WAVE.min(m));
+    let waves = m.div_ceil(wave_len);
+    let wave = |w: usize| w * wave_len..((w + 1) * wave_len).min(m);
+    let mut current = Vec::with_capacity(wave_len.min(m));
+    let mut next_out = Vec::with_capacity(wave_len.min(m));
     if waves > 0 {
         let r = reused(std::mem::take(&mut reused_buf), wave(0));
         reused_buf = compute(0, r, &mut current);
