@@ -73,29 +73,7 @@ pub fn angle_deg(y: f64, x: f64) -> f64 {
     };
     // ax == ay: (0, 0), the diagonals and (inf, inf); t = 0 without a 0/0 or inf/inf.
     let t = if ax == ay { 0.0 } else { n / d };
-    let a = atan_reduced(t).to_degrees();
-    // First quadrant: c + sa * a.
-    let c = if small {
-        0.0
-    } else if large {
-        90.0
-    } else {
-        45.0
-    };
-    let sa = if large { -1.0 } else { 1.0 };
-    // Quadrant: base + φ or base - φ.
-    let (xn, yn) = (x < 0.0, y < 0.0);
-    let base = if xn {
-        180.0
-    } else if yn {
-        360.0
-    } else {
-        0.0
-    };
-    let neg = xn != yn;
-    let m = if neg { base - c } else { base + c };
-    let s = if neg { -sa } else { sa };
-    m + s * a
+    placed(atan_reduced(t).to_degrees(), small, large, y, x)
 }
 
 /// [`angle_deg`] of a corner of the quality pass's fast path: `y` not zero and both
@@ -121,7 +99,15 @@ pub fn angle_deg_nonzero(y: f64, x: f64) -> f64 {
         (ay - ax, ay + ax)
     };
     let t = n / d;
-    let a = atan_reduced(t).to_degrees();
+    placed(atan_reduced(t).to_degrees(), small, large, y, x)
+}
+
+/// The angle of `(x, y)` from the reduced angle `a` (degrees) of the octant branch taken
+/// (`small`: `|y| < tan(π/8) |x|`, `large`: `|x| < tan(π/8) |y|`, else the diagonal one):
+/// first `c + sa * a` in the first quadrant, then mirrored into the quadrant of `(x, y)`.
+/// Shared by [`angle_deg`] and [`angle_deg_nonzero`], which differ only in the reduction.
+#[inline(always)]
+fn placed(a: f64, small: bool, large: bool, y: f64, x: f64) -> f64 {
     // First quadrant: c + sa * a.
     let c = if small {
         0.0
