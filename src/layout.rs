@@ -87,6 +87,23 @@ pub struct SideRef {
     pub reversed: bool,
 }
 
+impl SideRef {
+    /// The side running along `edge`'s direction.
+    pub const fn along(edge: u32) -> SideRef {
+        SideRef {
+            edge,
+            reversed: false,
+        }
+    }
+    /// The side running against `edge`'s direction.
+    pub const fn against(edge: u32) -> SideRef {
+        SideRef {
+            edge,
+            reversed: true,
+        }
+    }
+}
+
 /// One block: four corners counter-clockwise and the edge of each side.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Block {

@@ -298,14 +298,7 @@ impl<'a> Assembly<'a> {
 
     /// The two blocks of `arc` (checked by [`arc_curves`]), with its curves.
     fn add_pair(&mut self, arc: &MedialArc, [polyline, wall_a, wall_b]: [Curve; 3]) {
-        let fwd = |edge| SideRef {
-            edge,
-            reversed: false,
-        };
-        let rev = |edge| SideRef {
-            edge,
-            reversed: true,
-        };
+        let (fwd, rev) = (SideRef::along, SideRef::against);
         let [m0, m1] = arc.ends;
         let [ca, cb] = arc.circles;
         let (a0, a1) = (arc.c1[0], arc.c1[arc.c1.len() - 1]);
@@ -410,14 +403,7 @@ fn one_by_one_reusing(
         *head = spoke_list.len() as u32;
         edge
     };
-    let fwd = |edge| SideRef {
-        edge,
-        reversed: false,
-    };
-    let rev = |edge| SideRef {
-        edge,
-        reversed: true,
-    };
+    let (fwd, rev) = (SideRef::along, SideRef::against);
 
     // One buffer for every arc's reversed C2 chain.
     let mut c2_back: Vec<u32> = Vec::new();

@@ -955,14 +955,7 @@ pub fn assemble_cached(
     const NO_EDGE: u32 = u32::MAX;
     let mut spoke_edge: Vec<u32> = vec![NO_EDGE; layout.vertices.len()];
     let mut medial_edges = Vec::with_capacity(pieces.len());
-    let fwd = |edge| SideRef {
-        edge,
-        reversed: false,
-    };
-    let rev = |edge| SideRef {
-        edge,
-        reversed: true,
-    };
+    let (fwd, rev) = (SideRef::along, SideRef::against);
     for p in &pieces {
         let g = &p.geom;
         let [v0, v1] = p.ends;

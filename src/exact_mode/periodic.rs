@@ -410,14 +410,7 @@ fn build_checking(
                 }
             }
             grids.push(BlockGrid { ni: n, nj, nodes });
-            let fwd = |edge| SideRef {
-                edge,
-                reversed: false,
-            };
-            let rev = |edge| SideRef {
-                edge,
-                reversed: true,
-            };
+            let (fwd, rev) = (SideRef::along, SideRef::against);
             let me = medial_edges[side];
             b.layout.blocks.push(if side == 0 {
                 Block {
