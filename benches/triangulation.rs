@@ -1,8 +1,9 @@
 //! This engine vs spade (`bulk_load`) vs delaunator on the same inputs:
 //! uniform random points and circle-sampled points (non-overlapping circles, 32 samples each),
 //! sizes 1e4, 1e5, 1e6 (select with e.g. `cargo bench --bench triangulation -- 1000000`); and
-//! the pipeline's own sample points (`triangulate/pipeline/<engine>/<particles>`): the final
-//! boundary samples of `sample_and_triangulate` on `layouts::bubbles(n, 1)` for n = 1e3, 1e4,
+//! the pipeline's own sample points (`triangulate/pipeline/<engine>/<particles>`): the
+//! boundary samples exact mode triangulates first (`sample_and_triangulate` with
+//! `soft_rounds: false`, as the mesher samples) on `layouts::bubbles(n, 1)` for n = 1e3, 1e4,
 //! 1e5, capped by `MEDIAL_BENCH_MAX` (default `1e4`) as in the pipeline bench.
 
 use criterion::{black_box, criterion_group, criterion_main, BenchmarkId, Criterion};
@@ -89,8 +90,11 @@ fn bench_pipeline_points(c: &mut Criterion) {
             continue;
         }
         let domain = layouts::bubbles(n, 1).expect("bubbles");
-        let sampled =
-            sample_and_triangulate(&domain, &SamplingOptions::default()).expect("sampling");
+        let exact_mode = SamplingOptions {
+            soft_rounds: false,
+            ..SamplingOptions::default()
+        };
+        let sampled = sample_and_triangulate(&domain, &exact_mode).expect("sampling");
         compare(&mut group, n, &sampled.samples.points);
     }
     group.finish();
