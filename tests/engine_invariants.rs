@@ -4,20 +4,10 @@
 use medial_blocks::geometry::verify::verify_exact;
 use medial_blocks::geometry::{Point, Triangulation, TriangulationError};
 
-/// Deterministic xorshift generator.
-struct Rng(u64);
-impl Rng {
-    fn next(&mut self) -> u64 {
-        self.0 ^= self.0 << 13;
-        self.0 ^= self.0 >> 7;
-        self.0 ^= self.0 << 17;
-        self.0
-    }
-    fn unit(&mut self) -> f64 {
-        (self.next() >> 11) as f64 / (1u64 << 53) as f64
-    }
-}
+mod common;
+use common::XorShift as Rng;
 
+/// Deterministic xorshift generator.
 fn check(pts: &[Point]) -> Triangulation {
     let dt = Triangulation::new(pts).expect("triangulation");
     if let Err(e) = verify_exact(&dt) {

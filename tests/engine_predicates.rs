@@ -7,21 +7,8 @@ use medial_blocks::geometry::Point;
 use rug::{Integer, Rational};
 use std::cmp::Ordering;
 
-struct Rng(u64);
-impl Rng {
-    fn next(&mut self) -> u64 {
-        self.0 ^= self.0 << 13;
-        self.0 ^= self.0 >> 7;
-        self.0 ^= self.0 << 17;
-        self.0
-    }
-    fn unit(&mut self) -> f64 {
-        (self.next() >> 11) as f64 / (1u64 << 53) as f64
-    }
-    fn below(&mut self, n: u64) -> u64 {
-        self.next() % n
-    }
-}
+mod common;
+use common::XorShift as Rng;
 
 fn q(x: f64) -> Rational {
     Rational::from_f64(x).expect("finite")

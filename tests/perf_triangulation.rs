@@ -8,30 +8,8 @@ use medial_blocks::geometry::{Point, Triangulation};
 use medial_blocks::layouts;
 use medial_blocks::sampling::{sample_and_triangulate, SamplingOptions};
 
-/// FNV-1a over the triangles, neighbours, duplicates and vertex triangles, in order.
-fn structure_hash(t: &Triangulation) -> u64 {
-    let mut h: u64 = 0xcbf2_9ce4_8422_2325;
-    let mut eat = |x: u64| {
-        h ^= x;
-        h = h.wrapping_mul(0x100_0000_01b3);
-    };
-    eat(t.len() as u64);
-    for i in 0..t.len() {
-        for v in t.triangle(i) {
-            eat(u64::from(v));
-        }
-        for m in t.neighbors(i) {
-            eat(m.map_or(u64::MAX, u64::from));
-        }
-    }
-    for &(a, b) in t.duplicates() {
-        eat((u64::from(a) << 32) | u64::from(b));
-    }
-    for v in 0..t.points().len() {
-        eat(t.vertex_triangle(v).map_or(u64::MAX, |x| x as u64));
-    }
-    h
-}
+mod common;
+use common::structure_hash;
 
 fn samples(holes: usize, seed: u64) -> Vec<Point> {
     let domain = layouts::bubbles(holes, seed).unwrap();

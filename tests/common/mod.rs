@@ -231,3 +231,50 @@ pub const INSERTING: &str = r#"{"bounding": {"center": [0.0, 0.0], "radius": 1.0
 /// A layout (far from the origin) whose refinement inserts a hole without resampling any
 /// other circle: the samples before are a prefix of the samples after.
 pub const PREFIX: &str = r#"{"bounding": {"center": [99.80518032777042, 222.13404102732048], "radius": 1.0}, "holes": [{"center": [100.01448901478783, 222.33167266433094], "radius": 0.20821141244148114}, {"center": [99.15416679567457, 222.4725675840845], "radius": 0.24053959701870642}, {"center": [100.49276751007557, 221.92556284706956], "radius": 0.00010638887682197367}, {"center": [100.68302868175985, 221.93803595726027], "radius": 0.00014962206114609836}, {"center": [99.46589073326423, 222.3685354043989], "radius": 0.0001105205087575796}]}"#;
+
+/// Marsaglia's xorshift64 (shifts 13, 7, 17): the tests' small seeded generator (seed non-zero).
+pub struct XorShift(pub u64);
+
+impl XorShift {
+    pub fn next(&mut self) -> u64 {
+        self.0 ^= self.0 << 13;
+        self.0 ^= self.0 >> 7;
+        self.0 ^= self.0 << 17;
+        self.0
+    }
+    /// Uniform in `[0, 1)`: the top 53 bits.
+    pub fn unit(&mut self) -> f64 {
+        (self.next() >> 11) as f64 / (1u64 << 53) as f64
+    }
+    /// In `0..n` (`n > 0`; modulo bias is irrelevant here).
+    pub fn below(&mut self, n: u64) -> u64 {
+        self.next() % n
+    }
+}
+
+/// FNV-1a over a triangulation's triangles, neighbours, duplicates and vertex triangles, in
+/// order: equal hashes mean the same arrays (ids and order), as the golden values recorded
+/// from an earlier engine check.
+pub fn structure_hash(t: &medial_blocks::geometry::Triangulation) -> u64 {
+    let mut h: u64 = 0xcbf2_9ce4_8422_2325;
+    let mut eat = |x: u64| {
+        h ^= x;
+        h = h.wrapping_mul(0x100_0000_01b3);
+    };
+    eat(t.len() as u64);
+    for i in 0..t.len() {
+        for v in t.triangle(i) {
+            eat(u64::from(v));
+        }
+        for m in t.neighbors(i) {
+            eat(m.map_or(u64::MAX, u64::from));
+        }
+    }
+    for &(a, b) in t.duplicates() {
+        eat((u64::from(a) << 32) | u64::from(b));
+    }
+    for v in 0..t.points().len() {
+        eat(t.vertex_triangle(v).map_or(u64::MAX, |x| x as u64));
+    }
+    h
+}
