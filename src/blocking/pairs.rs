@@ -60,23 +60,44 @@ const WAVE: usize = 2048;
 /// ([`arc_curves`], a function of the arc alone, its checks and errors included), while the
 /// wave before is numbered into the layout one arc after the other ([`Assembly::add`]). The
 /// layout and the error (the first failing arc's, its checks in the one-by-one order) are
-/// those of [`one_by_one_reusing`] for every thread count (tested in
+/// those of the one-by-one construction ([`blocks_one_by_one`]) for every thread count (tested in
 /// `tests/perf_blocks_parallel.rs`).
 ///
-/// Graphs of fewer than [`PARALLEL_FROM`] arcs take [`one_by_one_reusing`] itself: with at
-/// most a few waves there is little to overlap, and the buffers and joins cost more than they
-/// save (measured at 1e3 bubbles, about 3 000 arcs: 9.7 ms in waves, 8.6 ms one by one).
+/// Graphs of fewer than [`PARALLEL_FROM`] arcs go one arc at a time through the same pieces
+/// ([`arc_curves`], then [`Assembly::add_pair`]): with at most a few waves there is little to
+/// overlap, and the buffers and joins cost more than they save (measured at 1e3 bubbles,
+/// about 3 000 arcs: 9.7 ms in waves, 8.6 ms one at a time).
 pub(super) fn blocks_reusing(
     domain: &Domain,
     samples: &Samples,
     medial: &MedialGraph,
-    old: Option<(&mut BlockLayout, &[u32])>,
+    mut old: Option<(&mut BlockLayout, &[u32])>,
 ) -> Result<(BlockLayout, Vec<Option<u32>>), MeshError> {
-    if medial.arcs.len() < PARALLEL_FROM {
-        one_by_one_reusing(domain, samples, medial, old)
-    } else {
-        in_waves(domain, samples, medial, old, WAVE)
+    if medial.arcs.len() >= PARALLEL_FROM {
+        return in_waves(domain, samples, medial, old, WAVE);
     }
+    let mut asm = Assembly::new(samples, medial);
+    let mut back = Vec::new();
+    for (a, arc) in medial.arcs.iter().enumerate() {
+        let reused = taken_over(&mut old, medial, a);
+        let curves = arc_curves(domain, samples, medial, a, reused, &mut back)?;
+        asm.add_pair(arc, curves);
+    }
+    Ok((asm.layout, asm.vertex_samples))
+}
+
+/// The curves of arc `a` taken over from `old` ([`take_pair_curves`] of the pair `taken[a]`),
+/// `None` when the arc is computed afresh (no earlier layout, `taken[a] = u32::MAX`, or a pair
+/// not of Blocking2D's shape).
+fn taken_over(
+    old: &mut Option<(&mut BlockLayout, &[u32])>,
+    medial: &MedialGraph,
+    a: usize,
+) -> Option<[Curve; 3]> {
+    let arc = &medial.arcs[a];
+    let (old, taken) = old.as_mut()?;
+    let k = *taken.get(a)?;
+    (k != u32::MAX).then(|| take_pair_curves(old, k as usize, arc.polyline.len(), arc.circles))?
 }
 
 /// Arc count from which [`blocks_reusing`] goes in waves.
@@ -113,13 +134,7 @@ fn in_waves(
                       range: std::ops::Range<usize>|
      -> Vec<Option<[Curve; 3]>> {
         buf.clear();
-        buf.extend(range.map(|a| {
-            let arc = &medial.arcs[a];
-            let (old, taken) = old.as_mut()?;
-            let k = *taken.get(a)?;
-            (k != u32::MAX)
-                .then(|| take_pair_curves(old, k as usize, arc.polyline.len(), arc.circles))?
-        }));
+        buf.extend(range.map(|a| taken_over(&mut old, medial, a)));
         buf
     };
     let compute = |start: usize,
@@ -329,28 +344,15 @@ impl<'a> Assembly<'a> {
     }
 }
 
-/// [`super::blocks`] as first written, one arc after the other ([`one_by_one_reusing`]
-/// without an earlier layout): the oracle of the parallel construction in the tests.
+/// [`super::blocks`] as first written, one arc after the other, every curve computed: the
+/// oracle of [`blocks_reusing`] in the tests (written apart from [`Assembly`] and
+/// [`arc_curves`] on purpose). The taking over of an earlier layout's curves is checked
+/// against the rebuild from scratch instead (`tests/perf_blocking.rs`).
 #[doc(hidden)]
 pub fn blocks_one_by_one(
     domain: &Domain,
     samples: &Samples,
     medial: &MedialGraph,
-) -> Result<(BlockLayout, Vec<Option<u32>>), MeshError> {
-    one_by_one_reusing(domain, samples, medial, None)
-}
-
-/// The one-by-one Blocking2D [`blocks_reusing`] replaces (its oracle): [`super::blocks`],
-/// taking the curves of arc `a` of `medial` from the pair of blocks `2k, 2k + 1`
-/// of `old` where `taken[a] = k` (`u32::MAX`: computed): the previous Blocking2D of a
-/// contraction that handed arc `k` over unchanged
-/// ([`crate::collapse::Selection::contract_reusing`]), so its polyline and wall chains, hence
-/// its curves, are those of arc `a`. The curves taken are left as segments in `old`.
-fn one_by_one_reusing(
-    domain: &Domain,
-    samples: &Samples,
-    medial: &MedialGraph,
-    mut old: Option<(&mut BlockLayout, &[u32])>,
 ) -> Result<(BlockLayout, Vec<Option<u32>>), MeshError> {
     // Vertices: the medial ones, then at most four sample corners per arc (reserved once:
     // no doubling of a large vector, issue 8).
@@ -407,7 +409,7 @@ fn one_by_one_reusing(
 
     // One buffer for every arc's reversed C2 chain.
     let mut c2_back: Vec<u32> = Vec::new();
-    for (a, arc) in medial.arcs.iter().enumerate() {
+    for arc in &medial.arcs {
         let [m0, m1] = arc.ends;
         let [ca, cb] = arc.circles;
         let ends = |c: &[u32]| match (c.first(), c.last()) {
@@ -432,22 +434,11 @@ fn one_by_one_reusing(
         let va1 = sample_vertex_of(&mut slots, a1, &mut layout);
         let vb0 = sample_vertex_of(&mut slots, b0, &mut layout);
         let vb1 = sample_vertex_of(&mut slots, b1, &mut layout);
-        let reused = old.as_mut().and_then(|(old, taken)| {
-            let k = *taken.get(a)?;
-            (k != u32::MAX)
-                .then(|| take_pair_curves(old, k as usize, arc.polyline.len(), arc.circles))?
-        });
-        let (polyline, [reused_a, reused_b]) = match reused {
-            Some([p, wa, wb]) => (p, [Some(wa), Some(wb)]),
-            None => (Curve::Polyline(arc.polyline.clone()), [None, None]),
-        };
+        let polyline = Curve::Polyline(arc.polyline.clone());
         let medial_edge = add_edge(&mut layout, [m0, m1], polyline, EdgeKind::Medial);
         // Block on A: wall along C1 forward, fluid on the left.
         let expect = |c: CircleId| if c < 0 { 1 } else { -1 };
-        let wall_a = match reused_a {
-            Some(curve) => curve,
-            None => wall_curve(domain, samples, ca, &arc.c1, expect(ca))?,
-        };
+        let wall_a = wall_curve(domain, samples, ca, &arc.c1, expect(ca))?;
         let wall_a = add_edge(&mut layout, [va0, va1], wall_a, EdgeKind::Wall(ca));
         let s_a1 = spoke(&mut slots, &mut layout, m1, a1, va1);
         let s_a0 = spoke(&mut slots, &mut layout, m0, a0, va0);
@@ -457,14 +448,9 @@ fn one_by_one_reusing(
             wall: Some(ca),
         });
         // Block on B: wall along C2 backward.
-        let wall_b = match reused_b {
-            Some(curve) => curve,
-            None => {
-                c2_back.clear();
-                c2_back.extend(arc.c2.iter().rev());
-                wall_curve(domain, samples, cb, &c2_back, expect(cb))?
-            }
-        };
+        c2_back.clear();
+        c2_back.extend(arc.c2.iter().rev());
+        let wall_b = wall_curve(domain, samples, cb, &c2_back, expect(cb))?;
         let wall_b = add_edge(&mut layout, [vb1, vb0], wall_b, EdgeKind::Wall(cb));
         let s_b0 = spoke(&mut slots, &mut layout, m0, b0, vb0);
         let s_b1 = spoke(&mut slots, &mut layout, m1, b1, vb1);
