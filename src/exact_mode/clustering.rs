@@ -93,6 +93,13 @@ pub fn spoke_distances(len: f64, n: usize, first: Option<f64>, growth: f64) -> V
     d
 }
 
+/// The first cell height a spoke of length `len` with `n` cells is clustered with, `None` when
+/// [`spoke_distances_into`] spaces it equally instead (no usable `first`, one cell, or `n`
+/// first heights would not fit).
+pub fn clustered_first(len: f64, n: usize, first: Option<f64>) -> Option<f64> {
+    first.filter(|&delta| n > 1 && delta.is_finite() && delta > 0.0 && (n as f64) * delta < len)
+}
+
 /// [`spoke_distances`] into `d` (cleared first): the grid build reuses one buffer for all its
 /// spokes instead of allocating one per spoke.
 pub fn spoke_distances_into(len: f64, n: usize, first: Option<f64>, growth: f64, d: &mut Vec<f64>) {
@@ -101,15 +108,10 @@ pub fn spoke_distances_into(len: f64, n: usize, first: Option<f64>, growth: f64,
         d.push(0.0);
         return;
     }
-    let delta = match first {
-        Some(delta) if n > 1 && delta.is_finite() && delta > 0.0 && (n as f64) * delta < len => {
-            delta
-        }
-        _ => {
-            d.extend((0..=n).map(|j| len * (j as f64 / n as f64)));
-            d[n] = len;
-            return;
-        }
+    let Some(delta) = clustered_first(len, n, first) else {
+        d.extend((0..=n).map(|j| len * (j as f64 / n as f64)));
+        d[n] = len;
+        return;
     };
     let g = if growth.is_finite() && growth >= 1.0 {
         growth

@@ -102,10 +102,7 @@ impl GridScratch {
             self.frac.clear();
             self.frac.extend((0..=nj).map(|j| j as f64 / nj as f64));
             // `spoke_distances_into`'s choice of equal spacing, for a spoke of length `len`.
-            let uniform = |len: f64| match first {
-                Some(delta) => !(delta.is_finite() && delta > 0.0 && (nj as f64) * delta < len),
-                None => true,
-            };
+            let uniform = |len: f64| clustering::clustered_first(len, nj, first).is_none();
             let all_safe = self
                 .len
                 .iter()
