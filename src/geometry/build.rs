@@ -37,7 +37,11 @@ pub(crate) struct Builder<'a> {
     all_safe: bool,
     inf: u32,
     pub(crate) tv: Vec<[u32; 3]>,
-    pub(crate) adj: Vec<u32>,
+    /// Per triangle slot `t`, the half-edge across its edge `k` (opposite vertex `k`): `3 m + j`
+    /// for edge `j` of triangle `m`. Triples rather than a flat array so that
+    /// [`Builder::into_parts`] can hand it on as the finished triangulation's neighbour array
+    /// (compacted in place); the walk and the insertion read it flat (`as_flattened`).
+    pub(crate) adj: Vec<[u32; 3]>,
     mark: Vec<u32>,
     stamp: u32,
     start_at: Vec<u32>,
@@ -184,7 +188,7 @@ impl<'a> Builder<'a> {
             all_safe,
             inf,
             tv: Vec::with_capacity(cap),
-            adj: Vec::with_capacity(3 * cap),
+            adj: Vec::with_capacity(cap),
             mark: Vec::with_capacity(cap),
             stamp: 0,
             start_at: vec![0; n + 1],
@@ -196,7 +200,7 @@ impl<'a> Builder<'a> {
             dups: Vec::new(),
         };
         s.tv.extend_from_slice(&[[a, b, c], [c, b, inf], [a, c, inf], [b, a, inf]]);
-        s.adj.extend_from_slice(&[u32::MAX; 12]);
+        s.adj.extend_from_slice(&[[u32::MAX; 3]; 4]);
         s.mark.extend_from_slice(&[0; 4]);
         // Link the four triangles by matching reversed edges.
         for t in 0..4 {
@@ -205,7 +209,7 @@ impl<'a> Builder<'a> {
                 for m in 0..4 {
                     for j in 0..3 {
                         if s.tv[m][next(j)] == v && s.tv[m][prev(j)] == u {
-                            s.adj[3 * t + k] = (3 * m + j) as u32;
+                            s.adj[t][k] = (3 * m + j) as u32;
                         }
                     }
                 }
@@ -221,7 +225,7 @@ impl<'a> Builder<'a> {
         pts: &'a [Point],
         all_safe: bool,
         tv: Vec<[u32; 3]>,
-        adj: Vec<u32>,
+        adj: Vec<[u32; 3]>,
         dups: Vec<(u32, u32)>,
     ) -> Self {
         debug_assert_eq!(all_safe, pts.iter().all(safe));
@@ -274,7 +278,7 @@ impl<'a> Builder<'a> {
         } else {
             2
         };
-        self.adj[3 * t as usize + k] / 3
+        self.adj[t as usize][k] / 3
     }
 
     /// Exact check that the walk ended right: `q` in the closed finite triangle `t`, or strictly
@@ -306,7 +310,7 @@ impl<'a> Builder<'a> {
         let (pts, tv, adj, all_safe, inf) = (
             self.pts,
             &self.tv[..],
-            &self.adj[..],
+            self.adj.as_flattened(),
             self.all_safe,
             self.inf,
         );
@@ -389,7 +393,7 @@ impl<'a> Builder<'a> {
         self.stack.push(seed);
         // Borrowed apart: the search reads the triangles and writes only the marks and lists.
         let (pts, all_safe, inf) = (self.pts, self.all_safe, self.inf);
-        let (tv, adj, mark) = (&self.tv[..], &self.adj[..], &mut self.mark[..]);
+        let (tv, adj, mark) = (&self.tv[..], self.adj.as_flattened(), &mut self.mark[..]);
         while let Some(t) = self.stack.pop() {
             let t = t as usize;
             let ht: [u32; 3] = adj[3 * t..3 * t + 3].try_into().expect("three half-edges");
@@ -422,11 +426,15 @@ impl<'a> Builder<'a> {
         // the slot of every boundary edge.
         let first_new = self.tv.len() as u32;
         self.tv.extend_from_slice(&[[0; 3]; 2]);
-        self.adj.extend_from_slice(&[u32::MAX; 6]);
+        self.adj.extend_from_slice(&[[u32::MAX; 3]; 2]);
         self.mark.extend_from_slice(&[0; 2]);
         self.cavity.extend_from_slice(&[first_new, first_new + 1]);
         let inf = self.inf;
-        let (tv, adj, start_at) = (&mut self.tv[..], &mut self.adj[..], &mut self.start_at[..]);
+        let (tv, adj, start_at) = (
+            &mut self.tv[..],
+            self.adj.as_flattened_mut(),
+            &mut self.start_at[..],
+        );
         let mut last = 0;
         for (&(u, w, h), &s) in self.boundary.iter().zip(&self.cavity) {
             tv[s as usize] = [u, w, pi];
@@ -447,7 +455,32 @@ impl<'a> Builder<'a> {
         Ok(())
     }
 
-    pub(crate) fn infinite(&self) -> u32 {
-        self.inf
+    /// The builder's arrays, free of its borrow of the points, for `Triangulation::finish` to
+    /// reuse as the result's arrays instead of fresh ones (issue 8: fresh pages are what a
+    /// large triangulation costs).
+    pub(crate) fn into_parts(self) -> Parts {
+        debug_assert_eq!(self.mark.len(), self.tv.len());
+        debug_assert_eq!(self.adj.len(), self.tv.len());
+        debug_assert_eq!(self.start_at.len(), self.inf as usize + 1);
+        Parts {
+            inf: self.inf,
+            tv: self.tv,
+            adj: self.adj,
+            mark: self.mark,
+            start_at: self.start_at,
+            dups: self.dups,
+        }
     }
+}
+
+/// What [`Builder::into_parts`] hands on: the triangle slots `tv` and their half-edges `adj`,
+/// one scratch entry per slot (`mark`) and one per vertex plus the infinite one (`start_at`),
+/// both free to overwrite, and the duplicate pairs.
+pub(crate) struct Parts {
+    pub(crate) inf: u32,
+    pub(crate) tv: Vec<[u32; 3]>,
+    pub(crate) adj: Vec<[u32; 3]>,
+    pub(crate) mark: Vec<u32>,
+    pub(crate) start_at: Vec<u32>,
+    pub(crate) dups: Vec<(u32, u32)>,
 }

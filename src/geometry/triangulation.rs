@@ -1,6 +1,6 @@
 //! The public Delaunay triangulation type.
 
-use super::build::Builder;
+use super::build::{Builder, Parts};
 use super::predicates::{incircle, orient2d, SAFE_MAX, SAFE_MIN};
 use super::{exact, Point};
 use std::borrow::Cow;
@@ -244,7 +244,8 @@ impl Triangulation {
                 .insert(pos as u32)
                 .map_err(|e| TriangulationError::Internal { message: e.0 })?;
         }
-        Ok(Self::finish(points, Some(&order), builder))
+        let parts = builder.into_parts();
+        Ok(Self::finish(points, Some(order), parts, work))
     }
 
     /// The triangulation of `points`, whose first [`Self::vertex_count`] entries are this
@@ -371,7 +372,12 @@ impl Triangulation {
                 .insert(pos as u32)
                 .map_err(|e| TriangulationError::Internal { message: e.0 })?;
         }
-        Ok(Some(Self::finish(points, None, builder)))
+        let parts = builder.into_parts();
+        let spare = match work {
+            Cow::Owned(v) => v,
+            Cow::Borrowed(_) => Vec::new(),
+        };
+        Ok(Some(Self::finish(points, None, parts, spare)))
     }
 
     /// [`Self::extended`] by the sparse replay, moving this triangulation's arrays into the
@@ -442,7 +448,7 @@ impl Triangulation {
     /// This triangulation in the builder's layout (see `build`): the finite triangles, then one
     /// infinite triangle `(u, w, inf)` per hull edge `w -> u` of a finite triangle, in order of
     /// finite triangle and edge; `adj` as half-edge ids.
-    fn builder_arrays(&self, inf: u32) -> (Vec<[u32; 3]>, Vec<u32>) {
+    fn builder_arrays(&self, inf: u32) -> (Vec<[u32; 3]>, Vec<[u32; 3]>) {
         let next = |k: usize| (k + 1) % 3;
         let prev = |k: usize| (k + 2) % 3;
         // Reserved once for the infinite triangles (at most one per kept point) and the two new
@@ -450,8 +456,8 @@ impl Triangulation {
         let cap = self.tris.len() + self.points.len() + 2 * (inf as usize - self.points.len()) + 8;
         let mut tv = Vec::with_capacity(cap);
         tv.extend_from_slice(&self.tris);
-        let mut adj = Vec::with_capacity(3 * cap);
-        adj.resize(3 * tv.len(), NONE);
+        let mut adj: Vec<[u32; 3]> = Vec::with_capacity(cap);
+        adj.resize(tv.len(), [NONE; 3]);
         // The infinite triangle whose first vertex is `u`, per vertex.
         let mut hull_from: Vec<u32> = vec![NONE; self.points.len()];
         for (t, nb) in self.adj.iter().enumerate() {
@@ -467,15 +473,15 @@ impl Triangulation {
                     }
                     let w = self.tris[m];
                     if let Some(j) = (0..3).find(|&j| w[next(j)] == b && w[prev(j)] == a) {
-                        adj[3 * t + k] = (3 * m + j) as u32;
-                        adj[3 * m + j] = (3 * t + k) as u32;
+                        adj[t][k] = (3 * m + j) as u32;
+                        adj[m][j] = (3 * t + k) as u32;
                     }
                 } else {
                     let s = tv.len();
                     tv.push([b, a, inf]);
-                    adj.extend_from_slice(&[NONE; 3]);
-                    adj[3 * s + 2] = (3 * t + k) as u32;
-                    adj[3 * t + k] = (3 * s + 2) as u32;
+                    adj.push([NONE; 3]);
+                    adj[s][2] = (3 * t + k) as u32;
+                    adj[t][k] = (3 * s + 2) as u32;
                     hull_from[b as usize] = s as u32;
                 }
             }
@@ -484,8 +490,8 @@ impl Triangulation {
         for s in self.tris.len()..tv.len() {
             let w = tv[s][1];
             let s2 = hull_from[w as usize] as usize;
-            adj[3 * s] = (3 * s2 + 1) as u32;
-            adj[3 * s2 + 1] = (3 * s) as u32;
+            adj[s][0] = (3 * s2 + 1) as u32;
+            adj[s2][1] = (3 * s) as u32;
         }
         (tv, adj)
     }
@@ -494,91 +500,122 @@ impl Triangulation {
     /// `order[v]` is the input index of builder vertex `v`; `None` for the identity (a resumed
     /// builder, whose vertex ids are input indices).
     ///
-    /// The finite triangles keep the builder's order. They are compacted inside the builder's
-    /// own triangle array (slot `t` moves to `map[t] <= t`), which saves a fresh array.
-    fn finish(points: &[Point], order: Option<&[u32]>, b: Builder<'_>) -> Self {
-        let inf = b.infinite();
+    /// The finite triangles keep the builder's order. Every array of the result is one of the
+    /// builder's or the caller's, reused in place (issue 8: at 1e5 particles fresh arrays were
+    /// some 450 MB of fresh pages): the triangles and their neighbours are compacted inside the
+    /// builder's slot arrays (slot `t` moves to `map[t] <= t`, read before any write reaches
+    /// it), the slot map is the builder's per-slot scratch, the vertex tables its per-vertex
+    /// scratch or the slot map again, the input indices are `order` itself and the points are
+    /// copied into `spare` (the working copy of the points, no longer needed; may be empty).
+    fn finish(points: &[Point], order: Option<Vec<u32>>, parts: Parts, spare: Vec<Point>) -> Self {
+        let Parts {
+            inf,
+            tv: mut tris,
+            mut adj,
+            mark: mut map,
+            start_at: mut scratch,
+            dups,
+        } = parts;
         // Input index of each vertex (empty: the identity); for a duplicate group, its smallest
         // input index.
-        let mut input: Vec<u32> = order.map_or_else(Vec::new, <[u32]>::to_vec);
-        let input_of = |v: u32| order.map_or(v, |o| o[v as usize]);
-        let mut duplicates = Vec::with_capacity(b.dups.len());
-        if !b.dups.is_empty() {
+        let mut input: Vec<u32> = order.unwrap_or_default();
+        let mut duplicates = Vec::with_capacity(dups.len());
+        if !dups.is_empty() {
+            let input_of = |input: &[u32], v: u32| {
+                if input.is_empty() {
+                    v
+                } else {
+                    input[v as usize]
+                }
+            };
             let mut groups: HashMap<u32, Vec<u32>> = HashMap::new();
-            for &(v, d) in &b.dups {
-                groups.entry(v).or_default().push(input_of(d));
+            for &(v, d) in &dups {
+                groups.entry(v).or_default().push(input_of(&input, d));
             }
+            // Read every input index before the first change (the changes are to group heads,
+            // which no other group reads; kept apart all the same).
+            let mut firsts = Vec::new();
             for (v, mut members) in groups {
-                members.push(input_of(v));
+                members.push(input_of(&input, v));
                 members.sort_unstable();
                 let first = members[0];
-                if first != input_of(v) {
-                    if input.is_empty() {
-                        input = (0..inf).collect();
-                    }
-                    input[v as usize] = first;
+                if first != input_of(&input, v) {
+                    firsts.push((v, first));
                 }
                 duplicates.extend(members[1..].iter().map(|&d| (first, d)));
             }
+            if !firsts.is_empty() && input.is_empty() {
+                input = (0..inf).collect();
+            }
+            for (v, first) in firsts {
+                input[v as usize] = first;
+            }
             duplicates.sort_unstable();
         }
-        let mut map = vec![NONE; b.tv.len()];
         let mut count = 0u32;
-        for (t, v) in b.tv.iter().enumerate() {
-            if !v.contains(&inf) {
-                map[t] = count;
+        for (t, v) in tris.iter().enumerate() {
+            map[t] = if v.contains(&inf) {
+                NONE
+            } else {
                 count += 1;
-            }
+                count - 1
+            };
         }
-        let Builder {
-            tv: mut tris,
-            adj: half,
-            ..
-        } = b;
-        let mut adj = Vec::with_capacity(count as usize);
         // A vertex's triangle is the last (highest) one having it. Recorded per builder vertex
         // (local in the builder's order) and moved to input indices once per vertex: vertices
         // map to distinct input indices (a duplicate's own builder position is no vertex).
-        let mut vertex_tri = vec![NONE; points.len()];
-        let mut by_vertex = if input.is_empty() {
-            Vec::new()
-        } else {
-            vec![NONE; inf as usize]
-        };
+        // The per-vertex scratch is the identity's table, or the builder-order one.
+        scratch.truncate(points.len());
+        scratch.fill(NONE);
+        let identity = input.is_empty();
         for t in 0..tris.len() {
             let m = map[t];
             if m == NONE {
                 continue;
             }
             let mut v = tris[t];
-            if input.is_empty() {
+            if identity {
                 for &x in &v {
-                    vertex_tri[x as usize] = m;
+                    scratch[x as usize] = m;
                 }
             } else {
                 for x in &mut v {
-                    by_vertex[*x as usize] = m;
+                    scratch[*x as usize] = m;
                     *x = input[*x as usize];
                 }
             }
-            let nb = [0, 1, 2].map(|k| map[(half[3 * t + k] / 3) as usize]);
+            let half = adj[t];
             tris[m as usize] = v;
-            adj.push(nb);
+            adj[m as usize] = half.map(|h| map[(h / 3) as usize]);
         }
-        for (v, &m) in by_vertex.iter().enumerate() {
-            if m != NONE {
-                vertex_tri[input[v] as usize] = m;
+        let mut vertex_tri = if identity {
+            scratch
+        } else {
+            // The slot map is no longer needed: it becomes the input-order table (as long, but
+            // for many duplicates: there are about two slots per vertex).
+            let by_vertex = scratch;
+            map.clear();
+            map.resize(points.len(), NONE);
+            for (v, &m) in by_vertex.iter().enumerate() {
+                if m != NONE {
+                    map[input[v] as usize] = m;
+                }
             }
-        }
-        drop(by_vertex);
+            map
+        };
+        vertex_tri.shrink_to_fit();
         tris.truncate(count as usize);
-        drop(half);
         tris.shrink_to_fit();
+        adj.truncate(count as usize);
+        adj.shrink_to_fit();
         for &(first, d) in &duplicates {
             vertex_tri[d as usize] = vertex_tri[first as usize];
         }
+        let mut pts = spare;
+        pts.clear();
+        pts.extend_from_slice(points);
         Triangulation {
-            points: points.to_vec(),
+            points: pts,
             tris,
             adj,
             duplicates,
