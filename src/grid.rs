@@ -51,23 +51,26 @@ pub struct EdgeCounts {
 }
 
 /// Union-find with path halving; deterministic.
-struct Dsu(Vec<usize>);
+/// Union-find over edge ids (`u32`, as in [`crate::layout::SideRef`]: half the memory of
+/// `usize` parents); every root is the smallest id of its set.
+struct Dsu(Vec<u32>);
 
 impl Dsu {
-    fn find(&mut self, mut x: usize) -> usize {
-        while self.0[x] != x {
-            self.0[x] = self.0[self.0[x]];
-            x = self.0[x];
+    fn find(&mut self, x: usize) -> usize {
+        let mut x = x as u32;
+        while self.0[x as usize] != x {
+            self.0[x as usize] = self.0[self.0[x as usize] as usize];
+            x = self.0[x as usize];
         }
-        x
+        x as usize
     }
     fn union(&mut self, a: usize, b: usize) {
-        let (ra, rb) = (self.find(a), self.find(b));
+        let (ra, rb) = (self.find(a) as u32, self.find(b) as u32);
         // Keep the smaller root: deterministic and independent of call order.
         if ra < rb {
-            self.0[rb] = ra;
+            self.0[rb as usize] = ra;
         } else if rb < ra {
-            self.0[ra] = rb;
+            self.0[ra as usize] = rb;
         }
     }
 }
@@ -166,7 +169,9 @@ pub fn validate_layout(layout: &BlockLayout) -> Result<(), GridError> {
 /// Classes are numbered in order of their smallest edge id. Assumes valid edge indices.
 pub fn edge_classes(layout: &BlockLayout) -> (Vec<usize>, usize) {
     let ne = layout.edges.len();
-    let mut dsu = Dsu((0..ne).collect());
+    // Edge ids are `u32` wherever a layout names an edge (sides, periodic partners).
+    let n32 = u32::try_from(ne).expect("a layout has fewer than 2^32 edges");
+    let mut dsu = Dsu((0..n32).collect());
     for block in &layout.blocks {
         let e = block.sides.map(|s| s.edge as usize);
         if e.iter().all(|&x| x < ne) {
@@ -182,16 +187,18 @@ pub fn edge_classes(layout: &BlockLayout) -> (Vec<usize>, usize) {
             }
         }
     }
-    let mut id = vec![usize::MAX; ne];
-    let mut class = vec![0; ne];
+    // A root is its class's smallest edge, so it is met first in edge order: it opens the
+    // next class, every later edge takes its root's (no per-root table).
+    let mut class: Vec<usize> = Vec::with_capacity(ne);
     let mut classes = 0;
-    for (e, c) in class.iter_mut().enumerate() {
+    for e in 0..ne {
         let root = dsu.find(e);
-        if id[root] == usize::MAX {
-            id[root] = classes;
+        if root == e {
+            class.push(classes);
             classes += 1;
+        } else {
+            class.push(class[root]);
         }
-        *c = id[root];
     }
     (class, classes)
 }
