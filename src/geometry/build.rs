@@ -274,8 +274,12 @@ impl<'a> Builder<'a> {
     }
 
     /// The triangles, half-edges and duplicate pairs, moved out.
-    pub(crate) fn into_parts(self) -> (Vec<[u32; 3]>, Vec<u32>, Vec<(u32, u32)>) {
-        (self.tv, self.adj, self.dups)
+    pub(crate) fn into_parts(self) -> super::split::Parts {
+        super::split::Parts {
+            tv: self.tv,
+            adj: self.adj,
+            dups: self.dups,
+        }
     }
 
     #[inline(always)]

@@ -42,7 +42,7 @@ pub(super) const SPLIT_MIN: usize = 1 << 15;
 
 /// A triangulation in the builder's layout: `tv`, `adj` (half-edges `3t + k`), duplicate
 /// pairs, vertex ids those of the points given to [`build_split`] (infinite vertex `n`).
-pub(super) struct Parts {
+pub(crate) struct Parts {
     pub tv: Vec<[u32; 3]>,
     pub adj: Vec<u32>,
     pub dups: Vec<(u32, u32)>,
@@ -108,16 +108,9 @@ fn half(
     }))
 }
 
-/// A builder's arrays, moved out.
-struct Built {
-    tv: Vec<[u32; 3]>,
-    adj: Vec<u32>,
-    dups: Vec<(u32, u32)>,
-}
-
 /// The Delaunay triangulation of `pts` in insertion order (as `Triangulation::new` starts
 /// it), or `None` without three non-collinear points.
-fn build(pts: &[Point]) -> Result<Option<Built>, Broken> {
+fn build(pts: &[Point]) -> Result<Option<Parts>, Broken> {
     let Some(&pa) = pts.first() else {
         return Ok(None);
     };
@@ -138,8 +131,7 @@ fn build(pts: &[Point]) -> Result<Option<Built>, Broken> {
             builder.insert(pos as u32)?;
         }
     }
-    let (tv, adj, dups) = builder.into_parts();
-    Ok(Some(Built { tv, adj, dups }))
+    Ok(Some(builder.into_parts()))
 }
 
 /// True when the closed circumdisk of the finite triangle `v` lies strictly on its side of
