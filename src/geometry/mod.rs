@@ -3,6 +3,7 @@
 //!
 //! - [`predicates`]: three-valued `orient2d` / `incircle` (adaptive, exact) and the SoS tie-break;
 //! - [`Triangulation`]: the Delaunay triangulation of a point set, a function of the set only;
+//!   large sets are built as two halves on two threads and stitched along a seam (`split.rs`);
 //! - [`verify`]: an independent exact checker (integer arithmetic) used by tests and fuzzing.
 
 mod build;
@@ -12,6 +13,7 @@ pub mod fuzzing;
 mod order;
 pub mod predicates;
 mod sparse;
+mod split;
 pub mod triangulation;
 pub mod verify;
 mod wide;

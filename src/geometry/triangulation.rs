@@ -235,6 +235,19 @@ impl Triangulation {
             });
         };
         let all_safe = all_safe_after(range, shift);
+        if all_safe && work.len() >= super::split::SPLIT_MIN {
+            // Two halves on two threads, stitched (the same triangle set, another numbering;
+            // see `split`). A failure there is a bug: checked in debug builds, else the
+            // one-piece construction below answers.
+            match super::split::build_split(&work) {
+                Ok(Some(p)) => {
+                    let builder = Builder::assembled(&work, all_safe, p.tv, p.adj, p.dups);
+                    return Ok(Self::finish(points, Some(&order), builder));
+                }
+                Ok(None) => {}
+                Err(e) => debug_assert!(false, "split triangulation: {}", e.0),
+            }
+        }
         let mut builder = Builder::new(&work, all_safe, 0, b as u32, c as u32);
         for pos in 1..work.len() {
             if pos == b || pos == c {

@@ -1,0 +1,459 @@
+//! The Delaunay triangulation of a large point set built as two halves on two threads, then
+//! stitched along a seam (issue 8: the triangulation was the longest stage on one core).
+//!
+//! Split the points by the vertical line `x = xs` (`xs` their median abscissa): `L` the points
+//! with `x < xs`, `R` the others. Triangulate `L` and `R` apart ([`Builder`], in parallel).
+//! A triangle of `DT(L)` whose closed circumdisk lies strictly left of the line is
+//! *certified*: its disk holds no point of `L` (Delaunay in `DT(L)`) and none of `R` (they are
+//! right of the line), so it is a triangle of `DT(L ∪ R)`; the same on the right. Every other
+//! triangle of the full triangulation has all its vertices in the *seam set* `S`: the vertices
+//! of the triangles of `DT(L)` and `DT(R)` that are not certified (infinite ones included).
+//!
+//! Why (for a vertex `v ∈ L` of a full triangle `T` with a vertex in `R`): the centre `c` of
+//! `T`'s empty circle lies in `v`'s Voronoi cell of `L`, and the disk about `c` through `v`
+//! reaches the line. `g(x) = |x - v| + x.x - xs` is convex and `g(c) >= 0`, so `g >= 0` at a
+//! vertex of that cell (or the cell is unbounded and `v` is on the hull of `L`): the
+//! circumdisk of a triangle of `DT(L)` at `v` reaches the line, and that triangle is not
+//! certified. A full triangle with all vertices in `L` is a triangle of `DT(L)`, certified or
+//! not.
+//!
+//! The region `Q` not covered by certified triangles is bounded by *barrier* edges (an edge of
+//! a certified triangle whose neighbour in its half is not certified); barriers have both
+//! ends in `S` and are full Delaunay edges, so they are edges of `DT(S)`. Inside `Q` the full
+//! triangulation uses only `S`'s points and empty circles, so it is `DT(S)` restricted to `Q`:
+//! the triangles of `DT(S)` reached from the barriers' outer sides without crossing a barrier.
+//!
+//! The result is the unique Delaunay triangulation under the lexicographic simulation of
+//! simplicity (ties inside a half are broken as in the whole set: SoS compares the points
+//! themselves), in the builder's layout; its numbering differs from the one-thread insertion
+//! (certified left triangles, certified right ones, then the seam's), and depends on nothing
+//! but the points: not on the thread count. The certificate is a floating-point test with a
+//! generous error margin, so a doubtful triangle goes to the seam (never the other way).
+
+use super::build::{next, prev, Broken, Builder};
+use super::predicates::orient2d;
+use super::Point;
+use std::cmp::Ordering;
+use std::collections::HashMap;
+
+/// Fewest points split in halves (below, one builder; a pipeline's 1e3 particles give some
+/// 33 000 sample points).
+pub(super) const SPLIT_MIN: usize = 1 << 15;
+
+/// A triangulation in the builder's layout: `tv`, `adj` (half-edges `3t + k`), duplicate
+/// pairs, vertex ids those of the points given to [`build_split`] (infinite vertex `n`).
+pub(crate) struct Parts {
+    pub tv: Vec<[u32; 3]>,
+    pub adj: Vec<u32>,
+    pub dups: Vec<(u32, u32)>,
+}
+
+/// One half: its triangulation in its own ids, the global id of each of its points, and which
+/// of its triangles are certified.
+struct Half {
+    tv: Vec<[u32; 3]>,
+    adj: Vec<u32>,
+    dups: Vec<(u32, u32)>,
+    ids: Vec<u32>,
+    certified: Vec<bool>,
+}
+
+/// The triangulation of `pts` (in insertion order, every coordinate in the predicates' safe
+/// range) by halves, see the module doc. `Ok(None)` when the split does not apply (a half
+/// without three non-collinear points, or every point on one side): the caller builds it in
+/// one piece.
+pub(super) fn build_split(pts: &[Point]) -> Result<Option<Parts>, Broken> {
+    let n = pts.len();
+    let mut xs: Vec<f64> = pts.iter().map(|p| p[0]).collect();
+    let mid = n / 2;
+    let (_, &mut split, _) = xs.select_nth_unstable_by(mid, f64::total_cmp);
+    drop(xs);
+    let left = |p: &Point| p[0] < split;
+    let (l, r) = rayon::join(
+        || half(pts, |p| left(p), split, true),
+        || half(pts, |p| !left(p), split, false),
+    );
+    let (Some(l), Some(r)) = (l?, r?) else {
+        return Ok(None);
+    };
+    stitch(pts, &l, &r).map(Some)
+}
+
+/// Triangulate the points of `pts` with `side(p)` (in their order) and certify its triangles
+/// (`on_left`: the half left of `x = split`). `Ok(None)` without three non-collinear points.
+fn half(
+    pts: &[Point],
+    side: impl Fn(&Point) -> bool,
+    split: f64,
+    on_left: bool,
+) -> Result<Option<Half>, Broken> {
+    let ids: Vec<u32> = (0..pts.len() as u32)
+        .filter(|&i| side(&pts[i as usize]))
+        .collect();
+    let local: Vec<Point> = ids.iter().map(|&i| pts[i as usize]).collect();
+    let Some(b) = build(&local)? else {
+        return Ok(None);
+    };
+    let inf = local.len() as u32;
+    let certified =
+        b.tv.iter()
+            .map(|v| !v.contains(&inf) && disk_clear(&local, *v, split, on_left))
+            .collect();
+    Ok(Some(Half {
+        tv: b.tv,
+        adj: b.adj,
+        dups: b.dups,
+        ids,
+        certified,
+    }))
+}
+
+/// The Delaunay triangulation of `pts` in insertion order (as `Triangulation::new` starts
+/// it), or `None` without three non-collinear points.
+fn build(pts: &[Point]) -> Result<Option<Parts>, Broken> {
+    let Some(&pa) = pts.first() else {
+        return Ok(None);
+    };
+    let Some(b) = pts.iter().position(|&p| p != pa) else {
+        return Ok(None);
+    };
+    let pb = pts[b];
+    let Some(c) = pts[b + 1..]
+        .iter()
+        .position(|&p| orient2d(pa, pb, p) != Ordering::Equal)
+        .map(|i| i + b + 1)
+    else {
+        return Ok(None);
+    };
+    let mut builder = Builder::new(pts, true, 0, b as u32, c as u32);
+    for pos in 1..pts.len() {
+        if pos != b && pos != c {
+            builder.insert(pos as u32)?;
+        }
+    }
+    Ok(Some(builder.into_parts()))
+}
+
+/// True when the closed circumdisk of the finite triangle `v` lies strictly on its side of
+/// the line `x = split` (left when `on_left`), with a margin covering every rounding of the
+/// floating-point circumcentre: a false `true` cannot happen, a false `false` only sends the
+/// triangle to the seam. Non-finite intermediate values give `false`.
+fn disk_clear(pts: &[Point], v: [u32; 3], split: f64, on_left: bool) -> bool {
+    let [a, b, c] = v.map(|i| pts[i as usize]);
+    let (bx, by) = (b[0] - a[0], b[1] - a[1]);
+    let (cx, cy) = (c[0] - a[0], c[1] - a[1]);
+    let (bb, cc) = (bx * bx + by * by, cx * cx + cy * cy);
+    let (p, q) = (bx * cy, by * cx);
+    let d = 2.0 * (p - q);
+    let ux = (cy * bb - by * cc) / d;
+    let uy = (bx * cc - cx * bb) / d;
+    let r = (ux * ux + uy * uy).sqrt();
+    // Relative condition of the denominator, and the numerators' magnitudes over it: the
+    // centre's error is a few units in the last place of these (the differences `b - a`,
+    // `c - a` are rounded too, which the factor 2 |d| / (|p| + |q|) >= 1 amplifies alike).
+    let kappa = 2.0 * (p.abs() + q.abs()) / d.abs();
+    let num = ((cy.abs() + cx.abs()) * bb + (by.abs() + bx.abs()) * cc) / d.abs();
+    let u = f64::EPSILON;
+    let margin = 64.0 * u * (num + (ux.abs() + uy.abs()) * kappa + r)
+        + 8.0 * u * (a[0].abs() + split.abs() + r);
+    let centre = a[0] + ux;
+    if on_left {
+        centre + r + margin < split
+    } else {
+        centre - r - margin > split
+    }
+}
+
+/// Global half-edge of slot `k` of new triangle `t`.
+#[inline]
+fn he(t: u32, k: usize) -> u32 {
+    3 * t + k as u32
+}
+
+/// The full triangulation from the two halves: certified triangles kept, the rest from the
+/// seam `DT(S)`, see the module doc.
+fn stitch(pts: &[Point], l: &Half, r: &Half) -> Result<Parts, Broken> {
+    let n = pts.len() as u32;
+    let halves = [l, r];
+    // Seam set: vertices of the uncertified triangles, in global (insertion) order.
+    let mut in_seam = vec![false; pts.len()];
+    for h in halves {
+        let inf = h.ids.len() as u32;
+        for (t, v) in h.tv.iter().enumerate() {
+            if !h.certified[t] {
+                for &x in v {
+                    if x != inf {
+                        in_seam[h.ids[x as usize] as usize] = true;
+                    }
+                }
+            }
+        }
+    }
+    let seam_ids: Vec<u32> = (0..n).filter(|&i| in_seam[i as usize]).collect();
+    drop(in_seam);
+    let seam_pts: Vec<Point> = seam_ids.iter().map(|&i| pts[i as usize]).collect();
+    let seam = build(&seam_pts)?.ok_or_else(|| Broken("seam set is degenerate".into()))?;
+    if !seam.dups.is_empty() {
+        return Err(Broken("seam set has duplicates".into()));
+    }
+    let seam_inf = seam_ids.len() as u32;
+    let gs = |x: u32| {
+        if x == seam_inf {
+            n
+        } else {
+            seam_ids[x as usize]
+        }
+    };
+
+    // New ids: certified left, certified right, then the seam's triangles inside the region.
+    let mut new_id: [Vec<u32>; 2] = [Vec::new(), Vec::new()];
+    let mut count = 0u32;
+    for (s, h) in halves.iter().enumerate() {
+        new_id[s] = h
+            .certified
+            .iter()
+            .map(|&c| {
+                if c {
+                    count += 1;
+                    count - 1
+                } else {
+                    u32::MAX
+                }
+            })
+            .collect();
+    }
+    let kept = count;
+
+    // Barriers: directed edge (u, w) of a certified triangle (on its left) whose neighbour in
+    // its half is not certified -> that triangle's new half-edge.
+    let mut barriers: HashMap<(u32, u32), u32> = HashMap::new();
+    for (s, h) in halves.iter().enumerate() {
+        for (t, v) in h.tv.iter().enumerate() {
+            if !h.certified[t] {
+                continue;
+            }
+            for k in 0..3 {
+                let m = (h.adj[3 * t + k] / 3) as usize;
+                if !h.certified[m] {
+                    let (u, w) = (h.ids[v[next(k)] as usize], h.ids[v[prev(k)] as usize]);
+                    barriers.insert((u, w), he(new_id[s][t], k));
+                }
+            }
+        }
+    }
+
+    // Seam triangles across a barrier (the one with the reversed edge), then the region
+    // reached from them without crossing a barrier.
+    let mut across = vec![u32::MAX; seam.adj.len()];
+    let mut inside = vec![false; seam.tv.len()];
+    let mut stack = Vec::new();
+    let mut matched = 0usize;
+    for (t, v) in seam.tv.iter().enumerate() {
+        for k in 0..3 {
+            let (u, w) = (gs(v[next(k)]), gs(v[prev(k)]));
+            if let Some(&h) = barriers.get(&(w, u)) {
+                across[3 * t + k] = h;
+                matched += 1;
+                if !inside[t] {
+                    inside[t] = true;
+                    stack.push(t);
+                }
+            }
+        }
+    }
+    if matched != barriers.len() {
+        return Err(Broken(format!(
+            "{} of {} barrier edges are not seam edges",
+            barriers.len() - matched,
+            barriers.len()
+        )));
+    }
+    if barriers.is_empty() {
+        inside.iter_mut().for_each(|x| *x = true);
+    }
+    while let Some(t) = stack.pop() {
+        for k in 0..3 {
+            if across[3 * t + k] == u32::MAX {
+                let m = (seam.adj[3 * t + k] / 3) as usize;
+                if !inside[m] {
+                    inside[m] = true;
+                    stack.push(m);
+                }
+            }
+        }
+    }
+    let seam_new: Vec<u32> = inside
+        .iter()
+        .map(|&i| {
+            if i {
+                count += 1;
+                count - 1
+            } else {
+                u32::MAX
+            }
+        })
+        .collect();
+
+    // Assemble.
+    let total = count as usize;
+    let mut tv = Vec::with_capacity(total);
+    let mut adj = vec![u32::MAX; 3 * total];
+    for (s, h) in halves.iter().enumerate() {
+        let inf = h.ids.len() as u32;
+        let g = |x: u32| if x == inf { n } else { h.ids[x as usize] };
+        for (t, v) in h.tv.iter().enumerate() {
+            if !h.certified[t] {
+                continue;
+            }
+            let me = new_id[s][t];
+            tv.push(v.map(g));
+            for k in 0..3 {
+                let o = h.adj[3 * t + k];
+                let m = (o / 3) as usize;
+                if h.certified[m] {
+                    adj[he(me, k) as usize] = he(new_id[s][m], (o % 3) as usize);
+                }
+            }
+        }
+    }
+    debug_assert_eq!(tv.len() as u32, kept);
+    for (t, v) in seam.tv.iter().enumerate() {
+        if !inside[t] {
+            continue;
+        }
+        let me = seam_new[t];
+        tv.push(v.map(gs));
+        for k in 0..3 {
+            let b = across[3 * t + k];
+            let own = he(me, k);
+            if b != u32::MAX {
+                adj[own as usize] = b;
+                adj[b as usize] = own;
+            } else {
+                let o = seam.adj[3 * t + k];
+                let m = seam_new[(o / 3) as usize];
+                if m == u32::MAX {
+                    return Err(Broken("seam region leaks past a barrier".into()));
+                }
+                adj[own as usize] = he(m, (o % 3) as usize);
+            }
+        }
+    }
+    if adj.contains(&u32::MAX) {
+        return Err(Broken(
+            "stitched triangulation has an unmatched edge".into(),
+        ));
+    }
+    let mut dups = Vec::with_capacity(l.dups.len() + r.dups.len());
+    for h in halves {
+        dups.extend(
+            h.dups
+                .iter()
+                .map(|&(v, d)| (h.ids[v as usize], h.ids[d as usize])),
+        );
+    }
+    Ok(Parts { tv, adj, dups })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::geometry::{verify, Triangulation};
+
+    /// Finite triangles as sorted rotations (smallest id first), sorted.
+    fn canonical(tv: &[[u32; 3]], inf: u32) -> Vec<[u32; 3]> {
+        let mut out: Vec<[u32; 3]> = tv
+            .iter()
+            .filter(|v| !v.contains(&inf))
+            .map(|&v| {
+                let k = (0..3).min_by_key(|&k| v[k]).unwrap();
+                [v[k], v[(k + 1) % 3], v[(k + 2) % 3]]
+            })
+            .collect();
+        out.sort_unstable();
+        out
+    }
+
+    struct Rng(u64);
+    impl Rng {
+        fn f(&mut self) -> f64 {
+            self.0 ^= self.0 << 13;
+            self.0 ^= self.0 >> 7;
+            self.0 ^= self.0 << 17;
+            (self.0 >> 11) as f64 / (1u64 << 53) as f64
+        }
+    }
+
+    /// Point sets that stress the seam: uniform, an integer grid (co-circular quadruples,
+    /// points on the split line, collinear hull) with repeated points, sampled circles (the
+    /// pipeline's input), and a thin vertical band (every circumdisk crosses the line).
+    fn sets() -> Vec<Vec<Point>> {
+        let mut r = Rng(0x1234_5678_9abc_def1);
+        let uniform: Vec<Point> = (0..40_000).map(|_| [r.f(), r.f()]).collect();
+        let mut grid = Vec::new();
+        for i in 0..200 {
+            for j in 0..180 {
+                grid.push([i as f64, j as f64]);
+                if (i * 7 + j) % 5 == 0 {
+                    grid.push([i as f64, j as f64]);
+                }
+            }
+        }
+        let mut circles = Vec::new();
+        for k in 0..900 {
+            let (cx, cy) = ((k % 30) as f64 * 3.0 + r.f(), (k / 30) as f64 * 3.0 + r.f());
+            let rad = 0.5 + r.f();
+            for m in 0..40 {
+                let a = m as f64 * std::f64::consts::TAU / 40.0;
+                circles.push([cx + rad * a.cos(), cy + rad * a.sin()]);
+            }
+        }
+        let band: Vec<Point> = (0..36_000).map(|_| [1e-6 * r.f(), r.f()]).collect();
+        vec![uniform, grid, circles, band]
+    }
+
+    #[test]
+    fn halves_give_the_one_piece_triangle_set() {
+        for pts in sets() {
+            assert!(pts.len() >= SPLIT_MIN);
+            let parts = build_split(&pts).unwrap().expect("the split applies");
+            let one = build(&pts).unwrap().unwrap();
+            let inf = pts.len() as u32;
+            assert_eq!(canonical(&parts.tv, inf), canonical(&one.tv, inf));
+            assert_eq!(parts.tv.len(), one.tv.len(), "infinite triangles too");
+            let mut d1 = parts.dups.clone();
+            let mut d2 = one.dups.clone();
+            d1.sort_unstable();
+            d2.sort_unstable();
+            assert_eq!(d1, d2);
+            // Half-edges: each the reverse of its partner.
+            for (t, v) in parts.tv.iter().enumerate() {
+                for k in 0..3 {
+                    let o = parts.adj[3 * t + k] as usize;
+                    assert_eq!(parts.adj[o] as usize, 3 * t + k);
+                    let w = parts.tv[o / 3];
+                    let j = o % 3;
+                    assert_eq!((w[next(j)], w[prev(j)]), (v[prev(k)], v[next(k)]));
+                }
+            }
+            let dt = Triangulation::new(&pts).unwrap();
+            verify::verify_exact(&dt).unwrap();
+        }
+    }
+
+    /// The numbering is a function of the points: the same arrays on one thread and on two.
+    #[test]
+    fn numbering_does_not_depend_on_the_thread_count() {
+        let pts = sets().swap_remove(2);
+        let on = |threads| {
+            rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap()
+                .install(|| Triangulation::new(&pts).unwrap())
+        };
+        let (a, b) = (on(1), on(2));
+        assert!(a.triangles().eq(b.triangles()));
+        assert!((0..a.len()).all(|t| a.neighbors(t) == b.neighbors(t)));
+    }
+}
