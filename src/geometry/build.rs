@@ -250,42 +250,6 @@ impl<'a> Builder<'a> {
         }
     }
 
-    /// A finished triangulation assembled elsewhere ([`super::split`]), in this module's
-    /// layout, for `Triangulation::finish` only (no insertion state).
-    pub(crate) fn assembled(
-        pts: &'a [Point],
-        all_safe: bool,
-        tv: Vec<[u32; 3]>,
-        adj: Vec<u32>,
-        dups: Vec<(u32, u32)>,
-    ) -> Self {
-        Builder {
-            pts,
-            all_safe,
-            inf: pts.len() as u32,
-            tv,
-            adj,
-            mark: Vec::new(),
-            stamp: 0,
-            start_at: Vec::new(),
-            stack: Vec::new(),
-            cavity: Vec::new(),
-            boundary: Vec::new(),
-            last: 0,
-            rng: WalkRng::new(),
-            dups,
-        }
-    }
-
-    /// The triangles, half-edges and duplicate pairs, moved out.
-    pub(crate) fn into_parts(self) -> super::split::Parts {
-        super::split::Parts {
-            tv: self.tv,
-            adj: self.adj,
-            dups: self.dups,
-        }
-    }
-
     #[inline(always)]
     fn p(&self, v: u32) -> &Point {
         &self.pts[v as usize]

@@ -30,7 +30,7 @@
 //! but the points: not on the thread count. The certificate is a floating-point test with a
 //! generous error margin, so a doubtful triangle goes to the seam (never the other way).
 
-use super::build::{next, prev, Broken, Builder};
+use super::build::{next, prev, Broken, Builder, Parts};
 use super::predicates::orient2d;
 use super::Point;
 use std::cmp::Ordering;
@@ -40,26 +40,19 @@ use std::collections::HashMap;
 /// 33 000 sample points).
 pub(super) const SPLIT_MIN: usize = 1 << 15;
 
-/// A triangulation in the builder's layout: `tv`, `adj` (half-edges `3t + k`), duplicate
-/// pairs, vertex ids those of the points given to [`build_split`] (infinite vertex `n`).
-pub(crate) struct Parts {
-    pub tv: Vec<[u32; 3]>,
-    pub adj: Vec<u32>,
-    pub dups: Vec<(u32, u32)>,
-}
-
 /// One half: its triangulation in its own ids, the global id of each of its points, and which
 /// of its triangles are certified.
 struct Half {
     tv: Vec<[u32; 3]>,
-    adj: Vec<u32>,
+    adj: Vec<[u32; 3]>,
     dups: Vec<(u32, u32)>,
     ids: Vec<u32>,
     certified: Vec<bool>,
 }
 
 /// The triangulation of `pts` (in insertion order, every coordinate in the predicates' safe
-/// range) by halves, see the module doc. `Ok(None)` when the split does not apply (a half
+/// range) by halves, see the module doc, in the builder's layout ([`Parts`], vertex ids the
+/// indices of `pts`, infinite vertex `pts.len()`). `Ok(None)` when the split does not apply (a half
 /// without three non-collinear points, or every point on one side): the caller builds it in
 /// one piece.
 pub(super) fn build_split(pts: &[Point]) -> Result<Option<Parts>, Broken> {
@@ -233,7 +226,7 @@ fn stitch(pts: &[Point], l: &Half, r: &Half) -> Result<Parts, Broken> {
                 continue;
             }
             for k in 0..3 {
-                let m = (h.adj[3 * t + k] / 3) as usize;
+                let m = (h.adj[t][k] / 3) as usize;
                 if !h.certified[m] {
                     let (u, w) = (h.ids[v[next(k)] as usize], h.ids[v[prev(k)] as usize]);
                     barriers.insert((u, w), he(new_id[s][t], k));
@@ -244,7 +237,7 @@ fn stitch(pts: &[Point], l: &Half, r: &Half) -> Result<Parts, Broken> {
 
     // Seam triangles across a barrier (the one with the reversed edge), then the region
     // reached from them without crossing a barrier.
-    let mut across = vec![u32::MAX; seam.adj.len()];
+    let mut across = vec![u32::MAX; 3 * seam.tv.len()];
     let mut inside = vec![false; seam.tv.len()];
     let mut stack = Vec::new();
     let mut matched = 0usize;
@@ -274,7 +267,7 @@ fn stitch(pts: &[Point], l: &Half, r: &Half) -> Result<Parts, Broken> {
     while let Some(t) = stack.pop() {
         for k in 0..3 {
             if across[3 * t + k] == u32::MAX {
-                let m = (seam.adj[3 * t + k] / 3) as usize;
+                let m = (seam.adj[t][k] / 3) as usize;
                 if !inside[m] {
                     inside[m] = true;
                     stack.push(m);
@@ -297,7 +290,8 @@ fn stitch(pts: &[Point], l: &Half, r: &Half) -> Result<Parts, Broken> {
     // Assemble.
     let total = count as usize;
     let mut tv = Vec::with_capacity(total);
-    let mut adj = vec![u32::MAX; 3 * total];
+    let mut adj = vec![[u32::MAX; 3]; total];
+    let flat = adj.as_flattened_mut();
     for (s, h) in halves.iter().enumerate() {
         let inf = h.ids.len() as u32;
         let g = |x: u32| if x == inf { n } else { h.ids[x as usize] };
@@ -308,10 +302,10 @@ fn stitch(pts: &[Point], l: &Half, r: &Half) -> Result<Parts, Broken> {
             let me = new_id[s][t];
             tv.push(v.map(g));
             for k in 0..3 {
-                let o = h.adj[3 * t + k];
+                let o = h.adj[t][k];
                 let m = (o / 3) as usize;
                 if h.certified[m] {
-                    adj[he(me, k) as usize] = he(new_id[s][m], (o % 3) as usize);
+                    flat[he(me, k) as usize] = he(new_id[s][m], (o % 3) as usize);
                 }
             }
         }
@@ -327,19 +321,19 @@ fn stitch(pts: &[Point], l: &Half, r: &Half) -> Result<Parts, Broken> {
             let b = across[3 * t + k];
             let own = he(me, k);
             if b != u32::MAX {
-                adj[own as usize] = b;
-                adj[b as usize] = own;
+                flat[own as usize] = b;
+                flat[b as usize] = own;
             } else {
-                let o = seam.adj[3 * t + k];
+                let o = seam.adj[t][k];
                 let m = seam_new[(o / 3) as usize];
                 if m == u32::MAX {
                     return Err(Broken("seam region leaks past a barrier".into()));
                 }
-                adj[own as usize] = he(m, (o % 3) as usize);
+                flat[own as usize] = he(m, (o % 3) as usize);
             }
         }
     }
-    if adj.contains(&u32::MAX) {
+    if flat.contains(&u32::MAX) {
         return Err(Broken(
             "stitched triangulation has an unmatched edge".into(),
         ));
@@ -352,7 +346,14 @@ fn stitch(pts: &[Point], l: &Half, r: &Half) -> Result<Parts, Broken> {
                 .map(|&(v, d)| (h.ids[v as usize], h.ids[d as usize])),
         );
     }
-    Ok(Parts { tv, adj, dups })
+    Ok(Parts {
+        inf: n,
+        mark: vec![0; tv.len()],
+        start_at: vec![0; n as usize + 1],
+        tv,
+        adj,
+        dups,
+    })
 }
 
 #[cfg(test)]
@@ -429,8 +430,8 @@ mod tests {
             // Half-edges: each the reverse of its partner.
             for (t, v) in parts.tv.iter().enumerate() {
                 for k in 0..3 {
-                    let o = parts.adj[3 * t + k] as usize;
-                    assert_eq!(parts.adj[o] as usize, 3 * t + k);
+                    let o = parts.adj[t][k] as usize;
+                    assert_eq!(parts.adj.as_flattened()[o] as usize, 3 * t + k);
                     let w = parts.tv[o / 3];
                     let j = o % 3;
                     assert_eq!((w[next(j)], w[prev(j)]), (v[prev(k)], v[next(k)]));

@@ -240,10 +240,7 @@ impl Triangulation {
             // see `split`). A failure there is a bug: checked in debug builds, else the
             // one-piece construction below answers.
             match super::split::build_split(&work) {
-                Ok(Some(p)) => {
-                    let builder = Builder::assembled(&work, all_safe, p.tv, p.adj, p.dups);
-                    return Ok(Self::finish(points, Some(&order), builder));
-                }
+                Ok(Some(parts)) => return Ok(Self::finish(points, Some(order), parts, work)),
                 Ok(None) => {}
                 Err(e) => debug_assert!(false, "split triangulation: {}", e.0),
             }
