@@ -42,6 +42,7 @@ pub mod equidistribution;
 pub mod grid_nodes;
 pub mod imposed;
 pub mod inserted;
+pub mod inverted;
 pub mod metrics;
 pub mod periodic;
 pub mod piece_cache;
@@ -1282,9 +1283,10 @@ pub fn assemble_cached(
     })
 }
 
-/// True when `g` has an inverted cell: `g` is one of [`crate::quality::inverted_blocks`].
+/// True when `g` has an inverted cell: `g` is one of [`crate::quality::inverted_blocks`]
+/// ([`inverted::has_inverted_cell`]).
 fn has_inverted_cell(g: &BlockGrid) -> bool {
-    crate::quality::inverted_cells(std::slice::from_ref(g)) > 0
+    inverted::has_inverted_cell(g)
 }
 
 #[cfg(test)]
