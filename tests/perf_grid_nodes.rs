@@ -124,3 +124,69 @@ fn equidistribution_matches_the_sum_then_scan() {
         );
     }
 }
+
+/// The inverted-cell test of the exact grid loop (`exact_mode::inverted`) against
+/// `quality::inverted_cells` of the same grid, computed alongside: blocks made by the row
+/// builder (valid ones), the same with random nodes moved (folded cells), with nodes merged
+/// (zero products), with NaN and infinite coordinates, random node clouds, thin and empty
+/// grids and malformed ones (node count not `(ni + 1)(nj + 1)`); every vector build agrees.
+#[test]
+fn inverted_cells_match_the_quality_count() {
+    use medial_blocks::exact_mode::inverted::has_inverted_cell_every_build;
+    use medial_blocks::quality::inverted_cells;
+    use medial_blocks::BlockGrid;
+    let mut rng = SplitMix64(29);
+    let (mut inverted, mut valid) = (0, 0);
+    for case in 0..6000u64 {
+        let ni = (case % 19) as usize;
+        let nj = (case % 17) as usize;
+        let mut nodes: Vec<Point> = if case % 5 == 4 {
+            (0..(ni + 1) * (nj + 1))
+                .map(|_| [rng.next_f64(), rng.next_f64()])
+                .collect()
+        } else {
+            // A block around an annulus sector: walls at radius 1, medial points further out.
+            let ends: Vec<(Point, Point)> = (0..=ni)
+                .map(|i| {
+                    let a = -(i as f64) * 0.05;
+                    let r = 1.5 + 0.3 * rng.next_f64();
+                    ([a.cos(), a.sin()], [r * a.cos(), r * a.sin()])
+                })
+                .collect();
+            block_nodes(&ends, nj, None, 1.2).expect("the vector builds differ")
+        };
+        let k = nodes.len();
+        if k > 1 {
+            match case % 7 {
+                1 => {
+                    let at = (rng.next_u64() % k as u64) as usize;
+                    nodes[at][0] += 0.3 * (rng.next_f64() - 0.5);
+                    nodes[at][1] += 0.3 * (rng.next_f64() - 0.5);
+                }
+                2 => {
+                    let at = (rng.next_u64() % (k as u64 - 1)) as usize;
+                    nodes[at] = nodes[at + 1];
+                }
+                3 => {
+                    let at = (rng.next_u64() % k as u64) as usize;
+                    nodes[at][(case % 2) as usize] = if case % 3 == 0 {
+                        f64::NAN
+                    } else {
+                        f64::INFINITY
+                    };
+                }
+                5 => {
+                    nodes.pop();
+                }
+                _ => {}
+            }
+        }
+        let g = BlockGrid { ni, nj, nodes };
+        let want = inverted_cells(std::slice::from_ref(&g)) > 0;
+        let got = has_inverted_cell_every_build(&g).expect("the vector builds differ");
+        assert_eq!(got, want, "case {case} ni {ni} nj {nj}");
+        inverted += usize::from(want);
+        valid += usize::from(!want && ni > 0 && nj > 0);
+    }
+    assert!(inverted > 1000 && valid > 1000, "{inverted} {valid}");
+}

@@ -48,7 +48,17 @@ fn larger_of_turns(c: f64, d: f64, turn_p: f64, tan_p: f64) -> f64 {
     }
 }
 
-/// The arrays of the batched densities' passes (`ArcGeometry::densities_into`): 24 KB, kept
+/// `u` turned by the angle whose cosine and sine are `cd`, `sd` (one step of the recurrence).
+#[inline(always)]
+fn rotate(u: Point, cd: f64, sd: f64) -> Point {
+    [u[0] * cd - u[1] * sd, u[1] * cd + u[0] * sd]
+}
+
+/// Chains of the rotation recurrence between restarts: sub-steps `1..RESTART`, then one
+/// chain per further `RESTART` sub-steps.
+const CHAINS: usize = ARC_SUBSTEPS / RESTART;
+
+/// The arrays of the batched densities' passes (`ArcGeometry::densities_into`): 32 KB, kept
 /// per thread instead of zeroed on the stack at each call (issue 8).
 struct Passes {
     ux: [f64; ARC_SUBSTEPS + 1],
@@ -58,6 +68,10 @@ struct Passes {
     r: [f64; ARC_SUBSTEPS + 1],
     tx: [[f64; ARC_SUBSTEPS + 1]; 2],
     ty: [[f64; ARC_SUBSTEPS + 1]; 2],
+    /// The spoke mid-points `0.5 (m + t[wall])` of every point, once each (every sub-step
+    /// reads those of both its ends).
+    hx: [[f64; ARC_SUBSTEPS + 1]; 2],
+    hy: [[f64; ARC_SUBSTEPS + 1]; 2],
     sqa: [f64; ARC_SUBSTEPS],
     ca: [f64; ARC_SUBSTEPS],
     da: [f64; ARC_SUBSTEPS],
@@ -73,6 +87,8 @@ impl Default for Passes {
             r: [0.0; ARC_SUBSTEPS + 1],
             tx: [[0.0; ARC_SUBSTEPS + 1]; 2],
             ty: [[0.0; ARC_SUBSTEPS + 1]; 2],
+            hx: [[0.0; ARC_SUBSTEPS + 1]; 2],
+            hy: [[0.0; ARC_SUBSTEPS + 1]; 2],
             sqa: [0.0; ARC_SUBSTEPS],
             ca: [0.0; ARC_SUBSTEPS],
             da: [0.0; ARC_SUBSTEPS],
@@ -91,12 +107,19 @@ impl ArcGeometry {
     /// [`RESTART`] sub-steps from the same angle as `at(s / ARC_SUBSTEPS)`.
     fn next_unit(&self, s: usize, u: Point, cd: f64, sd: f64) -> Point {
         if s == 1 || s.is_multiple_of(RESTART) {
-            let p = self.param;
-            let theta = self.start[p] + (s as f64 / ARC_SUBSTEPS as f64) * self.sweep[p];
-            [theta.cos(), theta.sin()]
+            self.restart_unit(s)
         } else {
-            [u[0] * cd - u[1] * sd, u[1] * cd + u[0] * sd]
+            rotate(u, cd, sd)
         }
+    }
+
+    /// The unit vector of sub-step `s` computed afresh, from the same angle as
+    /// `at(s / ARC_SUBSTEPS)`.
+    #[inline(always)]
+    fn restart_unit(&self, s: usize) -> Point {
+        let p = self.param;
+        let theta = self.start[p] + (s as f64 / ARC_SUBSTEPS as f64) * self.sweep[p];
+        [theta.cos(), theta.sin()]
     }
 
     /// Sub-step densities for the count problem: `(sq, ang)` per sub-step.
@@ -198,6 +221,8 @@ impl ArcGeometry {
             r,
             tx,
             ty,
+            hx,
+            hy,
             sqa,
             ca,
             da,
@@ -211,11 +236,30 @@ impl ArcGeometry {
         let (sd, cd) = step.sin_cos();
         let turn_p = step.abs();
         let tan_p = turn_p.tan() / (1.0 + 1e-9);
-        // Pass 1: the unit vectors of the interior points (as `densities_into_scalar`).
-        let mut u = [1.0, 0.0];
-        for s in 1..K {
-            u = self.next_unit(s, u, cd, sd);
-            (ux[s], uy[s]) = (u[0], u[1]);
+        // Pass 1: the unit vectors of the interior points, as `densities_into_scalar` makes
+        // them one after the other. The recurrence restarts exactly at sub-step 1 and every
+        // `RESTART` sub-steps, so it is `CHAINS` independent chains (chain `k` from sub-step
+        // `max(1, k RESTART)` to `(k + 1) RESTART - 1`), run side by side here: each unit
+        // vector is the same rotation of the same predecessor, so the same bits, without
+        // waiting on one long chain of dependent multiplications.
+        let (mut cx, mut cy) = ([0.0; CHAINS], [0.0; CHAINS]);
+        for k in 0..CHAINS {
+            let s = (k * RESTART).max(1);
+            [cx[k], cy[k]] = self.restart_unit(s);
+            (ux[s], uy[s]) = (cx[k], cy[k]);
+        }
+        for r in 1..RESTART {
+            for k in 0..CHAINS {
+                [cx[k], cy[k]] = rotate([cx[k], cy[k]], cd, sd);
+            }
+            // Chain 0 starts one sub-step late: its last rotation (sub-step `RESTART`,
+            // a restart) is not used.
+            if r + 1 < RESTART {
+                (ux[r + 1], uy[r + 1]) = (cx[0], cy[0]);
+            }
+            for k in 1..CHAINS {
+                (ux[k * RESTART + r], uy[k * RESTART + r]) = (cx[k], cy[k]);
+            }
         }
         // Pass 2: every point: medial point `m`, radius `r`, touching points `t[wall]` (the
         // expressions of `medial_point_u` and `project`, written out).
@@ -273,13 +317,20 @@ impl ArcGeometry {
         if !ok {
             return None;
         }
-        // Pass 3: every sub-step's length density and the other wall's turn parts.
+        // Pass 3: every point's spoke mid-points, then every sub-step's length density and
+        // the other wall's turn parts.
+        for w in 0..2 {
+            for s in 0..N {
+                hx[w][s] = 0.5 * (mx[s] + tx[w][s]);
+                hy[w][s] = 0.5 * (my[s] + ty[w][s]);
+            }
+        }
         let cq = wq.c;
         for s in 1..N {
             let mut ds = 0.0;
             for w in 0..2 {
-                let x = 0.5 * (mx[s - 1] + tx[w][s - 1]) - 0.5 * (mx[s] + tx[w][s]);
-                let y = 0.5 * (my[s - 1] + ty[w][s - 1]) - 0.5 * (my[s] + ty[w][s]);
+                let x = hx[w][s - 1] - hx[w][s];
+                let y = hy[w][s - 1] - hy[w][s];
                 let l = (x * x + y * y).sqrt();
                 ds = if w == 0 { l } else { ds + l };
             }
@@ -292,11 +343,21 @@ impl ArcGeometry {
             da[s - 1] = u0 * v0 + u1 * v1;
         }
         sq.extend_from_slice(&sqa[..]);
+        // `larger_of_turns(c, d, turn_p, tan_p) / MAX_WALL_ANGLE`: first its common case (the
+        // parametrised wall's turn, no `atan2`) for every sub-step side by side, then the
+        // sub-steps that need the `atan2` one by one (the same operations on each value).
+        let clear = |c: f64, d: f64| d > 0.0 && c.abs() < tan_p * d;
+        let common = turn_p / MAX_WALL_ANGLE;
         ang.extend(
             ca.iter()
                 .zip(da.iter())
-                .map(|(&c, &d)| larger_of_turns(c, d, turn_p, tan_p) / MAX_WALL_ANGLE),
+                .map(|(&c, &d)| if clear(c, d) { common } else { 0.0 }),
         );
+        for ((a, &c), &d) in ang.iter_mut().zip(ca.iter()).zip(da.iter()) {
+            if !clear(c, d) {
+                *a = larger_of_turns(c, d, turn_p, tan_p) / MAX_WALL_ANGLE;
+            }
+        }
         Some(())
     }
 

@@ -47,8 +47,6 @@ pub(crate) struct GridScratch {
     d: Vec<f64>,
     /// One spoke's distances.
     col: Vec<f64>,
-    /// One row's nodes.
-    row: Vec<Point>,
 }
 
 impl GridScratch {
@@ -125,8 +123,6 @@ impl GridScratch {
                     }
                 }
             }
-            self.row.clear();
-            self.row.resize(ni, [0.0; 2]);
             self.rows_with(lanes, nj, all_safe, &mut nodes);
         }
         nodes.extend((0..ni).map(|i| [self.mx[i], self.my[i]]));
@@ -168,44 +164,59 @@ impl GridScratch {
         self.rows(nj, all_safe, nodes)
     }
 
-    /// The body of [`GridScratch::rows_with`], inlined into each build.
+    /// The body of [`GridScratch::rows_with`], inlined into each build: each row appended to
+    /// `nodes` as it is computed (no row buffer copied in).
     #[inline(always)]
     fn rows(&mut self, nj: usize, all_safe: bool, nodes: &mut Vec<Point>) {
         for j in 1..nj {
             if all_safe {
-                row_uniform(self, self.frac[j]);
+                row_uniform(self, self.frac[j], nodes);
             } else {
-                row_general(self, j);
+                row_general(self, j, nodes);
             }
-            nodes.extend_from_slice(&self.row);
         }
     }
 }
 
-/// One interior row of a block whose spokes are all safe uniform ones: node `i` at distance
-/// `len_i * f` (`f = j / nj`).
+/// One interior row of a block whose spokes are all safe uniform ones, appended to `nodes`:
+/// node `i` at distance `len_i * f` (`f = j / nj`).
 #[inline(always)]
-fn row_uniform(s: &mut GridScratch, f: f64) {
-    let n = s.row.len();
+fn row_uniform(s: &GridScratch, f: f64, nodes: &mut Vec<Point>) {
+    let n = s.len.len();
     let (ax, ay, dx, dy, len) = (&s.ax[..n], &s.ay[..n], &s.dx[..n], &s.dy[..n], &s.len[..n]);
-    for (i, out) in s.row.iter_mut().enumerate() {
+    let out = row_slots(nodes, n);
+    for i in 0..n {
         let l = len[i];
         let t = (l * f) / l;
-        *out = [ax[i] + t * dx[i], ay[i] + t * dy[i]];
+        out[i].write([ax[i] + t * dx[i], ay[i] + t * dy[i]]);
     }
+    // SAFETY: `row_slots` reserved the `n` slots, and each was written just above.
+    unsafe { nodes.set_len(nodes.len() + n) };
 }
 
-/// Interior row `j` from the distances `s.d` (the formula of `super::spoke_column`).
+/// The `n` slots after the last node, reserved (a block's node vector has room for all its
+/// rows: nothing is moved then).
 #[inline(always)]
-fn row_general(s: &mut GridScratch, j: usize) {
-    let n = s.row.len();
+fn row_slots(nodes: &mut Vec<Point>, n: usize) -> &mut [std::mem::MaybeUninit<Point>] {
+    nodes.reserve(n);
+    &mut nodes.spare_capacity_mut()[..n]
+}
+
+/// Interior row `j` from the distances `s.d` (the formula of `super::spoke_column`), appended
+/// to `nodes`.
+#[inline(always)]
+fn row_general(s: &GridScratch, j: usize, nodes: &mut Vec<Point>) {
+    let n = s.len.len();
     let d = &s.d[(j - 1) * n..j * n];
     let (ax, ay, dx, dy, len) = (&s.ax[..n], &s.ay[..n], &s.dx[..n], &s.dy[..n], &s.len[..n]);
-    for (i, out) in s.row.iter_mut().enumerate() {
+    let out = row_slots(nodes, n);
+    for i in 0..n {
         let l = len[i];
         let t = if l > 0.0 { d[i] / l } else { 0.0 };
-        *out = [ax[i] + t * dx[i], ay[i] + t * dy[i]];
+        out[i].write([ax[i] + t * dx[i], ay[i] + t * dy[i]]);
     }
+    // SAFETY: `row_slots` reserved the `n` slots, and each was written just above.
+    unsafe { nodes.set_len(nodes.len() + n) };
 }
 
 /// The nodes of the block whose column `i` runs from `ends[i].0` to `ends[i].1`, built by

@@ -42,7 +42,9 @@ pub mod equidistribution;
 pub mod grid_nodes;
 pub mod imposed;
 pub mod inserted;
+pub mod inverted;
 pub mod metrics;
+mod near_median;
 pub mod periodic;
 pub mod piece_cache;
 pub mod smoothing;
@@ -764,12 +766,9 @@ pub fn assemble_cached(
             clustering_of(options, id)
         }
     };
-    // The radii of the vertices touching each circle, bucketed in one pass
-    // ([`radii_by_circle`]); the median does not depend on their order.
-    let near_median: Vec<Option<f64>> = radii_by_circle(&vertices, ncirc)
-        .into_iter()
-        .map(median)
-        .collect();
+    // The median radius of the vertices touching each circle ([`radii_by_circle`] and
+    // [`median`] of each list, in one array: `near_median::near_medians`).
+    let near_median: Vec<Option<f64>> = near_median::near_medians(&vertices, ncirc);
     let mut circle_fixed = vec![None; ncirc];
     for (c, n) in &options.wall_cells {
         if *c >= -1 && ((*c + 1) as usize) < ncirc && !fluid(*c) {
@@ -939,10 +938,22 @@ pub fn assemble_cached(
     // Into the rejected mesh's vectors when there is one ([`PieceCache::keep`]).
     let mut layout = cache.spare_layout();
     let tangents: usize = vertices.iter().map(|v| v.tangent.len()).sum();
-    layout.vertices.reserve_exact(nv + tangents);
+    // Room for the templates too, so that filling the inserted holes does not move the
+    // vectors (issue 8: a copy of every block and edge, into fresh pages): a hole with `k`
+    // wall arcs gets `k` vertices, fewer than `3k` edges and `2k` blocks
+    // (`templates::fill_inserted_holes`). Capacity only: nothing else depends on it.
+    let fluid_walls: usize = pieces
+        .iter()
+        .map(|p| p.circles.iter().filter(|&&c| fluid(c)).count())
+        .sum();
+    layout.vertices.reserve_exact(nv + tangents + fluid_walls);
     layout.vertices.extend(vertices.iter().map(|v| v.center));
-    layout.edges.reserve_exact(3 * pieces.len() + 3 * nv);
-    layout.blocks.reserve_exact(2 * pieces.len());
+    layout
+        .edges
+        .reserve_exact(3 * pieces.len() + tangents.max(3 * nv) + 3 * fluid_walls);
+    layout
+        .blocks
+        .reserve_exact(2 * pieces.len() + 2 * fluid_walls);
     let mut tangent_base = Vec::with_capacity(nv);
     for v in &vertices {
         tangent_base.push(layout.vertices.len());
@@ -1282,9 +1293,10 @@ pub fn assemble_cached(
     })
 }
 
-/// True when `g` has an inverted cell: `g` is one of [`crate::quality::inverted_blocks`].
+/// True when `g` has an inverted cell: `g` is one of [`crate::quality::inverted_blocks`]
+/// ([`inverted::has_inverted_cell`]).
 fn has_inverted_cell(g: &BlockGrid) -> bool {
-    crate::quality::inverted_cells(std::slice::from_ref(g)) > 0
+    inverted::has_inverted_cell(g)
 }
 
 #[cfg(test)]
