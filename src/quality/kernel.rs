@@ -119,17 +119,21 @@ pub(super) fn skewness(min_angle_deg: f64, max_angle_deg: f64) -> f64 {
 /// for [`super::ANGLE_EDGES`] (0, 10, ..., 130, 135, 140, ..., 180): the inner edges at or below `x`
 /// are the multiples of 10 from 10 up (`floor(x / 10)` of them) and 135 when `x >= 135`, at
 /// most 18 in all (the last bin): `min(floor(x / 10) + [x >= 135], 18)`, by arithmetic rather
-/// than a search, so that the vectorised row loop computes it.
+/// than a search, so that the vectorised row loop computes it; and without a division (the
+/// row loop's costliest operation): `floor(x / 10)` is `q = floor(fl(x · 0.1))`, less one when
+/// `10 q > x`.
 ///
-/// Why `floor(fl(x / 10))` is `floor(x / 10)` for every finite `x >= 0`: when `x / 10` is an
-/// integer `k` the quotient is exact; otherwise let `k` be the next integer above it. `10 k`
-/// is a float (`k < 2⁵⁰`), so `x <= pred(10 k)`, and `k - x / 10` is at least a tenth of
-/// the float spacing below `10 k`, which is at least 8 times the spacing `u` below `k`
-/// (`10 k > 8 k`): so `k - x / 10 >= 0.8 u > u / 2`, and rounding to nearest stays below
-/// `k`. Infinity gives 18; NaN (not on the path that counts the bin) gives 18 too.
+/// Why: let `k = floor(x / 10)` (exact quotient), `x` finite, `0 <= x < 2⁵⁰`. The float `0.1`
+/// is above `1/10` by a relative `δ = 5.6e-17`, so `x · 0.1 >= x / 10 >= k`, and `k` is a
+/// float: rounding keeps `fl(x · 0.1) >= k`. Above, `x · 0.1 < (k + 1)(1 + δ)`, which is
+/// below the midpoint between `k + 1` and the next float, so `fl(x · 0.1) <= k + 1`. So
+/// `q` is `k` or `k + 1`, and since `10 k <= x < 10 (k + 1)` (both products exact, `q < 2⁵⁰`)
+/// the test `10 q > x` tells which. For `x >= 2⁵⁰` either way gives a count above 18, so the
+/// last bin; infinity gives 18; NaN (not on the path that counts the bin) gives 18 too.
 #[inline(always)]
 pub(super) fn angle_bin_unsigned(x: f64) -> f64 {
-    let q = (x / 10.0).floor();
+    let q = (x * 0.1).floor();
+    let q = if q * 10.0 > x { q - 1.0 } else { q };
     let b = if x >= 135.0 { q + 1.0 } else { q };
     if b < 18.0 {
         b
@@ -142,14 +146,59 @@ pub(super) fn angle_bin_unsigned(x: f64) -> f64 {
 /// `x`, the rule of [`bin`] (the number of `edges[1..]` at or below `x`, at most `N - 2`: the
 /// last edge is at or below `x` only when every inner edge is), scaled. With weights `32ᵏ` the bins
 /// of several values add up, exactly (integers below `2⁵³`), into one packed word of 5-bit
-/// fields, see [`PACK`]: one comparison and one masked addition per edge, no packing.
+/// fields, see [`PACK`], no packing.
+///
+/// One comparison and one select of a constant per edge (no addition): the edges ascend, so
+/// the edges at or below `x` are the first ones, and the last edge `x` passes (in edge order)
+/// gives the count, `k + 1` for edge `k` (NaN passes none: 0, as counting does).
 #[inline(always)]
 pub(super) fn weighted_bin<const N: usize>(x: f64, edges: &[f64; N], weight: f64) -> f64 {
     let mut b = 0.0;
-    for &e in &edges[1..N - 1] {
-        b = if x >= e { b + weight } else { b };
+    for (k, &e) in edges[1..N - 1].iter().enumerate() {
+        b = if x >= e { (k + 1) as f64 * weight } else { b };
     }
     b
+}
+
+/// The ratio histogram's bin of `x` ([`super::RATIO_EDGES`]) from a table rather than nine
+/// comparisons: every edge has at most four significant bits (1.25 = 1.01b, 50 = 1.1001b · 2⁵,
+/// ...), so for `x >= +0` the comparison `x >= e` is that of the top 16 bits of their
+/// representations (sign, exponent and four fraction bits; `e`'s lower bits are zero), and
+/// every float with the same top 16 bits falls in the same bin: the table has the bin of each
+/// such group from `1.0` (below: bin 0) to `1.9375 · 2⁷` (above: the last bin, `x >= 50`).
+/// Negative `x` (top bits negative as a signed integer) give bin 0, as the rule does.
+pub(super) struct RatioBins {
+    /// Bin of the group `k` (top 16 bits of `1.0` plus `k`), times the weight.
+    table: [f64; RATIO_GROUPS],
+}
+
+/// Groups of 16 top bits covered by [`RatioBins`] (seven binades from 1, 16 groups each, and
+/// up to 128 in all).
+const RATIO_GROUPS: usize = 128;
+
+/// The top 16 bits of `1.0`.
+const ONE_TOP: i64 = (0x3ff0_0000_0000_0000_u64 >> 48) as i64;
+
+impl RatioBins {
+    /// The table of weighted bins for `edges` (each edge with its lower 48 bits zero,
+    /// ascending, `edges[0] <= 1`), weight `weight`.
+    pub fn new<const N: usize>(edges: &[f64; N], weight: f64) -> RatioBins {
+        assert!(edges.iter().all(|e| e.to_bits() << 16 == 0) && edges[0] <= 1.0);
+        RatioBins {
+            table: std::array::from_fn(|k| {
+                let x = f64::from_bits(((ONE_TOP + k as i64) as u64) << 48);
+                weighted_bin(x, edges, weight)
+            }),
+        }
+    }
+
+    /// `weighted_bin(x, edges, weight)` for `x >= +0` or negative (NaN with the sign clear: the
+    /// last bin).
+    #[inline(always)]
+    pub fn bin(&self, x: f64) -> f64 {
+        let k = ((x.to_bits() as i64 >> 48) - ONE_TOP).clamp(0, RATIO_GROUPS as i64 - 1);
+        self.table[k as usize & (RATIO_GROUPS - 1)]
+    }
 }
 
 /// The weights `32ᵏ` of the 5-bit fields of a packed word of bins (field `k` in bits
@@ -253,6 +302,8 @@ pub(super) struct Tables {
     pub wider: bool,
     /// The skewness thresholds.
     pub skew: SkewThresholds,
+    /// The edge ratio's and the aspect ratio's bins, weighted for their fields.
+    pub ratios: [RatioBins; 2],
 }
 
 impl Tables {
@@ -261,6 +312,10 @@ impl Tables {
             wide: wide(),
             wider: wider(),
             skew: SkewThresholds::new(),
+            ratios: [
+                RatioBins::new(&super::RATIO_EDGES, PACK[6]),
+                RatioBins::new(&super::RATIO_EDGES, PACK[7]),
+            ],
         }
     }
 }
@@ -536,6 +591,82 @@ mod tests {
             if x >= 0.0 {
                 assert_eq!(angle_bin_unsigned(x), want as f64, "{x:e}");
             }
+        }
+    }
+
+    /// The division-free angle bin equals the division rule it replaced,
+    /// `min(floor(x / 10) + [x >= 135], 18)`: on 64 floats either side of every multiple of
+    /// 10 up to 400 and of the powers of two, on random angles of `[0, 360]` and random bit
+    /// patterns (every exponent), and at the specials.
+    #[test]
+    fn angle_bin_without_division_equals_the_quotient() {
+        let by_division = |x: f64| {
+            let q = (x / 10.0).floor();
+            let b = if x >= 135.0 { q + 1.0 } else { q };
+            if b < 18.0 {
+                b
+            } else {
+                18.0
+            }
+        };
+        let mut xs = vec![0.0, 5e-324, f64::MIN_POSITIVE, f64::MAX, f64::INFINITY];
+        let centres = (0..=40)
+            .map(|m| 10.0 * m as f64)
+            .chain((-60..60).map(|e| f64::powi(2.0, e)))
+            .chain([135.0, 360.0]);
+        for c in centres {
+            for k in -64i64..=64 {
+                let x = f64::from_bits(c.to_bits().wrapping_add(k as u64));
+                if x >= 0.0 {
+                    xs.push(x);
+                }
+            }
+        }
+        let mut r = crate::layouts::SplitMix64(17);
+        for _ in 0..1_000_000 {
+            xs.push(360.0 * r.next_f64());
+            let b = f64::from_bits(r.next_u64() >> 1);
+            if !b.is_nan() {
+                xs.push(b);
+            }
+        }
+        for x in xs {
+            assert_eq!(
+                angle_bin_unsigned(x).to_bits(),
+                by_division(x).to_bits(),
+                "{x:e}"
+            );
+        }
+        assert_eq!(angle_bin_unsigned(f64::NAN), 18.0);
+    }
+
+    /// The ratio bins from the table equal the counted ones ([`weighted_bin`], itself checked
+    /// against the search of [`bin`]): at and around every edge and every group boundary of
+    /// the table (16 top bits), for zeros of both signs, negative, tiny, subnormal and huge
+    /// values, and random bit patterns of either sign.
+    #[test]
+    fn ratio_bins_from_the_table_equal_the_counted_ones() {
+        let table = RatioBins::new(&RATIO_EDGES, PACK[6]);
+        let mut xs = vec![0.0, -0.0, 5e-324, -5e-324, f64::MAX, -f64::MAX, -1.0, 0.5];
+        let group_starts = (0..=RATIO_GROUPS as i64 + 4)
+            .map(|k| f64::from_bits(((ONE_TOP + k) as u64) << 48))
+            .chain(RATIO_EDGES);
+        for c in group_starts {
+            for k in -3i64..=3 {
+                xs.push(f64::from_bits(c.to_bits().wrapping_add(k as u64)));
+            }
+        }
+        let mut r = crate::layouts::SplitMix64(19);
+        for _ in 0..300_000 {
+            xs.push(1.0 + 150.0 * r.next_f64());
+            xs.push(f64::from_bits(r.next_u64()));
+        }
+        for x in xs.into_iter().filter(|x| !x.is_nan()) {
+            assert_eq!(
+                table.bin(x).to_bits(),
+                weighted_bin(x, &RATIO_EDGES, PACK[6]).to_bits(),
+                "{x:e}"
+            );
         }
     }
 
