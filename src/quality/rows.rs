@@ -15,11 +15,13 @@
 //!    reductions over the band the acceptance, inverted and cell counts and the band's extremes
 //!    (integer keys); per cell it stores only what loop 2 reads (the two extreme angles and the
 //!    eight bins packed in one word: contiguous stores, where a wider record took scatters);
-//!    Loop 1 is two loops over the band: 1a the four corner angles alone (stored per cell),
-//!    1b everything else. One loop of about 600 vector instructions per 8 cells left the
-//!    processor's reorder window too small to overlap the long dependency chains of one
-//!    iteration (two divisions and two polynomials per angle) with the next; the corner
-//!    products are formed again in 1b (the same expressions, the same bits);
+//!    In the AVX-512 build loop 1 is two loops over the band (`SPLIT`): 1a the four corner
+//!    angles alone (stored per cell), 1b everything else. One loop of about 600 vector
+//!    instructions per 8 cells left the processor's reorder window too small to overlap the
+//!    long dependency chains of one iteration (two divisions and two polynomials per angle)
+//!    with the next (split: 3-4% less time for the whole pass on an AMD EPYC with AVX-512);
+//!    the corner products are formed again in 1b (the same expressions, the same bits). The
+//!    AVX2 and portable builds keep one loop (split, the AVX2 build ran 2% slower);
 //! 2. per cell, in cell order: the angle sums and the histogram counts (one increment per
 //!    pair of values, into a table per pair, see [`Chunk`]), or the reference path.
 //!
@@ -131,7 +133,7 @@ fn cross_edges(lo: &[Point], hi: &[Point], e: [&mut [f64]; 3]) {
 /// reduction of its counts per band, not per row); the slots `i = ni` and the padding get a
 /// NaN edge, so they are not on the fast path and count nowhere.
 #[inline(always)]
-fn band(
+fn band<const SPLIT: bool>(
     nodes: &[Point],
     w: usize,
     nb: usize,
@@ -157,7 +159,7 @@ fn band(
     }
     let b = [&hx[..m], &hy[..m], &hl[..m]];
     let t = [&hx[w..w + m], &hy[w..w + m], &hl[w..w + m]];
-    row_figures(b, t, [&vx[..=m], &vy[..=m], &vl[..=m]], th, out)
+    row_figures::<SPLIT>(b, t, [&vx[..=m], &vy[..=m], &vl[..=m]], th, out)
 }
 
 /// [`band`] compiled for AVX-512 (8-lane vectors; the same IEEE operations on the same
@@ -173,7 +175,7 @@ fn band_avx512(
     th: &Tables,
     out: Out,
 ) -> RowCounts {
-    band(nodes, w, nb, h, v, th, out)
+    band::<true>(nodes, w, nb, h, v, th, out)
 }
 
 /// [`band`] compiled for AVX2.
@@ -188,7 +190,7 @@ fn band_avx2(
     th: &Tables,
     out: Out,
 ) -> RowCounts {
-    band(nodes, w, nb, h, v, th, out)
+    band::<false>(nodes, w, nb, h, v, th, out)
 }
 
 /// The figures of one cell from loop 1 (one record per cell, so that loop 1 writes through a
@@ -251,7 +253,7 @@ impl Rows {
             // SAFETY: `wide` is only set when the CPU has AVX2 (see `Tables::wide`).
             return unsafe { band_avx2(nodes, w, nb, h, v, bins, out) };
         }
-        band(nodes, w, nb, h, v, bins, out)
+        band::<false>(nodes, w, nb, h, v, bins, out)
     }
 }
 
@@ -300,7 +302,7 @@ fn row_figures_avx2(
     th: &Tables,
     out: Out,
 ) -> RowCounts {
-    row_figures(b, t, v, th, out)
+    row_figures::<false>(b, t, v, th, out)
 }
 
 /// Loop 1: the figures of every cell of a row from its edges (`x`, `y`, length): bottom `b`
@@ -311,19 +313,26 @@ fn row_figures_avx2(
 /// [`least_scaled_jacobian`] picks (a cell whose pick is not certain takes the reference
 /// path).
 #[inline(always)]
-fn row_figures(b: [&[f64]; 3], t: [&[f64]; 3], v: [&[f64]; 3], th: &Tables, out: Out) -> RowCounts {
+fn row_figures<const SPLIT: bool>(
+    b: [&[f64]; 3],
+    t: [&[f64]; 3],
+    v: [&[f64]; 3],
+    th: &Tables,
+    out: Out,
+) -> RowCounts {
     let Out { cells: out, angles } = out;
     let n = out.len();
     let rb = &th.ratios;
     let [a0, a1, a2, a3] = angles;
     let (a0, a1, a2, a3) = (&mut a0[..n], &mut a1[..n], &mut a2[..n], &mut a3[..n]);
-    {
+    if SPLIT {
         let (bx, by) = (&b[0][..n], &b[1][..n]);
         let (tx, ty) = (&t[0][..n], &t[1][..n]);
         let (ax, ay) = (&v[0][..n], &v[1][..n]);
         let (qx, qy) = (&v[0][1..=n], &v[1][1..=n]);
-        // Loop 1a: the corner angles alone (the long dependency chains of the divisions and
-        // the polynomial, in a loop small enough for the processor to overlap iterations).
+        // Loop 1a (`SPLIT`): the corner angles alone (the long dependency chains of the
+        // divisions and the polynomial, in a loop small enough for the processor to overlap
+        // iterations).
         for i in 0..n {
             let e = [
                 [bx[i], by[i]],
@@ -353,7 +362,7 @@ fn row_figures(b: [&[f64]; 3], t: [&[f64]; 3], v: [&[f64]; 3], th: &Tables, out:
         let (ux, uy) = (tx[i], ty[i]);
         let (vx, vy) = (ax[i], ay[i]);
         let (wx, wy) = (qx[i], qy[i]);
-        let (c, _) = cell_products([[hx, hy], [ux, uy], [vx, vy], [wx, wy]]);
+        let (c, d) = cell_products([[hx, hy], [ux, uy], [vx, vy], [wx, wy]]);
         let edges = [bl[i], ql[i], tl[i], al[i]];
         let (sj, certain) = least_scaled_jacobian(&c, &edges);
         // NaN lengths fail `>= 0`; with every length in range the products are finite.
@@ -368,8 +377,18 @@ fn row_figures(b: [&[f64]; 3], t: [&[f64]; 3], v: [&[f64]; 3], th: &Tables, out:
             & certain;
         let inverted = (c[0] < 0.0) | (c[1] < 0.0) | (c[2] < 0.0) | (c[3] < 0.0);
         // On the fast path (`fine`) the cross products are not zero and every product is
-        // finite, below `2e280` (lengths in range): [`angle_deg_nonzero`] is [`angle_deg`](super::angle_deg).
-        let a = [a0[i], a1[i], a2[i], a3[i]];
+        // finite, below `2e280` (lengths in range): [`angle_deg_nonzero`] is
+        // [`angle_deg`](super::angle_deg).
+        let a = if SPLIT {
+            [a0[i], a1[i], a2[i], a3[i]]
+        } else {
+            [
+                angle_deg_nonzero(c[0], d[0]),
+                angle_deg_nonzero(c[1], d[1]),
+                angle_deg_nonzero(c[2], d[2]),
+                angle_deg_nonzero(c[3], d[3]),
+            ]
+        };
         // No NaN and no `-0.0` on the fast path: the plain compares are `f64::min` / `max`.
         let (amin, amax) = (fold(a, less), fold(a, more));
         let (er, ar) = edge_ratios(&edges);
@@ -758,7 +777,8 @@ mod tests {
                 let mut one = vec![Figures::default(); n];
                 let mut two = vec![Figures::default(); n];
                 let mut ang = [(); 4].map(|_| vec![0.0; n]);
-                let k1 = row_figures(refs(&b), refs(&tt), refs(&v), &t, out(&mut one, &mut ang));
+                let k1 =
+                    row_figures::<true>(refs(&b), refs(&tt), refs(&v), &t, out(&mut one, &mut ang));
                 // SAFETY: `t.wide` says the CPU has AVX2.
                 let k2 = unsafe {
                     row_figures_avx2(refs(&b), refs(&tt), refs(&v), &t, out(&mut two, &mut ang))
