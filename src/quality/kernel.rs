@@ -119,17 +119,21 @@ pub(super) fn skewness(min_angle_deg: f64, max_angle_deg: f64) -> f64 {
 /// for [`super::ANGLE_EDGES`] (0, 10, ..., 130, 135, 140, ..., 180): the inner edges at or below `x`
 /// are the multiples of 10 from 10 up (`floor(x / 10)` of them) and 135 when `x >= 135`, at
 /// most 18 in all (the last bin): `min(floor(x / 10) + [x >= 135], 18)`, by arithmetic rather
-/// than a search, so that the vectorised row loop computes it.
+/// than a search, so that the vectorised row loop computes it; and without a division (the
+/// row loop's costliest operation): `floor(x / 10)` is `q = floor(fl(x · 0.1))`, less one when
+/// `10 q > x`.
 ///
-/// Why `floor(fl(x / 10))` is `floor(x / 10)` for every finite `x >= 0`: when `x / 10` is an
-/// integer `k` the quotient is exact; otherwise let `k` be the next integer above it. `10 k`
-/// is a float (`k < 2⁵⁰`), so `x <= pred(10 k)`, and `k - x / 10` is at least a tenth of
-/// the float spacing below `10 k`, which is at least 8 times the spacing `u` below `k`
-/// (`10 k > 8 k`): so `k - x / 10 >= 0.8 u > u / 2`, and rounding to nearest stays below
-/// `k`. Infinity gives 18; NaN (not on the path that counts the bin) gives 18 too.
+/// Why: let `k = floor(x / 10)` (exact quotient), `x` finite, `0 <= x < 2⁵⁰`. The float `0.1`
+/// is above `1/10` by a relative `δ = 5.6e-17`, so `x · 0.1 >= x / 10 >= k`, and `k` is a
+/// float: rounding keeps `fl(x · 0.1) >= k`. Above, `x · 0.1 < (k + 1)(1 + δ)`, which is
+/// below the midpoint between `k + 1` and the next float, so `fl(x · 0.1) <= k + 1`. So
+/// `q` is `k` or `k + 1`, and since `10 k <= x < 10 (k + 1)` (both products exact, `q < 2⁵⁰`)
+/// the test `10 q > x` tells which. For `x >= 2⁵⁰` either way gives a count above 18, so the
+/// last bin; infinity gives 18; NaN (not on the path that counts the bin) gives 18 too.
 #[inline(always)]
 pub(super) fn angle_bin_unsigned(x: f64) -> f64 {
-    let q = (x / 10.0).floor();
+    let q = (x * 0.1).floor();
+    let q = if q * 10.0 > x { q - 1.0 } else { q };
     let b = if x >= 135.0 { q + 1.0 } else { q };
     if b < 18.0 {
         b
@@ -142,14 +146,59 @@ pub(super) fn angle_bin_unsigned(x: f64) -> f64 {
 /// `x`, the rule of [`bin`] (the number of `edges[1..]` at or below `x`, at most `N - 2`: the
 /// last edge is at or below `x` only when every inner edge is), scaled. With weights `32ᵏ` the bins
 /// of several values add up, exactly (integers below `2⁵³`), into one packed word of 5-bit
-/// fields, see [`PACK`]: one comparison and one masked addition per edge, no packing.
+/// fields, see [`PACK`], no packing.
+///
+/// One comparison and one select of a constant per edge (no addition): the edges ascend, so
+/// the edges at or below `x` are the first ones, and the last edge `x` passes (in edge order)
+/// gives the count, `k + 1` for edge `k` (NaN passes none: 0, as counting does).
 #[inline(always)]
 pub(super) fn weighted_bin<const N: usize>(x: f64, edges: &[f64; N], weight: f64) -> f64 {
     let mut b = 0.0;
-    for &e in &edges[1..N - 1] {
-        b = if x >= e { b + weight } else { b };
+    for (k, &e) in edges[1..N - 1].iter().enumerate() {
+        b = if x >= e { (k + 1) as f64 * weight } else { b };
     }
     b
+}
+
+/// The ratio histogram's bin of `x` ([`super::RATIO_EDGES`]) from a table rather than nine
+/// comparisons: every edge has at most four significant bits (1.25 = 1.01b, 50 = 1.1001b · 2⁵,
+/// ...), so for `x >= +0` the comparison `x >= e` is that of the top 16 bits of their
+/// representations (sign, exponent and four fraction bits; `e`'s lower bits are zero), and
+/// every float with the same top 16 bits falls in the same bin: the table has the bin of each
+/// such group from `1.0` (below: bin 0) to `1.9375 · 2⁷` (above: the last bin, `x >= 50`).
+/// Negative `x` (top bits negative as a signed integer) give bin 0, as the rule does.
+pub(super) struct RatioBins {
+    /// Bin of the group `k` (top 16 bits of `1.0` plus `k`), times the weight.
+    table: [f64; RATIO_GROUPS],
+}
+
+/// Groups of 16 top bits covered by [`RatioBins`] (seven binades from 1, 16 groups each, and
+/// up to 128 in all).
+const RATIO_GROUPS: usize = 128;
+
+/// The top 16 bits of `1.0`.
+const ONE_TOP: i64 = (0x3ff0_0000_0000_0000_u64 >> 48) as i64;
+
+impl RatioBins {
+    /// The table of weighted bins for `edges` (each edge with its lower 48 bits zero,
+    /// ascending, `edges[0] <= 1`), weight `weight`.
+    pub fn new<const N: usize>(edges: &[f64; N], weight: f64) -> RatioBins {
+        assert!(edges.iter().all(|e| e.to_bits() << 16 == 0) && edges[0] <= 1.0);
+        RatioBins {
+            table: std::array::from_fn(|k| {
+                let x = f64::from_bits(((ONE_TOP + k as i64) as u64) << 48);
+                weighted_bin(x, edges, weight)
+            }),
+        }
+    }
+
+    /// `weighted_bin(x, edges, weight)` for `x >= +0` or negative (NaN with the sign clear: the
+    /// last bin).
+    #[inline(always)]
+    pub fn bin(&self, x: f64) -> f64 {
+        let k = ((x.to_bits() as i64 >> 48) - ONE_TOP).clamp(0, RATIO_GROUPS as i64 - 1);
+        self.table[k as usize & (RATIO_GROUPS - 1)]
+    }
 }
 
 /// The weights `32ᵏ` of the 5-bit fields of a packed word of bins (field `k` in bits
@@ -253,6 +302,8 @@ pub(super) struct Tables {
     pub wider: bool,
     /// The skewness thresholds.
     pub skew: SkewThresholds,
+    /// The edge ratio's and the aspect ratio's bins, weighted for their fields.
+    pub ratios: [RatioBins; 2],
 }
 
 impl Tables {
@@ -261,6 +312,10 @@ impl Tables {
             wide: wide(),
             wider: wider(),
             skew: SkewThresholds::new(),
+            ratios: [
+                RatioBins::new(&super::RATIO_EDGES, PACK[6]),
+                RatioBins::new(&super::RATIO_EDGES, PACK[7]),
+            ],
         }
     }
 }
@@ -444,290 +499,4 @@ fn row_corner_below_portable(lo: &[Point], hi: &[Point], t: f64) -> bool {
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::quality::{JACOBIAN_EDGES, RATIO_EDGES, SKEWNESS_EDGES};
-
-    /// The AVX2, AVX-512 and portable builds of the row tests agree, on rows with degenerate,
-    /// inverted, signed-zero and non-finite cells.
-    #[test]
-    fn wide_and_portable_row_tests_agree() {
-        if !wide() {
-            return;
-        }
-        let mut r = crate::layouts::SplitMix64(5);
-        let vals = [
-            0.0,
-            -0.0,
-            1.0,
-            -1.0,
-            0.5,
-            2.0,
-            f64::NAN,
-            f64::INFINITY,
-            1e-300,
-            3.0,
-        ];
-        for n in [2usize, 3, 5, 9, 17] {
-            for _ in 0..3000 {
-                let mut p = || {
-                    let mut v = || vals[(r.next_u64() % vals.len() as u64) as usize];
-                    [v(), v()]
-                };
-                let lo: Vec<Point> = (0..n).map(|_| p()).collect();
-                let hi: Vec<Point> = (0..n).map(|_| p()).collect();
-                // SAFETY: AVX2 was detected above.
-                unsafe {
-                    assert_eq!(row_inverted_avx2(&lo, &hi), row_inverted_portable(&lo, &hi));
-                    if wider() {
-                        assert_eq!(
-                            row_inverted_avx512(&lo, &hi),
-                            row_inverted_portable(&lo, &hi)
-                        );
-                        for t in [0.1, 1.0] {
-                            assert_eq!(
-                                row_corner_below_avx512(&lo, &hi, t),
-                                row_corner_below_portable(&lo, &hi, t)
-                            );
-                        }
-                    }
-                    for t in [0.1, 1.0] {
-                        assert_eq!(
-                            row_corner_below_avx2(&lo, &hi, t),
-                            row_corner_below_portable(&lo, &hi, t)
-                        );
-                    }
-                }
-            }
-        }
-    }
-
-    /// The arithmetic angle bin equals the search of [`bin`]: at, just around and between
-    /// every edge and every multiple of 10, on a fine sweep and far outside (both rules are
-    /// monotone step functions, so agreeing around every step is agreeing everywhere).
-    #[test]
-    fn angle_bins_equal_the_search() {
-        use crate::quality::ANGLE_EDGES;
-        let mut xs = vec![
-            -1e300,
-            -400.0,
-            -2.0,
-            -0.0,
-            0.0,
-            1e-300,
-            1e300,
-            500.0,
-            f64::MAX,
-        ];
-        for m in -3..=40 {
-            for e in [10.0 * m as f64, 135.0] {
-                for k in -4i64..=4 {
-                    xs.push(f64::from_bits((e.to_bits() as i64 + k) as u64));
-                    xs.push(e + k as f64 * 1e-12);
-                    xs.push(e + k as f64 * 0.3);
-                }
-            }
-        }
-        for s in 0..400_000 {
-            xs.push(-20.0 + 400.0 * s as f64 / 400_000.0);
-        }
-        for x in xs.into_iter().filter(|x| x.is_finite()) {
-            let want = bin(&ANGLE_EDGES, x);
-            if x >= 0.0 {
-                assert_eq!(angle_bin_unsigned(x), want as f64, "{x:e}");
-            }
-        }
-    }
-
-    /// Each skewness threshold is the first dividend where its test holds (and it fails on
-    /// the float just below); and on dividends around every threshold, every bin edge times 90
-    /// and a sweep, the thresholds give the bin and the acceptance of the divided skewness.
-    #[test]
-    fn skew_thresholds_equal_the_division() {
-        use crate::quality::{SKEWNESS_ACCEPTABLE, SKEWNESS_EDGES};
-        let th = SkewThresholds::new();
-        let below = |x: f64| {
-            if x == 0.0 {
-                -f64::from_bits(1)
-            } else if x > 0.0 {
-                f64::from_bits(x.to_bits() - 1)
-            } else {
-                f64::from_bits(x.to_bits() + 1)
-            }
-        };
-        for (k, &t) in th.bins.iter().enumerate() {
-            let e = SKEWNESS_EDGES[k + 1];
-            assert!(t / 90.0 >= e && below(t) / 90.0 < e, "{t:e} for {e}");
-        }
-        assert!(th.lo / 90.0 >= 0.0 && below(th.lo) / 90.0 < 0.0);
-        assert!(th.above / 90.0 > 0.5 && below(th.above) / 90.0 <= 0.5);
-        let mut ds = vec![0.0, -0.0, 1e-310, -1e-310, -1.0, 400.0, 1e300, -1e300];
-        for &t in th.bins.iter().chain([&th.lo, &th.above]) {
-            let mut x = t;
-            for _ in 0..4 {
-                x = below(x);
-            }
-            for _ in 0..9 {
-                ds.push(x);
-                x = -below(-x);
-            }
-        }
-        for &e in &SKEWNESS_EDGES {
-            ds.push(90.0 * e);
-        }
-        for s in 0..200_000 {
-            ds.push(-10.0 + 200.0 * s as f64 / 200_000.0);
-        }
-        for d in ds {
-            let sk = d / 90.0;
-            let by_threshold = th.bins.iter().filter(|&&t| d >= t).count();
-            assert_eq!(by_threshold, bin(&SKEWNESS_EDGES, sk), "{d:e}");
-            let [lo, hi] = SKEWNESS_ACCEPTABLE;
-            assert_eq!(
-                (d >= th.lo) & (d < th.above),
-                (sk >= lo) & (sk <= hi),
-                "{d:e}"
-            );
-        }
-    }
-
-    /// Corners of cells that tie or nearly tie: exact squares and rectangles (axis-aligned,
-    /// rotated), mirror-symmetric trapezoids, kites, random cells on a coarse integer lattice
-    /// (many equal products) and at several scales.
-    fn tie_prone_cell(r: &mut crate::layouts::SplitMix64) -> [Point; 4] {
-        let mut u = || r.next_f64();
-        let scale = [1.0, 1e-100, 1e100, 3.0e-7, 0.1][(u() * 5.0) as usize];
-        let p: [Point; 4] = match (u() * 6.0) as u32 {
-            0 => {
-                let (w, h) = (
-                    (1.0 + (u() * 4.0).floor()) * 0.25,
-                    (1.0 + (u() * 4.0).floor()) * 0.5,
-                );
-                [[0.0, 0.0], [w, 0.0], [w, h], [0.0, h]]
-            }
-            1 => {
-                let (a, w, h) = (u() * 6.3, 0.1 + u(), 0.1 + u());
-                let (c, s) = (a.cos(), a.sin());
-                [
-                    [0.0, 0.0],
-                    [w * c, w * s],
-                    [w * c - h * s, w * s + h * c],
-                    [-h * s, h * c],
-                ]
-            }
-            2 => {
-                let (b, t, h) = (0.5 + u(), 0.1 + u(), 0.1 + u());
-                [[-b, 0.0], [b, 0.0], [t, h], [-t, h]]
-            }
-            3 => {
-                let (a, b, w) = (0.1 + u(), 0.1 + u(), 0.1 + u());
-                [[0.0, -a], [w, 0.0], [0.0, b], [-w, 0.0]]
-            }
-            4 => {
-                let mut q = || (u() * 4.0).floor() - 1.0;
-                [
-                    [q(), q()],
-                    [q() + 3.0, q()],
-                    [q() + 3.0, q() + 3.0],
-                    [q(), q() + 3.0],
-                ]
-            }
-            _ => {
-                let mut q = || u() * 2.0 - 1.0;
-                [
-                    [q(), q()],
-                    [q() + 2.0, q()],
-                    [q() + 2.0, q() + 2.0],
-                    [q(), q() + 2.0],
-                ]
-            }
-        };
-        let o = [u() * 8.0 - 4.0, u() * 8.0 - 4.0];
-        p.map(|[x, y]| [scale * (x + o[0]), scale * (y + o[1])])
-    }
-
-    /// [`least_scaled_jacobian`] gives the bits of [`length_figures`] whenever it says it is
-    /// certain, on tie-prone, inverted and random cells (and it is certain on most of them).
-    #[test]
-    fn least_scaled_jacobian_equals_the_four_divisions() {
-        let mut r = crate::layouts::SplitMix64(11);
-        let (mut certain, mut total) = (0, 0);
-        for round in 0..300_000 {
-            let mut p = tie_prone_cell(&mut r);
-            if round % 7 == 0 {
-                p.swap(1, 3);
-            }
-            let (cross, _) = corner_products(&p);
-            let edges = [0, 1, 2, 3].map(|k| {
-                let (a, b) = (p[k], p[(k + 1) % 4]);
-                edge_len(b[0] - a[0], b[1] - a[1])
-            });
-            let ok = edges.iter().all(|&l| (SQ_MIN..=SQ_MAX).contains(&(l * l)))
-                && cross.iter().all(|&c| c != 0.0 && c.is_finite());
-            if !ok {
-                continue;
-            }
-            total += 1;
-            let (want, _, _) = length_figures(&cross, &edges);
-            let (got, sure) = least_scaled_jacobian(&cross, &edges);
-            if sure {
-                certain += 1;
-                assert_eq!(got.to_bits(), want.to_bits(), "{p:?}");
-            }
-        }
-        // About half of these tie-prone cells are decided (rotated rectangles mostly not).
-        assert!(certain * 3 > total, "{certain} of {total}");
-    }
-
-    /// Bins weighted by [`PACK`] and summed in any grouping give, through [`packed_bins`],
-    /// the 5-bit fields packed with shifts (every bin value, extreme words included).
-    #[test]
-    fn packed_sums_equal_the_shifted_fields() {
-        let mut r = crate::layouts::SplitMix64(13);
-        for round in 0..20_000 {
-            let b: [u64; 8] = std::array::from_fn(|k| match round % 3 {
-                0 => r.next_u64() % 32,
-                1 => [0, 31][(r.next_u64() % 2) as usize],
-                _ => [18, 10, 9, k as u64][(r.next_u64() % 4) as usize],
-            });
-            let want = (0..8).fold(0, |w, k| w | b[k] << (5 * k));
-            let t: [f64; 8] = std::array::from_fn(|k| b[k] as f64 * PACK[k]);
-            let grouped = ((t[0] + t[1]) + (t[2] + t[3])) + (t[4] + ((t[5] + t[6]) + t[7]));
-            let serial = t.iter().fold(0.0, |s, x| s + x);
-            assert_eq!(packed_bins(grouped), want, "{b:?}");
-            assert_eq!(packed_bins(serial), want, "{b:?}");
-        }
-    }
-
-    /// Values at, just around and between every edge, and far outside, for every histogram
-    /// counted by [`weighted_bin`]: its bin equals the search of [`bin`].
-    #[test]
-    fn counted_bins_equal_the_search() {
-        fn check<const N: usize>(edges: &[f64; N]) {
-            let mut xs = vec![-1e300, -400.0, -2.0, 0.0, -0.0, 1e-300, 1e300, 500.0, 150.0];
-            for &e in edges {
-                for k in -3i64..=3 {
-                    // Neighbouring floats (for 0.0, NaN patterns below it are skipped).
-                    xs.push(f64::from_bits((e.to_bits() as i64 + k) as u64));
-                    xs.push(-f64::from_bits(k.unsigned_abs()));
-                    xs.push(e + k as f64 * 1e-3);
-                    xs.push(e + k as f64 * 0.07);
-                }
-            }
-            let (lo, hi) = (edges[0] - 5.0, edges[N - 1] + 5.0);
-            for s in 0..100_000 {
-                xs.push(lo + (hi - lo) * s as f64 / 100_000.0);
-            }
-            for x in xs.into_iter().filter(|x| x.is_finite()) {
-                assert_eq!(
-                    weighted_bin(x, edges, 1.0),
-                    bin(edges, x) as f64,
-                    "{x:e} in {edges:?}"
-                );
-            }
-        }
-        check(&SKEWNESS_EDGES);
-        check(&JACOBIAN_EDGES);
-        check(&RATIO_EDGES);
-    }
-}
+mod tests;
