@@ -167,6 +167,25 @@ pub(super) fn orient_fast(a: &Point, b: &Point, c: &Point) -> f64 {
     (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0])
 }
 
+/// The first triangle of a construction over `pts` in insertion order: point 0, the first
+/// point distinct from it (`b`) and the first point after that not collinear with both
+/// (`c`). `Err(k)` when there is none: `k` is 0 without points, 1 when every point equals
+/// point 0, 2 when the distinct points are all collinear.
+pub(crate) fn first_triangle(pts: &[Point]) -> Result<(u32, u32), usize> {
+    let Some(&pa) = pts.first() else {
+        return Err(0);
+    };
+    let Some(b) = pts.iter().position(|&p| p != pa) else {
+        return Err(1);
+    };
+    let pb = pts[b];
+    let c = pts[b + 1..]
+        .iter()
+        .position(|&p| orient2d(pa, pb, p) != Ordering::Equal)
+        .ok_or(2usize)?;
+    Ok((b as u32, (c + b + 1) as u32))
+}
+
 impl<'a> Builder<'a> {
     /// Start from the triangle `a, b, c` (non-collinear) and its three infinite neighbours.
     /// `all_safe`: every coordinate of `pts` is in the predicates' safe range (the caller knows
@@ -368,6 +387,17 @@ impl<'a> Builder<'a> {
             }
         }
         Ok(Located::Triangle(t))
+    }
+
+    /// Insert every point of `pts` after point 0 but the first triangle's `b` and `c`
+    /// ([`first_triangle`]), in order.
+    pub(crate) fn insert_rest(&mut self, b: u32, c: u32) -> Result<(), Broken> {
+        for pos in 1..self.pts.len() as u32 {
+            if pos != b && pos != c {
+                self.insert(pos)?;
+            }
+        }
+        Ok(())
     }
 
     /// Insert input point `pi` (or record it as a duplicate).

@@ -30,10 +30,8 @@
 //! but the points: not on the thread count. The certificate is a floating-point test with a
 //! generous error margin, so a doubtful triangle goes to the seam (never the other way).
 
-use super::build::{next, prev, Broken, Builder, Parts};
-use super::predicates::orient2d;
+use super::build::{first_triangle, next, prev, Broken, Builder, Parts};
 use super::Point;
-use std::cmp::Ordering;
 use std::collections::HashMap;
 
 /// Fewest points split in halves (below, one builder; a pipeline's 1e3 particles give some
@@ -104,26 +102,11 @@ fn half(
 /// The Delaunay triangulation of `pts` in insertion order (as `Triangulation::new` starts
 /// it), or `None` without three non-collinear points.
 fn build(pts: &[Point]) -> Result<Option<Parts>, Broken> {
-    let Some(&pa) = pts.first() else {
+    let Ok((b, c)) = first_triangle(pts) else {
         return Ok(None);
     };
-    let Some(b) = pts.iter().position(|&p| p != pa) else {
-        return Ok(None);
-    };
-    let pb = pts[b];
-    let Some(c) = pts[b + 1..]
-        .iter()
-        .position(|&p| orient2d(pa, pb, p) != Ordering::Equal)
-        .map(|i| i + b + 1)
-    else {
-        return Ok(None);
-    };
-    let mut builder = Builder::new(pts, true, 0, b as u32, c as u32);
-    for pos in 1..pts.len() {
-        if pos != b && pos != c {
-            builder.insert(pos as u32)?;
-        }
-    }
+    let mut builder = Builder::new(pts, true, 0, b, c);
+    builder.insert_rest(b, c)?;
     Ok(Some(builder.into_parts()))
 }
 
@@ -155,6 +138,21 @@ fn disk_clear(pts: &[Point], v: [u32; 3], split: f64, on_left: bool) -> bool {
     } else {
         centre - r - margin > split
     }
+}
+
+/// New ids for the slots whose flag is set, from `*count` on (`u32::MAX` for the others).
+fn number(flags: &[bool], count: &mut u32) -> Vec<u32> {
+    flags
+        .iter()
+        .map(|&f| {
+            if f {
+                *count += 1;
+                *count - 1
+            } else {
+                u32::MAX
+            }
+        })
+        .collect()
 }
 
 /// Global half-edge of slot `k` of new triangle `t`.
@@ -202,18 +200,7 @@ fn stitch(pts: &[Point], l: &Half, r: &Half) -> Result<Parts, Broken> {
     let mut new_id: [Vec<u32>; 2] = [Vec::new(), Vec::new()];
     let mut count = 0u32;
     for (s, h) in halves.iter().enumerate() {
-        new_id[s] = h
-            .certified
-            .iter()
-            .map(|&c| {
-                if c {
-                    count += 1;
-                    count - 1
-                } else {
-                    u32::MAX
-                }
-            })
-            .collect();
+        new_id[s] = number(&h.certified, &mut count);
     }
     let kept = count;
 
@@ -275,17 +262,7 @@ fn stitch(pts: &[Point], l: &Half, r: &Half) -> Result<Parts, Broken> {
             }
         }
     }
-    let seam_new: Vec<u32> = inside
-        .iter()
-        .map(|&i| {
-            if i {
-                count += 1;
-                count - 1
-            } else {
-                u32::MAX
-            }
-        })
-        .collect();
+    let seam_new = number(&inside, &mut count);
 
     // Assemble.
     let total = count as usize;
@@ -375,22 +352,12 @@ mod tests {
         out
     }
 
-    struct Rng(u64);
-    impl Rng {
-        fn f(&mut self) -> f64 {
-            self.0 ^= self.0 << 13;
-            self.0 ^= self.0 >> 7;
-            self.0 ^= self.0 << 17;
-            (self.0 >> 11) as f64 / (1u64 << 53) as f64
-        }
-    }
-
     /// Point sets that stress the seam: uniform, an integer grid (co-circular quadruples,
     /// points on the split line, collinear hull) with repeated points, sampled circles (the
     /// pipeline's input), and a thin vertical band (every circumdisk crosses the line).
     fn sets() -> Vec<Vec<Point>> {
-        let mut r = Rng(0x1234_5678_9abc_def1);
-        let uniform: Vec<Point> = (0..40_000).map(|_| [r.f(), r.f()]).collect();
+        let mut r = crate::layouts::SplitMix64(0x1234_5678_9abc_def1);
+        let uniform: Vec<Point> = (0..40_000).map(|_| [r.next_f64(), r.next_f64()]).collect();
         let mut grid = Vec::new();
         for i in 0..200 {
             for j in 0..180 {
@@ -402,14 +369,19 @@ mod tests {
         }
         let mut circles = Vec::new();
         for k in 0..900 {
-            let (cx, cy) = ((k % 30) as f64 * 3.0 + r.f(), (k / 30) as f64 * 3.0 + r.f());
-            let rad = 0.5 + r.f();
+            let (cx, cy) = (
+                (k % 30) as f64 * 3.0 + r.next_f64(),
+                (k / 30) as f64 * 3.0 + r.next_f64(),
+            );
+            let rad = 0.5 + r.next_f64();
             for m in 0..40 {
                 let a = m as f64 * std::f64::consts::TAU / 40.0;
                 circles.push([cx + rad * a.cos(), cy + rad * a.sin()]);
             }
         }
-        let band: Vec<Point> = (0..36_000).map(|_| [1e-6 * r.f(), r.f()]).collect();
+        let band: Vec<Point> = (0..36_000)
+            .map(|_| [1e-6 * r.next_f64(), r.next_f64()])
+            .collect();
         vec![uniform, grid, circles, band]
     }
 

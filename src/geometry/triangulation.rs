@@ -1,7 +1,7 @@
 //! The public Delaunay triangulation type.
 
-use super::build::{Builder, Parts};
-use super::predicates::{incircle, orient2d, SAFE_MAX, SAFE_MIN};
+use super::build::{first_triangle, Builder, Parts};
+use super::predicates::{incircle, SAFE_MAX, SAFE_MIN};
 use super::{exact, Point};
 use std::borrow::Cow;
 use std::cmp::Ordering;
@@ -215,24 +215,17 @@ impl Triangulation {
             .collect();
         debug_assert!(work.iter().all(|p| p.iter().all(|&c| c.is_finite())));
         // First vertex, first point distinct from it, first point not collinear with them.
-        let Some(&pa) = work.first() else {
-            return Err(TriangulationError::TooFewPoints { distinct: 0 });
-        };
-        let Some(b) = work.iter().position(|&p| p != pa) else {
-            return Err(TriangulationError::TooFewPoints { distinct: 1 });
-        };
-        let pb = work[b];
-        let Some(c) = work[b + 1..]
-            .iter()
-            .position(|&p| orient2d(pa, pb, p) != Ordering::Equal)
-            .map(|i| i + b + 1)
-        else {
-            let distinct = count_distinct(points);
-            return Err(if distinct < 3 {
-                TriangulationError::TooFewPoints { distinct }
-            } else {
-                TriangulationError::AllCollinear { distinct }
-            });
+        let (b, c) = match first_triangle(&work) {
+            Ok(bc) => bc,
+            Err(distinct @ (0 | 1)) => return Err(TriangulationError::TooFewPoints { distinct }),
+            Err(_) => {
+                let distinct = count_distinct(points);
+                return Err(if distinct < 3 {
+                    TriangulationError::TooFewPoints { distinct }
+                } else {
+                    TriangulationError::AllCollinear { distinct }
+                });
+            }
         };
         let all_safe = all_safe_after(range, shift);
         if all_safe && work.len() >= super::split::SPLIT_MIN {
@@ -245,15 +238,10 @@ impl Triangulation {
                 Err(e) => debug_assert!(false, "split triangulation: {}", e.0),
             }
         }
-        let mut builder = Builder::new(&work, all_safe, 0, b as u32, c as u32);
-        for pos in 1..work.len() {
-            if pos == b || pos == c {
-                continue;
-            }
-            builder
-                .insert(pos as u32)
-                .map_err(|e| TriangulationError::Internal { message: e.0 })?;
-        }
+        let mut builder = Builder::new(&work, all_safe, 0, b, c);
+        builder
+            .insert_rest(b, c)
+            .map_err(|e| TriangulationError::Internal { message: e.0 })?;
         let parts = builder.into_parts();
         Ok(Self::finish(points, Some(order), parts, work))
     }
