@@ -429,4 +429,51 @@ mod tests {
         assert!(a.triangles().eq(b.triangles()));
         assert!((0..a.len()).all(|t| a.neighbors(t) == b.neighbors(t)));
     }
+
+    /// Splits that cannot apply or keep nothing: more than half of the points on the median
+    /// line (the left half is empty), a collinear left half, points on one circle (every
+    /// circumdisk crosses the line: no barrier, the seam is the whole set). Each gives the
+    /// one-piece triangle set, or no split; `Triangulation::new` passes the exact re-check.
+    #[test]
+    fn degenerate_splits_agree_or_fall_back() {
+        let mut r = crate::layouts::SplitMix64(7);
+        let n = SPLIT_MIN + 100;
+        let on_line: Vec<Point> = (0..n)
+            .map(|i| {
+                if i % 5 < 3 {
+                    [0.0, r.next_f64()]
+                } else {
+                    [r.next_f64(), r.next_f64()]
+                }
+            })
+            .collect();
+        let collinear_left: Vec<Point> = (0..n)
+            .map(|i| {
+                if i % 2 == 0 {
+                    [-1.0 - r.next_f64(), 0.5]
+                } else {
+                    [r.next_f64(), r.next_f64()]
+                }
+            })
+            .collect();
+        let circle: Vec<Point> = (0..n)
+            .map(|i| {
+                let a = i as f64 * std::f64::consts::TAU / n as f64;
+                [a.cos(), a.sin()]
+            })
+            .collect();
+        for (name, pts) in [
+            ("on the line", on_line),
+            ("collinear left", collinear_left),
+            ("circle", circle),
+        ] {
+            let one = build(&pts).unwrap().unwrap();
+            let inf = pts.len() as u32;
+            if let Some(parts) = build_split(&pts).unwrap() {
+                assert_eq!(canonical(&parts.tv, inf), canonical(&one.tv, inf), "{name}");
+            }
+            let dt = Triangulation::new(&pts).unwrap();
+            verify::verify_exact(&dt).unwrap_or_else(|e| panic!("{name}: {e}"));
+        }
+    }
 }
