@@ -23,6 +23,7 @@ use serde::Serialize;
 
 pub mod atan;
 mod kernel;
+pub(crate) use kernel::row_inverted_portable;
 mod rows;
 
 mod sides;

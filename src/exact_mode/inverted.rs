@@ -6,13 +6,14 @@
 //! check per row (about as much as the cells themselves). Here the same test runs as one loop
 //! over the grid's rows, compiled for each vector build (`crate::lanes::Lanes`):
 //! a cell is inverted when one of its four corner cross products is not `> 0` (zero, negative
-//! or NaN), each product formed exactly as `quality::kernel::cell_products` forms it from the
-//! edge differences of `quality::kernel::row_edges` (so the same bits, and the same answer as
-//! `quality::inverted_cells(&[grid]) > 0`; tested against it in `tests/perf_grid_nodes.rs`).
+//! or NaN), counted per row by quality's own row pass (`quality::row_inverted_portable`,
+//! inlined into each build here), so the same answer as `quality::inverted_cells(&[grid]) > 0`
+//! (tested against it in `tests/perf_grid_nodes.rs`).
 
 use crate::geometry::Point;
 use crate::lanes::Lanes;
 use crate::mesh::BlockGrid;
+use crate::quality::row_inverted_portable;
 
 /// True when `g` has an inverted cell: `quality::inverted_cells(&[g]) > 0` (a malformed grid
 /// has no cells).
@@ -57,38 +58,11 @@ fn rows_avx2(nodes: &[Point], w: usize, nj: usize) -> bool {
 #[inline(always)]
 fn rows(nodes: &[Point], w: usize, nj: usize) -> bool {
     for j in 0..nj {
-        if row(&nodes[j * w..(j + 1) * w], &nodes[(j + 1) * w..(j + 2) * w]) > 0 {
+        if row_inverted_portable(&nodes[j * w..(j + 1) * w], &nodes[(j + 1) * w..(j + 2) * w]) > 0 {
             return true;
         }
     }
     false
-}
-
-/// The cells between node lines `lo` and `hi` (same length) with a corner cross product that
-/// is not `> 0`: the products of `quality::kernel::cell_products` of the edges of
-/// `quality::kernel::row_edges`, written out (a count, which vectorises, where a flag does
-/// not).
-#[inline(always)]
-fn row(lo: &[Point], hi: &[Point]) -> usize {
-    let n = lo.len().min(hi.len()).saturating_sub(1);
-    let (lo, hi) = (&lo[..=n], &hi[..=n]);
-    let mut bad = 0;
-    for i in 0..n {
-        // p0 -> p1, p3 -> p2, p0 -> p3, p1 -> p2.
-        let (hx, hy) = (lo[i + 1][0] - lo[i][0], lo[i + 1][1] - lo[i][1]);
-        let (ux, uy) = (hi[i + 1][0] - hi[i][0], hi[i + 1][1] - hi[i][1]);
-        let (vx, vy) = (hi[i][0] - lo[i][0], hi[i][1] - lo[i][1]);
-        let (wx, wy) = (hi[i + 1][0] - lo[i + 1][0], hi[i + 1][1] - lo[i + 1][1]);
-        let c = [
-            hx * vy - hy * vx,
-            wx * (-hy) - wy * (-hx),
-            (-ux) * (-wy) - (-uy) * (-wx),
-            (-vx) * uy - (-vy) * ux,
-        ];
-        let good = (c[0] > 0.0) & (c[1] > 0.0) & (c[2] > 0.0) & (c[3] > 0.0);
-        bad += usize::from(!good);
-    }
-    bad
 }
 
 /// [`has_inverted_cell`] of `g` in every vector build the CPU has (test hook): `None` if two

@@ -437,8 +437,10 @@ fn row_inverted_avx2(lo: &[Point], hi: &[Point]) -> usize {
     row_inverted_portable(lo, hi)
 }
 
+/// The body of [`row_inverted`], inlined into each caller's build (the row passes here and
+/// `exact_mode::inverted`, which runs it inside its own vector builds).
 #[inline(always)]
-fn row_inverted_portable(lo: &[Point], hi: &[Point]) -> usize {
+pub(crate) fn row_inverted_portable(lo: &[Point], hi: &[Point]) -> usize {
     let n = lo.len().min(hi.len()).saturating_sub(1);
     let (lo, hi) = (&lo[..=n], &hi[..=n]);
     let mut count = 0;
