@@ -140,6 +140,14 @@ pub struct Selection {
     next: Option<Vec<u32>>,
 }
 
+/// The block successors of `medial` ([`contraction::successors`]) when its arcs are well
+/// formed, computed once per selection for the contractions.
+fn block_successors(medial: &MedialGraph) -> Option<Vec<u32>> {
+    contraction::well_formed(medial)
+        .then(|| contraction::successors(medial).ok())
+        .flatten()
+}
+
 impl Selection {
     /// The per-arc data of [`select_forced`] (same arguments less `exclude` and `forced`).
     ///
@@ -180,11 +188,7 @@ impl Selection {
                     })
                     .collect()
             },
-            || {
-                contraction::well_formed(medial)
-                    .then(|| contraction::successors(medial).ok())
-                    .flatten()
-            },
+            || block_successors(medial),
         );
         let (mut zero, mut is_zero) = (Vec::new(), vec![false; m]);
         let mut length = vec![0.0; m];
@@ -200,16 +204,7 @@ impl Selection {
                 short.push((rel, e as u32));
             }
         }
-        short.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
-        Selection {
-            zero,
-            is_zero,
-            length,
-            short,
-            ends: medial.arcs.iter().map(|a| a.ends).collect(),
-            vertices: medial.vertices.len(),
-            next,
-        }
+        Selection::from_figures(medial, zero, is_zero, length, short, next)
     }
 
     /// [`Selection::new`] one arc after the other, as first written: the oracle of the tests.
@@ -247,6 +242,20 @@ impl Selection {
                 }
             }
         }
+        let next = block_successors(medial);
+        Selection::from_figures(medial, zero, is_zero, length, short, next)
+    }
+
+    /// The selection from its per-arc figures (`short` in any order: sorted here by relative
+    /// length, then arc), shared by [`Selection::new`] and its oracle.
+    fn from_figures(
+        medial: &MedialGraph,
+        zero: Vec<u32>,
+        is_zero: Vec<bool>,
+        length: Vec<f64>,
+        mut short: Vec<(f64, u32)>,
+        next: Option<Vec<u32>>,
+    ) -> Selection {
         short.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
         Selection {
             zero,
@@ -255,9 +264,7 @@ impl Selection {
             short,
             ends: medial.arcs.iter().map(|a| a.ends).collect(),
             vertices: medial.vertices.len(),
-            next: contraction::well_formed(medial)
-                .then(|| contraction::successors(medial).ok())
-                .flatten(),
+            next,
         }
     }
 
