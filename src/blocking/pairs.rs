@@ -186,6 +186,30 @@ fn chain_ends(samples: &Samples, c: &[u32]) -> Result<(u32, u32), MeshError> {
     }
 }
 
+/// The first and last samples of the arc's chains C1 and C2, after the checks of an arc in
+/// the one-by-one construction's order: both chains non-empty and in range, then its medial
+/// vertices and circles in range.
+fn checked_ends(
+    domain: &Domain,
+    samples: &Samples,
+    medial: &MedialGraph,
+    arc: &MedialArc,
+) -> Result<[(u32, u32); 2], MeshError> {
+    let ends = [chain_ends(samples, &arc.c1)?, chain_ends(samples, &arc.c2)?];
+    let [m0, m1] = arc.ends;
+    if m0.max(m1) as usize >= medial.vertices.len()
+        || arc
+            .circles
+            .iter()
+            .any(|&c| c < -1 || c >= domain.hole_count() as CircleId)
+    {
+        return Err(MeshError::Internal(
+            "medial arc with an out-of-range vertex or circle".into(),
+        ));
+    }
+    Ok(ends)
+}
+
 /// The checks of arc `a` and its curves `[medial polyline, wall on circles[0] (C1 forward),
 /// wall on circles[1] (C2 backward)]`, `reused` when given: what the one-by-one construction
 /// checks and computes for the arc, in its order (chains, vertex and circle range, wall A,
@@ -199,19 +223,7 @@ fn arc_curves(
     back: &mut Vec<u32>,
 ) -> Result<[Curve; 3], MeshError> {
     let arc = &medial.arcs[a];
-    chain_ends(samples, &arc.c1)?;
-    chain_ends(samples, &arc.c2)?;
-    let [m0, m1] = arc.ends;
-    if m0.max(m1) as usize >= medial.vertices.len()
-        || arc
-            .circles
-            .iter()
-            .any(|&c| c < -1 || c >= domain.hole_count() as CircleId)
-    {
-        return Err(MeshError::Internal(
-            "medial arc with an out-of-range vertex or circle".into(),
-        ));
-    }
+    checked_ends(domain, samples, medial, arc)?;
     if let Some(curves) = reused {
         return Ok(curves);
     }
@@ -420,24 +432,7 @@ pub fn blocks_one_by_one(
     for arc in &medial.arcs {
         let [m0, m1] = arc.ends;
         let [ca, cb] = arc.circles;
-        let ends = |c: &[u32]| match (c.first(), c.last()) {
-            (Some(&f), Some(&l)) if (f.max(l) as usize) < samples.len() => Ok((f, l)),
-            _ => Err(MeshError::Internal(
-                "medial arc with an empty or out-of-range sample chain".into(),
-            )),
-        };
-        let (a0, a1) = ends(&arc.c1)?;
-        let (b0, b1) = ends(&arc.c2)?;
-        if m0.max(m1) as usize >= medial.vertices.len()
-            || arc
-                .circles
-                .iter()
-                .any(|&c| c < -1 || c >= domain.hole_count() as CircleId)
-        {
-            return Err(MeshError::Internal(
-                "medial arc with an out-of-range vertex or circle".into(),
-            ));
-        }
+        let [(a0, a1), (b0, b1)] = checked_ends(domain, samples, medial, arc)?;
         let va0 = sample_vertex_of(&mut slots, a0, &mut layout);
         let va1 = sample_vertex_of(&mut slots, a1, &mut layout);
         let vb0 = sample_vertex_of(&mut slots, b0, &mut layout);
