@@ -18,6 +18,8 @@ pub mod plot3d;
 pub mod png;
 pub mod report;
 pub mod svg;
+#[doc(hidden)]
+pub mod text;
 pub mod vtk;
 pub mod vtu;
 

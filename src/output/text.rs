@@ -1,0 +1,304 @@
+//! Numbers as text for the writers: exactly the bytes `std::fmt` writes, several times faster
+//! (issue 8: a 10 000-particle mesh puts about 60 million numbers into its `.vts` files, and
+//! `write!` spent most of the writers' time in the formatting machinery).
+//!
+//! Each function appends to a byte buffer what `format!` gives for the same value:
+//! - [`debug`]: `{:?}` of an `f64` (shortest round-trip digits; plain notation with at least
+//!   one fractional digit for `1e-4 <= |x| < 1e16` and zero, exponent notation otherwise);
+//! - [`exp`]: `{:e}` (shortest round-trip digits, always in exponent notation);
+//! - [`fixed3`]: `{:.3}` (the exact binary value correctly rounded to three decimals, ties to
+//!   even);
+//! - [`int`]: `{}` of an integer.
+//!
+//! The shortest digits come from the `zmij` crate (the shortest digit string that reads back
+//! to the value, and of those the closest to it). `std` picks the same digits except when the
+//! value lies exactly halfway between the two closest shortest candidates: `zmij` then takes
+//! the even one, `std` may not. Such a tie needs a value whose exact decimal expansion is one
+//! digit longer than its shortest form (a dyadic rational with few digits, such as
+//! `981446413237567.25`); [`is_tie`] detects it exactly and the value is then formatted by
+//! `std` itself. Everything else is plain digit shuffling, tested against `std` on tens of
+//! millions of values (`tests/perf_text_numbers.rs`).
+
+use std::io::Write;
+
+/// The shortest round-trip digits of a finite `x > 0`: `n` significant digits in `d[..n]`
+/// (no leading or trailing zero) and the decimal exponent `q` of the last one, so that
+/// `x ~ d × 10^q`; `None` when `std` might choose other digits (a tie, see the module doc).
+fn shortest(x: f64) -> Option<([u8; 20], usize, i32)> {
+    let mut zb = zmij::Buffer::new();
+    let s = zb.format_finite(x).as_bytes();
+    let (mant, e) = match s.iter().position(|&c| c == b'e') {
+        Some(k) => (&s[..k], parse_exponent(&s[k + 1..])?),
+        None => (s, 0),
+    };
+    let mut d = [0u8; 20];
+    let mut n = 0;
+    let mut frac = 0i32;
+    let mut after_dot = false;
+    for &c in mant {
+        match c {
+            b'.' => after_dot = true,
+            b'0'..=b'9' => {
+                frac += i32::from(after_dot);
+                // Leading zeros are not significant.
+                if n == 0 && c == b'0' {
+                    continue;
+                }
+                *d.get_mut(n)? = c;
+                n += 1;
+            }
+            _ => return None,
+        }
+    }
+    let mut q = e - frac;
+    while n > 0 && d[n - 1] == b'0' {
+        n -= 1;
+        q += 1;
+    }
+    (n > 0 && !is_tie(x, q)).then_some((d, n, q))
+}
+
+/// The exponent after `e` in `zmij`'s output (`+16`, `-7`, `308`).
+fn parse_exponent(s: &[u8]) -> Option<i32> {
+    let (neg, digits) = match s.first()? {
+        b'-' => (true, &s[1..]),
+        b'+' => (false, &s[1..]),
+        _ => (false, s),
+    };
+    let mut v: i32 = 0;
+    for &c in digits {
+        if !c.is_ascii_digit() {
+            return None;
+        }
+        v = v.checked_mul(10)?.checked_add(i32::from(c - b'0'))?;
+    }
+    Some(if neg { -v } else { v })
+}
+
+/// Whether the finite `x > 0` lies exactly halfway between two multiples of `10^q`, i.e.
+/// whether `2 x / 10^q` is an odd integer. With `x = m 2^e` and `m` odd: for `q <= 0` that is
+/// `m 5^(-q) 2^(e + 1 - q)`, an odd integer exactly when `e + 1 = q`; for `q > 0` it is
+/// `m 2^(e + 1 - q) / 5^q`, an odd integer exactly when `e + 1 = q` and `5^q` divides `m`.
+fn is_tie(x: f64, q: i32) -> bool {
+    let bits = x.to_bits();
+    let biased = ((bits >> 52) & 0x7ff) as i32;
+    let mut m = bits & ((1u64 << 52) - 1);
+    let mut e = -1074;
+    if biased != 0 {
+        m |= 1u64 << 52;
+        e = biased - 1075;
+    }
+    if m == 0 {
+        return false;
+    }
+    let tz = m.trailing_zeros();
+    m >>= tz;
+    e += tz as i32;
+    if e + 1 != q {
+        return false;
+    }
+    if q <= 0 {
+        return true;
+    }
+    // m < 2^53 < 5^23: a larger power of 5 cannot divide it.
+    q < 23 && m % 5u64.pow(q as u32) == 0
+}
+
+/// Append `std`'s formatting of `x` (the rare cases this module does not do itself).
+fn by_std(out: &mut Vec<u8>, args: std::fmt::Arguments) {
+    // Writing into a `Vec` cannot fail.
+    let _ = out.write_fmt(args);
+}
+
+/// Append `n` zeros.
+fn zeros(out: &mut Vec<u8>, n: usize) {
+    out.resize(out.len() + n, b'0');
+}
+
+/// Append the exponent-notation body `D[0].D[1..]eE` of the digits (`E = n + q - 1`).
+fn exponent_body(out: &mut Vec<u8>, d: &[u8], q: i32) {
+    out.push(d[0]);
+    if d.len() > 1 {
+        out.push(b'.');
+        out.extend_from_slice(&d[1..]);
+    }
+    out.push(b'e');
+    int(out, d.len() as i32 + q - 1);
+}
+
+/// Append `format!("{x:?}")`.
+pub fn debug(out: &mut Vec<u8>, x: f64) {
+    if !x.is_finite() {
+        return by_std(out, format_args!("{x:?}"));
+    }
+    if x.is_sign_negative() {
+        out.push(b'-');
+    }
+    let a = x.abs();
+    if a == 0.0 {
+        out.extend_from_slice(b"0.0");
+        return;
+    }
+    let Some((d, n, q)) = shortest(a) else {
+        out.truncate(out.len() - usize::from(x.is_sign_negative()));
+        return by_std(out, format_args!("{x:?}"));
+    };
+    let d = &d[..n];
+    if !(1e-4..1e16).contains(&a) {
+        return exponent_body(out, d, q);
+    }
+    // Plain notation, at least one fractional digit: `point` digits before the point.
+    let point = n as i32 + q;
+    if point <= 0 {
+        out.extend_from_slice(b"0.");
+        zeros(out, (-point) as usize);
+        out.extend_from_slice(d);
+    } else if point as usize >= n {
+        out.extend_from_slice(d);
+        zeros(out, point as usize - n);
+        out.extend_from_slice(b".0");
+    } else {
+        let (int_part, frac) = d.split_at(point as usize);
+        out.extend_from_slice(int_part);
+        out.push(b'.');
+        out.extend_from_slice(frac);
+    }
+}
+
+/// Append `format!("{x:e}")`.
+pub fn exp(out: &mut Vec<u8>, x: f64) {
+    if !x.is_finite() {
+        return by_std(out, format_args!("{x:e}"));
+    }
+    if x.is_sign_negative() {
+        out.push(b'-');
+    }
+    let a = x.abs();
+    if a == 0.0 {
+        out.extend_from_slice(b"0e0");
+        return;
+    }
+    match shortest(a) {
+        Some((d, n, q)) => exponent_body(out, &d[..n], q),
+        None => {
+            out.truncate(out.len() - usize::from(x.is_sign_negative()));
+            by_std(out, format_args!("{x:e}"));
+        }
+    }
+}
+
+/// Append `format!("{x:.3}")`: `round(|x| 1000)` computed exactly from `x = m 2^e` (ties to
+/// even, as `std`), with `std`'s sign rule (a minus for every negative number, `-0.0` and
+/// values that round to zero included). Values of `1e15` and more, infinities and NaN are
+/// left to `std`.
+pub fn fixed3(out: &mut Vec<u8>, x: f64) {
+    if !(x.abs() < 1e15) {
+        return by_std(out, format_args!("{x:.3}"));
+    }
+    let bits = x.to_bits();
+    let biased = ((bits >> 52) & 0x7ff) as i32;
+    let mut m = bits & ((1u64 << 52) - 1);
+    let mut e = -1074;
+    if biased != 0 {
+        m |= 1u64 << 52;
+        e = biased - 1075;
+    }
+    // |x| < 1e15 < 2^50: m 2^e < 2^50, so e < 50 and m 1000 2^e < 2^60.
+    let p = u128::from(m) * 1000;
+    let scaled: u128 = if e >= 0 {
+        p << e
+    } else {
+        let s = (-e) as u32;
+        if s >= 100 {
+            // p < 2^63 < 2^(s - 1): below half a unit, rounds to 0.
+            0
+        } else {
+            let q = p >> s;
+            let r = p - (q << s);
+            let half = 1u128 << (s - 1);
+            q + u128::from(r > half || (r == half && q & 1 == 1))
+        }
+    };
+    if x.is_sign_negative() {
+        out.push(b'-');
+    }
+    int(out, (scaled / 1000) as u64);
+    let f = (scaled % 1000) as u16;
+    out.extend_from_slice(&[
+        b'.',
+        b'0' + (f / 100) as u8,
+        b'0' + (f / 10 % 10) as u8,
+        b'0' + (f % 10) as u8,
+    ]);
+}
+
+/// Append `format!("{v}")` of an integer.
+pub fn int<I: itoa::Integer>(out: &mut Vec<u8>, v: I) {
+    out.extend_from_slice(itoa::Buffer::new().format(v).as_bytes());
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn same(x: f64) {
+        let mut b = Vec::new();
+        debug(&mut b, x);
+        assert_eq!(String::from_utf8(b).unwrap(), format!("{x:?}"), "debug {x:e}");
+        let mut b = Vec::new();
+        exp(&mut b, x);
+        assert_eq!(String::from_utf8(b).unwrap(), format!("{x:e}"), "exp {x:e}");
+        let mut b = Vec::new();
+        fixed3(&mut b, x);
+        assert_eq!(String::from_utf8(b).unwrap(), format!("{x:.3}"), "fixed3 {x:e}");
+    }
+
+    #[test]
+    fn special_values_and_notation_boundaries_are_std_s() {
+        for x in [
+            0.0,
+            -0.0,
+            f64::NAN,
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+            1.0,
+            -1.0,
+            0.1,
+            1e-4,
+            1e16,
+            9.999999999999999e15,
+            1e-5,
+            9.99e-5,
+            1e15,
+            1e-7,
+            f64::MAX,
+            f64::MIN_POSITIVE,
+            5e-324,
+            0.0625,
+            2.0625,
+            0.0005,
+            -0.0001,
+            999.9995,
+            981446413237567.25,
+            123456.789,
+        ] {
+            same(x);
+            same(-x);
+            same(f64::from_bits(x.to_bits().wrapping_add(1)));
+            same(f64::from_bits(x.to_bits().wrapping_sub(1)));
+        }
+    }
+
+    #[test]
+    fn ties_are_detected_exactly() {
+        // 0.25 × 10^0 and 0.5 × 10^0 sit halfway between one-digit decimals at q = -1: 2.5 is
+        // a tie at q = 0 (between 2 and 3), 0.25 at q = -1, 1e15 + 0.5 at q = 0.
+        assert!(is_tie(2.5, 0));
+        assert!(is_tie(0.25, -1));
+        assert!(is_tie(1e15 + 0.5, 0));
+        assert!(is_tie(25.0, 1)); // between 20 and 30
+        assert!(!is_tie(2.5, -1));
+        assert!(!is_tie(0.1, -2));
+        assert!(!is_tie(35.0, 0));
+    }
+}
