@@ -26,7 +26,11 @@ impl Rng {
 
 fn check(x: f64, buf: &mut Vec<u8>) {
     for (name, f, want) in [
-        ("{:?}", text::debug as fn(&mut Vec<u8>, f64), format!("{x:?}")),
+        (
+            "{:?}",
+            text::debug as fn(&mut Vec<u8>, f64),
+            format!("{x:?}"),
+        ),
         ("{:e}", text::exp, format!("{x:e}")),
         ("{:.3}", text::fixed3, format!("{x:.3}")),
     ] {

@@ -8,6 +8,7 @@
 //! `Spline` through points on the exact circle (every 1/32 of a turn).
 
 use super::gmsh::{PHYSICAL_FLUID, PHYSICAL_INTERFACES, PHYSICAL_OUTER, PHYSICAL_WALL_BASE};
+use super::text;
 use super::write_atomic;
 use crate::layout::{Curve, EdgeKind};
 use crate::mesh::Mesh;
@@ -21,6 +22,19 @@ fn list(tags: &[i64]) -> String {
         .map(|t| t.to_string())
         .collect::<Vec<_>>()
         .join(", ")
+}
+
+/// `Point(tag) = {x, y, 0};` (`{:e}` floats) and a newline.
+fn point_line(w: &mut dyn Write, tag: usize, p: [f64; 2]) -> io::Result<()> {
+    let mut out = Vec::with_capacity(64);
+    out.extend_from_slice(b"Point(");
+    text::int(&mut out, tag);
+    out.extend_from_slice(b") = {");
+    text::exp(&mut out, p[0]);
+    out.extend_from_slice(b", ");
+    text::exp(&mut out, p[1]);
+    out.extend_from_slice(b", 0};\n");
+    w.write_all(&out)
 }
 
 /// Write the `.geo` script of `mesh`'s layout to `path`.
@@ -41,13 +55,13 @@ pub fn write_geo(mesh: &Mesh, path: &Path) -> io::Result<()> {
         )?;
         writeln!(w, "SetFactory(\"Built-in\");")?;
         for (v, p) in layout.vertices.iter().enumerate() {
-            writeln!(w, "Point({}) = {{{:e}, {:e}, 0}};", v + 1, p[0], p[1])?;
+            point_line(w, v + 1, *p)?;
         }
         let mut next_point = layout.vertices.len() + 1;
         let mut extra_point = |w: &mut dyn Write, p: [f64; 2]| -> io::Result<usize> {
             let tag = next_point;
             next_point += 1;
-            writeln!(w, "Point({tag}) = {{{:e}, {:e}, 0}};", p[0], p[1])?;
+            point_line(w, tag, p)?;
             Ok(tag)
         };
         for (e, edge) in layout.edges.iter().enumerate() {

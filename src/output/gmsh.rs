@@ -6,6 +6,7 @@
 //! - `interfaces` (dimension 1, tag 3): every block-to-block interface;
 //! - `wall_N` (dimension 1, tag 10 + N): the wall of hole `N` (0-based, input order).
 
+use super::text::{self, write_chunked};
 use super::write_atomic;
 use crate::layout::EdgeKind;
 use crate::mesh::Mesh;
@@ -29,6 +30,28 @@ fn physical_of(kind: EdgeKind) -> i32 {
         EdgeKind::Wall(c) => PHYSICAL_WALL_BASE + c,
         _ => PHYSICAL_INTERFACES,
     }
+}
+
+/// ` xmin ymin 0 xmax ymax 0` of an entity's bounding box (`{:e}` floats).
+fn entity_box(out: &mut Vec<u8>, b: [f64; 4]) {
+    for (k, x) in [b[0], b[1], b[2], b[3]].into_iter().enumerate() {
+        out.push(b' ');
+        text::exp(out, x);
+        if k % 2 == 1 {
+            out.extend_from_slice(b" 0");
+        }
+    }
+}
+
+/// One line of integers separated by spaces.
+fn line_of_ints(out: &mut Vec<u8>, values: &[usize]) {
+    for (k, &v) in values.iter().enumerate() {
+        if k > 0 {
+            out.push(b' ');
+        }
+        text::int(out, v);
+    }
+    out.push(b'\n');
 }
 
 fn bbox(points: impl Iterator<Item = [f64; 2]>) -> [f64; 4] {
@@ -112,47 +135,51 @@ pub fn write_msh(mesh: &Mesh, path: &Path) -> io::Result<()> {
         // Entities: curves = layout edges (tag e + 1), surfaces = blocks (tag b + 1).
         writeln!(w, "$Entities")?;
         writeln!(w, "0 {} {} 0", layout.edges.len(), layout.blocks.len())?;
-        for (e, edge) in layout.edges.iter().enumerate() {
-            let chain = edge_lines[e].as_deref().unwrap_or(&[]);
-            let b = bbox(chain.iter().map(|&n| nodes.coords[n as usize]));
-            writeln!(
-                w,
-                "{} {:e} {:e} 0 {:e} {:e} 0 1 {} 0",
-                e + 1,
-                b[0],
-                b[1],
-                b[2],
-                b[3],
-                physical_of(edge.kind)
-            )?;
-        }
-        for (b, block) in layout.blocks.iter().enumerate() {
-            let bb = bbox(mesh.grids[b].nodes.iter().copied());
-            write!(
-                w,
-                "{} {:e} {:e} 0 {:e} {:e} 0 1 {PHYSICAL_FLUID} 4",
-                b + 1,
-                bb[0],
-                bb[1],
-                bb[2],
-                bb[3]
-            )?;
-            for side in &block.sides {
-                let sign = if side.reversed { -1 } else { 1 };
-                write!(w, " {}", sign * (side.edge as i64 + 1))?;
+        write_chunked(w, layout.edges.len(), 1024, |r, out| {
+            for e in r {
+                let chain = edge_lines[e].as_deref().unwrap_or(&[]);
+                let b = bbox(chain.iter().map(|&n| nodes.coords[n as usize]));
+                text::int(out, e + 1);
+                entity_box(out, b);
+                out.extend_from_slice(b" 1 ");
+                text::int(out, physical_of(layout.edges[e].kind));
+                out.extend_from_slice(b" 0\n");
             }
-            writeln!(w)?;
-        }
+        })?;
+        write_chunked(w, layout.blocks.len(), 512, |r, out| {
+            for b in r {
+                let bb = bbox(mesh.grids[b].nodes.iter().copied());
+                text::int(out, b + 1);
+                entity_box(out, bb);
+                out.extend_from_slice(b" 1 ");
+                text::int(out, PHYSICAL_FLUID);
+                out.extend_from_slice(b" 4");
+                for side in &layout.blocks[b].sides {
+                    let sign = if side.reversed { -1 } else { 1 };
+                    out.push(b' ');
+                    text::int(out, sign * (side.edge as i64 + 1));
+                }
+                out.push(b'\n');
+            }
+        })?;
         writeln!(w, "$EndEntities")?;
 
         let n = nodes.coords.len();
         writeln!(w, "$Nodes\n1 {n} 1 {n}\n2 1 0 {n}")?;
-        for k in 1..=n {
-            writeln!(w, "{k}")?;
-        }
-        for p in &nodes.coords {
-            writeln!(w, "{:e} {:e} 0", p[0], p[1])?;
-        }
+        write_chunked(w, n, 8192, |r, out| {
+            for k in r {
+                text::int(out, k + 1);
+                out.push(b'\n');
+            }
+        })?;
+        write_chunked(w, n, 4096, |r, out| {
+            for p in &nodes.coords[r] {
+                text::exp(out, p[0]);
+                out.push(b' ');
+                text::exp(out, p[1]);
+                out.extend_from_slice(b" 0\n");
+            }
+        })?;
         writeln!(w, "$EndNodes")?;
 
         let nlines: usize = edge_lines
@@ -167,33 +194,56 @@ pub fn write_msh(mesh: &Mesh, path: &Path) -> io::Result<()> {
             "{} {total} 1 {total}",
             layout.edges.len() + layout.blocks.len()
         )?;
-        let mut tag = 1usize;
-        for (e, chain) in edge_lines.iter().enumerate() {
-            let chain = chain.as_deref().unwrap_or(&[]);
-            writeln!(w, "1 {} 1 {}", e + 1, chain.len().saturating_sub(1))?;
-            for pair in chain.windows(2) {
-                writeln!(w, "{tag} {} {}", pair[0] + 1, pair[1] + 1)?;
-                tag += 1;
-            }
+        // Element tags run 1.. over the edges' lines, then the blocks' quads: each chunk
+        // starts from the tags of what precedes it.
+        let mut first_line = Vec::with_capacity(edge_lines.len() + 1);
+        first_line.push(1usize);
+        for c in &edge_lines {
+            let k = c.as_ref().map_or(0, |c| c.len().saturating_sub(1));
+            first_line.push(first_line.last().copied().unwrap_or(1) + k);
         }
-        for (b, g) in mesh.grids.iter().enumerate() {
-            let ids = &nodes.block_nodes[b];
-            writeln!(w, "2 {} 3 {}", b + 1, g.ni * g.nj)?;
-            let at = |i: usize, j: usize| ids[i + j * (g.ni + 1)] + 1;
-            for j in 0..g.nj {
-                for i in 0..g.ni {
-                    writeln!(
-                        w,
-                        "{tag} {} {} {} {}",
-                        at(i, j),
-                        at(i + 1, j),
-                        at(i + 1, j + 1),
-                        at(i, j + 1)
-                    )?;
-                    tag += 1;
+        write_chunked(w, edge_lines.len(), 1024, |r, out| {
+            for e in r {
+                let chain = edge_lines[e].as_deref().unwrap_or(&[]);
+                out.extend_from_slice(b"1 ");
+                text::int(out, e + 1);
+                out.extend_from_slice(b" 1 ");
+                text::int(out, chain.len().saturating_sub(1));
+                out.push(b'\n');
+                for (k, pair) in chain.windows(2).enumerate() {
+                    line_of_ints(
+                        out,
+                        &[
+                            first_line[e] + k,
+                            pair[0] as usize + 1,
+                            pair[1] as usize + 1,
+                        ],
+                    );
                 }
             }
+        })?;
+        let mut first_quad = Vec::with_capacity(mesh.grids.len() + 1);
+        first_quad.push(first_line.last().copied().unwrap_or(1));
+        for g in &mesh.grids {
+            first_quad.push(first_quad.last().copied().unwrap_or(1) + g.ni * g.nj);
         }
+        write_chunked(w, mesh.grids.len(), 16, |r, out| {
+            for b in r {
+                let (g, ids) = (&mesh.grids[b], &nodes.block_nodes[b]);
+                line_of_ints(out, &[2, b + 1, 3, g.ni * g.nj]);
+                let at = |i: usize, j: usize| ids[i + j * (g.ni + 1)] as usize + 1;
+                let mut tag = first_quad[b];
+                for j in 0..g.nj {
+                    for i in 0..g.ni {
+                        line_of_ints(
+                            out,
+                            &[tag, at(i, j), at(i + 1, j), at(i + 1, j + 1), at(i, j + 1)],
+                        );
+                        tag += 1;
+                    }
+                }
+            }
+        })?;
         writeln!(w, "$EndElements")?;
         Ok(())
     })

@@ -30,7 +30,7 @@ use crate::connectivity::BlockConnectivity;
 use crate::mesh::Mesh;
 use crate::quality::well_formed;
 use std::fs::File;
-use std::io::{self, BufWriter, Write};
+use std::io::{self, BufWriter};
 use std::path::Path;
 
 /// Write `path` atomically: `body` writes into a buffered temporary file next to `path`,
@@ -88,11 +88,6 @@ pub(crate) fn check_mesh(mesh: &Mesh) -> io::Result<()> {
         ));
     }
     Ok(())
-}
-
-/// Write `x` with the shortest representation that reads back to the same `f64`.
-pub(crate) fn num<W: Write>(w: &mut W, x: f64) -> io::Result<()> {
-    write!(w, "{x:?}")
 }
 
 /// A writer the CLI's `--format` can name.

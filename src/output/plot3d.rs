@@ -9,6 +9,7 @@
 //!   DoublePrecision on) and most structured solvers take.
 //! - `mesh.p3d`: the same numbers as formatted ASCII.
 
+use super::text::{self, write_chunked};
 use super::write_atomic;
 use crate::mesh::BlockGrid;
 use std::io::{self, Write};
@@ -61,18 +62,16 @@ pub fn write_ascii(grids: &[BlockGrid], path: &Path) -> io::Result<()> {
         for g in grids {
             writeln!(w, "{} {}", dim(g.ni)?, dim(g.nj)?)?;
         }
-        for g in grids {
-            for axis in 0..2 {
-                for (k, p) in g.nodes.iter().enumerate() {
-                    let sep = if k % 4 == 3 || k + 1 == g.nodes.len() {
-                        "\n"
-                    } else {
-                        " "
-                    };
-                    write!(w, "{:e}{}", p[axis], sep)?;
+        write_chunked(w, grids.len(), 16, |r, out| {
+            for g in &grids[r] {
+                for axis in 0..2 {
+                    for (k, p) in g.nodes.iter().enumerate() {
+                        text::exp(out, p[axis]);
+                        let last = k % 4 == 3 || k + 1 == g.nodes.len();
+                        out.push(if last { b'\n' } else { b' ' });
+                    }
                 }
             }
-        }
-        Ok(())
+        })
     })
 }

@@ -9,6 +9,7 @@
 //! mesh's bounding box. Coordinates are written with 3 decimals, so the file is deterministic.
 //! The circles are recovered from the wall edges that are arcs (one `<circle>` per circle id).
 
+use super::text::{self, write_chunked};
 use super::{check_mesh, write_atomic};
 use crate::domain::CircleId;
 use crate::geometry::Point;
@@ -132,29 +133,40 @@ impl View {
 /// The blocks as filled polygons (their four sides' nodes), in alternating colours.
 fn write_block_fills<W: Write>(w: &mut W, mesh: &Mesh, v: &View) -> io::Result<()> {
     writeln!(w, "  <g stroke=\"none\">")?;
-    for (g, c) in mesh.grids.iter().zip(block_colours(mesh)) {
-        write!(w, "    <path fill=\"{}\" d=\"", BLOCK_FILLS[c])?;
-        let ring = (0..4).flat_map(|k| {
-            let side = g.side(k);
-            let n = side.len().saturating_sub(1);
-            side.into_iter().take(n)
-        });
-        for (k, p) in ring.enumerate() {
-            let cmd = if k == 0 { "M" } else { " L" };
-            write!(w, "{cmd}{:.3} {:.3}", v.x(p[0]), v.y(p[1]))?;
+    let colours = block_colours(mesh);
+    write_chunked(w, mesh.grids.len(), 64, |r, out| {
+        for b in r {
+            let g = &mesh.grids[b];
+            out.extend_from_slice(b"    <path fill=\"");
+            out.extend_from_slice(BLOCK_FILLS[colours[b]].as_bytes());
+            out.extend_from_slice(b"\" d=\"");
+            let ring = (0..4).flat_map(|k| {
+                let side = g.side(k);
+                let n = side.len().saturating_sub(1);
+                side.into_iter().take(n)
+            });
+            path_data(out, v, ring);
+            out.extend_from_slice(b" Z\"/>\n");
         }
-        writeln!(w, " Z\"/>")?;
-    }
+    })?;
     writeln!(w, "  </g>")
 }
 
-fn path<W: Write>(w: &mut W, v: &View, pts: impl Iterator<Item = Point>) -> io::Result<()> {
-    write!(w, "    <path d=\"")?;
+/// `M x y L x y ...` (three decimals) of `pts` in picture coordinates.
+fn path_data(out: &mut Vec<u8>, v: &View, pts: impl Iterator<Item = Point>) {
     for (k, p) in pts.enumerate() {
-        let cmd = if k == 0 { "M" } else { " L" };
-        write!(w, "{cmd}{:.3} {:.3}", v.x(p[0]), v.y(p[1]))?;
+        out.extend_from_slice(if k == 0 { b"M" } else { b" L" });
+        text::fixed3(out, v.x(p[0]));
+        out.push(b' ');
+        text::fixed3(out, v.y(p[1]));
     }
-    writeln!(w, "\"/>")
+}
+
+/// One `<path>` element through `pts`.
+fn path(out: &mut Vec<u8>, v: &View, pts: impl Iterator<Item = Point>) {
+    out.extend_from_slice(b"    <path d=\"");
+    path_data(out, v, pts);
+    out.extend_from_slice(b"\"/>\n");
 }
 
 /// Write the SVG picture of `mesh` to `path` (atomically).
@@ -208,14 +220,16 @@ fn write_to<W: Write>(w: &mut W, mesh: &Mesh) -> io::Result<()> {
         w,
         "  <g stroke=\"#b0b0b0\" stroke-width=\"0.4\" fill=\"none\">"
     )?;
-    for g in &mesh.grids {
-        for j in 1..g.nj {
-            path(w, &v, (0..=g.ni).map(|i| g.node(i, j)))?;
+    write_chunked(w, mesh.grids.len(), 64, |r, out| {
+        for g in &mesh.grids[r] {
+            for j in 1..g.nj {
+                path(out, &v, (0..=g.ni).map(|i| g.node(i, j)));
+            }
+            for i in 1..g.ni {
+                path(out, &v, (0..=g.nj).map(|j| g.node(i, j)));
+            }
         }
-        for i in 1..g.ni {
-            path(w, &v, (0..=g.nj).map(|j| g.node(i, j)))?;
-        }
-    }
+    })?;
     writeln!(w, "  </g>")?;
 
     // Each edge once, from the first block side that uses it.
@@ -243,17 +257,21 @@ fn write_to<W: Write>(w: &mut W, mesh: &Mesh) -> io::Result<()> {
         w,
         "  <g stroke=\"#303030\" stroke-width=\"1.2\" fill=\"none\">"
     )?;
-    for nodes in &outlines {
-        path(w, &v, nodes.iter().copied())?;
-    }
+    write_chunked(w, outlines.len(), 256, |r, out| {
+        for nodes in &outlines[r] {
+            path(out, &v, nodes.iter().copied());
+        }
+    })?;
     writeln!(w, "  </g>")?;
     writeln!(
         w,
         "  <g stroke=\"#d62728\" stroke-width=\"2.5\" fill=\"none\">"
     )?;
-    for nodes in &medial {
-        path(w, &v, nodes.iter().copied())?;
-    }
+    write_chunked(w, medial.len(), 256, |r, out| {
+        for nodes in &medial[r] {
+            path(out, &v, nodes.iter().copied());
+        }
+    })?;
     writeln!(w, "  </g>")?;
 
     write_degeneracy_marks(w, mesh, &v)?;
@@ -273,15 +291,19 @@ fn write_to<W: Write>(w: &mut W, mesh: &Mesh) -> io::Result<()> {
         w,
         "  <g font-family=\"sans-serif\" font-size=\"11\" fill=\"#1f4e9c\" text-anchor=\"middle\">"
     )?;
-    for (b, g) in mesh.grids.iter().enumerate() {
-        let p = g.node(g.ni / 2, g.nj / 2);
-        writeln!(
-            w,
-            "    <text x=\"{:.3}\" y=\"{:.3}\">{b}</text>",
-            v.x(p[0]),
-            v.y(p[1])
-        )?;
-    }
+    write_chunked(w, mesh.grids.len(), 1024, |r, out| {
+        for b in r {
+            let g = &mesh.grids[b];
+            let p = g.node(g.ni / 2, g.nj / 2);
+            out.extend_from_slice(b"    <text x=\"");
+            text::fixed3(out, v.x(p[0]));
+            out.extend_from_slice(b"\" y=\"");
+            text::fixed3(out, v.y(p[1]));
+            out.extend_from_slice(b"\">");
+            text::int(out, b);
+            out.extend_from_slice(b"</text>\n");
+        }
+    })?;
     writeln!(w, "  </g>")?;
     writeln!(w, "</svg>")
 }

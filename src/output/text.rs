@@ -19,7 +19,41 @@
 //! `std` itself. Everything else is plain digit shuffling, tested against `std` on tens of
 //! millions of values (`tests/perf_text_numbers.rs`).
 
-use std::io::Write;
+use rayon::prelude::*;
+use std::io::{self, Write};
+use std::ops::Range;
+
+/// Write the text of the items `0..n` to `w`: `f(range, out)` appends the text of the items
+/// in `range` (a chunk of `chunk` items), the chunks are formatted on the rayon pool a few per
+/// thread at a time (memory stays bounded) and written in order, so the bytes are those of
+/// formatting every item in turn, for any number of threads.
+pub fn write_chunked<W: Write + ?Sized>(
+    w: &mut W,
+    n: usize,
+    chunk: usize,
+    f: impl Fn(Range<usize>, &mut Vec<u8>) + Sync,
+) -> io::Result<()> {
+    let chunk = chunk.max(1);
+    let chunks = n.div_ceil(chunk);
+    let wave = 4 * rayon::current_num_threads().max(1);
+    let mut first = 0;
+    while first < chunks {
+        let last = (first + wave).min(chunks);
+        let texts: Vec<Vec<u8>> = (first..last)
+            .into_par_iter()
+            .map(|c| {
+                let mut out = Vec::new();
+                f(c * chunk..((c + 1) * chunk).min(n), &mut out);
+                out
+            })
+            .collect();
+        for t in &texts {
+            w.write_all(t)?;
+        }
+        first = last;
+    }
+    Ok(())
+}
 
 /// The shortest round-trip digits of a finite `x > 0`: `n` significant digits in `d[..n]`
 /// (no leading or trailing zero) and the decimal exponent `q` of the last one, so that
@@ -104,6 +138,18 @@ fn is_tie(x: f64, q: i32) -> bool {
     q < 23 && m % 5u64.pow(q as u32) == 0
 }
 
+/// Whether a finite `x > 0` of at least `1e-4` can be a tie at all (see [`is_tie`]): its
+/// shortest digits end at `q >= -21` (at most 17 significant digits, the first at `10^-4` or
+/// above), and a tie at `q` needs `x = m 2^(q - 1)` with `m` odd, so `x` must be a multiple of
+/// `2^-22`. Mesh coordinates almost never are: they skip the digit parsing.
+fn may_tie(x: f64) -> bool {
+    let bits = x.to_bits();
+    let biased = ((bits >> 52) & 0x7ff) as i32;
+    let m = (bits & ((1u64 << 52) - 1)) | (u64::from(biased != 0) << 52);
+    // The exponent of the lowest set bit of x.
+    biased.max(1) - 1075 + m.trailing_zeros() as i32 >= -22
+}
+
 /// Append `std`'s formatting of `x` (the rare cases this module does not do itself).
 fn by_std(out: &mut Vec<u8>, args: std::fmt::Arguments) {
     // Writing into a `Vec` cannot fail.
@@ -137,6 +183,12 @@ pub fn debug(out: &mut Vec<u8>, x: f64) {
     let a = x.abs();
     if a == 0.0 {
         out.extend_from_slice(b"0.0");
+        return;
+    }
+    if (1e-4..1e16).contains(&a) && !may_tie(a) {
+        // zmij writes this range as `std` does: plain notation, `.0` after an integer.
+        let mut zb = zmij::Buffer::new();
+        out.extend_from_slice(zb.format_finite(a).as_bytes());
         return;
     }
     let Some((d, n, q)) = shortest(a) else {
@@ -244,13 +296,21 @@ mod tests {
     fn same(x: f64) {
         let mut b = Vec::new();
         debug(&mut b, x);
-        assert_eq!(String::from_utf8(b).unwrap(), format!("{x:?}"), "debug {x:e}");
+        assert_eq!(
+            String::from_utf8(b).unwrap(),
+            format!("{x:?}"),
+            "debug {x:e}"
+        );
         let mut b = Vec::new();
         exp(&mut b, x);
         assert_eq!(String::from_utf8(b).unwrap(), format!("{x:e}"), "exp {x:e}");
         let mut b = Vec::new();
         fixed3(&mut b, x);
-        assert_eq!(String::from_utf8(b).unwrap(), format!("{x:.3}"), "fixed3 {x:e}");
+        assert_eq!(
+            String::from_utf8(b).unwrap(),
+            format!("{x:.3}"),
+            "fixed3 {x:e}"
+        );
     }
 
     #[test]

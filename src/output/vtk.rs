@@ -11,6 +11,7 @@
 //! [`crate::output`]). Block files left over from an earlier run with more blocks are not
 //! removed (the `.vtm` does not reference them).
 
+use super::vtu::{float_lines, int_lines, point_lines, POINTS_HEADER};
 use super::{check_mesh, write_atomic};
 use crate::mesh::{BlockGrid, Mesh};
 use crate::quality::{cell_fields, CellFields};
@@ -81,43 +82,43 @@ pub fn write_multiblock(mesh: &Mesh, dir: &Path) -> io::Result<()> {
     })
 }
 
-/// Write one block as a VTK XML StructuredGrid (ASCII).
+/// Write one block as a VTK XML StructuredGrid (ASCII). The file's text is made in memory
+/// (numbers through [`super::text`]) and written in one call.
 pub fn write_vts<W: Write>(w: &mut W, block_id: usize, grid: &BlockGrid) -> io::Result<()> {
     let (ni, nj) = (grid.ni, grid.nj);
     let fields = cell_fields(grid);
-    writeln!(w, "<?xml version=\"1.0\"?>")?;
+    // About 24 bytes per point and 6 x 22 + 3 per cell.
+    let mut out = Vec::with_capacity(1024 + 24 * grid.nodes.len() + 140 * grid.cells());
+    writeln!(out, "<?xml version=\"1.0\"?>")?;
     writeln!(
-        w,
+        out,
         "<VTKFile type=\"StructuredGrid\" version=\"1.0\" byte_order=\"LittleEndian\" header_type=\"UInt64\">"
     )?;
-    writeln!(w, "  <StructuredGrid WholeExtent=\"0 {ni} 0 {nj} 0 0\">")?;
-    writeln!(w, "    <Piece Extent=\"0 {ni} 0 {nj} 0 0\">")?;
-    writeln!(w, "      <CellData Scalars=\"min_angle_deg\">")?;
+    writeln!(out, "  <StructuredGrid WholeExtent=\"0 {ni} 0 {nj} 0 0\">")?;
+    writeln!(out, "    <Piece Extent=\"0 {ni} 0 {nj} 0 0\">")?;
+    writeln!(out, "      <CellData Scalars=\"min_angle_deg\">")?;
     writeln!(
-        w,
+        out,
         "        <DataArray type=\"Int32\" Name=\"block_id\" format=\"ascii\">"
     )?;
-    for k in 0..grid.cells() {
-        if k % 16 == 0 {
-            write!(w, "         ")?;
-        }
-        write!(w, " {block_id}")?;
-        if k % 16 == 15 || k + 1 == grid.cells() {
-            writeln!(w)?;
-        }
-    }
-    writeln!(w, "        </DataArray>")?;
+    int_lines(&mut out, std::iter::repeat_n(block_id, grid.cells()));
+    writeln!(out, "        </DataArray>")?;
     for (k, name) in CELL_ARRAYS.iter().enumerate() {
         writeln!(
-            w,
+            out,
             "        <DataArray type=\"Float64\" Name=\"{name}\" format=\"ascii\">"
         )?;
-        super::vtu::floats(w, cell_array(&fields, k).iter().copied())?;
-        writeln!(w, "        </DataArray>")?;
+        float_lines(&mut out, cell_array(&fields, k));
+        writeln!(out, "        </DataArray>")?;
     }
-    writeln!(w, "      </CellData>")?;
-    super::vtu::points(w, &grid.nodes)?;
-    writeln!(w, "    </Piece>")?;
-    writeln!(w, "  </StructuredGrid>")?;
-    writeln!(w, "</VTKFile>")
+    writeln!(out, "      </CellData>")?;
+    writeln!(out, "      <Points>")?;
+    writeln!(out, "{POINTS_HEADER}")?;
+    point_lines(&mut out, &grid.nodes);
+    writeln!(out, "        </DataArray>")?;
+    writeln!(out, "      </Points>")?;
+    writeln!(out, "    </Piece>")?;
+    writeln!(out, "  </StructuredGrid>")?;
+    writeln!(out, "</VTKFile>")?;
+    w.write_all(&out)
 }
