@@ -2,7 +2,7 @@
 //!
 //! ```text
 //! cargo run --release --example perf_table -- [--max 1e5] [--seed 1] [--block-cells 16]
-//!     [--format json] [--tri-max N] [--force] [--no-build]
+//!     [--format json] [--tri-max N] [--warm-max N] [--force] [--no-build]
 //! ```
 //!
 //! For n = 1e2, 1e3, 1e4, 1e5 (up to `--max`) it writes `layouts::bubbles(n, seed)` with the
@@ -18,6 +18,12 @@
 //! the sample points the exact pipeline triangulates (its first sampling of the same layouts:
 //! `SamplingOptions { soft_rounds: false, .. }`, as `mesher` samples in exact mode; best of a
 //! few runs each, interleaved), up to `--tri-max` (default: `--max`).
+//!
+//! Then, in this process, the remeshing loop of a time-stepping solver (the library, not the
+//! CLI): `mesh` and the quality report (`Report::from_mesh`) of the same layout again and
+//! again, after one run to warm up, as a program that remeshes every time step does (its
+//! memory comes back from the allocator instead of fresh pages); median of a few runs, up to
+//! `--warm-max` (default: `--max`).
 //!
 //! Before running the largest sizes it projects the peak memory from the previous size's bytes
 //! per particle and skips a size that would not fit in 85% of `MemAvailable` (`--force` runs
@@ -53,6 +59,7 @@ struct Args {
     block_cells: usize,
     format: String,
     tri_max: Option<usize>,
+    warm_max: Option<usize>,
     force: bool,
     build: bool,
 }
@@ -73,6 +80,7 @@ fn parse_args() -> Result<Args, String> {
         block_cells: 16,
         format: "json".into(),
         tri_max: None,
+        warm_max: None,
         force: false,
         build: true,
     };
@@ -89,12 +97,13 @@ fn parse_args() -> Result<Args, String> {
             }
             "--format" => a.format = value()?,
             "--tri-max" => a.tri_max = Some(parse_size(&value()?)?),
+            "--warm-max" => a.warm_max = Some(parse_size(&value()?)?),
             "--force" => a.force = true,
             "--no-build" => a.build = false,
             "-h" | "--help" => {
                 println!(
                     "perf_table [--max 1e5] [--seed 1] [--block-cells 16] [--format json] \
-                     [--tri-max N] [--force] [--no-build]"
+                     [--tri-max N] [--warm-max N] [--force] [--no-build]"
                 );
                 std::process::exit(0);
             }
@@ -374,6 +383,63 @@ fn triangulation_table(max: usize, seed: u64) {
     }
 }
 
+/// The remeshing loop of a time-stepping solver, in this process: `mesh` (exact mode, `N x N`
+/// blocks) and its quality report, the same layout meshed again and again after a first run.
+fn remeshing_table(max: usize, seed: u64, block_cells: usize) {
+    use medial_blocks::output::report::Report;
+    use medial_blocks::{mesh, Options};
+    println!(
+        "\nRemeshing in a running program (library `mesh` + `Report::from_mesh`, the same \
+         layout again after one warm-up run; median of the runs):\n"
+    );
+    println!("| particles | runs | mesh s | mesh + report s | growth exp. (mesh + report) |");
+    println!("|---:|---:|---:|---:|---:|");
+    let options = Options {
+        block_cells: Some(block_cells),
+        ..Options::default()
+    };
+    let mut prev: Option<(usize, f64)> = None;
+    for n in SIZES.into_iter().filter(|&n| n <= max) {
+        let Ok(domain) = layouts::bubbles(n, seed) else {
+            continue;
+        };
+        let runs = match n {
+            0..=1_000 => 15,
+            1_001..=10_000 => 5,
+            _ => 3,
+        };
+        let mut times: Vec<(f64, f64)> = Vec::new();
+        for k in 0..=runs {
+            let start = Instant::now();
+            let Ok(m) = mesh(&domain, &options) else {
+                eprintln!("meshing {n} bubbles in process failed");
+                break;
+            };
+            let meshed = start.elapsed().as_secs_f64();
+            std::hint::black_box(Report::from_mesh(&m).cells);
+            let reported = start.elapsed().as_secs_f64();
+            drop(m);
+            if k > 0 {
+                times.push((meshed, reported));
+            }
+        }
+        if times.is_empty() {
+            continue;
+        }
+        let median = |f: fn(&(f64, f64)) -> f64| {
+            let mut v: Vec<f64> = times.iter().map(f).collect();
+            v.sort_by(f64::total_cmp);
+            v[v.len() / 2]
+        };
+        let (m, r) = (median(|t| t.0), median(|t| t.1));
+        let growth = prev.map_or("-".to_string(), |(n0, r0)| {
+            format!("{:.2}", exponent(n0, r0, n, r))
+        });
+        println!("| {n} | {} | {m:.3} | {r:.3} | {growth} |", times.len());
+        prev = Some((n, r));
+    }
+}
+
 fn main() {
     let a = match parse_args() {
         Ok(a) => a,
@@ -443,4 +509,5 @@ fn main() {
         println!("\n{}", n.replace('\n', " "));
     }
     triangulation_table(a.tri_max.unwrap_or(a.max), a.seed);
+    remeshing_table(a.warm_max.unwrap_or(a.max), a.seed, a.block_cells);
 }
