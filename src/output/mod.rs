@@ -301,7 +301,7 @@ struct Prepared<'a> {
     conn: Option<&'a [BlockConnectivity]>,
 }
 
-/// Write every format into `dir` (no staging).
+/// Write every format into `dir`, the staging directory of [`write_files_prepared`].
 fn write_into(
     mesh: &Mesh,
     dir: &Path,
@@ -324,7 +324,8 @@ fn write_into(
                      (apt-get install libcgns-dev; cargo build --release --features cgns)",
                 ))
             }
-            Format::Vtk => vtk::write_multiblock(mesh, dir)?,
+            // In the staging directory: no temporary file per block.
+            Format::Vtk => vtk::write_multiblock_with(mesh, dir, false)?,
             Format::Plot3d => {
                 plot3d::write_binary(&mesh.grids, &dir.join("mesh.xyz"))?;
                 plot3d::write_ascii(&mesh.grids, &dir.join("mesh.p3d"))?;
