@@ -24,17 +24,23 @@ fn array(f: &CellFields, k: usize) -> &[f64] {
     ][k]
 }
 
-/// The former `floats`: `{:?}`, six a line.
-fn ref_floats(s: &mut String, values: impl Iterator<Item = f64>) {
+/// The former `floats` (`{:?}`, six a line) and `ints` (sixteen a line): each line nine
+/// spaces, then ` v` per value.
+fn ref_lines<T>(
+    s: &mut String,
+    values: impl Iterator<Item = T>,
+    per_line: usize,
+    f: fn(&T) -> String,
+) {
     let mut k = 0;
     for x in values {
-        if k % 6 == 0 {
+        if k % per_line == 0 {
             if k > 0 {
                 s.push('\n');
             }
             s.push_str("         ");
         }
-        write!(s, " {x:?}").unwrap();
+        write!(s, " {}", f(&x)).unwrap();
         k += 1;
     }
     if k > 0 {
@@ -42,22 +48,12 @@ fn ref_floats(s: &mut String, values: impl Iterator<Item = f64>) {
     }
 }
 
-/// The former `ints`: sixteen a line.
+fn ref_floats(s: &mut String, values: impl Iterator<Item = f64>) {
+    ref_lines(s, values, 6, |x| format!("{x:?}"));
+}
+
 fn ref_ints(s: &mut String, values: impl Iterator<Item = usize>) {
-    let mut k = 0;
-    for x in values {
-        if k % 16 == 0 {
-            if k > 0 {
-                s.push('\n');
-            }
-            s.push_str("         ");
-        }
-        write!(s, " {x}").unwrap();
-        k += 1;
-    }
-    if k > 0 {
-        s.push('\n');
-    }
+    ref_lines(s, values, 16, |x| format!("{x}"));
 }
 
 fn ref_points(s: &mut String, coords: &[[f64; 2]]) {

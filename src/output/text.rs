@@ -172,28 +172,55 @@ fn exponent_body(out: &mut Vec<u8>, d: &[u8], q: i32) {
     int(out, d.len() as i32 + q - 1);
 }
 
-/// Append `format!("{x:?}")`.
-pub fn debug(out: &mut Vec<u8>, x: f64) {
+/// `std`'s text of `x` for one of this module's formats (the cases it leaves to `std`).
+type Fallback = fn(&mut Vec<u8>, f64);
+
+/// The part [`debug`] and [`exp`] share: infinities and NaN by `fallback`, the sign, `zero` for
+/// a zero; `Some(|x|)` for the rest (sign written).
+fn sign_of_nonzero(out: &mut Vec<u8>, x: f64, zero: &[u8], fallback: Fallback) -> Option<f64> {
     if !x.is_finite() {
-        return by_std(out, format_args!("{x:?}"));
+        fallback(out, x);
+        return None;
     }
     if x.is_sign_negative() {
         out.push(b'-');
     }
-    let a = x.abs();
-    if a == 0.0 {
-        out.extend_from_slice(b"0.0");
-        return;
+    if x == 0.0 {
+        out.extend_from_slice(zero);
+        return None;
     }
+    Some(x.abs())
+}
+
+/// [`shortest`] digits of `|x|` after [`sign_of_nonzero`] wrote the sign; on a tie the sign is
+/// taken back and `fallback` writes the whole text.
+fn digits_or_fallback(
+    out: &mut Vec<u8>,
+    x: f64,
+    fallback: Fallback,
+) -> Option<([u8; 20], usize, i32)> {
+    let digits = shortest(x.abs());
+    if digits.is_none() {
+        out.truncate(out.len() - usize::from(x.is_sign_negative()));
+        fallback(out, x);
+    }
+    digits
+}
+
+/// Append `format!("{x:?}")`.
+pub fn debug(out: &mut Vec<u8>, x: f64) {
+    let fallback: Fallback = |out, x| by_std(out, format_args!("{x:?}"));
+    let Some(a) = sign_of_nonzero(out, x, b"0.0", fallback) else {
+        return;
+    };
     if (1e-4..1e16).contains(&a) && !may_tie(a) {
         // zmij writes this range as `std` does: plain notation, `.0` after an integer.
         let mut zb = zmij::Buffer::new();
         out.extend_from_slice(zb.format_finite(a).as_bytes());
         return;
     }
-    let Some((d, n, q)) = shortest(a) else {
-        out.truncate(out.len() - usize::from(x.is_sign_negative()));
-        return by_std(out, format_args!("{x:?}"));
+    let Some((d, n, q)) = digits_or_fallback(out, x, fallback) else {
+        return;
     };
     let d = &d[..n];
     if !(1e-4..1e16).contains(&a) {
@@ -219,23 +246,12 @@ pub fn debug(out: &mut Vec<u8>, x: f64) {
 
 /// Append `format!("{x:e}")`.
 pub fn exp(out: &mut Vec<u8>, x: f64) {
-    if !x.is_finite() {
-        return by_std(out, format_args!("{x:e}"));
-    }
-    if x.is_sign_negative() {
-        out.push(b'-');
-    }
-    let a = x.abs();
-    if a == 0.0 {
-        out.extend_from_slice(b"0e0");
+    let fallback: Fallback = |out, x| by_std(out, format_args!("{x:e}"));
+    if sign_of_nonzero(out, x, b"0e0", fallback).is_none() {
         return;
     }
-    match shortest(a) {
-        Some((d, n, q)) => exponent_body(out, &d[..n], q),
-        None => {
-            out.truncate(out.len() - usize::from(x.is_sign_negative()));
-            by_std(out, format_args!("{x:e}"));
-        }
+    if let Some((d, n, q)) = digits_or_fallback(out, x, fallback) {
+        exponent_body(out, &d[..n], q);
     }
 }
 
