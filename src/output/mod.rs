@@ -5,11 +5,15 @@
 //!
 //! Every writer is deterministic (same mesh, byte-identical files: floats are written with
 //! Rust's shortest round-trip formatting or a fixed precision, and nothing depends on hash
-//! order) and atomic per file: it writes `.NAME.tmp` in the target directory and renames it
-//! onto `NAME` only after a successful flush, so a failed run never leaves a complete-looking
-//! half file (the temporary file is removed on error). [`write_files`] goes further: it writes
-//! every file into a staging directory and moves them into place at the end, `report.json`
-//! last, so a `report.json` marks a complete mesh.
+//! order or on the number of threads) and atomic per file: it writes `.NAME.tmp` in the
+//! target directory and renames it onto `NAME` only after a successful flush, so a failed run
+//! never leaves a complete-looking half file (the temporary file is removed on error).
+//! [`write_files`] goes further: it writes every file into a staging directory and moves them
+//! into place at the end, `report.json` last, so a `report.json` marks a complete mesh.
+//!
+//! The text formats put their numbers through [`text`] (the bytes `std::fmt` writes, without
+//! its machinery) and format their large arrays in parallel chunks that are written in order
+//! ([`text::write_chunked`]); the `.vts` files are formatted one block per task.
 
 pub mod connectivity;
 pub mod geo;
