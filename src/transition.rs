@@ -26,7 +26,7 @@ use crate::geometry::Point;
 use crate::grid::tfi;
 use crate::grid::{build_grids_forced, MAX_CELLS_PER_SIDE};
 use crate::layout::{Block, BlockLayout, Curve, Edge, EdgeKind, SideRef};
-use crate::mesh::Mesh;
+use crate::mesh::{Geometry, Mesh};
 use crate::mesher::{mesh, MeshError, Mode, Options};
 use crate::sequence::layout_keys;
 use std::collections::BTreeMap;
@@ -404,6 +404,8 @@ pub fn mesh_with_transition_rect(
     Ok(Mesh {
         layout: t.layout,
         grids,
+        // Every grid is interpolated here, exact mode's spoke-aligned ones too.
+        geometry: Geometry::Paper,
         ..base
     })
 }
