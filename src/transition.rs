@@ -375,6 +375,9 @@ pub fn mesh_with_transition(
 }
 
 /// [`mesh_with_transition`] out to the lattice rectangle `rect` ([`Rect::from_bounds`]).
+/// Exact mode keeps its spoke-aligned grids when the lattice counts can be imposed on them
+/// (`exact_transition`); otherwise every grid is interpolated and the mesh says
+/// [`Geometry::Paper`].
 pub fn mesh_with_transition_rect(
     domain: &Domain,
     options: &Options,
