@@ -57,7 +57,8 @@ pub struct Options {
     pub circle_clustering: Vec<(CircleId, Clustering)>,
     /// Exact mode: per-circle wall-normal cell counts fixed by the user.
     pub wall_cells: Vec<(CircleId, usize)>,
-    /// Exact mode: Winslow smoothing sweeps per block (0: none).
+    /// Exact mode: Winslow smoothing sweeps per block (0: none; at most
+    /// [`crate::exact_mode::MAX_SMOOTH_SWEEPS`]).
     pub smooth: usize,
     /// Exact mode: a fixed `N x N` grid per block (issue #8's "16x16 grid per block"): every
     /// circle's wall-normal count is `N` (so every block has `nj = N`) and every medial arc's
@@ -181,6 +182,7 @@ pub fn mesh(domain: &Domain, options: &Options) -> Result<Mesh, MeshError> {
         )));
     }
     let holes = domain.hole_count();
+    validate_circle_ids(options, crate::domain::BOUNDING, holes)?;
     if options.mode == Mode::Exact {
         exact_mode::validate_options(options)?;
         if holes >= 2 {
@@ -254,6 +256,39 @@ pub fn validate_block_cells(options: &Options) -> Result<(), MeshError> {
              --wall-cells"
                 .into(),
         ));
+    }
+    Ok(())
+}
+
+/// Check that every circle named by [`Options::circle_clustering`] and
+/// [`Options::wall_cells`] is a circle of the domain: `first..holes` (`first` is
+/// [`crate::domain::BOUNDING`], -1, for a bounded domain, 0 for a periodic one, which has no
+/// bounding circle). An id outside that range (an inserted hole's included: those are not
+/// known before meshing) would otherwise be ignored without a word.
+pub fn validate_circle_ids(
+    options: &Options,
+    first: CircleId,
+    holes: usize,
+) -> Result<(), MeshError> {
+    let named = options
+        .circle_clustering
+        .iter()
+        .map(|(c, _)| ("--circle-clustering", *c))
+        .chain(options.wall_cells.iter().map(|(c, _)| ("--wall-cells", *c)));
+    for (flag, c) in named {
+        if c < first || i64::from(c) >= holes as i64 {
+            let circles = match (first < 0, holes) {
+                (true, 0) => "its only circle is -1, the bounding circle".to_string(),
+                (true, h) => format!("its circles are -1 (the bounding circle) to {}", h - 1),
+                (false, h) => format!(
+                    "its circles are 0 to {} (a periodic domain has no bounding circle)",
+                    h as i64 - 1
+                ),
+            };
+            return Err(MeshError::Options(format!(
+                "{flag} names circle {c}, which is not a circle of the domain: {circles}"
+            )));
+        }
     }
     Ok(())
 }

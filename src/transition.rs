@@ -26,7 +26,7 @@ use crate::geometry::Point;
 use crate::grid::tfi;
 use crate::grid::{build_grids_forced, MAX_CELLS_PER_SIDE};
 use crate::layout::{Block, BlockLayout, Curve, Edge, EdgeKind, SideRef};
-use crate::mesh::Mesh;
+use crate::mesh::{Geometry, Mesh};
 use crate::mesher::{mesh, MeshError, Mode, Options};
 use crate::sequence::layout_keys;
 use std::collections::BTreeMap;
@@ -375,6 +375,9 @@ pub fn mesh_with_transition(
 }
 
 /// [`mesh_with_transition`] out to the lattice rectangle `rect` ([`Rect::from_bounds`]).
+/// Exact mode keeps its spoke-aligned grids when the lattice counts can be imposed on them
+/// (`exact_transition`); otherwise every grid is interpolated and the mesh says
+/// [`Geometry::Paper`].
 pub fn mesh_with_transition_rect(
     domain: &Domain,
     options: &Options,
@@ -404,6 +407,8 @@ pub fn mesh_with_transition_rect(
     Ok(Mesh {
         layout: t.layout,
         grids,
+        // Every grid is interpolated here, exact mode's spoke-aligned ones too.
+        geometry: Geometry::Paper,
         ..base
     })
 }

@@ -323,3 +323,36 @@ fn exact_mode_grids_are_kept_inside_the_ring() {
         check_rect(&d, bounds, s, &Options::default());
     }
 }
+
+/// When exact mode's transition cannot keep the spoke-aligned grids (the exact mesher does not
+/// honour the lattice counts imposed on the bounding-circle arcs), every grid is interpolated,
+/// and the mesh says `Geometry::Paper`: exact geometry is never reported for interpolated
+/// grids. Two holes near the bounding circle, spacing 0.07 (from the robustness sweep): the
+/// interpolated mesh has inverted cells and was labelled exact. The hexagon keeps its exact
+/// grids.
+#[test]
+fn interpolated_transition_is_not_labelled_exact() {
+    use medial_blocks::mesh::Geometry;
+    let d = Domain::bounded(
+        Circle::new(0.0, 0.0, 1.0),
+        vec![
+            Circle::new(
+                0.9413840504912407,
+                -0.004767127675588344,
+                0.05860257788639028,
+            ),
+            Circle::new(0.7322512631258415, -0.5563126007602222, 0.08039363288774218),
+        ],
+    )
+    .unwrap();
+    let m = mesh_with_transition(&d, &Options::default(), 0.07).unwrap();
+    let inverted = measure(&m.grids).inverted_cells;
+    assert!(
+        m.geometry == Geometry::Paper || inverted == 0,
+        "{:?} geometry with {inverted} inverted cells",
+        m.geometry
+    );
+    let m = mesh_with_transition(&Domain::hexagon_example(), &Options::default(), 0.2).unwrap();
+    assert_eq!(m.geometry, Geometry::Exact);
+    assert_eq!(measure(&m.grids).inverted_cells, 0);
+}

@@ -61,23 +61,32 @@ pub struct Args {
     /// Exact mode: an N x N grid in every block (N cells along the wall and the arc, N along
     /// the spokes), raised along an arc only where a wall would span more than 15 degrees per
     /// cell; shared sides always match. Paper mode: the same as --cells N (N per block side).
-    #[arg(long, value_name = "N", conflicts_with_all = ["cells", "cell_size", "wall_cells"])]
+    #[arg(
+        long,
+        value_name = "N",
+        conflicts_with_all = ["cells", "cell_size", "wall_cells"],
+        allow_negative_numbers = true
+    )]
     pub block_cells: Option<usize>,
     /// Print per-stage wall time and peak memory on stderr (unless --quiet) and write them to
     /// DIR/timings.json. Nothing else changes: the other files are byte-identical without it.
     #[arg(long)]
     pub timings: bool,
     /// Exact mode: target cell size (overrides --cells).
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     pub cell_size: Option<f64>,
     /// Exact mode: first cell height at every wall (absolute length).
-    #[arg(long, conflicts_with = "first_height_rel")]
+    #[arg(
+        long,
+        conflicts_with = "first_height_rel",
+        allow_negative_numbers = true
+    )]
     pub first_height: Option<f64>,
     /// Exact mode: first cell height at every wall, as a fraction of the circle's radius.
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     pub first_height_rel: Option<f64>,
     /// Exact mode: growth ratio of the wall clustering.
-    #[arg(long, default_value_t = 1.2)]
+    #[arg(long, default_value_t = 1.2, allow_negative_numbers = true)]
     pub growth: f64,
     /// Exact mode: clustering of one circle, `ID:FIRST[:GROWTH]` (ID -1 is the bounding
     /// circle; FIRST ending in `r` is relative to the radius, e.g. `3:0.01r:1.1`). Repeatable.
@@ -86,8 +95,9 @@ pub struct Args {
     /// Exact mode: wall-normal cell count of one circle, `ID:N`. Repeatable.
     #[arg(long, allow_hyphen_values = true)]
     pub wall_cells: Vec<String>,
-    /// Exact mode: Winslow smoothing sweeps per block (never lowers the min scaled Jacobian).
-    #[arg(long, default_value_t = 0)]
+    /// Exact mode: Winslow smoothing sweeps per block, at most 1000 (never lowers the min
+    /// scaled Jacobian).
+    #[arg(long, default_value_t = 0, allow_negative_numbers = true)]
     pub smooth: usize,
     /// Also mesh the domain in the other mode and write both modes' quality figures to
     /// DIR/modes.json (`{"exact": {...}, "paper": {...}}`).
@@ -102,27 +112,40 @@ pub struct Args {
     pub bounding: Option<String>,
     /// Macro Delaunay refinement: insert holes while an interior triangle has circumradius /
     /// shortest edge above R (paper Algorithm 3; 2.0 means smallest angles above ~14.5 deg).
-    #[arg(long, default_value_t = medial_blocks::mesher::DEFAULT_REFINE_RATIO)]
+    #[arg(
+        long,
+        default_value_t = medial_blocks::mesher::DEFAULT_REFINE_RATIO,
+        allow_negative_numbers = true
+    )]
     pub refine_ratio: f64,
     /// Add a ring of transition blocks out to a square whose boundary nodes are nodes of a
     /// Cartesian background grid of this spacing (origin at 0); bounded domains only.
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     pub transition: Option<f64>,
     /// With --transition: transition out to this rectangle instead of the square,
     /// `XMIN,YMIN,XMAX,YMAX`, grown outwards to the nearest background grid lines (its corners
     /// are background nodes); it must enclose the bounding circle with one background interval
     /// to spare on every side. Aspect ratios up to about 3 give valid blocks.
-    #[arg(long, requires = "transition", value_name = "XMIN,YMIN,XMAX,YMAX")]
+    #[arg(
+        long,
+        requires = "transition",
+        value_name = "XMIN,YMIN,XMAX,YMAX",
+        allow_hyphen_values = true
+    )]
     pub transition_rect: Option<String>,
     /// The period `LX,LY` for a CSV input: mesh one period of a periodic layout.
-    #[arg(long, conflicts_with = "bounding")]
+    #[arg(long, conflicts_with = "bounding", allow_hyphen_values = true)]
     pub periodic: Option<String>,
     /// No macro Delaunay refinement (no inserted holes).
     #[arg(long)]
     pub no_refine: bool,
     /// Collapse medial arcs shorter than F times the local empty-circle radius (0: only
     /// zero-length arcs, which are always collapsed).
-    #[arg(long, default_value_t = medial_blocks::mesher::DEFAULT_COLLAPSE_FRACTION)]
+    #[arg(
+        long,
+        default_value_t = medial_blocks::mesher::DEFAULT_COLLAPSE_FRACTION,
+        allow_negative_numbers = true
+    )]
     pub collapse_fraction: f64,
 }
 

@@ -30,7 +30,7 @@ pub struct Cli {
     #[arg(short, long, global = true)]
     quiet: bool,
     /// Worker threads for per-block work (default: one per core). Output does not depend on it.
-    #[arg(long, global = true, value_name = "N")]
+    #[arg(long, global = true, value_name = "N", allow_negative_numbers = true)]
     threads: Option<usize>,
     #[command(subcommand)]
     command: Command,
@@ -91,9 +91,38 @@ fn set_threads(threads: Option<usize>) -> Result<(), Failure> {
         .map_err(|e| Failure::output(format!("cannot start {n} threads: {e}")))
 }
 
+/// A command line clap refuses: help and version as clap prints them, every other error (an
+/// unknown flag, a value that does not parse, flags that conflict) as one line `error: ...` on
+/// stderr with exit code 2, like every other bad input; clap's usage block is left out.
+fn command_line_error(e: clap::Error) -> ExitCode {
+    use clap::error::ErrorKind;
+    match e.kind() {
+        ErrorKind::DisplayHelp
+        | ErrorKind::DisplayVersion
+        | ErrorKind::DisplayHelpOnMissingArgumentOrSubcommand => e.exit(),
+        _ => {
+            // clap's first paragraph (its message, with the flags it names on their own
+            // lines), joined into one line.
+            let text = e.render().to_string();
+            let first: Vec<&str> = text
+                .lines()
+                .map(str::trim)
+                .take_while(|l| !l.is_empty())
+                .collect();
+            let first = first.join(" ");
+            let message = first.strip_prefix("error: ").unwrap_or(&first);
+            eprintln!("error: {message} (see --help)");
+            ExitCode::from(2)
+        }
+    }
+}
+
 pub fn run() -> ExitCode {
     allocator::keep_freed_memory();
-    let cli = Cli::parse();
+    let cli = match Cli::try_parse() {
+        Ok(cli) => cli,
+        Err(e) => return command_line_error(e),
+    };
     let global = Global {
         threads: cli.threads.unwrap_or(0),
         quiet: cli.quiet,

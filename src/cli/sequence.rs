@@ -29,7 +29,7 @@ pub struct Args {
     #[arg(short, long, default_value = "out")]
     pub output: PathBuf,
     /// Target number of cells along a block side.
-    #[arg(long, default_value_t = 16)]
+    #[arg(long, default_value_t = 16, allow_negative_numbers = true)]
     pub cells: usize,
     /// Writers, comma separated: vtk, plot3d, gmsh, svg, png, json, or all.
     #[arg(long, default_value = "vtk,svg,json")]

@@ -394,8 +394,18 @@ pub fn clustering_of(options: &Options, id: CircleId) -> Clustering {
         .unwrap_or(options.clustering)
 }
 
+/// The most Winslow sweeps per block [`Options::smooth`] may ask for (each sweep visits every
+/// node of the mesh; more is refused before any work, like an absurd `--cells`).
+pub const MAX_SMOOTH_SWEEPS: usize = 1000;
+
 /// Check the exact-mode options.
 pub fn validate_options(options: &Options) -> Result<(), MeshError> {
+    if options.smooth > MAX_SMOOTH_SWEEPS {
+        return Err(MeshError::Options(format!(
+            "--smooth {} is more than the limit of {MAX_SMOOTH_SWEEPS} sweeps",
+            options.smooth
+        )));
+    }
     if let Some(h) = options.cell_size {
         if !(h.is_finite() && h > 0.0) {
             return Err(MeshError::Options(format!(

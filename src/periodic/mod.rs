@@ -1298,6 +1298,7 @@ pub fn mesh_periodic_frame(
             },
         ));
     }
+    crate::mesher::validate_circle_ids(options, 0, pd.hole_count())?;
     if options.mode == Mode::Exact {
         exact_mode::validate_options(options)?;
         if let Some(done) = mesh_periodic_exact(pd, options)? {
