@@ -17,9 +17,9 @@
 //! radius below each node, so validating `10^5` holes costs `O(n log n)`, not `O(n^2)`.
 
 use crate::geometry::Point;
+use rayon::prelude::*;
 use serde::de::{IgnoredAny, SeqAccess, Visitor};
 use serde::{Deserialize, Deserializer, Serialize};
-use rayon::prelude::*;
 use std::collections::HashMap;
 use std::fmt;
 
@@ -787,7 +787,7 @@ impl HoleIndex<'_> {
     /// [`HoleIndex::nearest_gap`] of every hole, indexed by hole. The queries run in the
     /// tree's order (neighbouring holes one after the other, so that they find the same nodes
     /// in cache); each answer is that of its own query, so the queries are split between the
-    /// threads of the pool when it has several and there are at least [`PARALLEL_MIN_HOLES`]
+    /// threads of the pool when it has several and there are enough holes to pay for it
     /// holes (the same answers, [`HoleIndex::nearest_gap_each_on`]).
     pub fn nearest_gap_each(&self) -> Vec<Option<(usize, f64)>> {
         self.nearest_gap_each_on(

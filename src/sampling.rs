@@ -1695,7 +1695,18 @@ mod tests {
                 .filter_map(|s| size.checked_mul(1 << s))
                 .chain((1..=6).filter_map(|s| (size >> s << s == size).then_some(size >> s)))
                 .collect();
-            grids.extend([0, 4, 12, 8, 48, 72, 1000, 1 << 40, 3 << 40, u64::MAX / 8 * 8]);
+            grids.extend([
+                0,
+                4,
+                12,
+                8,
+                48,
+                72,
+                1000,
+                1 << 40,
+                3 << 40,
+                u64::MAX / 8 * 8,
+            ]);
             for n in grids {
                 let units = table.grid(n);
                 looked_up += usize::from(!units.table.is_empty());

@@ -207,7 +207,7 @@ fn option_sets(slots: usize, rng: &mut SplitMix64) -> Vec<(SamplingOptions, Vec<
     let density = (0..slots)
         .map(|_| {
             let r = rng.next_u64();
-            if r % 5 == 0 {
+            if r.is_multiple_of(5) {
                 (r >> 8) as u32 % 4
             } else {
                 0
@@ -387,7 +387,10 @@ fn taking_over_an_earlier_sampling_is_the_same_on_the_pool() {
             }
         }
     }
-    assert!(taken * 2 > circles, "{taken} of {circles} circles taken over");
+    assert!(
+        taken * 2 > circles,
+        "{taken} of {circles} circles taken over"
+    );
     assert!(errors >= 10, "{errors}");
 }
 
