@@ -31,8 +31,10 @@ use crate::mesher::MeshError;
 pub use fused::classify_and_check;
 #[doc(hidden)]
 pub use fused::classify_and_check_in;
+use rayon::prelude::*;
 use std::collections::{HashMap, HashSet};
 use std::f64::consts::{FRAC_1_SQRT_2, FRAC_PI_4, TAU};
+use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 
 /// Tuning of the boundary sampling.
 #[derive(Debug, Clone, PartialEq)]
@@ -233,9 +235,13 @@ pub fn unit_offsets(n: usize) -> Vec<Point> {
 /// slot `i + 1` hole `i`). Hole-hole gaps come from the k-d tree, so this is `O(h log h)`.
 /// With no hole the bounding circle's "gap" is its radius.
 pub fn nearest_gaps(domain: &Domain) -> Vec<f64> {
+    nearest_gaps_in(domain, &HoleIndex::new(domain.holes()))
+}
+
+/// [`nearest_gaps`] with the index of the domain's holes.
+fn nearest_gaps_in(domain: &Domain, index: &HoleIndex) -> Vec<f64> {
     let holes = domain.holes();
     let b = domain.bounding();
-    let index = HoleIndex::new(holes);
     let mut gaps = Vec::with_capacity(holes.len() + 1);
     gaps.push(b.radius);
     let mut bmin = f64::INFINITY;
@@ -352,6 +358,74 @@ pub fn unit_offset(k: u64, n: u64) -> Point {
     u
 }
 
+/// The unit vectors of one grid of `n` angles ([`unit_offsets`]), serving [`unit_offset`] on
+/// every grid that refines or coarsens it by a power of two. `unit_offset(k, n)` depends only
+/// on the angle `k / n`: its first-octant argument is the correctly rounded quotient `j / m` of
+/// integers that stay exact in `f64` when both are scaled by a power of two, and the octant
+/// folding is integer arithmetic that scales with them; so `unit_offset(k 2^s, n 2^s)` is
+/// bitwise `unit_offset(k, n)` (tested against it). Adaptive sampling takes its coarse samples
+/// and their first bisections from the table instead of calling `cos`/`sin` for each (issue 8).
+struct UnitTable {
+    u: Vec<Point>,
+}
+
+/// [`UnitTable`] on one grid of `n` angles: `k` of that grid is entry `(k << down) >> up` of the
+/// table when the low `up` bits of `k` are zero.
+struct GridUnits<'a> {
+    n: u64,
+    table: &'a [Point],
+    up: u32,
+    down: u32,
+}
+
+impl UnitTable {
+    /// The table of the grid of `n` angles; empty (every lookup computed) when `n` is not a
+    /// positive multiple of 8 or above `2^12`.
+    fn new(n: u64) -> Self {
+        UnitTable {
+            u: if n <= 1 << 12 {
+                unit_offsets(n as usize)
+            } else {
+                Vec::new()
+            },
+        }
+    }
+
+    /// Lookups on the grid of `n` angles.
+    fn grid(&self, n: u64) -> GridUnits<'_> {
+        let size = self.u.len() as u64;
+        let scale = |a: u64, b: u64| {
+            (b > 0 && a.is_multiple_of(b) && (a / b).is_power_of_two())
+                .then(|| (a / b).trailing_zeros())
+        };
+        let (table, up, down): (&[Point], _, _) = if n == 0 || !n.is_multiple_of(8) {
+            (&[], 0, 0)
+        } else if let Some(up) = scale(n, size) {
+            (&self.u, up, 0)
+        } else if let Some(down) = scale(size, n) {
+            (&self.u, 0, down)
+        } else {
+            (&[], 0, 0)
+        };
+        GridUnits { n, table, up, down }
+    }
+}
+
+impl GridUnits<'_> {
+    /// Bitwise `unit_offset(k, n)`.
+    fn at(&self, k: u64) -> Point {
+        if self.table.is_empty() {
+            return unit_offset(k, self.n);
+        }
+        let k = if k < self.n { k } else { k % self.n };
+        if k.trailing_zeros() >= self.up {
+            self.table[((k >> self.up) << self.down) as usize]
+        } else {
+            unit_offset(k, self.n)
+        }
+    }
+}
+
 /// A circle near the one being sampled, as seen from a point `p`: its surface distance is
 /// `|p - center| - radius` (a hole) or `radius - |p - center|` (the bounding circle).
 #[derive(Debug, Clone, Copy)]
@@ -405,6 +479,8 @@ fn coarse_count(c: Circle, n: u64, n0: u64) -> u64 {
 /// 1-Lipschitz this bounds `L <= f g` on the whole interval), never below a precision floor
 /// (see the comments in the body). `outer` is true for the bounding circle. Returns the grid size and the
 /// grid indices in increasing order; `Err(())` when more than `cap` samples would be needed.
+/// Unit vectors come from `units` ([`UnitTable`], the same values as [`unit_offset`]).
+#[allow(clippy::too_many_arguments)]
 fn adaptive_circle(
     c: Circle,
     outer: bool,
@@ -413,6 +489,7 @@ fn adaptive_circle(
     g_nearest: f64,
     near: &[Near],
     cap: usize,
+    units: &UnitTable,
 ) -> Result<(u64, Vec<u64>), ()> {
     if n0 > cap as u64 || n0 == 0 || !n0.is_multiple_of(8) {
         return Err(());
@@ -454,8 +531,9 @@ fn adaptive_circle(
     let n = n0.checked_mul(1u64 << levels).ok_or(())?;
     let step0 = 1u64 << levels;
     let unit = TAU * c.radius / n as f64;
+    let grid = units.grid(n);
     let point = |k: u64| {
-        let u = unit_offset(k, n);
+        let u = grid.at(k);
         [c.center[0] + c.radius * u[0], c.center[1] + c.radius * u[1]]
     };
     let mut out: Vec<u64> = Vec::with_capacity(n0.min(1 << 16) as usize);
@@ -549,6 +627,10 @@ pub fn sample_adaptive(
 /// it then has the same samples, so the same budget is left, and [`adaptive_circle`] is
 /// deterministic. Returns the samples and how many circles were taken over (the same samples
 /// as [`sample_adaptive`]; tested in `tests/perf_resample.rs`).
+///
+/// The circles are sampled on the thread pool when it has more than one thread and there are
+/// at least [`PARALLEL_MIN_CIRCLES`] of them; the result (samples, count taken over, error) is
+/// that of the serial loop whatever the thread count ([`sample_adaptive_on`]).
 #[doc(hidden)]
 pub fn sample_adaptive_after(
     domain: &Domain,
@@ -557,42 +639,207 @@ pub fn sample_adaptive_after(
     density: &[u32],
     previous: Option<&SampledDomain>,
 ) -> Result<(Samples, usize), TooManySamples> {
-    // The earlier sampling, when it was made with these options; its circles in slot order.
-    let earlier = previous.and_then(|p| {
-        let inputs = p.inputs.as_ref()?;
-        (inputs.options == *opts && inputs.circles.len() == p.samples.circles.len())
-            .then_some((p, inputs))
-    });
-    let old_slots = earlier.map_or(0, |(_, i)| i.circles.len());
-    let old_holes = old_slots.saturating_sub(1);
-    let mut reused = 0;
-    let holes = domain.holes();
-    let b = domain.bounding();
-    let index = HoleIndex::new(holes);
-    let n0 = round8(opts.min_per_circle) as u64;
-    let cap = (opts.max_per_circle / 8 * 8).max(n0 as usize);
-    let factor = |slot: usize| {
-        opts.spacing_per_gap / 2f64.powi(density.get(slot).copied().unwrap_or(0).min(60) as i32)
+    let index = HoleIndex::new(domain.holes());
+    let ctx = SlotContext::new(domain, &index, opts, gaps, density, previous);
+    sample_adaptive_with(&ctx, ctx.parallel())
+}
+
+/// [`sample_adaptive_after`], on the thread pool when `parallel` (whatever the number of
+/// circles or threads) and by the serial loop alone otherwise: the same result either way
+/// (tested in `tests/perf_sampling_parallel.rs`, the serial loop being the reference).
+///
+/// The serial loop samples the circles in slot order, each within what the ones before it left
+/// of [`SamplingOptions::max_total`] (and within [`SamplingOptions::max_per_circle`]); the first
+/// circle that does not fit is the error. A sampling within a budget is the same under any
+/// budget it fits (a budget only turns a longer sampling into an error, and decides whether an
+/// earlier circle's samples may be taken over by the same comparison). So the parallel path
+/// samples every circle within the per-circle budget alone, in any order, and checks the total
+/// afterwards: when every circle fits and the total does too, each circle fitted what the serial
+/// loop would have left it, and the samples are the serial ones; otherwise the serial loop runs
+/// and returns its error. A running count of the samples made stops the parallel path once the
+/// total is passed, so memory stays bounded by the total limit as in the serial loop.
+#[doc(hidden)]
+pub fn sample_adaptive_on(
+    domain: &Domain,
+    opts: &SamplingOptions,
+    gaps: &[f64],
+    density: &[u32],
+    previous: Option<&SampledDomain>,
+    parallel: bool,
+) -> Result<(Samples, usize), TooManySamples> {
+    let index = HoleIndex::new(domain.holes());
+    let ctx = SlotContext::new(domain, &index, opts, gaps, density, previous);
+    sample_adaptive_with(&ctx, parallel)
+}
+
+/// [`sample_adaptive_on`] with the circles' inputs gathered.
+fn sample_adaptive_with(
+    ctx: &SlotContext,
+    parallel: bool,
+) -> Result<(Samples, usize), TooManySamples> {
+    let plans = match parallel.then(|| ctx.plan_parallel()).flatten() {
+        Some(plans) => plans,
+        None => ctx.plan_serial()?,
     };
-    // The largest local gap that can ever make circle `slot` bisect: at the coarse level,
-    // `g < x0 = L0 (1 + f/2) / f`; a margin of 2 covers rounding.
-    let reach = |slot: usize, r: f64| {
-        let f = factor(slot);
-        let k = density.get(slot).copied().unwrap_or(0).min(MAX_LEVELS);
-        2.0 * (TAU * r / (n0 << k) as f64) * (1.0 + 0.5 * f) / f
-    };
-    let mut s = Samples {
-        points: Vec::new(),
-        circle_of: Vec::new(),
-        index_of: Vec::new(),
-        circles: Vec::with_capacity(holes.len() + 1),
-        grid: Vec::new(),
-        grid_counts: Vec::with_capacity(holes.len() + 1),
-    };
-    for (slot, id) in domain.circle_ids().enumerate() {
-        let c = domain.circle(id);
-        let g = gaps.get(slot).copied().unwrap_or(f64::NAN);
-        let x = reach(slot, c.radius);
+    Ok(ctx.assemble(&plans, parallel))
+}
+
+/// Fewest circles sampled on the thread pool (below, waking the pool costs more than it saves).
+const PARALLEL_MIN_CIRCLES: usize = 128;
+
+/// Fewest circles per task of the parallel sampling (a circle takes a few microseconds).
+const CIRCLES_PER_TASK: usize = 16;
+
+/// Fewest samples per task of the parallel assembly.
+const SAMPLES_PER_TASK: usize = 1 << 14;
+
+/// One circle's samples, before they are laid out in [`Samples`]: on a grid of `n` angles.
+enum SlotSamples<'a> {
+    /// The earlier sampling's samples of the same slot ([`sample_adaptive_after`]): their
+    /// points and grid indices.
+    Taken {
+        n: u64,
+        points: &'a [Point],
+        grid: &'a [u64],
+    },
+    /// Grid indices `ks` (increasing), from [`adaptive_circle`].
+    Made { n: u64, ks: Vec<u64> },
+}
+
+impl SlotSamples<'_> {
+    /// The number of samples.
+    fn len(&self) -> usize {
+        match self {
+            SlotSamples::Taken { grid, .. } => grid.len(),
+            SlotSamples::Made { ks, .. } => ks.len(),
+        }
+    }
+}
+
+/// What every circle of one adaptive sampling reads: the domain, its hole index, the options,
+/// the gaps and densities (slot order), and the earlier sampling that may be taken over.
+struct SlotContext<'a> {
+    domain: &'a Domain,
+    index: &'a HoleIndex<'a>,
+    opts: &'a SamplingOptions,
+    gaps: &'a [f64],
+    density: &'a [u32],
+    /// The earlier sampling, when it was made with these options; its circles in slot order.
+    earlier: Option<(&'a SampledDomain, &'a SamplingInputs)>,
+    /// Coarse samples per circle (a multiple of 8).
+    n0: u64,
+    /// Most samples on one circle ([`SamplingOptions::max_per_circle`], at least `n0`).
+    cap: usize,
+    /// The unit vectors of the grid of `8 n0` angles: every circle's grid is `n0` times a
+    /// power of two ([`coarse_count`], [`adaptive_circle`]).
+    units: UnitTable,
+}
+
+/// Mutable views of the per-sample arrays of [`Samples`] over one range of samples.
+struct SampleSlices<'a> {
+    points: &'a mut [Point],
+    circle_of: &'a mut [CircleId],
+    index_of: &'a mut [u32],
+    grid: &'a mut [u64],
+}
+
+impl<'a> SampleSlices<'a> {
+    /// The first `k` samples and the rest.
+    fn split_at(self, k: usize) -> (Self, Self) {
+        let (p0, p1) = self.points.split_at_mut(k);
+        let (c0, c1) = self.circle_of.split_at_mut(k);
+        let (i0, i1) = self.index_of.split_at_mut(k);
+        let (g0, g1) = self.grid.split_at_mut(k);
+        (
+            SampleSlices {
+                points: p0,
+                circle_of: c0,
+                index_of: i0,
+                grid: g0,
+            },
+            SampleSlices {
+                points: p1,
+                circle_of: c1,
+                index_of: i1,
+                grid: g1,
+            },
+        )
+    }
+}
+
+impl<'a> SlotContext<'a> {
+    fn new(
+        domain: &'a Domain,
+        index: &'a HoleIndex<'a>,
+        opts: &'a SamplingOptions,
+        gaps: &'a [f64],
+        density: &'a [u32],
+        previous: Option<&'a SampledDomain>,
+    ) -> Self {
+        let earlier = previous.and_then(|p| {
+            let inputs = p.inputs.as_ref()?;
+            (inputs.options == *opts && inputs.circles.len() == p.samples.circles.len())
+                .then_some((p, inputs))
+        });
+        let n0 = round8(opts.min_per_circle) as u64;
+        SlotContext {
+            domain,
+            index,
+            opts,
+            gaps,
+            density,
+            earlier,
+            n0,
+            cap: (opts.max_per_circle / 8 * 8).max(n0 as usize),
+            units: UnitTable::new(n0.saturating_mul(8)),
+        }
+    }
+
+    /// Number of circles (slots).
+    fn slots(&self) -> usize {
+        self.domain.hole_count() + 1
+    }
+
+    /// True when the circles are worth sampling on the thread pool.
+    fn parallel(&self) -> bool {
+        self.slots() >= PARALLEL_MIN_CIRCLES && rayon::current_num_threads() > 1
+    }
+
+    /// The circle of `slot` (slot 0 the bounding circle, slot `i + 1` hole `i`).
+    fn id(slot: usize) -> CircleId {
+        slot as CircleId - 1
+    }
+
+    /// The density doublings asked for `slot`.
+    fn density(&self, slot: usize) -> u32 {
+        self.density.get(slot).copied().unwrap_or(0)
+    }
+
+    /// The spacing-to-gap factor of `slot`.
+    fn factor(&self, slot: usize) -> f64 {
+        self.opts.spacing_per_gap / 2f64.powi(self.density(slot).min(60) as i32)
+    }
+
+    /// The largest local gap that can ever make circle `slot` (radius `r`) bisect: at the
+    /// coarse level, `g < x0 = L0 (1 + f/2) / f`; a margin of 2 covers rounding.
+    fn reach(&self, slot: usize, r: f64) -> f64 {
+        let f = self.factor(slot);
+        let k = self.density(slot).min(MAX_LEVELS);
+        2.0 * (TAU * r / (self.n0 << k) as f64) * (1.0 + 0.5 * f) / f
+    }
+
+    /// The samples of circle `slot` within `budget` samples: taken over from the earlier
+    /// sampling when they cannot differ and fit, else [`adaptive_circle`]; `Err(())` when more
+    /// than `budget` would be needed.
+    fn plan(&self, slot: usize, budget: usize) -> Result<SlotSamples<'a>, ()> {
+        let holes = self.domain.holes();
+        let b = self.domain.bounding();
+        let id = Self::id(slot);
+        let c = self.domain.circle(id);
+        let g = self.gaps.get(slot).copied().unwrap_or(f64::NAN);
+        let x = self.reach(slot, c.radius);
+        let old_slots = self.earlier.map_or(0, |(_, i)| i.circles.len());
+        let old_holes = old_slots.saturating_sub(1);
         // The close holes (increasing), for a hole.
         let mut close: Vec<usize> = Vec::new();
         let near: Vec<Near> = if id == BOUNDING {
@@ -606,8 +853,7 @@ pub fn sample_adaptive_after(
                 })
                 .collect()
         } else {
-            let i = (id) as usize;
-            close = index.within_gap(i, x);
+            close = self.index.within_gap(id as usize, x);
             let mut v: Vec<Near> = close
                 .iter()
                 .map(|&j| Near {
@@ -626,16 +872,11 @@ pub fn sample_adaptive_after(
             v
         };
         let bits = |c: &Circle| [c.center[0], c.center[1], c.radius].map(f64::to_bits);
-        // A sampling within the budget is the same under any budget it fits (the limit only
-        // turns a longer one into an error).
-        let fits =
-            |count: u32| count as usize <= cap.min(opts.max_total.saturating_sub(s.points.len()));
-        let same = earlier.filter(|(p, inputs)| {
+        let same = self.earlier.filter(|(p, inputs)| {
             slot < old_slots
                 && bits(&inputs.circles[slot]) == bits(&c)
-                && fits(p.samples.circles[slot].count)
-                && inputs.density.get(slot).copied().unwrap_or(0)
-                    == density.get(slot).copied().unwrap_or(0)
+                && p.samples.circles[slot].count as usize <= budget
+                && inputs.density.get(slot).copied().unwrap_or(0) == self.density(slot)
                 && p.samples.circles[slot].gap.to_bits() == g.to_bits()
                 && p.samples.circles[slot].circle == id
                 && !p.samples.grid.is_empty()
@@ -650,56 +891,190 @@ pub fn sample_adaptive_after(
         if let (Some((p, _)), false) = (same, new_near) {
             let cs = p.samples.circles[slot];
             let range = cs.first as usize..(cs.first + cs.count) as usize;
-            s.circles.push(CircleSamples {
-                circle: id,
-                first: s.points.len() as u32,
-                count: cs.count,
-                gap: g,
+            return Ok(SlotSamples::Taken {
+                n: p.samples.grid_counts[slot],
+                points: &p.samples.points[range.clone()],
+                grid: &p.samples.grid[range],
             });
-            s.grid_counts.push(p.samples.grid_counts[slot]);
-            s.points.extend_from_slice(&p.samples.points[range.clone()]);
-            s.grid.extend_from_slice(&p.samples.grid[range]);
-            s.circle_of
-                .extend(std::iter::repeat_n(id, cs.count as usize));
-            s.index_of.extend(0..cs.count);
-            reused += 1;
-            continue;
         }
         // Resampling doubles the density everywhere on the circle: the coarse count too.
-        let k = density.get(slot).copied().unwrap_or(0).min(MAX_LEVELS);
-        // The total budget bounds every circle too, so memory stays within `max_total`.
-        let left = opts.max_total.saturating_sub(s.points.len());
-        let budget = cap.min(left);
+        let k = self.density(slot).min(MAX_LEVELS);
         // Coarse count `n0 2^k` (fewer for a circle tiny for its coordinates,
         // [`coarse_count`]); one beyond the budget fails in `adaptive_circle`.
-        let coarse = n0
+        let coarse = self
+            .n0
             .checked_mul(1u64 << k)
-            .map(|v| coarse_count(c, v, n0))
+            .map(|v| coarse_count(c, v, self.n0))
             .filter(|&v| v <= budget as u64)
             .unwrap_or(u64::MAX);
-        let (n, ks) = adaptive_circle(c, id == BOUNDING, coarse, factor(slot), g, &near, budget)
-            .map_err(|()| TooManySamples {
-                circle: id,
-                limit: if left < cap { opts.max_total } else { cap },
-                total: left < cap,
-            })?;
-        s.circles.push(CircleSamples {
-            circle: id,
-            first: s.points.len() as u32,
-            count: ks.len() as u32,
-            gap: g,
-        });
-        s.grid_counts.push(n);
-        for (i, &k) in ks.iter().enumerate() {
-            let u = unit_offset(k, n);
-            s.points
-                .push([c.center[0] + c.radius * u[0], c.center[1] + c.radius * u[1]]);
-            s.circle_of.push(id);
-            s.index_of.push(i as u32);
-            s.grid.push(k);
+        let (n, ks) = adaptive_circle(
+            c,
+            id == BOUNDING,
+            coarse,
+            self.factor(slot),
+            g,
+            &near,
+            budget,
+            &self.units,
+        )?;
+        Ok(SlotSamples::Made { n, ks })
+    }
+
+    /// Every circle's samples in slot order, each within what the ones before it left of the
+    /// total limit: the first that does not fit is the error.
+    fn plan_serial(&self) -> Result<Vec<SlotSamples<'a>>, TooManySamples> {
+        let mut plans = Vec::with_capacity(self.slots());
+        let mut used = 0usize;
+        for slot in 0..self.slots() {
+            // The total budget bounds every circle too, so memory stays within `max_total`.
+            let left = self.opts.max_total.saturating_sub(used);
+            let plan = self
+                .plan(slot, self.cap.min(left))
+                .map_err(|()| TooManySamples {
+                    circle: Self::id(slot),
+                    limit: if left < self.cap {
+                        self.opts.max_total
+                    } else {
+                        self.cap
+                    },
+                    total: left < self.cap,
+                })?;
+            used += plan.len();
+            plans.push(plan);
+        }
+        Ok(plans)
+    }
+
+    /// Every circle's samples, on the thread pool, each within the per-circle budget (and the
+    /// total limit); `None` when a circle does not fit or the total is passed (the serial loop
+    /// then finds the error, [`sample_adaptive_on`]). Collected in slot order.
+    fn plan_parallel(&self) -> Option<Vec<SlotSamples<'a>>> {
+        let budget = self.cap.min(self.opts.max_total);
+        let made = AtomicUsize::new(0);
+        let over = AtomicBool::new(false);
+        let plans: Vec<Option<SlotSamples<'a>>> = (0..self.slots())
+            .into_par_iter()
+            .with_min_len(CIRCLES_PER_TASK)
+            .map(|slot| {
+                if over.load(Ordering::Relaxed) {
+                    return None;
+                }
+                let plan = self.plan(slot, budget).ok();
+                let fits = plan.as_ref().is_some_and(|p| {
+                    made.fetch_add(p.len(), Ordering::Relaxed) + p.len() <= self.opts.max_total
+                });
+                if !fits {
+                    over.store(true, Ordering::Relaxed);
+                }
+                plan
+            })
+            .collect();
+        if over.into_inner() {
+            return None;
+        }
+        plans.into_iter().collect()
+    }
+
+    /// The samples of `plans` (one per slot, in slot order) laid out in [`Samples`], and how
+    /// many were taken over; the arrays filled by ranges of circles on the thread pool when
+    /// `parallel` (the same values either way).
+    fn assemble(&self, plans: &[SlotSamples], parallel: bool) -> (Samples, usize) {
+        let mut circles = Vec::with_capacity(plans.len());
+        let mut grid_counts = Vec::with_capacity(plans.len());
+        let mut total = 0usize;
+        for (slot, plan) in plans.iter().enumerate() {
+            let count = plan.len();
+            circles.push(CircleSamples {
+                circle: Self::id(slot),
+                first: total as u32,
+                count: count as u32,
+                gap: self.gaps.get(slot).copied().unwrap_or(f64::NAN),
+            });
+            grid_counts.push(match plan {
+                SlotSamples::Taken { n, .. } | SlotSamples::Made { n, .. } => *n,
+            });
+            total += count;
+        }
+        let reused = plans
+            .iter()
+            .filter(|p| matches!(p, SlotSamples::Taken { .. }))
+            .count();
+        let mut s = Samples {
+            points: vec![[0.0; 2]; total],
+            circle_of: vec![0; total],
+            index_of: vec![0; total],
+            grid: vec![0; total],
+            circles,
+            grid_counts,
+        };
+        let all = SampleSlices {
+            points: &mut s.points,
+            circle_of: &mut s.circle_of,
+            index_of: &mut s.index_of,
+            grid: &mut s.grid,
+        };
+        if parallel {
+            // Ranges of whole circles of about `per_task` samples each.
+            let per_task = (total / (8 * rayon::current_num_threads())).max(SAMPLES_PER_TASK);
+            let mut tasks = Vec::new();
+            let mut rest = all;
+            let mut start = 0;
+            let mut size = 0;
+            for (slot, c) in s.circles.iter().enumerate() {
+                size += c.count as usize;
+                if size >= per_task || slot + 1 == plans.len() {
+                    let (head, tail) = rest.split_at(size);
+                    tasks.push((start..slot + 1, head));
+                    rest = tail;
+                    start = slot + 1;
+                    size = 0;
+                }
+            }
+            let circles = &s.circles;
+            tasks
+                .into_par_iter()
+                .for_each(|(slots, out)| self.fill(plans, circles, slots, out));
+        } else {
+            self.fill(plans, &s.circles, 0..plans.len(), all);
+        }
+        (s, reused)
+    }
+
+    /// The samples of circles `slots` (their plans and places in `plans` and `circles`) into
+    /// `out`, which holds exactly their samples.
+    fn fill(
+        &self,
+        plans: &[SlotSamples],
+        circles: &[CircleSamples],
+        slots: std::ops::Range<usize>,
+        out: SampleSlices,
+    ) {
+        let mut rest = out;
+        for slot in slots {
+            let cs = circles[slot];
+            let (o, tail) = rest.split_at(cs.count as usize);
+            rest = tail;
+            o.circle_of.fill(cs.circle);
+            for (i, x) in o.index_of.iter_mut().enumerate() {
+                *x = i as u32;
+            }
+            match &plans[slot] {
+                SlotSamples::Made { n, ks } => {
+                    let c = self.domain.circle(cs.circle);
+                    let units = self.units.grid(*n);
+                    for ((p, g), &k) in o.points.iter_mut().zip(o.grid.iter_mut()).zip(ks) {
+                        let u = units.at(k);
+                        *p = [c.center[0] + c.radius * u[0], c.center[1] + c.radius * u[1]];
+                        *g = k;
+                    }
+                }
+                SlotSamples::Taken { points, grid, .. } => {
+                    o.points.copy_from_slice(points);
+                    o.grid.copy_from_slice(grid);
+                }
+            }
         }
     }
-    Ok((s, reused))
 }
 
 /// What broke one of the sampling invariants.
@@ -1041,7 +1416,8 @@ fn sample_and_triangulate_impl(
     mut owned: Option<Triangulation>,
 ) -> Result<SampledDomain, MeshError> {
     let _stage = crate::timings::enter("sampling");
-    let gaps = nearest_gaps(domain);
+    let index = HoleIndex::new(domain.holes());
+    let gaps = nearest_gaps_in(domain, &index);
     let radii: Vec<f64> = domain
         .circle_ids()
         .map(|c| domain.circle(c).radius)
@@ -1065,23 +1441,22 @@ fn sample_and_triangulate_impl(
     }
     let mut round = 0;
     loop {
+        let ctx = SlotContext::new(domain, &index, opts, &gaps, &density, previous);
         let (samples, _) =
-            sample_adaptive_after(domain, opts, &gaps, &density, previous).map_err(|e| {
-                MeshError::Sampling {
-                    circle: e.circle,
-                    message: if e.total {
-                        format!(
-                            "more samples would be needed in total than the limit {}",
-                            e.limit
-                        )
-                    } else {
-                        format!(
-                            "the circle would need more than the most samples allowed ({}): its \
+            sample_adaptive_with(&ctx, ctx.parallel()).map_err(|e| MeshError::Sampling {
+                circle: e.circle,
+                message: if e.total {
+                    format!(
+                        "more samples would be needed in total than the limit {}",
+                        e.limit
+                    )
+                } else {
+                    format!(
+                        "the circle would need more than the most samples allowed ({}): its \
                          gap to a neighbour is too small for the sampling",
-                            e.limit
-                        )
-                    },
-                }
+                        e.limit
+                    )
+                },
             })?;
         let total = samples.len();
         if total > opts.max_total {
@@ -1303,6 +1678,53 @@ mod tests {
             }
         }
         assert!(unit_offset(3, 12)[0].is_nan());
+    }
+
+    /// The table's lookups are bitwise [`unit_offset`] on grids that refine or coarsen the
+    /// table's by powers of two (up to `2^60` angles, indices past the grid included), and
+    /// computed on every other grid.
+    #[test]
+    fn unit_table_is_unit_offset_bitwise() {
+        let bits = |u: Point| [u[0].to_bits(), u[1].to_bits()];
+        let mut rng = crate::layouts::SplitMix64(7);
+        let mut looked_up = 0;
+        for size in [8u64, 16, 24, 40, 96, 256, 4096, 8192] {
+            let table = UnitTable::new(size);
+            assert_eq!(table.u.is_empty(), size > 1 << 12);
+            let mut grids: Vec<u64> = (0..=60)
+                .filter_map(|s| size.checked_mul(1 << s))
+                .chain((1..=6).filter_map(|s| (size >> s << s == size).then_some(size >> s)))
+                .collect();
+            grids.extend([
+                0,
+                4,
+                12,
+                8,
+                48,
+                72,
+                1000,
+                1 << 40,
+                3 << 40,
+                u64::MAX / 8 * 8,
+            ]);
+            for n in grids {
+                let units = table.grid(n);
+                looked_up += usize::from(!units.table.is_empty());
+                let mut ks: Vec<u64> = (0..n.min(2048)).collect();
+                ks.extend((0..2000).map(|_| rng.next_u64() % n.max(1)));
+                ks.extend((0..64).map(|s| n.wrapping_mul(3) >> 1 >> (s % 8) << (s % 8)));
+                ks.extend((0..n.trailing_zeros()).map(|s| n >> s));
+                ks.extend([n, n.wrapping_add(1), 2 * size, u64::MAX]);
+                for k in ks {
+                    let (a, b) = (units.at(k), unit_offset(k, n));
+                    assert!(
+                        bits(a) == bits(b) || (a[0].is_nan() && b[0].is_nan()),
+                        "table {size} grid {n} index {k}: {a:?} {b:?}"
+                    );
+                }
+            }
+        }
+        assert!(looked_up > 200, "{looked_up}");
     }
 
     #[test]
