@@ -114,14 +114,7 @@ fn parse_exponent(s: &[u8]) -> Option<i32> {
 /// `m 5^(-q) 2^(e + 1 - q)`, an odd integer exactly when `e + 1 = q`; for `q > 0` it is
 /// `m 2^(e + 1 - q) / 5^q`, an odd integer exactly when `e + 1 = q` and `5^q` divides `m`.
 fn is_tie(x: f64, q: i32) -> bool {
-    let bits = x.to_bits();
-    let biased = ((bits >> 52) & 0x7ff) as i32;
-    let mut m = bits & ((1u64 << 52) - 1);
-    let mut e = -1074;
-    if biased != 0 {
-        m |= 1u64 << 52;
-        e = biased - 1075;
-    }
+    let (mut m, mut e) = integer_and_exponent(x);
     if m == 0 {
         return false;
     }
@@ -143,11 +136,22 @@ fn is_tie(x: f64, q: i32) -> bool {
 /// above), and a tie at `q` needs `x = m 2^(q - 1)` with `m` odd, so `x` must be a multiple of
 /// `2^-22`. Mesh coordinates almost never are: they skip the digit parsing.
 fn may_tie(x: f64) -> bool {
+    let (m, e) = integer_and_exponent(x);
+    // The exponent of the lowest set bit of x.
+    e + m.trailing_zeros() as i32 >= -22
+}
+
+/// `|x| = m 2^e` with the integer `m < 2^53` and `e` as in the IEEE encoding (subnormals:
+/// `e = -1074`).
+fn integer_and_exponent(x: f64) -> (u64, i32) {
     let bits = x.to_bits();
     let biased = ((bits >> 52) & 0x7ff) as i32;
-    let m = (bits & ((1u64 << 52) - 1)) | (u64::from(biased != 0) << 52);
-    // The exponent of the lowest set bit of x.
-    biased.max(1) - 1075 + m.trailing_zeros() as i32 >= -22
+    let m = bits & ((1u64 << 52) - 1);
+    if biased == 0 {
+        (m, -1074)
+    } else {
+        (m | (1u64 << 52), biased - 1075)
+    }
 }
 
 /// Append `std`'s formatting of `x` (the rare cases this module does not do itself).
@@ -263,14 +267,7 @@ pub fn fixed3(out: &mut Vec<u8>, x: f64) {
     if x.is_nan() || x.abs() >= 1e15 {
         return by_std(out, format_args!("{x:.3}"));
     }
-    let bits = x.to_bits();
-    let biased = ((bits >> 52) & 0x7ff) as i32;
-    let mut m = bits & ((1u64 << 52) - 1);
-    let mut e = -1074;
-    if biased != 0 {
-        m |= 1u64 << 52;
-        e = biased - 1075;
-    }
+    let (m, e) = integer_and_exponent(x);
     // |x| < 1e15 < 2^50: m 2^e < 2^50, so e < 50 and m 1000 2^e < 2^60.
     let p = u128::from(m) * 1000;
     let scaled: u128 = if e >= 0 {
