@@ -21,16 +21,17 @@
 //!   formula as the background grid's.
 
 use crate::domain::{Domain, BOUNDING};
-use crate::exact_mode::imposed::{BlockKey, ImposedCounts};
+use crate::exact_mode::imposed::{vertex_cycle, BlockKey, CircleTag, ImposedCounts};
+use crate::geometry::predicates::orient2d;
 use crate::geometry::Point;
-use crate::grid::tfi;
 use crate::grid::{build_grids_forced, MAX_CELLS_PER_SIDE};
 use crate::layout::{Block, BlockLayout, Curve, Edge, EdgeKind, SideRef};
-use crate::mesh::{Geometry, Mesh};
+use crate::mesh::{BlockGrid, Geometry, Mesh};
 use crate::mesher::{mesh, MeshError, Mode, Options};
-use crate::sequence::layout_keys;
+use std::cmp::Ordering;
 use std::collections::BTreeMap;
 use std::collections::HashMap;
+use std::f64::consts::TAU;
 use std::sync::Arc;
 
 /// The background-aligned rectangle: lattice nodes `i0..=i0 + nx` by `j0..=j0 + ny`.
@@ -157,6 +158,29 @@ impl Rect {
         [i as f64 * self.spacing, j as f64 * self.spacing]
     }
 
+    /// The distance from `c` (inside) to the rectangle's boundary in direction `theta`.
+    fn reach(&self, c: Point, theta: f64) -> f64 {
+        let s = self.spacing;
+        let (x0, y0) = (self.i0 as f64 * s, self.j0 as f64 * s);
+        let (x1, y1) = (x0 + self.nx as f64 * s, y0 + self.ny as f64 * s);
+        let (dx, dy) = (theta.cos(), theta.sin());
+        let tx = if dx > 0.0 {
+            (x1 - c[0]) / dx
+        } else if dx < 0.0 {
+            (x0 - c[0]) / dx
+        } else {
+            f64::INFINITY
+        };
+        let ty = if dy > 0.0 {
+            (y1 - c[1]) / dy
+        } else if dy < 0.0 {
+            (y0 - c[1]) / dy
+        } else {
+            f64::INFINITY
+        };
+        tx.min(ty)
+    }
+
     /// Continuous perimeter coordinate (in intervals, from the lower-left corner) of the ray
     /// from `c` (inside) at angle `theta`.
     fn perimeter(&self, c: Point, theta: f64) -> f64 {
@@ -200,32 +224,45 @@ impl Rect {
 pub struct Transition {
     pub layout: BlockLayout,
     pub square: Rect,
-    /// `(edge, cells)` to impose.
+    /// `(edge, cells)` to impose: first a radial edge of the ring (every radial edge is in
+    /// its class), then each bounding-circle wall edge with its lattice run's interval count.
+    /// Edges of one conformity class of the input layout get one count ([`assign_runs`]).
     pub counts: Vec<(usize, usize)>,
     /// Per transition block: its id and the lattice nodes of its side 0, in order.
     pub outer: Vec<(usize, Vec<(i64, i64)>)>,
 }
 
-/// Add the transition ring to a layout whose outer boundary is the bounding circle of
-/// `domain` (see the module documentation).
-pub fn add_transition(
-    layout: &BlockLayout,
-    domain: &Domain,
-    spacing: f64,
-) -> Result<Transition, MeshError> {
-    let b = domain.bounding();
-    add_transition_rect(layout, domain, Rect::around(b.center, b.radius, spacing)?)
+/// The bounding-circle wall edges of `layout` chained counter-clockwise (starting with the
+/// one whose start projects first onto the rectangle's perimeter) and the perimeter node
+/// `ps[i]` of each one's start: edge `chain[i]` gets the lattice run `ps[i]..ps[i + 1]`
+/// (the last one up to `ps[0] + perimeter`), at least one interval each.
+#[derive(Debug, Clone, PartialEq)]
+struct Runs {
+    chain: Vec<usize>,
+    ps: Vec<i64>,
 }
 
-/// [`add_transition`] out to a given lattice rectangle (see [`Rect::from_bounds`]).
-pub fn add_transition_rect(
-    layout: &BlockLayout,
-    domain: &Domain,
-    sq: Rect,
-) -> Result<Transition, MeshError> {
+impl Runs {
+    /// Lattice intervals of the run of chain edge `i`.
+    fn cells(&self, i: usize, total: i64) -> i64 {
+        let next = self.ps.get(i + 1).copied().unwrap_or(self.ps[0] + total);
+        next - self.ps[i]
+    }
+}
+
+/// Assign the lattice runs ([`Runs`]). Each chain vertex is projected radially from the
+/// circle's centre onto the perimeter (continuous position `t_i`, in intervals). Edges that
+/// share a conformity class of `layout` (templates of inserted holes and collapsed vertices
+/// can tie two bounding arcs) must get one count: such a class gets the rounded mean of its
+/// edges' ideal lengths (`t_{i+1} - t_i`, at least 1), lowered or raised one step at a time
+/// (the class furthest from its mean first) until the other edges can close the perimeter;
+/// the other edges share what is left in proportion to their ideal lengths. Positions are
+/// then rounded in turn (a tied edge adds its class count), each edge at least one
+/// interval, the last free edge closing the perimeter. Without tied edges this is the plain
+/// rounding of every `t_i`, kept strictly increasing.
+fn assign_runs(layout: &BlockLayout, domain: &Domain, sq: &Rect) -> Result<Runs, MeshError> {
     let spacing = sq.spacing;
     let b = domain.bounding();
-    let mut out = layout.clone();
     // The bounding wall edges, chained counter-clockwise.
     let walls: Vec<usize> = (0..layout.edges.len())
         .filter(|&e| layout.edges[e].kind == EdgeKind::Wall(BOUNDING))
@@ -269,30 +306,186 @@ pub fn add_transition_rect(
             "the bounding-circle walls do not form one closed chain".into(),
         ));
     }
-    // Snap the chain's vertices to perimeter nodes, strictly increasing.
     let total = sq.perimeter_len();
-    let mut ps: Vec<i64> = Vec::with_capacity(chain.len());
-    let mut prev_t = f64::NEG_INFINITY;
+    let k = chain.len();
+    let too_coarse = || {
+        MeshError::Options(format!(
+            "--transition: the background spacing {spacing} is too coarse for the {k} bounding \
+             wall edges (each needs at least one interval, edges tied by a conformity class \
+             the same number)"
+        ))
+    };
+    // Continuous perimeter positions, increasing, t[k] = t[0] + total.
+    let mut t: Vec<f64> = Vec::with_capacity(k + 1);
     for &e in &chain {
-        let v = layout.edges[e].ends[0];
-        let mut t = sq.perimeter(b.center, angle(v));
-        while t < prev_t {
-            t += total as f64;
+        let mut x = sq.perimeter(b.center, angle(layout.edges[e].ends[0]));
+        while t.last().is_some_and(|&prev| x < prev) {
+            x += total as f64;
         }
-        prev_t = t;
-        let mut p = t.round() as i64;
-        if let Some(&q) = ps.last() {
-            p = p.max(q + 1);
+        t.push(x);
+    }
+    t.push(t[0] + total as f64);
+    // Tied edges: classes holding two or more chain edges, with their count.
+    let (class, _) = crate::grid::edge_classes(layout);
+    let mut members: BTreeMap<usize, Vec<usize>> = BTreeMap::new();
+    for (i, &e) in chain.iter().enumerate() {
+        members.entry(class[e]).or_default().push(i);
+    }
+    let mut tied: Vec<(Vec<usize>, f64, i64)> = members
+        .into_values()
+        .filter(|m| m.len() >= 2)
+        .map(|m| {
+            let mean = m.iter().map(|&i| t[i + 1] - t[i]).sum::<f64>() / m.len() as f64;
+            let n = (mean.round() as i64).max(1);
+            (m, mean, n)
+        })
+        .collect();
+    let mut fixed: Vec<Option<i64>> = vec![None; k];
+    let free = k - tied.iter().map(|g| g.0.len()).sum::<usize>();
+    if !tied.is_empty() {
+        // What the tied edges take; the free edges need at least one interval each, and
+        // without free edges the tied ones must close the perimeter alone.
+        let taken = |tied: &[(Vec<usize>, f64, i64)]| -> i64 {
+            tied.iter().map(|g| g.0.len() as i64 * g.2).sum()
+        };
+        let fits = |x: i64| {
+            if free == 0 {
+                x == total
+            } else {
+                x + free as i64 <= total
+            }
+        };
+        let mut steps = 0;
+        while !fits(taken(&tied)) {
+            steps += 1;
+            let x = taken(&tied);
+            let lower = if free == 0 { x > total } else { true };
+            // The class furthest from its mean in the direction of the step, that can take
+            // it (one interval at least; without free edges, not past the perimeter).
+            let pick = (0..tied.len())
+                .filter(|&g| {
+                    let (m, n) = (tied[g].0.len() as i64, tied[g].2);
+                    if lower {
+                        n > 1
+                    } else {
+                        x + m <= total
+                    }
+                })
+                .max_by(|&a, &c| {
+                    let d = |g: usize| {
+                        let d = tied[g].2 as f64 - tied[g].1;
+                        if lower {
+                            d
+                        } else {
+                            -d
+                        }
+                    };
+                    d(a).total_cmp(&d(c)).then(c.cmp(&a))
+                });
+            match pick {
+                Some(g) if steps <= 4 * total => tied[g].2 += if lower { -1 } else { 1 },
+                _ => return Err(too_coarse()),
+            }
         }
-        ps.push(p);
+        for (m, _, n) in &tied {
+            for &i in m {
+                fixed[i] = Some(*n);
+            }
+        }
     }
-    if ps[ps.len() - 1] + 1 > ps[0] + total {
-        return Err(MeshError::Options(format!(
-            "--transition: the background spacing {spacing} is too coarse for the {} bounding \
-             wall edges (each needs at least one interval)",
-            chain.len()
-        )));
+    if free == 0 {
+        // Tied edges only: their counts close the perimeter (checked above).
+        let mut ps = vec![t[0].round() as i64];
+        for i in 0..k - 1 {
+            let n = fixed[i].ok_or_else(|| MeshError::Internal("untied edge".into()))?;
+            ps.push(ps[i] + n);
+        }
+        return Ok(Runs { chain, ps });
     }
+    // The free edges share what the tied ones leave, in proportion to their ideal lengths;
+    // positions are rounded from the first edge after the last free one, so that a free
+    // edge closes the perimeter.
+    let left = total - (0..k).filter_map(|i| fixed[i]).sum::<i64>();
+    let free_len: f64 = (0..k)
+        .filter(|&i| fixed[i].is_none())
+        .map(|i| t[i + 1] - t[i])
+        .sum();
+    let scale = if tied.is_empty() || !(free_len > 0.0) {
+        1.0
+    } else {
+        left as f64 / free_len
+    };
+    let last_free = (0..k)
+        .rev()
+        .find(|&i| fixed[i].is_none())
+        .ok_or_else(|| MeshError::Internal("no free edge".into()))?;
+    let start = (last_free + 1) % k;
+    let order: Vec<usize> = (0..k).map(|x| (start + x) % k).collect();
+    // Target positions along `order`, from t[start].
+    let mut target = Vec::with_capacity(k);
+    let mut acc = t[start];
+    for &i in &order {
+        target.push(acc);
+        acc += match fixed[i] {
+            Some(n) => n as f64,
+            None if tied.is_empty() => t[i + 1] - t[i],
+            None => (t[i + 1] - t[i]) * scale,
+        };
+    }
+    // What the edges after each position need at least.
+    let mut need = vec![0i64; k + 1];
+    for x in (0..k).rev() {
+        need[x] = need[x + 1] + fixed[order[x]].unwrap_or(1);
+    }
+    let mut pos = vec![target[0].round() as i64];
+    for x in 1..k {
+        let prev = pos[x - 1];
+        let p = match fixed[order[x - 1]] {
+            Some(n) => prev + n,
+            None if tied.is_empty() => (target[x].round() as i64).max(prev + 1),
+            None => (target[x].round() as i64)
+                .max(prev + 1)
+                .min(pos[0] + total - need[x]),
+        };
+        pos.push(p);
+    }
+    if pos[k - 1] + need[k - 1] > pos[0] + total || pos.windows(2).any(|w| w[1] <= w[0]) {
+        return Err(too_coarse());
+    }
+    // Back to chain order, positions increasing from chain[0].
+    let mut ps = vec![0i64; k];
+    for (x, &i) in order.iter().enumerate() {
+        ps[i] = pos[x] - if i < start { total } else { 0 };
+    }
+    Ok(Runs { chain, ps })
+}
+
+/// Add the transition ring to a layout whose outer boundary is the bounding circle of
+/// `domain` (see the module documentation).
+pub fn add_transition(
+    layout: &BlockLayout,
+    domain: &Domain,
+    spacing: f64,
+) -> Result<Transition, MeshError> {
+    let b = domain.bounding();
+    add_transition_rect(layout, domain, Rect::around(b.center, b.radius, spacing)?)
+}
+
+/// [`add_transition`] out to a given lattice rectangle (see [`Rect::from_bounds`]).
+pub fn add_transition_rect(
+    layout: &BlockLayout,
+    domain: &Domain,
+    sq: Rect,
+) -> Result<Transition, MeshError> {
+    let runs = assign_runs(layout, domain, &sq)?;
+    Ok(ring_layout(layout, sq, &runs))
+}
+
+/// The layout with one transition block per chain edge of `runs` (module documentation).
+fn ring_layout(layout: &BlockLayout, sq: Rect, runs: &Runs) -> Transition {
+    let (chain, ps) = (&runs.chain, &runs.ps);
+    let total = sq.perimeter_len();
+    let mut out = layout.clone();
     // New vertices and radial edges.
     let mut pv = Vec::with_capacity(chain.len());
     let mut radial = Vec::with_capacity(chain.len());
@@ -311,14 +504,14 @@ pub fn add_transition_rect(
         });
         radial.push((out.edges.len() - 1) as u32);
     }
-    let radial_cells =
-        ((radial_len / chain.len() as f64 / spacing).round() as usize).clamp(1, MAX_CELLS_PER_SIDE);
+    let radial_cells = ((radial_len / chain.len() as f64 / sq.spacing).round() as usize)
+        .clamp(1, MAX_CELLS_PER_SIDE);
     let mut counts = vec![(radial[0] as usize, radial_cells)];
     let mut outer = Vec::with_capacity(chain.len());
     let k = chain.len();
     for i in 0..k {
         let e = chain[i];
-        let (pa, pb) = (ps[i], if i + 1 < k { ps[i + 1] } else { ps[0] + total });
+        let (pa, pb) = (ps[i], ps[i] + runs.cells(i, total));
         let nodes: Vec<(i64, i64)> = (pa..=pb).map(|p| sq.node(p)).collect();
         let pts: Vec<Point> = nodes.iter().map(|&n| sq.point(n)).collect();
         let (va, vb) = (pv[i], pv[(i + 1) % k]);
@@ -355,12 +548,155 @@ pub fn add_transition_rect(
         counts.push((e, (pb - pa) as usize));
         outer.push((out.blocks.len() - 1, nodes));
     }
-    Ok(Transition {
+    Transition {
         layout: out,
         square: sq,
         counts,
         outer,
-    })
+    }
+}
+
+/// The angle of `p` about `c`, moved by a multiple of `2 pi` to within `pi` of `near`.
+fn angle_near(c: Point, p: Point, near: f64) -> f64 {
+    let a = (p[1] - c[1]).atan2(p[0] - c[0]);
+    a + TAU * ((near - a) / TAU).round()
+}
+
+/// The ring's grids by polar interpolation about the bounding circle's centre `c` (radius
+/// `r`): node `(i, j)` of a ring block, `s = j / nj` from the lattice (`s = 0`) to the wall
+/// (`s = 1`), is at angle `phi = beta_i + s (alpha_i - beta_i)` and distance
+/// `rho(phi) + s (r - rho(phi))`, where `alpha_i` and `beta_i` are the angles of wall node
+/// `i` and lattice node `i` (unwrapped along the block) and `rho(phi)` the distance from `c`
+/// to the rectangle in direction `phi`. Both angle sequences increase with `i`, so every
+/// grid line `j` has increasing angles and the ring cannot fold however the wall nodes
+/// crowd (a straight-line interpolation folds where they crowd towards a hole near the
+/// bounding circle while the lattice nodes are evenly spaced). The boundary nodes are the
+/// given ones exactly; each radial edge's nodes are computed once and copied into both
+/// blocks. `walls[k]` are the wall nodes of ring block `k` counter-clockwise (its side 2
+/// reversed). Returns the grids and each radial edge's nodes (from the wall to the
+/// lattice), or `None` when the counts do not fit or some cell is not strictly
+/// counter-clockwise at all four corners (exact orientation, and the float test of
+/// [`crate::quality`]).
+fn ring_grids(
+    t: &Transition,
+    c: Point,
+    r: f64,
+    walls: &[Vec<Point>],
+) -> Option<(Vec<BlockGrid>, HashMap<u32, Vec<Point>>)> {
+    let nj = t.counts.first()?.1;
+    let sq = &t.square;
+    let at = |alpha: f64, beta: f64, j: usize| -> Point {
+        let s = j as f64 / nj as f64;
+        let phi = beta + s * (alpha - beta);
+        let rho = sq.reach(c, phi);
+        let d = rho + s * (r - rho);
+        [c[0] + d * phi.cos(), c[1] + d * phi.sin()]
+    };
+    // Radial edge nodes, from the wall vertex (index 0) to the lattice vertex (index nj).
+    let mut radial: HashMap<u32, Vec<Point>> = HashMap::new();
+    for (k, (b, _)) in t.outer.iter().enumerate() {
+        let block = t.layout.blocks.get(*b)?;
+        let e = block.sides[3].edge;
+        let [q, p] = t.layout.edges.get(e as usize)?.ends;
+        let (q, p) = (
+            *t.layout.vertices.get(q as usize)?,
+            *t.layout.vertices.get(p as usize)?,
+        );
+        if walls.get(k)?.first() != Some(&q) {
+            return None;
+        }
+        let alpha = (q[1] - c[1]).atan2(q[0] - c[0]);
+        let beta = angle_near(c, p, alpha);
+        let mut nodes: Vec<Point> = (0..=nj).map(|j| at(alpha, beta, nj - j)).collect();
+        nodes[0] = q;
+        nodes[nj] = p;
+        radial.insert(e, nodes);
+    }
+    let mut grids = Vec::with_capacity(t.outer.len());
+    for (k, (b, lattice)) in t.outer.iter().enumerate() {
+        let block = t.layout.blocks.get(*b)?;
+        let wall = walls.get(k)?;
+        let ni = lattice.len().checked_sub(1)?;
+        if wall.len() != ni + 1 || ni == 0 {
+            return None;
+        }
+        let (left, right) = (
+            radial.get(&block.sides[3].edge)?,
+            radial.get(&block.sides[1].edge)?,
+        );
+        let outer: Vec<Point> = lattice.iter().map(|&n| sq.point(n)).collect();
+        if left[nj] != outer[0] || right[nj] != outer[ni] || wall[ni] != right[0] {
+            return None;
+        }
+        let mut alpha = Vec::with_capacity(ni + 1);
+        let mut beta = Vec::with_capacity(ni + 1);
+        alpha.push((wall[0][1] - c[1]).atan2(wall[0][0] - c[0]));
+        beta.push(angle_near(c, outer[0], alpha[0]));
+        for i in 1..=ni {
+            alpha.push(angle_near(c, wall[i], alpha[i - 1]));
+            beta.push(angle_near(c, outer[i], beta[i - 1]));
+        }
+        let mut nodes = Vec::with_capacity((ni + 1) * (nj + 1));
+        for j in 0..=nj {
+            for i in 0..=ni {
+                nodes.push(if i == 0 {
+                    left[nj - j]
+                } else if i == ni {
+                    right[nj - j]
+                } else if j == 0 {
+                    outer[i]
+                } else if j == nj {
+                    wall[i]
+                } else {
+                    at(alpha[i], beta[i], j)
+                });
+            }
+        }
+        let g = BlockGrid { ni, nj, nodes };
+        if !counter_clockwise(&g) {
+            return None;
+        }
+        grids.push(g);
+    }
+    Some((grids, radial))
+}
+
+/// Every cell of `g` strictly counter-clockwise at its four corners: exactly
+/// ([`orient2d`]) and by the float test that [`crate::quality`] reports inverted cells with.
+fn counter_clockwise(g: &BlockGrid) -> bool {
+    for j in 0..g.nj {
+        for i in 0..g.ni {
+            let q = [
+                g.node(i, j),
+                g.node(i + 1, j),
+                g.node(i + 1, j + 1),
+                g.node(i, j + 1),
+            ];
+            for k in 0..4 {
+                if orient2d(q[k], q[(k + 1) % 4], q[(k + 3) % 4]) != Ordering::Greater {
+                    return false;
+                }
+            }
+        }
+    }
+    crate::quality::inverted_cells(std::slice::from_ref(g)) == 0
+}
+
+/// The wall nodes of each transition block of `t` (counter-clockwise), from the grids of
+/// the blocks inside the ring (`grids[b]` for block `b` of the layout before the ring).
+fn ring_walls(t: &Transition, grids: &[BlockGrid], inner: usize) -> Option<Vec<Vec<Point>>> {
+    let mut by_wall: HashMap<u32, usize> = HashMap::new();
+    for (b, block) in t.layout.blocks.iter().enumerate().take(inner) {
+        by_wall.entry(block.sides[0].edge).or_insert(b);
+    }
+    t.outer
+        .iter()
+        .map(|(b, _)| {
+            let edge = t.layout.blocks.get(*b)?.sides[2].edge;
+            let g = grids.get(*by_wall.get(&edge)?)?;
+            Some(g.side(0))
+        })
+        .collect()
 }
 
 /// Mesh `domain` ([`mesh`]) and add the transition ring to a Cartesian background of
@@ -375,22 +711,36 @@ pub fn mesh_with_transition(
 }
 
 /// [`mesh_with_transition`] out to the lattice rectangle `rect` ([`Rect::from_bounds`]).
-/// Exact mode keeps its spoke-aligned grids when the lattice counts can be imposed on them
-/// (`exact_transition`); otherwise every grid is interpolated and the mesh says
-/// [`Geometry::Paper`].
+///
+/// Exact mode keeps its spoke-aligned grids when the exact mesher honours the lattice counts
+/// imposed on the bounding-circle arcs and the ring is valid (`exact_transition`).
+/// Otherwise the domain is meshed by the paper pipeline (paper mode, [`Geometry::Paper`])
+/// with those counts imposed on its conformity classes, every grid interpolated. The ring is
+/// built by polar interpolation ([`ring_grids`]); in the interpolated mesh, where that is
+/// not valid, the ring's transfinite interpolation is kept when it is valid.
 pub fn mesh_with_transition_rect(
     domain: &Domain,
     options: &Options,
     rect: Rect,
 ) -> Result<Mesh, MeshError> {
-    let base = mesh(domain, options)?;
+    let mut base = mesh(domain, options)?;
     if options.mode == Mode::Exact && domain.hole_count() >= 2 {
-        if let Some(m) = exact_transition(domain, options, rect, &base)? {
-            return Ok(m);
+        if base.geometry == Geometry::Exact {
+            if let Some(m) = exact_transition(domain, options, rect, &base)? {
+                return Ok(m);
+            }
         }
+        base = mesh(
+            domain,
+            &Options {
+                mode: Mode::Paper,
+                ..options.clone()
+            },
+        )?;
     }
     let t = add_transition_rect(&base.layout, domain, rect)?;
     let mut grids = build_grids_forced(&t.layout, options.cells, &t.counts)?;
+    let nbase = base.layout.blocks.len();
     for (b, nodes) in &t.outer {
         let g = grids
             .get_mut(*b)
@@ -404,115 +754,151 @@ pub fn mesh_with_transition_rect(
             g.nodes[i] = t.square.point(n);
         }
     }
+    let bc = domain.bounding();
+    let ring = ring_walls(&t, &grids, nbase).and_then(|w| ring_grids(&t, bc.center, bc.radius, &w));
+    let mut layout = t.layout;
+    if let Some((ring, radial)) = ring {
+        for ((b, _), g) in t.outer.iter().zip(ring) {
+            grids[*b] = g;
+        }
+        set_radial_curves(&mut layout, radial);
+    }
     Ok(Mesh {
-        layout: t.layout,
+        layout,
         grids,
-        // Every grid is interpolated here, exact mode's spoke-aligned ones too.
+        // Every grid is interpolated here.
         geometry: Geometry::Paper,
         ..base
     })
 }
 
+/// The radial edges of the ring take the polyline of their nodes (they are not straight).
+fn set_radial_curves(layout: &mut BlockLayout, radial: HashMap<u32, Vec<Point>>) {
+    for (e, nodes) in radial {
+        if let Some(edge) = layout.edges.get_mut(e as usize) {
+            edge.curve = Curve::Polyline(nodes);
+        }
+    }
+}
+
+/// The block keys exact mode gives the medial blocks of the exact mesh `m` (the blocks
+/// before its templates), as [`crate::exact_mode::imposed`] computes them from its vertices:
+/// the wall circle (a block around an inserted hole has no `wall`: its circle is the
+/// inserted hole whose arc its side 0 is) and the circles around its two medial corners,
+/// from the touching points of the blocks there. `None` when a wall is not found.
+fn exact_keys(m: &Mesh) -> Option<Vec<BlockKey>> {
+    let layout = &m.layout;
+    let nmed = layout.blocks.len().checked_sub(m.template_blocks)?;
+    let walls: Vec<i64> = layout.blocks[..nmed]
+        .iter()
+        .map(|b| {
+            if let Some(w) = b.wall {
+                return Some(w as i64);
+            }
+            match &layout.edges.get(b.sides[0].edge as usize)?.curve {
+                Curve::Arc { center, radius, .. } => m
+                    .inserted_holes
+                    .iter()
+                    .position(|h| h.center == *center && h.radius == *radius)
+                    .map(|k| (m.holes + k) as i64),
+                _ => None,
+            }
+        })
+        .collect::<Option<_>>()?;
+    let mut touching: Vec<Vec<(CircleTag, Point)>> = vec![Vec::new(); layout.vertices.len()];
+    for (b, &w) in layout.blocks[..nmed].iter().zip(&walls) {
+        for (corner, wall_corner) in [(3, 0), (2, 1)] {
+            let p = *layout.vertices.get(b.corners[wall_corner] as usize)?;
+            touching
+                .get_mut(b.corners[corner] as usize)?
+                .push(((w, 0, 0), p));
+        }
+    }
+    let cycle = |v: u32| vertex_cycle(layout.vertices[v as usize], &touching[v as usize]);
+    Some(
+        layout.blocks[..nmed]
+            .iter()
+            .zip(&walls)
+            .map(|(b, &w)| ((w, 0, 0), cycle(b.corners[3]), cycle(b.corners[2])))
+            .collect(),
+    )
+}
+
+/// The most exact meshes made to honour the lattice counts: the counts are imposed on the
+/// combinatorics of the previous mesh; a rebuild that changes them (an inverted block given
+/// up) gets its own counts imposed in turn.
+const EXACT_ATTEMPTS: usize = 3;
+
 /// Exact mode: keep the spoke-aligned grids. The bounding-circle arcs get as many cells as
-/// their lattice runs have intervals (imposed by block key, [`Options::imposed_counts`]; the
-/// snapping only depends on the layout's vertices, which counts do not move), then only the
-/// transition blocks are interpolated: side 2 is the medial block's wall nodes, side 0 the
-/// lattice nodes, sides 1 and 3 equally spaced radial segments shared by neighbours.
-/// `Ok(None)` when the counts could not be imposed (the caller interpolates everything).
+/// their lattice runs have intervals, and so does every arc in their conformity classes
+/// (imposed by block key, [`Options::imposed_counts`], on the medial blocks; the templates
+/// of inserted holes follow their classes); then only the ring is interpolated
+/// ([`ring_grids`]). `Ok(None)` when the exact mesher did not honour the counts, the mesh
+/// is not exact, or the ring is not valid (the caller interpolates everything).
 fn exact_transition(
     domain: &Domain,
     options: &Options,
     rect: Rect,
     base: &Mesh,
 ) -> Result<Option<Mesh>, MeshError> {
-    let t = add_transition_rect(&base.layout, domain, rect)?;
-    let keys = layout_keys(&base.layout);
-    let mut want: BTreeMap<BlockKey, [usize; 2]> = keys
-        .iter()
-        .cloned()
-        .zip(base.grids.iter().map(|g| [g.ni, g.nj]))
-        .collect();
-    if want.len() != keys.len() || base.grids.len() != base.layout.blocks.len() {
-        return Ok(None);
-    }
-    let wall_cells: HashMap<usize, usize> = t.counts.iter().skip(1).copied().collect();
-    let blocks = &base.layout.blocks;
-    for b in blocks {
-        if let Some(&n) = wall_cells.get(&(b.sides[0].edge as usize)) {
-            for (b2, other) in blocks.iter().enumerate() {
-                if other.sides[2].edge == b.sides[2].edge {
-                    if let Some(w) = want.get_mut(&keys[b2]) {
-                        w[0] = n;
-                    }
-                }
-            }
-        }
-    }
-    let opts = Options {
-        imposed_counts: Some(Arc::new(ImposedCounts(want.clone()))),
-        ..options.clone()
-    };
-    let m = mesh(domain, &opts)?;
-    let got: BTreeMap<BlockKey, [usize; 2]> = layout_keys(&m.layout)
-        .into_iter()
-        .zip(m.grids.iter().map(|g| [g.ni, g.nj]))
-        .collect();
-    if got != want {
-        return Ok(None);
-    }
-    let t = add_transition_rect(&m.layout, domain, rect)?;
-    let nbase = m.layout.blocks.len();
-    let mut radial_nodes: HashMap<u32, Vec<Point>> = HashMap::new();
-    let radial_cells = t.counts.first().map_or(1, |c| c.1);
-    let mut grids = m.grids.clone();
-    for (b, nodes) in &t.outer {
-        let block = &t.layout.blocks[*b];
-        let wall_edge = block.sides[2].edge;
-        let Some(inner) = (0..nbase).find(|&k| m.layout.blocks[k].sides[0].edge == wall_edge)
-        else {
-            return Ok(None);
-        };
-        let mut s2 = m.grids[inner].side(0);
-        s2.reverse();
-        if s2.len() != nodes.len() {
+    let mut current = base.clone();
+    for _ in 0..EXACT_ATTEMPTS {
+        let m = &current;
+        if m.geometry != Geometry::Exact || m.grids.len() != m.layout.blocks.len() {
             return Ok(None);
         }
-        let s0: Vec<Point> = nodes.iter().map(|&n| t.square.point(n)).collect();
-        let mut radial = |side: SideRef| -> Vec<Point> {
-            let e = side.edge;
-            let mut pts = radial_nodes
-                .entry(e)
-                .or_insert_with(|| {
-                    let [a, c] = t.layout.edges[e as usize]
-                        .ends
-                        .map(|v| t.layout.vertices[v as usize]);
-                    let mut v: Vec<Point> = (0..=radial_cells)
-                        .map(|i| {
-                            let s = i as f64 / radial_cells as f64;
-                            [a[0] + s * (c[0] - a[0]), a[1] + s * (c[1] - a[1])]
-                        })
-                        .collect();
-                    v[0] = a;
-                    v[radial_cells] = c;
-                    v
-                })
-                .clone();
-            if side.reversed {
-                pts.reverse();
-            }
-            pts
+        let Ok(runs) = assign_runs(&m.layout, domain, &rect) else {
+            return Ok(None);
         };
-        let (s1, s3) = (radial(block.sides[1]), radial(block.sides[3]));
-        let g = tfi(&s0, &s1, &s2, &s3)
-            .ok_or_else(|| MeshError::Internal("transition block side counts differ".into()))?;
-        grids.push(g);
+        let total = rect.perimeter_len();
+        // The lattice count of each class holding a chain edge.
+        let (class, _) = crate::grid::edge_classes(&m.layout);
+        let mut class_cells: HashMap<usize, usize> = HashMap::new();
+        for (i, &e) in runs.chain.iter().enumerate() {
+            class_cells.insert(class[e], runs.cells(i, total) as usize);
+        }
+        let nmed = m.layout.blocks.len().saturating_sub(m.template_blocks);
+        let honoured = m.layout.blocks[..nmed]
+            .iter()
+            .zip(&m.grids)
+            .all(|(b, g)| class_cells.get(&class[b.sides[0].edge as usize]).is_none_or(|&n| n == g.ni));
+        if honoured {
+            let t = ring_layout(&m.layout, rect, &runs);
+            let bc = domain.bounding();
+            let nbase = m.layout.blocks.len();
+            let Some((ring, radial)) = ring_walls(&t, &m.grids, nbase)
+                .and_then(|w| ring_grids(&t, bc.center, bc.radius, &w))
+            else {
+                return Ok(None);
+            };
+            let mut layout = t.layout;
+            set_radial_curves(&mut layout, radial);
+            let mut grids = current.grids;
+            grids.extend(ring);
+            return Ok(Some(Mesh {
+                layout,
+                grids,
+                ..current
+            }));
+        }
+        let Some(keys) = exact_keys(m) else {
+            return Ok(None);
+        };
+        let mut want: BTreeMap<BlockKey, [usize; 2]> = BTreeMap::new();
+        for ((key, b), g) in keys.into_iter().zip(&m.layout.blocks).zip(&m.grids) {
+            let ni = class_cells
+                .get(&class[b.sides[0].edge as usize])
+                .copied()
+                .unwrap_or(g.ni);
+            if want.insert(key, [ni, g.nj]).is_some() {
+                return Ok(None);
+            }
+        }
+        let opts = Options {
+            imposed_counts: Some(Arc::new(ImposedCounts(want))),
+            ..options.clone()
+        };
+        current = mesh(domain, &opts)?;
     }
-    if grids.len() != t.layout.blocks.len() {
-        return Ok(None);
-    }
-    Ok(Some(Mesh {
-        layout: t.layout,
-        grids,
-        ..m
-    }))
+    Ok(None)
 }
