@@ -24,7 +24,7 @@ use crate::domain::{Domain, BOUNDING};
 use crate::exact_mode::imposed::{vertex_cycle, BlockKey, CircleTag, ImposedCounts};
 use crate::geometry::predicates::orient2d;
 use crate::geometry::Point;
-use crate::grid::{build_grids_forced, MAX_CELLS_PER_SIDE};
+use crate::grid::{build_grids_forced, tfi, MAX_CELLS_PER_SIDE};
 use crate::layout::{Block, BlockLayout, Curve, Edge, EdgeKind, SideRef};
 use crate::mesh::{BlockGrid, Geometry, Mesh};
 use crate::mesher::{mesh, MeshError, Mode, Options};
@@ -179,6 +179,14 @@ impl Rect {
             f64::INFINITY
         };
         tx.min(ty)
+    }
+
+    /// The distance from `c` (inside) to the nearest side of the rectangle.
+    fn inner_reach(&self, c: Point) -> f64 {
+        let s = self.spacing;
+        let (x0, y0) = (self.i0 as f64 * s, self.j0 as f64 * s);
+        let (x1, y1) = (x0 + self.nx as f64 * s, y0 + self.ny as f64 * s);
+        (c[0] - x0).min(x1 - c[0]).min(c[1] - y0).min(y1 - c[1])
     }
 
     /// Continuous perimeter coordinate (in intervals, from the lower-left corner) of the ray
@@ -478,11 +486,12 @@ pub fn add_transition_rect(
     sq: Rect,
 ) -> Result<Transition, MeshError> {
     let runs = assign_runs(layout, domain, &sq)?;
-    Ok(ring_layout(layout, sq, &runs))
+    Ok(ring_layout(layout, sq, &runs, 1))
 }
 
-/// The layout with one transition block per chain edge of `runs` (module documentation).
-fn ring_layout(layout: &BlockLayout, sq: Rect, runs: &Runs) -> Transition {
+/// The layout with one transition block per chain edge of `runs` (module documentation),
+/// `rows` times as many radial cells as the mean radial length has intervals.
+fn ring_layout(layout: &BlockLayout, sq: Rect, runs: &Runs, rows: usize) -> Transition {
     let (chain, ps) = (&runs.chain, &runs.ps);
     let total = sq.perimeter_len();
     let mut out = layout.clone();
@@ -505,7 +514,9 @@ fn ring_layout(layout: &BlockLayout, sq: Rect, runs: &Runs) -> Transition {
         radial.push((out.edges.len() - 1) as u32);
     }
     let radial_cells = ((radial_len / chain.len() as f64 / sq.spacing).round() as usize)
-        .clamp(1, MAX_CELLS_PER_SIDE);
+        .clamp(1, MAX_CELLS_PER_SIDE)
+        .saturating_mul(rows)
+        .min(MAX_CELLS_PER_SIDE);
     let mut counts = vec![(radial[0] as usize, radial_cells)];
     let mut outer = Vec::with_capacity(chain.len());
     let k = chain.len();
@@ -556,6 +567,15 @@ fn ring_layout(layout: &BlockLayout, sq: Rect, runs: &Runs) -> Transition {
     }
 }
 
+/// How the ring's interior nodes are placed ([`ring_grids`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Ring {
+    /// Polar interpolation about the bounding circle's centre.
+    Polar,
+    /// Straight radial edges, equally spaced, and transfinite interpolation.
+    Straight,
+}
+
 /// The angle of `p` about `c`, moved by a multiple of `2 pi` to within `pi` of `near`.
 fn angle_near(c: Point, p: Point, near: f64) -> f64 {
     let a = (p[1] - c[1]).atan2(p[0] - c[0]);
@@ -582,14 +602,22 @@ fn ring_grids(
     c: Point,
     r: f64,
     walls: &[Vec<Point>],
+    shape: Ring,
 ) -> Option<(Vec<BlockGrid>, HashMap<u32, Vec<Point>>)> {
     let nj = t.counts.first()?.1;
     let sq = &t.square;
+    // Rows `0..=j2` run along the rays from the lattice nodes to the circle of radius `r2`;
+    // rows `j2..=nj` turn from the lattice angles to the wall angles on circles.
+    let j2 = if nj >= 2 { (nj / 3).max(1) } else { 0 };
+    let r2 = r + (sq.inner_reach(c) - r) * (nj - j2) as f64 / nj as f64;
     let at = |alpha: f64, beta: f64, j: usize| -> Point {
-        let s = j as f64 / nj as f64;
-        let phi = beta + s * (alpha - beta);
-        let rho = sq.reach(c, phi);
-        let d = rho + s * (r - rho);
+        let (phi, d) = if j <= j2 && j2 > 0 {
+            let rho = sq.reach(c, beta);
+            (beta, rho + (j as f64 / j2 as f64) * (r2 - rho))
+        } else {
+            let u = (j - j2) as f64 / (nj - j2) as f64;
+            (beta + u * (alpha - beta), r2 + u * (r - r2))
+        };
         [c[0] + d * phi.cos(), c[1] + d * phi.sin()]
     };
     // Radial edge nodes, from the wall vertex (index 0) to the lattice vertex (index nj).
@@ -607,7 +635,15 @@ fn ring_grids(
         }
         let alpha = (q[1] - c[1]).atan2(q[0] - c[0]);
         let beta = angle_near(c, p, alpha);
-        let mut nodes: Vec<Point> = (0..=nj).map(|j| at(alpha, beta, nj - j)).collect();
+        let mut nodes: Vec<Point> = match shape {
+            Ring::Polar => (0..=nj).map(|j| at(alpha, beta, nj - j)).collect(),
+            Ring::Straight => (0..=nj)
+                .map(|i| {
+                    let s = i as f64 / nj as f64;
+                    [q[0] + s * (p[0] - q[0]), q[1] + s * (p[1] - q[1])]
+                })
+                .collect(),
+        };
         nodes[0] = q;
         nodes[nj] = p;
         radial.insert(e, nodes);
@@ -636,29 +672,75 @@ fn ring_grids(
             alpha.push(angle_near(c, wall[i], alpha[i - 1]));
             beta.push(angle_near(c, outer[i], beta[i - 1]));
         }
-        let mut nodes = Vec::with_capacity((ni + 1) * (nj + 1));
-        for j in 0..=nj {
-            for i in 0..=ni {
-                nodes.push(if i == 0 {
-                    left[nj - j]
-                } else if i == ni {
-                    right[nj - j]
-                } else if j == 0 {
-                    outer[i]
-                } else if j == nj {
-                    wall[i]
-                } else {
-                    at(alpha[i], beta[i], j)
-                });
+        let g = match shape {
+            Ring::Straight => tfi(
+                &outer,
+                &right.iter().rev().copied().collect::<Vec<_>>(),
+                &wall.iter().rev().copied().collect::<Vec<_>>(),
+                left,
+            )?,
+            Ring::Polar => {
+                let mut nodes = Vec::with_capacity((ni + 1) * (nj + 1));
+                for j in 0..=nj {
+                    for i in 0..=ni {
+                        nodes.push(if i == 0 {
+                            left[nj - j]
+                        } else if i == ni {
+                            right[nj - j]
+                        } else if j == 0 {
+                            outer[i]
+                        } else if j == nj {
+                            wall[i]
+                        } else {
+                            at(alpha[i], beta[i], j)
+                        });
+                    }
+                }
+                BlockGrid { ni, nj, nodes }
             }
-        }
-        let g = BlockGrid { ni, nj, nodes };
+        };
         if !counter_clockwise(&g) {
             return None;
         }
         grids.push(g);
     }
     Some((grids, radial))
+}
+
+/// Radial cell counts tried for the polar ring, as multiples of the layout's (more rows
+/// turn the grid lines more gently).
+const POLAR_ROWS: [usize; 4] = [1, 2, 4, 8];
+
+/// The ring of `t` (made by [`ring_layout`] on `inner`, the layout inside the ring, with
+/// `runs`) with valid grids ([`ring_grids`]): the straight one (radial segments,
+/// transfinite interpolation) where it is valid, else the polar one with the layout's radial
+/// count or a multiple of it ([`POLAR_ROWS`]), whose radial edges become polylines of their
+/// nodes. `walls` are the wall nodes of the ring blocks ([`ring_walls`]). `None` when none
+/// is valid.
+fn valid_ring(
+    t: &Transition,
+    inner: &BlockLayout,
+    runs: &Runs,
+    domain: &Domain,
+    walls: &[Vec<Point>],
+) -> Option<(Transition, Vec<BlockGrid>)> {
+    let b = domain.bounding();
+    if let Some((grids, _)) = ring_grids(t, b.center, b.radius, walls, Ring::Straight) {
+        return Some((t.clone(), grids));
+    }
+    for rows in POLAR_ROWS {
+        let t = ring_layout(inner, t.square, runs, rows);
+        if let Some((grids, radial)) = ring_grids(&t, b.center, b.radius, walls, Ring::Polar) {
+            let mut t = t;
+            for (e, nodes) in radial {
+                if let Some(edge) = t.layout.edges.get_mut(e as usize) {
+                    edge.curve = Curve::Polyline(nodes);
+                }
+            }
+            return Some((t, grids));
+        }
+    }
+    None
 }
 
 /// Every cell of `g` strictly counter-clockwise at its four corners: exactly
@@ -738,7 +820,8 @@ pub fn mesh_with_transition_rect(
             },
         )?;
     }
-    let t = add_transition_rect(&base.layout, domain, rect)?;
+    let runs = assign_runs(&base.layout, domain, &rect)?;
+    let t = ring_layout(&base.layout, rect, &runs, 1);
     let mut grids = build_grids_forced(&t.layout, options.cells, &t.counts)?;
     let nbase = base.layout.blocks.len();
     for (b, nodes) in &t.outer {
@@ -754,14 +837,15 @@ pub fn mesh_with_transition_rect(
             g.nodes[i] = t.square.point(n);
         }
     }
-    let bc = domain.bounding();
-    let ring = ring_walls(&t, &grids, nbase).and_then(|w| ring_grids(&t, bc.center, bc.radius, &w));
-    let mut layout = t.layout;
-    if let Some((ring, radial)) = ring {
-        for ((b, _), g) in t.outer.iter().zip(ring) {
+    // The forced grids' ring is the straight one: kept where no ring is valid.
+    let mut layout = t.layout.clone();
+    if let Some((valid, ring)) =
+        ring_walls(&t, &grids, nbase).and_then(|w| valid_ring(&t, &base.layout, &runs, domain, &w))
+    {
+        for ((b, _), g) in valid.outer.iter().zip(ring) {
             grids[*b] = g;
         }
-        set_radial_curves(&mut layout, radial);
+        layout = valid.layout;
     }
     Ok(Mesh {
         layout,
@@ -770,15 +854,6 @@ pub fn mesh_with_transition_rect(
         geometry: Geometry::Paper,
         ..base
     })
-}
-
-/// The radial edges of the ring take the polyline of their nodes (they are not straight).
-fn set_radial_curves(layout: &mut BlockLayout, radial: HashMap<u32, Vec<Point>>) {
-    for (e, nodes) in radial {
-        if let Some(edge) = layout.edges.get_mut(e as usize) {
-            edge.curve = Curve::Polyline(nodes);
-        }
-    }
 }
 
 /// The block keys exact mode gives the medial blocks of the exact mesh `m` (the blocks
@@ -858,25 +933,22 @@ fn exact_transition(
             class_cells.insert(class[e], runs.cells(i, total) as usize);
         }
         let nmed = m.layout.blocks.len().saturating_sub(m.template_blocks);
-        let honoured = m.layout.blocks[..nmed]
-            .iter()
-            .zip(&m.grids)
-            .all(|(b, g)| class_cells.get(&class[b.sides[0].edge as usize]).is_none_or(|&n| n == g.ni));
+        let honoured = m.layout.blocks[..nmed].iter().zip(&m.grids).all(|(b, g)| {
+            class_cells
+                .get(&class[b.sides[0].edge as usize])
+                .is_none_or(|&n| n == g.ni)
+        });
         if honoured {
-            let t = ring_layout(&m.layout, rect, &runs);
-            let bc = domain.bounding();
-            let nbase = m.layout.blocks.len();
-            let Some((ring, radial)) = ring_walls(&t, &m.grids, nbase)
-                .and_then(|w| ring_grids(&t, bc.center, bc.radius, &w))
+            let t = ring_layout(&m.layout, rect, &runs, 1);
+            let Some((valid, ring)) = ring_walls(&t, &m.grids, m.layout.blocks.len())
+                .and_then(|w| valid_ring(&t, &m.layout, &runs, domain, &w))
             else {
                 return Ok(None);
             };
-            let mut layout = t.layout;
-            set_radial_curves(&mut layout, radial);
             let mut grids = current.grids;
             grids.extend(ring);
             return Ok(Some(Mesh {
-                layout,
+                layout: valid.layout,
                 grids,
                 ..current
             }));
