@@ -8,17 +8,26 @@
 //!   square enclosing the bounding circle grown by the margin `max(R / 4, 2 s)`.
 //! - One transition block per bounding-circle wall edge `Q_a -> Q_b` (counter-clockwise):
 //!   each end `Q` is projected radially from the circle's centre onto the square and snapped
-//!   to the nearest lattice node `P` along the perimeter (kept strictly increasing around
-//!   the perimeter, so every block gets at least one lattice interval). The block has corners
-//!   `[P_a, P_b, Q_b, Q_a]`: side 0 the run of lattice intervals from `P_a` to `P_b` (the
-//!   new outer boundary, a polyline that may turn a corner of the square), side 1 and 3 the
-//!   radial segments `Q -> P` (shared with the neighbouring transition blocks), side 2 the
-//!   former wall edge, now an interface with the medial block behind it.
-//! - Cell counts: the former wall edge gets as many cells as its lattice run has intervals
-//!   (its conformity class follows: every class holds at most one bounding-circle edge, so
-//!   this is always possible); the radial segments get `round(mean radial length / s)`.
+//!   to a lattice node `P` along the perimeter ([`assign_runs`]: the nearest one, kept
+//!   strictly increasing around the perimeter, so every block gets at least one lattice
+//!   interval). The block has corners `[P_a, P_b, Q_b, Q_a]`: side 0 the run of lattice
+//!   intervals from `P_a` to `P_b` (the new outer boundary, a polyline that may turn a
+//!   corner of the square), side 1 and 3 the radial edges `Q -> P` (shared with the
+//!   neighbouring transition blocks), side 2 the former wall edge, now an interface with the
+//!   medial block behind it.
+//! - Cell counts: the former wall edge gets as many cells as its lattice run has intervals,
+//!   and so does its conformity class. Templates of inserted holes and collapsed vertices
+//!   can tie several bounding-circle edges into one class: their runs get one count
+//!   ([`assign_runs`]). The radial edges get `round(mean radial length / s)` (or a multiple,
+//!   see below).
 //! - The outer nodes are then set to the lattice points exactly (`i as f64 * s`), the same
 //!   formula as the background grid's.
+//! - The ring's grids ([`ring_grids`]): straight radial edges and transfinite interpolation
+//!   where every cell is valid; else a polar interpolation that cannot fold where the wall
+//!   nodes crowd (towards a hole near the bounding circle), with up to 8 times the radial
+//!   cells. Every cell's orientation is checked exactly. Exact mode keeps its spoke-aligned
+//!   grids only with a valid ring; otherwise the paper pipeline's interpolated mesh is used
+//!   and labelled so ([`mesh_with_transition_rect`]).
 
 use crate::domain::{Domain, BOUNDING};
 use crate::exact_mode::imposed::{vertex_cycle, BlockKey, CircleTag, ImposedCounts};
@@ -418,10 +427,10 @@ fn assign_runs(layout: &BlockLayout, domain: &Domain, sq: &Rect) -> Result<Runs,
         .filter(|&i| fixed[i].is_none())
         .map(|i| t[i + 1] - t[i])
         .sum();
-    let scale = if tied.is_empty() || !(free_len > 0.0) {
-        1.0
-    } else {
+    let scale = if free_len.is_finite() && free_len > 0.0 {
         left as f64 / free_len
+    } else {
+        1.0
     };
     let last_free = (0..k)
         .rev()
@@ -429,14 +438,13 @@ fn assign_runs(layout: &BlockLayout, domain: &Domain, sq: &Rect) -> Result<Runs,
         .ok_or_else(|| MeshError::Internal("no free edge".into()))?;
     let start = (last_free + 1) % k;
     let order: Vec<usize> = (0..k).map(|x| (start + x) % k).collect();
-    // Target positions along `order`, from t[start].
+    // Target positions along `order`, from t[start] (without tied edges, the `t` themselves).
     let mut target = Vec::with_capacity(k);
     let mut acc = t[start];
     for &i in &order {
-        target.push(acc);
+        target.push(if tied.is_empty() { t[i] } else { acc });
         acc += match fixed[i] {
             Some(n) => n as f64,
-            None if tied.is_empty() => t[i + 1] - t[i],
             None => (t[i + 1] - t[i]) * scale,
         };
     }
@@ -448,9 +456,9 @@ fn assign_runs(layout: &BlockLayout, domain: &Domain, sq: &Rect) -> Result<Runs,
     let mut pos = vec![target[0].round() as i64];
     for x in 1..k {
         let prev = pos[x - 1];
+        // (Without tied edges the upper bound never binds where the perimeter closes.)
         let p = match fixed[order[x - 1]] {
             Some(n) => prev + n,
-            None if tied.is_empty() => (target[x].round() as i64).max(prev + 1),
             None => (target[x].round() as i64)
                 .max(prev + 1)
                 .min(pos[0] + total - need[x]),
@@ -567,6 +575,9 @@ fn ring_layout(layout: &BlockLayout, sq: Rect, runs: &Runs, rows: usize) -> Tran
     }
 }
 
+/// The ring's grids and the nodes of each radial edge ([`ring_grids`]).
+type RingNodes = (Vec<BlockGrid>, HashMap<u32, Vec<Point>>);
+
 /// How the ring's interior nodes are placed ([`ring_grids`]).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 enum Ring {
@@ -603,7 +614,7 @@ fn ring_grids(
     r: f64,
     walls: &[Vec<Point>],
     shape: Ring,
-) -> Option<(Vec<BlockGrid>, HashMap<u32, Vec<Point>>)> {
+) -> Option<RingNodes> {
     let nj = t.counts.first()?.1;
     let sq = &t.square;
     // Rows `0..=j2` run along the rays from the lattice nodes to the circle of radius `r2`;
@@ -795,11 +806,11 @@ pub fn mesh_with_transition(
 /// [`mesh_with_transition`] out to the lattice rectangle `rect` ([`Rect::from_bounds`]).
 ///
 /// Exact mode keeps its spoke-aligned grids when the exact mesher honours the lattice counts
-/// imposed on the bounding-circle arcs and the ring is valid (`exact_transition`).
-/// Otherwise the domain is meshed by the paper pipeline (paper mode, [`Geometry::Paper`])
-/// with those counts imposed on its conformity classes, every grid interpolated. The ring is
-/// built by polar interpolation ([`ring_grids`]); in the interpolated mesh, where that is
-/// not valid, the ring's transfinite interpolation is kept when it is valid.
+/// imposed on the bounding-circle arcs and the ring is valid (`exact_transition`): such a
+/// mesh has no inverted cell. Otherwise the domain is meshed by the paper pipeline (paper
+/// mode, [`Geometry::Paper`]) with those counts imposed on its conformity classes, every
+/// grid interpolated, the ring as in [`valid_ring`] (its straight interpolation when no
+/// ring is valid: the inverted cells are then reported by the quality measures).
 pub fn mesh_with_transition_rect(
     domain: &Domain,
     options: &Options,
