@@ -8,7 +8,7 @@
 //!   square enclosing the bounding circle grown by the margin `max(R / 4, 2 s)`.
 //! - One transition block per bounding-circle wall edge `Q_a -> Q_b` (counter-clockwise):
 //!   each end `Q` is projected radially from the circle's centre onto the square and snapped
-//!   to a lattice node `P` along the perimeter ([`assign_runs`]: the nearest one, kept
+//!   to a lattice node `P` along the perimeter (`assign_runs`: the nearest one, kept
 //!   strictly increasing around the perimeter, so every block gets at least one lattice
 //!   interval). The block has corners `[P_a, P_b, Q_b, Q_a]`: side 0 the run of lattice
 //!   intervals from `P_a` to `P_b` (the new outer boundary, a polyline that may turn a
@@ -18,11 +18,11 @@
 //! - Cell counts: the former wall edge gets as many cells as its lattice run has intervals,
 //!   and so does its conformity class. Templates of inserted holes and collapsed vertices
 //!   can tie several bounding-circle edges into one class: their runs get one count
-//!   ([`assign_runs`]). The radial edges get `round(mean radial length / s)` (or a multiple,
+//!   (`assign_runs`). The radial edges get `round(mean radial length / s)` (or a multiple,
 //!   see below).
 //! - The outer nodes are then set to the lattice points exactly (`i as f64 * s`), the same
 //!   formula as the background grid's.
-//! - The ring's grids ([`ring_grids`]): straight radial edges and transfinite interpolation
+//! - The ring's grids (`ring_grids`): straight radial edges and transfinite interpolation
 //!   where every cell is valid; else a polar interpolation that cannot fold where the wall
 //!   nodes crowd (towards a hole near the bounding circle), with up to 8 times the radial
 //!   cells. Every cell's orientation is checked exactly. Exact mode keeps its spoke-aligned
@@ -243,7 +243,7 @@ pub struct Transition {
     pub square: Rect,
     /// `(edge, cells)` to impose: first a radial edge of the ring (every radial edge is in
     /// its class), then each bounding-circle wall edge with its lattice run's interval count.
-    /// Edges of one conformity class of the input layout get one count ([`assign_runs`]).
+    /// Edges of one conformity class of the input layout get one count (`assign_runs`).
     pub counts: Vec<(usize, usize)>,
     /// Per transition block: its id and the lattice nodes of its side 0, in order.
     pub outer: Vec<(usize, Vec<(i64, i64)>)>,
@@ -809,7 +809,7 @@ pub fn mesh_with_transition(
 /// imposed on the bounding-circle arcs and the ring is valid (`exact_transition`): such a
 /// mesh has no inverted cell. Otherwise the domain is meshed by the paper pipeline (paper
 /// mode, [`Geometry::Paper`]) with those counts imposed on its conformity classes, every
-/// grid interpolated, the ring as in [`valid_ring`] (its straight interpolation when no
+/// grid interpolated, the ring as in `valid_ring` (its straight interpolation when no
 /// ring is valid: the inverted cells are then reported by the quality measures).
 pub fn mesh_with_transition_rect(
     domain: &Domain,
@@ -981,7 +981,12 @@ fn exact_transition(
             imposed_counts: Some(Arc::new(ImposedCounts(want))),
             ..options.clone()
         };
-        current = mesh(domain, &opts)?;
+        // An error of the rebuild (the imposed counts exceed a limit) leaves the paper
+        // pipeline to try.
+        match mesh(domain, &opts) {
+            Ok(m) => current = m,
+            Err(_) => return Ok(None),
+        }
     }
     Ok(None)
 }
