@@ -167,8 +167,10 @@ impl Rect {
         [i as f64 * self.spacing, j as f64 * self.spacing]
     }
 
-    /// The distance from `c` (inside) to the rectangle's boundary in direction `theta`.
-    fn reach(&self, c: Point, theta: f64) -> f64 {
+    /// The ray from `c` (inside) at angle `theta`: its parameters where it meets the vertical
+    /// and the horizontal side it heads for (infinite when parallel to them), and its unit
+    /// direction.
+    fn ray(&self, c: Point, theta: f64) -> (f64, f64, [f64; 2]) {
         let s = self.spacing;
         let (x0, y0) = (self.i0 as f64 * s, self.j0 as f64 * s);
         let (x1, y1) = (x0 + self.nx as f64 * s, y0 + self.ny as f64 * s);
@@ -187,6 +189,12 @@ impl Rect {
         } else {
             f64::INFINITY
         };
+        (tx, ty, [dx, dy])
+    }
+
+    /// The distance from `c` (inside) to the rectangle's boundary in direction `theta`.
+    fn reach(&self, c: Point, theta: f64) -> f64 {
+        let (tx, ty, _) = self.ray(c, theta);
         tx.min(ty)
     }
 
@@ -205,21 +213,7 @@ impl Rect {
         let (nx, ny) = (self.nx as f64, self.ny as f64);
         let (x0, y0) = (self.i0 as f64 * s, self.j0 as f64 * s);
         let (x1, y1) = (x0 + nx * s, y0 + ny * s);
-        let (dx, dy) = (theta.cos(), theta.sin());
-        let tx = if dx > 0.0 {
-            (x1 - c[0]) / dx
-        } else if dx < 0.0 {
-            (x0 - c[0]) / dx
-        } else {
-            f64::INFINITY
-        };
-        let ty = if dy > 0.0 {
-            (y1 - c[1]) / dy
-        } else if dy < 0.0 {
-            (y0 - c[1]) / dy
-        } else {
-            f64::INFINITY
-        };
+        let (tx, ty, [dx, dy]) = self.ray(c, theta);
         let t = tx.min(ty);
         let (x, y) = (c[0] + t * dx, c[1] + t * dy);
         if tx < ty {
