@@ -1,5 +1,5 @@
 //! Binary forms of the writers that have one (issue 8: "binary where the format allows"):
-//! VTK XML `.vts` / `.vtu` with raw appended data ([`Appended`]) and Gmsh `.msh` 4.1 binary
+//! VTK XML `.vts` / `.vtu` with raw appended data (`Appended`) and Gmsh `.msh` 4.1 binary
 //! ([`super::gmsh`]). Plot3D's `mesh.xyz` is always binary; the picture, the JSON files and the
 //! Gmsh `.geo` script are text by nature.
 //!
