@@ -31,7 +31,7 @@ use crate::exact_mode::imposed::{vertex_cycle, BlockKey, ImposedCounts};
 use crate::layout::BlockLayout;
 use crate::mesh::Mesh;
 use crate::mesher::{mesh, MeshError, Options};
-use crate::output::{write_atomic, write_files, Format};
+use crate::output::{write_atomic, write_files_encoded, Encoding, Format};
 use crate::quality::measure;
 use rayon::prelude::*;
 use serde::Serialize;
@@ -285,7 +285,7 @@ fn run_frame(
     index: usize,
     frame: &Result<AnyDomain, String>,
     options: &Options,
-    formats: &[Format],
+    out: Out,
     dir: &Path,
 ) -> Done {
     let domain = match frame {
@@ -296,11 +296,19 @@ fn run_frame(
         Ok(fm) => fm,
         Err(e) => return failed(index, e.to_string()),
     };
-    finish(index, fm, formats, dir)
+    finish(index, fm, out, dir)
 }
 
-fn finish(index: usize, fm: FrameMesh, formats: &[Format], dir: &Path) -> Done {
-    if let Err(e) = write_files(&fm.mesh, &frame_dir(dir, index), formats) {
+/// What every frame writes: the formats, and the encoding of those with a binary form.
+#[derive(Clone, Copy)]
+struct Out<'a> {
+    formats: &'a [Format],
+    encoding: Encoding,
+}
+
+fn finish(index: usize, fm: FrameMesh, out: Out, dir: &Path) -> Done {
+    let dir_of_frame = frame_dir(dir, index);
+    if let Err(e) = write_files_encoded(&fm.mesh, &dir_of_frame, out.formats, out.encoding) {
         return failed(index, format!("cannot write frame {index}: {e}"));
     }
     let q = measure(&fm.mesh.grids);
@@ -347,7 +355,8 @@ fn linked(a: &Done, b: &Done) -> bool {
         && same_keys
 }
 
-/// Mesh every frame into `dir/frame_NNNNN/` with `formats`, on `threads` threads (0: rayon's
+/// Mesh every frame into `dir/frame_NNNNN/` with `formats` (those with a binary form in
+/// `encoding`), on `threads` threads (0: rayon's
 /// default), calling `progress` once per frame of the first pass; then write `dir/mesh.pvd`
 /// (when `formats` has VTK) and `dir/summary.json`. A frame that fails is reported in the
 /// summary and does not stop the others. Errors: only failures to create `dir` or write the
@@ -364,11 +373,13 @@ pub fn run_sequence(
     frames: &[Result<AnyDomain, String>],
     options: &Options,
     formats: &[Format],
+    encoding: Encoding,
     dir: &Path,
     threads: usize,
     progress: &(dyn Fn() + Sync),
 ) -> io::Result<SequenceSummary> {
     std::fs::create_dir_all(dir)?;
+    let out = Out { formats, encoding };
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(threads)
         .build()
@@ -378,7 +389,7 @@ pub fn run_sequence(
             .par_iter()
             .enumerate()
             .map(|(i, f)| {
-                let d = run_frame(i, f, options, formats, dir);
+                let d = run_frame(i, f, options, out, dir);
                 progress();
                 d
             })
@@ -400,12 +411,7 @@ pub fn run_sequence(
         .collect();
     let redone: Vec<(usize, Result<Done, String>)> = pool.install(|| {
         redo.par_iter()
-            .map(|(i, want)| {
-                (
-                    *i,
-                    reuse_counts(*i, &frames[*i], want, options, formats, dir),
-                )
-            })
+            .map(|(i, want)| (*i, reuse_counts(*i, &frames[*i], want, options, out, dir)))
             .collect()
     });
     for (i, r) in redone {
@@ -454,7 +460,7 @@ fn reuse_counts(
     frame: &Result<AnyDomain, String>,
     want: &Structure,
     options: &Options,
-    formats: &[Format],
+    out: Out,
     dir: &Path,
 ) -> Result<Done, String> {
     let domain = frame.as_ref().map_err(|e| e.clone())?;
@@ -474,7 +480,7 @@ fn reuse_counts(
             "the run's node counts give {inverted} inverted cells in this frame"
         ));
     }
-    let d = finish(index, fm, formats, dir);
+    let d = finish(index, fm, out, dir);
     if d.summary.ok {
         Ok(d)
     } else {

@@ -16,7 +16,7 @@ use medial_blocks::connectivity::{
 };
 use medial_blocks::output::connectivity::{write_json, File, CHUNK, CONVENTIONS, WAVE};
 use medial_blocks::output::report::Report;
-use medial_blocks::output::{write_files, write_files_prepared, Format};
+use medial_blocks::output::{write_files, write_files_prepared, Encoding, Format};
 use medial_blocks::{layouts, Mesh};
 
 /// The file serde_json writes for `blocks`: the pretty-printed top level, one block per line in
@@ -179,7 +179,16 @@ fn shared_connectivity_gives_the_same_report_and_files() {
         let a = tempfile::tempdir().unwrap();
         let b = tempfile::tempdir().unwrap();
         write_files(&m, a.path(), &[Format::Json]).unwrap();
-        write_files_prepared(&m, b.path(), &[Format::Json], Some(&r), Some(&conn), |_| {}).unwrap();
+        write_files_prepared(
+            &m,
+            b.path(),
+            &[Format::Json],
+            Encoding::Ascii,
+            Some(&r),
+            Some(&conn),
+            |_| {},
+        )
+        .unwrap();
         for f in ["report.json", "connectivity.json"] {
             let x = std::fs::read(a.path().join(f)).unwrap();
             let y = std::fs::read(b.path().join(f)).unwrap();

@@ -52,6 +52,7 @@ fn run(text: &str, dir: &Path, threads: usize) -> SequenceSummary {
         &frames,
         &opts,
         &[medial_blocks::output::Format::Json],
+        medial_blocks::output::Encoding::Ascii,
         dir,
         threads,
         &|| {},

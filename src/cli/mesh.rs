@@ -1,14 +1,14 @@
 //! `medial-blocks mesh [INPUT] [-o DIR] [--mode exact|paper] [--cells N] [--cell-size H]
 //! [--first-height H | --first-height-rel F] [--growth G] [--circle-clustering ID:FIRST[:G]]
 //! [--wall-cells ID:N] [--smooth N] [--compare-modes] [--refine-ratio R] [--no-refine]
-//! [--collapse-fraction F] [--format LIST] [--block-cells N] [--timings]`.
+//! [--collapse-fraction F] [--format LIST] [--binary] [--block-cells N] [--timings]`.
 
 use super::{Failure, Global};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use medial_blocks::domain::{AnyDomain, Circle, Domain};
 use medial_blocks::exact_mode::{Clustering, FirstCell};
 use medial_blocks::input::{parse_holes_csv, parse_triple};
-use medial_blocks::output::{report, write_files_prepared, Format};
+use medial_blocks::output::{report, write_files_prepared, Encoding, Format};
 use medial_blocks::periodic::PeriodicDomain;
 use medial_blocks::{mesh_any, timings, Mode, Options};
 use std::path::PathBuf;
@@ -107,6 +107,11 @@ pub struct Args {
     /// cgns feature), or all.
     #[arg(long, default_value = DEFAULT_FORMATS)]
     pub format: String,
+    /// Write the VTK files (.vts, .vtu) with raw appended binary data and the Gmsh .msh as
+    /// 4.1 binary: the same values, about half the size, faster to write and to read.
+    /// Plot3D's mesh.xyz is binary either way.
+    #[arg(long)]
+    pub binary: bool,
     /// The bounding circle `X,Y,R` for a CSV input.
     #[arg(long, allow_hyphen_values = true)]
     pub bounding: Option<String>,
@@ -147,6 +152,15 @@ pub struct Args {
         allow_negative_numbers = true
     )]
     pub collapse_fraction: f64,
+}
+
+/// The writers' encoding for `--binary`.
+pub fn encoding(binary: bool) -> Encoding {
+    if binary {
+        Encoding::Binary
+    } else {
+        Encoding::Ascii
+    }
 }
 
 fn read_domain(args: &Args) -> Result<AnyDomain, Failure> {
@@ -479,6 +493,7 @@ fn report_timings(
         obj.insert("cells".into(), cells.into());
         obj.insert("threads".into(), rayon::current_num_threads().into());
         obj.insert("formats".into(), args.format.clone().into());
+        obj.insert("binary".into(), args.binary.into());
     }
     let text = serde_json::to_string_pretty(&value)
         .map_err(|e| Failure::output(format!("cannot encode timings.json: {e}")))?;
@@ -563,6 +578,7 @@ pub fn run(args: Args, global: Global) -> Result<(), Failure> {
             &mesh,
             &args.output,
             &formats,
+            encoding(args.binary),
             summary_report.as_ref(),
             conn.as_deref(),
             |f| {

@@ -1,4 +1,4 @@
-//! `medial-blocks mesh-sequence FRAMES.jsonl [-o DIR] [--cells N] [--format LIST] [--threads N]`.
+//! `medial-blocks mesh-sequence FRAMES.jsonl [-o DIR] [--cells N] [--format LIST] [--binary] [--threads N]`.
 
 use super::{Failure, Global};
 use medial_blocks::output::Format;
@@ -34,6 +34,10 @@ pub struct Args {
     /// Writers, comma separated: vtk, plot3d, gmsh, svg, png, json, or all.
     #[arg(long, default_value = "vtk,svg,json")]
     pub format: String,
+    /// Write the VTK files with raw appended binary data and the Gmsh .msh as 4.1 binary (as
+    /// `mesh --binary`).
+    #[arg(long)]
+    pub binary: bool,
 }
 
 /// Run `mesh-sequence`; the global `--threads` and `--quiet` apply.
@@ -68,6 +72,7 @@ pub fn run(args: Args, global: Global) -> Result<(), Failure> {
         &frames,
         &options,
         &formats,
+        super::mesh::encoding(args.binary),
         &args.output,
         global.threads,
         &tick,

@@ -15,6 +15,7 @@
 //! its machinery) and format their large arrays in parallel chunks that are written in order
 //! ([`text::write_chunked`]); the `.vts` files are formatted one block per task.
 
+pub mod binary;
 pub mod connectivity;
 pub mod geo;
 pub mod gmsh;
@@ -33,6 +34,7 @@ pub mod cgns;
 use crate::connectivity::BlockConnectivity;
 use crate::mesh::Mesh;
 use crate::quality::well_formed;
+pub use binary::Encoding;
 use std::fs::File;
 use std::io::{self, BufWriter};
 use std::path::Path;
@@ -203,6 +205,17 @@ pub fn write_files(mesh: &Mesh, dir: &Path, formats: &[Format]) -> io::Result<()
     write_files_with_progress(mesh, dir, formats, |_| {})
 }
 
+/// [`write_files`] with the formats that have a binary form (VTK `.vts` and `.vtu`, Gmsh
+/// `.msh`) in `encoding` ([`binary`]).
+pub fn write_files_encoded(
+    mesh: &Mesh,
+    dir: &Path,
+    formats: &[Format],
+    encoding: Encoding,
+) -> io::Result<()> {
+    write_files_prepared(mesh, dir, formats, encoding, None, None, |_| {})
+}
+
 /// [`write_files`], calling `progress(format)` before each format is written (for a
 /// progress display).
 pub fn write_files_with_progress(
@@ -224,16 +237,18 @@ pub fn write_files_reporting(
     report: Option<&report::Report>,
     progress: impl FnMut(Format),
 ) -> io::Result<()> {
-    write_files_prepared(mesh, dir, formats, report, None, progress)
+    write_files_prepared(mesh, dir, formats, Encoding::Ascii, report, None, progress)
 }
 
 /// [`write_files_reporting`] with the block connectivity already computed: `conn` must be
 /// [`crate::connectivity::connectivity`]`(&mesh.layout, &mesh.grids)` when given (the CLI
-/// computes it once for the report and `connectivity.json`).
+/// computes it once for the report and `connectivity.json`), and the formats that have a
+/// binary form written in `encoding`.
 pub fn write_files_prepared(
     mesh: &Mesh,
     dir: &Path,
     formats: &[Format],
+    encoding: Encoding,
     report: Option<&report::Report>,
     conn: Option<&[BlockConnectivity]>,
     mut progress: impl FnMut(Format),
@@ -244,7 +259,11 @@ pub fn write_files_prepared(
         std::fs::remove_dir_all(&staging)?;
     }
     std::fs::create_dir(&staging)?;
-    let prepared = Prepared { report, conn };
+    let prepared = Prepared {
+        report,
+        conn,
+        encoding,
+    };
     let result = write_into(mesh, &staging, formats, &prepared, &mut progress).and_then(|()| {
         if formats.contains(&Format::Json) {
             match std::fs::remove_file(dir.join("report.json")) {
@@ -309,6 +328,7 @@ fn publish(staging: &Path, dir: &Path) -> io::Result<()> {
 struct Prepared<'a> {
     report: Option<&'a report::Report>,
     conn: Option<&'a [BlockConnectivity]>,
+    encoding: Encoding,
 }
 
 /// Write every format into `dir`, the staging directory of [`write_files_prepared`].
@@ -323,7 +343,7 @@ fn write_into(
         progress(*f);
         let _stage = crate::timings::enter(crate::timings::writer_stage(f.name()));
         match f {
-            Format::Vtu => vtu::write_vtu(mesh, &dir.join("mesh.vtu"))?,
+            Format::Vtu => vtu::write_vtu_encoded(mesh, &dir.join("mesh.vtu"), prepared.encoding)?,
             #[cfg(feature = "cgns")]
             Format::Cgns => cgns::write_cgns(mesh, &dir.join("mesh.cgns"))?,
             #[cfg(not(feature = "cgns"))]
@@ -335,13 +355,13 @@ fn write_into(
                 ))
             }
             // In the staging directory: no temporary file per block.
-            Format::Vtk => vtk::write_multiblock_with(mesh, dir, false)?,
+            Format::Vtk => vtk::write_multiblock_with(mesh, dir, prepared.encoding, false)?,
             Format::Plot3d => {
                 plot3d::write_binary(&mesh.grids, &dir.join("mesh.xyz"))?;
                 plot3d::write_ascii(&mesh.grids, &dir.join("mesh.p3d"))?;
             }
             Format::Gmsh => {
-                gmsh::write_msh(mesh, &dir.join("mesh.msh"))?;
+                gmsh::write_msh_encoded(mesh, &dir.join("mesh.msh"), prepared.encoding)?;
                 geo::write_geo(mesh, &dir.join("mesh.geo"))?;
             }
             Format::Svg => svg::write(mesh, &dir.join("mesh.svg"))?,

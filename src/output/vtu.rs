@@ -6,13 +6,15 @@
 //! in each block in the order `i + j * ni` with corners `(i, j), (i + 1, j), (i + 1, j + 1),
 //! (i, j + 1)` (counter-clockwise). Cell data: `block_id` (Int32) and the quality figures of
 //! [`crate::quality::CellFields`] (Float64), the same arrays as the `.vts` files. ASCII,
-//! floats in Rust's shortest round-trip formatting, so the file is deterministic.
+//! floats in Rust's shortest round-trip formatting, so the file is deterministic; or, with
+//! [`Encoding::Binary`], the same values as raw appended data, streamed in parallel chunks.
 
+use super::binary::{self, Appended, Encoding};
 use super::text::{self, write_chunked};
 use super::{check_mesh, write_atomic};
 use crate::mesh::Mesh;
-use crate::numbering::number_nodes;
-use crate::quality::cell_fields;
+use crate::numbering::{number_nodes, GlobalNodes};
+use crate::quality::{cell_fields, CellFields};
 use rayon::prelude::*;
 use std::io::{self, Write};
 use std::path::Path;
@@ -21,20 +23,33 @@ use std::path::Path;
 ///
 /// Errors: I/O failures, or a mesh whose grids do not match its blocks (`InvalidInput`).
 pub fn write_vtu(mesh: &Mesh, path: &Path) -> io::Result<()> {
-    check_mesh(mesh)?;
-    write_atomic(path, |w| write_to(w, mesh))
+    write_vtu_encoded(mesh, path, Encoding::Ascii)
 }
 
-fn write_to<W: Write>(w: &mut W, mesh: &Mesh) -> io::Result<()> {
+/// [`write_vtu`] in `encoding`.
+pub fn write_vtu_encoded(mesh: &Mesh, path: &Path, encoding: Encoding) -> io::Result<()> {
+    check_mesh(mesh)?;
+    write_atomic(path, |w| match encoding {
+        Encoding::Ascii => write_to(w, mesh),
+        Encoding::Binary => write_binary(w, mesh),
+    })
+}
+
+/// The global nodes, the first cell of every block (and the total at the end), and the
+/// cell fields of every block.
+fn prepare(mesh: &Mesh) -> (GlobalNodes, Vec<usize>, Vec<CellFields>) {
     let nodes = number_nodes(&mesh.layout, &mesh.grids);
-    // First cell of every block (and the total at the end).
     let mut first_cell = Vec::with_capacity(mesh.grids.len() + 1);
     first_cell.push(0);
     for g in &mesh.grids {
         first_cell.push(first_cell.last().copied().unwrap_or(0) + g.cells());
     }
-    let cells = first_cell.last().copied().unwrap_or(0);
-    let fields: Vec<_> = mesh.grids.par_iter().map(cell_fields).collect();
+    let fields = mesh.grids.par_iter().map(cell_fields).collect();
+    (nodes, first_cell, fields)
+}
+
+/// The XML up to the `<Points>` opening: the file header and the piece's counts.
+fn piece_open<W: Write>(w: &mut W, points: usize, cells: usize) -> io::Result<()> {
     writeln!(w, "<?xml version=\"1.0\"?>")?;
     writeln!(
         w,
@@ -43,10 +58,112 @@ fn write_to<W: Write>(w: &mut W, mesh: &Mesh) -> io::Result<()> {
     writeln!(w, "  <UnstructuredGrid>")?;
     writeln!(
         w,
-        "    <Piece NumberOfPoints=\"{}\" NumberOfCells=\"{cells}\">",
-        nodes.coords.len()
+        "    <Piece NumberOfPoints=\"{points}\" NumberOfCells=\"{cells}\">"
     )?;
-    writeln!(w, "      <Points>")?;
+    writeln!(w, "      <Points>")
+}
+
+/// The four corners of every cell of `blocks`, in file order (global node numbers).
+fn cell_corners_of(
+    mesh: &Mesh,
+    nodes: &GlobalNodes,
+    blocks: std::ops::Range<usize>,
+    mut each: impl FnMut([usize; 4]),
+) {
+    for b in blocks {
+        let (g, ids) = (&mesh.grids[b], &nodes.block_nodes[b]);
+        let id = |i: usize, j: usize| ids[i + j * (g.ni + 1)] as usize;
+        for j in 0..g.nj {
+            for i in 0..g.ni {
+                each([id(i, j), id(i + 1, j), id(i + 1, j + 1), id(i, j + 1)]);
+            }
+        }
+    }
+}
+
+/// The block of cell `k`: the last block starting at or before it.
+fn block_of(first_cell: &[usize], k: usize) -> usize {
+    first_cell.partition_point(|&f| f <= k) - 1
+}
+
+/// The binary file: every array `format="appended"`, then the raw data, each array's bytes
+/// formed in parallel chunks ([`write_chunked`]) and written in order.
+fn write_binary<W: Write>(w: &mut W, mesh: &Mesh) -> io::Result<()> {
+    let (nodes, first_cell, fields) = prepare(mesh);
+    let cells = first_cell.last().copied().unwrap_or(0);
+    let points = nodes.coords.len();
+    piece_open(w, points, cells)?;
+    let mut at = Appended::default();
+    let mut head = Vec::new();
+    binary::appended_tag(
+        &mut head,
+        "Float64",
+        "Points",
+        Some(3),
+        at.reserve(24 * points),
+    );
+    head.extend_from_slice(b"      </Points>\n      <Cells>\n");
+    let conn = at.reserve(32 * cells);
+    binary::appended_tag(&mut head, "Int64", "connectivity", None, conn);
+    binary::appended_tag(&mut head, "Int64", "offsets", None, at.reserve(8 * cells));
+    binary::appended_tag(&mut head, "UInt8", "types", None, at.reserve(cells));
+    head.extend_from_slice(b"      </Cells>\n      <CellData Scalars=\"min_angle_deg\">\n");
+    binary::appended_tag(&mut head, "Int32", "block_id", None, at.reserve(4 * cells));
+    for name in super::vtk::CELL_ARRAYS {
+        binary::appended_tag(&mut head, "Float64", name, None, at.reserve(8 * cells));
+    }
+    head.extend_from_slice(b"      </CellData>\n    </Piece>\n  </UnstructuredGrid>\n");
+    head.extend_from_slice(binary::APPENDED_OPEN);
+    binary::array_header(&mut head, 24 * points);
+    w.write_all(&head)?;
+    write_chunked(w, points, 8192, |r, out| {
+        binary::points_xyz(out, &nodes.coords[r])
+    })?;
+    let mut header = Vec::new();
+    binary::array_header(&mut header, 32 * cells);
+    w.write_all(&header)?;
+    write_chunked(w, mesh.grids.len(), 64, |blocks, out| {
+        cell_corners_of(mesh, &nodes, blocks, |c| {
+            for v in c {
+                out.extend_from_slice(&(v as i64).to_le_bytes());
+            }
+        })
+    })?;
+    let chunked = |w: &mut W, size: usize, value: &(dyn Fn(usize, &mut Vec<u8>) + Sync)| {
+        let mut header = Vec::new();
+        binary::array_header(&mut header, size * cells);
+        w.write_all(&header)?;
+        write_chunked(w, cells, 1 << 16, |r, out| {
+            out.reserve(size * r.len());
+            for k in r {
+                value(k, out);
+            }
+        })
+    };
+    chunked(w, 8, &|k, out| {
+        out.extend_from_slice(&(4 * (k as i64 + 1)).to_le_bytes())
+    })?;
+    chunked(w, 1, &|_, out| out.push(9))?;
+    chunked(w, 4, &|k, out| {
+        out.extend_from_slice(&(block_of(&first_cell, k) as i32).to_le_bytes())
+    })?;
+    for k in 0..super::vtk::CELL_ARRAYS.len() {
+        let mut header = Vec::new();
+        binary::array_header(&mut header, 8 * cells);
+        w.write_all(&header)?;
+        write_chunked(w, fields.len(), 64, |blocks, out| {
+            for f in &fields[blocks] {
+                binary::f64s(out, super::vtk::cell_array(f, k));
+            }
+        })?;
+    }
+    w.write_all(binary::APPENDED_CLOSE)
+}
+
+fn write_to<W: Write>(w: &mut W, mesh: &Mesh) -> io::Result<()> {
+    let (nodes, first_cell, fields) = prepare(mesh);
+    let cells = first_cell.last().copied().unwrap_or(0);
+    piece_open(w, nodes.coords.len(), cells)?;
     writeln!(w, "{POINTS_HEADER}")?;
     write_chunked(w, nodes.coords.len(), 4096, |r, out| {
         point_lines(out, &nodes.coords[r])
@@ -59,20 +176,14 @@ fn write_to<W: Write>(w: &mut W, mesh: &Mesh) -> io::Result<()> {
         "        <DataArray type=\"Int64\" Name=\"connectivity\" format=\"ascii\">"
     )?;
     write_chunked(w, mesh.grids.len(), 16, |blocks, out| {
-        for b in blocks {
-            let (g, ids) = (&mesh.grids[b], &nodes.block_nodes[b]);
-            let id = |i: usize, j: usize| ids[i + j * (g.ni + 1)];
-            for j in 0..g.nj {
-                for i in 0..g.ni {
-                    out.extend_from_slice(b"         ");
-                    for v in [id(i, j), id(i + 1, j), id(i + 1, j + 1), id(i, j + 1)] {
-                        out.push(b' ');
-                        text::int(out, v);
-                    }
-                    out.push(b'\n');
-                }
+        cell_corners_of(mesh, &nodes, blocks, |c| {
+            out.extend_from_slice(b"         ");
+            for v in c {
+                out.push(b' ');
+                text::int(out, v);
             }
-        }
+            out.push(b'\n');
+        })
     })?;
     writeln!(w, "        </DataArray>")?;
     writeln!(
@@ -93,8 +204,7 @@ fn write_to<W: Write>(w: &mut W, mesh: &Mesh) -> io::Result<()> {
         w,
         "        <DataArray type=\"Int32\" Name=\"block_id\" format=\"ascii\">"
     )?;
-    // The block of cell `k`: the last block starting at or before it.
-    ints_chunked(w, cells, |k| first_cell.partition_point(|&f| f <= k) - 1)?;
+    ints_chunked(w, cells, |k| block_of(&first_cell, k))?;
     writeln!(w, "        </DataArray>")?;
     for (k, name) in super::vtk::CELL_ARRAYS.iter().enumerate() {
         writeln!(
