@@ -175,12 +175,7 @@ pub fn mesh(domain: &Domain, options: &Options) -> Result<Mesh, MeshError> {
         }));
     }
     validate_block_cells(options)?;
-    if !(options.collapse_fraction.is_finite() && options.collapse_fraction >= 0.0) {
-        return Err(MeshError::Options(format!(
-            "the collapse fraction must be a number >= 0, not {}",
-            options.collapse_fraction
-        )));
-    }
+    crate::ranges::check_ranges(options)?;
     let holes = domain.hole_count();
     validate_circle_ids(options, crate::domain::BOUNDING, holes)?;
     if options.mode == Mode::Exact {

@@ -28,7 +28,7 @@ pub struct Args {
     /// Output directory (created if missing).
     #[arg(short, long, default_value = "out")]
     pub output: PathBuf,
-    /// Target number of cells along a block side.
+    /// Target number of cells along a block side; 1 to 100000.
     #[arg(long, default_value_t = 16, allow_negative_numbers = true)]
     pub cells: usize,
     /// Writers, comma separated: vtk, plot3d, gmsh, svg, png, json, or all.
