@@ -316,10 +316,10 @@ struct DomainJsonIn {
 }
 
 /// The `holes` array, read without allocating more than the limit: elements beyond it are
-/// only counted.
-struct LimitedHoles {
-    holes: Vec<Circle>,
-    count: usize,
+/// only counted (bounded and periodic JSON alike).
+pub(crate) struct LimitedHoles {
+    pub(crate) holes: Vec<Circle>,
+    pub(crate) count: usize,
 }
 
 thread_local! {
@@ -496,7 +496,7 @@ impl Domain {
     /// [`Self::from_json_str`] with a custom hole limit.
     pub fn from_json_str_with_limit(text: &str, max_holes: usize) -> Result<Self, DomainError> {
         let previous = JSON_HOLE_LIMIT.with(|l| l.replace(max_holes));
-        let parsed = serde_json::from_str::<DomainJsonIn>(text);
+        let parsed = serde_json::from_str::<DomainJsonIn>(crate::input::without_bom(text));
         JSON_HOLE_LIMIT.with(|l| l.set(previous));
         let parsed = parsed.map_err(|e| DomainError::Json(e.to_string()))?;
         if parsed.holes.count > max_holes {
@@ -1088,7 +1088,7 @@ impl AnyDomain {
             periodic: Option<IgnoredAny>,
             bounding: Option<IgnoredAny>,
         }
-        let probe: Result<Probe, _> = serde_json::from_str(text);
+        let probe: Result<Probe, _> = serde_json::from_str(crate::input::without_bom(text));
         match probe {
             Ok(Probe {
                 periodic: Some(_),

@@ -1703,3 +1703,94 @@ fn option_values_outside_their_ranges() {
         assert!(help.contains(range), "--help lacks {range:?}");
     }
 }
+
+// 41. Text-file oddities: a byte order mark (CSV, JSON, JSON Lines) is skipped; a one-row CSV
+// whose row does not parse (`0x1`, tabs, quotes) is refused with its line instead of being
+// taken for a header (the file meshed the empty disk); invisible characters in a bad field
+// are shown escaped; a periodic JSON with too many holes is refused by count.
+#[test]
+fn text_file_oddities() {
+    let one = vec![Circle::new(1.0, 0.0, 0.5)];
+    for text in [
+        "\u{feff}1,0,0.5\n",
+        "\u{feff}x,y,r\r\n1,0,0.5\r\n",
+        "x,y,r\n+1,0,0.5",
+        "\"x\",\"y\",\"r\"\n1,0,0.5\n",
+    ] {
+        assert_eq!(parse_holes_csv(text).unwrap(), one, "{text:?}");
+    }
+    for (text, field) in [
+        ("0x1,0,0.5\n", "0x1"),
+        ("\"1\",\"0\",\"0.5\"\n", "\"1\""),
+        ("1,0,0.5\u{0}\n", "0.5\\u{0}"),
+    ] {
+        assert_eq!(
+            parse_holes_csv(text),
+            Err(CsvError::NotANumber {
+                line: 1,
+                field: field.into()
+            }),
+            "{text:?}"
+        );
+    }
+    assert!(matches!(
+        parse_holes_csv("1\t0\t0.5\n"),
+        Err(CsvError::WrongColumnCount {
+            line: 1,
+            found: 1,
+            ..
+        })
+    ));
+    // Subnormal coordinates are numbers like any other.
+    assert_eq!(
+        parse_holes_csv("1e-310,0,0.5\n").unwrap(),
+        vec![Circle::new(1e-310, 0.0, 0.5)]
+    );
+    let json = format!("\u{feff}{}", json_domain(B10, &[&c(1.0, 0.0, 0.5)]));
+    assert_eq!(Domain::from_json_str(&json).unwrap().holes(), &one[..]);
+    assert!(medial_blocks::AnyDomain::from_json_str(&json).is_ok());
+    let periodic =
+        "\u{feff}{\"periodic\":{\"size\":[3,3]},\"holes\":[{\"center\":[1,0],\"radius\":0.5}]}";
+    assert!(medial_blocks::PeriodicDomain::from_json_str(periodic).is_ok());
+    let s = Scratch::new();
+    s.mesh("b.json", &json, &[], 0, &[]);
+    Scratch::new().mesh(
+        "b.csv",
+        "\u{feff}1,0,0.5\n",
+        &["--bounding", "0,0,3"],
+        0,
+        &[],
+    );
+    let s = Scratch::new();
+    s.mesh(
+        "h.csv",
+        "0x1,0,0.5\n",
+        &["--bounding", "0,0,3"],
+        2,
+        &["h.csv: line 1: '0x1' is not a number"],
+    );
+    s.mesh(
+        "t.csv",
+        "1\t0\t0.5\n",
+        &["--bounding", "0,0,3"],
+        2,
+        &["line 1: expected 3 comma-separated numbers `x,y,r`, found 1"],
+    );
+    // The hole limit is counted, not stored, for periodic JSON too.
+    let mut text = String::from("{\"periodic\":{\"size\":[1,1]},\"holes\":[");
+    let hole = "{\"center\":[0.5,0.5],\"radius\":0.1}";
+    for k in 0..=Domain::MAX_HOLES {
+        if k > 0 {
+            text.push(',');
+        }
+        text.push_str(hole);
+    }
+    text.push_str("]}");
+    assert_eq!(
+        medial_blocks::PeriodicDomain::from_json_str(&text),
+        Err(DomainError::TooManyHoles {
+            count: Domain::MAX_HOLES + 1,
+            max: Domain::MAX_HOLES
+        })
+    );
+}

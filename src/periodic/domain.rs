@@ -18,7 +18,7 @@
 //! always in a neighbouring tile.
 
 use crate::domain::{
-    check_circle, precision_unit, Circle, CircleId, Domain, DomainError, HoleIndex,
+    check_circle, precision_unit, Circle, CircleId, Domain, DomainError, HoleIndex, LimitedHoles,
 };
 use serde::{Deserialize, Serialize};
 
@@ -39,7 +39,7 @@ struct PeriodJson {
 #[serde(deny_unknown_fields)]
 struct PeriodicJsonIn {
     periodic: PeriodJson,
-    holes: Vec<Circle>,
+    holes: LimitedHoles,
 }
 
 #[derive(Serialize)]
@@ -193,9 +193,15 @@ impl PeriodicDomain {
     /// Parse and validate `{"periodic": {"size": [Lx, Ly]}, "holes": [{"center": [x, y],
     /// "radius": r}, ...]}` (unknown fields refused).
     pub fn from_json_str(text: &str) -> Result<Self, DomainError> {
-        let raw: PeriodicJsonIn =
-            serde_json::from_str(text).map_err(|e| DomainError::Json(e.to_string()))?;
-        Self::new(raw.periodic.size, raw.holes)
+        let raw: PeriodicJsonIn = serde_json::from_str(crate::input::without_bom(text))
+            .map_err(|e| DomainError::Json(e.to_string()))?;
+        if raw.holes.count > Domain::MAX_HOLES {
+            return Err(DomainError::TooManyHoles {
+                count: raw.holes.count,
+                max: Domain::MAX_HOLES,
+            });
+        }
+        Self::new(raw.periodic.size, raw.holes.holes)
     }
 
     /// The JSON form read by [`Self::from_json_str`] (canonical, wrapped centres).
