@@ -1195,7 +1195,7 @@ fn negative_flag_values_and_usage_errors() {
         (
             "--collapse-fraction",
             "-1",
-            "--collapse-fraction -1 is out of range: expected 0 <= F <= 2",
+            "--collapse-fraction -1 is out of range: expected 0 <= F <= 1",
         ),
         (
             "--refine-ratio",
@@ -1525,7 +1525,7 @@ fn option_values_outside_their_ranges() {
                 collapse_fraction: 1e9,
                 ..base.clone()
             },
-            "--collapse-fraction 1e9 is out of range: expected 0 <= F <= 2",
+            "--collapse-fraction 1e9 is out of range: expected 0 <= F <= 1",
         ),
         (
             Options {
@@ -1629,7 +1629,7 @@ fn option_values_outside_their_ranges() {
             "1e9",
             "--collapse-fraction 1e9 is out of range",
         ),
-        ("--collapse-fraction", "2.0000001", "expected 0 <= F <= 2"),
+        ("--collapse-fraction", "1.0000001", "expected 0 <= F <= 1"),
         (
             "--first-height-rel",
             "0",
@@ -1670,7 +1670,7 @@ fn option_values_outside_their_ranges() {
             "2",
         ][..],
         &["--growth", "1", "--first-height", "1e300", "--cells", "2"][..],
-        &["--collapse-fraction", "2", "--cells", "2"][..],
+        &["--collapse-fraction", "1", "--cells", "2"][..],
         &[
             "--collapse-fraction",
             "0",
@@ -1694,7 +1694,7 @@ fn option_values_outside_their_ranges() {
     let help = String::from_utf8_lossy(&out.stdout);
     for range in [
         "1 to 10",
-        "0 to 2",
+        "0 to 1",
         "0.5773502691896258",
         "1 to 100000",
         "0 to 1000",

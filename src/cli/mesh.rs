@@ -148,8 +148,8 @@ pub struct Args {
     #[arg(long)]
     pub no_refine: bool,
     /// Collapse medial arcs shorter than F times the local empty-circle radius (0: only
-    /// zero-length arcs, which are always collapsed); 0 to 2 (below 2 the merged vertex stays
-    /// inside both ends' empty circles, so in the fluid).
+    /// zero-length arcs, which are always collapsed); 0 to 1 (up to 1 the merged vertex stays
+    /// well inside both ends' empty circles, in the fluid).
     #[arg(
         long,
         default_value_t = medial_blocks::mesher::DEFAULT_COLLAPSE_FRACTION,
