@@ -1088,9 +1088,24 @@ impl AnyDomain {
             periodic: Option<IgnoredAny>,
             bounding: Option<IgnoredAny>,
         }
-        let probe: Result<Probe, _> = serde_json::from_str(crate::input::without_bom(text));
+        let text = crate::input::without_bom(text);
+        // Only an object is a domain: serde reads a struct from an array too, so `[1, 2]` was
+        // taken for a domain with both "periodic" and "bounding".
+        let found = match text.trim_start().chars().next() {
+            Some('{') | None => None,
+            Some('[') => Some("an array"),
+            Some('"') => Some("a string"),
+            Some(_) => Some("a number or literal"),
+        };
+        if let Some(found) = found {
+            return Err(DomainError::Json(format!(
+                "a domain is a JSON object ({{\"bounding\": ..., \"holes\": [...]}} or \
+                 {{\"periodic\": ..., \"holes\": [...]}}), not {found}"
+            )));
+        }
+        let probe = serde_json::from_str::<Probe>(text).ok();
         match probe {
-            Ok(Probe {
+            Some(Probe {
                 periodic: Some(_),
                 bounding: Some(_),
             }) => Err(DomainError::Json(
@@ -1098,7 +1113,7 @@ impl AnyDomain {
                  periodic box), not both: unknown field `periodic` next to `bounding`"
                     .into(),
             )),
-            Ok(Probe {
+            Some(Probe {
                 periodic: Some(_), ..
             }) => crate::periodic::PeriodicDomain::from_json_str(text).map(AnyDomain::Periodic),
             _ => Domain::from_json_str(text).map(AnyDomain::Bounded),

@@ -11,12 +11,14 @@
 //! | `--first-height H`, `--first-height-rel F`, `--circle-clustering`'s `FIRST` | `> 0`, finite | a length (or a fraction of a radius); too large for a spoke gives equal spacing |
 //! | `--cell-size H` | `> 0`, finite | a length; one too small for the node limit is refused by the grid ([`crate::grid::GridError::TooManyNodes`]) |
 //!
-//! The integer options are checked where they are used: `--cells`, `--block-cells` and the
-//! `N` of `--wall-cells` in `1..=`[`crate::grid::MAX_CELLS_PER_SIDE`], `--smooth` in
+//! `--cells` is in `1..=`[`crate::grid::MAX_CELLS_PER_SIDE`] ([`check_cells`]). The other
+//! integer options are checked where they are used: `--block-cells` and the `N` of
+//! `--wall-cells` in the same range, `--smooth` in
 //! `0..=`[`crate::exact_mode::MAX_SMOOTH_SWEEPS`], `--threads` in `1..=`[`MAX_THREADS`] (the
 //! CLI), `--transition`'s spacing by [`crate::transition`].
 
 use crate::exact_mode::{Clustering, FirstCell};
+use crate::grid::{GridError, MAX_CELLS_PER_SIDE};
 use crate::mesher::{MeshError, Options};
 use crate::numfmt::Num;
 
@@ -106,9 +108,28 @@ fn check_clustering(k: &Clustering, flags: [&str; 3]) -> Result<(), MeshError> {
     }
 }
 
-/// Check every real-valued option against its range (see the module documentation), in both
-/// modes (an option the mode does not read is still refused when out of range).
+/// `--cells`: in `1..=`[`crate::grid::MAX_CELLS_PER_SIDE`] (above it the typed
+/// [`GridError::TooManyCellsPerSide`], refused before any grid allocation).
+pub fn check_cells(cells: usize) -> Result<(), MeshError> {
+    if cells == 0 {
+        return Err(MeshError::Options(
+            "--cells must be at least 1 (cells along a block side)".into(),
+        ));
+    }
+    if cells > MAX_CELLS_PER_SIDE {
+        return Err(MeshError::Grid(GridError::TooManyCellsPerSide {
+            cells,
+            limit: MAX_CELLS_PER_SIDE,
+        }));
+    }
+    Ok(())
+}
+
+/// Check `--cells` ([`check_cells`]) and every real-valued option against its range (see the
+/// module documentation), in both modes (an option the mode does not read is still refused
+/// when out of range). Needs no domain, so the CLI runs it once before meshing a sequence.
 pub fn check_ranges(options: &Options) -> Result<(), MeshError> {
+    check_cells(options.cells)?;
     if let Some(r) = options.refine_ratio {
         check_refine_ratio(r)?;
     }

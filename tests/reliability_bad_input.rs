@@ -1794,3 +1794,76 @@ fn text_file_oddities() {
         })
     );
 }
+
+// 42. A document that is not a JSON object (serde read `[1, 2]` as a struct and answered that
+// the domain had both "periodic" and "bounding"), and a bad `mesh-sequence` flag: refused once
+// before any frame, not once per frame with an output directory of failures.
+#[test]
+fn non_object_json_and_sequence_flags() {
+    for (text, found) in [
+        ("[1, 2]", "not an array"),
+        ("\"x\"", "not a string"),
+        ("1e5", "not a number or literal"),
+        ("\u{feff} [", "not an array"),
+    ] {
+        let e = medial_blocks::AnyDomain::from_json_str(text).unwrap_err();
+        assert!(
+            matches!(&e, DomainError::Json(m) if m.starts_with("a domain is a JSON object") && m.ends_with(found)),
+            "{text:?}: {e:?}"
+        );
+    }
+    let s = Scratch::new();
+    s.mesh(
+        "a.json",
+        "[1, 2]",
+        &[],
+        2,
+        &["a domain is a JSON object", "not an array"],
+    );
+    let frame = json_domain(B10, &[&c(0.0, 0.0, 1.0), &c(3.0, 0.0, 1.0)]);
+    s.file("f.jsonl", format!("{frame}\n[1, 2]\n{frame}\n"));
+    let (code, err) = cli(
+        &[
+            "mesh-sequence",
+            "f.jsonl",
+            "-o",
+            "seq",
+            "-q",
+            "--cells",
+            "2",
+        ],
+        s.path(),
+    );
+    assert_eq!(code, 2, "{err}");
+    assert!(
+        err.contains("frame 1: error: line 2: invalid domain JSON: a domain is a JSON object"),
+        "{err}"
+    );
+    assert!(err.contains("1 of 3 frames failed"), "{err}");
+    for (cells, needle) in [
+        ("0", "--cells must be at least 1"),
+        (
+            "100001",
+            "100001 cells along a block side is more than the limit of 100000",
+        ),
+    ] {
+        expect(
+            &[
+                "mesh-sequence",
+                "f.jsonl",
+                "-o",
+                "bad",
+                "-q",
+                "--cells",
+                cells,
+            ],
+            s.path(),
+            2,
+            &[needle],
+        );
+        assert!(
+            !s.path().join("bad").exists(),
+            "--cells {cells} wrote output"
+        );
+    }
+}

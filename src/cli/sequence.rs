@@ -53,6 +53,8 @@ pub fn run(args: Args, global: Global) -> Result<(), Failure> {
         cells: args.cells,
         ..Options::default()
     };
+    // A bad flag is refused once, before any frame (not once per frame).
+    medial_blocks::ranges::check_ranges(&options).map_err(|e| Failure::input(e.to_string()))?;
     let bar = if global.quiet {
         indicatif::ProgressBar::hidden()
     } else {

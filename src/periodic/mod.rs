@@ -1282,19 +1282,6 @@ pub fn mesh_periodic_frame(
     pd: &PeriodicDomain,
     options: &Options,
 ) -> Result<PeriodicFrame, MeshError> {
-    if options.cells == 0 {
-        return Err(MeshError::Options(
-            "--cells must be at least 1 (cells along a block side)".into(),
-        ));
-    }
-    if options.cells > crate::grid::MAX_CELLS_PER_SIDE {
-        return Err(MeshError::Grid(
-            crate::grid::GridError::TooManyCellsPerSide {
-                cells: options.cells,
-                limit: crate::grid::MAX_CELLS_PER_SIDE,
-            },
-        ));
-    }
     crate::ranges::check_ranges(options)?;
     crate::mesher::validate_circle_ids(options, 0, pd.hole_count())?;
     if options.mode == Mode::Exact {
