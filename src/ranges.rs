@@ -1,5 +1,5 @@
 //! The valid range of every real-valued option, each decided from what the option means, and
-//! the one check that refuses a value outside it ([`check_ranges`], run by [`crate::mesh`]
+//! the one check that refuses a value outside it ([`check_ranges`], run by [`crate::mesh()`]
 //! and [`crate::mesh_periodic`] before any work) with a message naming the flag, the value and
 //! the range.
 //!
