@@ -230,13 +230,13 @@ pub enum DomainError {
         value: f64,
         min: f64,
     },
-    /// A period length is not finite and positive, or beyond [`Domain::MAX_MAGNITUDE`];
-    /// `axis` 0 is `Lx`, 1 is `Ly`.
+    /// A period length is not finite and positive, or beyond
+    /// [`crate::periodic::PeriodicDomain::MAX_PERIOD`]; `axis` 0 is `Lx`, 1 is `Ly`.
     #[error(
         "the period {} is {}, but it must be finite, positive and at most {}",
         PERIOD_NAMES[(*axis).min(1)],
         Num(*value),
-        Num(Domain::MAX_MAGNITUDE)
+        Num(crate::periodic::PeriodicDomain::MAX_PERIOD)
     )]
     InvalidPeriod { axis: usize, value: f64 },
     /// A periodic domain without holes (nothing to mesh around).

@@ -1253,7 +1253,7 @@ fn negative_flag_values_and_usage_errors() {
         &["mesh", "h.csv", "-o", "out", "-q", "--periodic", "-1,1"],
         s.path(),
         2,
-        &["the period Lx is -1, but it must be finite, positive and at most 1e100"],
+        &["the period Lx is -1, but it must be finite, positive and at most 1.25e99"],
     );
     // Help and version still print in full and succeed.
     let out = Command::new(env!("CARGO_BIN_EXE_medial-blocks"))
@@ -1355,7 +1355,7 @@ fn periodic_holes_that_do_not_fit_or_meet_across_the_edge() {
         ([3.0, 1.0], 0.5, 1, 1.0),
         ([1.0, 1.0], 0.6, 0, 1.0),
         ([2.0, 1.0], 0.5 - 1e-9, 1, 1.0),
-        ([1e100, 1e99], 6e98, 1, 1e99),
+        ([1.25e99, 1e99], 6e98, 1, 1e99),
     ] {
         let e = PeriodicDomain::new(size, vec![Circle::new(0.0, 0.0, r)]).unwrap_err();
         assert!(
@@ -1364,6 +1364,32 @@ fn periodic_holes_that_do_not_fit_or_meet_across_the_edge() {
             "{size:?} r {r}: {e:?}"
         );
     }
+    // The largest box meshes (1e100 was accepted, then failed as an internal error).
+    let big = PeriodicDomain::MAX_PERIOD;
+    let pd = PeriodicDomain::new(
+        [big, big],
+        vec![
+            Circle::new(0.3 * big, 0.4 * big, 0.2 * big),
+            Circle::new(0.8 * big, 0.1 * big, 0.1 * big),
+        ],
+    )
+    .unwrap();
+    let o = Options {
+        cells: 4,
+        ..Options::default()
+    };
+    let m = medial_blocks::mesh_periodic(&pd, &o).unwrap();
+    assert_eq!(
+        medial_blocks::output::report::Report::from_mesh(&m).inverted_cells,
+        0
+    );
+    assert!(matches!(
+        PeriodicDomain::new(
+            [big * (1.0 + f64::EPSILON), big],
+            vec![Circle::new(0.0, 0.0, 1.0)]
+        ),
+        Err(DomainError::InvalidPeriod { axis: 0, .. })
+    ));
     // Just inside the tolerance: it fits.
     let tol = PeriodicDomain::tolerance_for([2.0, 1.0]);
     assert!(PeriodicDomain::new([2.0, 1.0], vec![Circle::new(0.0, 0.0, 0.5 - tol)]).is_ok());
@@ -1443,7 +1469,7 @@ fn periodic_holes_that_do_not_fit_or_meet_across_the_edge() {
         &p("[1e300, 1e300]", &c(0.0, 0.0, 1.0)),
         &[],
         2,
-        &["the period Lx is 1e300, but it must be finite, positive and at most 1e100"],
+        &["the period Lx is 1e300, but it must be finite, positive and at most 1.25e99"],
     );
 }
 

@@ -4,7 +4,7 @@
 //! A [`PeriodicDomain`] can only be obtained through validation ([`PeriodicDomain::new`],
 //! [`PeriodicDomain::from_json_str`]), which guarantees:
 //!
-//! - `Lx`, `Ly` are finite and in [`Domain::MIN_SCALE`]`..=`[`Domain::MAX_MAGNITUDE`];
+//! - `Lx`, `Ly` are finite and in [`Domain::MIN_SCALE`]`..=`[`PeriodicDomain::MAX_PERIOD`];
 //! - every hole centre and radius is finite (magnitudes as for [`Domain`]), every radius `> 0`;
 //! - every hole centre is wrapped into `[0, Lx) x [0, Ly)` (its *canonical copy*);
 //! - every hole's diameter plus the tolerance is below `min(Lx, Ly)`, so a hole never meets
@@ -64,6 +64,11 @@ impl PeriodicDomain {
     /// [`Domain::GAP_TOLERANCE`] because the mesher validates an auxiliary bounded domain of
     /// up to 7 x 7 copies whose bounding radius is below 32 `max(Lx, Ly)`.
     pub const GAP_TOLERANCE: f64 = 32.0 * Domain::GAP_TOLERANCE;
+    /// The largest period length, `Domain::MAX_MAGNITUDE / 8`: the mesher samples a tiling
+    /// whose coordinates reach [`Self::coordinate_magnitude`] `= 8 max(Lx, Ly)`, and that
+    /// tiling is validated as a bounded [`Domain`] (a box of `1e100` was accepted and then
+    /// failed there with an internal error).
+    pub const MAX_PERIOD: f64 = Domain::MAX_MAGNITUDE / 8.0;
 
     /// Validate a periodic domain of period `size = [Lx, Ly]` with `holes` (centres anywhere;
     /// they are wrapped into the box). Holes are named by their 0-based input index.
@@ -84,7 +89,7 @@ impl PeriodicDomain {
             });
         }
         for (axis, &l) in size.iter().enumerate() {
-            if !(l.is_finite() && l > 0.0 && l <= Domain::MAX_MAGNITUDE) {
+            if !(l.is_finite() && l > 0.0 && l <= Self::MAX_PERIOD) {
                 return Err(DomainError::InvalidPeriod { axis, value: l });
             }
             if l < Domain::MIN_SCALE {
