@@ -23,6 +23,8 @@ use serde::{Deserialize, Deserializer, Serialize};
 use std::collections::HashMap;
 use std::fmt;
 
+use crate::numfmt::Num;
+
 /// Circle identifier used across the crate: `-1` is the bounding circle, `0..` the holes in
 /// input order.
 pub type CircleId = i32;
@@ -97,7 +99,8 @@ fn pair_name(first: CircleId, second: usize) -> String {
     }
 }
 
-/// Why a domain was refused. Holes are named by their 0-based index in the input.
+/// Why a domain was refused. Holes are named by their 0-based index in the input; every
+/// number in a message is printed by [`Num`] (`1e300`, not 301 digits).
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum DomainError {
     /// The JSON text is malformed, truncated, has wrong types, missing or unknown fields.
@@ -108,14 +111,19 @@ pub enum DomainError {
     #[error("too many holes: {count} given, at most {max} allowed")]
     TooManyHoles { count: usize, max: usize },
     /// A coordinate or radius is NaN or infinite.
-    #[error("{} has a non-finite {field}: {value}", circle_name(*circle))]
+    #[error("{} has a non-finite {field}: {}", circle_name(*circle), Num(*value))]
     NonFinite {
         circle: CircleId,
         field: &'static str,
         value: f64,
     },
     /// A coordinate or radius exceeds [`Domain::MAX_MAGNITUDE`] in absolute value.
-    #[error("{} has {field} = {value:e}, beyond the supported magnitude {max:e}", circle_name(*circle))]
+    #[error(
+        "{} has {field} = {}, beyond the supported magnitude {}",
+        circle_name(*circle),
+        Num(*value),
+        Num(*max)
+    )]
     OutOfRange {
         circle: CircleId,
         field: &'static str,
@@ -123,13 +131,19 @@ pub enum DomainError {
         max: f64,
     },
     /// A radius is zero or negative.
-    #[error("{} has radius {radius}, but a radius must be positive", circle_name(*circle))]
+    #[error(
+        "{} has radius {}, but a radius must be positive",
+        circle_name(*circle),
+        Num(*radius)
+    )]
     NonPositiveRadius { circle: CircleId, radius: f64 },
     /// A hole is not strictly inside the bounding circle (touching within the tolerance
     /// counts as not inside). `gap = R - |c - C| - r`.
     #[error(
         "hole {hole} is not strictly inside the bounding circle: its gap to the bounding circle \
-         is {gap:e}, it must exceed {tolerance:e}"
+         is {}, it must exceed {}",
+        Num(*gap),
+        Num(*tolerance)
     )]
     HoleNotInside {
         hole: usize,
@@ -139,14 +153,21 @@ pub enum DomainError {
     /// Two holes are identical (same centre and radius).
     #[error("hole {second} is a duplicate of hole {first} (same centre and radius)")]
     DuplicateHole { first: usize, second: usize },
-    /// Two holes overlap or touch: `gap = |c_i - c_j| - r_i - r_j <= tolerance`.
+    /// Two holes overlap or touch: `gap = |c_i - c_j + t| - r_i - r_j <= tolerance`, where
+    /// `t = shift[0] Lx + shift[1] Ly` moves hole `second` to the image that meets hole
+    /// `first` (`[0, 0]` in a bounded domain or inside the periodic box; non-zero when the
+    /// holes meet only across the periodic boundary).
     #[error(
-        "holes {first} and {second} overlap or touch: the gap between them is {gap:e}, it must \
-         exceed {tolerance:e}"
+        "holes {first} and {second} overlap or touch{}: the gap between them is {}, it must \
+         exceed {}",
+        across_period(*second, *shift),
+        Num(*gap),
+        Num(*tolerance)
     )]
     HolesOverlap {
         first: usize,
         second: usize,
+        shift: [i32; 2],
         gap: f64,
         tolerance: f64,
     },
@@ -156,11 +177,13 @@ pub enum DomainError {
     /// mesher samples, [`crate::periodic::PeriodicDomain::coordinate_magnitude`]) and
     /// `min_radius` is [`Domain::MIN_RADIUS_ULPS`] units of [`precision_unit`]`(magnitude)`.
     #[error(
-        "{} has radius {radius:e}, which is too small for coordinates of magnitude \
-         {magnitude:e}: double precision there needs a radius of at least {min_radius:e} \
-         ({ulps} units in the last place) to sample the circle; translate the layout nearer \
-         the origin or scale it up",
+        "{} has radius {}, which is too small for coordinates of magnitude {}: double \
+         precision there needs a radius of at least {} ({ulps} units in the last place) to \
+         sample the circle; translate the layout nearer the origin or scale it up",
         circle_name(*circle),
+        Num(*radius),
+        Num(*magnitude),
+        Num(*min_radius),
         ulps = Domain::MIN_RADIUS_ULPS
     )]
     RadiusBelowPrecision {
@@ -175,11 +198,13 @@ pub enum DomainError {
     /// circle; `min_gap` is [`Domain::MIN_GAP_ULPS`] units of
     /// [`precision_unit`]`(magnitude)`, `magnitude` is [`Domain::coordinate_magnitude`].
     #[error(
-        "{} are only {gap:e} apart, which is too close for coordinates of magnitude \
-         {magnitude:e}: double precision there needs a gap of at least {min_gap:e} ({ulps} \
-         units in the last place) to tell the circles apart; translate the layout nearer the \
-         origin or scale it up",
+        "{} are only {} apart, which is too close for coordinates of magnitude {}: double \
+         precision there needs a gap of at least {} ({ulps} units in the last place) to tell \
+         the circles apart; translate the layout nearer the origin or scale it up",
         pair_name(*first, *second),
+        Num(*gap),
+        Num(*magnitude),
+        Num(*min_gap),
         ulps = Domain::MIN_GAP_ULPS
     )]
     GapBelowPrecision {
@@ -189,23 +214,83 @@ pub enum DomainError {
         magnitude: f64,
         min_gap: f64,
     },
-    /// A period length is not finite and positive (or beyond [`Domain::MAX_MAGNITUDE`]);
-    /// `axis` 0 is `Lx`, 1 is `Ly`.
-    #[error("the period {} is {value}, but it must be finite and positive", ["Lx", "Ly"][(*axis).min(1)])]
+    /// The domain is smaller than [`Domain::MIN_SCALE`]: the bounding radius (`axis`
+    /// `None`) or a period length (`axis` 0 is `Lx`, 1 is `Ly`) is below it, so squares of
+    /// the distances the mesher compares (its gaps and tolerances) would underflow double
+    /// precision.
+    #[error(
+        "{} is {}, below the smallest supported domain size {}: distances that small \
+         underflow double precision when squared; scale the layout up",
+        scale_name(*axis),
+        Num(*value),
+        Num(*min)
+    )]
+    DomainTooSmall {
+        axis: Option<usize>,
+        value: f64,
+        min: f64,
+    },
+    /// A period length is not finite and positive, or beyond
+    /// [`crate::periodic::PeriodicDomain::MAX_PERIOD`]; `axis` 0 is `Lx`, 1 is `Ly`.
+    #[error(
+        "the period {} is {}, but it must be finite, positive and at most {}",
+        PERIOD_NAMES[(*axis).min(1)],
+        Num(*value),
+        Num(crate::periodic::PeriodicDomain::MAX_PERIOD)
+    )]
     InvalidPeriod { axis: usize, value: f64 },
     /// A periodic domain without holes (nothing to mesh around).
     #[error("a periodic domain needs at least one hole")]
     NoPeriodicHoles,
-    /// A hole of a periodic domain is as wide as the period (it would meet its own image).
+    /// A hole of a periodic domain does not fit in the period along `axis` (0 is `Lx`, 1 is
+    /// `Ly`): its diameter plus the tolerance is at least the period there, so it would meet
+    /// its own image.
     #[error(
-        "hole {hole} has diameter {diameter}, which must be smaller than the period {period} \
-         (minus the tolerance)"
+        "hole {hole} has diameter {}, which does not fit in the period {} = {}: a diameter \
+         must be below each period minus the tolerance {} (the hole would touch its own \
+         periodic image)",
+        Num(*diameter),
+        PERIOD_NAMES[(*axis).min(1)],
+        Num(*period),
+        Num(*tolerance)
     )]
     HoleWiderThanPeriod {
         hole: usize,
+        axis: usize,
         diameter: f64,
         period: f64,
+        tolerance: f64,
     },
+}
+
+/// The names of the two period lengths, by axis.
+const PERIOD_NAMES: [&str; 2] = ["Lx", "Ly"];
+
+/// `"the bounding circle's radius"` or `"the period Lx"` for [`DomainError::DomainTooSmall`].
+fn scale_name(axis: Option<usize>) -> String {
+    match axis {
+        None => "the bounding circle's radius".to_string(),
+        Some(a) => format!("the period {}", PERIOD_NAMES[a.min(1)]),
+    }
+}
+
+/// `""` for holes that meet directly, else where across the periodic boundary they meet:
+/// `" across the periodic boundary (hole 1 moved by -1 Lx)"`.
+fn across_period(second: usize, shift: [i32; 2]) -> String {
+    let moves: Vec<String> = shift
+        .iter()
+        .zip(PERIOD_NAMES)
+        .filter(|(&k, _)| k != 0)
+        .map(|(k, name)| format!("{k} {name}"))
+        .collect();
+    if moves.is_empty() {
+        String::new()
+    } else {
+        format!(
+            " across the periodic boundary (hole {second} moved by {})",
+            moves.join(" and ")
+        )
+    }
 }
 
 /// A validated domain: a bounding circle and holes strictly inside it, pairwise apart
@@ -231,10 +316,10 @@ struct DomainJsonIn {
 }
 
 /// The `holes` array, read without allocating more than the limit: elements beyond it are
-/// only counted.
-struct LimitedHoles {
-    holes: Vec<Circle>,
-    count: usize,
+/// only counted (bounded and periodic JSON alike).
+pub(crate) struct LimitedHoles {
+    pub(crate) holes: Vec<Circle>,
+    pub(crate) count: usize,
 }
 
 thread_local! {
@@ -280,6 +365,14 @@ impl Domain {
     pub const GAP_TOLERANCE: f64 = 1e-9;
     /// Largest accepted absolute value of a coordinate or radius (keeps squares finite).
     pub const MAX_MAGNITUDE: f64 = 1e100;
+    /// Smallest accepted size of a domain: its bounding radius, or each period length of a
+    /// periodic domain ([`DomainError::DomainTooSmall`]). The tolerance is `1e-9` of the size
+    /// (periodic: `3.2e-8`) and distances are compared through their squares, which stay
+    /// normal doubles above it (`1e-218` at the tolerance); the 7-hole hexagon meshes alike
+    /// at any scale from `1e-150` to `1e99` but folds 5623 cells at `1e-160` and reports
+    /// overlaps that are not there at `1e-200` (squares underflow), so the limit mirrors
+    /// [`Domain::MAX_MAGNITUDE`] with margin.
+    pub const MIN_SCALE: f64 = 1e-100;
     /// Smallest accepted radius, in units of [`precision_unit`] of the coordinates'
     /// magnitude ([`Domain::coordinate_magnitude`]). Below it the 32 coarse boundary samples of
     /// the circle (spacing `0.2 r`) come within the rounding of the coordinates of each other
@@ -315,6 +408,13 @@ impl Domain {
             });
         }
         check_circle(crate::domain::BOUNDING, &bounding)?;
+        if bounding.radius < Self::MIN_SCALE {
+            return Err(DomainError::DomainTooSmall {
+                axis: None,
+                value: bounding.radius,
+                min: Self::MIN_SCALE,
+            });
+        }
         for (i, h) in holes.iter().enumerate() {
             check_circle(i as CircleId, h)?;
         }
@@ -353,6 +453,7 @@ impl Domain {
                     return Err(DomainError::HolesOverlap {
                         first: i.min(j),
                         second: i.max(j),
+                        shift: [0, 0],
                         gap,
                         tolerance: tol,
                     });
@@ -395,7 +496,7 @@ impl Domain {
     /// [`Self::from_json_str`] with a custom hole limit.
     pub fn from_json_str_with_limit(text: &str, max_holes: usize) -> Result<Self, DomainError> {
         let previous = JSON_HOLE_LIMIT.with(|l| l.replace(max_holes));
-        let parsed = serde_json::from_str::<DomainJsonIn>(text);
+        let parsed = serde_json::from_str::<DomainJsonIn>(crate::input::without_bom(text));
         JSON_HOLE_LIMIT.with(|l| l.set(previous));
         let parsed = parsed.map_err(|e| DomainError::Json(e.to_string()))?;
         if parsed.holes.count > max_holes {
@@ -987,9 +1088,24 @@ impl AnyDomain {
             periodic: Option<IgnoredAny>,
             bounding: Option<IgnoredAny>,
         }
-        let probe: Result<Probe, _> = serde_json::from_str(text);
+        let text = crate::input::without_bom(text);
+        // Only an object is a domain: serde reads a struct from an array too, so `[1, 2]` was
+        // taken for a domain with both "periodic" and "bounding".
+        let found = match text.trim_start().chars().next() {
+            Some('{') | None => None,
+            Some('[') => Some("an array"),
+            Some('"') => Some("a string"),
+            Some(_) => Some("a number or literal"),
+        };
+        if let Some(found) = found {
+            return Err(DomainError::Json(format!(
+                "a domain is a JSON object ({{\"bounding\": ..., \"holes\": [...]}} or \
+                 {{\"periodic\": ..., \"holes\": [...]}}), not {found}"
+            )));
+        }
+        let probe = serde_json::from_str::<Probe>(text).ok();
         match probe {
-            Ok(Probe {
+            Some(Probe {
                 periodic: Some(_),
                 bounding: Some(_),
             }) => Err(DomainError::Json(
@@ -997,7 +1113,7 @@ impl AnyDomain {
                  periodic box), not both: unknown field `periodic` next to `bounding`"
                     .into(),
             )),
-            Ok(Probe {
+            Some(Probe {
                 periodic: Some(_), ..
             }) => crate::periodic::PeriodicDomain::from_json_str(text).map(AnyDomain::Periodic),
             _ => Domain::from_json_str(text).map(AnyDomain::Bounded),

@@ -74,15 +74,38 @@ fn numbers<const N: usize>(
     Ok(out)
 }
 
-/// A field for an error message: at most 40 characters.
+/// A field for an error message: at most 40 characters, control characters escaped (a NUL
+/// byte or a stray carriage return would otherwise be invisible: `'0.5\u{0}'`, not `'0.5'`).
 fn truncate(f: &str) -> String {
-    if f.chars().count() <= 40 {
-        f.to_string()
-    } else {
-        let mut s: String = f.chars().take(40).collect();
-        s.push_str("...");
-        s
+    let mut s = String::new();
+    for c in f.chars().take(40) {
+        if c.is_control() {
+            s.extend(c.escape_default());
+        } else {
+            s.push(c);
+        }
     }
+    if f.chars().count() > 40 {
+        s.push_str("...");
+    }
+    s
+}
+
+/// `text` without a leading byte order mark (`U+FEFF`, which some editors write at the start
+/// of CSV and JSON files). Every reader of this crate starts with it, so a BOM neither hides
+/// the first row (it made `\u{feff}1,0,0.5` look like a header) nor breaks the JSON parser.
+pub fn without_bom(text: &str) -> &str {
+    text.strip_prefix('\u{feff}').unwrap_or(text)
+}
+
+/// Whether the first line of a CSV file is a header: it has at least two comma-separated
+/// fields and none of them is a number, quoted or not. So `x,y,r` is a header, while a data
+/// row whose first field does not parse (`0x1,0,0.5`) or a row on another separator
+/// (`1<TAB>0<TAB>0.5`, one field) is read as a row and refused with its line: a one-row file
+/// used to lose its only row that way and mesh the empty disk.
+fn is_header(line: &str) -> bool {
+    let mut fields = line.split(',').map(|f| f.trim().trim_matches('"').trim());
+    line.contains(',') && fields.all(|f| f.parse::<f64>().is_err())
 }
 
 /// The `X,Y,R` triple of `--bounding` (not validated beyond being three numbers).
@@ -102,10 +125,12 @@ pub fn parse_holes_csv(text: &str) -> Result<Vec<Circle>, CsvError> {
     parse_holes_csv_with_limit(text, crate::Domain::MAX_HOLES)
 }
 
-/// Holes from CSV text: `x,y,r` per line; blank lines and lines starting with `#` are
-/// skipped; a first line whose first field is not a number is a header. A text with a header
-/// and no row gives no holes (a disk domain); an empty text is [`CsvError::Empty`].
+/// Holes from CSV text: `x,y,r` per line; a leading byte order mark, blank lines and lines
+/// starting with `#` are skipped; a first line of comma-separated fields none of which is a
+/// number is a header. A text with a header and no row gives no holes (a disk domain); an empty text is
+/// [`CsvError::Empty`].
 pub fn parse_holes_csv_with_limit(text: &str, max_rows: usize) -> Result<Vec<Circle>, CsvError> {
+    let text = without_bom(text);
     if text.trim().is_empty() {
         return Err(CsvError::Empty);
     }
@@ -115,9 +140,8 @@ pub fn parse_holes_csv_with_limit(text: &str, max_rows: usize) -> Result<Vec<Cir
         if line.is_empty() || line.starts_with('#') {
             continue;
         }
-        let first_field = line.split(',').next().unwrap_or("").trim();
-        if n == 0 && first_field.parse::<f64>().is_err() {
-            continue; // header
+        if n == 0 && is_header(line) {
+            continue;
         }
         if holes.len() >= max_rows {
             return Err(CsvError::TooManyRows {
@@ -136,9 +160,9 @@ pub fn parse_points_csv(text: &str) -> Result<(Vec<Point>, Vec<usize>), CsvError
     parse_points_csv_with_limit(text, usize::MAX)
 }
 
-/// Points from CSV text, `x,y` per line, and the 1-based line number of each data row. Blank
-/// lines are skipped; a first non-blank line whose fields are all non-numeric is a header.
-/// No data row is [`CsvError::NoRows`].
+/// Points from CSV text, `x,y` per line, and the 1-based line number of each data row. A
+/// leading byte order mark and blank lines are skipped; a first non-blank line of
+/// comma-separated fields none of which is a number is a header. No data row is [`CsvError::NoRows`].
 pub fn parse_points_csv_with_limit(
     text: &str,
     max_rows: usize,
@@ -146,15 +170,15 @@ pub fn parse_points_csv_with_limit(
     let mut points = Vec::new();
     let mut lines = Vec::new();
     let mut first = true;
-    for (i, raw) in text.lines().enumerate() {
+    for (i, raw) in without_bom(text).lines().enumerate() {
         let line = raw.trim();
         if line.is_empty() {
             continue;
         }
         if first {
             first = false;
-            if line.split(',').all(|f| f.trim().parse::<f64>().is_err()) {
-                continue; // header
+            if is_header(line) {
+                continue;
             }
         }
         if points.len() >= max_rows {

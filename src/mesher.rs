@@ -163,24 +163,8 @@ pub enum MeshError {
 /// assert_eq!(mesh.layout.blocks.len(), 36); // 6 (h - 1) blocks for h = 7 holes
 /// ```
 pub fn mesh(domain: &Domain, options: &Options) -> Result<Mesh, MeshError> {
-    if options.cells == 0 {
-        return Err(MeshError::Options(
-            "--cells must be at least 1 (cells along a block side)".into(),
-        ));
-    }
-    if options.cells > crate::grid::MAX_CELLS_PER_SIDE {
-        return Err(MeshError::Grid(GridError::TooManyCellsPerSide {
-            cells: options.cells,
-            limit: crate::grid::MAX_CELLS_PER_SIDE,
-        }));
-    }
+    crate::ranges::check_ranges(options)?;
     validate_block_cells(options)?;
-    if !(options.collapse_fraction.is_finite() && options.collapse_fraction >= 0.0) {
-        return Err(MeshError::Options(format!(
-            "the collapse fraction must be a number >= 0, not {}",
-            options.collapse_fraction
-        )));
-    }
     let holes = domain.hole_count();
     validate_circle_ids(options, crate::domain::BOUNDING, holes)?;
     if options.mode == Mode::Exact {

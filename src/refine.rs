@@ -103,11 +103,7 @@ pub fn refine(
     sampling: &SamplingOptions,
 ) -> Result<Refined, MeshError> {
     if let Some(r) = ratio {
-        if !(r.is_finite() && r > 0.0) {
-            return Err(MeshError::Options(format!(
-                "the refinement ratio must be a positive number, not {r}"
-            )));
-        }
+        crate::ranges::check_refine_ratio(r)?;
     }
     let mut current = domain.clone();
     let mut inserted: Vec<Circle> = Vec::new();

@@ -255,6 +255,9 @@ struct Done {
     structure: Option<Structure>,
     /// Block keys in order (also when not unique), to compare structures.
     keys: Option<Vec<String>>,
+    /// `[ni, nj]` of each block in block order (empty for a failed frame), to compare node
+    /// counts also when the keys are not unique.
+    counts: Vec<[usize; 2]>,
 }
 
 fn failed(index: usize, error: String) -> Done {
@@ -276,6 +279,7 @@ fn failed(index: usize, error: String) -> Done {
         },
         combinatorics: None,
         structure: None,
+        counts: Vec::new(),
         keys: None,
     }
 }
@@ -336,6 +340,7 @@ fn finish(index: usize, fm: FrameMesh, out: Out, dir: &Path) -> Done {
             node_counts_not_kept: None,
         },
         structure: fm.structure(),
+        counts: fm.mesh.grids.iter().map(|g| [g.ni, g.nj]).collect(),
         combinatorics: Some(fm.combinatorics),
         keys: Some(keys),
     }
@@ -432,9 +437,11 @@ pub fn run_sequence(
                 a.combinatorics.is_some() && a.combinatorics == b.combinatorics;
             s.same_block_structure_as_previous =
                 s.same_combinatorics_as_previous && a.keys.is_some() && a.keys == b.keys;
-            s.same_node_counts_as_previous = s.same_block_structure_as_previous
-                && a.structure.is_some()
-                && a.structure == b.structure;
+            // The same keys in the same order: the same counts in order are the same counts
+            // per block, also when the keys are not unique (then no counts were imposed, but
+            // identical frames still have identical counts).
+            s.same_node_counts_as_previous =
+                s.same_block_structure_as_previous && a.counts == b.counts;
         }
         out.push(s);
     }

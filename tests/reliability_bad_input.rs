@@ -1175,17 +1175,17 @@ fn negative_flag_values_and_usage_errors() {
         (
             "--first-height-rel",
             "-1",
-            "the first cell height must be positive, not -1",
+            "--first-height-rel -1 is out of range: expected a finite number > 0",
         ),
         (
             "--first-height",
             "-0.5",
-            "the first cell height must be positive, not -0.5",
+            "--first-height -0.5 is out of range: expected a finite number > 0",
         ),
         (
             "--growth",
             "-2",
-            "the growth ratio must be a number >= 1, not -2",
+            "--growth -2 is out of range: expected 1 <= G <= 10",
         ),
         (
             "--transition",
@@ -1195,17 +1195,17 @@ fn negative_flag_values_and_usage_errors() {
         (
             "--collapse-fraction",
             "-1",
-            "the collapse fraction must be a number >= 0, not -1",
+            "--collapse-fraction -1 is out of range: expected 0 <= F <= 1",
         ),
         (
             "--refine-ratio",
             "-1",
-            "the refinement ratio must be a positive number, not -1",
+            "--refine-ratio -1 is out of range: expected a finite R >= 0.5773502691896258",
         ),
         (
             "--cell-size",
             "-1",
-            "--cell-size must be a positive length, not -1",
+            "--cell-size -1 is out of range: expected a finite number > 0",
         ),
         (
             "--smooth",
@@ -1253,7 +1253,7 @@ fn negative_flag_values_and_usage_errors() {
         &["mesh", "h.csv", "-o", "out", "-q", "--periodic", "-1,1"],
         s.path(),
         2,
-        &["the period Lx is -1, but it must be finite and positive"],
+        &["the period Lx is -1, but it must be finite, positive and at most 1.25e99"],
     );
     // Help and version still print in full and succeed.
     let out = Command::new(env!("CARGO_BIN_EXE_medial-blocks"))
@@ -1262,4 +1262,634 @@ fn negative_flag_values_and_usage_errors() {
         .expect("run the CLI");
     assert!(out.status.success());
     assert!(String::from_utf8_lossy(&out.stdout).contains("Usage: medial-blocks mesh"));
+}
+
+// 37. A domain smaller than `Domain::MIN_SCALE` (1e-100): a bounding radius or a period
+// below it. Squares of its gaps underflow: a 1e-300 box used to report "holes 0 and 0
+// overlap" (the hole against its own image), the hexagon at 1e-160 folded 5623 cells.
+#[test]
+fn domain_below_the_smallest_scale() {
+    use medial_blocks::PeriodicDomain;
+    let e = Domain::bounded(Circle::new(0.0, 0.0, 1e-101), vec![]).unwrap_err();
+    assert_eq!(
+        e,
+        DomainError::DomainTooSmall {
+            axis: None,
+            value: 1e-101,
+            min: Domain::MIN_SCALE
+        }
+    );
+    for (size, axis) in [
+        ([1e-300, 1e-300], 0),
+        ([1.0, 1e-101], 1),
+        ([1e-101, 1.0], 0),
+    ] {
+        let e = PeriodicDomain::new(size, vec![Circle::new(0.0, 0.0, 1e-302)]).unwrap_err();
+        assert!(
+            matches!(e, DomainError::DomainTooSmall { axis: Some(a), .. } if a == axis),
+            "{size:?}: {e:?}"
+        );
+    }
+    let s = Scratch::new();
+    s.mesh(
+        "p.json",
+        "{\"periodic\":{\"size\":[1e-300,1e-300]},\"holes\":[{\"center\":[0,0],\"radius\":1e-301}]}",
+        &[],
+        2,
+        &["the period Lx is 1e-300, below the smallest supported domain size 1e-100"],
+    );
+    s.mesh(
+        "d.json",
+        &json_domain(
+            "{\"center\": [0, 0], \"radius\": 1e-200}",
+            &[&c(0.0, 0.0, 5e-201)],
+        ),
+        &[],
+        2,
+        &["the bounding circle's radius is 1e-200, below the smallest supported domain size"],
+    );
+    // At the end of the range: the hexagon and a periodic box of size 1e-100 mesh as they do
+    // at size 1 (the same blocks, no inverted cell, the same angles to rounding).
+    let scale = |c: &Circle, k: f64| Circle::new(c.center[0] * k, c.center[1] * k, c.radius * k);
+    let hex = Domain::hexagon_example();
+    let k = Domain::MIN_SCALE / hex.bounding().radius;
+    let tiny = Domain::bounded(
+        scale(&hex.bounding(), k),
+        hex.holes().iter().map(|h| scale(h, k)).collect(),
+    )
+    .unwrap();
+    let o = Options {
+        block_cells: Some(4),
+        cells: 4,
+        ..Options::default()
+    };
+    let (a, b) = (mesh(&hex, &o).unwrap(), mesh(&tiny, &o).unwrap());
+    let (ra, rb) = (
+        medial_blocks::output::report::Report::from_mesh(&a),
+        medial_blocks::output::report::Report::from_mesh(&b),
+    );
+    assert_eq!((rb.blocks, rb.inverted_cells), (ra.blocks, 0));
+    assert!((ra.min_angle_deg - rb.min_angle_deg).abs() < 1e-6);
+    let box_of = |k: f64| {
+        let holes = vec![
+            Circle::new(0.3 * k, 0.4 * k, 0.2 * k),
+            Circle::new(0.8 * k, 0.1 * k, 0.1 * k),
+        ];
+        let pd = PeriodicDomain::new([k, k], holes).unwrap();
+        medial_blocks::output::report::Report::from_mesh(
+            &medial_blocks::mesh_periodic(&pd, &o).unwrap(),
+        )
+    };
+    let (ra, rb) = (box_of(1.0), box_of(Domain::MIN_SCALE));
+    assert_eq!((rb.blocks, rb.inverted_cells), (ra.blocks, 0));
+    assert!((ra.min_angle_deg - rb.min_angle_deg).abs() < 1e-6);
+}
+
+// 38. A periodic hole that does not fit in the box, along x only or y only, or only by the
+// tolerance; and two holes that meet only through the periodic wrap.
+#[test]
+fn periodic_holes_that_do_not_fit_or_meet_across_the_edge() {
+    use medial_blocks::PeriodicDomain;
+    for (size, r, axis, period) in [
+        ([1.0, 3.0], 0.5, 0, 1.0),
+        ([3.0, 1.0], 0.5, 1, 1.0),
+        ([1.0, 1.0], 0.6, 0, 1.0),
+        ([2.0, 1.0], 0.5 - 1e-9, 1, 1.0),
+        ([1.25e99, 1e99], 6e98, 1, 1e99),
+    ] {
+        let e = PeriodicDomain::new(size, vec![Circle::new(0.0, 0.0, r)]).unwrap_err();
+        assert!(
+            matches!(e, DomainError::HoleWiderThanPeriod { hole: 0, axis: a, period: p, .. }
+                if a == axis && p == period),
+            "{size:?} r {r}: {e:?}"
+        );
+    }
+    // The largest box meshes (1e100 was accepted, then failed as an internal error).
+    let big = PeriodicDomain::MAX_PERIOD;
+    let pd = PeriodicDomain::new(
+        [big, big],
+        vec![
+            Circle::new(0.3 * big, 0.4 * big, 0.2 * big),
+            Circle::new(0.8 * big, 0.1 * big, 0.1 * big),
+        ],
+    )
+    .unwrap();
+    let o = Options {
+        cells: 4,
+        ..Options::default()
+    };
+    let m = medial_blocks::mesh_periodic(&pd, &o).unwrap();
+    assert_eq!(
+        medial_blocks::output::report::Report::from_mesh(&m).inverted_cells,
+        0
+    );
+    assert!(matches!(
+        PeriodicDomain::new(
+            [big * (1.0 + f64::EPSILON), big],
+            vec![Circle::new(0.0, 0.0, 1.0)]
+        ),
+        Err(DomainError::InvalidPeriod { axis: 0, .. })
+    ));
+    // Just inside the tolerance: it fits.
+    let tol = PeriodicDomain::tolerance_for([2.0, 1.0]);
+    assert!(PeriodicDomain::new([2.0, 1.0], vec![Circle::new(0.0, 0.0, 0.5 - tol)]).is_ok());
+    // Two holes 0.3 wide whose centres are 0.6 apart only through the right edge (x = 0 and
+    // 2.4 in a box 3 wide): hole 1 moved by -Lx meets hole 0.
+    let e = PeriodicDomain::new(
+        [3.0, 1.0],
+        vec![Circle::new(0.0, 0.0, 0.3), Circle::new(2.4, 0.0, 0.3)],
+    )
+    .unwrap_err();
+    assert!(
+        matches!(
+            e,
+            DomainError::HolesOverlap {
+                first: 0,
+                second: 1,
+                shift: [-1, 0],
+                ..
+            }
+        ),
+        "{e:?}"
+    );
+    // Through the corner: hole 0 moved by (+Lx, +Ly) meets hole 1.
+    let e = PeriodicDomain::new(
+        [1.0, 1.0],
+        vec![Circle::new(0.95, 0.95, 0.1), Circle::new(0.02, 0.02, 0.1)],
+    )
+    .unwrap_err();
+    assert!(
+        matches!(
+            e,
+            DomainError::HolesOverlap {
+                first: 0,
+                second: 1,
+                shift: [1, 1],
+                ..
+            }
+        ),
+        "{e:?}"
+    );
+    assert!(e
+        .to_string()
+        .contains("across the periodic boundary (hole 1 moved by 1 Lx and 1 Ly)"));
+    let s = Scratch::new();
+    let p = |size: &str, holes: &str| {
+        format!("{{\"periodic\":{{\"size\":{size}}},\"holes\":[{holes}]}}")
+    };
+    s.mesh(
+        "x.json",
+        &p("[1, 3]", &c(0.0, 0.0, 0.5)),
+        &[],
+        2,
+        &["hole 0 has diameter 1, which does not fit in the period Lx = 1"],
+    );
+    s.mesh(
+        "y.json",
+        &p("[3, 1]", &c(0.0, 0.0, 0.5)),
+        &[],
+        2,
+        &[
+            "does not fit in the period Ly = 1",
+            "its own periodic image",
+        ],
+    );
+    s.mesh(
+        "w.json",
+        &p(
+            "[3, 1]",
+            &format!("{}, {}", c(0.0, 0.0, 0.3), c(2.4, 0.0, 0.3)),
+        ),
+        &[],
+        2,
+        &["holes 0 and 1 overlap or touch across the periodic boundary (hole 1 moved by -1 Lx)"],
+    );
+    s.mesh(
+        "huge.json",
+        &p("[1e300, 1e300]", &c(0.0, 0.0, 1.0)),
+        &[],
+        2,
+        &["the period Lx is 1e300, but it must be finite, positive and at most 1.25e99"],
+    );
+}
+
+// 39. Every number in a message is readable: 1e300 prints as `1e300`, not 301 digits, and
+// 0.5 as `0.5` (shortest round trip, exponent form only when large or tiny).
+#[test]
+fn numbers_in_messages_are_readable() {
+    let s = Scratch::new();
+    let cases = [
+        (
+            json_domain("{\"center\": [0, 0], \"radius\": 1e300}", &[]),
+            "the bounding circle has radius = 1e300, beyond the supported magnitude 1e100",
+        ),
+        (
+            json_domain(B10, &[&c(0.0, 0.0, 1.0), &c(1.5, 0.0, 1.0)]),
+            "the gap between them is -0.5, it must exceed 1e-8",
+        ),
+        (
+            json_domain(B10, &[&c(20.0, 0.0, 1.0)]),
+            "its gap to the bounding circle is -11, it must exceed 1e-8",
+        ),
+        (
+            json_domain(B10, &[&c(0.0, 0.0, -1e300)]),
+            "hole 0 has radius -1e300, but a radius must be positive",
+        ),
+    ];
+    for (text, needle) in &cases {
+        s.mesh("d.json", text, &[], 2, &[needle]);
+    }
+    // No message of a domain with extreme numbers has a run of more than 17 digits.
+    for text in [
+        json_domain("{\"center\": [1e99, -1e99], \"radius\": 1e-300}", &[]),
+        "{\"periodic\":{\"size\":[1e300,1e-300]},\"holes\":[]}".to_string(),
+        json_domain(B10, &[&c(0.0, 0.0, 1e-300)]),
+    ] {
+        let e = medial_blocks::AnyDomain::from_json_str(&text)
+            .unwrap_err()
+            .to_string();
+        let longest = e
+            .split(|ch: char| !ch.is_ascii_digit())
+            .map(str::len)
+            .max()
+            .unwrap_or(0);
+        assert!(longest <= 17, "{e}");
+    }
+}
+
+// 40. Option values outside their ranges (`medial_blocks::ranges`): refused with the flag, the
+// value and the range, in both modes and for periodic domains; the ends of each range mesh.
+#[test]
+fn option_values_outside_their_ranges() {
+    use medial_blocks::exact_mode::{Clustering, FirstCell};
+    use medial_blocks::ranges::{MAX_COLLAPSE_FRACTION, MAX_GROWTH, MIN_REFINE_RATIO};
+    use medial_blocks::{mesh_periodic, Mode, PeriodicDomain};
+    let hex = Domain::hexagon_example();
+    let pd = PeriodicDomain::new([1.0, 1.0], vec![Circle::new(0.3, 0.3, 0.1)]).unwrap();
+    let base = Options {
+        cells: 3,
+        ..Options::default()
+    };
+    let clustering = |growth, first| Clustering { first, growth };
+    let bad: [(Options, &str); 8] = [
+        (
+            Options {
+                refine_ratio: Some(0.5),
+                ..base.clone()
+            },
+            "--refine-ratio 0.5 is out of range: expected a finite R >= 0.5773502691896258",
+        ),
+        (
+            Options {
+                refine_ratio: Some(f64::INFINITY),
+                ..base.clone()
+            },
+            "--refine-ratio inf is out of range",
+        ),
+        (
+            Options {
+                collapse_fraction: 1e9,
+                ..base.clone()
+            },
+            "--collapse-fraction 1e9 is out of range: expected 0 <= F <= 1",
+        ),
+        (
+            Options {
+                clustering: clustering(1e308, None),
+                ..base.clone()
+            },
+            "--growth 1e308 is out of range: expected 1 <= G <= 10",
+        ),
+        (
+            Options {
+                clustering: clustering(1.2, Some(FirstCell::Absolute(f64::NAN))),
+                ..base.clone()
+            },
+            "--first-height NaN is out of range: expected a finite number > 0",
+        ),
+        (
+            Options {
+                circle_clustering: vec![(0, clustering(0.9, Some(FirstCell::Relative(0.1))))],
+                ..base.clone()
+            },
+            "--circle-clustering of circle 0: GROWTH 0.9 is out of range",
+        ),
+        (
+            Options {
+                cell_size: Some(0.0),
+                ..base.clone()
+            },
+            "--cell-size 0 is out of range: expected a finite number > 0",
+        ),
+        (
+            Options {
+                mode: Mode::Paper,
+                clustering: clustering(0.5, None),
+                ..base.clone()
+            },
+            "--growth 0.5 is out of range",
+        ),
+    ];
+    for (o, needle) in &bad {
+        for e in [
+            mesh(&hex, o).unwrap_err(),
+            mesh_periodic(&pd, o).unwrap_err(),
+        ] {
+            assert!(
+                matches!(&e, MeshError::Options(m) if m.contains(needle)),
+                "{needle}: {e:?}"
+            );
+        }
+    }
+    // The ends of each range mesh (the library, both domain kinds).
+    let ends = [
+        Options {
+            refine_ratio: Some(MIN_REFINE_RATIO),
+            ..base.clone()
+        },
+        Options {
+            refine_ratio: Some(f64::MAX),
+            collapse_fraction: MAX_COLLAPSE_FRACTION,
+            ..base.clone()
+        },
+        Options {
+            collapse_fraction: 0.0,
+            clustering: clustering(MAX_GROWTH, Some(FirstCell::Relative(1e-3))),
+            ..base.clone()
+        },
+        Options {
+            clustering: clustering(1.0, Some(FirstCell::Absolute(1e300))),
+            cell_size: Some(f64::MAX),
+            ..base.clone()
+        },
+    ];
+    for o in &ends {
+        assert!(mesh(&hex, o).is_ok(), "{o:?}");
+        assert!(mesh_periodic(&pd, o).is_ok(), "{o:?}");
+    }
+    // The CLI: one line naming the flag, the value and the range, exit 2; the ends exit 0.
+    let s = Scratch::new();
+    for (flag, value, needle) in [
+        (
+            "--refine-ratio",
+            "0.5",
+            "--refine-ratio 0.5 is out of range",
+        ),
+        (
+            "--refine-ratio",
+            "0.5773502691896",
+            "expected a finite R >= 0.5773502691896258",
+        ),
+        (
+            "--growth",
+            "1e308",
+            "--growth 1e308 is out of range: expected 1 <= G <= 10",
+        ),
+        (
+            "--growth",
+            "10.000001",
+            "--growth 10.000001 is out of range",
+        ),
+        (
+            "--collapse-fraction",
+            "1e9",
+            "--collapse-fraction 1e9 is out of range",
+        ),
+        ("--collapse-fraction", "1.0000001", "expected 0 <= F <= 1"),
+        (
+            "--first-height-rel",
+            "0",
+            "--first-height-rel 0 is out of range",
+        ),
+        ("--cell-size", "inf", "--cell-size inf is out of range"),
+        (
+            "--circle-clustering",
+            "2:0.01r:11",
+            "circle 2: GROWTH 11 is out of range",
+        ),
+    ] {
+        expect(
+            &["mesh", "-o", "out", "-q", flag, value],
+            s.path(),
+            2,
+            &[needle],
+        );
+    }
+    for threads in ["0", "1025"] {
+        expect(
+            &["--threads", threads, "mesh", "-o", "out", "-q"],
+            s.path(),
+            2,
+            &[&format!(
+                "--threads {threads} is out of range: expected 1 <= N <= 1024"
+            )],
+        );
+    }
+    for args in [
+        &["--refine-ratio", "0.5773502691896258", "--cells", "2"][..],
+        &[
+            "--growth",
+            "10",
+            "--first-height-rel",
+            "0.001",
+            "--cells",
+            "2",
+        ][..],
+        &["--growth", "1", "--first-height", "1e300", "--cells", "2"][..],
+        &["--collapse-fraction", "1", "--cells", "2"][..],
+        &[
+            "--collapse-fraction",
+            "0",
+            "--refine-ratio",
+            "1e308",
+            "--cells",
+            "2",
+        ][..],
+        &["--cell-size", "1e308"][..],
+        &["--threads", "1", "--cells", "2"][..],
+    ] {
+        let mut a = vec!["mesh", "-o", "out", "-q", "--format", "json"];
+        a.extend_from_slice(args);
+        expect(&a, s.path(), 0, &[]);
+    }
+    // --help states the ranges.
+    let out = Command::new(env!("CARGO_BIN_EXE_medial-blocks"))
+        .args(["mesh", "--help"])
+        .output()
+        .expect("run the CLI");
+    let help = String::from_utf8_lossy(&out.stdout);
+    for range in [
+        "1 to 10",
+        "0 to 1",
+        "0.5773502691896258",
+        "1 to 100000",
+        "0 to 1000",
+        "finite, > 0",
+    ] {
+        assert!(help.contains(range), "--help lacks {range:?}");
+    }
+}
+
+// 41. Text-file oddities: a byte order mark (CSV, JSON, JSON Lines) is skipped; a one-row CSV
+// whose row does not parse (`0x1`, tabs, quotes) is refused with its line instead of being
+// taken for a header (the file meshed the empty disk); invisible characters in a bad field
+// are shown escaped; a periodic JSON with too many holes is refused by count.
+#[test]
+fn text_file_oddities() {
+    let one = vec![Circle::new(1.0, 0.0, 0.5)];
+    for text in [
+        "\u{feff}1,0,0.5\n",
+        "\u{feff}x,y,r\r\n1,0,0.5\r\n",
+        "x,y,r\n+1,0,0.5",
+        "\"x\",\"y\",\"r\"\n1,0,0.5\n",
+    ] {
+        assert_eq!(parse_holes_csv(text).unwrap(), one, "{text:?}");
+    }
+    for (text, field) in [
+        ("0x1,0,0.5\n", "0x1"),
+        ("\"1\",\"0\",\"0.5\"\n", "\"1\""),
+        ("1,0,0.5\u{0}\n", "0.5\\u{0}"),
+    ] {
+        assert_eq!(
+            parse_holes_csv(text),
+            Err(CsvError::NotANumber {
+                line: 1,
+                field: field.into()
+            }),
+            "{text:?}"
+        );
+    }
+    assert!(matches!(
+        parse_holes_csv("1\t0\t0.5\n"),
+        Err(CsvError::WrongColumnCount {
+            line: 1,
+            found: 1,
+            ..
+        })
+    ));
+    // Subnormal coordinates are numbers like any other.
+    assert_eq!(
+        parse_holes_csv("1e-310,0,0.5\n").unwrap(),
+        vec![Circle::new(1e-310, 0.0, 0.5)]
+    );
+    let json = format!("\u{feff}{}", json_domain(B10, &[&c(1.0, 0.0, 0.5)]));
+    assert_eq!(Domain::from_json_str(&json).unwrap().holes(), &one[..]);
+    assert!(medial_blocks::AnyDomain::from_json_str(&json).is_ok());
+    let periodic =
+        "\u{feff}{\"periodic\":{\"size\":[3,3]},\"holes\":[{\"center\":[1,0],\"radius\":0.5}]}";
+    assert!(medial_blocks::PeriodicDomain::from_json_str(periodic).is_ok());
+    let s = Scratch::new();
+    s.mesh("b.json", &json, &[], 0, &[]);
+    Scratch::new().mesh(
+        "b.csv",
+        "\u{feff}1,0,0.5\n",
+        &["--bounding", "0,0,3"],
+        0,
+        &[],
+    );
+    let s = Scratch::new();
+    s.mesh(
+        "h.csv",
+        "0x1,0,0.5\n",
+        &["--bounding", "0,0,3"],
+        2,
+        &["h.csv: line 1: '0x1' is not a number"],
+    );
+    s.mesh(
+        "t.csv",
+        "1\t0\t0.5\n",
+        &["--bounding", "0,0,3"],
+        2,
+        &["line 1: expected 3 comma-separated numbers `x,y,r`, found 1"],
+    );
+    // The hole limit is counted, not stored, for periodic JSON too.
+    let mut text = String::from("{\"periodic\":{\"size\":[1,1]},\"holes\":[");
+    let hole = "{\"center\":[0.5,0.5],\"radius\":0.1}";
+    for k in 0..=Domain::MAX_HOLES {
+        if k > 0 {
+            text.push(',');
+        }
+        text.push_str(hole);
+    }
+    text.push_str("]}");
+    assert_eq!(
+        medial_blocks::PeriodicDomain::from_json_str(&text),
+        Err(DomainError::TooManyHoles {
+            count: Domain::MAX_HOLES + 1,
+            max: Domain::MAX_HOLES
+        })
+    );
+}
+
+// 42. A document that is not a JSON object (serde read `[1, 2]` as a struct and answered that
+// the domain had both "periodic" and "bounding"), and a bad `mesh-sequence` flag: refused once
+// before any frame, not once per frame with an output directory of failures.
+#[test]
+fn non_object_json_and_sequence_flags() {
+    for (text, found) in [
+        ("[1, 2]", "not an array"),
+        ("\"x\"", "not a string"),
+        ("1e5", "not a number or literal"),
+        ("\u{feff} [", "not an array"),
+    ] {
+        let e = medial_blocks::AnyDomain::from_json_str(text).unwrap_err();
+        assert!(
+            matches!(&e, DomainError::Json(m) if m.starts_with("a domain is a JSON object") && m.ends_with(found)),
+            "{text:?}: {e:?}"
+        );
+    }
+    let s = Scratch::new();
+    s.mesh(
+        "a.json",
+        "[1, 2]",
+        &[],
+        2,
+        &["a domain is a JSON object", "not an array"],
+    );
+    let frame = json_domain(B10, &[&c(0.0, 0.0, 1.0), &c(3.0, 0.0, 1.0)]);
+    s.file("f.jsonl", format!("{frame}\n[1, 2]\n{frame}\n"));
+    let (code, err) = cli(
+        &[
+            "mesh-sequence",
+            "f.jsonl",
+            "-o",
+            "seq",
+            "-q",
+            "--cells",
+            "2",
+        ],
+        s.path(),
+    );
+    assert_eq!(code, 2, "{err}");
+    assert!(
+        err.contains("frame 1: error: line 2: invalid domain JSON: a domain is a JSON object"),
+        "{err}"
+    );
+    assert!(err.contains("1 of 3 frames failed"), "{err}");
+    for (cells, needle) in [
+        ("0", "--cells must be at least 1"),
+        (
+            "100001",
+            "100001 cells along a block side is more than the limit of 100000",
+        ),
+    ] {
+        expect(
+            &[
+                "mesh-sequence",
+                "f.jsonl",
+                "-o",
+                "bad",
+                "-q",
+                "--cells",
+                cells,
+            ],
+            s.path(),
+            2,
+            &[needle],
+        );
+        assert!(
+            !s.path().join("bad").exists(),
+            "--cells {cells} wrote output"
+        );
+    }
 }

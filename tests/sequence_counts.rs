@@ -204,3 +204,41 @@ fn counts_that_do_not_fit_are_ignored() {
     assert_eq!(again.mesh.grids, own.mesh.grids);
     assert!(matches!(&other[0], Ok(AnyDomain::Periodic(_))));
 }
+
+/// Frames switching between bounded and periodic domains, in CRLF lines with a byte order
+/// mark: every frame meshes, a switch is never "the same combinatorics", and two identical
+/// periodic frames whose block keys are not unique (two holes: no counts can be imposed by
+/// key) are still reported with the same blocks and node counts (they were reported with
+/// differing counts).
+#[test]
+fn frames_switching_between_bounded_and_periodic() {
+    let bounded = |x: f64| {
+        format!(
+            r#"{{"bounding": {{"center": [0, 0], "radius": 5}}, "holes": [{{"center": [0, 0], "radius": 1}}, {{"center": [{x}, 0], "radius": 1}}]}}"#
+        )
+    };
+    let periodic = |x: f64| {
+        format!(
+            r#"{{"periodic": {{"size": [6, 6]}}, "holes": [{{"center": [0, 0], "radius": 1}}, {{"center": [{x}, 0], "radius": 1}}]}}"#
+        )
+    };
+    let text = format!(
+        "\u{feff}{}\r\n{}\r\n{}\r\n{}\r\n{}\r\n",
+        bounded(2.5),
+        periodic(2.5),
+        bounded(2.6),
+        periodic(2.6),
+        periodic(2.6)
+    );
+    let dir = tempfile::tempdir().unwrap();
+    let s = run(&text, dir.path(), 2);
+    assert_eq!(s.failed, 0, "{s:?}");
+    let f = &s.frames;
+    for (k, frame) in f.iter().enumerate().take(4).skip(1) {
+        assert!(!frame.same_combinatorics_as_previous, "frame {k}");
+    }
+    assert!(f[4].same_combinatorics_as_previous && f[4].same_block_structure_as_previous);
+    assert!(f[4].same_node_counts_as_previous, "{:?}", f[4]);
+    // The oracle: the node counts written for frames 3 and 4 are equal block for block.
+    assert_eq!(dims(dir.path(), 3), dims(dir.path(), 4));
+}

@@ -55,12 +55,14 @@ pub struct Args {
     /// Geometry of the blocks.
     #[arg(long, value_enum, default_value_t = ModeArg::Exact)]
     pub mode: ModeArg,
-    /// Target number of cells along a block side (exact mode: along a typical spoke).
+    /// Target number of cells along a block side (exact mode: along a typical spoke); 1 to
+    /// 100000.
     #[arg(long, default_value_t = 16, allow_negative_numbers = true)]
     pub cells: usize,
     /// Exact mode: an N x N grid in every block (N cells along the wall and the arc, N along
     /// the spokes), raised along an arc only where a wall would span more than 15 degrees per
     /// cell; shared sides always match. Paper mode: the same as --cells N (N per block side).
+    /// N is 1 to 100000.
     #[arg(
         long,
         value_name = "N",
@@ -72,30 +74,33 @@ pub struct Args {
     /// DIR/timings.json. Nothing else changes: the other files are byte-identical without it.
     #[arg(long)]
     pub timings: bool,
-    /// Exact mode: target cell size (overrides --cells).
+    /// Exact mode: target cell size (overrides --cells); a finite length > 0.
     #[arg(long, allow_negative_numbers = true)]
     pub cell_size: Option<f64>,
-    /// Exact mode: first cell height at every wall (absolute length).
+    /// Exact mode: first cell height at every wall (absolute length); finite, > 0.
     #[arg(
         long,
         conflicts_with = "first_height_rel",
         allow_negative_numbers = true
     )]
     pub first_height: Option<f64>,
-    /// Exact mode: first cell height at every wall, as a fraction of the circle's radius.
+    /// Exact mode: first cell height at every wall, as a fraction of the circle's radius;
+    /// finite, > 0.
     #[arg(long, allow_negative_numbers = true)]
     pub first_height_rel: Option<f64>,
-    /// Exact mode: growth ratio of the wall clustering.
+    /// Exact mode: growth ratio of the wall clustering (the largest ratio of neighbouring
+    /// wall-normal cells); 1 to 10.
     #[arg(long, default_value_t = 1.2, allow_negative_numbers = true)]
     pub growth: f64,
     /// Exact mode: clustering of one circle, `ID:FIRST[:GROWTH]` (ID -1 is the bounding
-    /// circle; FIRST ending in `r` is relative to the radius, e.g. `3:0.01r:1.1`). Repeatable.
+    /// circle; FIRST ending in `r` is relative to the radius, e.g. `3:0.01r:1.1`; FIRST > 0,
+    /// GROWTH 1 to 10). Repeatable.
     #[arg(long, allow_hyphen_values = true)]
     pub circle_clustering: Vec<String>,
-    /// Exact mode: wall-normal cell count of one circle, `ID:N`. Repeatable.
+    /// Exact mode: wall-normal cell count of one circle, `ID:N` (N 1 to 100000). Repeatable.
     #[arg(long, allow_hyphen_values = true)]
     pub wall_cells: Vec<String>,
-    /// Exact mode: Winslow smoothing sweeps per block, at most 1000 (never lowers the min
+    /// Exact mode: Winslow smoothing sweeps per block, 0 to 1000 (never lowers the min
     /// scaled Jacobian).
     #[arg(long, default_value_t = 0, allow_negative_numbers = true)]
     pub smooth: usize,
@@ -117,6 +122,8 @@ pub struct Args {
     pub bounding: Option<String>,
     /// Macro Delaunay refinement: insert holes while an interior triangle has circumradius /
     /// shortest edge above R (paper Algorithm 3; 2.0 means smallest angles above ~14.5 deg).
+    /// R is finite and at least 1/sqrt(3) = 0.5773502691896258, the ratio of the equilateral
+    /// triangle (no triangle has less).
     #[arg(
         long,
         default_value_t = medial_blocks::mesher::DEFAULT_REFINE_RATIO,
@@ -124,7 +131,8 @@ pub struct Args {
     )]
     pub refine_ratio: f64,
     /// Add a ring of transition blocks out to a square whose boundary nodes are nodes of a
-    /// Cartesian background grid of this spacing (origin at 0); bounded domains only.
+    /// Cartesian background grid of this spacing (origin at 0; a finite length > 0); bounded
+    /// domains only.
     #[arg(long, allow_negative_numbers = true)]
     pub transition: Option<f64>,
     /// With --transition: transition out to this rectangle instead of the square,
@@ -145,7 +153,8 @@ pub struct Args {
     #[arg(long)]
     pub no_refine: bool,
     /// Collapse medial arcs shorter than F times the local empty-circle radius (0: only
-    /// zero-length arcs, which are always collapsed).
+    /// zero-length arcs, which are always collapsed); 0 to 1 (up to 1 the merged vertex stays
+    /// well inside both ends' empty circles, in the fluid).
     #[arg(
         long,
         default_value_t = medial_blocks::mesher::DEFAULT_COLLAPSE_FRACTION,

@@ -29,7 +29,8 @@ pub struct Cli {
     /// Print nothing on success (no summary, no progress bar).
     #[arg(short, long, global = true)]
     quiet: bool,
-    /// Worker threads for per-block work (default: one per core). Output does not depend on it.
+    /// Worker threads for per-block work (default: one per core), 1 to 1024. Output does not
+    /// depend on it.
     #[arg(long, global = true, value_name = "N", allow_negative_numbers = true)]
     threads: Option<usize>,
     #[command(subcommand)]
@@ -82,8 +83,11 @@ impl Failure {
 /// Size rayon's global pool from `--threads`.
 fn set_threads(threads: Option<usize>) -> Result<(), Failure> {
     let Some(n) = threads else { return Ok(()) };
-    if n == 0 {
-        return Err(Failure::input("--threads must be at least 1"));
+    let max = medial_blocks::ranges::MAX_THREADS;
+    if n == 0 || n > max {
+        return Err(Failure::input(format!(
+            "--threads {n} is out of range: expected 1 <= N <= {max}"
+        )));
     }
     rayon::ThreadPoolBuilder::new()
         .num_threads(n)

@@ -28,7 +28,7 @@ pub struct Args {
     /// Output directory (created if missing).
     #[arg(short, long, default_value = "out")]
     pub output: PathBuf,
-    /// Target number of cells along a block side.
+    /// Target number of cells along a block side; 1 to 100000.
     #[arg(long, default_value_t = 16, allow_negative_numbers = true)]
     pub cells: usize,
     /// Writers, comma separated: vtk, plot3d, gmsh, svg, png, json, or all.
@@ -57,6 +57,8 @@ pub fn run(args: Args, global: Global) -> Result<(), Failure> {
         cells: args.cells,
         ..Options::default()
     };
+    // A bad flag is refused once, before any frame (not once per frame).
+    medial_blocks::ranges::check_ranges(&options).map_err(|e| Failure::input(e.to_string()))?;
     let bar = if global.quiet {
         indicatif::ProgressBar::hidden()
     } else {

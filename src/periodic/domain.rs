@@ -4,7 +4,7 @@
 //! A [`PeriodicDomain`] can only be obtained through validation ([`PeriodicDomain::new`],
 //! [`PeriodicDomain::from_json_str`]), which guarantees:
 //!
-//! - `Lx`, `Ly` are finite, positive and at most [`Domain::MAX_MAGNITUDE`];
+//! - `Lx`, `Ly` are finite and in [`Domain::MIN_SCALE`]`..=`[`PeriodicDomain::MAX_PERIOD`];
 //! - every hole centre and radius is finite (magnitudes as for [`Domain`]), every radius `> 0`;
 //! - every hole centre is wrapped into `[0, Lx) x [0, Ly)` (its *canonical copy*);
 //! - every hole's diameter plus the tolerance is below `min(Lx, Ly)`, so a hole never meets
@@ -18,7 +18,7 @@
 //! always in a neighbouring tile.
 
 use crate::domain::{
-    check_circle, precision_unit, Circle, CircleId, Domain, DomainError, HoleIndex,
+    check_circle, precision_unit, Circle, CircleId, Domain, DomainError, HoleIndex, LimitedHoles,
 };
 use serde::{Deserialize, Serialize};
 
@@ -39,7 +39,7 @@ struct PeriodJson {
 #[serde(deny_unknown_fields)]
 struct PeriodicJsonIn {
     periodic: PeriodJson,
-    holes: Vec<Circle>,
+    holes: LimitedHoles,
 }
 
 #[derive(Serialize)]
@@ -64,6 +64,11 @@ impl PeriodicDomain {
     /// [`Domain::GAP_TOLERANCE`] because the mesher validates an auxiliary bounded domain of
     /// up to 7 x 7 copies whose bounding radius is below 32 `max(Lx, Ly)`.
     pub const GAP_TOLERANCE: f64 = 32.0 * Domain::GAP_TOLERANCE;
+    /// The largest period length, `Domain::MAX_MAGNITUDE / 8`: the mesher samples a tiling
+    /// whose coordinates reach [`Self::coordinate_magnitude`] `= 8 max(Lx, Ly)`, and that
+    /// tiling is validated as a bounded [`Domain`] (a box of `1e100` was accepted and then
+    /// failed there with an internal error).
+    pub const MAX_PERIOD: f64 = Domain::MAX_MAGNITUDE / 8.0;
 
     /// Validate a periodic domain of period `size = [Lx, Ly]` with `holes` (centres anywhere;
     /// they are wrapped into the box). Holes are named by their 0-based input index.
@@ -84,8 +89,15 @@ impl PeriodicDomain {
             });
         }
         for (axis, &l) in size.iter().enumerate() {
-            if !(l.is_finite() && l > 0.0 && l <= Domain::MAX_MAGNITUDE) {
+            if !(l.is_finite() && l > 0.0 && l <= Self::MAX_PERIOD) {
                 return Err(DomainError::InvalidPeriod { axis, value: l });
+            }
+            if l < Domain::MIN_SCALE {
+                return Err(DomainError::DomainTooSmall {
+                    axis: Some(axis),
+                    value: l,
+                    min: Domain::MIN_SCALE,
+                });
             }
         }
         if holes.is_empty() {
@@ -107,23 +119,26 @@ impl PeriodicDomain {
             }
         }
         let tol = Self::tolerance_for(size);
-        let min_l = size[0].min(size[1]);
         for (i, h) in holes.iter_mut().enumerate() {
-            if 2.0 * h.radius + tol >= min_l {
+            if let Some(axis) = (0..2).find(|&a| 2.0 * h.radius + tol >= size[a]) {
                 return Err(DomainError::HoleWiderThanPeriod {
                     hole: i,
+                    axis,
                     diameter: 2.0 * h.radius,
-                    period: min_l,
+                    period: size[axis],
+                    tolerance: tol,
                 });
             }
             h.center = [wrap(h.center[0], size[0]), wrap(h.center[1], size[1])];
         }
         // Overlaps with images: a k-d tree over the 3 x 3 tiling, queried for the canonical
-        // copies (tile (0, 0) is stored first, so tiling index i < h is hole i).
+        // copies (tile (0, 0) is stored first, then the tiles of `shifts`, so tiling index
+        // `k h + j` is hole `j` moved by `shifts[k - 1]`).
         let h = holes.len();
+        let shifts: Vec<(i32, i32)> = tile_offsets(1).filter(|&o| o != (0, 0)).collect();
         let mut tiling = Vec::with_capacity(9 * h);
         tiling.extend_from_slice(&holes);
-        for (a, b) in tile_offsets(1).filter(|&o| o != (0, 0)) {
+        for &(a, b) in &shifts {
             for c in &holes {
                 tiling.push(Circle {
                     center: [
@@ -135,22 +150,44 @@ impl PeriodicDomain {
             }
         }
         let index = HoleIndex::new(&tiling);
-        let mut worst: Option<(usize, usize, f64)> = None;
+        let mut worst: Option<(usize, usize, [i32; 2], f64)> = None;
         for i in 0..h {
-            if let Some((j, gap)) = index.nearest_gap(i) {
+            if let Some((k, gap)) = index.nearest_gap(i) {
                 if gap <= tol {
-                    let j = j % h;
-                    let pair = (i.min(j), i.max(j), gap);
+                    let (j, shift) = match (k / h).checked_sub(1) {
+                        None => (k, [0, 0]),
+                        Some(s) => (k % h, [shifts[s].0, shifts[s].1]),
+                    };
+                    // As `first`, `second`: the image of `second` that meets `first`.
+                    let pair = if i <= j {
+                        (i, j, shift, gap)
+                    } else {
+                        (j, i, [-shift[0], -shift[1]], gap)
+                    };
                     if worst.is_none_or(|w| (pair.0, pair.1) < (w.0, w.1)) {
                         worst = Some(pair);
                     }
                 }
             }
         }
-        if let Some((first, second, gap)) = worst {
+        if let Some((first, second, shift, gap)) = worst {
+            if first == second {
+                // A hole against its own image: it does not fit in the period along the
+                // shift (the diameter test above passed only by rounding of the shifted
+                // centre).
+                let axis = usize::from(shift[0] == 0);
+                return Err(DomainError::HoleWiderThanPeriod {
+                    hole: first,
+                    axis,
+                    diameter: 2.0 * holes[first].radius,
+                    period: size[axis],
+                    tolerance: tol,
+                });
+            }
             return Err(DomainError::HolesOverlap {
                 first,
                 second,
+                shift,
                 gap,
                 tolerance: tol,
             });
@@ -161,9 +198,15 @@ impl PeriodicDomain {
     /// Parse and validate `{"periodic": {"size": [Lx, Ly]}, "holes": [{"center": [x, y],
     /// "radius": r}, ...]}` (unknown fields refused).
     pub fn from_json_str(text: &str) -> Result<Self, DomainError> {
-        let raw: PeriodicJsonIn =
-            serde_json::from_str(text).map_err(|e| DomainError::Json(e.to_string()))?;
-        Self::new(raw.periodic.size, raw.holes)
+        let raw: PeriodicJsonIn = serde_json::from_str(crate::input::without_bom(text))
+            .map_err(|e| DomainError::Json(e.to_string()))?;
+        if raw.holes.count > Domain::MAX_HOLES {
+            return Err(DomainError::TooManyHoles {
+                count: raw.holes.count,
+                max: Domain::MAX_HOLES,
+            });
+        }
+        Self::new(raw.periodic.size, raw.holes.holes)
     }
 
     /// The JSON form read by [`Self::from_json_str`] (canonical, wrapped centres).

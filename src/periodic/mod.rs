@@ -173,7 +173,8 @@ impl Tiling {
         let quantum = 2f64.powi(e as i32 - 50);
         if !(quantum.is_normal() && e.is_finite()) {
             return Err(MeshError::Options(format!(
-                "the period {size:?} is too small or too large to mesh"
+                "the period {} is too small or too large to mesh",
+                crate::numfmt::NumPair(size)
             )));
         }
         let q = |x: f64| (x / quantum).round() * quantum;
@@ -421,12 +422,7 @@ pub fn periodic_layout_with(
     options: &Options,
     sampling: &SamplingOptions,
 ) -> Result<PeriodicLayout, MeshError> {
-    if !(options.collapse_fraction.is_finite() && options.collapse_fraction >= 0.0) {
-        return Err(MeshError::Options(format!(
-            "the collapse fraction must be a number >= 0, not {}",
-            options.collapse_fraction
-        )));
-    }
+    crate::ranges::check_collapse_fraction(options.collapse_fraction)?;
     let gaps = pd.nearest_gaps();
     let opts = sampling.clone();
     let mut last = None;
@@ -1026,8 +1022,9 @@ fn extract(
         let positive = a > 0.0;
         if !positive {
             return Err(MeshError::Internal(format!(
-                "periodic block {b} has a non-positive area {a:e} (a degenerate medial arc \
-                 that was not collapsed)"
+                "periodic block {b} has a non-positive area {} (a degenerate medial arc \
+                 that was not collapsed)",
+                crate::numfmt::Num(a)
             )));
         }
     }
@@ -1285,19 +1282,7 @@ pub fn mesh_periodic_frame(
     pd: &PeriodicDomain,
     options: &Options,
 ) -> Result<PeriodicFrame, MeshError> {
-    if options.cells == 0 {
-        return Err(MeshError::Options(
-            "--cells must be at least 1 (cells along a block side)".into(),
-        ));
-    }
-    if options.cells > crate::grid::MAX_CELLS_PER_SIDE {
-        return Err(MeshError::Grid(
-            crate::grid::GridError::TooManyCellsPerSide {
-                cells: options.cells,
-                limit: crate::grid::MAX_CELLS_PER_SIDE,
-            },
-        ));
-    }
+    crate::ranges::check_ranges(options)?;
     crate::mesher::validate_circle_ids(options, 0, pd.hole_count())?;
     if options.mode == Mode::Exact {
         exact_mode::validate_options(options)?;
