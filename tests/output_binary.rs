@@ -77,6 +77,18 @@ struct Array {
     words: Vec<u64>,
 }
 
+impl Array {
+    /// The array opened by `tag`, of type `ty`, holding `words`.
+    fn of_tag(tag: &str, ty: String, words: Vec<u64>) -> Array {
+        Array {
+            name: attr(tag, "Name").unwrap().to_string(),
+            components: attr(tag, "NumberOfComponents").map(str::to_string),
+            ty,
+            words,
+        }
+    }
+}
+
 /// The value of attribute `key` in the tag `tag`.
 fn attr<'a>(tag: &'a str, key: &str) -> Option<&'a str> {
     let k = format!(" {key}=\"");
@@ -104,12 +116,7 @@ fn read_ascii_vtk(text: &str) -> (Vec<String>, Vec<Array>) {
                 _ => t.parse::<i64>().unwrap() as u64,
             })
             .collect();
-        arrays.push(Array {
-            name: attr(tag, "Name").unwrap().to_string(),
-            components: attr(tag, "NumberOfComponents").map(str::to_string),
-            ty,
-            words,
-        });
+        arrays.push(Array::of_tag(tag, ty, words));
         skeleton.push("DATA".into());
         rest = &rest[close + "</DataArray>".len()..];
     }
@@ -166,12 +173,7 @@ fn read_binary_vtk(bytes: &[u8]) -> (Vec<String>, Vec<Array>) {
                 _ => c[0] as u64,
             })
             .collect();
-        arrays.push(Array {
-            name: attr(tag, "Name").unwrap().to_string(),
-            components: attr(tag, "NumberOfComponents").map(str::to_string),
-            ty,
-            words,
-        });
+        arrays.push(Array::of_tag(tag, ty, words));
         skeleton.push("DATA".into());
         rest = &rest[tag_end + 2..];
     }

@@ -91,7 +91,7 @@ pub(crate) const APPENDED_OPEN: &[u8] = b"  <AppendedData encoding=\"raw\">\n   
 /// The end of the appended-data block and of the file.
 pub(crate) const APPENDED_CLOSE: &[u8] = b"\n  </AppendedData>\n</VTKFile>\n";
 
-/// Append the UInt64 byte count that starts an appended array of `bytes` bytes.
-pub(crate) fn array_header(out: &mut Vec<u8>, bytes: usize) {
-    out.extend_from_slice(&(bytes as u64).to_le_bytes());
+/// The UInt64 byte count that starts an appended array of `bytes` bytes.
+pub(crate) fn array_header(bytes: usize) -> [u8; 8] {
+    (bytes as u64).to_le_bytes()
 }

@@ -158,15 +158,15 @@ pub fn write_vts_encoded<W: Write>(
         writeln!(out, "    </Piece>")?;
         writeln!(out, "  </StructuredGrid>")?;
         out.extend_from_slice(binary::APPENDED_OPEN);
-        binary::array_header(&mut out, 4 * cells);
+        out.extend_from_slice(&binary::array_header(4 * cells));
         for _ in 0..cells {
             out.extend_from_slice(&id.to_le_bytes());
         }
         for k in 0..CELL_ARRAYS.len() {
-            binary::array_header(&mut out, 8 * cells);
+            out.extend_from_slice(&binary::array_header(8 * cells));
             binary::f64s(&mut out, cell_array(&fields, k));
         }
-        binary::array_header(&mut out, 24 * grid.nodes.len());
+        out.extend_from_slice(&binary::array_header(24 * grid.nodes.len()));
         binary::points_xyz(&mut out, &grid.nodes);
         out.extend_from_slice(binary::APPENDED_CLOSE);
         return w.write_all(&out);

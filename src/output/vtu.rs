@@ -114,14 +114,12 @@ fn write_binary<W: Write>(w: &mut W, mesh: &Mesh) -> io::Result<()> {
     }
     head.extend_from_slice(b"      </CellData>\n    </Piece>\n  </UnstructuredGrid>\n");
     head.extend_from_slice(binary::APPENDED_OPEN);
-    binary::array_header(&mut head, 24 * points);
+    head.extend_from_slice(&binary::array_header(24 * points));
     w.write_all(&head)?;
     write_chunked(w, points, 8192, |r, out| {
         binary::points_xyz(out, &nodes.coords[r])
     })?;
-    let mut header = Vec::new();
-    binary::array_header(&mut header, 32 * cells);
-    w.write_all(&header)?;
+    w.write_all(&binary::array_header(32 * cells))?;
     write_chunked(w, mesh.grids.len(), 64, |blocks, out| {
         cell_corners_of(mesh, &nodes, blocks, |c| {
             for v in c {
@@ -130,9 +128,7 @@ fn write_binary<W: Write>(w: &mut W, mesh: &Mesh) -> io::Result<()> {
         })
     })?;
     let chunked = |w: &mut W, size: usize, value: &(dyn Fn(usize, &mut Vec<u8>) + Sync)| {
-        let mut header = Vec::new();
-        binary::array_header(&mut header, size * cells);
-        w.write_all(&header)?;
+        w.write_all(&binary::array_header(size * cells))?;
         write_chunked(w, cells, 1 << 16, |r, out| {
             out.reserve(size * r.len());
             for k in r {
@@ -148,9 +144,7 @@ fn write_binary<W: Write>(w: &mut W, mesh: &Mesh) -> io::Result<()> {
         out.extend_from_slice(&(block_of(&first_cell, k) as i32).to_le_bytes())
     })?;
     for k in 0..super::vtk::CELL_ARRAYS.len() {
-        let mut header = Vec::new();
-        binary::array_header(&mut header, 8 * cells);
-        w.write_all(&header)?;
+        w.write_all(&binary::array_header(8 * cells))?;
         write_chunked(w, fields.len(), 64, |blocks, out| {
             for f in &fields[blocks] {
                 binary::f64s(out, super::vtk::cell_array(f, k));
