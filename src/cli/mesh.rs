@@ -503,6 +503,10 @@ fn report_timings(
         obj.insert("threads".into(), rayon::current_num_threads().into());
         obj.insert("formats".into(), args.format.clone().into());
         obj.insert("binary".into(), args.binary.into());
+        obj.insert(
+            "huge_pages".into(),
+            super::allocator::huge_pages_active().into(),
+        );
     }
     let text = serde_json::to_string_pretty(&value)
         .map_err(|e| Failure::output(format!("cannot encode timings.json: {e}")))?;
