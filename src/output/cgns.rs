@@ -133,7 +133,9 @@ pub fn write_cgns(mesh: &Mesh, path: &Path) -> io::Result<()> {
     let body = write_body(f, mesh, &conn);
     // SAFETY: f is an open CGNS file.
     let closed = check(unsafe { cg_close(f) }, "close");
-    let result = body.and(closed).and_then(|()| std::fs::rename(&tmp, path));
+    let result = body
+        .and(closed)
+        .and_then(|()| super::replace_file(&tmp, path));
     if result.is_err() {
         let _ = std::fs::remove_file(&tmp);
     }

@@ -40,7 +40,7 @@ use std::io::{self, BufWriter};
 use std::path::Path;
 
 /// Write `path` atomically: `body` writes into a buffered temporary file next to `path`,
-/// which is renamed onto `path` only when everything succeeded.
+/// which is renamed onto `path` only when everything succeeded ([`replace_file`]).
 ///
 /// Guarantee: a file under its final name is always complete; a failed or interrupted run
 /// leaves at most a hidden `.NAME.tmp` (removed on a reported error), never a truncated
@@ -67,12 +67,68 @@ where
         body(&mut w)?;
         let file = w.into_inner().map_err(|e| e.into_error())?;
         drop(file);
-        std::fs::rename(&tmp, path)
+        replace_file(&tmp, path)
     })();
     if result.is_err() {
         let _ = std::fs::remove_file(&tmp);
     }
     result
+}
+
+/// Give the file `from` (just written) the name `to`, atomically: at every moment `to` names
+/// the old file or the new one, complete.
+///
+/// A plain `rename` onto an existing file does that, but ext4 (`auto_da_alloc`, its default)
+/// then starts writing the new file's data to the disk inside the call: ~3 ms for the 4 MB
+/// `connectivity.json` of 1e3 bubbles, once per `.vts` block file, on every run into the same
+/// directory (a solver remeshing each time step). On Linux, when `to` is an existing regular
+/// file the two names are exchanged instead (`renameat2` with `RENAME_EXCHANGE`, one atomic
+/// step that starts no write-back) and the old file, now named `from`, is removed. Where the
+/// file system cannot exchange, and for anything that is not an existing regular file, it is
+/// a plain `rename`. Either way no data is forced to the disk ([`write_atomic`] has no
+/// `fsync` either).
+pub fn replace_file(from: &Path, to: &Path) -> io::Result<()> {
+    #[cfg(target_os = "linux")]
+    if std::fs::symlink_metadata(to).is_ok_and(|m| m.file_type().is_file()) {
+        match exchange(from, to) {
+            Ok(()) => return std::fs::remove_file(from),
+            // Not supported here, or `to` went away meanwhile: rename as usual.
+            Err(e)
+                if matches!(
+                    e.raw_os_error(),
+                    Some(libc::EINVAL | libc::ENOSYS | libc::EOPNOTSUPP | libc::ENOENT)
+                ) => {}
+            Err(e) => return Err(e),
+        }
+    }
+    std::fs::rename(from, to)
+}
+
+/// `renameat2(from, to, RENAME_EXCHANGE)`: swap two existing names atomically.
+#[cfg(target_os = "linux")]
+fn exchange(from: &Path, to: &Path) -> io::Result<()> {
+    use std::os::unix::ffi::OsStrExt;
+    let c = |p: &Path| {
+        std::ffi::CString::new(p.as_os_str().as_bytes())
+            .map_err(|_| io::Error::new(io::ErrorKind::InvalidInput, "path with a NUL byte"))
+    };
+    let (a, b) = (c(from)?, c(to)?);
+    // SAFETY: two NUL-terminated paths that outlive the call, relative to the working
+    // directory as `std::fs::rename`'s are; renameat2 reads them and returns a status.
+    let status = unsafe {
+        libc::renameat2(
+            libc::AT_FDCWD,
+            a.as_ptr(),
+            libc::AT_FDCWD,
+            b.as_ptr(),
+            libc::RENAME_EXCHANGE,
+        )
+    };
+    if status == 0 {
+        Ok(())
+    } else {
+        Err(io::Error::last_os_error())
+    }
 }
 
 /// Check that the mesh has one well-formed grid per block, as every writer needs.
@@ -319,7 +375,7 @@ fn publish(staging: &Path, dir: &Path) -> io::Result<()> {
                 made = Some(parent.to_path_buf());
             }
         }
-        std::fs::rename(staging.join(&rel), &target)?;
+        replace_file(&staging.join(&rel), &target)?;
     }
     Ok(())
 }
