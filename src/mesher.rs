@@ -162,7 +162,16 @@ pub enum MeshError {
 /// let mesh = mesh(&domain, &Options::default()).unwrap();
 /// assert_eq!(mesh.layout.blocks.len(), 36); // 6 (h - 1) blocks for h = 7 holes
 /// ```
+///
+/// Called from a thread outside rayon's pool, the work runs on a worker of the pool (the
+/// calling thread waits; [`timings::on_pool_worker`]), which is faster than driving the
+/// parallel stages from outside; the mesh is the same.
 pub fn mesh(domain: &Domain, options: &Options) -> Result<Mesh, MeshError> {
+    timings::on_pool_worker(|| mesh_here(domain, options))
+}
+
+/// [`mesh`] on this thread.
+fn mesh_here(domain: &Domain, options: &Options) -> Result<Mesh, MeshError> {
     crate::ranges::check_ranges(options)?;
     validate_block_cells(options)?;
     let holes = domain.hole_count();

@@ -469,6 +469,60 @@ pub fn span<T>(name: &'static str, f: impl FnOnce() -> T) -> T {
     f()
 }
 
+/// Run `f` on a worker thread of rayon's pool, with this thread's recording (if any) moved
+/// there for the call and back after it, so that the stages `f` enters are recorded as if it
+/// ran here. On a worker thread already, `f` simply runs.
+///
+/// Issue 8: a pipeline driven from a thread outside the pool wakes every worker and puts
+/// itself to sleep at each of its many parallel loops, and on two cores its idle workers
+/// spin beside it; driven from a worker, each loop starts on a thread that does its share
+/// and wakes only the others (1e3 bubbles: ~1 200 context switches per mesh -> ~65, the
+/// `--timings` total 65-69 -> 56-57 ms median). The result does not depend on the thread
+/// (same pool, same thread count).
+pub fn on_pool_worker<T: Send>(f: impl FnOnce() -> T + Send) -> T {
+    if rayon::current_thread_index().is_some() {
+        return f();
+    }
+    let here = ACTIVE.with(|a| a.try_borrow_mut().ok().and_then(|mut a| a.take()));
+    let (out, back) = rayon::scope(move |_| {
+        // The worker may be in the middle of other work (stealing while it waits): its own
+        // recording is set aside and put back, also if `f` panics.
+        struct Restore(Option<Option<Recorder>>);
+        impl Drop for Restore {
+            fn drop(&mut self) {
+                if let Some(saved) = self.0.take() {
+                    ACTIVE.with(|a| {
+                        if let Ok(mut a) = a.try_borrow_mut() {
+                            *a = saved;
+                        }
+                    });
+                }
+            }
+        }
+        let saved = ACTIVE.with(|a| {
+            a.try_borrow_mut()
+                .ok()
+                .map(|mut a| std::mem::replace(&mut *a, here))
+        });
+        let restore = Restore(saved);
+        let out = f();
+        let back = match restore.0 {
+            Some(_) => ACTIVE.with(|a| a.try_borrow_mut().ok().and_then(|mut a| a.take())),
+            None => None,
+        };
+        drop(restore);
+        (out, back)
+    });
+    if back.is_some() {
+        ACTIVE.with(|a| {
+            if let Ok(mut a) = a.try_borrow_mut() {
+                *a = back;
+            }
+        });
+    }
+    out
+}
+
 /// Whether a recording is active on this thread.
 pub fn is_recording() -> bool {
     ACTIVE.with(|a| a.try_borrow().map(|a| a.is_some()).unwrap_or(false))
@@ -477,6 +531,44 @@ pub fn is_recording() -> bool {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Stages entered inside [`on_pool_worker`] run on a pool worker and land in the calling
+    /// thread's recording; the worker keeps no recording afterwards, also after a panic.
+    #[test]
+    fn on_pool_worker_carries_the_recording_there_and_back() {
+        std::thread::spawn(|| {
+            assert!(rayon::current_thread_index().is_none());
+            let r = Recording::start();
+            let before = enter("outer");
+            let on = on_pool_worker(|| {
+                let _s = enter("inside");
+                assert!(is_recording(), "the recording moved to the worker");
+                rayon::current_thread_index()
+            });
+            assert!(on.is_some(), "ran on a pool worker");
+            assert!(is_recording(), "and came back");
+            drop(before);
+            let t = r.finish();
+            let calls = |n: &str| t.calls.iter().find(|(m, _)| m == n).map(|c| c.1);
+            assert_eq!(calls("inside"), Some(1));
+            assert_eq!(calls("outer"), Some(1));
+            // A panic inside: caught by the caller; no worker is left recording.
+            let r = Recording::start();
+            let caught = std::panic::catch_unwind(|| on_pool_worker(|| panic!("inside")));
+            assert!(caught.is_err());
+            assert!(rayon::broadcast(|_| !is_recording()).into_iter().all(|b| b));
+            drop(r);
+            assert!(!is_recording());
+            // On a worker already, it runs in place.
+            let same = rayon::scope(|_| {
+                let here = rayon::current_thread_index();
+                (here, on_pool_worker(rayon::current_thread_index))
+            });
+            assert_eq!(same.0, same.1);
+        })
+        .join()
+        .unwrap();
+    }
 
     #[test]
     fn vm_hwm_is_parsed_in_bytes() {

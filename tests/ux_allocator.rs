@@ -1,9 +1,9 @@
-//! The CLI's malloc tuning (issue 8, `src/cli/allocator.rs`): where the kernel gives
-//! transparent huge pages on request, the tool starts itself again with
+//! The CLI's malloc tuning (issue 8, `src/cli/allocator.rs`): with `--huge-pages`, where the
+//! kernel gives transparent huge pages on request, the tool starts itself again with
 //! `GLIBC_TUNABLES=glibc.malloc.hugetlb=1:...`. These tests check that this changes nothing a
 //! user can see but the speed: the same files byte for byte, the same arguments (odd bytes
-//! included), exit codes, messages and standard input; that `MEDIAL_BLOCKS_HUGE_PAGES=off` and
-//! a user's own `GLIBC_TUNABLES` turn it off; and that `timings.json` says which way it ran.
+//! included), exit codes, messages and standard input; that it is off without the flag and
+//! with a user's own malloc settings; and that `timings.json` says which way it ran.
 
 mod common;
 
@@ -11,7 +11,8 @@ use common::{bin, tree};
 use std::path::Path;
 use std::process::{Output, Stdio};
 
-/// Whether this kernel gives huge pages on request, the only case where the tool restarts.
+/// Whether this kernel gives huge pages on request, the only case where `--huge-pages`
+/// restarts the tool.
 fn kernel_madvise() -> bool {
     cfg!(all(target_os = "linux", target_env = "gnu"))
         && std::fs::read_to_string("/sys/kernel/mm/transparent_hugepage/enabled")
@@ -45,9 +46,9 @@ fn huge_pages_flag(dir: &Path) -> bool {
     v["huge_pages"].as_bool().expect("huge_pages is a boolean")
 }
 
-/// Mesh the lattice example with every format, with `env`; the tree without timings.json and
-/// the `huge_pages` flag.
-fn mesh_all(dir: &Path, env: &[(&str, &str)]) -> (Vec<(String, Vec<u8>)>, bool) {
+/// Mesh the lattice example with every format, with `huge` (`--huge-pages`) or not; the tree
+/// without timings.json and the `huge_pages` flag of timings.json.
+fn mesh_all(dir: &Path, huge: bool) -> (Vec<(String, Vec<u8>)>, bool) {
     let layout = dir.join("lattice.json");
     if !layout.exists() {
         let out = run_with(
@@ -62,20 +63,21 @@ fn mesh_all(dir: &Path, env: &[(&str, &str)]) -> (Vec<(String, Vec<u8>)>, bool) 
         );
         assert!(out.status.success(), "{out:?}");
     }
-    let target = dir.join(format!("out{}", env.len()));
-    let out = run_with(
-        &[
-            os("--quiet"),
-            os("mesh"),
-            layout.as_os_str(),
-            os("-o"),
-            target.as_os_str(),
-            os("--format"),
-            os("all"),
-            os("--timings"),
-        ],
-        env,
-    );
+    let target = dir.join(format!("out{huge}"));
+    let mut args = vec![
+        os("--quiet"),
+        os("mesh"),
+        layout.as_os_str(),
+        os("-o"),
+        target.as_os_str(),
+        os("--format"),
+        os("all"),
+        os("--timings"),
+    ];
+    if huge {
+        args.push(os("--huge-pages"));
+    }
+    let out = run_with(&args, &[]);
     assert!(out.status.success(), "{out:?}");
     assert!(out.stdout.is_empty() && out.stderr.is_empty(), "{out:?}");
     let flag = huge_pages_flag(&target);
@@ -88,14 +90,14 @@ fn mesh_all(dir: &Path, env: &[(&str, &str)]) -> (Vec<(String, Vec<u8>)>, bool) 
 #[test]
 fn huge_pages_change_no_file_and_are_reported() {
     let dir = tempfile::tempdir().unwrap();
-    let (default, on) = mesh_all(dir.path(), &[]);
-    let (off, flag_off) = mesh_all(dir.path(), &[("MEDIAL_BLOCKS_HUGE_PAGES", "off")]);
+    let (default, on) = mesh_all(dir.path(), true);
+    let (off, flag_off) = mesh_all(dir.path(), false);
     assert_eq!(
         on,
         kernel_madvise(),
         "huge pages used exactly when the kernel offers them"
     );
-    assert!(!flag_off, "MEDIAL_BLOCKS_HUGE_PAGES=off keeps normal pages");
+    assert!(!flag_off, "normal pages without --huge-pages");
     assert!(
         default.len() > 5,
         "every format wrote files: {}",
@@ -123,6 +125,7 @@ fn user_malloc_settings_are_left_alone() {
         let out_dir = dir.path().join(env[0].0);
         let out = run_with(
             &[
+                os("--huge-pages"),
                 os("--quiet"),
                 os("mesh"),
                 os("-o"),
@@ -155,6 +158,8 @@ fn restart_keeps_arguments_byte_for_byte() {
             target.as_os_str(),
             os("--format"),
             os("json"),
+            os("--timings"),
+            os("--huge-pages"),
         ],
         &[],
     );
@@ -163,6 +168,7 @@ fn restart_keeps_arguments_byte_for_byte() {
         target.join("report.json").is_file(),
         "written under the odd name"
     );
+    assert_eq!(huge_pages_flag(&target), kernel_madvise(), "and restarted");
 }
 
 /// Exit codes and messages are those of a run with normal pages; standard input reaches
@@ -176,9 +182,11 @@ fn restart_keeps_exit_codes_messages_and_stdin() {
         &["--threads", "0", "mesh"],
     ];
     for args in cases {
-        let args: Vec<&std::ffi::OsStr> = args.iter().map(|a| os(a)).collect();
-        let a = run_with(&args, &[]);
-        let b = run_with(&args, &[("MEDIAL_BLOCKS_HUGE_PAGES", "off")]);
+        let b: Vec<&std::ffi::OsStr> = args.iter().map(|a| os(a)).collect();
+        let a: Vec<&std::ffi::OsStr> = std::iter::once(os("--huge-pages"))
+            .chain(b.iter().copied())
+            .collect();
+        let (a, b) = (run_with(&a, &[]), run_with(&b, &[]));
         assert_eq!(a.status.code(), Some(2), "{args:?}: {a:?}");
         assert_eq!(a.status.code(), b.status.code(), "{args:?}");
         assert_eq!(a.stderr, b.stderr, "{args:?}");
@@ -188,12 +196,12 @@ fn restart_keeps_exit_codes_messages_and_stdin() {
     // Points on standard input, read through its path.
     let points = "0,0\n1,0\n0,1\n1,1\n0.5,0.25\n";
     let mut outs = Vec::new();
-    for env in [&[][..], &[("MEDIAL_BLOCKS_HUGE_PAGES", "off")][..]] {
+    for huge in [true, false] {
         let mut c = bin();
         c.env_remove("GLIBC_TUNABLES")
             .env_remove("MEDIAL_BLOCKS_HUGE_PAGES");
-        for (k, v) in env {
-            c.env(k, v);
+        if huge {
+            c.arg("--huge-pages");
         }
         let mut child = c
             .args(["triangulate", "/dev/stdin"])

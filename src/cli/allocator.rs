@@ -10,24 +10,25 @@
 //!   freed (`trim_threshold`) and grows its heap 64 MB at a time (`top_pad`): measured on 1e4
 //!   and 1e5 bubbles, the system time fell by about a third (1e5: 7.8 -> 4.8 s) at the same
 //!   peak memory. Memory still goes back to the kernel at exit.
-//! - **Transparent huge pages** (`glibc.malloc.hugetlb=1`, where the kernel gives huge pages
-//!   on request, `/sys/kernel/mm/transparent_hugepage/enabled` = `madvise`): malloc asks for
-//!   2 MiB pages for its heaps, one fault instead of 512. The 17 x 17 nodes of every block are
-//!   the bulk of the memory (27 MB at 1e3 bubbles, 2.7 GB at 1e5); with huge pages the grids
-//!   stage at 1e3 fell from ~11 to ~5 ms and the whole run from ~65 to ~50 ms, 1e4 from ~600
-//!   to ~480 ms, at the same peak memory. glibc reads this setting only when a process
-//!   starts, so the tool starts itself again (`exec`, same process id, arguments and
-//!   standard streams; ~1 ms) with it in `GLIBC_TUNABLES`, together with the two settings
-//!   above, and `MEDIAL_BLOCKS_HUGE_PAGES=on` so that it does so once.
+//! - **Transparent huge pages**, with `--huge-pages` (`glibc.malloc.hugetlb=1`, where the
+//!   kernel gives huge pages on request: `/sys/kernel/mm/transparent_hugepage/enabled` =
+//!   `madvise`): malloc asks for 2 MiB pages for its heaps, one fault instead of 512. glibc
+//!   reads this setting only when a process starts, so the tool starts itself again (`exec`:
+//!   same process id, arguments and standard streams; ~1 ms) with it in `GLIBC_TUNABLES`,
+//!   together with the two settings above, and `MEDIAL_BLOCKS_HUGE_PAGES=on` so that it does
+//!   so once. Not the default: on this project's virtual machines, whose free 2 MiB blocks
+//!   go back to the host (virtio-balloon free page reporting), a huge page is often memory
+//!   the host must supply again. Runs back to back gain (1e3 bubbles: `--timings` total ~57
+//!   -> ~47 ms, 1e4 ~530 -> ~400 ms), a run after a pause of a few seconds loses (1e3: ~67 ->
+//!   ~77 ms median), and so does 1e5 (7.9-8.5 -> 9.0-10.6 s). On a machine that keeps its
+//!   memory it may be worth trying.
 //!
-//! `MEDIAL_BLOCKS_HUGE_PAGES=off` keeps the normal pages (only the first setting, through
-//! `mallopt`), for a machine whose memory is so fragmented that the kernel would have to
-//! compact it to find huge pages. A user who set `GLIBC_TUNABLES`, `MALLOC_TRIM_THRESHOLD_` or
-//! `MALLOC_TOP_PAD_` is left alone. Elsewhere than glibc on Linux nothing happens. The mesh and
-//! every file are the same either way (tests/ux_allocator.rs).
+//! A user who set `GLIBC_TUNABLES`, `MALLOC_TRIM_THRESHOLD_` or `MALLOC_TOP_PAD_` is left
+//! alone. Elsewhere than glibc on Linux nothing happens. The mesh and every file are the same
+//! either way (tests/ux_allocator.rs).
 
-/// The environment variable that turns huge pages off (`off`), and that the tool sets to `on`
-/// when it starts itself again with them.
+/// The environment variable the tool sets to `on` when it starts itself again with huge
+/// pages (so that it does so once).
 pub const HUGE_PAGES_VAR: &str = "MEDIAL_BLOCKS_HUGE_PAGES";
 
 /// What the tool puts in `GLIBC_TUNABLES` when it starts itself again: huge pages, and the
@@ -35,16 +36,19 @@ pub const HUGE_PAGES_VAR: &str = "MEDIAL_BLOCKS_HUGE_PAGES";
 pub const TUNABLES: &str =
     "glibc.malloc.hugetlb=1:glibc.malloc.trim_threshold=2147483647:glibc.malloc.top_pad=67108864";
 
-/// Tune malloc for one mesh and an exit: start again with huge pages where that helps
-/// (the call then does not return), else keep freed memory through `mallopt`. Call it first,
-/// before any other thread exists.
-pub fn tune() {
+/// Tune malloc for one mesh and an exit: with `huge_pages`, start again with huge pages
+/// where the kernel gives them (the call then does not return); else keep freed memory
+/// through `mallopt`. Call it before any other thread exists.
+pub fn tune(huge_pages: bool) {
+    #[cfg(not(all(target_os = "linux", target_env = "gnu")))]
+    let _ = huge_pages;
     #[cfg(all(target_os = "linux", target_env = "gnu"))]
     {
         if user_tuned() || huge_pages_active() {
             return;
         }
-        let wanted = std::env::var_os(HUGE_PAGES_VAR).is_none() && kernel_gives_huge_pages();
+        let wanted =
+            huge_pages && std::env::var_os(HUGE_PAGES_VAR).is_none() && kernel_gives_huge_pages();
         if wanted {
             // Only returns on failure (no /proc, exec refused): go on with normal pages.
             let _ = restart_with_tunables();

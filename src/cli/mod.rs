@@ -33,6 +33,12 @@ pub struct Cli {
     /// depend on it.
     #[arg(long, global = true, value_name = "N", allow_negative_numbers = true)]
     threads: Option<usize>,
+    /// Ask the kernel for 2 MiB pages (glibc on Linux, where transparent huge pages are given
+    /// on request; the tool restarts itself once with GLIBC_TUNABLES=glibc.malloc.hugetlb=1).
+    /// Faster for runs back to back; on virtual machines that hand free memory back to their
+    /// host it can be slower. Output does not depend on it.
+    #[arg(long, global = true)]
+    huge_pages: bool,
     #[command(subcommand)]
     command: Command,
 }
@@ -104,17 +110,12 @@ fn set_threads(threads: Option<usize>) -> Result<(), Failure> {
         })
 }
 
-/// Run `command` on a worker of the global pool, with the calling thread asleep until it
-/// returns (issue 8).
-///
-/// Every stage's parallel loop then starts on a worker that takes its share itself and wakes
-/// only the others, instead of waking every worker and putting the main thread to sleep
-/// once per loop, and no idle worker spins for a core beside a third, main thread: on two
-/// cores 1 000 bubbles took 65-70 ms (median, `--timings` total) with ~1 200 context
-/// switches when run from the main thread, 53-56 ms with ~65 from a worker. Output does not
-/// depend on it (the same pool, the same thread count).
+/// Run `command` on a worker of the global pool, the calling thread asleep until it returns
+/// ([`medial_blocks::timings::on_pool_worker`], issue 8): reading, meshing, the report and
+/// the writers all drive their parallel loops from inside the pool. Output does not depend
+/// on it (the same pool, the same thread count).
 fn in_pool<T: Send>(command: impl FnOnce() -> T + Send) -> T {
-    rayon::scope(|_| command())
+    medial_blocks::timings::on_pool_worker(command)
 }
 
 /// A command line clap refuses: help and version as clap prints them, every other error (an
@@ -144,11 +145,12 @@ fn command_line_error(e: clap::Error) -> ExitCode {
 }
 
 pub fn run() -> ExitCode {
-    allocator::tune();
     let cli = match Cli::try_parse() {
         Ok(cli) => cli,
         Err(e) => return command_line_error(e),
     };
+    // Before any other thread exists (clap starts none).
+    allocator::tune(cli.huge_pages);
     let global = Global {
         threads: cli.threads.unwrap_or(0),
         quiet: cli.quiet,

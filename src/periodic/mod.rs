@@ -1278,10 +1278,18 @@ pub struct PeriodicFrame {
 }
 
 /// [`mesh_periodic`] and the medial combinatorics of the mesh made.
+///
+/// Like [`crate::mesher::mesh`], it runs on a worker of rayon's pool when called from outside
+/// the pool ([`timings::on_pool_worker`]).
 pub fn mesh_periodic_frame(
     pd: &PeriodicDomain,
     options: &Options,
 ) -> Result<PeriodicFrame, MeshError> {
+    timings::on_pool_worker(|| periodic_frame_here(pd, options))
+}
+
+/// [`mesh_periodic_frame`] on this thread.
+fn periodic_frame_here(pd: &PeriodicDomain, options: &Options) -> Result<PeriodicFrame, MeshError> {
     crate::ranges::check_ranges(options)?;
     crate::mesher::validate_circle_ids(options, 0, pd.hole_count())?;
     if options.mode == Mode::Exact {
