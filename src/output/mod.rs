@@ -257,8 +257,11 @@ pub fn staging_dir(dir: &Path) -> std::path::PathBuf {
 /// presence of `report.json` marks a complete mesh: when `json` is among the formats an older
 /// `report.json` is removed before the first rename, and a run that fails at any point leaves
 /// no `report.json` (and no staging directory; earlier files may have been replaced).
+///
+/// Called from a thread outside rayon's pool, the writing runs on one of its workers (the
+/// caller waits; [`crate::timings::on_pool_worker`]).
 pub fn write_files(mesh: &Mesh, dir: &Path, formats: &[Format]) -> io::Result<()> {
-    write_files_with_progress(mesh, dir, formats, |_| {})
+    write_files_encoded(mesh, dir, formats, Encoding::Ascii)
 }
 
 /// [`write_files`] with the formats that have a binary form (VTK `.vts` and `.vtu`, Gmsh
@@ -269,7 +272,9 @@ pub fn write_files_encoded(
     formats: &[Format],
     encoding: Encoding,
 ) -> io::Result<()> {
-    write_files_prepared(mesh, dir, formats, encoding, None, None, |_| {})
+    crate::timings::on_pool_worker(|| {
+        write_files_prepared(mesh, dir, formats, encoding, None, None, |_| {})
+    })
 }
 
 /// [`write_files`], calling `progress(format)` before each format is written (for a
