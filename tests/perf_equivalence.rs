@@ -463,15 +463,7 @@ fn one_and_two_threads_agree() {
             ] {
                 let m = medial_blocks::mesh(&domain, &opts).expect("mesh");
                 let r = medial_blocks::output::report::Report::from_mesh(&m);
-                let bits: Vec<u64> = m
-                    .grids
-                    .iter()
-                    .flat_map(|g| {
-                        g.nodes
-                            .iter()
-                            .flat_map(|p| [p[0].to_bits(), p[1].to_bits()])
-                    })
-                    .collect();
+                let bits = common::node_bits(&m);
                 out.push((serde_json::to_string(&r).expect("json"), bits));
             }
             out

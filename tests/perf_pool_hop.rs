@@ -5,24 +5,16 @@
 //! still records the stages that ran on the worker.
 
 use medial_blocks::mesher::mesh_timed;
+mod common;
+
 use medial_blocks::output::report::Report;
 use medial_blocks::periodic::{mesh_periodic, PeriodicDomain};
 use medial_blocks::{layouts, mesh, Circle, Mesh, Options};
 
-/// Every node of every grid, as bits, and the block corners: equal exactly when the meshes
-/// are.
+/// The block corners and every node's bits: equal exactly when the meshes are.
 fn fingerprint(m: &Mesh) -> (Vec<[u32; 4]>, Vec<u64>) {
     let corners = m.layout.blocks.iter().map(|b| b.corners).collect();
-    let bits = m
-        .grids
-        .iter()
-        .flat_map(|g| {
-            g.nodes
-                .iter()
-                .flat_map(|p| [p[0].to_bits(), p[1].to_bits()])
-        })
-        .collect();
-    (corners, bits)
+    (corners, common::node_bits(m))
 }
 
 /// `f` from a plain thread, a global worker, and pools of one and three threads.

@@ -19,6 +19,19 @@ pub fn run(args: &[&str]) -> Output {
         .expect("the medial-blocks binary runs")
 }
 
+/// Every node of every grid of `m` as bits (x then y, block after block): two meshes have
+/// the same nodes exactly when these are equal.
+pub fn node_bits(m: &medial_blocks::Mesh) -> Vec<u64> {
+    m.grids
+        .iter()
+        .flat_map(|g| {
+            g.nodes
+                .iter()
+                .flat_map(|p| [p[0].to_bits(), p[1].to_bits()])
+        })
+        .collect()
+}
+
 /// Every file under `dir` as (path relative to `dir` with `/` separators, bytes), sorted by
 /// path: two trees are byte-identical exactly when their `tree`s are equal.
 pub fn tree(dir: &Path) -> Vec<(String, Vec<u8>)> {
