@@ -2,7 +2,7 @@
 //!
 //! ```text
 //! cargo run --release --example perf_table -- [--max 1e5] [--seed 1] [--block-cells 16]
-//!     [--format json] [--tri-max N] [--warm-max N] [--force] [--no-build]
+//!     [--format json] [--tri-max N] [--warm-max N] [--force] [--no-build] [--huge-pages]
 //! ```
 //!
 //! For n = 1e2, 1e3, 1e4, 1e5 (up to `--max`) it writes `layouts::bubbles(n, seed)` with the
@@ -62,6 +62,8 @@ struct Args {
     warm_max: Option<usize>,
     force: bool,
     build: bool,
+    /// Pass `--huge-pages` to the meshing runs.
+    huge_pages: bool,
 }
 
 fn parse_size(s: &str) -> Result<usize, String> {
@@ -83,6 +85,7 @@ fn parse_args() -> Result<Args, String> {
         warm_max: None,
         force: false,
         build: true,
+        huge_pages: false,
     };
     let mut it = std::env::args().skip(1);
     while let Some(flag) = it.next() {
@@ -100,10 +103,11 @@ fn parse_args() -> Result<Args, String> {
             "--warm-max" => a.warm_max = Some(parse_size(&value()?)?),
             "--force" => a.force = true,
             "--no-build" => a.build = false,
+            "--huge-pages" => a.huge_pages = true,
             "-h" | "--help" => {
                 println!(
                     "perf_table [--max 1e5] [--seed 1] [--block-cells 16] [--format json] \
-                     [--tri-max N] [--warm-max N] [--force] [--no-build]"
+                     [--tri-max N] [--warm-max N] [--force] [--no-build] [--huge-pages]"
                 );
                 std::process::exit(0);
             }
@@ -200,6 +204,7 @@ fn run_size(bin: &Path, dir: &Path, n: usize, a: &Args) -> Result<Row, String> {
         .args(["--timings", "--block-cells"])
         .arg(a.block_cells.to_string())
         .args(["--format", &a.format])
+        .args(a.huge_pages.then_some("--huge-pages"))
         .output()
         .map_err(|e| format!("cannot run {}: {e}", bin.display()))?;
     let wall = start.elapsed().as_secs_f64();
@@ -308,14 +313,14 @@ fn print_cpu_table(rows: &[Row]) {
         }
         let mut cells = vec![r.n.to_string()];
         for (_, keys) in COLUMNS {
-            cells.push(format!("{:.2}", stage_sum(&r.cpu_stages, keys)));
+            cells.push(format!("{:.3}", stage_sum(&r.cpu_stages, keys)));
         }
-        cells.push(format!("{:.2}", writers(&r.cpu_stages)));
+        cells.push(format!("{:.3}", writers(&r.cpu_stages)));
         cells.push(format!(
-            "{:.2}",
+            "{:.3}",
             r.cpu_stages["other"].as_f64().unwrap_or(0.0)
         ));
-        cells.push(r.cpu.map_or("n/a".into(), |c| format!("{c:.2}")));
+        cells.push(r.cpu.map_or("n/a".into(), |c| format!("{c:.3}")));
         cells.push(r.calls["triangulation"].as_u64().unwrap_or(0).to_string());
         println!("| {} |", cells.join(" | "));
     }
@@ -495,10 +500,11 @@ fn main() {
         }
     }
     println!(
-        "Exact mode, `--block-cells {}`, `--format {}`, bubbles seed {}, {} threads; load \
+        "Exact mode, `--block-cells {}`, `--format {}`{}, bubbles seed {}, {} threads; load \
          average {load_before} before, {} after the runs.\n",
         a.block_cells,
         a.format,
+        if a.huge_pages { ", `--huge-pages`" } else { "" },
         a.seed,
         std::thread::available_parallelism().map_or(1, |n| n.get()),
         load_average()
