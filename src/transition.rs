@@ -37,6 +37,7 @@ use crate::grid::{build_grids_forced, tfi, MAX_CELLS_PER_SIDE};
 use crate::layout::{Block, BlockLayout, Curve, Edge, EdgeKind, SideRef};
 use crate::mesh::{BlockGrid, Geometry, Mesh};
 use crate::mesher::{mesh, MeshError, Mode, Options};
+use crate::numfmt::{Num, NumPair};
 use std::cmp::Ordering;
 use std::collections::BTreeMap;
 use std::collections::HashMap;
@@ -61,7 +62,8 @@ fn check_spacing(spacing: f64) -> Result<(), MeshError> {
         Ok(())
     } else {
         Err(MeshError::Options(format!(
-            "--transition: the background spacing must be finite and positive, got {spacing}"
+            "--transition: the background spacing must be finite and positive, got {}",
+            Num(spacing)
         )))
     }
 }
@@ -93,7 +95,8 @@ impl Rect {
         if !(bounds.iter().all(|v| v.is_finite()) && x0 < x1 && y0 < y1) {
             return Err(MeshError::Options(format!(
                 "--transition-rect: expected XMIN,YMIN,XMAX,YMAX with XMIN < XMAX and YMIN < \
-                 YMAX, got {bounds:?}"
+                 YMAX, got {}",
+                bounds.map(|v| Num(v).to_string()).join(",")
             )));
         }
         let f = |x: f64| x / spacing;
@@ -108,9 +111,16 @@ impl Rect {
             .min(hi_y - center[1] - r);
         if room.is_nan() || room < spacing {
             return Err(MeshError::Options(format!(
-                "--transition-rect: the rectangle [{lo_x}, {hi_x}] x [{lo_y}, {hi_y}] must \
-                 enclose the bounding circle (centre {center:?}, radius {r}) with at least one \
-                 background interval ({spacing}) to spare on every side"
+                "--transition-rect: the rectangle [{}, {}] x [{}, {}] must enclose the bounding \
+                 circle (centre {}, radius {}) with at least one background interval ({}) to \
+                 spare on every side",
+                Num(lo_x),
+                Num(hi_x),
+                Num(lo_y),
+                Num(hi_y),
+                NumPair(center),
+                Num(r),
+                Num(spacing)
             )));
         }
         Ok(rect)
@@ -128,8 +138,10 @@ impl Rect {
         let ok = |x: f64| x.is_finite() && x >= 1.0 && x <= lim;
         if !(ok(nx) && ok(ny) && a0.abs() < 1e15 && b0.abs() < 1e15) {
             return Err(MeshError::Options(format!(
-                "--transition: a spacing of {spacing} needs too many background intervals \
-                 around a bounding circle of radius {r}"
+                "--transition: a spacing of {} needs too many background intervals around a \
+                 bounding circle of radius {}",
+                Num(spacing),
+                Num(r)
             )));
         }
         Ok(Rect {
@@ -321,9 +333,10 @@ fn assign_runs(layout: &BlockLayout, domain: &Domain, sq: &Rect) -> Result<Runs,
     let k = chain.len();
     let too_coarse = || {
         MeshError::Options(format!(
-            "--transition: the background spacing {spacing} is too coarse for the {k} bounding \
-             wall edges (each needs at least one interval, edges tied by a conformity class \
-             the same number)"
+            "--transition: the background spacing {} is too coarse for the {k} bounding wall \
+             edges (each needs at least one interval, edges tied by a conformity class the same \
+             number)",
+            Num(spacing)
         ))
     };
     // Continuous perimeter positions, increasing, t[k] = t[0] + total.

@@ -1515,6 +1515,41 @@ fn numbers_in_messages_are_readable() {
             .unwrap_or(0);
         assert!(longest <= 17, "{e}");
     }
+    // The Cartesian transition's messages too (a spacing of 1e-300 printed 300 zeros).
+    use medial_blocks::transition::{mesh_with_transition, mesh_with_transition_rect, Rect};
+    let hex = Domain::hexagon_example();
+    let o = Options::default();
+    let b = hex.bounding();
+    let transition_cases = [
+        (
+            mesh_with_transition(&hex, &o, 1e-300).map(|_| ()),
+            "a spacing of 1e-300 needs too many background intervals",
+        ),
+        (
+            Rect::from_bounds([0.0, 0.0, 1.0, 1.0], 0.25, b.center, b.radius).map(|_| ()),
+            "the rectangle [0, 1] x [0, 1] must enclose the bounding circle (centre (0, 0)",
+        ),
+        (
+            Rect::from_bounds([1e300, 0.0, -1e300, 1.0], 0.25, b.center, b.radius).map(|_| ()),
+            "with XMIN < XMAX and YMIN < YMAX, got 1e300,0,-1e300,1",
+        ),
+        (
+            Rect::from_bounds([-5.0, -5.0, 5.0, 5.0], 2.5e-7, b.center, b.radius)
+                .and_then(|r| mesh_with_transition_rect(&hex, &o, r))
+                .map(|_| ()),
+            "a spacing of 2.5e-7 needs too many background intervals",
+        ),
+    ];
+    for (result, needle) in transition_cases {
+        let e = result.expect_err(needle).to_string();
+        assert!(e.contains(needle), "{e}");
+        let longest = e
+            .split(|ch: char| !ch.is_ascii_digit())
+            .map(str::len)
+            .max()
+            .unwrap_or(0);
+        assert!(longest <= 17, "{e}");
+    }
 }
 
 // 40. Option values outside their ranges (`medial_blocks::ranges`): refused with the flag, the
