@@ -245,3 +245,76 @@ mod cgns_read_back {
         }
     }
 }
+
+/// The stride is the least `s` with `s^2 FULL_GRID_CELLS >= cells` (1 up to the limit), and
+/// it never decreases with the cell count.
+#[test]
+fn svg_grid_line_stride_is_the_least_that_fits() {
+    let full = svg::FULL_GRID_CELLS;
+    assert_eq!(svg::grid_line_stride(0), 1);
+    assert_eq!(svg::grid_line_stride(full), 1);
+    assert_eq!(svg::grid_line_stride(full + 1), 2);
+    assert_eq!(svg::grid_line_stride(4 * full), 2);
+    assert_eq!(svg::grid_line_stride(4 * full + 1), 3);
+    let mut last = 1;
+    let mut rng = SplitMix64(7);
+    let mut sizes: Vec<usize> = (0..2000)
+        .map(|_| (rng.next_u64() % 200_000_000) as usize)
+        .collect();
+    sizes.sort_unstable();
+    for cells in sizes {
+        let s = svg::grid_line_stride(cells);
+        assert!(s >= last, "monotone at {cells}");
+        last = s;
+        if cells > full {
+            assert!(
+                s * s * full >= cells && (s - 1) * (s - 1) * full < cells,
+                "{cells}: {s}"
+            );
+        } else {
+            assert_eq!(s, 1);
+        }
+    }
+}
+
+/// The grid lines of the SVG: every line through every node up to the limit; beyond it every
+/// `s`-th line of each block through every `s`-th node and the line's last node. Counted from
+/// the file: the paths of the grid group and the points of each.
+#[test]
+fn svg_draws_grid_lines_at_the_pictures_resolution() {
+    let hexagon = Domain::hexagon_example();
+    for (block_cells, want_stride) in [(8, 1), (90, 2)] {
+        let m = mesh(
+            &hexagon,
+            &Options {
+                block_cells: Some(block_cells),
+                ..Options::default()
+            },
+        )
+        .unwrap();
+        let cells: usize = m.grids.iter().map(|g| g.cells()).sum();
+        let s = svg::grid_line_stride(cells);
+        assert_eq!(s, want_stride, "{cells} cells");
+        let text = svg::to_string(&m).unwrap();
+        let start = text.find("<g stroke=\"#b0b0b0\"").expect("grid group");
+        let group = &text[start..start + text[start..].find("</g>").unwrap()];
+        let points: Vec<usize> = group
+            .lines()
+            .filter(|l| l.trim_start().starts_with("<path"))
+            .map(|l| l.matches(" L").count() + 1)
+            .collect();
+        let mut want = Vec::new();
+        // Nodes 0, s, 2s, ... below n, then n.
+        let along = |n: usize| n.div_ceil(s) + 1;
+        for g in &m.grids {
+            want.extend((1..g.nj).filter(|j| j % s == 0).map(|_| along(g.ni)));
+            want.extend((1..g.ni).filter(|i| i % s == 0).map(|_| along(g.nj)));
+        }
+        assert_eq!(points.len(), want.len(), "grid paths at stride {s}");
+        assert_eq!(points, want, "points per grid path at stride {s}");
+        if s == 1 {
+            let all: usize = m.grids.iter().map(|g| g.ni - 1 + g.nj - 1).sum();
+            assert_eq!(points.len(), all, "every line below the limit");
+        }
+    }
+}

@@ -4,6 +4,13 @@
 //! block numbers; for a periodic mesh also the period's box `[0, Lx] x [0, Ly]` (dashed
 //! green), with the zig-zag sides drawn as the medial edges they are.
 //!
+//! Grid lines at the picture's resolution: up to [`FULL_GRID_CELLS`] cells every grid line
+//! is drawn through every node; a larger mesh draws every `s`-th line of each block through
+//! every `s`-th node (and each line's last node), `s` = [`grid_line_stride`], so that lines
+//! stay about two pixels apart on average instead of smearing into a solid fill (1 000
+//! bubbles with default options, 3.8 M cells: a 151 MB `mesh.svg` before, `s` = 4 now). Block
+//! outlines, circles, the medial axis and block numbers are always complete.
+//!
 //! The y axis is flipped (mathematical orientation on screen). The picture is
 //! [`WIDTH`] pixels wide with a fixed margin; its height follows the aspect ratio of the
 //! mesh's bounding box. Coordinates are written with 3 decimals, so the file is deterministic.
@@ -23,6 +30,32 @@ use std::path::Path;
 pub const WIDTH: f64 = 1000.0;
 /// Margin around the mesh, pixels.
 pub const MARGIN: f64 = 20.0;
+
+/// Most cells whose grid lines are all drawn: a picture [`WIDTH`] = 1 000 pixels wide then
+/// has cells of at least about 2 x 2 pixels on average.
+pub const FULL_GRID_CELLS: usize = 250_000;
+
+/// Which grid lines a mesh of `cells` cells draws: every `s`-th line of each block through
+/// every `s`-th node, `s = ceil(sqrt(cells / FULL_GRID_CELLS))` (1 up to [`FULL_GRID_CELLS`]).
+pub fn grid_line_stride(cells: usize) -> usize {
+    if cells <= FULL_GRID_CELLS {
+        return 1;
+    }
+    // The least s with s^2 FULL_GRID_CELLS >= cells, in integers.
+    let mut s = ((cells as f64 / FULL_GRID_CELLS as f64).sqrt().ceil() as usize).max(1);
+    while s > 1 && (s - 1) * (s - 1) * FULL_GRID_CELLS >= cells {
+        s -= 1;
+    }
+    while s * s * FULL_GRID_CELLS < cells {
+        s += 1;
+    }
+    s
+}
+
+/// The node indices `0, s, 2s, ...` up to `n`, with `n` itself last.
+fn strided(n: usize, s: usize) -> impl Iterator<Item = usize> {
+    (0..n).step_by(s).chain(std::iter::once(n))
+}
 
 /// Fill colours of the blocks, indexed by [`block_colours`].
 pub const BLOCK_FILLS: [&str; 6] = [
@@ -220,13 +253,14 @@ fn write_to<W: Write>(w: &mut W, mesh: &Mesh) -> io::Result<()> {
         w,
         "  <g stroke=\"#b0b0b0\" stroke-width=\"0.4\" fill=\"none\">"
     )?;
+    let s = grid_line_stride(mesh.grids.iter().map(|g| g.cells()).sum());
     write_chunked(w, mesh.grids.len(), 64, |r, out| {
         for g in &mesh.grids[r] {
-            for j in 1..g.nj {
-                path(out, &v, (0..=g.ni).map(|i| g.node(i, j)));
+            for j in (1..g.nj).filter(|j| j % s == 0) {
+                path(out, &v, strided(g.ni, s).map(|i| g.node(i, j)));
             }
-            for i in 1..g.ni {
-                path(out, &v, (0..=g.nj).map(|j| g.node(i, j)));
+            for i in (1..g.ni).filter(|i| i % s == 0) {
+                path(out, &v, strided(g.nj, s).map(|j| g.node(i, j)));
             }
         }
     })?;
