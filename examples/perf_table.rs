@@ -3,14 +3,16 @@
 //! ```text
 //! cargo run --release --example perf_table -- [--max 1e5] [--seed 1] [--block-cells 16]
 //!     [--format json] [--tri-max N] [--warm-max N] [--force] [--no-build] [--huge-pages]
+//!     [--runs N]
 //! ```
 //!
 //! For n = 1e2, 1e3, 1e4, 1e5 (up to `--max`) it writes `layouts::bubbles(n, seed)` with the
 //! release CLI (`medial-blocks example bubbles`), then meshes it in a child process:
 //! `medial-blocks --quiet mesh IN -o DIR --timings --block-cells 16 --format json` (exact
 //! mode, a 16 x 16 grid per block; `--format json` writes `report.json` and
-//! `connectivity.json`, so the quality figures are computed once). It prints a markdown table
-//! from each run's `timings.json`: per-stage seconds, total, the child's wall time measured
+//! `connectivity.json`, so the quality figures are computed once), `--runs` times per size
+//! (default 5 up to 1e3, 3 at 1e4, 1 above), and keeps the run with the median total. It
+//! prints a markdown table from that run's `timings.json`: per-stage seconds, total, the child's wall time measured
 //! from outside (process start and exit included), its peak resident memory (`VmHWM`), bytes
 //! per particle and the growth exponent `ln(t2 / t1) / ln(n2 / n1)` between sizes.
 //!
@@ -64,6 +66,8 @@ struct Args {
     build: bool,
     /// Pass `--huge-pages` to the meshing runs.
     huge_pages: bool,
+    /// CLI runs per size (`--runs`); `None`: 5 up to 1e3, 3 at 1e4, 1 above.
+    runs: Option<usize>,
 }
 
 fn parse_size(s: &str) -> Result<usize, String> {
@@ -86,6 +90,7 @@ fn parse_args() -> Result<Args, String> {
         force: false,
         build: true,
         huge_pages: false,
+        runs: None,
     };
     let mut it = std::env::args().skip(1);
     while let Some(flag) = it.next() {
@@ -104,10 +109,20 @@ fn parse_args() -> Result<Args, String> {
             "--force" => a.force = true,
             "--no-build" => a.build = false,
             "--huge-pages" => a.huge_pages = true,
+            "--runs" => {
+                a.runs = Some(
+                    value()?
+                        .parse()
+                        .ok()
+                        .filter(|&r: &usize| r >= 1)
+                        .ok_or("--runs needs a count of at least 1")?,
+                )
+            }
             "-h" | "--help" => {
                 println!(
                     "perf_table [--max 1e5] [--seed 1] [--block-cells 16] [--format json] \
-                     [--tri-max N] [--warm-max N] [--force] [--no-build] [--huge-pages]"
+                     [--tri-max N] [--warm-max N] [--force] [--no-build] [--huge-pages] \
+                     [--runs N]"
                 );
                 std::process::exit(0);
             }
@@ -178,6 +193,17 @@ struct Row {
     cpu: Option<f64>,
     wall: f64,
     peak: Option<u64>,
+}
+
+/// `runs` runs of `run`, the one with the median total (the lower middle of an even count):
+/// its stages, CPU time and process time are one run's, not mixed.
+fn median_run(runs: usize, mut run: impl FnMut() -> Result<Row, String>) -> Result<Row, String> {
+    let mut all = (0..runs)
+        .map(|_| run())
+        .collect::<Result<Vec<Row>, String>>()?;
+    all.sort_by(|x, y| x.total.total_cmp(&y.total));
+    let mid = (all.len() - 1) / 2;
+    Ok(all.swap_remove(mid))
 }
 
 fn run_size(bin: &Path, dir: &Path, n: usize, a: &Args) -> Result<Row, String> {
@@ -485,10 +511,15 @@ fn main() {
                 }
             }
         }
-        eprintln!("meshing {n} bubbles ...");
-        match run_size(&bin, dir.path(), n, &a) {
+        let runs = a.runs.unwrap_or(match n {
+            0..=1_000 => 5,
+            1_001..=10_000 => 3,
+            _ => 1,
+        });
+        eprintln!("meshing {n} bubbles ({runs} runs) ...");
+        match median_run(runs, || run_size(&bin, dir.path(), n, &a)) {
             Ok(r) => {
-                eprintln!("  {:.3} s, {} blocks", r.total, r.blocks);
+                eprintln!("  {:.3} s (median), {} blocks", r.total, r.blocks);
                 rows.push(r);
             }
             Err(e) => {
@@ -500,13 +531,16 @@ fn main() {
         }
     }
     println!(
-        "Exact mode, `--block-cells {}`, `--format {}`{}, bubbles seed {}, {} threads; load \
-         average {load_before} before, {} after the runs.\n",
+        "Exact mode, `--block-cells {}`, `--format {}`{}, bubbles seed {}, {} threads; each \
+         row the median of {} runs; load average {load_before} before, {} after the runs.\n",
         a.block_cells,
         a.format,
         if a.huge_pages { ", `--huge-pages`" } else { "" },
         a.seed,
         std::thread::available_parallelism().map_or(1, |n| n.get()),
+        a.runs
+            .map_or("5 (1e2, 1e3), 3 (1e4) and 1 (1e5)".to_string(), |r| r
+                .to_string()),
         load_average()
     );
     print_table(&rows);
