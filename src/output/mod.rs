@@ -84,21 +84,17 @@ where
 /// directory (a solver remeshing each time step). On Linux, when `to` is an existing regular
 /// file the two names are exchanged instead (`renameat2` with `RENAME_EXCHANGE`, one atomic
 /// step that starts no write-back) and the old file, now named `from`, is removed. Where the
-/// file system cannot exchange, and for anything that is not an existing regular file, it is
-/// a plain `rename`. Either way no data is forced to the disk ([`write_atomic`] has no
-/// `fsync` either).
+/// exchange fails (a file system or kernel without it, a filter refusing the call), and for
+/// anything that is not an existing regular file, it is a plain `rename`. Either way no data
+/// is forced to the disk ([`write_atomic`] has no `fsync` either).
 pub fn replace_file(from: &Path, to: &Path) -> io::Result<()> {
     #[cfg(target_os = "linux")]
     if std::fs::symlink_metadata(to).is_ok_and(|m| m.file_type().is_file()) {
-        match exchange(from, to) {
-            Ok(()) => return std::fs::remove_file(from),
-            // Not supported here, or `to` went away meanwhile: rename as usual.
-            Err(e)
-                if matches!(
-                    e.raw_os_error(),
-                    Some(libc::EINVAL | libc::ENOSYS | libc::EOPNOTSUPP | libc::ENOENT)
-                ) => {}
-            Err(e) => return Err(e),
+        // An exchange happens whole or not at all. When it fails (not supported by this
+        // file system or this kernel, `to` gone meanwhile, anything else) the plain rename
+        // below does what it always did, and reports its own error if there is one.
+        if exchange(from, to).is_ok() {
+            return std::fs::remove_file(from);
         }
     }
     std::fs::rename(from, to)
