@@ -819,10 +819,14 @@ pub fn collapsed_blocking_excluding(
 /// collapse selection ([`crate::collapse::Selection`]) nothing reads them (the selection keeps
 /// its per-arc data; the blocks, the exact geometry and the rebuilds read the samples and the
 /// medial graph). At 1e5 particles they are ~70 bytes per sample, a few hundred MB that would
-/// otherwise stay alive under the grids (issue 8).
+/// otherwise stay alive under the grids (issue 8). They are freed on the pool, off this
+/// thread (26 ms at 1e5).
 fn release_triangulation(sampled: &mut crate::sampling::SampledDomain) {
-    sampled.triangulation = Triangulation::default();
-    sampled.kinds = Vec::new();
+    let old = (
+        std::mem::take(&mut sampled.triangulation),
+        std::mem::take(&mut sampled.kinds),
+    );
+    rayon::spawn(move || drop(old));
 }
 
 impl CollapsedBlocking {
