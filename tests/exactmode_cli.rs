@@ -165,3 +165,54 @@ fn report_names_the_geometry_used() {
         }
     }
 }
+
+/// When exact mode (the default) ends with the paper pipeline's geometry on a layout of two
+/// or more holes, the CLI says so on stderr (unless `--quiet`); never otherwise. Checked as
+/// "note printed exactly when report.json says paper in exact mode", over cases that include
+/// a fallback (a first cell height far below the coordinates' precision).
+#[test]
+fn a_fallback_to_paper_geometry_is_noted() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let one_hole = d.join("one.json");
+    std::fs::write(
+        &one_hole,
+        r#"{"bounding": {"center": [0, 0], "radius": 4}, "holes": [{"center": [0.5, 0], "radius": 1}]}"#,
+    )
+    .unwrap();
+    let one = one_hole.to_str().unwrap();
+    let cases: [&[&str]; 5] = [
+        &[],
+        &["--first-height", "1e-20"],
+        &["--mode", "paper"],
+        &["--mode", "paper", "--first-height", "1e-20"],
+        &[one],
+    ];
+    let mut noted = 0;
+    for (k, extra) in cases.iter().enumerate() {
+        let out_dir = d.join(format!("o{k}"));
+        let mut args = vec!["-o", out_dir.to_str().unwrap(), "--format", "json"];
+        args.extend_from_slice(extra);
+        let out = run(&args);
+        assert!(out.status.success(), "{extra:?}: {out:?}");
+        let report = read_json(&out_dir.join("report.json"));
+        let paper = report["geometry"] == "paper";
+        let exact_mode = !extra.contains(&"paper");
+        let holes = report["holes"].as_u64().unwrap();
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        let note = stderr.contains("note: exact mode fell back to the paper pipeline's geometry");
+        assert_eq!(
+            note,
+            exact_mode && paper && holes >= 2,
+            "{extra:?}: geometry {}, stderr {stderr}",
+            report["geometry"]
+        );
+        noted += usize::from(note);
+        // --quiet prints nothing, the note included.
+        let mut quiet = vec!["--quiet"];
+        quiet.extend_from_slice(&args);
+        let q = run(&quiet);
+        assert!(q.status.success() && q.stderr.is_empty() && q.stdout.is_empty(), "{q:?}");
+    }
+    assert!(noted > 0, "some case fell back, so the note was seen");
+}

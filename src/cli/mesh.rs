@@ -450,6 +450,22 @@ fn fig(x: Option<f64>) -> String {
     }
 }
 
+/// The note on stderr when exact mode (the default) fell back to the paper pipeline's
+/// geometry for a layout with two or more holes (`"geometry": "paper"` in report.json), which
+/// would otherwise go unnoticed: `None` for a mesh of the geometry asked for, and for the disk
+/// and annulus templates (paper geometry by design).
+pub fn fallback_note(options: &Options, mesh: &medial_blocks::Mesh) -> Option<String> {
+    (options.mode == Mode::Exact
+        && mesh.geometry == medial_blocks::mesh::Geometry::Paper
+        && mesh.holes >= 2)
+        .then(|| {
+            "note: exact mode fell back to the paper pipeline's geometry for this layout \
+             (\"geometry\": \"paper\" in report.json): the exact construction disagreed with \
+             the sampled blocking, or could not be built with these options"
+                .to_string()
+        })
+}
+
 /// The short summary printed after meshing.
 pub fn summary(r: &report::Report) -> String {
     let mut s = format!(
@@ -575,6 +591,11 @@ pub fn run(args: Args, global: Global) -> Result<(), Failure> {
             _ => Failure::input(e.to_string()),
         }
     })?;
+    if !global.quiet {
+        if let Some(note) = fallback_note(&options, &mesh) {
+            bar.suspend(|| eprintln!("{note}"));
+        }
+    }
     // The report (quality figures) and the block connectivity once, for report.json,
     // connectivity.json and the summary.
     let want_report = !global.quiet || formats.contains(&Format::Json);
