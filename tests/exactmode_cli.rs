@@ -212,7 +212,10 @@ fn a_fallback_to_paper_geometry_is_noted() {
         let mut quiet = vec!["--quiet"];
         quiet.extend_from_slice(&args);
         let q = run(&quiet);
-        assert!(q.status.success() && q.stderr.is_empty() && q.stdout.is_empty(), "{q:?}");
+        assert!(
+            q.status.success() && q.stderr.is_empty() && q.stdout.is_empty(),
+            "{q:?}"
+        );
     }
     assert!(noted > 0, "some case fell back, so the note was seen");
 }
