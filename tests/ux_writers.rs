@@ -316,5 +316,45 @@ fn svg_draws_grid_lines_at_the_pictures_resolution() {
             let all: usize = m.grids.iter().map(|g| g.ni - 1 + g.nj - 1).sum();
             assert_eq!(points.len(), all, "every line below the limit");
         }
+        // Block fills: every s-th node of each side but its last; one path per block.
+        let group_points = |head: &str| -> Vec<usize> {
+            let start = text.find(head).unwrap_or_else(|| panic!("no {head}"));
+            let group = &text[start..start + text[start..].find("</g>").unwrap()];
+            group
+                .lines()
+                .filter(|l| l.trim_start().starts_with("<path"))
+                .map(|l| l.matches(" L").count() + 1)
+                .collect()
+        };
+        let fills: Vec<usize> = m
+            .grids
+            .iter()
+            .map(|g| 2 * g.ni.div_ceil(s) + 2 * g.nj.div_ceil(s))
+            .collect();
+        assert_eq!(
+            group_points("<g stroke=\"none\">"),
+            fills,
+            "fills at stride {s}"
+        );
+        // Outlines and medial edges: each layout edge once, every s-th node and its ends.
+        let mut drawn = vec![false; m.layout.edges.len()];
+        let mut want_edges = Vec::new();
+        for (b, block) in m.layout.blocks.iter().enumerate() {
+            for (k, side) in block.sides.iter().enumerate() {
+                let e = side.edge as usize;
+                if !drawn[e] {
+                    drawn[e] = true;
+                    want_edges.push(along(m.grids[b].side(k).len() - 1));
+                }
+            }
+        }
+        let mut got_edges = group_points("<g stroke=\"#303030\"");
+        got_edges.extend(group_points("<g stroke=\"#d62728\""));
+        got_edges.sort_unstable();
+        want_edges.sort_unstable();
+        assert_eq!(
+            got_edges, want_edges,
+            "outlines and medial edges at stride {s}"
+        );
     }
 }
