@@ -1500,6 +1500,12 @@ fn numbers_in_messages_are_readable() {
         s.mesh("d.json", text, &[], 2, &[needle]);
     }
     // No message of a domain with extreme numbers has a run of more than 17 digits.
+    let longest_digit_run = |e: &str| {
+        e.split(|ch: char| !ch.is_ascii_digit())
+            .map(str::len)
+            .max()
+            .unwrap_or(0)
+    };
     for text in [
         json_domain("{\"center\": [1e99, -1e99], \"radius\": 1e-300}", &[]),
         "{\"periodic\":{\"size\":[1e300,1e-300]},\"holes\":[]}".to_string(),
@@ -1508,12 +1514,7 @@ fn numbers_in_messages_are_readable() {
         let e = medial_blocks::AnyDomain::from_json_str(&text)
             .unwrap_err()
             .to_string();
-        let longest = e
-            .split(|ch: char| !ch.is_ascii_digit())
-            .map(str::len)
-            .max()
-            .unwrap_or(0);
-        assert!(longest <= 17, "{e}");
+        assert!(longest_digit_run(&e) <= 17, "{e}");
     }
     // The Cartesian transition's messages too (a spacing of 1e-300 printed 300 zeros).
     use medial_blocks::transition::{mesh_with_transition, mesh_with_transition_rect, Rect};
@@ -1543,12 +1544,7 @@ fn numbers_in_messages_are_readable() {
     for (result, needle) in transition_cases {
         let e = result.expect_err(needle).to_string();
         assert!(e.contains(needle), "{e}");
-        let longest = e
-            .split(|ch: char| !ch.is_ascii_digit())
-            .map(str::len)
-            .max()
-            .unwrap_or(0);
-        assert!(longest <= 17, "{e}");
+        assert!(longest_digit_run(&e) <= 17, "{e}");
     }
 }
 

@@ -19,14 +19,20 @@ fn kernel_madvise() -> bool {
             .is_ok_and(|s| s.contains("[madvise]"))
 }
 
-/// Run the CLI with `env` added (and the tuning variables of the test's own environment
-/// removed, so the default case is the default).
-fn run_with(args: &[&std::ffi::OsStr], env: &[(&str, &str)]) -> Output {
+/// The binary without the malloc tuning variables of the test's own environment.
+fn untuned_bin() -> std::process::Command {
     let mut c = bin();
     c.env_remove("GLIBC_TUNABLES")
         .env_remove("MEDIAL_BLOCKS_HUGE_PAGES")
         .env_remove("MALLOC_TRIM_THRESHOLD_")
         .env_remove("MALLOC_TOP_PAD_");
+    c
+}
+
+/// Run the CLI with `env` added (and the tuning variables of the test's own environment
+/// removed, so the default case is the default).
+fn run_with(args: &[&std::ffi::OsStr], env: &[(&str, &str)]) -> Output {
+    let mut c = untuned_bin();
     for (k, v) in env {
         c.env(k, v);
     }
@@ -197,9 +203,7 @@ fn restart_keeps_exit_codes_messages_and_stdin() {
     let points = "0,0\n1,0\n0,1\n1,1\n0.5,0.25\n";
     let mut outs = Vec::new();
     for huge in [true, false] {
-        let mut c = bin();
-        c.env_remove("GLIBC_TUNABLES")
-            .env_remove("MEDIAL_BLOCKS_HUGE_PAGES");
+        let mut c = untuned_bin();
         if huge {
             c.arg("--huge-pages");
         }

@@ -296,13 +296,17 @@ fn svg_draws_grid_lines_at_the_pictures_resolution() {
         let s = svg::grid_line_stride(cells);
         assert_eq!(s, want_stride, "{cells} cells");
         let text = svg::to_string(&m).unwrap();
-        let start = text.find("<g stroke=\"#b0b0b0\"").expect("grid group");
-        let group = &text[start..start + text[start..].find("</g>").unwrap()];
-        let points: Vec<usize> = group
-            .lines()
-            .filter(|l| l.trim_start().starts_with("<path"))
-            .map(|l| l.matches(" L").count() + 1)
-            .collect();
+        // The points of each path in the group whose opening tag starts with `head`.
+        let group_points = |head: &str| -> Vec<usize> {
+            let start = text.find(head).unwrap_or_else(|| panic!("no {head}"));
+            let group = &text[start..start + text[start..].find("</g>").unwrap()];
+            group
+                .lines()
+                .filter(|l| l.trim_start().starts_with("<path"))
+                .map(|l| l.matches(" L").count() + 1)
+                .collect()
+        };
+        let points = group_points("<g stroke=\"#b0b0b0\"");
         let mut want = Vec::new();
         // Nodes 0, s, 2s, ... below n, then n.
         let along = |n: usize| n.div_ceil(s) + 1;
@@ -317,15 +321,6 @@ fn svg_draws_grid_lines_at_the_pictures_resolution() {
             assert_eq!(points.len(), all, "every line below the limit");
         }
         // Block fills: every s-th node of each side but its last; one path per block.
-        let group_points = |head: &str| -> Vec<usize> {
-            let start = text.find(head).unwrap_or_else(|| panic!("no {head}"));
-            let group = &text[start..start + text[start..].find("</g>").unwrap()];
-            group
-                .lines()
-                .filter(|l| l.trim_start().starts_with("<path"))
-                .map(|l| l.matches(" L").count() + 1)
-                .collect()
-        };
         let fills: Vec<usize> = m
             .grids
             .iter()

@@ -64,12 +64,11 @@ pub fn huge_pages_active() -> bool {
         && std::env::var_os("GLIBC_TUNABLES").is_some_and(|v| v == TUNABLES)
 }
 
-/// The user tuned glibc's malloc through its own environment variables.
+/// The user tuned glibc's malloc through its own environment variables (a `GLIBC_TUNABLES`
+/// that is not this tool's restart).
 #[cfg(all(target_os = "linux", target_env = "gnu"))]
 fn user_tuned() -> bool {
-    let ours = std::env::var_os(HUGE_PAGES_VAR).is_some_and(|v| v == "on");
-    let tunables = std::env::var_os("GLIBC_TUNABLES").is_some_and(|v| !ours || v != TUNABLES);
-    tunables
+    (std::env::var_os("GLIBC_TUNABLES").is_some() && !huge_pages_active())
         || ["MALLOC_TRIM_THRESHOLD_", "MALLOC_TOP_PAD_"]
             .iter()
             .any(|v| std::env::var_os(v).is_some())

@@ -454,16 +454,15 @@ fn fig(x: Option<f64>) -> String {
 /// geometry for a layout with two or more holes (`"geometry": "paper"` in report.json), which
 /// would otherwise go unnoticed: `None` for a mesh of the geometry asked for, and for the disk
 /// and annulus templates (paper geometry by design).
-pub fn fallback_note(options: &Options, mesh: &medial_blocks::Mesh) -> Option<String> {
+pub fn fallback_note(options: &Options, mesh: &medial_blocks::Mesh) -> Option<&'static str> {
     (options.mode == Mode::Exact
         && mesh.geometry == medial_blocks::mesh::Geometry::Paper
         && mesh.holes >= 2)
-        .then(|| {
+        .then_some(
             "note: exact mode fell back to the paper pipeline's geometry for this layout \
              (\"geometry\": \"paper\" in report.json): the exact construction disagreed with \
-             the sampled blocking, or could not be built with these options"
-                .to_string()
-        })
+             the sampled blocking, or could not be built with these options",
+        )
 }
 
 /// The short summary printed after meshing.

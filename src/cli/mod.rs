@@ -86,7 +86,7 @@ impl Failure {
     }
 }
 
-/// Stack of each worker thread: the command runs on one of them ([`in_pool`]), so it gets the
+/// Stack of each worker thread: the command runs on one of them (`run`), so it gets the
 /// 8 MiB a main thread has, not the 2 MiB of a spawned thread (address space only: pages are
 /// touched as the stack grows).
 const WORKER_STACK_BYTES: usize = 8 << 20;
@@ -108,14 +108,6 @@ fn set_threads(threads: Option<usize>) -> Result<(), Failure> {
             let n = threads.map_or_else(|| "the".to_string(), |n| n.to_string());
             Failure::output(format!("cannot start {n} worker threads: {e}"))
         })
-}
-
-/// Run `command` on a worker of the global pool, the calling thread asleep until it returns
-/// ([`medial_blocks::timings::on_pool_worker`], issue 8): reading, meshing, the report and
-/// the writers all drive their parallel loops from inside the pool. Output does not depend
-/// on it (the same pool, the same thread count).
-fn in_pool<T: Send>(command: impl FnOnce() -> T + Send) -> T {
-    medial_blocks::timings::on_pool_worker(command)
 }
 
 /// A command line clap refuses: help and version as clap prints them, every other error (an
@@ -155,8 +147,11 @@ pub fn run() -> ExitCode {
         threads: cli.threads.unwrap_or(0),
         quiet: cli.quiet,
     };
+    // The command runs on a worker of the global pool, this thread asleep until it returns
+    // (issue 8): reading, meshing, the report and the writers all drive their parallel
+    // loops from inside the pool. Output does not depend on it.
     let result = set_threads(cli.threads).and_then(|()| {
-        in_pool(move || match cli.command {
+        medial_blocks::timings::on_pool_worker(move || match cli.command {
             Command::Triangulate(args) => triangulate::run(args),
             Command::Mesh(args) => mesh::run(*args, global),
             Command::Example(args) => example::run(args, global),

@@ -64,23 +64,26 @@ impl Report {
     /// Counts from the mesh, quality from [`crate::quality::measure`] and
     /// [`crate::quality::quality_metrics`] over its grids (one pass,
     /// [`crate::quality::measure_all`]).
+    ///
+    /// Called from outside rayon's pool, the work runs on one of its workers
+    /// ([`crate::timings::on_pool_worker`], issue 8: fewer wake-ups).
     pub fn from_mesh(mesh: &Mesh) -> Report {
         let _stage = crate::timings::enter("quality");
-        let conn = connectivity(&mesh.layout, &mesh.grids).ok();
-        Report::build(mesh, conn.as_deref())
+        crate::timings::on_pool_worker(|| {
+            let conn = connectivity(&mesh.layout, &mesh.grids).ok();
+            Report::build(mesh, conn.as_deref())
+        })
     }
 
     /// [`Report::from_mesh`] with the block connectivity already computed (`conn` must be
     /// `connectivity(&mesh.layout, &mesh.grids).ok()`), for a caller that also writes it.
     pub fn from_mesh_with(mesh: &Mesh, conn: Option<&[BlockConnectivity]>) -> Report {
         let _stage = crate::timings::enter("quality");
-        Report::build(mesh, conn)
+        crate::timings::on_pool_worker(|| Report::build(mesh, conn))
     }
 
     fn build(mesh: &Mesh, conn: Option<&[BlockConnectivity]>) -> Report {
-        // From outside rayon's pool, on one of its workers (issue 8: fewer wake-ups).
-        let (q, quality) =
-            crate::timings::on_pool_worker(|| measure_all_with(&mesh.layout, &mesh.grids, conn));
+        let (q, quality) = measure_all_with(&mesh.layout, &mesh.grids, conn);
         Report {
             holes: mesh.holes,
             blocks: mesh.layout.blocks.len(),

@@ -39,23 +39,24 @@ pub const FULL_GRID_CELLS: usize = 250_000;
 /// Which grid lines a mesh of `cells` cells draws: every `s`-th line of each block through
 /// every `s`-th node, `s = ceil(sqrt(cells / FULL_GRID_CELLS))` (1 up to [`FULL_GRID_CELLS`]).
 pub fn grid_line_stride(cells: usize) -> usize {
-    if cells <= FULL_GRID_CELLS {
-        return 1;
+    // The least s with s^2 >= ceil(cells / FULL_GRID_CELLS) (s^2 is an integer), at least 1.
+    let q = cells.div_ceil(FULL_GRID_CELLS).max(1);
+    let s = q.isqrt();
+    if s * s < q {
+        s + 1
+    } else {
+        s
     }
-    // The least s with s^2 FULL_GRID_CELLS >= cells, in integers.
-    let mut s = ((cells as f64 / FULL_GRID_CELLS as f64).sqrt().ceil() as usize).max(1);
-    while s > 1 && (s - 1) * (s - 1) * FULL_GRID_CELLS >= cells {
-        s -= 1;
-    }
-    while s * s * FULL_GRID_CELLS < cells {
-        s += 1;
-    }
-    s
 }
 
 /// The node indices `0, s, 2s, ...` up to `n`, with `n` itself last.
 fn strided(n: usize, s: usize) -> impl Iterator<Item = usize> {
     (0..n).step_by(s).chain(std::iter::once(n))
+}
+
+/// Every `s`-th node of a block side and its last one ([`strided`]).
+fn thinned(nodes: &[Point], s: usize) -> impl Iterator<Item = Point> + '_ {
+    strided(nodes.len().saturating_sub(1), s).filter_map(|i| nodes.get(i).copied())
 }
 
 /// Fill colours of the blocks, indexed by [`block_colours`].
@@ -229,15 +230,15 @@ fn write_to<W: Write>(w: &mut W, mesh: &Mesh) -> io::Result<()> {
         "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"{WIDTH:.0}\" height=\"{h:.3}\" viewBox=\"0 0 {WIDTH:.0} {h:.3}\">",
         h = v.height
     )?;
+    let cells: usize = mesh.grids.iter().map(|g| g.cells()).sum();
     writeln!(
         w,
-        "  <title>medial-blocks: {} holes, {} blocks, {} cells</title>",
+        "  <title>medial-blocks: {} holes, {} blocks, {cells} cells</title>",
         mesh.holes,
         mesh.layout.blocks.len(),
-        mesh.grids.iter().map(|g| g.cells()).sum::<usize>()
     )?;
     writeln!(w, "  <rect width=\"100%\" height=\"100%\" fill=\"white\"/>")?;
-    let s = grid_line_stride(mesh.grids.iter().map(|g| g.cells()).sum());
+    let s = grid_line_stride(cells);
     write_block_fills(w, mesh, &v, s)?;
     writeln!(w, "  <g stroke=\"black\" stroke-width=\"1.5\">")?;
     for (&id, &(c, r)) in &circles {
@@ -295,11 +296,7 @@ fn write_to<W: Write>(w: &mut W, mesh: &Mesh) -> io::Result<()> {
     )?;
     write_chunked(w, outlines.len(), 256, |r, out| {
         for nodes in &outlines[r] {
-            path(
-                out,
-                &v,
-                strided(nodes.len().saturating_sub(1), s).filter_map(|i| nodes.get(i).copied()),
-            );
+            path(out, &v, thinned(nodes, s));
         }
     })?;
     writeln!(w, "  </g>")?;
@@ -309,11 +306,7 @@ fn write_to<W: Write>(w: &mut W, mesh: &Mesh) -> io::Result<()> {
     )?;
     write_chunked(w, medial.len(), 256, |r, out| {
         for nodes in &medial[r] {
-            path(
-                out,
-                &v,
-                strided(nodes.len().saturating_sub(1), s).filter_map(|i| nodes.get(i).copied()),
-            );
+            path(out, &v, thinned(nodes, s));
         }
     })?;
     writeln!(w, "  </g>")?;
