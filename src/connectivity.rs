@@ -306,18 +306,6 @@ fn block_connectivity(
 /// the pass), the hint lets the misses of several blocks overlap.
 const PREFETCH_BLOCKS: usize = 8;
 
-/// Ask for the cache line at `p` (a hint: never faults, changes no result).
-#[inline(always)]
-fn prefetch<T>(p: *const T) {
-    #[cfg(target_arch = "x86_64")]
-    // SAFETY: a prefetch never faults, whatever the address.
-    unsafe {
-        std::arch::x86_64::_mm_prefetch::<{ std::arch::x86_64::_MM_HINT_T0 }>(p.cast())
-    };
-    #[cfg(not(target_arch = "x86_64"))]
-    let _ = p;
-}
-
 /// The block sides using each edge, in block then side order: how many, and the first two
 /// (all a valid layout has). Two flat arrays instead of one small `Vec` per edge (issue 8:
 /// 1.2 M edges at 1e5 particles); [`EdgeUsers::of`] is the list the per-edge vectors held,
@@ -377,9 +365,9 @@ impl EdgeUsers {
     fn prefetch(&self, layout: &BlockLayout, block: &crate::layout::Block) {
         for side in &block.sides {
             let e = side.edge as usize;
-            prefetch(layout.edges.as_ptr().wrapping_add(e));
-            prefetch(self.count.as_ptr().wrapping_add(e));
-            prefetch(self.first.as_ptr().wrapping_add(e));
+            crate::prefetch::read(layout.edges.as_ptr().wrapping_add(e));
+            crate::prefetch::read(self.count.as_ptr().wrapping_add(e));
+            crate::prefetch::read(self.first.as_ptr().wrapping_add(e));
         }
     }
 

@@ -77,6 +77,7 @@ pub mod numbering;
 pub mod numfmt;
 pub mod output;
 pub mod periodic;
+mod prefetch;
 pub mod quality;
 pub mod ranges;
 pub mod refine;

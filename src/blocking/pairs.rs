@@ -100,6 +100,9 @@ fn taken_over(
     (k != u32::MAX).then(|| take_pair_curves(old, k as usize, arc.polyline.len(), arc.circles))?
 }
 
+/// How far ahead (in arcs) [`Assembly::add`] prefetches.
+const PREFETCH_ARCS: usize = 16;
+
 /// Arc count from which [`blocks_reusing`] goes in waves.
 const PARALLEL_FROM: usize = 4 * WAVE;
 
@@ -324,11 +327,47 @@ impl<'a> Assembly<'a> {
         start: usize,
         curves: &mut Vec<Result<[Curve; 3], MeshError>>,
     ) -> Result<(), MeshError> {
+        let medial = self.medial;
         for (i, c) in curves.drain(..).enumerate() {
-            let medial = self.medial;
+            self.prefetch_ahead(start + i);
             self.add_pair(&medial.arcs[start + i], c?);
         }
         Ok(())
+    }
+
+    /// Prefetches for the arcs ahead of arc `a` in numbering order (issue 8: the slots of
+    /// the chain ends are random accesses into an array of one entry per sample, 13 MB at
+    /// 1e5 particles, and each chain is its own allocation): the chains' ends of arc
+    /// `a + 2 PREFETCH_ARCS`, the slots and positions of arc `a + PREFETCH_ARCS`'s chain
+    /// ends, and the spoke list heads of the corners of arc `a + PREFETCH_ARCS / 2`. Hints only: nothing
+    /// read here changes what is numbered.
+    #[inline(always)]
+    fn prefetch_ahead(&self, a: usize) {
+        let arcs = &self.medial.arcs;
+        if let Some(far) = arcs.get(a + 2 * PREFETCH_ARCS) {
+            for c in [&far.c1, &far.c2] {
+                crate::prefetch::read(c.as_ptr());
+                crate::prefetch::read(c.as_ptr().wrapping_add(c.len().saturating_sub(1)));
+            }
+        }
+        fn ends(arc: &MedialArc) -> [Option<&u32>; 4] {
+            [arc.c1.first(), arc.c1.last(), arc.c2.first(), arc.c2.last()]
+        }
+        if let Some(near) = arcs.get(a + PREFETCH_ARCS) {
+            for s in ends(near).into_iter().flatten() {
+                crate::prefetch::read(self.slots.as_ptr().wrapping_add(*s as usize));
+                crate::prefetch::read(self.samples.points.as_ptr().wrapping_add(*s as usize));
+            }
+        }
+        if let Some(next) = arcs.get(a + PREFETCH_ARCS / 2) {
+            let nv = self.medial.vertices.len();
+            for s in ends(next).into_iter().flatten() {
+                let slot = self.slots.get(*s as usize).copied().unwrap_or(0) as usize;
+                if slot > nv {
+                    crate::prefetch::read(self.spoke_heads.as_ptr().wrapping_add(slot - 1 - nv));
+                }
+            }
+        }
     }
 
     /// The two blocks of `arc` (checked by [`arc_curves`]), with its curves.

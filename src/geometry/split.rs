@@ -163,9 +163,166 @@ fn he(t: u32, k: usize) -> u32 {
 
 /// The full triangulation from the two halves: certified triangles kept, the rest from the
 /// seam `DT(S)`, see the module doc.
+///
+/// Issue 8: the seam side (its set, `DT(S)`, the barriers and the region) and the copy of the
+/// certified triangles of each half (nearly every triangle: 150 ms on one thread at 1e5
+/// particles) run side by side, each half into its own range of the arrays, which are
+/// allocated once at their final size: a triangulation of `V` distinct points with the
+/// vertex at infinity has `2 V - 2` triangles (Euler), checked at the end. The arrays and
+/// numbering are those of copying one triangle after the other: certified left triangles,
+/// certified right ones, then the seam's.
 fn stitch(pts: &[Point], l: &Half, r: &Half) -> Result<Parts, Broken> {
     let n = pts.len() as u32;
     let halves = [l, r];
+    // Duplicates have equal abscissas: each pair lies in one half (the seam has none).
+    let distinct = pts.len() - l.dups.len() - r.dups.len();
+    let total = (2 * distinct).saturating_sub(2);
+    // New ids: certified left, certified right, then the seam's triangles inside the region.
+    let left_kept = l.certified.iter().filter(|&&c| c).count();
+    let (new_left, new_right) = rayon::join(
+        || number(&l.certified, &mut 0),
+        || number(&r.certified, &mut (left_kept as u32)),
+    );
+    let new_id = [new_left, new_right];
+    let kept = left_kept + r.certified.iter().filter(|&&c| c).count();
+    if kept > total {
+        return Err(Broken(format!(
+            "{kept} certified triangles, more than the {total} of {distinct} points"
+        )));
+    }
+    // Zeroed memory (no fill): every entry of the halves' ranges is written by its half's
+    // thread, the seam's range below.
+    let mut tv = vec![[0u32; 3]; total];
+    let mut adj = vec![[0u32; 3]; total];
+    let seam = {
+        let (tv_l, tv_r) = tv[..kept].split_at_mut(left_kept);
+        let (adj_l, adj_r) = adj[..kept].split_at_mut(left_kept);
+        let (seam, ((), ())) = rayon::join(
+            || seam_side(pts, &halves, &new_id),
+            || {
+                rayon::join(
+                    || copy_certified(n, l, &new_id[0], 0, tv_l, adj_l),
+                    || copy_certified(n, r, &new_id[1], left_kept as u32, tv_r, adj_r),
+                )
+            },
+        );
+        seam?
+    };
+    let Seam {
+        ids: seam_ids,
+        parts: seam,
+        across,
+        inside,
+    } = seam;
+    let mut count = kept as u32;
+    let seam_new = number(&inside, &mut count);
+    if count as usize != total {
+        return Err(Broken(format!(
+            "stitched triangulation has {count} triangles, not the {total} of {distinct} points"
+        )));
+    }
+    let seam_inf = seam_ids.len() as u32;
+    let gs = |x: u32| {
+        if x == seam_inf {
+            n
+        } else {
+            seam_ids[x as usize]
+        }
+    };
+
+    // The seam's triangles inside the region, after the halves'.
+    for (t, v) in seam.tv.iter().enumerate() {
+        if !inside[t] {
+            continue;
+        }
+        let me = seam_new[t];
+        tv[me as usize] = v.map(gs);
+        let mut links = [u32::MAX; 3];
+        for (k, link) in links.iter_mut().enumerate() {
+            let b = across[3 * t + k];
+            if b != u32::MAX {
+                *link = b;
+                // The barrier's half-edge, in a half's range.
+                adj.as_flattened_mut()[b as usize] = he(me, k);
+            } else {
+                let o = seam.adj[t][k];
+                let m = seam_new[(o / 3) as usize];
+                if m == u32::MAX {
+                    return Err(Broken("seam region leaks past a barrier".into()));
+                }
+                *link = he(m, (o % 3) as usize);
+            }
+        }
+        adj[me as usize] = links;
+    }
+    if adj.as_flattened().contains(&u32::MAX) {
+        return Err(Broken(
+            "stitched triangulation has an unmatched edge".into(),
+        ));
+    }
+    let mut dups = Vec::with_capacity(l.dups.len() + r.dups.len());
+    for h in halves {
+        dups.extend(
+            h.dups
+                .iter()
+                .map(|&(v, d)| (h.ids[v as usize], h.ids[d as usize])),
+        );
+    }
+    Ok(Parts {
+        inf: n,
+        mark: vec![0; tv.len()],
+        start_at: vec![0; n as usize + 1],
+        tv,
+        adj,
+        dups,
+    })
+}
+
+/// The certified triangles of half `h` (new ids `new_id`, the first of them `base`) into
+/// `tv` and `adj` (one entry per certified triangle, in order): global vertex ids, and the
+/// half-edge across each side when the neighbour is certified too, else `u32::MAX` (a
+/// barrier, linked by the seam).
+fn copy_certified(
+    n: u32,
+    h: &Half,
+    new_id: &[u32],
+    base: u32,
+    tv: &mut [[u32; 3]],
+    adj: &mut [[u32; 3]],
+) {
+    let inf = h.ids.len() as u32;
+    let g = |x: u32| if x == inf { n } else { h.ids[x as usize] };
+    for (t, v) in h.tv.iter().enumerate() {
+        if !h.certified[t] {
+            continue;
+        }
+        let at = (new_id[t] - base) as usize;
+        tv[at] = v.map(g);
+        let mut links = [u32::MAX; 3];
+        for (k, link) in links.iter_mut().enumerate() {
+            let o = h.adj[t][k];
+            let m = (o / 3) as usize;
+            if h.certified[m] {
+                *link = he(new_id[m], (o % 3) as usize);
+            }
+        }
+        adj[at] = links;
+    }
+}
+
+/// The seam side of [`stitch`]: the seam set's global ids, `DT(S)`, per seam half-edge the
+/// new half-edge of the certified triangle across a barrier (`u32::MAX`: none), and which
+/// seam triangles are inside the region.
+struct Seam {
+    ids: Vec<u32>,
+    parts: Parts,
+    across: Vec<u32>,
+    inside: Vec<bool>,
+}
+
+/// [`Seam`] of the halves (new ids of their certified triangles `new_id`).
+fn seam_side(pts: &[Point], halves: &[&Half; 2], new_id: &[Vec<u32>; 2]) -> Result<Seam, Broken> {
+    let n = pts.len() as u32;
     // Seam set: vertices of the uncertified triangles, in global (insertion) order.
     let mut in_seam = vec![false; pts.len()];
     for h in halves {
@@ -195,14 +352,6 @@ fn stitch(pts: &[Point], l: &Half, r: &Half) -> Result<Parts, Broken> {
             seam_ids[x as usize]
         }
     };
-
-    // New ids: certified left, certified right, then the seam's triangles inside the region.
-    let mut new_id: [Vec<u32>; 2] = [Vec::new(), Vec::new()];
-    let mut count = 0u32;
-    for (s, h) in halves.iter().enumerate() {
-        new_id[s] = number(&h.certified, &mut count);
-    }
-    let kept = count;
 
     // Barriers: directed edge (u, w) of a certified triangle (on its left) whose neighbour in
     // its half is not certified -> that triangle's new half-edge.
@@ -262,74 +411,11 @@ fn stitch(pts: &[Point], l: &Half, r: &Half) -> Result<Parts, Broken> {
             }
         }
     }
-    let seam_new = number(&inside, &mut count);
-
-    // Assemble.
-    let total = count as usize;
-    let mut tv = Vec::with_capacity(total);
-    let mut adj = vec![[u32::MAX; 3]; total];
-    let flat = adj.as_flattened_mut();
-    for (s, h) in halves.iter().enumerate() {
-        let inf = h.ids.len() as u32;
-        let g = |x: u32| if x == inf { n } else { h.ids[x as usize] };
-        for (t, v) in h.tv.iter().enumerate() {
-            if !h.certified[t] {
-                continue;
-            }
-            let me = new_id[s][t];
-            tv.push(v.map(g));
-            for k in 0..3 {
-                let o = h.adj[t][k];
-                let m = (o / 3) as usize;
-                if h.certified[m] {
-                    flat[he(me, k) as usize] = he(new_id[s][m], (o % 3) as usize);
-                }
-            }
-        }
-    }
-    debug_assert_eq!(tv.len() as u32, kept);
-    for (t, v) in seam.tv.iter().enumerate() {
-        if !inside[t] {
-            continue;
-        }
-        let me = seam_new[t];
-        tv.push(v.map(gs));
-        for k in 0..3 {
-            let b = across[3 * t + k];
-            let own = he(me, k);
-            if b != u32::MAX {
-                flat[own as usize] = b;
-                flat[b as usize] = own;
-            } else {
-                let o = seam.adj[t][k];
-                let m = seam_new[(o / 3) as usize];
-                if m == u32::MAX {
-                    return Err(Broken("seam region leaks past a barrier".into()));
-                }
-                flat[own as usize] = he(m, (o % 3) as usize);
-            }
-        }
-    }
-    if flat.contains(&u32::MAX) {
-        return Err(Broken(
-            "stitched triangulation has an unmatched edge".into(),
-        ));
-    }
-    let mut dups = Vec::with_capacity(l.dups.len() + r.dups.len());
-    for h in halves {
-        dups.extend(
-            h.dups
-                .iter()
-                .map(|&(v, d)| (h.ids[v as usize], h.ids[d as usize])),
-        );
-    }
-    Ok(Parts {
-        inf: n,
-        mark: vec![0; tv.len()],
-        start_at: vec![0; n as usize + 1],
-        tv,
-        adj,
-        dups,
+    Ok(Seam {
+        ids: seam_ids,
+        parts: seam,
+        across,
+        inside,
     })
 }
 

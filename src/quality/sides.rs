@@ -135,14 +135,9 @@ pub(super) fn wall_orthogonality(layout: &BlockLayout, grids: &[BlockGrid]) -> O
 /// being far apart in memory). A hint only: no effect on any result.
 #[inline(always)]
 pub(super) fn prefetch_edges(layout: &BlockLayout, block: &crate::layout::Block) {
-    #[cfg(target_arch = "x86_64")]
     for side in &block.sides {
-        let p = layout.edges.as_ptr().wrapping_add(side.edge as usize);
-        // SAFETY: a prefetch never faults, whatever the address.
-        unsafe { std::arch::x86_64::_mm_prefetch::<{ std::arch::x86_64::_MM_HINT_T0 }>(p.cast()) };
+        crate::prefetch::read(layout.edges.as_ptr().wrapping_add(side.edge as usize));
     }
-    #[cfg(not(target_arch = "x86_64"))]
-    let _ = (layout, block);
 }
 
 /// [`wall_orthogonality`] of one block.
