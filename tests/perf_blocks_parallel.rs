@@ -28,8 +28,9 @@ fn same(domain: &Domain, samples: &Samples, g: &MedialGraph) -> bool {
             .num_threads(threads)
             .build()
             .unwrap();
-        // `blocks` itself (one by one below 8192 arcs, in waves of 2048 above), and the
-        // waves forced on graphs of every size, the pipeline's wave and small ones.
+        // `blocks` itself (one by one below 1024 arcs, in waves of a sixth of the arcs, 256
+        // to 2048, above), and the waves forced on graphs of every size, the pipeline's
+        // largest wave and small ones.
         for wave in [None, Some(2048), Some(97)] {
             let got = pool.install(|| match wave {
                 None => blocks(domain, samples, g),
@@ -69,7 +70,7 @@ fn parallel_curves_give_the_one_by_one_layout() {
     assert!(arcs > 2 * 2048, "three waves of arcs covered ({arcs} arcs)");
 }
 
-/// A graph large enough for `blocks` to go in waves (8192 arcs and more), in a local rebuild
+/// A graph large enough for `blocks` to go in waves (1024 arcs and more), in a local rebuild
 /// that takes the unchanged arcs' curves over from the previous layout: the layout is the
 /// rebuild from scratch's, with one and two threads.
 #[test]

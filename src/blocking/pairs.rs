@@ -55,7 +55,7 @@ const WAVE: usize = 2048;
 /// ([`crate::collapse::Selection::contract_reusing`]), so its polyline and wall chains, hence
 /// its curves, are those of arc `a`. The curves taken are left as segments in `old`.
 ///
-/// Arcs go in waves of [`WAVE`]: the curves taken from `old` (one after the other, in arc
+/// Arcs go in waves of [`wave_len`] arcs: the curves taken from `old` (one after the other, in arc
 /// order, as the one-by-one construction takes them), then the others computed in parallel
 /// ([`arc_curves`], a function of the arc alone, its checks and errors included), while the
 /// wave before is numbered into the layout one arc after the other ([`Assembly::add`]). The
@@ -64,9 +64,8 @@ const WAVE: usize = 2048;
 /// `tests/perf_blocks_parallel.rs`).
 ///
 /// Graphs of fewer than [`PARALLEL_FROM`] arcs go one arc at a time through the same pieces
-/// ([`arc_curves`], then [`Assembly::add_pair`]): with at most a few waves there is little to
-/// overlap, and the buffers and joins cost more than they save (measured at 1e3 bubbles,
-/// about 3 000 arcs: 9.7 ms in waves, 8.6 ms one at a time).
+/// ([`arc_curves`], then [`Assembly::add_pair`]): there the buffers and joins cost more than
+/// the overlap saves.
 pub(super) fn blocks_reusing(
     domain: &Domain,
     samples: &Samples,
@@ -74,7 +73,7 @@ pub(super) fn blocks_reusing(
     mut old: Option<(&mut BlockLayout, &[u32])>,
 ) -> Result<(BlockLayout, Vec<Option<u32>>), MeshError> {
     if medial.arcs.len() >= PARALLEL_FROM {
-        return in_waves(domain, samples, medial, old, WAVE);
+        return in_waves(domain, samples, medial, old, wave_len(medial.arcs.len()));
     }
     let mut asm = Assembly::new(samples, medial);
     let mut back = Vec::new();
@@ -104,7 +103,18 @@ fn taken_over(
 const PREFETCH_ARCS: usize = 16;
 
 /// Arc count from which [`blocks_reusing`] goes in waves.
-const PARALLEL_FROM: usize = 4 * WAVE;
+///
+/// Issue 8, measured with the pipeline on a pool worker: 1e3 bubbles (about 3 000 arcs, 15
+/// runs, medians) build in 1.26 ms one arc at a time, 1.04 ms in waves of 2 048 and 0.89 ms
+/// in waves of 512 (a recollapse: 1.46, 1.17 and 1.03 ms); 1e4 and 1e5 are fastest in waves
+/// of [`WAVE`].
+const PARALLEL_FROM: usize = 1024;
+
+/// The wave length for `arcs` arcs: about a sixth of them, from 256 up to [`WAVE`] (a few
+/// waves on small graphs, so that the numbering of one overlaps the curves of the next).
+fn wave_len(arcs: usize) -> usize {
+    (arcs / 6).clamp(256, WAVE)
+}
 
 /// [`super::blocks`] in waves of `wave` arcs (at least 1) whatever the graph's size: what
 /// [`blocks_reusing`] does from [`PARALLEL_FROM`] arcs on, for the tests to compare with
