@@ -12,9 +12,10 @@
 //! mode, a 16 x 16 grid per block; `--format json` writes `report.json` and
 //! `connectivity.json`, so the quality figures are computed once), `--runs` times per size
 //! (default 5 up to 1e3, 3 at 1e4, 1 above), and keeps the run with the median total. It
-//! prints a markdown table from that run's `timings.json`: per-stage seconds, total, the child's wall time measured
-//! from outside (process start and exit included), its peak resident memory (`VmHWM`), bytes
-//! per particle and the growth exponent `ln(t2 / t1) / ln(n2 / n1)` between sizes.
+//! prints a markdown table from that run's `timings.json`: per-stage seconds, total, the
+//! child's wall time measured from outside (process start and exit included), its peak
+//! resident memory (`VmHWM`), bytes per particle and the growth exponent
+//! `ln(t2 / t1) / ln(n2 / n1)` between sizes.
 //!
 //! Then, in this process, the triangulation engine vs spade (`bulk_load`) vs delaunator on
 //! the sample points the exact pipeline triangulates (its first sampling of the same layouts:

@@ -313,8 +313,8 @@ pub fn medial_arcs_parallel(
 /// cells of a square grid over the vertices).
 ///
 /// Issue 8, measured with the pipeline on a pool worker (medians of the `medial_graph`
-/// stage): 1e3 bubbles (2 000 vertices, serial below `3 x 2048`) 1.41 ms serial, 1.11 ms
-/// with cells of 512; 1e4 22.8 ms with 2048, 20.0 ms with 512; 1e5 alike within the noise.
+/// stage): 1e3 bubbles (2 000 vertices, one thread with cells of 2 048, the parallel walk
+/// starting at three cells) 1.41 ms, 1.11 ms with cells of 512; 1e4 22.8 ms with 2048, 20.0 ms with 512; 1e5 alike within the noise.
 /// The arcs are those of the one-by-one walk whatever the cells (tested).
 const ARC_CHUNK: usize = 512;
 

@@ -55,8 +55,8 @@ const WAVE: usize = 2048;
 /// ([`crate::collapse::Selection::contract_reusing`]), so its polyline and wall chains, hence
 /// its curves, are those of arc `a`. The curves taken are left as segments in `old`.
 ///
-/// Arcs go in waves of [`wave_len`] arcs: the curves taken from `old` (one after the other, in arc
-/// order, as the one-by-one construction takes them), then the others computed in parallel
+/// Arcs go in waves of [`wave_len`] arcs: the curves taken from `old` (one after the other,
+/// in arc order, as the one-by-one construction takes them), then the others computed in parallel
 /// ([`arc_curves`], a function of the arc alone, its checks and errors included), while the
 /// wave before is numbered into the layout one arc after the other ([`Assembly::add`]). The
 /// layout and the error (the first failing arc's, its checks in the one-by-one order) are
@@ -349,8 +349,8 @@ impl<'a> Assembly<'a> {
     /// the chain ends are random accesses into an array of one entry per sample, 13 MB at
     /// 1e5 particles, and each chain is its own allocation): the chains' ends of arc
     /// `a + 2 PREFETCH_ARCS`, the slots and positions of arc `a + PREFETCH_ARCS`'s chain
-    /// ends, and the spoke list heads of the corners of arc `a + PREFETCH_ARCS / 2`. Hints only: nothing
-    /// read here changes what is numbered.
+    /// ends, and the spoke list heads of the corners of arc `a + PREFETCH_ARCS / 2`. Hints
+    /// only: nothing read here changes what is numbered.
     #[inline(always)]
     fn prefetch_ahead(&self, a: usize) {
         let arcs = &self.medial.arcs;

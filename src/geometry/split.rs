@@ -155,6 +155,17 @@ fn number(flags: &[bool], count: &mut u32) -> Vec<u32> {
         .collect()
 }
 
+/// The global id of vertex `x` of the seam's triangulation (`ids[x]`; its infinite vertex,
+/// `ids.len()`, is the global infinite vertex `n`).
+#[inline]
+fn global_id(ids: &[u32], n: u32, x: u32) -> u32 {
+    if x as usize == ids.len() {
+        n
+    } else {
+        ids[x as usize]
+    }
+}
+
 /// Global half-edge of slot `k` of new triangle `t`.
 #[inline]
 fn he(t: u32, k: usize) -> u32 {
@@ -221,14 +232,7 @@ fn stitch(pts: &[Point], l: &Half, r: &Half) -> Result<Parts, Broken> {
             "stitched triangulation has {count} triangles, not the {total} of {distinct} points"
         )));
     }
-    let seam_inf = seam_ids.len() as u32;
-    let gs = |x: u32| {
-        if x == seam_inf {
-            n
-        } else {
-            seam_ids[x as usize]
-        }
-    };
+    let gs = |x: u32| global_id(&seam_ids, n, x);
 
     // The seam's triangles inside the region, after the halves'.
     for (t, v) in seam.tv.iter().enumerate() {
@@ -344,14 +348,7 @@ fn seam_side(pts: &[Point], halves: &[&Half; 2], new_id: &[Vec<u32>; 2]) -> Resu
     if !seam.dups.is_empty() {
         return Err(Broken("seam set has duplicates".into()));
     }
-    let seam_inf = seam_ids.len() as u32;
-    let gs = |x: u32| {
-        if x == seam_inf {
-            n
-        } else {
-            seam_ids[x as usize]
-        }
-    };
+    let gs = |x: u32| global_id(&seam_ids, n, x);
 
     // Barriers: directed edge (u, w) of a certified triangle (on its left) whose neighbour in
     // its half is not certified -> that triangle's new half-edge.

@@ -206,7 +206,7 @@ impl Triangulation {
         let shift = shift_for(range);
         let order = super::order::insertion_order(points);
         // Points in insertion order (vertex ids are positions in it), scaled by 2^shift; on
-        // the pool for the sets the split builds (issue 8: 40 ms at 1e5 particles).
+        // the pool for the sets the split builds (issue 8: 38 ms on one thread at 1e5 particles).
         let at = |&i: &u32| {
             let p = points[i as usize];
             shift.map_or(p, |s| [scale(p[0], s), scale(p[1], s)])
