@@ -190,6 +190,8 @@ struct Row {
     stages: serde_json::Value,
     cpu_stages: serde_json::Value,
     calls: serde_json::Value,
+    fault_stages: serde_json::Value,
+    faults: Option<u64>,
     total: f64,
     cpu: Option<f64>,
     wall: f64,
@@ -256,6 +258,8 @@ fn run_size(bin: &Path, dir: &Path, n: usize, a: &Args) -> Result<Row, String> {
         stages: t["stages"].clone(),
         cpu_stages: t["cpu_stages"].clone(),
         calls: t["calls"].clone(),
+        fault_stages: t["fault_stages"].clone(),
+        faults: t["page_faults"].as_u64(),
         wall,
     })
 }
@@ -326,11 +330,19 @@ fn print_table(rows: &[Row]) {
 }
 
 /// Process CPU seconds per stage (all threads; less sensitive to a shared machine than wall
-/// time) and how often the sampling loop triangulated.
+/// time), how often the sampling loop triangulated, and the page faults of the run and of its
+/// grids stage (fresh memory: on a virtual machine each costs microseconds).
 fn print_cpu_table(rows: &[Row]) {
     let mut head = vec!["particles"];
     head.extend(COLUMNS.iter().map(|c| c.0));
-    head.extend(["writers", "other", "CPU s", "triangulations"]);
+    head.extend([
+        "writers",
+        "other",
+        "CPU s",
+        "triangulations",
+        "page faults",
+        "grids faults",
+    ]);
     println!("\nProcess CPU seconds per stage (all threads):\n");
     println!("| {} |", head.join(" | "));
     println!("|{}", "---:|".repeat(head.len()));
@@ -349,6 +361,12 @@ fn print_cpu_table(rows: &[Row]) {
         ));
         cells.push(r.cpu.map_or("n/a".into(), |c| format!("{c:.3}")));
         cells.push(r.calls["triangulation"].as_u64().unwrap_or(0).to_string());
+        cells.push(r.faults.map_or("n/a".into(), |f| f.to_string()));
+        cells.push(
+            r.fault_stages["grids"]
+                .as_u64()
+                .map_or("n/a".into(), |f| f.to_string()),
+        );
         println!("| {} |", cells.join(" | "));
     }
 }

@@ -352,6 +352,33 @@ fn timings_flag_writes_timings_json_and_nothing_else_changes() {
             assert!(x.is_some_and(|x| x >= 0.0), "cpu stage {k}: {t}");
         }
     }
+    // Page faults per stage add up to the run's count (`other` is the rest), and the grids
+    // stage, which writes every node into fresh memory, has at least one fault per 2 MiB of
+    // nodes (one per 4 KiB without huge pages).
+    if cfg!(target_os = "linux") {
+        let all = t["page_faults"].as_u64().expect("page_faults on Linux");
+        let sum: u64 = t["fault_stages"]
+            .as_object()
+            .expect("fault_stages")
+            .values()
+            .map(|v| v.as_u64().expect("a count"))
+            .sum();
+        assert_eq!(sum, all, "{t}");
+        for k in &keys {
+            assert!(
+                t["fault_stages"][k.as_str()].is_u64(),
+                "fault stage {k}: {t}"
+            );
+        }
+        let report: serde_json::Value = serde_json::from_slice(&b["report.json"]).unwrap();
+        let node_bytes = report["nodes"].as_u64().unwrap() * 16;
+        let grids = t["fault_stages"]["grids"].as_u64().unwrap();
+        assert!(
+            grids >= node_bytes >> 21,
+            "{grids} faults for {node_bytes} B: {t}"
+        );
+        assert!(stderr.contains("faults"), "{stderr}");
+    }
     // Sampling triangulates at least once per attempt; every stage that ran was entered.
     assert!(
         t["calls"]["triangulation"].as_u64().is_some_and(|c| c >= 1),
