@@ -195,10 +195,19 @@ pub fn group_of(medial: &MedialGraph, groups: &[CocircularGroup]) -> Vec<Option<
     out
 }
 
+/// Arcs per task of the parallel [`same_circle`] tests of [`cocircular_groups`]: most tests
+/// are one comparison of rounded values, but on a lattice every arc inside a co-circular group
+/// is an exact comparison of quadratic irrationals (some microseconds each).
+const SAME_CIRCLE_CHUNK: usize = 512;
+
 /// The co-circular groups of a medial graph with its vertex circles (one per vertex, from
 /// [`vertex_circles`]). Vertices are joined across arcs whose two end circles are exactly the
 /// same ([`same_circle`]); components of two or more vertices are groups. Deterministic:
 /// groups sorted by their circle lists.
+///
+/// The tests of the arcs run in parallel (issue 8: on a 100 x 100 square lattice, 9 801
+/// groups, they were 90 ms of serial exact arithmetic), the joins then in arc order: the same
+/// unions as one pass, whatever the thread count.
 pub fn cocircular_groups(
     medial: &MedialGraph,
     circles: &[Option<Apollonius>],
@@ -207,19 +216,27 @@ pub fn cocircular_groups(
     if circles.len() != n {
         return Vec::new();
     }
-    let mut parent: Vec<u32> = (0..n as u32).collect();
-    for arc in &medial.arcs {
-        let [a, b] = arc.ends;
-        if a == b || a as usize >= n || b as usize >= n {
-            continue;
-        }
-        if let (Some(x), Some(y)) = (&circles[a as usize], &circles[b as usize]) {
-            if same_circle(&x.exact, &y.exact) {
-                let (ra, rb) = (find(&mut parent, a), find(&mut parent, b));
-                if ra != rb {
-                    parent[ra.max(rb) as usize] = ra.min(rb);
-                }
+    let same: Vec<bool> = medial
+        .arcs
+        .par_iter()
+        .with_min_len(SAME_CIRCLE_CHUNK)
+        .map(|arc| {
+            let [a, b] = arc.ends;
+            if a == b || a as usize >= n || b as usize >= n {
+                return false;
             }
+            match (&circles[a as usize], &circles[b as usize]) {
+                (Some(x), Some(y)) => same_circle(&x.exact, &y.exact),
+                _ => false,
+            }
+        })
+        .collect();
+    let mut parent: Vec<u32> = (0..n as u32).collect();
+    for (arc, _) in medial.arcs.iter().zip(&same).filter(|(_, &s)| s) {
+        let [a, b] = arc.ends;
+        let (ra, rb) = (find(&mut parent, a), find(&mut parent, b));
+        if ra != rb {
+            parent[ra.max(rb) as usize] = ra.min(rb);
         }
     }
     // Components of two or more vertices, by increasing root, members in vertex order. A
