@@ -149,7 +149,7 @@ pub fn refine(
                 min_gaps,
             });
         };
-        let mut poor: Vec<(f64, usize)> = (0..sampled.medial.vertices.len())
+        let poor: Vec<(f64, usize)> = (0..sampled.medial.vertices.len())
             .map(|v| {
                 (
                     vertex_ratio(
@@ -163,20 +163,37 @@ pub fn refine(
             })
             .filter(|&(q, _)| q > limit)
             .collect();
-        poor.sort_by(|a, b| b.0.total_cmp(&a.0).then(a.1.cmp(&b.1)));
+        // The candidate hole of each poor vertex: the centre and radius of its empty circle.
+        let candidate = |v: usize| match &circles[v] {
+            Some(c) => (c.center, c.radius),
+            None => {
+                let mv = &sampled.medial.vertices[v];
+                let p = sampled.samples.points[mv.samples[0] as usize];
+                (mv.position, dist(mv.position, p))
+            }
+        };
+        let mut poor: Vec<(f64, usize, (Point, f64))> = poor
+            .into_iter()
+            .map(|(q, v)| (q, v, candidate(v)))
+            .collect();
+        // Poorest first; equal ratios (symmetric layouts have many) by the candidate's centre
+        // and radius, not by the vertex number: the holes inserted, and their order, are then
+        // a function of the geometry, whatever numbering the triangulation gave the medial
+        // vertices (a resampled triangulation numbered as an extension of the earlier one
+        // inserts the same holes as one triangulated afresh).
+        poor.sort_by(|a, b| {
+            let (ca, cb) = (a.2, b.2);
+            b.0.total_cmp(&a.0)
+                .then(ca.0[0].total_cmp(&cb.0[0]))
+                .then(ca.0[1].total_cmp(&cb.0[1]))
+                .then(ca.1.total_cmp(&cb.1))
+                .then(a.1.cmp(&b.1))
+        });
         let mut batch: Vec<Circle> = Vec::new();
         // The holes of this round, indexed: a candidate is checked against its neighbours,
         // not against every hole (O(log n) per candidate instead of O(n)).
         let index = HoleIndex::new(current.holes());
-        for &(_, v) in &poor {
-            let (center, rho) = match &circles[v] {
-                Some(c) => (c.center, c.radius),
-                None => {
-                    let mv = &sampled.medial.vertices[v];
-                    let p = sampled.samples.points[mv.samples[0] as usize];
-                    (mv.position, dist(mv.position, p))
-                }
-            };
+        for &(_, _, (center, rho)) in &poor {
             if key(center).is_some_and(|k| refused.contains(&k)) {
                 continue;
             }

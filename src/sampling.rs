@@ -1490,7 +1490,22 @@ fn sample_and_triangulate_impl(
             };
             match extended {
                 Some(t) => Ok((t, true)),
-                None => Triangulation::new(&samples.points).map(|t| (t, false)),
+                None => {
+                    // Earlier circles resampled more densely keep every earlier sample: the
+                    // earlier triangulation renumbered, with the new samples inserted.
+                    let source = owned.as_ref().or(previous.map(|p| &p.triangulation));
+                    let renumbered = match (source, previous) {
+                        (Some(t), Some(p)) if !t.is_empty() => kept_samples(&p.samples, &samples)
+                            .map(|map| t.extended_renumbered(&samples.points, &map))
+                            .transpose()?
+                            .flatten(),
+                        _ => None,
+                    };
+                    match renumbered {
+                        Some(t) => Ok((t, false)),
+                        None => Triangulation::new(&samples.points).map(|t| (t, false)),
+                    }
+                }
             }
         })?;
         // The round before, when the new triangulation extends its own and every earlier
@@ -1628,6 +1643,44 @@ fn sample_and_triangulate_impl(
         }
         round += 1;
     }
+}
+
+/// Where the samples `before` of an earlier sampling are among `after`, when every earlier
+/// circle kept all its samples (a resampling that only made circles denser, as macro
+/// refinement does around an inserted hole; new circles come after the earlier ones):
+/// `map[s]` is the index in `after` of earlier sample `s`. `None` when a circle lost a sample
+/// or moved, or the circles differ. Samples of a circle run counter-clockwise from angle 0 in
+/// both, so one merge per circle finds them (points compared bit for bit).
+fn kept_samples(before: &Samples, after: &Samples) -> Option<Vec<u32>> {
+    if before.circles.len() > after.circles.len() {
+        return None;
+    }
+    let bits = |p: &Point| p.map(f64::to_bits);
+    let mut map = vec![0u32; before.points.len()];
+    for (b, a) in before.circles.iter().zip(&after.circles) {
+        if b.circle != a.circle || b.count > a.count {
+            return None;
+        }
+        let old = before
+            .points
+            .get(b.first as usize..(b.first + b.count) as usize)?;
+        let new = after
+            .points
+            .get(a.first as usize..(a.first + a.count) as usize)?;
+        let mut k = 0;
+        for (j, p) in old.iter().enumerate() {
+            let key = bits(p);
+            while k < new.len() && bits(&new[k]) != key {
+                k += 1;
+            }
+            if k == new.len() {
+                return None;
+            }
+            map[b.first as usize + j] = a.first + k as u32;
+            k += 1;
+        }
+    }
+    Some(map)
 }
 
 #[cfg(test)]

@@ -148,6 +148,26 @@ fn block_successors(medial: &MedialGraph) -> Option<Vec<u32>> {
         .flatten()
 }
 
+/// Sort `(relative length, arc)` pairs by length, equal lengths by the arc's circles
+/// ([`crate::blocking::arc_key`]), then by arc: symmetric layouts have many arcs of the same
+/// length, and the greedy acceptance takes the first of two that exclude each other, so the
+/// tie is broken by the geometry rather than by the arc numbers (which follow the
+/// triangulation's numbering, not the layout).
+fn sort_by_length(medial: &MedialGraph, short: &mut [(f64, u32)]) {
+    let mut keyed: Vec<(f64, Vec<crate::domain::CircleId>, u32)> = short
+        .iter()
+        .map(|&(r, e)| (r, crate::blocking::arc_key(medial, e as usize), e))
+        .collect();
+    keyed.sort_by(|a, b| {
+        a.0.total_cmp(&b.0)
+            .then_with(|| a.1.cmp(&b.1))
+            .then(a.2.cmp(&b.2))
+    });
+    for (slot, (r, _, e)) in short.iter_mut().zip(keyed) {
+        *slot = (r, e);
+    }
+}
+
 impl Selection {
     /// The per-arc data of [`select_forced`] (same arguments less `exclude` and `forced`).
     ///
@@ -256,7 +276,7 @@ impl Selection {
         mut short: Vec<(f64, u32)>,
         next: Option<Vec<u32>>,
     ) -> Selection {
-        short.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+        sort_by_length(medial, &mut short);
         Selection {
             zero,
             is_zero,

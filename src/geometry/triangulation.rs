@@ -382,6 +382,95 @@ impl Triangulation {
         Ok(Some(Self::finish(points, None, parts, spare)))
     }
 
+    /// The triangulation of `points`, which hold this triangulation's points at other places:
+    /// `map[v]` is the index in `points` of its point `v` (bit for bit; one entry per point,
+    /// distinct). This triangulation is renumbered and the other points are inserted into it
+    /// in increasing index order, instead of triangulating from scratch. For a resampling that
+    /// only adds points to some circles: their samples stay contiguous, so the earlier points
+    /// are no prefix ([`Self::extended`]) but all are still there.
+    ///
+    /// `Ok(None)` when `map` does not say that (wrong length, an index out of range, a point
+    /// that differs, a repeated index), when the coordinate scaling of the predicates
+    /// (`shift_for`) would differ, or when either point set has duplicates (whose kept index
+    /// the renumbering could change). The triangle *set* is the one [`Self::new`] gives (a
+    /// function of the point set under the lexicographic simulation of simplicity); the
+    /// *numbering* is that of the extension: the earlier triangles first, in their order.
+    /// Deterministic.
+    pub fn extended_renumbered(
+        &self,
+        points: &[Point],
+        map: &[u32],
+    ) -> Result<Option<Self>, TriangulationError> {
+        let n0 = self.points.len();
+        if map.len() != n0 || !self.duplicates.is_empty() || self.tris.is_empty() {
+            return Ok(None);
+        }
+        if points.len() > MAX_POINTS {
+            return Err(TriangulationError::TooManyPoints {
+                count: points.len(),
+                max: MAX_POINTS,
+            });
+        }
+        if points.len() >= NONE as usize {
+            return Ok(None);
+        }
+        let bits = |p: &Point| p.map(f64::to_bits);
+        // Which indices of `points` the earlier points take.
+        let mut taken = vec![false; points.len()];
+        for (v, &m) in map.iter().enumerate() {
+            match taken.get_mut(m as usize) {
+                Some(t) if !*t && bits(&points[m as usize]) == bits(&self.points[v]) => *t = true,
+                _ => return Ok(None),
+            }
+        }
+        if let Some(index) = points
+            .iter()
+            .zip(&taken)
+            .position(|(p, &t)| !(t || p[0].is_finite() && p[1].is_finite()))
+        {
+            return Err(TriangulationError::NonFinite { index });
+        }
+        let (old_lo, old_hi) = magnitude_range(&self.points);
+        let (all_lo, all_hi) = magnitude_range(points);
+        let range = (old_lo.min(all_lo), old_hi.max(all_hi));
+        let shift = shift_for(range);
+        if shift != shift_for((old_lo, old_hi)) {
+            return Ok(None);
+        }
+        let work: Cow<'_, [Point]> = match shift {
+            None => Cow::Borrowed(points),
+            Some(s) => points
+                .iter()
+                .map(|&p| [scale(p[0], s), scale(p[1], s)])
+                .collect(),
+        };
+        let all_safe = all_safe_after(range, shift);
+        let inf = points.len() as u32;
+        let (mut tv, adj) = self.builder_arrays(inf);
+        for t in &mut tv {
+            for x in t.iter_mut() {
+                if *x != inf {
+                    *x = map[*x as usize];
+                }
+            }
+        }
+        let mut builder = Builder::resume(&work, all_safe, tv, adj, Vec::new());
+        for (pos, _) in taken.iter().enumerate().filter(|(_, &t)| !t) {
+            builder
+                .insert(pos as u32)
+                .map_err(|e| TriangulationError::Internal { message: e.0 })?;
+        }
+        let parts = builder.into_parts();
+        if !parts.dups.is_empty() {
+            return Ok(None);
+        }
+        let spare = match work {
+            Cow::Owned(v) => v,
+            Cow::Borrowed(_) => Vec::new(),
+        };
+        Ok(Some(Self::finish(points, None, parts, spare)))
+    }
+
     /// [`Self::extended`] by the sparse replay, moving this triangulation's arrays into the
     /// result instead of copying them (issue 8: at 1e5 particles the copies were some 220 MB
     /// of fresh pages). On `Ok(Some)` this triangulation is left empty, and the [`Changes`]
