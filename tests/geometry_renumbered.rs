@@ -152,3 +152,48 @@ fn refinement_of_a_lattice_renumbers_with_the_triangles_from_scratch() {
     let order = |t: &Triangulation| (0..t.len()).map(|k| t.triangle(k)).collect::<Vec<_>>();
     assert_ne!(order(a), order(b), "numbered as an extension, not afresh");
 }
+
+/// Every new point strictly inside the earlier hull (the corners of the box are earlier
+/// points): the case the sparse replay takes, on the renumbered arrays. Many rounds of random
+/// subsets, each against the triangulation from scratch.
+#[test]
+fn new_points_inside_the_hull_give_the_triangles_from_scratch() {
+    let mut r = layouts::SplitMix64(19);
+    for round in 0..40u64 {
+        let mut pts: Vec<Point> = vec![[0.0, 0.0], [4.0, 0.0], [4.0, 4.0], [0.0, 4.0]];
+        // Interior points, on a lattice (co-circular and collinear) or at random.
+        while pts.len() < 300 {
+            let p = if r.next_u64().is_multiple_of(2) {
+                [
+                    1.0 + (r.next_u64() % 5) as f64 * 0.5,
+                    1.0 + (r.next_u64() % 5) as f64 * 0.5,
+                ]
+            } else {
+                [0.1 + 3.8 * r.next_f64(), 0.1 + 3.8 * r.next_f64()]
+            };
+            if !pts.contains(&p) {
+                pts.push(p);
+            }
+        }
+        // The corners are kept; a third of the others are new.
+        let keep: Vec<bool> = (0..pts.len())
+            .map(|i| i < 4 || !r.next_u64().is_multiple_of(3))
+            .collect();
+        let order = shuffled(pts.len(), round);
+        let chosen: Vec<usize> = order.into_iter().filter(|&i| keep[i]).collect();
+        let old: Vec<Point> = chosen.iter().map(|&i| pts[i]).collect();
+        let map: Vec<u32> = chosen.iter().map(|&i| i as u32).collect();
+        let before = Triangulation::new(&old).unwrap();
+        let after = before
+            .extended_renumbered(&pts, &map)
+            .unwrap()
+            .expect("no duplicates, every earlier point placed");
+        let scratch = Triangulation::new(&pts).unwrap();
+        assert_eq!(
+            triangle_set(&after),
+            triangle_set(&scratch),
+            "round {round}"
+        );
+        assert!(verify_exact(&after).is_ok(), "round {round}");
+    }
+}

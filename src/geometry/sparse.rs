@@ -79,18 +79,19 @@ struct Sparse<'a> {
     touched: HashMap<u32, u32>,
 }
 
-/// The triangulation arrays after inserting `pts[n0..]` (in order) into the finished arrays
-/// `a` of the triangulation of `pts[..n0]` with `vertices` distinct points, as the resumed
-/// builder gives them after compaction; `None` where the builder must run (module docs).
-/// `pts` are the points as the predicates see them (scaled), `all_safe` as for the builder.
-/// Works in place: on success the arrays come back with the [`Log`] of what was written over
-/// them; where it gives up, `Err` gives back `a` as it was.
+/// The triangulation arrays after inserting the points `insert` (indices into `pts`, in that
+/// order) into the finished arrays `a` of the triangulation of the other points, with
+/// `vertices` distinct points: for `insert = n0..pts.len()` (the earlier points a prefix) as
+/// the resumed builder gives them after compaction; `None` where the builder must run
+/// (module docs). `pts` are the points as the predicates see them (scaled), `all_safe` as for
+/// the builder. Works in place: on success the arrays come back with the [`Log`] of what was
+/// written over them; where it gives up, `Err` gives back `a` as it was.
 pub(super) fn extend(
     pts: &[Point],
     all_safe: bool,
     a: Arrays,
     vertices: usize,
-    n0: usize,
+    insert: impl IntoIterator<Item = u32>,
     duplicates: &[(u32, u32)],
 ) -> Result<(Arrays, Log), Arrays> {
     // Euler: a triangulation of V points with H hull vertices has 2V - 2 - H triangles.
@@ -121,8 +122,8 @@ pub(super) fn extend(
         boundary: Vec::new(),
         touched: HashMap::new(),
     };
-    for pi in n0..pts.len() {
-        if s.insert(pi as u32).is_err() {
+    for pi in insert {
+        if s.insert(pi).is_err() {
             return Err(s.log.undo(s.a));
         }
     }

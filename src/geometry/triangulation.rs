@@ -352,7 +352,7 @@ impl Triangulation {
                 all_safe,
                 arrays,
                 self.vertex_count(),
-                n0,
+                n0 as u32..points.len() as u32,
                 &self.duplicates,
             ) {
                 return Ok(Some(Triangulation {
@@ -394,7 +394,9 @@ impl Triangulation {
     /// (`shift_for`) would differ, or when either point set has duplicates (whose kept index
     /// the renumbering could change). The triangle *set* is the one [`Self::new`] gives (a
     /// function of the point set under the lexicographic simulation of simplicity); the
-    /// *numbering* is that of the extension: the earlier triangles first, in their order.
+    /// *numbering* is that of the extension: the earlier triangles keep their ids, new ones
+    /// follow. By the sparse replay of [`Self::extended`] on the renumbered arrays where it
+    /// applies (every new point strictly inside the hull), else the resumed builder.
     /// Deterministic.
     pub fn extended_renumbered(
         &self,
@@ -445,6 +447,46 @@ impl Triangulation {
                 .collect(),
         };
         let all_safe = all_safe_after(range, shift);
+        let new_points = || {
+            taken
+                .iter()
+                .enumerate()
+                .filter(|(_, &t)| !t)
+                .map(|(pos, _)| pos as u32)
+        };
+        // The sparse replay on the renumbered arrays: the triangles keep their slots, so only
+        // the vertex ids change (issue 8: converting 6 triangles per point into the builder's
+        // half-edge layout and compacting it back cost more than the few hundred insertions
+        // of a refinement round).
+        let mut vertex_tri = vec![NONE; points.len()];
+        for (v, &t) in self.vertex_tri.iter().enumerate() {
+            vertex_tri[map[v] as usize] = t;
+        }
+        let arrays = super::sparse::Arrays {
+            tris: self
+                .tris
+                .iter()
+                .map(|t| t.map(|x| map[x as usize]))
+                .collect(),
+            adj: self.adj.clone(),
+            vertex_tri,
+        };
+        if let Ok((a, _)) = super::sparse::extend(
+            &work,
+            all_safe,
+            arrays,
+            self.vertex_count(),
+            new_points(),
+            &[],
+        ) {
+            return Ok(Some(Triangulation {
+                points: points.to_vec(),
+                tris: a.tris,
+                adj: a.adj,
+                duplicates: Vec::new(),
+                vertex_tri: a.vertex_tri,
+            }));
+        }
         let inf = points.len() as u32;
         let (mut tv, adj) = self.builder_arrays(inf);
         for t in &mut tv {
@@ -455,9 +497,9 @@ impl Triangulation {
             }
         }
         let mut builder = Builder::resume(&work, all_safe, tv, adj, Vec::new());
-        for (pos, _) in taken.iter().enumerate().filter(|(_, &t)| !t) {
+        for pos in new_points() {
             builder
-                .insert(pos as u32)
+                .insert(pos)
                 .map_err(|e| TriangulationError::Internal { message: e.0 })?;
         }
         let parts = builder.into_parts();
@@ -491,7 +533,8 @@ impl Triangulation {
             adj: std::mem::take(&mut self.adj),
             vertex_tri: std::mem::take(&mut self.vertex_tri),
         };
-        match super::sparse::extend(&work, all_safe, arrays, vertices, n0, &self.duplicates) {
+        let insert = n0 as u32..points.len() as u32;
+        match super::sparse::extend(&work, all_safe, arrays, vertices, insert, &self.duplicates) {
             Ok((a, log)) => {
                 let mut pts = std::mem::take(&mut self.points);
                 pts.extend_from_slice(&points[n0..]);
