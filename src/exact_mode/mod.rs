@@ -317,20 +317,23 @@ impl ArcGeometry {
     }
 
     /// Medial point and both touching points at parameter `t` in `[0, 1]` (exact ends).
+    ///
+    /// At an end the empty circle's radius is the mean of the distances to both touching
+    /// points: equal for an exact Apollonius vertex, but not at a vertex merged by short-arc
+    /// collapse, where the distance to one wall alone made the arc's first or last sub-step
+    /// density depend on which of its circles the numbering put first (1% of that sub-step,
+    /// 1e-5 of the node parameters; issue 8: the same layout triangulated with another
+    /// numbering must give the same mesh).
     fn at(&self, t: f64) -> Option<(Point, [Point; 2], f64)> {
+        let end = |k: usize| {
+            let (m, a) = (self.ends_m[k], self.ends_a[k]);
+            (m, a, 0.5 * (dist(m, a[0]) + dist(m, a[1])))
+        };
         if t <= 0.0 {
-            return Some((
-                self.ends_m[0],
-                self.ends_a[0],
-                dist(self.ends_m[0], self.ends_a[0][0]),
-            ));
+            return Some(end(0));
         }
         if t >= 1.0 {
-            return Some((
-                self.ends_m[1],
-                self.ends_a[1],
-                dist(self.ends_m[1], self.ends_a[1][0]),
-            ));
+            return Some(end(1));
         }
         let p = self.param;
         let q = 1 - p;
