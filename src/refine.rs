@@ -149,7 +149,16 @@ pub fn refine(
                 min_gaps,
             });
         };
-        let poor: Vec<(f64, usize)> = (0..sampled.medial.vertices.len())
+        // The candidate hole of a poor vertex: the centre and radius of its empty circle.
+        let candidate = |v: usize| match &circles[v] {
+            Some(c) => (c.center, c.radius),
+            None => {
+                let mv = &sampled.medial.vertices[v];
+                let p = sampled.samples.points[mv.samples[0] as usize];
+                (mv.position, dist(mv.position, p))
+            }
+        };
+        let mut poor: Vec<(f64, usize, (Point, f64))> = (0..sampled.medial.vertices.len())
             .map(|v| {
                 (
                     vertex_ratio(
@@ -162,18 +171,6 @@ pub fn refine(
                 )
             })
             .filter(|&(q, _)| q > limit)
-            .collect();
-        // The candidate hole of each poor vertex: the centre and radius of its empty circle.
-        let candidate = |v: usize| match &circles[v] {
-            Some(c) => (c.center, c.radius),
-            None => {
-                let mv = &sampled.medial.vertices[v];
-                let p = sampled.samples.points[mv.samples[0] as usize];
-                (mv.position, dist(mv.position, p))
-            }
-        };
-        let mut poor: Vec<(f64, usize, (Point, f64))> = poor
-            .into_iter()
             .map(|(q, v)| (q, v, candidate(v)))
             .collect();
         // Poorest first; equal ratios (symmetric layouts have many) by the candidate's centre

@@ -1374,7 +1374,10 @@ pub fn sample_and_triangulate(
 /// round before macro refinement inserted holes): when its sample points are a prefix of the
 /// new ones, bit for bit (no other circle was resampled, the new holes' samples come last), the
 /// new points are inserted into its triangulation ([`Triangulation::extended`]) instead of
-/// triangulating from scratch. Same triangles, numbered differently; deterministic.
+/// triangulating from scratch; when earlier circles were resampled more densely but kept every
+/// earlier sample, its triangulation is renumbered and the new samples inserted
+/// ([`Triangulation::extended_renumbered`]). Same triangles, numbered differently;
+/// deterministic.
 pub fn sample_and_triangulate_after(
     domain: &Domain,
     opts: &SamplingOptions,

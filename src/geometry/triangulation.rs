@@ -307,15 +307,27 @@ impl Triangulation {
                 max: MAX_POINTS,
             });
         }
-        // The ranges of the kept and the new points give both shifts in one pass.
-        let (old_lo, old_hi) = magnitude_range(&self.points);
-        let (new_lo, new_hi) = magnitude_range(&points[n0..]);
-        let range = (old_lo.min(new_lo), old_hi.max(new_hi));
-        let shift = shift_for(range);
-        if shift != shift_for((old_lo, old_hi)) || self.tris.is_empty() {
+        if self.tris.is_empty() {
             return Ok(None);
         }
-        // Unscaled points are used in place.
+        Ok(self.extension_work(points, magnitude_range(&points[n0..])))
+    }
+
+    /// `points` as the predicates see them when they extend this triangulation, with their
+    /// `all_safe`: `new` is the magnitude range of the points not yet in it (the kept ones'
+    /// range is this triangulation's). `None` when the coordinate scaling (`shift_for`) of
+    /// all of them differs from this triangulation's. Unscaled points are used in place.
+    fn extension_work<'p>(
+        &self,
+        points: &'p [Point],
+        new: (f64, f64),
+    ) -> Option<(Cow<'p, [Point]>, bool)> {
+        let (old_lo, old_hi) = magnitude_range(&self.points);
+        let range = (old_lo.min(new.0), old_hi.max(new.1));
+        let shift = shift_for(range);
+        if shift != shift_for((old_lo, old_hi)) {
+            return None;
+        }
         let work: Cow<'_, [Point]> = match shift {
             None => Cow::Borrowed(points),
             Some(s) => points
@@ -323,7 +335,7 @@ impl Triangulation {
                 .map(|&p| [scale(p[0], s), scale(p[1], s)])
                 .collect(),
         };
-        Ok(Some((work, all_safe_after(range, shift))))
+        Some((work, all_safe_after(range, shift)))
     }
 
     /// [`Self::extended`] by the way `how` says: the sparse replay on copies of this
@@ -425,28 +437,16 @@ impl Triangulation {
                 _ => return Ok(None),
             }
         }
+        // The earlier points are finite: only the others can fail this.
         if let Some(index) = points
             .iter()
-            .zip(&taken)
-            .position(|(p, &t)| !(t || p[0].is_finite() && p[1].is_finite()))
+            .position(|p| !(p[0].is_finite() && p[1].is_finite()))
         {
             return Err(TriangulationError::NonFinite { index });
         }
-        let (old_lo, old_hi) = magnitude_range(&self.points);
-        let (all_lo, all_hi) = magnitude_range(points);
-        let range = (old_lo.min(all_lo), old_hi.max(all_hi));
-        let shift = shift_for(range);
-        if shift != shift_for((old_lo, old_hi)) {
+        let Some((work, all_safe)) = self.extension_work(points, magnitude_range(points)) else {
             return Ok(None);
-        }
-        let work: Cow<'_, [Point]> = match shift {
-            None => Cow::Borrowed(points),
-            Some(s) => points
-                .iter()
-                .map(|&p| [scale(p[0], s), scale(p[1], s)])
-                .collect(),
         };
-        let all_safe = all_safe_after(range, shift);
         let new_points = || {
             taken
                 .iter()
