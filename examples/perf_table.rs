@@ -20,7 +20,10 @@
 //! Then, in this process, the triangulation engine vs spade (`bulk_load`) vs delaunator on
 //! the sample points the exact pipeline triangulates (its first sampling of the same layouts:
 //! `SamplingOptions { soft_rounds: false, .. }`, as `mesher` samples in exact mode; best of a
-//! few runs each, interleaved), up to `--tri-max` (default: `--max`).
+//! few runs each, interleaved), up to `--tri-max` (default: `--max`). Its last column is the
+//! CLI's median total of the table above in units of spade's time on the same points: a
+//! yardstick for the machine, since the sessions of this project run on machines whose speed
+//! differs by more than 2x (the header names the processor).
 //!
 //! Then, in this process, the remeshing loop of a time-stepping solver (the library, not the
 //! CLI): `mesh` and the quality report (`Report::from_mesh`) of the same layout again and
@@ -382,11 +385,27 @@ fn best<T>(reps: usize, mut f: impl FnMut() -> T) -> f64 {
         .fold(f64::INFINITY, f64::min)
 }
 
-fn triangulation_table(max: usize, seed: u64) {
+/// The processor's name (`model name` of `/proc/cpuinfo`), or `unknown processor`.
+fn cpu_model() -> String {
+    std::fs::read_to_string("/proc/cpuinfo")
+        .ok()
+        .and_then(|s| {
+            s.lines()
+                .find(|l| l.starts_with("model name"))
+                .and_then(|l| l.split_once(':'))
+                .map(|(_, m)| m.trim().to_string())
+        })
+        .unwrap_or_else(|| "unknown processor".to_string())
+}
+
+/// `rows`: the CLI runs of the table above, for the last column (CLI total in units of
+/// spade's time on the same points; `-` for a size without a CLI run).
+fn triangulation_table(max: usize, seed: u64, rows: &[Row]) {
     println!(
-        "\n| particles | sample points | engine ms | spade ms | delaunator ms | engine / spade |"
+        "\n| particles | sample points | engine ms | spade ms | delaunator ms | engine / spade \
+         | CLI total / spade |"
     );
-    println!("|---:|---:|---:|---:|---:|---:|");
+    println!("|---:|---:|---:|---:|---:|---:|---:|");
     for n in SIZES.into_iter().filter(|&n| n <= max) {
         let Ok(domain) = layouts::bubbles(n, seed) else {
             continue;
@@ -422,8 +441,12 @@ fn triangulation_table(max: usize, seed: u64) {
             }));
             d = d.min(best(1, || delaunator::triangulate(&dp).triangles.len()));
         }
+        let yardstick = rows
+            .iter()
+            .find(|r| r.n == n)
+            .map_or("-".to_string(), |r| format!("{:.2}", r.total / s));
         println!(
-            "| {n} | {} | {:.2} | {:.2} | {:.2} | {:.2} |",
+            "| {n} | {} | {:.2} | {:.2} | {:.2} | {:.2} | {yardstick} |",
             pts.len(),
             1e3 * e,
             1e3 * s,
@@ -550,13 +573,14 @@ fn main() {
         }
     }
     println!(
-        "Exact mode, `--block-cells {}`, `--format {}`{}, bubbles seed {}, {} threads; each \
-         row the median of {} runs; load average {load_before} before, {} after the runs.\n",
+        "Exact mode, `--block-cells {}`, `--format {}`{}, bubbles seed {}, {} threads ({}); \
+         each row the median of {} runs; load average {load_before} before, {} after the runs.\n",
         a.block_cells,
         a.format,
         if a.huge_pages { ", `--huge-pages`" } else { "" },
         a.seed,
         std::thread::available_parallelism().map_or(1, |n| n.get()),
+        cpu_model(),
         a.runs
             .map_or("5 (1e2, 1e3), 3 (1e4) and 1 (1e5)".to_string(), |r| r
                 .to_string()),
@@ -567,6 +591,6 @@ fn main() {
     for n in &notes {
         println!("\n{}", n.replace('\n', " "));
     }
-    triangulation_table(a.tri_max.unwrap_or(a.max), a.seed);
+    triangulation_table(a.tri_max.unwrap_or(a.max), a.seed, &rows);
     remeshing_table(a.warm_max.unwrap_or(a.max), a.seed, a.block_cells);
 }
