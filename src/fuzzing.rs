@@ -344,7 +344,9 @@ fn key(p: Point) -> Key {
 /// - counting identities that survive the collapse of co-circular arcs (`h >= 2`): the medial
 ///   graph of the refined domain (h counting inserted holes) has `V = 2 (h - 1)`,
 ///   `E = 3 (h - 1)`, and there are `6 (h - 1) - 2 collapsed + 2 split + template` blocks; the
-///   templates have 5 (disk) and 4 (annulus) blocks;
+///   templates have 5 (disk) and 4 (annulus) blocks; exact mode's annulus
+///   ([`crate::exact_mode::annulus`]) has no medial vertex or arc and
+///   `2 split = 2 ANNULUS_ARCS` blocks;
 /// - conformity by node coordinates: sides with the same set of nodes have the same nodes in
 ///   the same (or reversed) order, and they come in pairs; an unpaired side is a wall side;
 ///   and by topology: every edge is used by one wall side or two interface sides;
@@ -497,6 +499,20 @@ fn check_counts(h: usize, m: &Mesh) -> Result<(), String> {
     let (v, e) = (m.medial_vertices, m.medial_arcs);
     match h {
         0 if blocks != 5 => Err(format!("disk: {blocks} blocks, expected 5")),
+        1 if m.geometry == crate::mesh::Geometry::Exact => {
+            // The closed medial loop cut into `split_arcs` pieces, two blocks each.
+            let arcs = crate::exact_mode::annulus::ANNULUS_ARCS;
+            if m.split_arcs != arcs || blocks != 2 * arcs || v != 0 || e != 0 {
+                Err(format!(
+                    "exact annulus: {blocks} blocks, {} loop pieces, {v} vertices, {e} arcs; \
+                     expected {} blocks, {arcs} pieces, no medial vertex or arc",
+                    m.split_arcs,
+                    2 * arcs
+                ))
+            } else {
+                Ok(())
+            }
+        }
         1 if blocks != 4 => Err(format!("annulus: {blocks} blocks, expected 4")),
         0 | 1 => Ok(()),
         _ => {

@@ -83,7 +83,9 @@ pub struct Mesh {
     /// Holes inserted by macro Delaunay refinement ([`crate::refine`]); they are fluid, filled
     /// by template blocks ([`crate::templates::fill_inserted_hole`]).
     pub inserted_holes: Vec<Circle>,
-    /// Medial block pairs split in two to give an inserted hole an even number of sides.
+    /// Medial block pairs split in two to give an inserted hole an even number of sides; for
+    /// one hole in exact mode, the pieces its closed medial loop is cut into
+    /// ([`crate::exact_mode::annulus`]), so that blocks are `6(h - 1) + 2 split_arcs` there too.
     pub split_arcs: usize,
     /// Blocks inside inserted holes.
     pub template_blocks: usize,

@@ -27,8 +27,9 @@ pub const EXACT_RESAMPLING: usize = 2;
 ///
 /// Paper mode reads `mode`, `cells` (and `block_cells`, as `cells`) and the degeneracy
 /// options (`refine_ratio`, `collapse_fraction`, `max_inserted_holes`). Exact mode reads all
-/// fields; for the disk and the annulus (fewer than two holes) both modes use the same
-/// templates and equal spacing.
+/// fields; for the disk (no hole) both modes use the same template and equal spacing, and for
+/// one hole exact mode grids the annulus on its medial loop ([`exact_mode::annulus`]) with
+/// all of its options.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Options {
     pub mode: Mode,
@@ -68,7 +69,8 @@ pub struct Options {
     /// [`exact_mode::counts::CountProblem::solve_uniform`]). Replaces the size-driven counts
     /// of `cells` / `cell_size`; refused together with `cell_size` or `wall_cells`.
     ///
-    /// The paper pipeline (paper mode, exact mode's fallback, the disk and annulus templates)
+    /// The paper pipeline (paper mode, exact mode's fallback, the disk and paper mode's annulus
+    /// templates)
     /// reads it as `cells`: `N` cells along every block side, raised on long wall arcs, which
     /// is what `cells` already means there. Periodic and transition meshes read `cells` only.
     /// `N` must be in `1..=`[`crate::grid::MAX_CELLS_PER_SIDE`].
@@ -155,6 +157,8 @@ pub enum MeshError {
 /// Blocking2D ([`crate::blocking::build_mesh_layout`]) and templates in the inserted holes;
 /// no hole (a disk) or one hole (an annulus): the standard templates of
 /// [`crate::templates`]. Then node counts and transfinite interpolation ([`crate::grid`]).
+/// Exact mode meshes one hole on its closed medial loop ([`exact_mode::annulus`]), with the
+/// template as its fallback.
 ///
 /// ```
 /// use medial_blocks::{mesh, Domain, Options};
@@ -181,6 +185,21 @@ fn mesh_here(domain: &Domain, options: &Options) -> Result<Mesh, MeshError> {
         if holes >= 2 {
             if let Some(m) = mesh_exact(domain, options)? {
                 return Ok(m);
+            }
+        }
+        if holes == 1 {
+            let built = timings::span("exact_geometry", || {
+                exact_mode::annulus::build_annulus(domain, options)
+            })?;
+            if let Some(m) = built {
+                return Ok(Mesh {
+                    layout: m.layout,
+                    grids: m.grids,
+                    holes,
+                    split_arcs: exact_mode::annulus::ANNULUS_ARCS,
+                    geometry: Geometry::Exact,
+                    ..Mesh::default()
+                });
             }
         }
     }

@@ -123,7 +123,9 @@ pub fn disk(bounding: Circle) -> BlockLayout {
 }
 
 /// The annulus template (h = 1): a ring of four blocks between the hole (id
-/// [`ANNULUS_HOLE`]) and the bounding circle.
+/// [`ANNULUS_HOLE`]) and the bounding circle. Paper mode's mesh of one hole, and exact mode's
+/// fallback; exact mode meshes one hole on its medial loop instead
+/// ([`crate::exact_mode::annulus`]: spoke-aligned, clustered, eight blocks).
 ///
 /// With `phi` the direction from the bounding center to the hole center (0 when concentric),
 /// spoke `k` leaves the hole at angle `theta_k = phi + pi/4 + k pi/2` and runs straight along

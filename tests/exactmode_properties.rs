@@ -8,6 +8,7 @@
 mod common;
 
 use medial_blocks::domain::{Circle, Domain};
+use medial_blocks::exact_mode::annulus::ANNULUS_ARCS;
 use medial_blocks::exact_mode::{Clustering, FirstCell};
 use medial_blocks::layouts::SplitMix64;
 use medial_blocks::{mesh, Mesh, Mode, Options};
@@ -89,10 +90,21 @@ fn min_scaled_jacobian(m: &Mesh) -> f64 {
 fn check(domain: &Domain, m: &Mesh) -> Vec<usize> {
     let h = domain.holes().len();
     let blocks = m.grids.len();
-    assert_eq!(m.medial_vertices, 2 * (h - 1));
-    assert_eq!(m.medial_arcs, 3 * (h - 1));
-    // Short arcs may be collapsed (two blocks fewer each).
-    assert_eq!(blocks + 2 * m.collapsed_arcs, 6 * (h - 1));
+    if h == 1 {
+        // The closed medial loop without a vertex, cut into ANNULUS_ARCS pieces.
+        assert_eq!(
+            (m.medial_vertices, m.medial_arcs, m.collapsed_arcs),
+            (0, 0, 0)
+        );
+        assert_eq!(m.split_arcs, ANNULUS_ARCS);
+        assert_eq!(blocks, 2 * ANNULUS_ARCS);
+    } else {
+        assert_eq!(m.medial_vertices, 2 * (h - 1));
+        assert_eq!(m.medial_arcs, 3 * (h - 1));
+        // Short arcs may be collapsed (two blocks fewer each).
+        assert_eq!(blocks + 2 * m.collapsed_arcs, 6 * (h - 1));
+    }
+    assert_eq!(m.geometry, medial_blocks::mesh::Geometry::Exact);
     assert!(m.inserted_holes.is_empty());
     assert_eq!(m.layout.blocks.len(), blocks);
     for g in &m.grids {
@@ -452,4 +464,165 @@ fn cocircular_holes_do_not_panic() {
     assert_eq!(m.collapsed_arcs, 1);
     assert_eq!(m.grids.len(), 18 - 2);
     assert_eq!(medial_blocks::quality::measure(&m.grids).inverted_cells, 0);
+}
+
+/// One hole anywhere in the bounding circle, its gap to the bounding circle at least
+/// `min_gap * R` (concentric for `concentric`).
+fn one_hole(seed: u64, min_gap: f64, concentric: bool) -> Domain {
+    let mut rng = SplitMix64(seed);
+    let big_r = 0.5 + 20.0 * rng.next_f64();
+    let center = [rng.next_f64() * 100.0 - 50.0, rng.next_f64() * 100.0 - 50.0];
+    // Radius from 1e-3 R to nearly R, offset anywhere the gap allows.
+    let r = big_r * (1e-3 + (1.0 - 1e-3 - 2.0 * min_gap) * rng.next_f64().powi(2));
+    let room = big_r - r - min_gap * big_r;
+    let (dist, angle) = if concentric {
+        (0.0, 0.0)
+    } else {
+        (
+            room * rng.next_f64().sqrt(),
+            std::f64::consts::TAU * rng.next_f64(),
+        )
+    };
+    let hole = Circle {
+        center: [
+            center[0] + dist * angle.cos(),
+            center[1] + dist * angle.sin(),
+        ],
+        radius: r,
+    };
+    Domain::bounded(
+        Circle {
+            center,
+            radius: big_r,
+        },
+        vec![hole],
+    )
+    .expect("generated one-hole layout is valid")
+}
+
+/// Every medial node of a one-hole mesh (side 2 of every block) lies on the ellipse
+/// `|m - c| + |m - h| = R + r` (equidistant from both walls), recomputed from the nodes.
+fn medial_nodes_are_equidistant(d: &Domain, m: &Mesh) {
+    let (big, hole) = (d.bounding(), d.holes()[0]);
+    let scale = big.radius + big.center[0].abs().max(big.center[1].abs());
+    for b in 0..m.grids.len() {
+        for p in side_nodes(m, b, 2) {
+            let to_hole = (p[0] - hole.center[0]).hypot(p[1] - hole.center[1]) - hole.radius;
+            let to_big = big.radius - (p[0] - big.center[0]).hypot(p[1] - big.center[1]);
+            assert!(
+                (to_hole - to_big).abs() <= 1e-12 * scale,
+                "block {b}: medial node {p:?} is {to_hole} from the hole, {to_big} from the \
+                 bounding circle"
+            );
+        }
+    }
+}
+
+#[test]
+fn one_hole_is_meshed_exactly_on_its_medial_loop() {
+    // Concentric, off-centre, a small hole near the wall, a large hole with a thin gap.
+    let cases = [
+        (Circle::new(0.0, 0.0, 10.0), Circle::new(0.0, 0.0, 1.0)),
+        (Circle::new(0.0, 0.0, 10.0), Circle::new(3.0, -2.0, 1.0)),
+        (
+            Circle::new(5.0, 5.0, 10.0),
+            Circle::new(5.0 + 8.8, 5.0, 0.1),
+        ),
+        (Circle::new(0.0, 0.0, 1.0), Circle::new(0.0, 0.05, 0.9)),
+    ];
+    for (big, hole) in cases {
+        let d = Domain::bounded(big, vec![hole]).unwrap();
+        for opts in [exact(8), block_cells(16)] {
+            let m = mesh(&d, &opts).expect("mesh");
+            check(&d, &m);
+            medial_nodes_are_equidistant(&d, &m);
+            // One block per wall per piece: half on the hole, half on the bounding circle.
+            let walls: Vec<_> = m.layout.blocks.iter().map(|b| b.wall).collect();
+            assert_eq!(
+                walls.iter().filter(|&&w| w == Some(0)).count(),
+                ANNULUS_ARCS
+            );
+            assert_eq!(
+                walls.iter().filter(|&&w| w == Some(-1)).count(),
+                ANNULUS_ARCS
+            );
+        }
+    }
+}
+
+fn block_cells(n: usize) -> Options {
+    Options {
+        block_cells: Some(n),
+        ..exact(n)
+    }
+}
+
+#[test]
+fn one_hole_first_cell_height_is_as_requested() {
+    // The clustering options reach both walls of the annulus (the template ring ignores them).
+    let d = Domain::bounded(Circle::new(0.0, 0.0, 4.0), vec![Circle::new(1.2, 0.7, 0.5)]).unwrap();
+    let opts = Options {
+        clustering: Clustering {
+            first: Some(FirstCell::Absolute(2e-3)),
+            growth: 1.15,
+        },
+        circle_clustering: vec![(
+            0,
+            Clustering {
+                first: Some(FirstCell::Relative(0.01)),
+                growth: 1.1,
+            },
+        )],
+        ..exact(8)
+    };
+    let m = mesh(&d, &opts).expect("mesh");
+    let wall_of = check(&d, &m);
+    for (b, g) in m.grids.iter().enumerate() {
+        // Circle index 1 is the hole (0.01 of its radius 0.5), 0 the bounding circle.
+        let want = if wall_of[b] == 1 { 0.01 * 0.5 } else { 2e-3 };
+        for i in 0..=g.ni {
+            let (p, q) = (g.node(i, 0), g.node(i, 1));
+            let got = (q[0] - p[0]).hypot(q[1] - p[1]);
+            assert!(
+                ((got - want) / want).abs() < 1e-9,
+                "block {b} spoke {i}: first cell {got}, asked {want}"
+            );
+        }
+    }
+    // A fixed wall-normal count on the hole.
+    let fixed = Options {
+        wall_cells: vec![(0, 23)],
+        ..exact(8)
+    };
+    let m = mesh(&d, &fixed).expect("mesh");
+    let wall_of = check(&d, &m);
+    for (b, g) in m.grids.iter().enumerate() {
+        if wall_of[b] == 1 {
+            assert_eq!(g.nj, 23, "block {b}");
+        }
+    }
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 32, ..ProptestConfig::default() })]
+    #[test]
+    fn one_hole_layouts_are_valid_orthogonal_and_conforming(
+        seed in any::<u64>(),
+        gap in prop::sample::select(vec![1e-1, 1e-2, 1e-4]),
+        concentric in any::<bool>(),
+        smooth in prop::sample::select(vec![0usize, 5]),
+    ) {
+        let d = one_hole(seed, gap, concentric);
+        let opts = Options {
+            clustering: Clustering { first: Some(FirstCell::Relative(0.01)), growth: 1.2 },
+            smooth,
+            ..block_cells(6)
+        };
+        let m = mesh(&d, &opts).expect("exact mode");
+        check(&d, &m);
+        medial_nodes_are_equidistant(&d, &m);
+        // The same layout, the same mesh.
+        let again = mesh(&d, &opts).expect("exact mode");
+        prop_assert_eq!(&m.grids, &again.grids);
+    }
 }

@@ -451,13 +451,14 @@ fn fig(x: Option<f64>) -> String {
 }
 
 /// The note on stderr when exact mode (the default) fell back to the paper pipeline's
-/// geometry for a layout with two or more holes (`"geometry": "paper"` in report.json), which
-/// would otherwise go unnoticed: `None` for a mesh of the geometry asked for, and for the disk
-/// and annulus templates (paper geometry by design).
+/// geometry for a layout with one or more holes (`"geometry": "paper"` in report.json; one
+/// hole: the template ring instead of exact mode's annulus), which would otherwise go
+/// unnoticed: `None` for a mesh of the geometry asked for, and for the disk template (paper
+/// geometry by design).
 pub fn fallback_note(options: &Options, mesh: &medial_blocks::Mesh) -> Option<&'static str> {
     (options.mode == Mode::Exact
         && mesh.geometry == medial_blocks::mesh::Geometry::Paper
-        && mesh.holes >= 2)
+        && mesh.holes >= 1)
         .then_some(
             "note: exact mode fell back to the paper pipeline's geometry for this layout \
              (\"geometry\": \"paper\" in report.json): the exact construction disagreed with \

@@ -33,6 +33,7 @@
 //! are computed once and copied into both blocks; the ends of every arc are exactly the
 //! rounded Apollonius centres and tangent points.
 
+pub mod annulus;
 pub mod benchmarks;
 pub mod clustering;
 pub mod collapsed;
