@@ -99,7 +99,8 @@ pub fn mesh_frame(domain: &AnyDomain, options: &Options) -> Result<FrameMesh, Me
 
 /// The key of each block of a bounded layout, read from its geometry: at a medial corner,
 /// the wall circles of the blocks meeting there, ordered by the angle of their wall corner
-/// ([`vertex_cycle`]); blocks without a wall (templates) get the tag `(-2, 0, 0)`.
+/// ([`vertex_cycle`]); blocks without a wall (templates) get the tag `(-2, 0, 0)`; the pieces of
+/// one hole's medial loop are numbered ([`crate::exact_mode::imposed::number_loop_pieces`]).
 pub fn layout_keys(layout: &BlockLayout) -> Vec<BlockKey> {
     let pos = |v: u32| layout.vertices.get(v as usize).copied().unwrap_or([0.0; 2]);
     let mut touching: Vec<Vec<(CircleTag, crate::geometry::Point)>> =
@@ -120,14 +121,16 @@ pub fn layout_keys(layout: &BlockLayout) -> Vec<BlockKey> {
         .map(|(v, t)| vertex_cycle(pos(v as u32), t))
         .collect();
     let cycle = |v: u32| cycles.get(v as usize).cloned().unwrap_or_default();
-    layout
+    let mut keys: Vec<BlockKey> = layout
         .blocks
         .iter()
         .map(|b| {
             let wall = b.wall.map_or((-2, 0, 0), |w| (w as i64, 0, 0));
             (wall, cycle(b.corners[3]), cycle(b.corners[2]))
         })
-        .collect()
+        .collect();
+    crate::exact_mode::imposed::number_loop_pieces(&mut keys);
+    keys
 }
 
 /// The wall circles of the blocks meeting at each layout vertex, sorted and deduplicated.

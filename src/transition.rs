@@ -824,7 +824,7 @@ pub fn mesh_with_transition_rect(
     rect: Rect,
 ) -> Result<Mesh, MeshError> {
     let mut base = mesh(domain, options)?;
-    if options.mode == Mode::Exact && domain.hole_count() >= 2 {
+    if options.mode == Mode::Exact && domain.hole_count() >= 1 {
         if base.geometry == Geometry::Exact {
             if let Some(m) = exact_transition(domain, options, rect, &base)? {
                 return Ok(m);
@@ -908,13 +908,14 @@ fn exact_keys(m: &Mesh) -> Option<Vec<BlockKey>> {
         }
     }
     let cycle = |v: u32| vertex_cycle(layout.vertices[v as usize], &touching[v as usize]);
-    Some(
-        layout.blocks[..nmed]
-            .iter()
-            .zip(&walls)
-            .map(|(b, &w)| ((w, 0, 0), cycle(b.corners[3]), cycle(b.corners[2])))
-            .collect(),
-    )
+    let mut keys: Vec<BlockKey> = layout.blocks[..nmed]
+        .iter()
+        .zip(&walls)
+        .map(|(b, &w)| ((w, 0, 0), cycle(b.corners[3]), cycle(b.corners[2])))
+        .collect();
+    // One hole's loop pieces, numbered as the exact mesher numbers them.
+    crate::exact_mode::imposed::number_loop_pieces(&mut keys);
+    Some(keys)
 }
 
 /// The most exact meshes made to honour the lattice counts: the counts are imposed on the

@@ -242,3 +242,32 @@ fn frames_switching_between_bounded_and_periodic() {
     // The oracle: the node counts written for frames 3 and 4 are equal block for block.
     assert_eq!(dims(dir.path(), 3), dims(dir.path(), 4));
 }
+
+/// One hole moving off the centre of its bounding circle: exact mode's annulus
+/// (`exact_mode::annulus`: eight blocks whose keys are told apart by their loop piece).
+fn one_hole_frames(n: usize, step: f64) -> String {
+    (0..n)
+        .map(|k| {
+            format!(
+                r#"{{"bounding": {{"center": [0, 0], "radius": 4}}, "holes": [{{"center": [{}, {}], "radius": 1}}]}}"#,
+                0.3 + step * k as f64,
+                -0.5 * step * k as f64
+            )
+        })
+        .collect::<Vec<_>>()
+        .join("\n")
+}
+
+#[test]
+fn one_hole_motions_keep_blocks_and_node_counts() {
+    let text = one_hole_frames(5, 0.2);
+    // Unique keys, so the run can impose counts by key.
+    let frames = parse_frames(&text);
+    let f0 = mesh_frame(frames[0].as_ref().unwrap(), &Options::default()).unwrap();
+    assert_eq!(f0.mesh.grids.len(), 8);
+    assert!(
+        f0.structure().is_some(),
+        "the annulus blocks have unique keys"
+    );
+    check_run(&text, 5);
+}

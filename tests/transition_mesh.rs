@@ -289,12 +289,28 @@ fn cli_transition_rect_flag() {
 /// interpolation of the whole layout would not give that).
 #[test]
 fn exact_mode_grids_are_kept_inside_the_ring() {
-    let d = Domain::hexagon_example();
-    let b = d.bounding();
-    for (bounds, s) in [
-        ([-3.0, -3.0, 3.0, 3.0], 0.25),
-        ([-7.5, -2.5, 7.5, 2.5], 0.25),
+    let one_hole = Domain::bounded(
+        Circle::new(0.0, 0.0, 2.0),
+        vec![Circle::new(0.4, -0.3, 0.5)],
+    )
+    .unwrap();
+    for (d, bounds, s, min_walls) in [
+        (
+            Domain::hexagon_example(),
+            [-3.0, -3.0, 3.0, 3.0],
+            0.25,
+            6 * 5,
+        ),
+        (
+            Domain::hexagon_example(),
+            [-7.5, -2.5, 7.5, 2.5],
+            0.25,
+            6 * 5,
+        ),
+        // One hole: exact mode's annulus (4 blocks on the hole) keeps its grids too.
+        (one_hole, [-3.0, -3.0, 3.0, 3.0], 0.25, 4),
     ] {
+        let b = d.bounding();
         let rect = Rect::from_bounds(bounds, s, b.center, b.radius).unwrap();
         let mesh = mesh_with_transition_rect(&d, &Options::default(), rect).unwrap();
         let mut walls = 0;
@@ -319,7 +335,8 @@ fn exact_mode_grids_are_kept_inside_the_ring() {
                 assert!(ang < 0.5, "wall angle off by {ang} deg");
             }
         }
-        assert!(walls >= 6 * 5, "the hole blocks are there");
+        assert!(walls >= min_walls, "the hole blocks are there");
+        assert_eq!(mesh.geometry, medial_blocks::mesh::Geometry::Exact);
         check_rect(&d, bounds, s, &Options::default());
     }
 }

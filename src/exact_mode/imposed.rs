@@ -78,8 +78,35 @@ impl ImposedCounts {
     }
 }
 
+/// The pseudo-circle id of the tag [`number_loop_pieces`] adds (no circle has it: the
+/// bounding circle is `-1`, template blocks are tagged `-2`).
+pub const LOOP_PIECE: i64 = -3;
+
+/// Tell apart the blocks whose key repeats and whose two medial corners each see at most two
+/// circles: the pieces of one hole's medial loop ([`super::annulus`]), whose cuts all touch
+/// the same two circles. The `k`-th such block of a repeated key (in block order, which is
+/// the loop's cut order from a canonical direction) gets the tag `(LOOP_PIECE, k, 0)` appended
+/// to its corner-3 cycle, so that a sequence can impose counts on them. Unique keys and
+/// blocks at a medial vertex of three or more circles are unchanged.
+pub fn number_loop_pieces(keys: &mut [BlockKey]) {
+    let mut seen: BTreeMap<BlockKey, usize> = BTreeMap::new();
+    for k in keys.iter() {
+        *seen.entry(k.clone()).or_insert(0) += 1;
+    }
+    let mut next: BTreeMap<BlockKey, i64> = BTreeMap::new();
+    for k in keys.iter_mut() {
+        let repeated = seen.get(k).is_some_and(|&n| n > 1);
+        if repeated && k.1.len() <= 2 && k.2.len() <= 2 {
+            let ordinal = next.entry(k.clone()).or_insert(0);
+            k.1.push((LOOP_PIECE, *ordinal, 0));
+            *ordinal += 1;
+        }
+    }
+}
+
 /// The key of every block of a bounded exact build (block `2e + s`: side `s` of arc `e`);
-/// `arcs[e]` is `(end vertices, circles)` of arc (or arc piece) `e`.
+/// `arcs[e]` is `(end vertices, circles)` of arc (or arc piece) `e`; the pieces of one hole's
+/// loop numbered ([`number_loop_pieces`]).
 pub(super) fn bounded_keys(
     vertices: &[super::ExactVertex],
     arcs: &[([usize; 2], [crate::domain::CircleId; 2])],
@@ -100,5 +127,6 @@ pub(super) fn bounded_keys(
         keys.push(((circles[0] as i64, 0, 0), c0.clone(), c1.clone()));
         keys.push(((circles[1] as i64, 0, 0), c1, c0));
     }
+    number_loop_pieces(&mut keys);
     Some(keys)
 }
