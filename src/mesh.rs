@@ -38,8 +38,8 @@ impl BlockGrid {
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum Geometry {
     /// Paper geometry: circumcentre polylines, sampled walls, equally spaced transfinite
-    /// interpolation (paper mode, the templates of the disk and the annulus, periodic boxes
-    /// with a collapsed arc, and exact mode's rare fallback, see [`crate::mesher::mesh`]).
+    /// interpolation (paper mode, the disk template, and exact mode's rare fallback, see
+    /// [`crate::mesher::mesh`]).
     #[default]
     Paper,
     /// Exact geometry: Apollonius vertices, conic medial arcs, spoke-aligned grids

@@ -74,8 +74,11 @@ fn check(pd: &PeriodicDomain, mesh: &Mesh, first: Option<f64>) {
     let h = pd.hole_count();
     let size = pd.size();
     let l = size[0].max(size[1]);
-    assert_eq!(mesh.layout.blocks.len(), 6 * h, "six blocks per hole");
-    assert_eq!(mesh.grids.len(), 6 * h);
+    // Six blocks per hole, two fewer per collapsed zero-length arc orbit (co-circular groups).
+    let blocks = 6 * h - 2 * mesh.collapsed_arcs;
+    assert_eq!(mesh.layout.blocks.len(), blocks, "6 h - 2 collapsed blocks");
+    assert_eq!(mesh.grids.len(), blocks);
+    assert_eq!(mesh.geometry, medial_blocks::mesh::Geometry::Exact);
     let sides: Vec<(usize, usize, Vec<P>)> = (0..mesh.grids.len())
         .flat_map(|b| (0..4).map(move |k| (b, k)))
         .map(|(b, k)| (b, k, mesh.grids[b].side(k)))
@@ -185,13 +188,51 @@ fn exact_mode_is_the_default_for_periodic_domains() {
     let mesh = mesh_periodic(&pd, &Options::default()).unwrap();
     check(&pd, &mesh, None);
     assert_eq!(mesh.geometry, medial_blocks::mesh::Geometry::Exact);
-    // One hole in a square box: a degenerate (co-circular) periodic Voronoi diagram.
+    // One hole in a square box: a degenerate (co-circular) periodic Voronoi diagram. Its
+    // zero-length arc is collapsed into a vertex of degree 4, exactly (6 h - 2 collapsed
+    // blocks, checked by `check`).
     let pd = PeriodicDomain::new([1.0, 1.0], vec![Circle::new(0.5, 0.5, 0.2)]).unwrap();
     let mesh = mesh_periodic(&pd, &Options::default()).unwrap();
-    // Its zero-length arc is collapsed: 6 h - 2 collapsed blocks.
     assert_eq!(mesh.collapsed_arcs, 1);
-    assert_eq!(mesh.layout.blocks.len(), 6 - 2 * mesh.collapsed_arcs);
-    assert_eq!(mesh.geometry, medial_blocks::mesh::Geometry::Paper);
+    assert_eq!(mesh.cocircular_groups.len(), 1);
+    check(&pd, &mesh, None);
+}
+
+/// A `k x m` lattice of equal holes (spacing `d`, offset `o`) in a box of `k d x m d`: every
+/// cell corner is a co-circular group of four images.
+fn lattice(k: usize, m: usize, d: [f64; 2], r: f64, o: P) -> PeriodicDomain {
+    let hs = (0..k)
+        .flat_map(|i| (0..m).map(move |j| (i, j)))
+        .map(|(i, j)| Circle::new(o[0] + i as f64 * d[0], o[1] + j as f64 * d[1], r))
+        .collect();
+    PeriodicDomain::new([k as f64 * d[0], m as f64 * d[1]], hs).unwrap()
+}
+
+/// Periodic arrays of cylinders (square and rectangular lattices, the classic periodic
+/// layouts, on and off the box's edges) are meshed in exact geometry: collapsed vertices of
+/// degree 4, spoke-aligned grids, clustering honoured.
+#[test]
+fn lattices_are_exact_with_collapsed_vertices() {
+    for (k, m, d, r, o) in [
+        (1, 1, [1.0, 1.0], 0.3, [0.5, 0.5]),
+        (1, 1, [2.0, 1.0], 0.4, [0.0, 0.0]),
+        (2, 2, [1.0, 1.0], 0.2, [0.5, 0.5]),
+        (3, 2, [1.0, 1.5], 0.45, [0.1, 0.0]),
+    ] {
+        let pd = lattice(k, m, d, r, o);
+        let opts = Options {
+            cells: 6,
+            clustering: Clustering {
+                first: Some(FirstCell::Relative(0.02)),
+                growth: 1.2,
+            },
+            ..Options::default()
+        };
+        let mesh = mesh_periodic(&pd, &opts).unwrap();
+        // Each hole's lattice cell has one co-circular corner (a zero-length arc orbit).
+        assert_eq!(mesh.collapsed_arcs, k * m, "{k} x {m}");
+        check(&pd, &mesh, Some(0.02));
+    }
 }
 
 #[test]
@@ -244,12 +285,11 @@ fn exact_periodic_meshes_are_deterministic() {
 proptest! {
     #![proptest_config(ProptestConfig { cases: 20, ..ProptestConfig::default() })]
 
-    /// Random layouts, with holes across the box's corner and edge. (One hole is left out:
-    /// on a rectangular lattice four images are always co-circular, so exact mode falls back
-    /// to paper mode there, as for co-circular bounded layouts.)
+    /// Random layouts, with holes across the box's corner and edge (one hole: its four
+    /// images are co-circular, a collapsed vertex of degree 4).
     #[test]
     fn random_exact_periodic_layouts(
-        n in 2usize..8,
+        n in 1usize..8,
         lx in 0.6f64..2.0,
         ly in 0.6f64..2.0,
         seed in any::<u64>(),
@@ -259,6 +299,27 @@ proptest! {
         let hs = holes(n, size, seed, crossing);
         let pd = PeriodicDomain::new(size, hs).unwrap();
         let mesh = mesh_periodic(&pd, &Options { cells: 6, ..Options::default() }).unwrap();
+        check(&pd, &mesh, None);
+    }
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 16, ..ProptestConfig::default() })]
+
+    /// Random lattices: any spacing, radius and offset (holes across the edges too).
+    #[test]
+    fn random_lattices_are_exact(
+        k in 1usize..4,
+        m in 1usize..4,
+        dx in 0.5f64..2.0,
+        dy in 0.5f64..2.0,
+        fill in 0.1f64..0.9,
+        ox in 0.0f64..1.0,
+        oy in 0.0f64..1.0,
+    ) {
+        let r = 0.5 * fill * dx.min(dy);
+        let pd = lattice(k, m, [dx, dy], r, [ox * dx, oy * dy]);
+        let mesh = mesh_periodic(&pd, &Options { cells: 5, ..Options::default() }).unwrap();
         check(&pd, &mesh, None);
     }
 }

@@ -2,6 +2,11 @@
 //! [`crate::periodic`] with the exact geometry of [`super`] (Apollonius vertices, conic arcs,
 //! spoke-aligned grids, wall clustering, counts from [`super::counts`]).
 //!
+//! A vertex orbit of degree `n > 3` is a co-circular group whose zero-length arcs were
+//! collapsed (one hole in a box, the corners of a lattice): its centre is the Apollonius
+//! circle of three of its circles spread around it (every three give the same empty circle),
+//! and every spoke ends at the radial projection of that centre, exactly normal to its wall.
+//!
 //! # Exactly translated copies
 //! The input names every medial vertex and arc *up to a period shift* (an orbit of the
 //! infinite periodic medial axis, given by a representative in the tiling), circles as
@@ -44,9 +49,12 @@ pub type Shift = (i32, i32);
 /// A medial vertex orbit, in its representative's frame.
 #[derive(Debug, Clone, PartialEq)]
 pub struct PeriodicVertex {
-    /// Its circles in the Delaunay triangle's (counter-clockwise) sample order.
-    pub circles: [Tag; 3],
-    /// The triangle's circumcentre (chooses between two Apollonius roots).
+    /// Its circles in counter-clockwise order: three (the Delaunay triangle's samples), or
+    /// `n > 3` for a co-circular group whose zero-length arcs were collapsed (a vertex of
+    /// degree `n`, `2n` blocks around it).
+    pub circles: Vec<Tag>,
+    /// The triangle's circumcentre, or the collapsed vertex's position (chooses between two
+    /// Apollonius roots).
     pub near: Point,
 }
 
@@ -114,8 +122,8 @@ impl PeriodicBlocking {
 struct Vertex {
     center: Point,
     radius: f64,
-    tangent: [Point; 3],
-    circles: [Tag; 3],
+    tangent: Vec<Point>,
+    circles: Vec<Tag>,
 }
 
 impl Vertex {
@@ -162,20 +170,37 @@ fn build_checking(
     // 1. Vertex orbits.
     let mut verts = Vec::with_capacity(pb.vertices.len());
     for (k, v) in pb.vertices.iter().enumerate() {
+        let n = v.circles.len();
+        if n < 3 {
+            return Err(internal(format!("vertex orbit {k} has {n} circles")));
+        }
+        // Three circles in counter-clockwise order, spread around a vertex of degree n > 3
+        // (a co-circular group: every three of its circles have the same empty circle).
+        let pick = [0, n / 3, 2 * n / 3];
         let walls = [
-            pb.wall(v.circles[0]).ok_or_else(unknown)?,
-            pb.wall(v.circles[1]).ok_or_else(unknown)?,
-            pb.wall(v.circles[2]).ok_or_else(unknown)?,
+            pb.wall(v.circles[pick[0]]).ok_or_else(unknown)?,
+            pb.wall(v.circles[pick[1]]).ok_or_else(unknown)?,
+            pb.wall(v.circles[pick[2]]).ok_or_else(unknown)?,
         ];
         let sites = walls.map(|w| w.site());
         let ap = apollonius(sites, Choice::ccw().near(v.near))
             .or_else(|_| apollonius(sites, Choice::any().near(v.near)))
             .map_err(|e| internal(format!("no Apollonius circle for vertex orbit {k}: {e}")))?;
+        let tangent = if n == 3 {
+            ap.tangent_points.to_vec()
+        } else {
+            // Every spoke of a collapsed vertex is the radial projection of its centre, so
+            // it is exactly normal to its wall (as in `super::collapsed`).
+            v.circles
+                .iter()
+                .map(|&c| pb.wall(c).map(|w| w.project(ap.center)).ok_or_else(unknown))
+                .collect::<Result<Vec<Point>, MeshError>>()?
+        };
         verts.push(Vertex {
             center: ap.center,
             radius: ap.radius,
-            tangent: ap.tangent_points,
-            circles: v.circles,
+            tangent,
+            circles: v.circles.clone(),
         });
     }
     // 2. Arc orbits.

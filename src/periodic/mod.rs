@@ -44,7 +44,9 @@
 //! geometry of the orbit representative decides, clusters are tracked with translations so
 //! that no cycle of the torus is contracted), and a contracted vertex is identified up to
 //! translation by the samples of its members, so its instances are again the orbit
-//! representative plus a period shift. Blocks: `6h - 2 collapsed`; [`Mesh::collapsed_arcs`]
+//! representative plus a period shift; exact mode gets those contracted vertices as vertex
+//! orbits of degree `n` (`exact_input_clusters`), so periodic arrays of cylinders and one hole
+//! in a box are meshed in exact geometry. Blocks: `6h - 2 collapsed`; [`Mesh::collapsed_arcs`]
 //! counts collapsed arc orbits and [`Mesh::cocircular_groups`] lists one group per orbit
 //! (canonical hole ids, one entry per tangent image; centre wrapped into the box).
 
@@ -399,7 +401,9 @@ pub struct PeriodicLayout {
     /// normalised up to translation, sorted: the medial combinatorics of the period.
     pub triples: Vec<[CircleKey; 3]>,
     /// The same blocks as orbits, for exact mode ([`crate::exact_mode::periodic::build`]);
-    /// `None` when arcs were collapsed (exact mode then falls back to this paper layout).
+    /// vertex orbits are the contracted vertices (a co-circular group of `n` circles is one
+    /// vertex of degree `n`). `None` only when those orbits are not consistent (exact mode
+    /// then falls back to this paper layout).
     pub blocking: Option<PeriodicBlocking>,
     /// Zero-length medial arc orbits collapsed (blocks: `6h - 2 collapsed_arcs`).
     pub collapsed_arcs: usize,
@@ -1060,8 +1064,25 @@ fn extract(
             &vertex_by_key,
             &arc_by_key,
         )?)
-    } else {
+    } else if collapsed_orbits.is_empty() {
         None
+    } else {
+        // Collapsed co-circular groups: exact mode collapses only zero-length arcs, so every
+        // cluster is one exact empty circle. A failure here only leaves exact mode without
+        // its input (paper mode does not need it).
+        exact_input_clusters(
+            pd,
+            t,
+            medial,
+            &aux,
+            &contracted,
+            &members,
+            &ckeys,
+            &cluster_orbits,
+            &arc_orbits,
+            &arc_by_key,
+        )
+        .ok()
     };
     let mut triples: Vec<[CircleKey; 3]> = vertex_orbits
         .iter()
@@ -1126,7 +1147,7 @@ fn exact_input(
     for key in vertex_orbits {
         let v = &medial.vertices[*vertex_by_key.get(key).ok_or_else(|| bad("vertex orbit"))?];
         vertices.push(PeriodicVertex {
-            circles: [tag(v.circles[0])?, tag(v.circles[1])?, tag(v.circles[2])?],
+            circles: vec![tag(v.circles[0])?, tag(v.circles[1])?, tag(v.circles[2])?],
             near: v.position,
         });
     }
@@ -1148,6 +1169,126 @@ fn exact_input(
             wall_sweep(aux, 2 * r).ok_or_else(|| bad("sampled wall"))?,
             wall_sweep(aux, 2 * r + 1).ok_or_else(|| bad("sampled wall"))?,
         ];
+        arcs.push(PeriodicArc {
+            circles: [tag(arc.circles[0])?, tag(arc.circles[1])?],
+            ends,
+            hint,
+        });
+    }
+    Ok(PeriodicBlocking {
+        size: pd.size(),
+        holes: pd.holes().to_vec(),
+        vertices,
+        arcs,
+    })
+}
+
+/// [`exact_input`] after the collapse of zero-length arcs: the vertex orbits are the orbits of
+/// the contracted vertices `cluster_orbits` (representatives, sorted and deduplicated, as
+/// [`extract`] records them), each with every circle its members touch (a co-circular group
+/// of `n` circles is one vertex of degree `n`), in counter-clockwise order about the
+/// cluster's position; the arc orbits `arc_orbits` are kept arcs, their ends the clusters of
+/// their end vertices. Errors ([`MeshError::Internal`]) when the orbits are not
+/// translation-consistent.
+#[allow(clippy::too_many_arguments)]
+fn exact_input_clusters(
+    pd: &PeriodicDomain,
+    t: &Tiling,
+    medial: &MedialGraph,
+    aux: &BlockLayout,
+    contracted: &collapse::Contracted,
+    members: &[Vec<u32>],
+    ckeys: &[Option<ClusterKey>],
+    cluster_orbits: &[usize],
+    arc_orbits: &[ArcKey],
+    arc_by_key: &HashMap<ArcKey, usize>,
+) -> Result<PeriodicBlocking, MeshError> {
+    let bad = |what: &str| {
+        MeshError::Internal(format!(
+            "the periodic tiling is not translation-consistent ({what})"
+        ))
+    };
+    // The orbits by their representative's key, in key order.
+    let mut orbits: Vec<(ClusterKey, usize)> = cluster_orbits
+        .iter()
+        .map(|&r| {
+            ckeys
+                .get(r)
+                .cloned()
+                .flatten()
+                .map(|k| (k, r))
+                .ok_or_else(|| bad("cluster key"))
+        })
+        .collect::<Result<_, _>>()?;
+    orbits.sort();
+    orbits.dedup_by(|a, b| a.0 == b.0);
+    let index: HashMap<&ClusterKey, usize> = orbits
+        .iter()
+        .enumerate()
+        .map(|(i, (k, _))| (k, i))
+        .collect();
+    let mut vertices = Vec::with_capacity(orbits.len());
+    for (_, r) in &orbits {
+        let near = contracted
+            .graph
+            .vertices
+            .get(*r)
+            .ok_or_else(|| bad("cluster vertex"))?
+            .position;
+        let mut circles: Vec<(f64, crate::exact_mode::periodic::Tag)> = Vec::new();
+        for &v in members.get(*r).ok_or_else(|| bad("cluster members"))? {
+            for &c in &medial.vertices[v as usize].circles {
+                let tag = t
+                    .key(c)
+                    .ok_or_else(|| bad("a kept vertex on the bounding circle"))?;
+                if circles.iter().all(|x| x.1 != tag) {
+                    let o = t.domain.circle(c).center;
+                    circles.push(((o[1] - near[1]).atan2(o[0] - near[0]), tag));
+                }
+            }
+        }
+        circles.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+        vertices.push(PeriodicVertex {
+            circles: circles.into_iter().map(|x| x.1).collect(),
+            near,
+        });
+    }
+    // Kept arcs: their blocks in `aux` are `2k`, `2k + 1` for kept index `k`.
+    let kept_index: HashMap<u32, usize> = contracted
+        .kept
+        .iter()
+        .enumerate()
+        .map(|(k, &e)| (e, k))
+        .collect();
+    let cluster_end = |v: u32| -> Result<(usize, (i32, i32)), MeshError> {
+        let c = *contracted
+            .cluster_of
+            .get(v as usize)
+            .ok_or_else(|| bad("arc end cluster"))?;
+        let key = ckeys
+            .get(c as usize)
+            .cloned()
+            .flatten()
+            .ok_or_else(|| bad("arc end key"))?;
+        let (rep, d) = normalise_cluster(&key);
+        Ok((*index.get(&rep).ok_or_else(|| bad("arc end orbit"))?, d))
+    };
+    let mut arcs = Vec::with_capacity(arc_orbits.len());
+    for key in arc_orbits {
+        let r = *arc_by_key.get(key).ok_or_else(|| bad("arc orbit"))?;
+        let arc = &medial.arcs[r];
+        let k = *kept_index
+            .get(&(r as u32))
+            .ok_or_else(|| bad("a kept arc orbit"))?;
+        let ends = [cluster_end(arc.ends[0])?, cluster_end(arc.ends[1])?];
+        let hint = [
+            wall_sweep(aux, 2 * k).ok_or_else(|| bad("sampled wall"))?,
+            wall_sweep(aux, 2 * k + 1).ok_or_else(|| bad("sampled wall"))?,
+        ];
+        let tag = |c: CircleId| {
+            t.key(c)
+                .ok_or_else(|| bad("a kept orbit on the bounding circle"))
+        };
         arcs.push(PeriodicArc {
             circles: [tag(arc.circles[0])?, tag(arc.circles[1])?],
             ends,
@@ -1322,8 +1463,9 @@ fn mesh_periodic_exact(
     options: &Options,
 ) -> Result<Option<PeriodicFrame>, MeshError> {
     let mut sampling = SamplingOptions::default();
-    // Exact periodic geometry needs degree-3 vertices: collapse only zero-length arcs here
-    // (any collapse means the paper layout with its collapsed vertices is used instead).
+    // Exact periodic geometry collapses only zero-length arcs (exact co-circular groups,
+    // one empty circle per collapsed vertex): a short arc's merged vertex would sit on none
+    // of the exact bisectors.
     let zero_only = Options {
         collapse_fraction: 0.0,
         ..options.clone()
@@ -1334,7 +1476,7 @@ fn mesh_periodic_exact(
             Err(_) if attempt > 0 => return Ok(None),
             Err(e) => return Err(e),
         };
-        // Collapsed arcs: exact periodic geometry needs degree-3 vertices; paper mode.
+        // No exact input (the orbits of the collapsed vertices were not consistent): paper.
         let Some(pb) = &p.blocking else {
             return Ok(None);
         };
@@ -1351,6 +1493,8 @@ fn mesh_periodic_exact(
                         medial_vertices: p.medial_vertices,
                         medial_arcs: p.medial_arcs,
                         holes: pd.hole_count(),
+                        collapsed_arcs: p.collapsed_arcs,
+                        cocircular_groups: p.cocircular_groups.clone(),
                         geometry: crate::mesh::Geometry::Exact,
                         ..Mesh::default()
                     };
