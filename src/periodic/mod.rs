@@ -1473,6 +1473,16 @@ fn mesh_periodic_exact(
     for attempt in 0..=EXACT_RESAMPLING {
         let p = match periodic_layout_with(pd, &zero_only, &sampling) {
             Ok(p) => p,
+            // A nearly co-circular group (a lattice moved by 1e-9) leaves arcs so short that
+            // a block has no area unless they are collapsed: collapse short arcs as paper mode
+            // does (the merged vertex at the empty circle of three of its circles, spokes to
+            // the radial projections of its centre); paper mode when that fails too.
+            Err(MeshError::Internal(_)) => match periodic_layout_with(pd, options, &sampling) {
+                Ok(p) => p,
+                Err(MeshError::Internal(_)) => return Ok(None),
+                Err(_) if attempt > 0 => return Ok(None),
+                Err(e) => return Err(e),
+            },
             Err(_) if attempt > 0 => return Ok(None),
             Err(e) => return Err(e),
         };
