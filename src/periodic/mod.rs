@@ -1165,21 +1165,41 @@ fn exact_input(
             let (rep, d) = normalise_vertex(&k);
             ends[j] = (*index.get(&rep).ok_or_else(|| bad("arc end orbit"))?, d);
         }
-        let hint = [
-            wall_sweep(aux, 2 * r).ok_or_else(|| bad("sampled wall"))?,
-            wall_sweep(aux, 2 * r + 1).ok_or_else(|| bad("sampled wall"))?,
-        ];
-        arcs.push(PeriodicArc {
-            circles: [tag(arc.circles[0])?, tag(arc.circles[1])?],
-            ends,
-            hint,
-        });
+        arcs.push(orbit_arc(t, aux, arc, r, ends)?);
     }
     Ok(PeriodicBlocking {
         size: pd.size(),
         holes: pd.holes().to_vec(),
         vertices,
         arcs,
+    })
+}
+
+/// The arc orbit of `arc` for exact mode, its ends `ends` (vertex orbit, shift), its sampled
+/// wall sweeps read from its blocks `2k`, `2k + 1` of `aux`.
+fn orbit_arc(
+    t: &Tiling,
+    aux: &BlockLayout,
+    arc: &crate::medial::MedialArc,
+    k: usize,
+    ends: OrbitEnds,
+) -> Result<PeriodicArc, MeshError> {
+    let bad = |what: &str| {
+        MeshError::Internal(format!(
+            "the periodic tiling is not translation-consistent ({what})"
+        ))
+    };
+    let tag = |c: CircleId| {
+        t.key(c)
+            .ok_or_else(|| bad("a kept orbit on the bounding circle"))
+    };
+    Ok(PeriodicArc {
+        circles: [tag(arc.circles[0])?, tag(arc.circles[1])?],
+        ends,
+        hint: [
+            wall_sweep(aux, 2 * k).ok_or_else(|| bad("sampled wall"))?,
+            wall_sweep(aux, 2 * k + 1).ok_or_else(|| bad("sampled wall"))?,
+        ],
     })
 }
 
@@ -1281,19 +1301,7 @@ fn exact_input_clusters(
             .get(&(r as u32))
             .ok_or_else(|| bad("a kept arc orbit"))?;
         let ends = [cluster_end(arc.ends[0])?, cluster_end(arc.ends[1])?];
-        let hint = [
-            wall_sweep(aux, 2 * k).ok_or_else(|| bad("sampled wall"))?,
-            wall_sweep(aux, 2 * k + 1).ok_or_else(|| bad("sampled wall"))?,
-        ];
-        let tag = |c: CircleId| {
-            t.key(c)
-                .ok_or_else(|| bad("a kept orbit on the bounding circle"))
-        };
-        arcs.push(PeriodicArc {
-            circles: [tag(arc.circles[0])?, tag(arc.circles[1])?],
-            ends,
-            hint,
-        });
+        arcs.push(orbit_arc(t, aux, arc, k, ends)?);
     }
     Ok(PeriodicBlocking {
         size: pd.size(),
