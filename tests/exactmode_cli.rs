@@ -264,3 +264,41 @@ fn one_hole_is_exact_and_clustered() {
     // A first cell 0.002 thick needs more wall-normal cells than the default spacing.
     assert!(cells[1] > cells[0], "{cells:?}");
 }
+
+/// A domain without holes is the disk template: exact-mode wall options given for it are
+/// named in a note on stderr (they do not apply), never printed without them or with
+/// `--quiet`.
+#[test]
+fn wall_options_on_a_disk_are_noted() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let disk = d.join("disk.json");
+    std::fs::write(
+        &disk,
+        r#"{"bounding": {"center": [0, 0], "radius": 2}, "holes": []}"#,
+    )
+    .unwrap();
+    let disk = disk.to_str().unwrap();
+    let note = "note: a domain without holes is meshed by the disk template";
+    for (k, (extra, want)) in [
+        (vec![], false),
+        (vec!["--first-height", "0.01"], true),
+        (vec!["--smooth", "3"], true),
+        (vec!["--mode", "paper", "--cells", "4"], false),
+    ]
+    .into_iter()
+    .enumerate()
+    {
+        let out = d.join(format!("o{k}"));
+        let mut args = vec![disk, "-o", out.to_str().unwrap(), "--format", "json"];
+        args.extend_from_slice(&extra);
+        let o = run(&args);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        let stderr = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(stderr.contains(note), want, "{extra:?}: {stderr}");
+        let mut quiet = vec!["--quiet"];
+        quiet.extend_from_slice(&args);
+        let q = run(&quiet);
+        assert!(q.status.success() && q.stderr.is_empty(), "{q:?}");
+    }
+}

@@ -466,6 +466,26 @@ pub fn fallback_note(options: &Options, mesh: &medial_blocks::Mesh) -> Option<&'
         )
 }
 
+/// The note on stderr when exact-mode wall options were given for a domain without holes: the
+/// disk is meshed by its five-block template (no medial axis to build spokes on), which does
+/// not read them; `None` otherwise.
+pub fn disk_note(options: &Options, mesh: &medial_blocks::Mesh) -> Option<&'static str> {
+    let asked = options.clustering.first.is_some()
+        || !options.circle_clustering.is_empty()
+        || !options.wall_cells.is_empty()
+        || options.cell_size.is_some()
+        || options.smooth > 0;
+    (options.mode == Mode::Exact
+        && mesh.holes == 0
+        && mesh.geometry != medial_blocks::mesh::Geometry::Exact
+        && asked)
+        .then_some(
+            "note: a domain without holes is meshed by the disk template (five blocks, equal \
+             spacing): --first-height, --first-height-rel, --circle-clustering, --wall-cells, \
+             --cell-size and --smooth do not apply to it",
+        )
+}
+
 /// The short summary printed after meshing.
 pub fn summary(r: &report::Report) -> String {
     let mut s = format!(
@@ -593,6 +613,9 @@ pub fn run(args: Args, global: Global) -> Result<(), Failure> {
     })?;
     if !global.quiet {
         if let Some(note) = fallback_note(&options, &mesh) {
+            bar.suspend(|| eprintln!("{note}"));
+        }
+        if let Some(note) = disk_note(&options, &mesh) {
             bar.suspend(|| eprintln!("{note}"));
         }
     }
