@@ -1471,65 +1471,116 @@ fn mesh_periodic_exact(
     options: &Options,
 ) -> Result<Option<PeriodicFrame>, MeshError> {
     let mut sampling = SamplingOptions::default();
-    // Exact periodic geometry collapses only zero-length arcs (exact co-circular groups,
-    // one empty circle per collapsed vertex): a short arc's merged vertex would sit on none
-    // of the exact bisectors.
+    // The fallback layout: only zero-length arcs collapsed (exact co-circular groups, one
+    // empty circle per collapsed vertex).
     let zero_only = Options {
         collapse_fraction: 0.0,
         ..options.clone()
     };
+    let nearly_zero = Options {
+        collapse_fraction: options.collapse_fraction.min(EXACT_COLLAPSE_FRACTION),
+        ..options.clone()
+    };
     for attempt in 0..=EXACT_RESAMPLING {
-        let p = match periodic_layout_with(pd, &zero_only, &sampling) {
-            Ok(p) => p,
-            // A nearly co-circular group (a lattice moved by 1e-9) leaves arcs so short that
-            // a block has no area unless they are collapsed: collapse short arcs as paper mode
-            // does (the merged vertex at the empty circle of three of its circles, spokes to
-            // the radial projections of its centre); paper mode when that fails too.
-            Err(MeshError::Internal(_)) => match periodic_layout_with(pd, options, &sampling) {
+        // 1. Nearly zero-length arcs collapsed too ([`EXACT_COLLAPSE_FRACTION`]): a nearly
+        //    co-circular group (a lattice moved by 1e-6) would otherwise leave arcs of 1e-6
+        //    whose blocks are slivers (aspect ratios of 1e11 were measured), or no block area
+        //    at all (1e-9). The merged vertex is the empty circle of three of its circles,
+        //    its spokes go to the radial projections of its centre; the mesh is kept only
+        //    without a corner below `MERGED_MIN_ANGLE_DEG` (as bounded exact mode gives up
+        //    such collapses).
+        let short = match periodic_layout_with(pd, &nearly_zero, &sampling) {
+            Ok(p) => Some(p),
+            Err(MeshError::Internal(_)) => None,
+            Err(_) if attempt > 0 => return Ok(None),
+            Err(e) => return Err(e),
+        };
+        let mut same_as_zero_only = None;
+        if let Some(p) = short {
+            if p.collapsed_arcs == 0 || nearly_zero.collapse_fraction == 0.0 {
+                // Nothing collapsed (or nothing short): the zero-only layout is this one.
+                same_as_zero_only = Some(p);
+            } else if let Some(f) = exact_frame(pd, p, options, true)? {
+                return Ok(Some(f));
+            }
+        }
+        // 2. Only zero-length arcs collapsed.
+        let p = match same_as_zero_only {
+            Some(p) => p,
+            None => match periodic_layout_with(pd, &zero_only, &sampling) {
                 Ok(p) => p,
                 Err(MeshError::Internal(_)) => return Ok(None),
                 Err(_) if attempt > 0 => return Ok(None),
                 Err(e) => return Err(e),
             },
-            Err(_) if attempt > 0 => return Ok(None),
-            Err(e) => return Err(e),
         };
         // No exact input (the orbits of the collapsed vertices were not consistent): paper.
-        let Some(pb) = &p.blocking else {
+        if p.blocking.is_none() {
             return Ok(None);
-        };
-        match timings::span("exact_geometry", || {
-            exact_mode::periodic::build(pb, options)
-        }) {
-            Ok(x) => {
-                let inverted =
-                    timings::span("quality_check", || crate::quality::inverted_cells(&x.grids));
-                if x.inconsistent_arcs.is_empty() && inverted == 0 {
-                    let mesh = Mesh {
-                        layout: x.layout,
-                        grids: x.grids,
-                        medial_vertices: p.medial_vertices,
-                        medial_arcs: p.medial_arcs,
-                        holes: pd.hole_count(),
-                        collapsed_arcs: p.collapsed_arcs,
-                        cocircular_groups: p.cocircular_groups.clone(),
-                        geometry: crate::mesh::Geometry::Exact,
-                        ..Mesh::default()
-                    };
-                    return Ok(Some(PeriodicFrame {
-                        mesh,
-                        triples: p.triples,
-                        keys: Some(x.keys),
-                    }));
-                }
-            }
-            Err(MeshError::Internal(_)) => {}
-            Err(e) => return Err(e),
+        }
+        if let Some(f) = exact_frame(pd, p, options, false)? {
+            return Ok(Some(f));
         }
         sampling.min_per_circle = sampling.min_per_circle.saturating_mul(4);
         sampling.spacing_per_gap *= 0.25;
     }
     Ok(None)
+}
+
+/// Periodic exact mode collapses arcs shorter than this fraction of the local empty-circle
+/// radius (or `collapse_fraction` when smaller), not paper mode's `collapse_fraction`: enough
+/// for nearly co-circular groups (whose arcs would be slivers), while an arc of a few percent
+/// of the radius keeps its exact blocks (collapsing it into a merged vertex cost up to 10
+/// degrees of smallest angle on random layouts).
+pub const EXACT_COLLAPSE_FRACTION: f64 = 1e-3;
+
+/// The exact mesh of `p` (its [`PeriodicLayout::blocking`]): `None` without exact input, when
+/// an arc runs backwards, a cell is inverted, or (`strict`) a cell has a corner angle below
+/// [`crate::mesher::MERGED_MIN_ANGLE_DEG`]. Errors other than [`MeshError::Internal`] are
+/// returned.
+fn exact_frame(
+    pd: &PeriodicDomain,
+    p: PeriodicLayout,
+    options: &Options,
+    strict: bool,
+) -> Result<Option<PeriodicFrame>, MeshError> {
+    let Some(pb) = &p.blocking else {
+        return Ok(None);
+    };
+    let x = match timings::span("exact_geometry", || {
+        exact_mode::periodic::build(pb, options)
+    }) {
+        Ok(x) => x,
+        Err(MeshError::Internal(_)) => return Ok(None),
+        Err(e) => return Err(e),
+    };
+    let bad = timings::span("quality_check", || {
+        use rayon::prelude::*;
+        crate::quality::inverted_cells(&x.grids) > 0
+            || (strict
+                && x.grids.par_iter().any(|g| {
+                    crate::quality::has_corner_below(g, crate::mesher::MERGED_MIN_ANGLE_DEG)
+                }))
+    });
+    if !x.inconsistent_arcs.is_empty() || bad {
+        return Ok(None);
+    }
+    let mesh = Mesh {
+        layout: x.layout,
+        grids: x.grids,
+        medial_vertices: p.medial_vertices,
+        medial_arcs: p.medial_arcs,
+        holes: pd.hole_count(),
+        collapsed_arcs: p.collapsed_arcs,
+        cocircular_groups: p.cocircular_groups,
+        geometry: crate::mesh::Geometry::Exact,
+        ..Mesh::default()
+    };
+    Ok(Some(PeriodicFrame {
+        mesh,
+        triples: p.triples,
+        keys: Some(x.keys),
+    }))
 }
 
 /// The period `[Lx, Ly]` of a periodic layout, read off its translations (the smallest
