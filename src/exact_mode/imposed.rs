@@ -82,9 +82,9 @@ impl ImposedCounts {
 /// bounding circle is `-1`, template blocks are tagged `-2`).
 pub const LOOP_PIECE: i64 = -3;
 
-/// Tell apart the blocks whose key repeats and whose two medial corners each see at most two
-/// circles: the pieces of one hole's medial loop ([`super::annulus`]), whose cuts all touch
-/// the same two circles. The `k`-th such block of a repeated key (in block order, which is
+/// Tell apart the blocks on a circle whose key repeats and whose two medial corners each see
+/// at most two circles: the pieces of one hole's medial loop ([`super::annulus`]), whose cuts
+/// all touch the same two circles (template blocks, tagged `-2`, are left alone). The `k`-th such block of a repeated key (in block order, which is
 /// the loop's cut order from a canonical direction) gets the tag `(LOOP_PIECE, k, 0)` appended
 /// to its corner-3 cycle, so that a sequence can impose counts on them. Unique keys and
 /// blocks at a medial vertex of three or more circles are unchanged.
@@ -96,7 +96,7 @@ pub fn number_loop_pieces(keys: &mut [BlockKey]) {
     let mut next: BTreeMap<BlockKey, i64> = BTreeMap::new();
     for k in keys.iter_mut() {
         let repeated = seen.get(k).is_some_and(|&n| n > 1);
-        if repeated && k.1.len() <= 2 && k.2.len() <= 2 {
+        if repeated && k.0 .0 >= -1 && k.1.len() <= 2 && k.2.len() <= 2 {
             let ordinal = next.entry(k.clone()).or_insert(0);
             k.1.push((LOOP_PIECE, *ordinal, 0));
             *ordinal += 1;
@@ -129,4 +129,48 @@ pub(super) fn bounded_keys(
     }
     number_loop_pieces(&mut keys);
     Some(keys)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn key(wall: i64, c3: &[i64], c2: &[i64]) -> BlockKey {
+        let tags = |c: &[i64]| c.iter().map(|&x| (x, 0, 0)).collect::<Vec<_>>();
+        ((wall, 0, 0), tags(c3), tags(c2))
+    }
+
+    #[test]
+    fn only_repeated_keys_of_loop_pieces_are_numbered() {
+        let loop_piece = key(0, &[-1, 0], &[-1, 0]);
+        let template = key(-2, &[3], &[3]);
+        let at_vertex = key(1, &[-1, 0, 1], &[-1, 0, 1]);
+        let unique = key(2, &[-1, 2], &[-1, 2]);
+        let mut keys = vec![
+            loop_piece.clone(),
+            template.clone(),
+            at_vertex.clone(),
+            loop_piece.clone(),
+            template.clone(),
+            at_vertex.clone(),
+            unique.clone(),
+            loop_piece.clone(),
+        ];
+        number_loop_pieces(&mut keys);
+        // The loop pieces get ordinals 0, 1, 2 in block order; nothing else changes.
+        for (at, k) in [(0usize, 0i64), (3, 1), (7, 2)] {
+            let mut want = loop_piece.clone();
+            want.1.push((LOOP_PIECE, k, 0));
+            assert_eq!(keys[at], want);
+        }
+        assert_eq!(
+            [&keys[1], &keys[2], &keys[4], &keys[5], &keys[6]],
+            [&template, &at_vertex, &template, &at_vertex, &unique]
+        );
+        // Numbered keys are unique among themselves.
+        let mut numbered = vec![keys[0].clone(), keys[3].clone(), keys[7].clone()];
+        numbered.sort();
+        numbered.dedup();
+        assert_eq!(numbered.len(), 3);
+    }
 }
