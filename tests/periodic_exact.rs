@@ -343,29 +343,28 @@ fn nearly_co_circular_lattices_are_exact() {
         // No sliver: the nearly zero-length arcs are collapsed (a 1e-6 nudge left blocks
         // whose cells had edge ratios of 1e11). Longest over shortest edge of every cell,
         // from the nodes.
-        let mut worst: f64 = 1.0;
-        for g in &mesh.grids {
-            for j in 0..g.nj {
-                for i in 0..g.ni {
-                    let q = [
-                        g.node(i, j),
-                        g.node(i + 1, j),
-                        g.node(i + 1, j + 1),
-                        g.node(i, j + 1),
-                    ];
-                    let e: Vec<f64> = (0..4)
-                        .map(|k| {
-                            let (a, b) = (q[k], q[(k + 1) % 4]);
+        let worst = mesh
+            .grids
+            .iter()
+            .flat_map(|g| {
+                // Cell (i, j) from node (i, j) counter-clockwise: the edge from corner k to
+                // corner k + 1 is the difference of nodes at these offsets.
+                let at = |i: usize, j: usize, k: usize| {
+                    let [di, dj] = [[0, 0], [1, 0], [1, 1], [0, 1]][k % 4];
+                    g.node(i + di, j + dj)
+                };
+                (0..g.nj).flat_map(move |j| {
+                    (0..g.ni).map(move |i| {
+                        let e = (0..4).map(|k| {
+                            let (a, b) = (at(i, j, k), at(i, j, k + 1));
                             (b[0] - a[0]).hypot(b[1] - a[1])
-                        })
-                        .collect();
-                    let (lo, hi) = e
-                        .iter()
-                        .fold((f64::INFINITY, 0.0f64), |(l, h), &x| (l.min(x), h.max(x)));
-                    worst = worst.max(hi / lo);
-                }
-            }
-        }
+                        });
+                        let hi = e.clone().fold(0.0f64, f64::max);
+                        hi / e.fold(f64::INFINITY, f64::min)
+                    })
+                })
+            })
+            .fold(1.0f64, f64::max);
         assert!(worst < 10.0, "nudge {nudge}: a cell edge ratio of {worst}");
         if nudge <= 1e-4 {
             // Both co-circular corners of each hole's cell, merged.

@@ -659,6 +659,13 @@ fn select_collapse(
     }
 }
 
+/// The error of a tiling whose copies do not agree (`what` names the part).
+fn not_translation_consistent(what: &str) -> MeshError {
+    MeshError::Internal(format!(
+        "the periodic tiling is not translation-consistent ({what})"
+    ))
+}
+
 /// Keep the canonical cells; `Ok(None)` when the tiling is too small (step 4).
 ///
 /// Zero-length medial arcs (co-circular hole groups, e.g. every corner of a square lattice)
@@ -710,11 +717,7 @@ fn extract(
             }
         }
     }
-    let inconsistent = |what: &str| {
-        MeshError::Internal(format!(
-            "the periodic tiling is not translation-consistent ({what})"
-        ))
-    };
+    let inconsistent = not_translation_consistent;
 
     // Collapse zero-length (always) and short arcs, identically in every copy. As in the
     // bounded pipeline, short collapses that leave a kept block with a non-positive outline
@@ -1129,11 +1132,7 @@ fn exact_input(
     vertex_by_key: &HashMap<VertexKey, usize>,
     arc_by_key: &HashMap<ArcKey, usize>,
 ) -> Result<PeriodicBlocking, MeshError> {
-    let bad = |what: &str| {
-        MeshError::Internal(format!(
-            "the periodic tiling is not translation-consistent ({what})"
-        ))
-    };
+    let bad = not_translation_consistent;
     let tag = |c: CircleId| {
         t.key(c)
             .ok_or_else(|| bad("a kept orbit on the bounding circle"))
@@ -1184,11 +1183,7 @@ fn orbit_arc(
     k: usize,
     ends: OrbitEnds,
 ) -> Result<PeriodicArc, MeshError> {
-    let bad = |what: &str| {
-        MeshError::Internal(format!(
-            "the periodic tiling is not translation-consistent ({what})"
-        ))
-    };
+    let bad = not_translation_consistent;
     let tag = |c: CircleId| {
         t.key(c)
             .ok_or_else(|| bad("a kept orbit on the bounding circle"))
@@ -1223,11 +1218,7 @@ fn exact_input_clusters(
     arc_orbits: &[ArcKey],
     arc_by_key: &HashMap<ArcKey, usize>,
 ) -> Result<PeriodicBlocking, MeshError> {
-    let bad = |what: &str| {
-        MeshError::Internal(format!(
-            "the periodic tiling is not translation-consistent ({what})"
-        ))
-    };
+    let bad = not_translation_consistent;
     // The orbits by their representative's key, in key order.
     let mut orbits: Vec<(ClusterKey, usize)> = cluster_orbits
         .iter()
