@@ -3,9 +3,11 @@
 //! spoke-aligned grids, wall clustering, counts from [`super::counts`]).
 //!
 //! A vertex orbit of degree `n > 3` is a co-circular group whose zero-length arcs were
-//! collapsed (one hole in a box, the corners of a lattice): its centre is the Apollonius
-//! circle of three of its circles spread around it (every three give the same empty circle),
-//! and every spoke ends at the radial projection of that centre, exactly normal to its wall.
+//! collapsed (one hole in a box, the corners of a lattice), or a nearly co-circular one
+//! whose arcs were below [`crate::periodic::EXACT_COLLAPSE_FRACTION`] of the local radius:
+//! its centre is the Apollonius circle of three of its circles spread around it (every three
+//! give the same empty circle, up to that fraction), and every spoke ends at the radial
+//! projection of that centre, exactly normal to its wall.
 //!
 //! # Exactly translated copies
 //! The input names every medial vertex and arc *up to a period shift* (an orbit of the
@@ -50,7 +52,7 @@ pub type Shift = (i32, i32);
 #[derive(Debug, Clone, PartialEq)]
 pub struct PeriodicVertex {
     /// Its circles in counter-clockwise order: three (the Delaunay triangle's samples), or
-    /// `n > 3` for a co-circular group whose zero-length arcs were collapsed (a vertex of
+    /// `n > 3` for a (nearly) co-circular group whose arcs were collapsed (a vertex of
     /// degree `n`, `2n` blocks around it).
     pub circles: Vec<Tag>,
     /// The triangle's circumcentre, or the collapsed vertex's position (chooses between two

@@ -1070,8 +1070,9 @@ fn extract(
     } else if collapsed_orbits.is_empty() {
         None
     } else {
-        // Collapsed co-circular groups: exact mode collapses only zero-length arcs, so every
-        // cluster is one exact empty circle. A failure here only leaves exact mode without
+        // Collapsed (nearly) co-circular groups: exact mode collapses zero-length arcs and
+        // arcs below `EXACT_COLLAPSE_FRACTION` of the local radius, so every cluster is one
+        // empty circle up to that fraction. A failure here only leaves exact mode without
         // its input (paper mode does not need it).
         exact_input_clusters(
             pd,
