@@ -1,0 +1,199 @@
+//! The core polygon of an inserted-hole template ([`medial_blocks::templates::core_angles`]):
+//! its vertices leave the rays through the arc ends only where two of them would nearly
+//! coincide, by the least-squares smallest move to a minimum gap.
+//!
+//! Oracles: the projection onto the cyclic gap constraints by Dykstra's alternating
+//! projections (an independent slow solver of the same least-squares problem), the corner
+//! angles of regular templates worked out by hand, and a layout from a sweep of unseen
+//! layouts whose inserted hole is touched by a 3-degree arc (cells of 3.4 degrees before).
+
+use medial_blocks::domain::Domain;
+use medial_blocks::mesh::BlockGrid;
+use medial_blocks::templates::{core_angles, spread_angles, template_min_angle};
+use medial_blocks::{mesh, Options};
+use proptest::prelude::*;
+use std::f64::consts::{PI, TAU};
+
+/// The cyclic gaps of increasing angles within one turn.
+fn gaps(phi: &[f64]) -> Vec<f64> {
+    let k = phi.len();
+    (0..k)
+        .map(|i| {
+            if i + 1 < k {
+                phi[i + 1] - phi[i]
+            } else {
+                phi[0] + TAU - phi[k - 1]
+            }
+        })
+        .collect()
+}
+
+/// The least-squares nearest point to `theta` with every cyclic gap at least `gap`, by
+/// Dykstra's alternating projections onto the `k` half-spaces `phi_{i+1} - phi_i >= gap`
+/// (the last one across the turn). Slow and independent of the pool-adjacent-violators code.
+fn dykstra(theta: &[f64], gap: f64) -> Vec<f64> {
+    let k = theta.len();
+    let mut x = theta.to_vec();
+    let mut inc = vec![[0.0f64; 2]; k];
+    for _ in 0..200_000 {
+        let mut moved = 0.0f64;
+        for i in 0..k {
+            let j = (i + 1) % k;
+            let wrap = if j == 0 { TAU } else { 0.0 };
+            // y = x + increment of this half-space, then project y onto it.
+            let yi = x[i] + inc[i][0];
+            let yj = x[j] + inc[i][1];
+            let short = gap - (yj + wrap - yi);
+            let (pi, pj) = if short > 0.0 {
+                (yi - short / 2.0, yj + short / 2.0)
+            } else {
+                (yi, yj)
+            };
+            inc[i] = [yi - pi, yj - pj];
+            moved = moved.max((pi - x[i]).abs()).max((pj - x[j]).abs());
+            x[i] = pi;
+            x[j] = pj;
+        }
+        if moved < 1e-15 {
+            break;
+        }
+    }
+    x
+}
+
+/// Increasing angles within one turn: `k` sorted uniform draws, some pulled together.
+fn angles() -> impl Strategy<Value = Vec<f64>> {
+    (
+        4usize..12,
+        prop::collection::vec(0.0f64..1.0, 12),
+        0.0f64..1.0,
+    )
+        .prop_map(|(k, u, squeeze)| {
+            let mut t: Vec<f64> = u[..k].iter().map(|x| x * TAU).collect();
+            t.sort_by(f64::total_cmp);
+            // Pull the second angle towards the first (a narrow arc).
+            t[1] = t[0] + squeeze * squeeze * (t[1] - t[0]);
+            t
+        })
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(300))]
+
+    /// Where it answers, `spread_angles` keeps the order, leaves every gap at least `gap`
+    /// and is the least-squares projection (Dykstra's answer).
+    #[test]
+    fn spread_angles_is_the_least_squares_projection(theta in angles(), fraction in 0.1f64..0.9) {
+        prop_assume!(theta.windows(2).all(|w| w[0] < w[1]));
+        let k = theta.len();
+        let gap = fraction * TAU / k as f64;
+        if let Some(phi) = spread_angles(&theta, gap) {
+            for g in gaps(&phi) {
+                prop_assert!(g >= gap - 1e-12, "gap {g} < {gap}");
+            }
+            let oracle = dykstra(&theta, gap);
+            for (a, b) in phi.iter().zip(&oracle) {
+                prop_assert!((a - b).abs() < 1e-9, "{phi:?} vs Dykstra {oracle:?}");
+            }
+            if gaps(&theta).iter().all(|&g| g >= gap) {
+                prop_assert_eq!(&phi, &theta);
+            }
+        }
+    }
+
+    /// The chosen core is never worse than the rays (by the templates' smallest corner
+    /// angle), and when it moves, no core gap is below a quarter of the regular one.
+    #[test]
+    fn core_angles_never_lower_the_smallest_corner(theta in angles()) {
+        prop_assume!(theta.windows(2).all(|w| w[0] < w[1]));
+        let k = theta.len();
+        let phi = core_angles(&theta);
+        prop_assert!(template_min_angle(&theta, &phi) >= template_min_angle(&theta, &theta));
+        if phi != theta {
+            for g in gaps(&phi) {
+                prop_assert!(g >= 0.25 * TAU / k as f64 - 1e-12);
+            }
+        }
+    }
+}
+
+#[test]
+fn regular_templates_have_the_corner_angles_worked_out_by_hand() {
+    // k = 4: ring blocks with right angles at the arc, 135 degrees at the core; a square core.
+    let square: Vec<f64> = (0..4).map(|i| i as f64 * TAU / 4.0).collect();
+    assert!((template_min_angle(&square, &square) - PI / 2.0).abs() < 1e-12);
+    // k = 6: the core hexagon's ladder is two trapezoids with 60-degree corners.
+    let hexagon: Vec<f64> = (0..6).map(|i| 0.3 + i as f64 * TAU / 6.0).collect();
+    assert!((template_min_angle(&hexagon, &hexagon) - PI / 3.0).abs() < 1e-12);
+    // Regular templates are good: the rays stay.
+    assert_eq!(core_angles(&square), square);
+    assert_eq!(core_angles(&hexagon), hexagon);
+    // A core vertex turned past its neighbour folds the blocks.
+    let mut folded = square.clone();
+    folded[1] = folded[2] + 0.1;
+    assert!(template_min_angle(&square, &folded) < 0.0);
+}
+
+#[test]
+fn three_arc_ends_within_seven_degrees_move_apart() {
+    // The arc ends of the inserted hole of `data/inserted_narrow_arc.json` (rounded): arcs of
+    // 1.1 and 5 degrees side by side put three core vertices within 7 degrees, and the core
+    // block on them was a triangle with a 3.4-degree corner.
+    let theta = [
+        0.0432, 0.0629, 0.9377, 1.7565, 2.6679, 4.2920, 5.1029, 6.2262,
+    ];
+    let radial = template_min_angle(&theta, &theta);
+    assert!(radial.to_degrees() < 4.0);
+    let phi = core_angles(&theta);
+    assert!(gaps(&phi).iter().all(|&g| g >= 0.25 * TAU / 8.0 - 1e-12));
+    // Half the regular gap won: corners of at least 22.5 degrees.
+    assert!(template_min_angle(&theta, &phi).to_degrees() > 22.0);
+    // Only the crowded vertices moved.
+    for i in 2..7 {
+        assert_eq!(phi[i], theta[i]);
+    }
+}
+
+/// Smallest interior angle (degrees) of the cells of `grid`, from `atan2` of each corner's
+/// two edges (independent of the quality module).
+fn min_cell_angle(grid: &BlockGrid) -> f64 {
+    let w = grid.ni + 1;
+    let mut least = f64::INFINITY;
+    for j in 0..grid.nj {
+        for i in 0..grid.ni {
+            let c = [
+                grid.nodes[i + j * w],
+                grid.nodes[i + 1 + j * w],
+                grid.nodes[i + 1 + (j + 1) * w],
+                grid.nodes[i + (j + 1) * w],
+            ];
+            for t in 0..4 {
+                let (o, a, b) = (c[t], c[(t + 1) % 4], c[(t + 3) % 4]);
+                let u = [a[0] - o[0], a[1] - o[1]];
+                let v = [b[0] - o[0], b[1] - o[1]];
+                let ang = (u[0] * v[1] - u[1] * v[0])
+                    .abs()
+                    .atan2(u[0] * v[0] + u[1] * v[1]);
+                least = least.min(ang.to_degrees());
+            }
+        }
+    }
+    least
+}
+
+#[test]
+fn an_inserted_hole_touched_by_a_narrow_arc_has_no_sliver_cells() {
+    let domain = Domain::from_json_str(include_str!("data/inserted_narrow_arc.json")).unwrap();
+    let m = mesh(&domain, &Options::default()).unwrap();
+    assert_eq!(m.inserted_holes.len(), 1);
+    assert!(m.template_blocks > 0);
+    let first_template = m.layout.blocks.len() - m.template_blocks;
+    let least = m.grids[first_template..]
+        .iter()
+        .map(min_cell_angle)
+        .fold(f64::INFINITY, f64::min);
+    // With the core vertices on the rays, a ring block and a core block were slivers whose
+    // cells went down to 3.4 degrees.
+    assert!(least > 10.0, "template cells down to {least} degrees");
+    medial_blocks::fuzzing::check_mesh(&domain, &m).unwrap();
+}
