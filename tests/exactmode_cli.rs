@@ -302,3 +302,69 @@ fn wall_options_on_a_disk_are_noted() {
         assert!(q.status.success() && q.stderr.is_empty(), "{q:?}");
     }
 }
+
+/// Two circles 1e-5 apart (2.5e-5 of their radius): exact mode's own counts keep cells about
+/// square in the gap, thousands along its walls. A note on stderr says so, with the cell count
+/// of report.json and the longest block side of connectivity.json; not with `--block-cells`,
+/// not for a layout without such a gap, never with `--quiet`.
+#[test]
+fn a_nearly_touching_pair_notes_its_fine_gap() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let pair = d.join("pair.json");
+    let (r, g) = (0.4f64, 1e-5f64);
+    std::fs::write(
+        &pair,
+        format!(
+            r#"{{"bounding": {{"center": [0, 0], "radius": 2}}, "holes": [
+                {{"center": [{a}, 0], "radius": {r}}}, {{"center": [{b}, 0], "radius": {r}}}]}}"#,
+            a = -(r + g / 2.0),
+            b = r + g / 2.0
+        ),
+    )
+    .unwrap();
+    let pair = pair.to_str().unwrap();
+    let note = "along one block side: exact mode keeps cells about square";
+    for (k, (input, extra, want)) in [
+        (pair, vec![], true),
+        (pair, vec!["--block-cells", "16"], false),
+        (pair, vec!["--mode", "paper"], false),
+        ("", vec![], false),
+    ]
+    .into_iter()
+    .enumerate()
+    {
+        let out = d.join(format!("o{k}"));
+        let mut args = vec!["-o", out.to_str().unwrap(), "--format", "json"];
+        if !input.is_empty() {
+            args.insert(0, input);
+        }
+        args.extend_from_slice(&extra);
+        let o = run(&args);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        let stderr = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(stderr.contains(note), want, "{extra:?}: {stderr}");
+        let report = read_json(&out.join("report.json"));
+        let conn = read_json(&out.join("connectivity.json"));
+        let longest = conn["blocks"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .flat_map(|b| b["dims"].as_array().unwrap().iter())
+            .map(|n| n.as_u64().unwrap())
+            .max()
+            .unwrap()
+            - 1; // "dims" counts nodes
+                 // The note appears exactly when a side reaches the threshold, and names the figures
+                 // the files hold.
+        assert_eq!(want, longest >= 2048, "{longest}");
+        if want {
+            let line = format!("note: {} cells, {longest} along one", report["cells"]);
+            assert!(stderr.contains(&line), "{stderr}");
+        }
+        let mut quiet = vec!["--quiet"];
+        quiet.extend_from_slice(&args);
+        let q = run(&quiet);
+        assert!(q.status.success() && q.stderr.is_empty(), "{q:?}");
+    }
+}
