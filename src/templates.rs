@@ -362,14 +362,8 @@ pub fn template_min_angle(theta: &[f64], phi: &[f64]) -> f64 {
     if k < 4 || phi.len() != k {
         return -1.0;
     }
-    let p = |i: usize| [theta[i % k].cos(), theta[i % k].sin()];
-    let q = |i: usize| {
-        let a = phi[i % k];
-        [
-            INSERTED_CORE_FRACTION * a.cos(),
-            INSERTED_CORE_FRACTION * a.sin(),
-        ]
-    };
+    let p = |i: usize| on_circle([0.0; 2], 1.0, theta[i % k]);
+    let q = |i: usize| on_circle([0.0; 2], INSERTED_CORE_FRACTION, phi[i % k]);
     let sub = |a: [f64; 2], b: [f64; 2]| [a[0] - b[0], a[1] - b[1]];
     // Interior angle at a corner of a counter-clockwise block entered along `a`, left along
     // `b`: half a turn less the left turn (negative turn: reflex, reported as negative).

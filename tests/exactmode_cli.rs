@@ -11,6 +11,17 @@ fn run(args: &[&str]) -> Output {
         .expect("binary runs")
 }
 
+/// `mesh` with `--quiet` and `args` succeeds and prints nothing (no note, no summary).
+fn assert_quiet_is_silent(args: &[&str]) {
+    let mut quiet = vec!["--quiet"];
+    quiet.extend_from_slice(args);
+    let q = run(&quiet);
+    assert!(
+        q.status.success() && q.stderr.is_empty() && q.stdout.is_empty(),
+        "{q:?}"
+    );
+}
+
 fn read_json(path: &std::path::Path) -> serde_json::Value {
     serde_json::from_str(&std::fs::read_to_string(path).expect("file written")).expect("JSON")
 }
@@ -211,13 +222,7 @@ fn a_fallback_to_paper_geometry_is_noted() {
         );
         noted += usize::from(note);
         // --quiet prints nothing, the note included.
-        let mut quiet = vec!["--quiet"];
-        quiet.extend_from_slice(&args);
-        let q = run(&quiet);
-        assert!(
-            q.status.success() && q.stderr.is_empty() && q.stdout.is_empty(),
-            "{q:?}"
-        );
+        assert_quiet_is_silent(&args);
     }
     assert!(noted > 0, "some case fell back, so the note was seen");
 }
@@ -296,10 +301,7 @@ fn wall_options_on_a_disk_are_noted() {
         assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
         let stderr = String::from_utf8_lossy(&o.stderr);
         assert_eq!(stderr.contains(note), want, "{extra:?}: {stderr}");
-        let mut quiet = vec!["--quiet"];
-        quiet.extend_from_slice(&args);
-        let q = run(&quiet);
-        assert!(q.status.success() && q.stderr.is_empty(), "{q:?}");
+        assert_quiet_is_silent(&args);
     }
 }
 
@@ -362,9 +364,6 @@ fn a_nearly_touching_pair_notes_its_fine_gap() {
             let line = format!("note: {} cells, {longest} along one", report["cells"]);
             assert!(stderr.contains(&line), "{stderr}");
         }
-        let mut quiet = vec!["--quiet"];
-        quiet.extend_from_slice(&args);
-        let q = run(&quiet);
-        assert!(q.status.success() && q.stderr.is_empty(), "{q:?}");
+        assert_quiet_is_silent(&args);
     }
 }
