@@ -85,6 +85,14 @@ impl PiecesByCircle {
     }
 }
 
+/// Whether circle `x` is marked in `is_fluid` (by circle slot `x + 1`): an inserted hole.
+fn marked(is_fluid: &[bool], x: CircleId) -> bool {
+    usize::try_from(x + 1)
+        .ok()
+        .and_then(|i| is_fluid.get(i).copied())
+        .unwrap_or(false)
+}
+
 /// Split arcs on inserted hole `c` (widest wall first) until it has an even number `k >= 4`
 /// of arcs, none wider than [`MAX_TEMPLATE_SWEEP`] (bounded effort: the template reports what
 /// is still wrong). A split arc's halves replace it (the first keeps its index, the second is
@@ -97,23 +105,10 @@ pub(crate) fn prepare(
     is_fluid: &[bool],
     index: &mut PiecesByCircle,
 ) -> usize {
-    let fluid = |x: CircleId| {
-        usize::try_from(x + 1)
-            .ok()
-            .and_then(|i| is_fluid.get(i).copied())
-            .unwrap_or(false)
-    };
+    let fluid = |x: CircleId| marked(is_fluid, x);
     let mut splits = 0;
     for _ in 0..MAX_SPLITS_PER_HOLE {
-        let on: Vec<(usize, f64)> = index
-            .on(c)
-            .iter()
-            .filter_map(|&e| {
-                let p = pieces.get(e)?;
-                let side = p.circles.iter().position(|&x| x == c)?;
-                Some((e, p.geom.sweep[side].abs()))
-            })
-            .collect();
+        let on = sweeps_on(pieces, c, index);
         let k = on.len();
         let widest = on.iter().map(|x| x.1).fold(0.0, f64::max);
         if k.is_multiple_of(2) && k >= 4 && widest <= MAX_TEMPLATE_SWEEP {
@@ -136,31 +131,159 @@ pub(crate) fn prepare(
             }
         }
         let Some((_, e)) = best else { break };
-        let Some((m, a, rho, first, second)) = pieces[e].geom.split() else {
+        if !split_piece(pieces, vertices, e, index) {
             break;
-        };
-        let v = vertices.len();
-        vertices.push(ExactVertex {
-            center: m,
-            radius: rho,
-            circles: pieces[e].circles.to_vec(),
-            tangent: a.to_vec(),
-        });
-        let end = pieces[e].ends[1];
-        let circles = pieces[e].circles;
-        let slots = pieces[e].slots;
-        let mid = circles.map(|x| vertices[v].slot(x).unwrap_or(0));
-        pieces[e].ends[1] = v;
-        pieces[e].slots = [[slots[0][0], mid[0]], [slots[1][0], mid[1]]];
-        pieces[e].geom = first;
-        pieces.push(Piece {
-            ends: [v, end],
-            circles,
-            slots: [[mid[0], slots[0][1]], [mid[1], slots[1][1]]],
-            geom: second,
-        });
-        index.push(pieces.len() - 1, circles);
+        }
         splits += 1;
+    }
+    splits
+}
+
+/// Split piece `e` at its middle (an exact medial point with its two exact spokes): the first
+/// half keeps index `e`, the second is appended (and recorded in `index`), the middle vertex
+/// is appended to `vertices`. False (nothing changed) when the middle is not defined.
+fn split_piece(
+    pieces: &mut Vec<Piece>,
+    vertices: &mut Vec<ExactVertex>,
+    e: usize,
+    index: &mut PiecesByCircle,
+) -> bool {
+    let Some((m, a, rho, first, second)) = pieces.get(e).and_then(|p| p.geom.split()) else {
+        return false;
+    };
+    let v = vertices.len();
+    vertices.push(ExactVertex {
+        center: m,
+        radius: rho,
+        circles: pieces[e].circles.to_vec(),
+        tangent: a.to_vec(),
+    });
+    let end = pieces[e].ends[1];
+    let circles = pieces[e].circles;
+    let slots = pieces[e].slots;
+    let mid = circles.map(|x| vertices[v].slot(x).unwrap_or(0));
+    pieces[e].ends[1] = v;
+    pieces[e].slots = [[slots[0][0], mid[0]], [slots[1][0], mid[1]]];
+    pieces[e].geom = first;
+    pieces.push(Piece {
+        ends: [v, end],
+        circles,
+        slots: [[mid[0], slots[0][1]], [mid[1], slots[1][1]]],
+        geom: second,
+    });
+    index.push(pieces.len() - 1, circles);
+    true
+}
+
+/// The pieces on inserted hole `c` with their sweep on `c` (absolute, radians).
+fn sweeps_on(pieces: &[Piece], c: CircleId, index: &PiecesByCircle) -> Vec<(usize, f64)> {
+    index
+        .on(c)
+        .iter()
+        .filter_map(|&e| {
+            let p = pieces.get(e)?;
+            let side = p.circles.iter().position(|&x| x == c)?;
+            Some((e, p.geom.sweep[side].abs()))
+        })
+        .collect()
+}
+
+/// Whether inserted hole `c` fits its template: an even number `k >= 4` of arcs, none wider
+/// than [`MAX_TEMPLATE_SWEEP`].
+pub(crate) fn fits(pieces: &[Piece], c: CircleId, index: &PiecesByCircle) -> bool {
+    let on = sweeps_on(pieces, c, index);
+    let widest = on.iter().map(|x| x.1).fold(0.0, f64::max);
+    on.len().is_multiple_of(2) && on.len() >= 4 && widest <= MAX_TEMPLATE_SWEEP
+}
+
+/// Make every inserted hole of `holes` fit its template together, where [`prepare`] hole by
+/// hole did not (it splits greedily per hole, and a split between two inserted holes flips the
+/// parity of both: two small holes in a large disk get a dozen inserted holes around them,
+/// mostly beside each other, and the per-hole rounds ended with a hole of 11 arcs). The two
+/// phases of the paper pipeline's joint preparation (`blocking::prepare_inserted_holes_jointly`):
+/// 1. widths: on each hole, split its widest arc until it has at least 4, none wider than
+///    [`MAX_TEMPLATE_SWEEP`] (a split only adds arcs and halves sweeps, so later splits keep
+///    this);
+/// 2. parity: from each hole left with an odd count, a breadth-first search over splittable
+///    pieces (widest first) to an input circle or the bounding circle (which need no parity)
+///    or another inserted hole with an odd count; splitting one piece on each step of the path
+///    flips the parity of its two ends only (inner holes gain two arcs each).
+///
+/// Returns the number of splits.
+pub(crate) fn prepare_jointly(
+    pieces: &mut Vec<Piece>,
+    vertices: &mut Vec<ExactVertex>,
+    holes: &[CircleId],
+    is_fluid: &[bool],
+    index: &mut PiecesByCircle,
+) -> usize {
+    let fluid = |x: CircleId| marked(is_fluid, x);
+    let widest_first = |a: &(usize, f64), b: &(usize, f64)| b.1.total_cmp(&a.1).then(a.0.cmp(&b.0));
+    let mut splits = 0;
+    for &c in holes {
+        for _ in 0..MAX_SPLITS_PER_HOLE {
+            let on = sweeps_on(pieces, c, index);
+            let widest = on.iter().map(|x| x.1).fold(0.0, f64::max);
+            if on.len() >= 4 && widest <= MAX_TEMPLATE_SWEEP {
+                break;
+            }
+            // The widest arc (ties: the smallest index) that can be split.
+            let mut order: Vec<(usize, f64)> = on.into_iter().filter(|x| x.1 > 0.0).collect();
+            order.sort_by(widest_first);
+            if !order
+                .iter()
+                .any(|&(e, _)| split_piece(pieces, vertices, e, index))
+            {
+                break;
+            }
+            splits += 1;
+        }
+    }
+    let odd = |index: &PiecesByCircle, c: CircleId| !index.on(c).len().is_multiple_of(2);
+    for &hole in holes {
+        if !odd(index, hole) {
+            continue;
+        }
+        // Breadth-first search from `hole`; `parent[c]` = (previous circle, piece).
+        let mut parent: HashMap<CircleId, (CircleId, usize)> = HashMap::new();
+        let mut queue = std::collections::VecDeque::from([hole]);
+        let mut found = None;
+        'search: while let Some(c) = queue.pop_front() {
+            let mut next = sweeps_on(pieces, c, index);
+            next.sort_by(widest_first);
+            for (e, w) in next {
+                let Some(&other) = pieces[e].circles.iter().find(|&&x| x != c) else {
+                    continue;
+                };
+                if w <= 0.0 || other == hole || parent.contains_key(&other) {
+                    continue;
+                }
+                if pieces[e].geom.split().is_none() {
+                    continue;
+                }
+                parent.insert(other, (c, e));
+                if !fluid(other) || odd(index, other) {
+                    found = Some(other);
+                    break 'search;
+                }
+                queue.push_back(other);
+            }
+        }
+        let Some(mut c) = found else { continue };
+        let mut path = Vec::new();
+        while c != hole {
+            let Some(&(prev, e)) = parent.get(&c) else {
+                break;
+            };
+            path.push(e);
+            c = prev;
+        }
+        // From `hole` outwards (a split keeps the other pieces' indices).
+        for e in path.into_iter().rev() {
+            if split_piece(pieces, vertices, e, index) {
+                splits += 1;
+            }
+        }
     }
     splits
 }
@@ -181,6 +304,75 @@ pub(crate) fn tie_counts(classes: &(Vec<usize>, usize), medial_edge: &[u32], arc
             arc[e] = best[k];
         }
     }
+}
+
+/// Per conformity class, the count [`template_grids`] gives a straight template edge whose
+/// class has no gridded member: the longest member's length over `h`, rounded, at least 1 and
+/// at most [`crate::grid::MAX_CELLS_PER_SIDE`].
+fn free_counts(
+    layout: &BlockLayout,
+    classes: &(Vec<usize>, usize),
+    first: usize,
+    h: f64,
+) -> Vec<usize> {
+    let (class, ncls) = (&classes.0, classes.1);
+    let vertex = |i: u32| layout.vertices.get(i as usize).copied().unwrap_or([0.0; 2]);
+    let length = |e: usize| {
+        let [a, b] = layout.edges[e].ends.map(vertex);
+        (a[0] - b[0]).hypot(a[1] - b[1])
+    };
+    let mut free = vec![1usize; ncls];
+    for block in layout.blocks.iter().skip(first) {
+        for side in block.sides {
+            let e = side.edge as usize;
+            let want = (length(e) / h).round();
+            if want.is_finite() && want >= 1.0 {
+                let want = (want as usize).min(crate::grid::MAX_CELLS_PER_SIDE);
+                if let Some(f) = class.get(e).and_then(|&k| free.get_mut(k)) {
+                    *f = (*f).max(want);
+                }
+            }
+        }
+    }
+    free
+}
+
+/// The grid nodes [`template_grids`] will make for the template blocks `layout.blocks[first..]`
+/// (saturating), before any grid exists: `side_count(b, k)` is the cell count of side `k` of
+/// medial block `b < first`, which fixes the count of its class; the other classes get
+/// their free count ([`free_counts`]). For the node limit of exact mode (the templates of a
+/// tiny target size can outweigh every other block).
+pub(crate) fn template_nodes(
+    layout: &BlockLayout,
+    classes: &(Vec<usize>, usize),
+    first: usize,
+    h: f64,
+    side_count: impl Fn(usize, usize) -> usize,
+) -> usize {
+    let (class, ncls) = (&classes.0, classes.1);
+    let mut count: Vec<Option<usize>> = vec![None; ncls];
+    for (b, block) in layout.blocks.iter().enumerate().take(first) {
+        for (k, side) in block.sides.iter().enumerate() {
+            if let Some(c) = class
+                .get(side.edge as usize)
+                .and_then(|&x| count.get_mut(x))
+            {
+                *c = Some(side_count(b, k));
+            }
+        }
+    }
+    let free = free_counts(layout, classes, first, h);
+    let cells = |e: u32| {
+        class
+            .get(e as usize)
+            .map_or(1, |&x| count.get(x).copied().flatten().unwrap_or(free[x]))
+    };
+    layout
+        .blocks
+        .iter()
+        .skip(first)
+        .map(|b| (cells(b.sides[0].edge) + 1).saturating_mul(cells(b.sides[1].edge) + 1))
+        .fold(0usize, usize::saturating_add)
 }
 
 /// The grids of the template blocks `layout.blocks[first..]`: sides already gridded by the
@@ -235,21 +427,7 @@ pub(crate) fn template_grids(
         }
     }
     let vertex = |i: u32| layout.vertices.get(i as usize).copied().unwrap_or([0.0; 2]);
-    let length = |e: usize| {
-        let [a, b] = layout.edges[e].ends.map(vertex);
-        (a[0] - b[0]).hypot(a[1] - b[1])
-    };
-    let mut free = vec![1usize; ncls];
-    for block in &layout.blocks[first..] {
-        for side in block.sides {
-            let e = side.edge as usize;
-            let want = (length(e) / h).round();
-            if want.is_finite() && want >= 1.0 {
-                let want = (want as usize).min(crate::grid::MAX_CELLS_PER_SIDE);
-                free[class[e]] = free[class[e]].max(want);
-            }
-        }
-    }
+    let free = free_counts(layout, classes, first, h);
     let mut out = Vec::with_capacity(layout.blocks.len() - first);
     for block in &layout.blocks[first..] {
         let mut sides: Vec<Vec<Point>> = Vec::with_capacity(4);
@@ -285,4 +463,45 @@ pub(crate) fn template_grids(
         out.push(g);
     }
     Ok(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// [`template_nodes`] counts, before any grid exists, exactly the nodes [`template_grids`]
+    /// then makes, for target sizes from far coarser to far finer than the mesh's own (the
+    /// node limit of exact mode relies on it).
+    #[test]
+    fn template_nodes_predicts_the_template_grids() {
+        let d = crate::Domain::from_json_str(
+            r#"{"bounding":{"center":[0,0],"radius":10},"holes":[{"center":[0,0],"radius":0.003},{"center":[0.009,0],"radius":0.0018}]}"#,
+        )
+        .unwrap();
+        let opts = crate::Options {
+            block_cells: Some(3),
+            ..crate::Options::default()
+        };
+        let m = crate::mesh(&d, &opts).unwrap();
+        assert!(m.template_blocks > 0);
+        let first = m.grids.len() - m.template_blocks;
+        let classes = crate::grid::edge_classes(&m.layout);
+        let side_count = |b: usize, k: usize| {
+            let g = &m.grids[b];
+            if k.is_multiple_of(2) {
+                g.ni
+            } else {
+                g.nj
+            }
+        };
+        for h in [1e3, 1.0, 0.05, 1e-3, 1e-5] {
+            let made = template_grids(&m.layout, &classes, &m.grids, first, h).unwrap();
+            let nodes: usize = made.iter().map(|g| g.nodes.len()).sum();
+            assert_eq!(
+                template_nodes(&m.layout, &classes, first, h, side_count),
+                nodes,
+                "h = {h}"
+            );
+        }
+    }
 }

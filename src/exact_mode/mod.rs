@@ -760,6 +760,17 @@ pub fn assemble_cached(
                 break;
             }
         }
+        // Hole by hole did not make every hole fit (splits between inserted holes flip the
+        // parity of both): prepare them together. Layouts the rounds above fit are unchanged.
+        if !sk.fluid.iter().all(|&c| inserted::fits(&pieces, c, &index)) {
+            split_arcs += inserted::prepare_jointly(
+                &mut pieces,
+                &mut vertices,
+                &sk.fluid,
+                &is_fluid,
+                &mut index,
+            );
+        }
     }
 
     // Target size and the count problem.
@@ -1074,7 +1085,7 @@ pub fn assemble_cached(
     // at most [`MAX_COARSENING`] steps) until the mesh fits [`MAX_TOTAL_NODES`] (aiming at
     // 1/64 of it); a layout
     // within the limit never gets here, so its counts are unchanged.
-    let total_of = |counts: &Counts| {
+    let total_of = |counts: &Counts, h: f64| {
         let mut total: usize = 0;
         for (e, p) in pieces.iter().enumerate() {
             let n = counts.arc[e];
@@ -1083,11 +1094,30 @@ pub fn assemble_cached(
                 total = total.saturating_add((n + 1).saturating_mul(nj + 1));
             }
         }
+        if template_blocks > 0 {
+            // Block `b` of piece `b / 2` is on `circles[b % 2]`: sides 0 and 2 have the
+            // arc's count, sides 1 and 3 the circle's.
+            let side_count = |b: usize, k: usize| {
+                let e = b / 2;
+                if k.is_multiple_of(2) {
+                    counts.arc[e]
+                } else {
+                    counts.circle[cidx(pieces[e].circles[b % 2])]
+                }
+            };
+            total = total.saturating_add(inserted::template_nodes(
+                &layout,
+                &classes,
+                first_template,
+                h,
+                side_count,
+            ));
+        }
         total
     };
     let mut coarsened = 0;
     loop {
-        let total = total_of(&counts);
+        let total = total_of(&counts, h);
         if total <= MAX_TOTAL_NODES {
             break;
         }
@@ -1101,7 +1131,7 @@ pub fn assemble_cached(
             if template_blocks > 0 {
                 inserted::tie_counts(&classes, &medial_edges, &mut c.arc);
             }
-            user_sized = total_of(&c) > MAX_TOTAL_NODES;
+            user_sized = total_of(&c, largest.max(h)) > MAX_TOTAL_NODES;
         }
         if user_sized || coarsened >= MAX_COARSENING {
             return Err(MeshError::Grid(GridError::TooManyNodes {
