@@ -23,7 +23,7 @@
 //! meeting at that medial vertex. Layout vertices: the medial vertices first (vertex `i` is
 //! medial vertex `i`), then one per sample used as a corner, in order of first use.
 
-use crate::domain::{CircleId, Domain};
+use crate::domain::{Circle, CircleId, Domain};
 use crate::geometry::{Point, Triangulation};
 use crate::layout::{Block, BlockLayout, Curve, Edge, EdgeKind, SideRef};
 use crate::medial::{MedialGraph, TriangleKind};
@@ -752,8 +752,21 @@ pub fn collapsed_blocking_excluding(
     collapse_thin_walls: bool,
     never: &[Vec<CircleId>],
 ) -> Result<CollapsedBlocking, MeshError> {
+    collapsed_blocking_seeded(domain, options, sampling, collapse_thin_walls, never, &[])
+}
+
+/// [`collapsed_blocking_excluding`] with the fluid holes `seed` inserted from the start
+/// ([`crate::refine::refine_seeded`]); they count towards the two holes the blocking needs.
+pub fn collapsed_blocking_seeded(
+    domain: &Domain,
+    options: &Options,
+    sampling: &SamplingOptions,
+    collapse_thin_walls: bool,
+    never: &[Vec<CircleId>],
+    seed: &[Circle],
+) -> Result<CollapsedBlocking, MeshError> {
     use crate::{cocircular, refine};
-    let h = domain.hole_count();
+    let h = domain.hole_count() + seed.len();
     if h < 2 {
         return Err(MeshError::Options(format!(
             "medial blocking needs at least 2 holes, the domain has {h} (use the disk/annulus \
@@ -766,11 +779,12 @@ pub fn collapsed_blocking_excluding(
             options.collapse_fraction
         )));
     }
-    let mut refined = refine::refine(
+    let mut refined = refine::refine_seeded(
         domain,
         options.refine_ratio,
         options.max_inserted_holes,
         sampling,
+        seed,
     )?;
     let sampled = &refined.sampled;
     let medial = &sampled.medial;

@@ -192,14 +192,15 @@ fn mesh_here(domain: &Domain, options: &Options) -> Result<Mesh, MeshError> {
                 exact_mode::annulus::build_annulus(domain, options)
             })?;
             if let Some(m) = built {
-                return Ok(Mesh {
+                let ring = Mesh {
                     layout: m.layout,
                     grids: m.grids,
                     holes,
                     split_arcs: exact_mode::annulus::ANNULUS_ARCS,
                     geometry: Geometry::Exact,
                     ..Mesh::default()
-                });
+                };
+                return Ok(lone_hole_seeded(domain, options, ring));
             }
         }
     }
@@ -225,6 +226,61 @@ fn mesh_here(domain: &Domain, options: &Options) -> Result<Mesh, MeshError> {
     let side_cells = options.block_cells.unwrap_or(options.cells);
     out.grids = timings::span("grids", || build_grids(&out.layout, side_cells))?;
     Ok(out)
+}
+
+/// Exact mode's ring of one hole ([`exact_mode::annulus`]) is kept when its smallest angle is
+/// at least this (degrees); below it, the lone hole is also meshed with a seeded fluid hole
+/// ([`lone_hole_seed`]) and the better of the two is kept.
+pub const LONE_HOLE_GOOD_ANGLE_DEG: f64 = 30.0;
+
+/// The fluid hole seeded opposite a lone off-centre hole: half the largest empty circle on
+/// the far side (tangent to the bounding circle and the hole, centred on the line of the two
+/// centres), as macro Delaunay refinement inserts half the empty circle of a poor vertex.
+/// `None` for a concentric hole (its ring is polar).
+pub fn lone_hole_seed(domain: &Domain) -> Option<crate::domain::Circle> {
+    let b = domain.bounding();
+    let h = *domain.holes().first()?;
+    let (dx, dy) = (h.center[0] - b.center[0], h.center[1] - b.center[1]);
+    let d = dx.hypot(dy);
+    if d.is_nan() || d <= 0.0 {
+        return None;
+    }
+    // Tangent to both: |p - c_b| + rho = R and |p - c_h| = rho + r, with p = c_b - t u.
+    let rho = 0.5 * (b.radius + d - h.radius);
+    let t = b.radius - rho;
+    let center = [b.center[0] - t * dx / d, b.center[1] - t * dy / d];
+    let seed = crate::domain::Circle {
+        center,
+        radius: 0.5 * rho,
+    };
+    (seed.radius.is_finite() && seed.radius > 0.0).then_some(seed)
+}
+
+/// The ring of a lone hole, or, when its smallest angle is below [`LONE_HOLE_GOOD_ANGLE_DEG`]
+/// (a small hole far off-centre: its medial loop is a long thin ellipse and the ring's cells
+/// shear, 3.4 degrees and aspect ratios of 8000 for a hole of 1e-3 R by the wall), the
+/// medial blocking with a fluid hole seeded opposite it ([`lone_hole_seed`]) when that has a
+/// larger smallest angle and no inverted cell. Options imposing counts (a sequence) keep
+/// the ring.
+fn lone_hole_seeded(domain: &Domain, options: &Options, ring: Mesh) -> Mesh {
+    let ring_min = crate::quality::measure(&ring.grids).min_angle_deg;
+    if ring_min >= LONE_HOLE_GOOD_ANGLE_DEG || options.imposed_counts.is_some() {
+        return ring;
+    }
+    let Some(seed) = lone_hole_seed(domain) else {
+        return ring;
+    };
+    match mesh_exact_seeded(domain, options, &[seed]) {
+        Ok(Some(m)) => {
+            let q = crate::quality::measure(&m.grids);
+            if q.inverted_cells == 0 && q.min_angle_deg > ring_min {
+                m
+            } else {
+                ring
+            }
+        }
+        _ => ring,
+    }
 }
 
 /// [`mesh`], timed: the mesh and the exclusive wall time of each pipeline stage
@@ -345,6 +401,16 @@ pub const EXACT_LOCAL_FIXES: usize = 8;
 /// Errors other than [`MeshError::Internal`] are returned at once on the first sampling (a
 /// finer sampling failing after a coarser one worked falls back to the paper pipeline).
 fn mesh_exact(domain: &Domain, options: &Options) -> Result<Option<Mesh>, MeshError> {
+    mesh_exact_seeded(domain, options, &[])
+}
+
+/// [`mesh_exact`] with the fluid holes `seed` inserted from the start
+/// ([`crate::refine::refine_seeded`]).
+fn mesh_exact_seeded(
+    domain: &Domain,
+    options: &Options,
+    seed: &[crate::domain::Circle],
+) -> Result<Option<Mesh>, MeshError> {
     let mut sampling = SamplingOptions {
         soft_rounds: false,
         ..SamplingOptions::default()
@@ -356,7 +422,7 @@ fn mesh_exact(domain: &Domain, options: &Options) -> Result<Option<Mesh>, MeshEr
     let mut cache = exact_mode::PieceCache::default();
     for attempt in 0..=EXACT_RESAMPLING {
         let outcome = timings::span("blocking", || {
-            blocking::collapsed_blocking_excluding(domain, options, &sampling, false, &given_up)
+            blocking::collapsed_blocking_seeded(domain, options, &sampling, false, &given_up, seed)
         })
         .and_then(|mut cb| {
             let outcome = exact_on_sampling(domain, options, &mut cb, &mut given_up, &mut cache);

@@ -102,11 +102,31 @@ pub fn refine(
     max_inserted: usize,
     sampling: &SamplingOptions,
 ) -> Result<Refined, MeshError> {
+    refine_seeded(domain, ratio, max_inserted, sampling, &[])
+}
+
+/// [`refine`] starting with the holes `seed` already inserted (fluid holes appended after the
+/// domain's, ids from `domain.hole_count()` on, filled with templates as refinement's own):
+/// exact mode seeds one opposite a lone off-centre hole ([`crate::mesher`]), whose medial
+/// loop has no vertex to refine. The seeds must keep the domain valid.
+pub fn refine_seeded(
+    domain: &Domain,
+    ratio: Option<f64>,
+    max_inserted: usize,
+    sampling: &SamplingOptions,
+    seed: &[Circle],
+) -> Result<Refined, MeshError> {
     if let Some(r) = ratio {
         crate::ranges::check_refine_ratio(r)?;
     }
     let mut current = domain.clone();
-    let mut inserted: Vec<Circle> = Vec::new();
+    let mut inserted: Vec<Circle> = seed.to_vec();
+    if !seed.is_empty() {
+        let mut holes = current.holes().to_vec();
+        holes.extend_from_slice(seed);
+        current = Domain::bounded(current.bounding(), holes)
+            .map_err(|e| MeshError::Internal(format!("a seeded hole broke the domain: {e}")))?;
+    }
     let mut min_gaps = Vec::new();
     // Candidate centres found unusable (their insertion would break Lemma 2): not retried.
     // Kept as a set of `==`-classes (`-0.0` as `0.0`; a NaN never equals anything, so it is
