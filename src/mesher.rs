@@ -230,8 +230,10 @@ fn mesh_here(domain: &Domain, options: &Options) -> Result<Mesh, MeshError> {
 
 /// Exact mode's ring of one hole ([`exact_mode::annulus`]) is kept when its smallest angle is
 /// at least this (degrees); below it, the lone hole is also meshed with a seeded fluid hole
-/// ([`lone_hole_seed`]) and the better of the two is kept.
-pub const LONE_HOLE_GOOD_ANGLE_DEG: f64 = 30.0;
+/// ([`lone_hole_seed`]) and the better of the two is kept. Not higher: the seeded mesh has
+/// template blocks, and a sequence keeps node counts over a run only without them (a ring
+/// of 15.4 degrees kept its counts over three frames; seeded, at 17.6, it did not).
+pub const LONE_HOLE_GOOD_ANGLE_DEG: f64 = 15.0;
 
 /// The fluid hole seeded opposite a lone off-centre hole: half the largest empty circle on
 /// the far side (tangent to the bounding circle and the hole, centred on the line of the two
@@ -260,11 +262,11 @@ pub fn lone_hole_seed(domain: &Domain) -> Option<crate::domain::Circle> {
 /// (a small hole far off-centre: its medial loop is a long thin ellipse and the ring's cells
 /// shear, 3.4 degrees and aspect ratios of 8000 for a hole of 1e-3 R by the wall), the
 /// medial blocking with a fluid hole seeded opposite it ([`lone_hole_seed`]) when that has a
-/// larger smallest angle and no inverted cell. Options imposing counts (a sequence) keep
-/// the ring.
+/// larger smallest angle and no inverted cell. The same rule with counts imposed (the later
+/// frames of a sequence run): a run of seeded frames then keeps its counts by block key.
 fn lone_hole_seeded(domain: &Domain, options: &Options, ring: Mesh) -> Mesh {
     let ring_min = crate::quality::measure(&ring.grids).min_angle_deg;
-    if ring_min >= LONE_HOLE_GOOD_ANGLE_DEG || options.imposed_counts.is_some() {
+    if ring_min >= LONE_HOLE_GOOD_ANGLE_DEG {
         return ring;
     }
     let Some(seed) = lone_hole_seed(domain) else {

@@ -560,7 +560,7 @@ fn a_small_hole_by_the_wall_is_meshed_with_a_seeded_hole() {
     let cases = [
         (
             Circle::new(5.0, 5.0, 10.0),
-            Circle::new(5.0 + 8.8, 5.0, 0.1),
+            Circle::new(5.0 + 9.9, 5.0, 0.05),
         ),
         (Circle::new(0.0, 0.0, 1.0), Circle::new(0.0, -0.98, 0.01)),
         (Circle::new(0.0, 0.0, 1.0), Circle::new(0.7, 0.7, 0.001)),

@@ -363,9 +363,13 @@ pub(crate) fn template_nodes(
     }
     let free = free_counts(layout, classes, first, h);
     let cells = |e: u32| {
-        class
-            .get(e as usize)
-            .map_or(1, |&x| count.get(x).copied().flatten().unwrap_or(free[x]))
+        class.get(e as usize).map_or(1, |&x| {
+            count
+                .get(x)
+                .copied()
+                .flatten()
+                .unwrap_or_else(|| free.get(x).copied().unwrap_or(1))
+        })
     };
     layout
         .blocks
