@@ -263,7 +263,8 @@ pub fn lone_hole_seed(domain: &Domain) -> Option<crate::domain::Circle> {
 /// shear, 3.4 degrees and aspect ratios of 8000 for a hole of 1e-3 R by the wall), the
 /// medial blocking with a fluid hole seeded opposite it ([`lone_hole_seed`]) when that has a
 /// larger smallest angle and no inverted cell. The same rule with counts imposed (the later
-/// frames of a sequence run): a run of seeded frames then keeps its counts by block key.
+/// frames of a sequence run); a run of seeded frames does not keep its node counts (its
+/// template blocks' counts cannot be imposed), see [`LONE_HOLE_GOOD_ANGLE_DEG`].
 fn lone_hole_seeded(domain: &Domain, options: &Options, ring: Mesh) -> Mesh {
     let ring_min = crate::quality::measure(&ring.grids).min_angle_deg;
     if ring_min >= LONE_HOLE_GOOD_ANGLE_DEG {
