@@ -92,6 +92,11 @@ pub struct Mesh {
     /// The geometry the blocks were built on (exact mode falls back to paper geometry only
     /// where the exact geometry disagrees with the sampled combinatorics).
     pub geometry: Geometry,
+    /// Exact mode: `[default, used]` when the default target cell size (the median
+    /// Apollonius radius over `cells`) would have given more nodes than
+    /// [`crate::exact_mode::node_budget`] and was coarsened to `used`; `None` otherwise (also
+    /// whenever the size was chosen: `cell_size`, `block_cells`, imposed counts).
+    pub coarsened_cell_size: Option<[f64; 2]>,
 }
 
 impl Mesh {

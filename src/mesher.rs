@@ -752,6 +752,7 @@ fn done(cb: &blocking::CollapsedBlocking, m: exact_mode::ExactMesh, holes: usize
         split_arcs: m.split_arcs,
         template_blocks: m.template_blocks,
         geometry: Geometry::Exact,
+        coarsened_cell_size: m.coarsened_from.map(|from| [from, m.cell_size]),
     }))
 }
 

@@ -367,3 +367,59 @@ fn a_nearly_touching_pair_notes_its_fine_gap() {
         assert_quiet_is_silent(&args);
     }
 }
+
+/// A default target size that would exceed the node budget is coarsened, and the CLI says
+/// so: a note on stderr naming both sizes and the cells of the mesh written, and
+/// `report.json`'s `coarsened_cell_size` `[default, used]` (`null` when not coarsened, with
+/// `--block-cells`, and for the built-in example); nothing with `--quiet`.
+#[test]
+fn a_coarsened_default_size_is_noted_and_reported() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let two = d.join("two.json");
+    std::fs::write(
+        &two,
+        r#"{"bounding":{"center":[0,0],"radius":10},"holes":[{"center":[0.5,0],"radius":0.0001},{"center":[0.5003,2e-05],"radius":8e-05}]}"#,
+    )
+    .unwrap();
+    let two = two.to_str().unwrap();
+    let note = "so it was coarsened to";
+    for (k, (input, extra, want)) in [
+        (two, vec![], true),
+        (two, vec!["--block-cells", "8"], false),
+        ("", vec![], false),
+    ]
+    .into_iter()
+    .enumerate()
+    {
+        let out = d.join(format!("o{k}"));
+        let mut args = vec!["-o", out.to_str().unwrap(), "--format", "json"];
+        if !input.is_empty() {
+            args.insert(0, input);
+        }
+        args.extend_from_slice(&extra);
+        let o = run(&args);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        let stderr = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(stderr.contains(note), want, "{extra:?}: {stderr}");
+        let report = read_json(&out.join("report.json"));
+        let sizes = &report["coarsened_cell_size"];
+        if want {
+            let (from, to) = (sizes[0].as_f64().unwrap(), sizes[1].as_f64().unwrap());
+            assert!(to > from && from > 0.0, "{sizes}");
+            assert!(
+                stderr.contains(&format!("({} cells)", report["cells"])),
+                "{stderr}"
+            );
+            assert!(stderr.contains(&format!("{to:.4e}")), "{stderr}");
+            let budget = medial_blocks::exact_mode::node_budget(
+                report["blocks"].as_u64().unwrap() as usize,
+                16,
+            );
+            assert!(report["nodes"].as_u64().unwrap() as usize <= budget);
+        } else {
+            assert!(sizes.is_null(), "{sizes}");
+        }
+        assert_quiet_is_silent(&args);
+    }
+}

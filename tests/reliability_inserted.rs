@@ -309,10 +309,8 @@ fn tiny_holes_do_not_explode_the_node_count() {
     let d = Domain::from_json_str(r#"{"bounding":{"center":[-400.0817856577331,33.87822533056584],"radius":1.0},"holes":[{"center":[-400.08312479371654,33.44838334890991],"radius":0.0990630459071938},{"center":[-399.7947884873536,34.381635245660654],"radius":0.10418356028060242},{"center":[-400.34032909914225,34.13765904541643],"radius":0.15484414181549747},{"center":[-400.0938468361977,33.637360311276765],"radius":0.08959851009587018},{"center":[-400.07449930958086,33.975518636641894],"radius":0.15651953635017232},{"center":[-400.20025144500437,34.06995272688713],"radius":0.00005517186456721176},{"center":[-400.2002104163847,34.070164390528866],"radius":0.00009968364075799228},{"center":[-400.21574421724756,34.04455227047863],"radius":0.00006730713755663978}]}"#).unwrap();
     let m = mesh(&d, &Options::default()).unwrap();
     let nodes: usize = m.grids.iter().map(|g| g.nodes.len()).sum();
-    assert!(
-        nodes <= medial_blocks::grid::MAX_TOTAL_NODES / 16,
-        "{nodes} nodes"
-    );
+    let budget = medial_blocks::exact_mode::node_budget(m.layout.blocks.len(), 16);
+    assert!(nodes <= budget, "{nodes} nodes, budget {budget}");
 }
 
 /// Two small holes in a large empty disk (radii 1e-4..3e-4 of the bounding radius) make
@@ -344,4 +342,54 @@ fn small_holes_in_a_large_disk_are_meshed_exactly() {
         );
         medial_blocks::fuzzing::check_mesh(&d, &m).unwrap();
     }
+}
+
+/// Two holes of 1e-4 R in a disk of radius 10: refinement inserts a dozen holes around them,
+/// so most medial vertices are tiny and so is the default target size (their median
+/// Apollonius radius over `cells`): the large blocks far away got 160 M cells. The default
+/// size is now coarsened until the nodes fit `exact_mode::node_budget` (64 x the blocks'
+/// `(cells + 1)^2`, at least 2^22), and the mesh says so (`coarsened_cell_size`). Oracles:
+/// the nodes counted in the grids; the same mesh again when the size used is passed as
+/// `cell_size` (the report names the size that made the mesh); a layout within the budget
+/// is not coarsened.
+#[test]
+fn a_tiny_default_size_is_coarsened_to_the_node_budget() {
+    use medial_blocks::exact_mode::node_budget;
+    let d = Domain::from_json_str(
+        r#"{"bounding":{"center":[0,0],"radius":10},"holes":[{"center":[0.5,0],"radius":0.0001},{"center":[0.5003,2e-05],"radius":8e-05}]}"#,
+    )
+    .unwrap();
+    let options = Options::default();
+    let m = mesh(&d, &options).unwrap();
+    let nodes: usize = m.grids.iter().map(|g| g.nodes.len()).sum();
+    let budget = node_budget(m.layout.blocks.len(), options.cells);
+    assert!(nodes <= budget, "{nodes} nodes, budget {budget}");
+    // Not coarsened far below the budget either (steps aim just under it).
+    assert!(nodes >= budget / 4, "{nodes} nodes, budget {budget}");
+    let [from, to] = m.coarsened_cell_size.expect("coarsened");
+    assert!(from > 0.0 && to > 1.25 * from, "{from} -> {to}");
+    assert_eq!(m.geometry, medial_blocks::mesh::Geometry::Exact);
+    assert_eq!(medial_blocks::quality::inverted_cells(&m.grids), 0);
+    medial_blocks::fuzzing::check_mesh(&d, &m).unwrap();
+
+    let sized = Options {
+        cell_size: Some(to),
+        ..Options::default()
+    };
+    let again = mesh(&d, &sized).unwrap();
+    assert_eq!(
+        again.coarsened_cell_size, None,
+        "a chosen size is never coarsened"
+    );
+    assert_eq!(again.grids.len(), m.grids.len());
+    for (a, b) in again.grids.iter().zip(&m.grids) {
+        assert_eq!((a.ni, a.nj), (b.ni, b.nj));
+        assert!(a.nodes.iter().zip(&b.nodes).all(|(p, q)| p == q));
+    }
+
+    let bubbles = medial_blocks::layouts::bubbles(40, 3).unwrap();
+    let m = mesh(&bubbles, &options).unwrap();
+    let nodes: usize = m.grids.iter().map(|g| g.nodes.len()).sum();
+    assert!(nodes <= node_budget(m.layout.blocks.len(), options.cells));
+    assert_eq!(m.coarsened_cell_size, None);
 }

@@ -516,6 +516,25 @@ pub fn fine_gap_note(options: &Options, mesh: &medial_blocks::Mesh) -> Option<St
     })
 }
 
+/// The note for a mesh whose default target cell size was coarsened
+/// ([`medial_blocks::Mesh::coarsened_cell_size`]): the two sizes and how to choose one.
+pub fn coarsened_note(options: &Options, mesh: &medial_blocks::Mesh) -> Option<String> {
+    let [from, to] = mesh.coarsened_cell_size?;
+    let cells: usize = mesh.grids.iter().map(|g| g.cells()).sum();
+    Some(format!(
+        concat!(
+            "note: the default cell size {from:.4e} (the median empty-circle radius over ",
+            "--cells) would give over {budget} nodes for {blocks} blocks, so it was coarsened ",
+            "to {to:.4e} ({cells} cells); --cell-size or --block-cells chooses the size"
+        ),
+        from = from,
+        budget = medial_blocks::exact_mode::node_budget(mesh.layout.blocks.len(), options.cells),
+        blocks = mesh.layout.blocks.len(),
+        to = to,
+        cells = cells
+    ))
+}
+
 /// The short summary printed after meshing.
 pub fn summary(r: &report::Report) -> String {
     let mut s = format!(
@@ -649,6 +668,9 @@ pub fn run(args: Args, global: Global) -> Result<(), Failure> {
             bar.suspend(|| eprintln!("{note}"));
         }
         if let Some(note) = fine_gap_note(&options, &mesh) {
+            bar.suspend(|| eprintln!("{note}"));
+        }
+        if let Some(note) = coarsened_note(&options, &mesh) {
             bar.suspend(|| eprintln!("{note}"));
         }
     }

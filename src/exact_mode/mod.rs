@@ -374,8 +374,47 @@ fn cidx(id: CircleId) -> usize {
 }
 
 /// The most times the default target cell size is coarsened to bring a mesh under
-/// [`MAX_TOTAL_NODES`] (see the limits in [`assemble`]).
+/// [`node_budget`] (see the limits in [`assemble`]).
 pub const MAX_COARSENING: usize = 8;
+
+/// How many times the nodes of `cells` x `cells` per block a mesh at the default target size
+/// may have before that size is coarsened ([`node_budget`]): on average 8x finer per block
+/// side than asked for.
+pub const BUDGET_FACTOR: usize = 64;
+
+/// The fewest nodes [`node_budget`] allows (`2^22`, about 4.2 M): layouts of a few blocks
+/// keep their counts from geometry up to this size.
+pub const BUDGET_MIN_NODES: usize = 1 << 22;
+
+/// The most nodes a mesh of `blocks` blocks at the default target size (exact mode, no
+/// `cell_size`, `block_cells` or imposed counts) may have before that size is coarsened:
+/// [`BUDGET_FACTOR`] times `blocks (cells + 1)^2`, at least [`BUDGET_MIN_NODES`], at most
+/// [`MAX_TOTAL_NODES`].
+///
+/// The default size comes from the median Apollonius radius; where most medial vertices
+/// are tiny (tiny holes and the holes refinement inserts around them, near-touching close
+/// packs) it is tiny everywhere, and the large blocks got hundreds of times the cells the
+/// median block has (two holes of 1e-4 R in a disk: 160 M cells). Layouts without such
+/// vertices stay below it: random bubbles have about 2.5x the nominal nodes, the median of
+/// 328 random layouts of a sweep (clusters, lattices, near-touching and near-wall circles,
+/// rings, mixed sizes) 6.7x and its 90th percentile 42x; the few above had 60x to 3000x
+/// (307 M cells for 400 blocks).
+///
+/// ```
+/// use medial_blocks::exact_mode::{node_budget, BUDGET_MIN_NODES};
+/// assert_eq!(node_budget(8, 16), BUDGET_MIN_NODES);
+/// assert_eq!(node_budget(10_000, 16), 64 * 10_000 * 17 * 17);
+/// assert_eq!(node_budget(10_000_000, 16), medial_blocks::grid::MAX_TOTAL_NODES);
+/// ```
+pub fn node_budget(blocks: usize, cells: usize) -> usize {
+    let per_block = cells
+        .saturating_add(1)
+        .saturating_mul(cells.saturating_add(1));
+    BUDGET_FACTOR
+        .saturating_mul(blocks)
+        .saturating_mul(per_block)
+        .clamp(BUDGET_MIN_NODES, MAX_TOTAL_NODES)
+}
 
 fn median(mut v: Vec<f64>) -> Option<f64> {
     v.retain(|x| x.is_finite());
@@ -529,6 +568,9 @@ pub struct ExactMesh {
     pub counts: Counts,
     /// The target cell size used.
     pub cell_size: f64,
+    /// The default target size before [`node_budget`] coarsened it to `cell_size`
+    /// (`None`: not coarsened).
+    pub coarsened_from: Option<f64>,
     /// Arcs whose exact walls run against their block's orientation: the sampled Delaunay
     /// combinatorics disagree with the exact medial axis there (nearly co-circular circles
     /// not resolved by the sampling); their blocks are inverted. Empty on a consistent layout.
@@ -1077,14 +1119,16 @@ pub fn assemble_cached(
 
     // Limits before allocating. The default target size is the median Apollonius radius over
     // `cells`: where most medial vertices are tiny (tiny holes, and the holes refinement
-    // inserts around them, issue #9) it is tiny for every circle, and the counts of the
-    // large blocks explode (billions of nodes for a 10-hole layout) although nothing needs
-    // them. Only then, and only when the size was not chosen by the user (`cell_size`,
-    // `block_cells`, imposed counts, or a `cells` too large even for the largest Apollonius
-    // radius), the target size is coarsened (at least 2x per step,
-    // at most [`MAX_COARSENING`] steps) until the mesh fits [`MAX_TOTAL_NODES`] (aiming at
-    // 1/64 of it); a layout
-    // within the limit never gets here, so its counts are unchanged.
+    // inserts around them, issue #9; near-touching close packs) it is tiny for every circle,
+    // and the counts of the large blocks explode (two holes of 1e-4 R gave 160 M cells, a
+    // 10-hole layout billions of nodes) although nothing needs them. Only when the size was
+    // not chosen by the user (`cell_size`, `block_cells`, imposed counts) and the mesh
+    // exceeds [`node_budget`] (a multiple of what `cells` per block side would give, at
+    // least a few million nodes), the target size is coarsened step by step (at most
+    // [`MAX_COARSENING`] steps) towards that budget; a layout within it never gets here, so
+    // its counts are unchanged. Above [`MAX_TOTAL_NODES`] a mesh the coarsening cannot bring
+    // under it is refused, also when `cells` itself is too large even for the largest
+    // Apollonius radius (e.g. `--cells 100000`).
     let total_of = |counts: &Counts, h: f64| {
         let mut total: usize = 0;
         for (e, p) in pieces.iter().enumerate() {
@@ -1115,15 +1159,19 @@ pub fn assemble_cached(
         }
         total
     };
+    let budget = node_budget(2 * pieces.len() + template_blocks, options.cells);
+    let user_sized = options.cell_size.is_some() || options.block_cells.is_some() || imposed_used;
     let mut coarsened = 0;
+    let default_h = h;
     loop {
         let total = total_of(&counts, h);
-        if total <= MAX_TOTAL_NODES {
+        if total <= budget
+            || (total <= MAX_TOTAL_NODES && (user_sized || coarsened >= MAX_COARSENING))
+        {
             break;
         }
-        let mut user_sized =
-            options.cell_size.is_some() || options.block_cells.is_some() || imposed_used;
-        if !user_sized && coarsened == 0 {
+        let mut refused = user_sized || coarsened >= MAX_COARSENING;
+        if !refused && coarsened == 0 && total > MAX_TOTAL_NODES {
             // `cells` itself asks for too much when even the largest Apollonius radius over
             // `cells` does not fit (e.g. `--cells 100000`): refused, not coarsened.
             let largest = radii_max / options.cells.max(1) as f64;
@@ -1131,18 +1179,18 @@ pub fn assemble_cached(
             if template_blocks > 0 {
                 inserted::tie_counts(&classes, &medial_edges, &mut c.arc);
             }
-            user_sized = total_of(&c, largest.max(h)) > MAX_TOTAL_NODES;
+            refused = total_of(&c, largest.max(h)) > MAX_TOTAL_NODES;
         }
-        if user_sized || coarsened >= MAX_COARSENING {
+        if refused {
             return Err(MeshError::Grid(GridError::TooManyNodes {
                 nodes: total,
                 limit: MAX_TOTAL_NODES,
             }));
         }
-        // Nodes scale about as 1 / h^2: aim at 1/64 of the limit (a few million nodes, a
-        // mesh that can still be written and used; the limit itself is a memory guard).
-        let ratio = total as f64 / (MAX_TOTAL_NODES as f64 / 64.0);
-        h *= ratio.sqrt().max(2.0);
+        // Nodes scale about as 1 / h^2 where counts are above their floors: aim a little
+        // under the budget, by at least 1.25x per step (floors make the steps smaller).
+        let ratio = total as f64 / budget as f64;
+        h *= (1.02 * ratio.sqrt()).max(1.25);
         coarsened += 1;
         counts = solve_counts(h, &mut targets)?;
         if template_blocks > 0 {
@@ -1330,6 +1378,7 @@ pub fn assemble_cached(
         vertices,
         counts,
         cell_size: h,
+        coarsened_from: (coarsened > 0).then_some(default_h),
         inconsistent_arcs,
         split_arcs,
         template_blocks,

@@ -23,7 +23,7 @@ use std::path::Path;
 /// (`[{"holes": [...], "center": [x, y], "radius": r}]`, hole ids 0-based as in the input,
 /// `-1` the bounding circle, ids from `holes` on the inserted holes), `collapsed_arcs`,
 /// `inserted_holes` (`[{"center": [x, y], "radius": r}]`), `geometry` (`"exact"` or
-/// `"paper"`). Angle figures are those of
+/// `"paper"`), `coarsened_cell_size` (`[default, used]` or `null`). Angle figures are those of
 /// [`crate::quality::Quality`] (0 when there are no cells); a non-finite figure is written as
 /// `null`.
 ///
@@ -58,6 +58,10 @@ pub struct Report {
     /// `"exact"` or `"paper"`: the geometry the blocks were built on ([`crate::mesh::Geometry`];
     /// `"paper"` in exact mode means it fell back).
     pub geometry: &'static str,
+    /// Exact mode: `[default, used]` target cell sizes when the default size would have
+    /// given more nodes than [`crate::exact_mode::node_budget`] and was coarsened
+    /// ([`Mesh::coarsened_cell_size`]); `null` otherwise.
+    pub coarsened_cell_size: Option<[f64; 2]>,
 }
 
 impl Report {
@@ -104,6 +108,7 @@ impl Report {
             max_aspect_ratio: quality.aspect_ratio.max,
             quality,
             geometry: mesh.geometry.name(),
+            coarsened_cell_size: mesh.coarsened_cell_size,
         }
     }
 }
