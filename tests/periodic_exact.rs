@@ -372,3 +372,109 @@ fn nearly_co_circular_lattices_are_exact() {
         }
     }
 }
+
+/// |sweep| in degrees of block `b`'s wall (side 0), 0 when it is not an arc.
+fn wall_sweep_deg(m: &Mesh, b: usize) -> f64 {
+    let side = m.layout.blocks[b].sides[0];
+    match m.layout.edges[side.edge as usize].curve {
+        medial_blocks::layout::Curve::Arc { sweep, .. } => sweep.abs().to_degrees(),
+        _ => 0.0,
+    }
+}
+
+/// `block_cells` (`--block-cells N`) in a periodic box: `N` cells along every spoke and `N`
+/// along every arc, raised only where a wall of the arc's two blocks (blocks `2o` and
+/// `2o + 1` of arc orbit `o`) needs more than `N` cells of 15 degrees, and always there
+/// (it was ignored: the counts came from the geometry as without it).
+#[test]
+fn block_cells_gives_n_by_n_per_block() {
+    let mut all_square = 0;
+    for seed in 1..=3u64 {
+        let size = [2.0, 1.5];
+        let pd = PeriodicDomain::new(size, holes(6, size, seed, seed == 2)).unwrap();
+        for n in [4usize, 10] {
+            let o = Options {
+                block_cells: Some(n),
+                cells: n,
+                ..Options::default()
+            };
+            let mesh = mesh_periodic(&pd, &o).unwrap();
+            assert_eq!(mesh.geometry, medial_blocks::mesh::Geometry::Exact);
+            check(&pd, &mesh, None);
+            let limit = n as f64 * 15.0;
+            for (b, g) in mesh.grids.iter().enumerate() {
+                let what = format!("seed {seed}, N = {n}, block {b}");
+                assert_eq!(g.nj, n, "{what}: spokes");
+                assert!(g.ni >= n, "{what}: ni {}", g.ni);
+                let (own, other) = (wall_sweep_deg(&mesh, b), wall_sweep_deg(&mesh, b ^ 1));
+                if g.ni > n {
+                    assert!(own + other > limit - 1e-6, "{what}: {own} + {other} deg");
+                }
+                if own.max(other) > limit + 1e-6 {
+                    assert!(g.ni > n, "{what}: wall of {own} deg in {} cells", g.ni);
+                }
+            }
+            if mesh.grids.iter().all(|g| g.ni == n) {
+                all_square += 1;
+                let cells: usize = mesh.grids.iter().map(|g| g.cells()).sum();
+                assert_eq!(cells, n * n * mesh.layout.blocks.len());
+            }
+        }
+    }
+    assert!(all_square >= 1, "{all_square}");
+}
+
+/// A periodic close pack with gaps of 1e-5 of the radius: every medial vertex is tiny, so
+/// is the default target size, and the counts exceeded `exact_mode::node_budget` (5.8 M
+/// cells for 24 blocks). The default size is coarsened until the nodes fit the budget, as in
+/// bounded domains, and the mesh says so; with the size used passed as `cell_size` the mesh
+/// is the same, and nothing is coarsened with `block_cells`.
+#[test]
+fn a_tiny_default_size_is_coarsened_in_periodic_boxes() {
+    use medial_blocks::exact_mode::node_budget;
+    let (a, g) = (1.0f64, 1e-5f64);
+    let h = a * 3f64.sqrt() / 2.0;
+    let mut rng = SplitMix64(5);
+    let mut hs = Vec::new();
+    for j in 0..2 {
+        for i in 0..2 {
+            let x = i as f64 * a + if j % 2 == 1 { 0.5 * a } else { 0.0 };
+            let y = j as f64 * h;
+            let jitter = |r: &mut SplitMix64| (2.0 * r.next_f64() - 1.0) * 0.3 * g;
+            let (dx, dy) = (jitter(&mut rng), jitter(&mut rng));
+            hs.push(Circle::new(x + dx, y + dy, a / 2.0 - g));
+        }
+    }
+    let pd = PeriodicDomain::new([2.0 * a, 2.0 * h], hs).unwrap();
+    let options = Options::default();
+    let mesh = mesh_periodic(&pd, &options).unwrap();
+    check(&pd, &mesh, None);
+    let nodes: usize = mesh.grids.iter().map(|g| g.nodes.len()).sum();
+    let budget = node_budget(mesh.layout.blocks.len(), options.cells);
+    assert!(
+        nodes <= budget && nodes >= budget / 4,
+        "{nodes} nodes, budget {budget}"
+    );
+    let [from, to] = mesh.coarsened_cell_size.expect("coarsened");
+    assert!(from > 0.0 && to > 1.2 * from, "{from} -> {to}");
+    let sized = Options {
+        cell_size: Some(to),
+        ..Options::default()
+    };
+    let again = mesh_periodic(&pd, &sized).unwrap();
+    assert_eq!(again.coarsened_cell_size, None);
+    assert_eq!(again.grids.len(), mesh.grids.len());
+    for (x, y) in again.grids.iter().zip(&mesh.grids) {
+        assert_eq!((x.ni, x.nj), (y.ni, y.nj));
+        assert!(x.nodes.iter().zip(&y.nodes).all(|(p, q)| p == q));
+    }
+    let uniform = Options {
+        block_cells: Some(8),
+        cells: 8,
+        ..Options::default()
+    };
+    assert_eq!(
+        mesh_periodic(&pd, &uniform).unwrap().coarsened_cell_size,
+        None
+    );
+}

@@ -93,6 +93,8 @@ pub struct PeriodicExact {
     /// along arc orbit `o`.
     pub counts: Counts,
     pub cell_size: f64,
+    /// The default target size before [`super::node_budget`] coarsened it to `cell_size`.
+    pub coarsened_from: Option<f64>,
     /// Arc orbits whose exact walls run against their blocks (see
     /// [`super::ExactMesh::inconsistent_arcs`]).
     pub inconsistent_arcs: Vec<usize>,
@@ -270,32 +272,55 @@ fn build_checking(
                 / options.cells.max(1) as f64
         }
     };
-    let mut circle_target = vec![1.0; ncirc];
     let mut circle_fixed = vec![None; ncirc];
-    for (k, hole) in pb.holes.iter().enumerate() {
-        let near: Vec<f64> = verts
-            .iter()
-            .filter(|v| v.circles.iter().any(|c| c.0 as usize == k))
-            .map(|v| v.radius)
-            .collect();
-        let len = median(near).unwrap_or(cell);
-        let cl = clustering_of(options, k as CircleId);
-        let first = cl.first_height(hole.radius);
-        circle_target[k + 1] = clustering::cells_for(len, cell, first, cl.growth) as f64;
-    }
     for (c, n) in &options.wall_cells {
         if *c >= 0 && (*c as usize) < h {
             circle_fixed[*c as usize + 1] = Some(*n);
         }
     }
-    let problem = CountProblem {
-        circle_target,
-        circle_fixed,
-        template: vec![false; ncirc],
-        arcs: targets,
+    // The median Apollonius radius of the vertices touching each hole (independent of the
+    // target size).
+    let near_len: Vec<f64> = (0..pb.holes.len())
+        .map(|k| {
+            let near: Vec<f64> = verts
+                .iter()
+                .filter(|v| v.circles.iter().any(|c| c.0 as usize == k))
+                .map(|v| v.radius)
+                .collect();
+            median(near).unwrap_or(f64::NAN)
+        })
+        .collect();
+    let solve = |cell: f64, arcs: &mut Vec<ArcTarget>| -> Result<Counts, MeshError> {
+        let mut circle_target = vec![1.0; ncirc];
+        for (k, hole) in pb.holes.iter().enumerate() {
+            let len = if near_len[k].is_finite() {
+                near_len[k]
+            } else {
+                cell
+            };
+            let cl = clustering_of(options, k as CircleId);
+            let first = cl.first_height(hole.radius);
+            circle_target[k + 1] = clustering::cells_for(len, cell, first, cl.growth) as f64;
+        }
+        let problem = CountProblem {
+            circle_target,
+            circle_fixed: circle_fixed.clone(),
+            template: vec![false; ncirc],
+            arcs: std::mem::take(arcs),
+        };
+        // `--block-cells n`: n x n per block (arcs raised where a wall turns over 15 degrees
+        // per cell), as in bounded domains.
+        let solved = match options.block_cells {
+            Some(n) => problem.solve_uniform(n),
+            None => problem.solve(),
+        }
+        .map_err(internal);
+        *arcs = problem.arcs;
+        solved
     };
-    let mut counts = problem.solve().map_err(internal)?;
+    let mut counts = solve(cell, &mut targets)?;
     let keys = block_keys(pb, &verts);
+    let mut imposed_used = false;
     if let Some(imp) = &options.imposed_counts {
         let arcs: Vec<[usize; 2]> = pb
             .arcs
@@ -304,15 +329,37 @@ fn build_checking(
             .collect();
         if let Some((circle, arc)) = imp.counts_for(&keys, &arcs, ncirc) {
             counts = Counts { circle, arc };
+            imposed_used = true;
         }
     }
-    let mut total: usize = 0;
-    for (o, arc) in pb.arcs.iter().enumerate() {
-        for c in arc.circles {
-            let nj = counts.circle[c.0 as usize + 1];
-            total = total.saturating_add((counts.arc[o] + 1).saturating_mul(nj + 1));
+    let total_of = |counts: &Counts| {
+        let mut total: usize = 0;
+        for (o, arc) in pb.arcs.iter().enumerate() {
+            for c in arc.circles {
+                let nj = counts.circle[c.0 as usize + 1];
+                total = total.saturating_add((counts.arc[o] + 1).saturating_mul(nj + 1));
+            }
         }
-    }
+        total
+    };
+    // The default target size is coarsened towards the node budget as in bounded domains
+    // (see `super::node_budget`): a periodic close pack with tiny gaps has tiny medial
+    // vertices everywhere.
+    let budget = super::node_budget(2 * pb.arcs.len(), options.cells);
+    let user_sized = options.cell_size.is_some() || options.block_cells.is_some() || imposed_used;
+    let default_cell = cell;
+    let mut cell = cell;
+    let mut coarsened = 0;
+    let total = loop {
+        let total = total_of(&counts);
+        if total <= budget || user_sized || coarsened >= super::MAX_COARSENING {
+            break total;
+        }
+        let ratio = total as f64 / budget as f64;
+        cell *= (1.02 * ratio.sqrt()).max(1.25);
+        coarsened += 1;
+        counts = solve(cell, &mut targets)?;
+    };
     if total > MAX_TOTAL_NODES {
         return Err(MeshError::Grid(GridError::TooManyNodes {
             nodes: total,
@@ -335,10 +382,10 @@ fn build_checking(
         let nbar = 0.5
             * (counts.circle[arc.circles[0].0 as usize + 1]
                 + counts.circle[arc.circles[1].0 as usize + 1]) as f64;
-        let weights: Vec<f64> = problem.arcs[o]
+        let weights: Vec<f64> = targets[o]
             .sq
             .iter()
-            .zip(&problem.arcs[o].ang)
+            .zip(&targets[o].ang)
             .map(|(s, a)| (nbar * s).max(*a))
             .collect();
         let params = equidistribute(&weights, n);
@@ -465,6 +512,7 @@ fn build_checking(
         grids,
         counts,
         cell_size: cell,
+        coarsened_from: (coarsened > 0).then_some(default_cell),
         inconsistent_arcs,
         keys,
     })

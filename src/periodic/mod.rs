@@ -1566,6 +1566,7 @@ fn exact_frame(
         collapsed_arcs: p.collapsed_arcs,
         cocircular_groups: p.cocircular_groups,
         geometry: crate::mesh::Geometry::Exact,
+        coarsened_cell_size: x.coarsened_from.map(|from| [from, x.cell_size]),
         ..Mesh::default()
     };
     Ok(Some(PeriodicFrame {
