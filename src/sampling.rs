@@ -684,6 +684,31 @@ fn sample_adaptive_with(
     Ok(ctx.assemble(&plans, parallel))
 }
 
+/// The adaptive samples of the circles `slots` of `domain` (slot 0 the bounding circle,
+/// slot `i + 1` hole `i`), each on its own: its grid size and increasing grid indices, as
+/// [`sample_adaptive`] makes them with `gaps` and `density` (slot order), each within
+/// [`SamplingOptions::max_per_circle`]. `Err(slot)` names the first circle that needs more.
+/// For samplers that copy one circle's samples onto others (the orbits of a periodic tiling,
+/// [`crate::periodic`]).
+pub(crate) fn adaptive_grids(
+    domain: &Domain,
+    opts: &SamplingOptions,
+    gaps: &[f64],
+    density: &[u32],
+    slots: &[usize],
+) -> Result<Vec<(u64, Vec<u64>)>, usize> {
+    let index = HoleIndex::new(domain.holes());
+    let ctx = SlotContext::new(domain, &index, opts, gaps, density, None);
+    slots
+        .iter()
+        .map(|&slot| match ctx.plan(slot, ctx.cap) {
+            Ok(SlotSamples::Made { n, ks }) => Ok((n, ks)),
+            // No earlier sampling is given, so none is taken over.
+            Ok(SlotSamples::Taken { .. }) | Err(()) => Err(slot),
+        })
+        .collect()
+}
+
 /// Fewest circles sampled on the thread pool (below, waking the pool costs more than it saves).
 const PARALLEL_MIN_CIRCLES: usize = 128;
 

@@ -6,8 +6,10 @@
 //!    repeated over an `N x N` array of tiles, `N = 2m + 1` (`m = 1` first: the paper's
 //!    three-by-three tiling), inside an auxiliary bounding circle centred on the box and
 //!    enclosing the whole array. Circle `(k, a, b)` is hole `k` moved by `(a Lx, b Ly)`.
-//! 2. Exactly periodic sampling: every copy of hole `k` gets the same number of samples
-//!    (densities and resampling act on whole orbits `{(k, a, b)}`), and the samples of copy
+//! 2. Exactly periodic sampling: the canonical copy of hole `k` is sampled adaptively (as in
+//!    bounded domains, [`crate::sampling::sample_adaptive`]: densely only where a circle is
+//!    close), every copy gets the same samples (densities and resampling act on whole orbits
+//!    `{(k, a, b)}`), and the samples of copy
 //!    `(a, b)` are the canonical samples plus `(a Lx', b Ly')`, where the canonical samples
 //!    and `Lx', Ly'` are rounded to a common dyadic quantum (about `2^-50` of the array's
 //!    extent) so that these sums are exact. The exact Delaunay triangulation with its
@@ -69,13 +71,14 @@ use crate::medial::{circumcenter, classify, medial_graph, MedialGraph};
 use crate::mesh::Mesh;
 use crate::mesher::{MeshError, Mode, Options, EXACT_RESAMPLING};
 use crate::sampling::{
-    check_invariants, initial_counts, thin_walls, unit_offsets, CircleSamples, Samples,
-    SamplingOptions, ViolationKind,
+    check_invariants, initial_counts, thin_walls, unit_offset, unit_offsets, CircleSamples,
+    Samples, SamplingOptions, ViolationKind,
 };
 use crate::timings;
 use std::collections::HashMap;
 
-/// Most samples on one circle of the periodic tiling (its sampling is uniform per circle).
+/// Most samples on the auxiliary bounding circle of the periodic tiling (sampled uniformly;
+/// the holes are sampled adaptively within [`SamplingOptions::max_per_circle`]).
 pub const PERIODIC_MAX_PER_CIRCLE: usize = 1 << 14;
 
 /// Largest half-width `m` of the tiling array tried (`7 x 7` tiles).
@@ -211,35 +214,43 @@ impl Tiling {
         Some((k as u32, r / self.n - self.m, r % self.n - self.m))
     }
 
-    /// Samples of the tiling: orbit counts `counts[k]` for hole `k`, `bounding_count` for the
-    /// bounding circle.
-    fn samples(&self, counts: &[usize], bounding_count: usize, gaps: &[f64]) -> Samples {
+    /// Samples of the tiling: `plans[k]` the grid size and grid indices of hole `k`'s
+    /// canonical copy (adaptive, [`crate::sampling::adaptive_grids`]), copied onto every
+    /// copy of the orbit (quantised points plus the quantised period shift: exact sums);
+    /// `bounding_count` uniform samples on the bounding circle.
+    fn samples(&self, plans: &[(u64, Vec<u64>)], bounding_count: usize, gaps: &[f64]) -> Samples {
         let mut s = Samples::default();
         let b = self.domain.bounding();
-        let push_circle = |s: &mut Samples, id: CircleId, pts: Vec<Point>, gap: f64| {
-            s.circles.push(CircleSamples {
-                circle: id,
-                first: s.points.len() as u32,
-                count: pts.len() as u32,
-                gap,
-            });
-            for (i, p) in pts.into_iter().enumerate() {
-                s.points.push(p);
-                s.circle_of.push(id);
-                s.index_of.push(i as u32);
-            }
-        };
-        let bpts = unit_offsets(bounding_count)
+        let push_circle =
+            |s: &mut Samples, id: CircleId, pts: Vec<Point>, grid: &[u64], n: u64, gap: f64| {
+                s.circles.push(CircleSamples {
+                    circle: id,
+                    first: s.points.len() as u32,
+                    count: pts.len() as u32,
+                    gap,
+                });
+                s.grid_counts.push(n);
+                s.grid.extend_from_slice(grid);
+                for (i, p) in pts.into_iter().enumerate() {
+                    s.points.push(p);
+                    s.circle_of.push(id);
+                    s.index_of.push(i as u32);
+                }
+            };
+        let bpts: Vec<Point> = unit_offsets(bounding_count)
             .into_iter()
             .map(|u| [b.center[0] + b.radius * u[0], b.center[1] + b.radius * u[1]])
             .collect();
-        push_circle(&mut s, -1, bpts, gaps.first().copied().unwrap_or(f64::NAN));
+        let bgrid: Vec<u64> = (0..bpts.len() as u64).collect();
+        let bgap = gaps.first().copied().unwrap_or(f64::NAN);
+        push_circle(&mut s, -1, bpts, &bgrid, bounding_count as u64, bgap);
         let canon: Vec<Vec<Point>> = (0..self.h)
             .map(|k| {
                 let c = self.domain.holes()[self.id(k, 0, 0) as usize];
-                unit_offsets(counts[k])
-                    .into_iter()
-                    .map(|u| {
+                let (n, ks) = &plans[k];
+                ks.iter()
+                    .map(|&g| {
+                        let u = unit_offset(g, *n);
                         [
                             self.q(c.center[0] + c.radius * u[0]),
                             self.q(c.center[1] + c.radius * u[1]),
@@ -249,15 +260,12 @@ impl Tiling {
             })
             .collect();
         for (k, pts) in canon.iter().enumerate() {
+            let (n, ks) = &plans[k];
             for (a, bb) in tile_offsets(self.m) {
                 let (dx, dy) = (a as f64 * self.lq[0], bb as f64 * self.lq[1]);
                 let moved = pts.iter().map(|p| [p[0] + dx, p[1] + dy]).collect();
-                push_circle(
-                    &mut s,
-                    self.id(k, a, bb),
-                    moved,
-                    gaps.get(k + 1).copied().unwrap_or(f64::NAN),
-                );
+                let gap = gaps.get(k + 1).copied().unwrap_or(f64::NAN);
+                push_circle(&mut s, self.id(k, a, bb), moved, ks, *n, gap);
             }
         }
         s
@@ -265,18 +273,17 @@ impl Tiling {
 }
 
 /// Sampling, triangulation and medial graph of the tiling with orbit-uniform densities.
+///
+/// Every hole's canonical copy is sampled adaptively (issue 8: samples only where a circle
+/// is close, as in bounded domains; uniform sampling put up to 16 384 samples on every copy
+/// of a near-touching hole and took seconds to triangulate) and its samples are copied onto
+/// the whole orbit, so every copy is sampled alike. A violated sampling invariant doubles
+/// the density of the orbits it touches (while they stay within the per-circle limit).
 fn sample_tiling(
     t: &Tiling,
     gaps_canonical: &[f64],
     opts: &SamplingOptions,
 ) -> Result<(Samples, Triangulation, MedialGraph), MeshError> {
-    // Uniform sampling per orbit (the adaptive bounded sampler's per-circle limit is far
-    // larger): keep the cap this sampler was designed with.
-    let capped = SamplingOptions {
-        max_per_circle: opts.max_per_circle.min(PERIODIC_MAX_PER_CIRCLE),
-        ..opts.clone()
-    };
-    let opts = &capped;
     let b = t.domain.bounding();
     let bgap = t
         .domain
@@ -284,21 +291,50 @@ fn sample_tiling(
         .iter()
         .map(|h| b.radius - crate::domain::dist(h.center, b.center) - h.radius)
         .fold(f64::INFINITY, f64::min);
+    let per_tile = (t.n * t.n) as usize;
     let mut slot_gaps = vec![bgap];
     for &g in gaps_canonical.iter().take(t.h) {
-        for _ in 0..t.n * t.n {
+        for _ in 0..per_tile {
             slot_gaps.push(g);
         }
     }
-    let initial = initial_counts(&t.domain, &slot_gaps, opts);
-    let per_tile = (t.n * t.n) as usize;
-    let mut counts: Vec<usize> = (0..t.h).map(|k| initial[1 + k * per_tile]).collect();
-    let mut bcount = initial[0];
-    let cap = (opts.max_per_circle / 8 * 8).max(8);
+    // The auxiliary bounding circle: uniform, with the cap the uniform sampler had.
+    let bounding_opts = SamplingOptions {
+        max_per_circle: opts.max_per_circle.min(PERIODIC_MAX_PER_CIRCLE),
+        ..opts.clone()
+    };
+    let mut bcount = initial_counts(&t.domain, &slot_gaps[..1], &bounding_opts)[0];
+    let bcap = (bounding_opts.max_per_circle / 8 * 8).max(8);
+    let canonical_slot = |k: usize| t.id(k, 0, 0) as usize + 1;
+    let plan = |density: &[u32], k: usize| -> Result<(u64, Vec<u64>), usize> {
+        let mut slot_density = vec![0u32; 1 + t.h * per_tile];
+        for (j, &d) in density.iter().enumerate() {
+            slot_density[1 + j * per_tile..1 + (j + 1) * per_tile].fill(d);
+        }
+        crate::sampling::adaptive_grids(
+            &t.domain,
+            opts,
+            &slot_gaps,
+            &slot_density,
+            &[canonical_slot(k)],
+        )
+        .map(|mut v| v.remove(0))
+    };
+    let too_many = |k: usize| MeshError::Sampling {
+        circle: k as CircleId,
+        message: format!(
+            "hole {k} of the periodic tiling would need more than {} samples",
+            opts.max_per_circle
+        ),
+    };
+    let mut density = vec![0u32; t.h];
+    let mut plans: Vec<(u64, Vec<u64>)> = (0..t.h)
+        .map(|k| plan(&density, k).map_err(|_| too_many(k)))
+        .collect::<Result<_, _>>()?;
     let mut gaps = vec![bgap];
     gaps.extend_from_slice(gaps_canonical);
     for round in 0..=opts.max_rounds {
-        let total = bcount + counts.iter().sum::<usize>() * per_tile;
+        let total = bcount + plans.iter().map(|p| p.1.len()).sum::<usize>() * per_tile;
         if total > opts.max_total {
             return Err(MeshError::Sampling {
                 circle: -1,
@@ -308,7 +344,7 @@ fn sample_tiling(
                 ),
             });
         }
-        let samples = timings::span("sampling", || t.samples(&counts, bcount, &gaps));
+        let samples = timings::span("sampling", || t.samples(&plans, bcount, &gaps));
         let tri = timings::span("triangulation", || Triangulation::new(&samples.points))?;
         let (kinds, hard) = timings::span("sampling", || {
             let kinds = classify(&samples, &tri);
@@ -355,14 +391,22 @@ fn sample_tiling(
             }
         }
         let mut refined = false;
-        if grow_b && bcount < cap {
-            bcount = (bcount * 2).min(cap);
+        if grow_b && bcount < bcap {
+            bcount = (bcount * 2).min(bcap);
             refined = true;
         }
         for k in 0..t.h {
-            if grow[k] && counts[k] < cap {
-                counts[k] = (counts[k] * 2).min(cap);
-                refined = true;
+            if !grow[k] || density[k] >= 60 {
+                continue;
+            }
+            density[k] += 1;
+            match timings::span("sampling", || plan(&density, k)) {
+                Ok(p) => {
+                    plans[k] = p;
+                    refined = true;
+                }
+                // At the per-circle limit: this orbit stays as it is.
+                Err(_) => density[k] -= 1,
             }
         }
         if !refined {
@@ -376,8 +420,8 @@ fn sample_tiling(
         circle: -1,
         message: format!(
             "the periodic tiling's sampling invariants still fail after {} rounds (or with \
-             every offending orbit at the cap of {cap} samples)",
-            opts.max_rounds
+             every offending orbit at the limit of {} samples)",
+            opts.max_rounds, opts.max_per_circle
         ),
     })
 }
@@ -901,12 +945,7 @@ fn extract(
                     .ok_or_else(|| MeshError::Internal("a corner without a sample".into()))?;
                 let id = samples.circle_of[s as usize];
                 let c = t.domain.circle(id);
-                let a = samples.angle(s);
-                let u = unit_offsets(samples.count_of(s) as usize);
-                let uk = u
-                    .get(samples.index_of[s as usize] as usize)
-                    .copied()
-                    .unwrap_or([a.cos(), a.sin()]);
+                let uk = unit_offset(samples.grid_index(s), samples.grid_count(id));
                 [
                     c.center[0] + c.radius * uk[0],
                     c.center[1] + c.radius * uk[1],
@@ -1591,4 +1630,79 @@ pub fn period_of(layout: &BlockLayout) -> Option<[f64; 2]> {
         }
     }
     (out[0].is_finite() && out[1].is_finite()).then_some(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A pair of holes 1e-5 of their radius apart across the box's edge: the canonical
+    /// copies are sampled adaptively (densely only facing the contact: far fewer samples than
+    /// the `2 pi r / gap` a uniform sampling needs, and the samples on the far half of each
+    /// circle at the coarse spacing), and every copy of an orbit carries the canonical
+    /// samples plus its quantised period shift, bit for bit (what makes the Delaunay
+    /// triangulation of every copy alike).
+    #[test]
+    fn near_touching_orbits_are_sampled_adaptively_and_alike() {
+        let (r, g) = (0.2, 2e-6);
+        let pd = PeriodicDomain::new(
+            [1.0, 0.8],
+            vec![
+                Circle::new(0.79, 0.4, r),
+                Circle::new(0.79 + 2.0 * r + g - 1.0, 0.41, r),
+            ],
+        )
+        .unwrap();
+        let t = Tiling::new(&pd, 1).unwrap();
+        let opts = SamplingOptions::default();
+        let (samples, _, _) = sample_tiling(&t, &pd.nearest_gaps(), &opts).unwrap();
+        let uniform = std::f64::consts::TAU * r / (opts.spacing_per_gap * g);
+        for k in 0..2 {
+            let canon = samples.of_circle(t.id(k, 0, 0));
+            assert!(
+                (canon.count as f64) < uniform / 100.0,
+                "hole {k}: {} samples, uniform {uniform}",
+                canon.count
+            );
+            let c = pd.holes()[k];
+            // The copy whose centre is nearest the other hole faces the contact.
+            let pts = |id: CircleId| {
+                let cs = samples.of_circle(id);
+                &samples.points[cs.first as usize..(cs.first + cs.count) as usize]
+            };
+            let p0 = pts(t.id(k, 0, 0));
+            let far = p0
+                .iter()
+                .filter(|p| {
+                    let other = pd.holes()[1 - k].center;
+                    // Points on the half of the circle facing away from every image of
+                    // the other hole along x.
+                    let dx = (other[0] - c.center[0]).rem_euclid(1.0);
+                    let toward = if dx < 0.5 { 1.0 } else { -1.0 };
+                    (p[0] - c.center[0]) * toward < -0.5 * r
+                })
+                .count();
+            assert!(
+                far <= 2 + canon.count as usize / 4,
+                "hole {k}: {far} far samples"
+            );
+            for (a, b) in tile_offsets(t.m) {
+                let copy = pts(t.id(k, a, b));
+                assert_eq!(copy.len(), p0.len());
+                let shift = [a as f64 * t.lq[0], b as f64 * t.lq[1]];
+                for (q, p) in copy.iter().zip(p0) {
+                    assert_eq!(q[0].to_bits(), (p[0] + shift[0]).to_bits());
+                    assert_eq!(q[1].to_bits(), (p[1] + shift[1]).to_bits());
+                    // ... and the shift is exact: subtracting it gives the canonical point.
+                    assert_eq!((q[0] - shift[0]).to_bits(), p[0].to_bits());
+                }
+            }
+            // Grid indices are increasing, on a grid that is a multiple of 8.
+            let n = samples.grid_count(t.id(k, 0, 0));
+            assert!(n.is_multiple_of(8));
+            let first = canon.first as usize;
+            let grid = &samples.grid[first..first + canon.count as usize];
+            assert!(grid.windows(2).all(|w| w[0] < w[1]) && grid.iter().all(|&x| x < n));
+        }
+    }
 }
