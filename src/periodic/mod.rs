@@ -279,10 +279,16 @@ impl Tiling {
 /// of a near-touching hole and took seconds to triangulate) and its samples are copied onto
 /// the whole orbit, so every copy is sampled alike. A violated sampling invariant doubles
 /// the density of the orbits it touches (while they stay within the per-circle limit).
+///
+/// With `uniform` (paper mode, whose circumcentre polylines follow the samples: adaptive
+/// samples made them rougher, with more inverted cells) every orbit is sampled uniformly
+/// instead: `2 pi r / gap` samples from its nearest gap, doubled on violations, at most
+/// [`PERIODIC_MAX_PER_CIRCLE`].
 fn sample_tiling(
     t: &Tiling,
     gaps_canonical: &[f64],
     opts: &SamplingOptions,
+    uniform: bool,
 ) -> Result<(Samples, Triangulation, MedialGraph), MeshError> {
     let b = t.domain.bounding();
     let bgap = t
@@ -306,7 +312,27 @@ fn sample_tiling(
     let mut bcount = initial_counts(&t.domain, &slot_gaps[..1], &bounding_opts)[0];
     let bcap = (bounding_opts.max_per_circle / 8 * 8).max(8);
     let canonical_slot = |k: usize| t.id(k, 0, 0) as usize + 1;
+    let uniform_counts: Vec<usize> = if uniform {
+        let all = initial_counts(&t.domain, &slot_gaps, &bounding_opts);
+        (0..t.h).map(|k| all[canonical_slot(k)]).collect()
+    } else {
+        Vec::new()
+    };
     let plan = |density: &[u32], k: usize| -> Result<(u64, Vec<u64>), usize> {
+        if uniform {
+            // `n` samples at the grid angles `2 pi i / n`: doubled per density step, capped;
+            // a step that no longer changes the count is refused (the orbit is at the cap).
+            let count = |d: u32| {
+                uniform_counts[k]
+                    .saturating_mul(1usize << d.min(40))
+                    .min(bcap)
+            };
+            let n = count(density[k]);
+            if density[k] > 0 && n == count(density[k] - 1) {
+                return Err(canonical_slot(k));
+            }
+            return Ok((n as u64, (0..n as u64).collect()));
+        }
         let mut slot_density = vec![0u32; 1 + t.h * per_tile];
         for (j, &d) in density.iter().enumerate() {
             slot_density[1 + j * per_tile..1 + (j + 1) * per_tile].fill(d);
@@ -476,7 +502,7 @@ pub fn periodic_layout_with(
     let mut last = None;
     for m in 1..=MAX_TILING {
         let t = Tiling::new(pd, m)?;
-        let (samples, tri, medial) = sample_tiling(&t, &gaps, &opts)?;
+        let (samples, tri, medial) = sample_tiling(&t, &gaps, &opts, options.mode == Mode::Paper)?;
         let extracted = timings::span("blocking", || {
             extract(pd, &t, &samples, &tri, &medial, options.collapse_fraction)
         })?;
@@ -1478,7 +1504,12 @@ fn periodic_frame_here(pd: &PeriodicDomain, options: &Options) -> Result<Periodi
             return Ok(done);
         }
     }
-    let p = periodic_layout(pd, options)?;
+    // The paper layout (also exact mode's fallback): paper mode's uniform sampling.
+    let paper = Options {
+        mode: Mode::Paper,
+        ..options.clone()
+    };
+    let p = periodic_layout(pd, &paper)?;
     let grids = timings::span("grids", || build_grids(&p.layout, options.cells))?;
     Ok(PeriodicFrame {
         mesh: Mesh {
@@ -1655,7 +1686,7 @@ mod tests {
         .unwrap();
         let t = Tiling::new(&pd, 1).unwrap();
         let opts = SamplingOptions::default();
-        let (samples, _, _) = sample_tiling(&t, &pd.nearest_gaps(), &opts).unwrap();
+        let (samples, _, _) = sample_tiling(&t, &pd.nearest_gaps(), &opts, false).unwrap();
         let uniform = std::f64::consts::TAU * r / (opts.spacing_per_gap * g);
         for k in 0..2 {
             let canon = samples.of_circle(t.id(k, 0, 0));
