@@ -394,7 +394,7 @@ fn sample_tiling(
                     _ => false,
                 })
                 .collect();
-            if soft.is_empty() || round == opts.max_rounds {
+            if soft.is_empty() || round == opts.max_rounds || !opts.soft_rounds {
                 return Ok((samples, tri, medial));
             }
             (soft, Some((samples, tri, medial)))
@@ -1532,7 +1532,12 @@ fn mesh_periodic_exact(
     pd: &PeriodicDomain,
     options: &Options,
 ) -> Result<Option<PeriodicFrame>, MeshError> {
-    let mut sampling = SamplingOptions::default();
+    // Exact walls do not follow the samples: a wall with a single sample (the soft invariant
+    // (d)) costs nothing, as in bounded exact mode.
+    let mut sampling = SamplingOptions {
+        soft_rounds: false,
+        ..SamplingOptions::default()
+    };
     // The fallback layout: only zero-length arcs collapsed (exact co-circular groups, one
     // empty circle per collapsed vertex).
     let zero_only = Options {
