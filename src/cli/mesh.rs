@@ -55,8 +55,9 @@ pub struct Args {
     /// Geometry of the blocks.
     #[arg(long, value_enum, default_value_t = ModeArg::Exact)]
     pub mode: ModeArg,
-    /// Target number of cells along a block side (exact mode: along a typical spoke); 1 to
-    /// 100000.
+    /// Target number of cells along a block side (exact mode: along a typical spoke, and the
+    /// cell size this gives is coarsened when the mesh would exceed 64 x blocks x (CELLS + 1)^2
+    /// nodes, at least 2^22: see "coarsened_cell_size" in report.json); 1 to 100000.
     #[arg(long, default_value_t = 16, allow_negative_numbers = true)]
     pub cells: usize,
     /// Exact mode: an N x N grid in every block (N cells along the wall and the arc, N along
