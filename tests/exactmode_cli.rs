@@ -327,25 +327,13 @@ fn a_nearly_touching_pair_notes_its_fine_gap() {
     .unwrap();
     let pair = pair.to_str().unwrap();
     let note = "along one block side: exact mode keeps cells about square";
-    for (k, (input, extra, want)) in [
+    let cases = [
         (pair, vec![], true),
         (pair, vec!["--block-cells", "16"], false),
         (pair, vec!["--mode", "paper"], false),
         ("", vec![], false),
-    ]
-    .into_iter()
-    .enumerate()
-    {
-        let out = d.join(format!("o{k}"));
-        let mut args = vec!["-o", out.to_str().unwrap(), "--format", "json"];
-        if !input.is_empty() {
-            args.insert(0, input);
-        }
-        args.extend_from_slice(&extra);
-        let o = run(&args);
-        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-        let stderr = String::from_utf8_lossy(&o.stderr);
-        assert_eq!(stderr.contains(note), want, "{extra:?}: {stderr}");
+    ];
+    note_cases(d, &cases, note, |want, stderr, out| {
         let report = read_json(&out.join("report.json"));
         let conn = read_json(&out.join("connectivity.json"));
         let longest = conn["blocks"]
@@ -364,6 +352,31 @@ fn a_nearly_touching_pair_notes_its_fine_gap() {
             let line = format!("note: {} cells, {longest} along one", report["cells"]);
             assert!(stderr.contains(&line), "{stderr}");
         }
+    });
+}
+
+/// Runs `mesh [INPUT] -o DIR/oK --format json EXTRA...` for each case `(INPUT, EXTRA, want)`
+/// (an empty INPUT: the built-in example): it succeeds, its stderr holds `note` exactly when
+/// `want`, and with `--quiet` it prints nothing; `check(want, stderr, DIR/oK)` checks the
+/// rest.
+fn note_cases(
+    d: &std::path::Path,
+    cases: &[(&str, Vec<&str>, bool)],
+    note: &str,
+    mut check: impl FnMut(bool, &str, &std::path::Path),
+) {
+    for (k, (input, extra, want)) in cases.iter().enumerate() {
+        let out = d.join(format!("o{k}"));
+        let mut args = vec!["-o", out.to_str().unwrap(), "--format", "json"];
+        if !input.is_empty() {
+            args.insert(0, input);
+        }
+        args.extend_from_slice(extra);
+        let o = run(&args);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        let stderr = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(stderr.contains(note), *want, "{extra:?}: {stderr}");
+        check(*want, &stderr, &out);
         assert_quiet_is_silent(&args);
     }
 }
@@ -384,24 +397,12 @@ fn a_coarsened_default_size_is_noted_and_reported() {
     .unwrap();
     let two = two.to_str().unwrap();
     let note = "so it was coarsened to";
-    for (k, (input, extra, want)) in [
+    let cases = [
         (two, vec![], true),
         (two, vec!["--block-cells", "8"], false),
         ("", vec![], false),
-    ]
-    .into_iter()
-    .enumerate()
-    {
-        let out = d.join(format!("o{k}"));
-        let mut args = vec!["-o", out.to_str().unwrap(), "--format", "json"];
-        if !input.is_empty() {
-            args.insert(0, input);
-        }
-        args.extend_from_slice(&extra);
-        let o = run(&args);
-        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-        let stderr = String::from_utf8_lossy(&o.stderr);
-        assert_eq!(stderr.contains(note), want, "{extra:?}: {stderr}");
+    ];
+    note_cases(d, &cases, note, |want, stderr, out| {
         let report = read_json(&out.join("report.json"));
         let sizes = &report["coarsened_cell_size"];
         if want {
@@ -420,6 +421,5 @@ fn a_coarsened_default_size_is_noted_and_reported() {
         } else {
             assert!(sizes.is_null(), "{sizes}");
         }
-        assert_quiet_is_silent(&args);
-    }
+    });
 }
