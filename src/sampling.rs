@@ -687,7 +687,8 @@ fn sample_adaptive_with(
 /// The adaptive samples of the circles `slots` of `domain` (slot 0 the bounding circle,
 /// slot `i + 1` hole `i`), each on its own: its grid size and increasing grid indices, as
 /// [`sample_adaptive`] makes them with `gaps` and `density` (slot order), each within
-/// [`SamplingOptions::max_per_circle`]. `Err(slot)` names the first circle that needs more.
+/// [`SamplingOptions::max_per_circle`] (`Err(())` for a circle that needs more). One hole
+/// index for all of them; the circles on the thread pool, results in the order of `slots`.
 /// For samplers that copy one circle's samples onto others (the orbits of a periodic tiling,
 /// [`crate::periodic`]).
 pub(crate) fn adaptive_grids(
@@ -696,15 +697,15 @@ pub(crate) fn adaptive_grids(
     gaps: &[f64],
     density: &[u32],
     slots: &[usize],
-) -> Result<Vec<(u64, Vec<u64>)>, usize> {
+) -> Vec<Result<(u64, Vec<u64>), ()>> {
     let index = HoleIndex::new(domain.holes());
     let ctx = SlotContext::new(domain, &index, opts, gaps, density, None);
     slots
-        .iter()
+        .par_iter()
         .map(|&slot| match ctx.plan(slot, ctx.cap) {
             Ok(SlotSamples::Made { n, ks }) => Ok((n, ks)),
             // No earlier sampling is given, so none is taken over.
-            Ok(SlotSamples::Taken { .. }) | Err(()) => Err(slot),
+            Ok(SlotSamples::Taken { .. }) | Err(()) => Err(()),
         })
         .collect()
 }

@@ -318,33 +318,35 @@ fn sample_tiling(
     } else {
         Vec::new()
     };
-    let plan = |density: &[u32], k: usize| -> Result<(u64, Vec<u64>), usize> {
+    // The samples of the canonical copies of the orbits `ks` at `density` (per orbit); `Err`
+    // for an orbit beyond the per-circle limit (uniform: at the cap already).
+    type Plan = Result<(u64, Vec<u64>), ()>;
+    let plan = |density: &[u32], ks: &[usize]| -> Vec<Plan> {
         if uniform {
             // `n` samples at the grid angles `2 pi i / n`: doubled per density step, capped;
             // a step that no longer changes the count is refused (the orbit is at the cap).
-            let count = |d: u32| {
-                uniform_counts[k]
-                    .saturating_mul(1usize << d.min(40))
-                    .min(bcap)
-            };
-            let n = count(density[k]);
-            if density[k] > 0 && n == count(density[k] - 1) {
-                return Err(canonical_slot(k));
-            }
-            return Ok((n as u64, (0..n as u64).collect()));
+            return ks
+                .iter()
+                .map(|&k| {
+                    let count = |d: u32| {
+                        uniform_counts[k]
+                            .saturating_mul(1usize << d.min(40))
+                            .min(bcap)
+                    };
+                    let n = count(density[k]);
+                    if density[k] > 0 && n == count(density[k] - 1) {
+                        return Err(());
+                    }
+                    Ok((n as u64, (0..n as u64).collect()))
+                })
+                .collect();
         }
         let mut slot_density = vec![0u32; 1 + t.h * per_tile];
         for (j, &d) in density.iter().enumerate() {
             slot_density[1 + j * per_tile..1 + (j + 1) * per_tile].fill(d);
         }
-        crate::sampling::adaptive_grids(
-            &t.domain,
-            opts,
-            &slot_gaps,
-            &slot_density,
-            &[canonical_slot(k)],
-        )
-        .map(|mut v| v.remove(0))
+        let slots: Vec<usize> = ks.iter().map(|&k| canonical_slot(k)).collect();
+        crate::sampling::adaptive_grids(&t.domain, opts, &slot_gaps, &slot_density, &slots)
     };
     let too_many = |k: usize| MeshError::Sampling {
         circle: k as CircleId,
@@ -354,8 +356,11 @@ fn sample_tiling(
         ),
     };
     let mut density = vec![0u32; t.h];
-    let mut plans: Vec<(u64, Vec<u64>)> = (0..t.h)
-        .map(|k| plan(&density, k).map_err(|_| too_many(k)))
+    let all: Vec<usize> = (0..t.h).collect();
+    let mut plans: Vec<(u64, Vec<u64>)> = plan(&density, &all)
+        .into_iter()
+        .enumerate()
+        .map(|(k, p)| p.map_err(|()| too_many(k)))
         .collect::<Result<_, _>>()?;
     let mut gaps = vec![bgap];
     gaps.extend_from_slice(gaps_canonical);
@@ -421,18 +426,19 @@ fn sample_tiling(
             bcount = (bcount * 2).min(bcap);
             refined = true;
         }
-        for k in 0..t.h {
-            if !grow[k] || density[k] >= 60 {
-                continue;
-            }
+        let grown: Vec<usize> = (0..t.h).filter(|&k| grow[k] && density[k] < 60).collect();
+        for &k in &grown {
             density[k] += 1;
-            match timings::span("sampling", || plan(&density, k)) {
+        }
+        let made = timings::span("sampling", || plan(&density, &grown));
+        for (&k, p) in grown.iter().zip(made) {
+            match p {
                 Ok(p) => {
                     plans[k] = p;
                     refined = true;
                 }
                 // At the per-circle limit: this orbit stays as it is.
-                Err(_) => density[k] -= 1,
+                Err(()) => density[k] -= 1,
             }
         }
         if !refined {
