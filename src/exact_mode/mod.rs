@@ -416,6 +416,15 @@ pub fn node_budget(blocks: usize, cells: usize) -> usize {
         .clamp(BUDGET_MIN_NODES, MAX_TOTAL_NODES)
 }
 
+/// The factor one coarsening step multiplies the target size by, for a mesh of `total`
+/// nodes over `budget` ([`node_budget`]; bounded and periodic domains): nodes scale about as
+/// `1 / h^2` where counts are above their floors, so aim a little under the budget, by at
+/// least 1.25x per step (floors make the steps smaller).
+pub(crate) fn coarsening_step(total: usize, budget: usize) -> f64 {
+    let ratio = total as f64 / budget as f64;
+    (1.02 * ratio.sqrt()).max(1.25)
+}
+
 fn median(mut v: Vec<f64>) -> Option<f64> {
     v.retain(|x| x.is_finite());
     if v.is_empty() {
@@ -1187,10 +1196,7 @@ pub fn assemble_cached(
                 limit: MAX_TOTAL_NODES,
             }));
         }
-        // Nodes scale about as 1 / h^2 where counts are above their floors: aim a little
-        // under the budget, by at least 1.25x per step (floors make the steps smaller).
-        let ratio = total as f64 / budget as f64;
-        h *= (1.02 * ratio.sqrt()).max(1.25);
+        h *= coarsening_step(total, budget);
         coarsened += 1;
         counts = solve_counts(h, &mut targets)?;
         if template_blocks > 0 {

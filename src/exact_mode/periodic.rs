@@ -355,8 +355,7 @@ fn build_checking(
         if total <= budget || user_sized || coarsened >= super::MAX_COARSENING {
             break total;
         }
-        let ratio = total as f64 / budget as f64;
-        cell *= (1.02 * ratio.sqrt()).max(1.25);
+        cell *= super::coarsening_step(total, budget);
         coarsened += 1;
         counts = solve(cell, &mut targets)?;
     };
