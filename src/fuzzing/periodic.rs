@@ -13,8 +13,8 @@ use crate::mesh::Mesh;
 use crate::mesher::{Mode, Options};
 use crate::periodic::{mesh_periodic, PeriodicDomain};
 
-/// The most holes a decoded periodic layout has (one period is meshed on a tiling of up to
-/// 7 x 7 copies, so this is smaller than [`super::MAX_FUZZ_HOLES`]).
+/// The most holes a decoded periodic layout has (one period is meshed on a tiling of 3 x 3
+/// copies or more, so this is smaller than [`super::MAX_FUZZ_HOLES`]).
 pub const MAX_PERIODIC_FUZZ_HOLES: usize = 24;
 
 /// Decode bytes into a periodic layout and mesh options (1 to 4 cells, exact or paper mode),

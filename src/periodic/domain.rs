@@ -62,7 +62,7 @@ impl PeriodicDomain {
     /// Relative gap tolerance: two circles (or a circle and an image) closer than
     /// `GAP_TOLERANCE * max(Lx, Ly)` count as touching and are refused. It is larger than
     /// [`Domain::GAP_TOLERANCE`] because the mesher validates an auxiliary bounded domain of
-    /// up to 7 x 7 copies whose bounding radius is below 32 `max(Lx, Ly)`.
+    /// copies (at most 7 `max(Lx, Ly)` a side) whose bounding radius is below 32 `max(Lx, Ly)`.
     pub const GAP_TOLERANCE: f64 = 32.0 * Domain::GAP_TOLERANCE;
     /// The largest period length, `Domain::MAX_MAGNITUDE / 8`: the mesher samples a tiling
     /// whose coordinates reach [`Self::coordinate_magnitude`] `= 8 max(Lx, Ly)`, and that
@@ -219,8 +219,9 @@ impl PeriodicDomain {
     }
 
     /// A bound of the coordinates the mesher samples for a period `size`: `8 max(Lx, Ly)`.
-    /// The largest tiling ([`crate::periodic::MAX_TILING`] `= 3`, 7 x 7 copies) has its
-    /// bounding circle centred at `(Lx / 2, Ly / 2)` with radius `3.5 |(Lx, Ly)| + max(Lx,
+    /// The largest tiling (each side of the array of copies at most
+    /// [`crate::periodic::MAX_ARRAY_SIDE`] `= 7 max(Lx, Ly)` long) has its bounding circle
+    /// centred at `(Lx / 2, Ly / 2)` with radius at most `3.5 sqrt(2) max(Lx, Ly) + max(Lx,
     /// Ly)`, so every coordinate is below `6.5 max(Lx, Ly)`. Holes with a radius below
     /// [`Domain::MIN_RADIUS_ULPS`] units of precision at this magnitude are refused
     /// ([`DomainError::RadiusBelowPrecision`]), so the tiled bounded domain always validates.
@@ -282,5 +283,10 @@ impl PeriodicDomain {
 
 /// The tile offsets `(a, b)` with `|a|, |b| <= m`, in lexicographic order.
 pub fn tile_offsets(m: i32) -> impl Iterator<Item = (i32, i32)> {
-    (-m..=m).flat_map(move |a| (-m..=m).map(move |b| (a, b)))
+    tile_array([m, m])
+}
+
+/// The tile offsets `(a, b)` with `|a| <= m[0]` and `|b| <= m[1]`, in lexicographic order.
+pub fn tile_array(m: [i32; 2]) -> impl Iterator<Item = (i32, i32)> {
+    (-m[0]..=m[0]).flat_map(move |a| (-m[1]..=m[1]).map(move |b| (a, b)))
 }

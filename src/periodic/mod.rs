@@ -3,9 +3,10 @@
 //!
 //! # Method
 //! 1. Tiling: the canonical copies of the holes (centres in `[0, Lx) x [0, Ly)`) are
-//!    repeated over an `N x N` array of tiles, `N = 2m + 1` (`m = 1` first: the paper's
-//!    three-by-three tiling), inside an auxiliary bounding circle centred on the box and
-//!    enclosing the whole array. Circle `(k, a, b)` is hole `k` moved by `(a Lx, b Ly)`.
+//!    repeated over an `Nx x Ny` array of tiles, `N = 2m + 1` per axis (`m = [1, 1]` first:
+//!    the paper's three-by-three tiling), inside an auxiliary bounding circle centred on the
+//!    box and enclosing the whole array. Circle `(k, a, b)` is hole `k` moved by
+//!    `(a Lx, b Ly)`.
 //! 2. Exactly periodic sampling: the canonical copy of hole `k` is sampled adaptively (as in
 //!    bounded domains, [`crate::sampling::sample_adaptive`]: densely only where a circle is
 //!    close), every copy gets the same samples (densities and resampling act on whole orbits
@@ -22,8 +23,12 @@
 //!    triangles along their arcs) must have its circumcircle inside the array shrunk by the
 //!    largest radius, so that no sample missing from the finite array (or of the auxiliary
 //!    bounding circle) could lie in it: then it is a triangle of the infinite periodic
-//!    triangulation. If not, the array grows (`m = 2`, then `3`); beyond that the domain is
-//!    refused with [`MeshError::Sampling`].
+//!    triangulation. If not, the array grows per axis to the half-widths that hold every
+//!    offending circle ([`next_tiling`]; a kept arc on the auxiliary circle grows both axes
+//!    by half), at most [`MAX_ARRAY_SIDE`] long periods a side: an elongated box with few
+//!    holes has empty circles spanning many short periods, and gets many copies along its
+//!    short side only. Beyond that, or beyond the sample limit, the domain is refused with
+//!    [`MeshError::Sampling`].
 //! 5. Geometry by orbits: medial vertices and arcs are identified up to translation by their
 //!    sample triples (`(hole, sample index, tile)`, normalised). Every instance's geometry
 //!    is its orbit representative's plus the period shift (in the true `Lx`, `Ly`), so both
@@ -54,7 +59,7 @@
 
 pub mod domain;
 
-pub use domain::{tile_offsets, wrap, PeriodicDomain};
+pub use domain::{tile_array, tile_offsets, wrap, PeriodicDomain};
 
 use crate::apollonius::{same_circle, Apollonius};
 use crate::blocking;
@@ -81,8 +86,13 @@ use std::collections::HashMap;
 /// the holes are sampled adaptively within [`SamplingOptions::max_per_circle`]).
 pub const PERIODIC_MAX_PER_CIRCLE: usize = 1 << 14;
 
-/// Largest half-width `m` of the tiling array tried (`7 x 7` tiles).
-pub const MAX_TILING: i32 = 3;
+/// Longest side of the array of copies, in periods of the longer side `max(Lx, Ly)`: a square
+/// box gets at most `7 x 7` copies, a box of aspect ratio `A` up to `7 A` copies along its
+/// short side (the tiling grows per axis, [`next_tiling`]).
+pub const MAX_ARRAY_SIDE: f64 = 7.0;
+
+/// Most tilings tried before a periodic domain is refused.
+const MAX_TILING_ROUNDS: usize = 8;
 
 /// `(hole, sample index, tile a, tile b)`.
 type SampleKey = (u32, u32, i32, i32);
@@ -135,10 +145,10 @@ fn normalise_arc(a: &ArcKey) -> (ArcKey, (i32, i32)) {
         .unwrap_or((*a, (0, 0)))
 }
 
-/// The auxiliary tiled domain of half-width `m`.
+/// The auxiliary tiled domain of half-widths `m = [mx, my]`: `(2 mx + 1) x (2 my + 1)` tiles.
 struct Tiling {
-    m: i32,
-    n: i32,
+    m: [i32; 2],
+    n: [i32; 2],
     h: usize,
     size: [f64; 2],
     domain: Domain,
@@ -148,14 +158,14 @@ struct Tiling {
 }
 
 impl Tiling {
-    fn new(pd: &PeriodicDomain, m: i32) -> Result<Tiling, MeshError> {
+    fn new(pd: &PeriodicDomain, m: [i32; 2]) -> Result<Tiling, MeshError> {
         let size = pd.size();
-        let n = 2 * m + 1;
+        let n = [2 * m[0] + 1, 2 * m[1] + 1];
         let h = pd.hole_count();
         let max_l = size[0].max(size[1]);
-        let mut holes = Vec::with_capacity(h * (n * n) as usize);
+        let mut holes = Vec::with_capacity(h * (n[0] * n[1]) as usize);
         for c in pd.holes() {
-            for (a, b) in tile_offsets(m) {
+            for (a, b) in tile_array(m) {
                 holes.push(Circle {
                     center: [
                         c.center[0] + a as f64 * size[0],
@@ -165,7 +175,7 @@ impl Tiling {
                 });
             }
         }
-        let half = 0.5 * n as f64 * size[0].hypot(size[1]);
+        let half = 0.5 * (n[0] as f64 * size[0]).hypot(n[1] as f64 * size[1]);
         let bounding = Circle {
             center: [0.5 * size[0], 0.5 * size[1]],
             radius: half + max_l,
@@ -173,7 +183,8 @@ impl Tiling {
         let domain = Domain::bounded(bounding, holes).map_err(|e| {
             MeshError::Internal(format!("the tiled periodic domain is invalid: {e}"))
         })?;
-        let extent = (m as f64 + 2.0) * max_l + bounding.radius;
+        let extent =
+            (m[0] as f64 * size[0]).max(m[1] as f64 * size[1]) + 2.0 * max_l + bounding.radius;
         let e = extent.log2().ceil();
         let quantum = 2f64.powi(e as i32 - 50);
         if !(quantum.is_normal() && e.is_finite()) {
@@ -200,7 +211,8 @@ impl Tiling {
 
     /// Circle id of copy `(a, b)` of hole `k`.
     fn id(&self, k: usize, a: i32, b: i32) -> CircleId {
-        (k as i32 * self.n * self.n + (a + self.m) * self.n + (b + self.m)) as CircleId
+        (k as i32 * self.n[0] * self.n[1] + (a + self.m[0]) * self.n[1] + (b + self.m[1]))
+            as CircleId
     }
 
     /// `(hole, a, b)` of a hole id of the tiling (`None` for the bounding circle).
@@ -208,10 +220,14 @@ impl Tiling {
         if id < 0 {
             return None;
         }
-        let nn = self.n * self.n;
+        let nn = self.n[0] * self.n[1];
         let k = id / nn;
         let r = id % nn;
-        Some((k as u32, r / self.n - self.m, r % self.n - self.m))
+        Some((
+            k as u32,
+            r / self.n[1] - self.m[0],
+            r % self.n[1] - self.m[1],
+        ))
     }
 
     /// Samples of the tiling: `plans[k]` the grid size and grid indices of hole `k`'s
@@ -261,7 +277,7 @@ impl Tiling {
             .collect();
         for (k, pts) in canon.iter().enumerate() {
             let (n, ks) = &plans[k];
-            for (a, bb) in tile_offsets(self.m) {
+            for (a, bb) in tile_array(self.m) {
                 let (dx, dy) = (a as f64 * self.lq[0], bb as f64 * self.lq[1]);
                 let moved = pts.iter().map(|p| [p[0] + dx, p[1] + dy]).collect();
                 let gap = gaps.get(k + 1).copied().unwrap_or(f64::NAN);
@@ -297,7 +313,7 @@ fn sample_tiling(
         .iter()
         .map(|h| b.radius - crate::domain::dist(h.center, b.center) - h.radius)
         .fold(f64::INFINITY, f64::min);
-    let per_tile = (t.n * t.n) as usize;
+    let per_tile = (t.n[0] * t.n[1]) as usize;
     let mut slot_gaps = vec![bgap];
     for &g in gaps_canonical.iter().take(t.h) {
         for _ in 0..per_tile {
@@ -471,8 +487,8 @@ pub struct PeriodicLayout {
     /// Medial vertex and arc orbits (on the torus: `2h` and `3h`).
     pub medial_vertices: usize,
     pub medial_arcs: usize,
-    /// The half-width `m` of the tiling used (`2m + 1` tiles a side).
-    pub tiling: i32,
+    /// The half-widths `[mx, my]` of the tiling used (`(2 mx + 1) x (2 my + 1)` tiles).
+    pub tiling: [i32; 2],
     /// The circle triples of the medial vertex orbits, each as `(hole, tile a, tile b)`
     /// normalised up to translation, sorted: the medial combinatorics of the period.
     pub triples: Vec<[CircleKey; 3]>,
@@ -505,26 +521,88 @@ pub fn periodic_layout_with(
     crate::ranges::check_collapse_fraction(options.collapse_fraction)?;
     let gaps = pd.nearest_gaps();
     let opts = sampling.clone();
-    let mut last = None;
-    for m in 1..=MAX_TILING {
+    let cap = max_half_widths(pd.size());
+    let mut m = [1, 1];
+    for _ in 0..MAX_TILING_ROUNDS {
+        let copies = (2 * m[0] as usize + 1) * (2 * m[1] as usize + 1) * pd.hole_count();
+        let least = copies.saturating_mul(opts.min_per_circle.next_multiple_of(8).max(8));
+        if least > opts.max_total {
+            return Err(MeshError::Sampling {
+                circle: -1,
+                message: format!(
+                    "the periodic tiling needs {} x {} copies of the box ({copies} circles, at \
+                     least {least} samples), more than the limit of {} samples: the empty \
+                     regions are too long for the period",
+                    2 * m[0] + 1,
+                    2 * m[1] + 1,
+                    opts.max_total
+                ),
+            });
+        }
         let t = Tiling::new(pd, m)?;
         let (samples, tri, medial) = sample_tiling(&t, &gaps, &opts, options.mode == Mode::Paper)?;
         let extracted = timings::span("blocking", || {
             extract(pd, &t, &samples, &tri, &medial, options.collapse_fraction)
         })?;
         match extracted {
-            Some(p) => return Ok(p),
-            None => last = Some(m),
+            Extracted::Layout(p) => return Ok(p),
+            Extracted::TooSmall { need, blind } => match next_tiling(m, need, blind, cap) {
+                Some(next) => m = next,
+                None => break,
+            },
         }
     }
     Err(MeshError::Sampling {
         circle: -1,
         message: format!(
-            "the medial axis of the periodic layout reaches beyond a {n} x {n} tiling (empty \
-             regions larger than the period); refused",
-            n = 2 * last.unwrap_or(MAX_TILING) + 1
+            "the medial axis of the periodic layout reaches beyond a {} x {} tiling (empty \
+             regions far larger than the period); refused",
+            2 * m[0] + 1,
+            2 * m[1] + 1
         ),
     })
+}
+
+/// The largest half-widths of the array of copies for a period `size`: `(2 m + 1) L <=`
+/// [`MAX_ARRAY_SIDE`]` max(Lx, Ly)` per axis (`[3, 3]` for a square box), so that the
+/// coordinates stay within [`PeriodicDomain::coordinate_magnitude`].
+fn max_half_widths(size: [f64; 2]) -> [i32; 2] {
+    let l = size[0].max(size[1]);
+    size.map(|s| {
+        let m = ((MAX_ARRAY_SIDE * l / s - 1.0) / 2.0).floor();
+        if m.is_finite() {
+            m.clamp(1.0, (i32::MAX / 4) as f64) as i32
+        } else {
+            1
+        }
+    })
+}
+
+/// The half-widths of the next tiling after `m` was too small: at least the half-widths
+/// `need` that would hold every offending circle, and, when some kept arc could not be
+/// judged (`blind`: it reaches the auxiliary bounding circle), every axis grown by half
+/// (at least one tile); each axis at most `cap`. `None` when nothing can grow.
+fn next_tiling(m: [i32; 2], need: [i32; 2], blind: bool, cap: [i32; 2]) -> Option<[i32; 2]> {
+    let next: [i32; 2] = std::array::from_fn(|a| {
+        let grown = if blind {
+            m[a] + (m[a] / 2).max(1)
+        } else {
+            m[a]
+        };
+        need[a].max(grown).min(cap[a]).max(m[a])
+    });
+    (next != m).then_some(next)
+}
+
+/// What [`extract`] makes of a tiling.
+#[allow(clippy::large_enum_variant)]
+enum Extracted {
+    /// One period's blocks.
+    Layout(PeriodicLayout),
+    /// The tiling is too small (step 4): `need` are the half-widths whose array holds every
+    /// offending circumcircle (at least the current ones), `blind` is set when a kept arc
+    /// reaches the auxiliary bounding circle (no circle to measure).
+    TooSmall { need: [i32; 2], blind: bool },
 }
 
 /// A contracted medial vertex (a cluster of collapsed vertices) up to nothing: the samples of
@@ -742,7 +820,7 @@ fn not_translation_consistent(what: &str) -> MeshError {
     ))
 }
 
-/// Keep the canonical cells; `Ok(None)` when the tiling is too small (step 4).
+/// Keep the canonical cells; [`Extracted::TooSmall`] when the tiling is too small (step 4).
 ///
 /// Zero-length medial arcs (co-circular hole groups, e.g. every corner of a square lattice)
 /// and arcs shorter than `fraction` of the local radius are collapsed ([`select_collapse`],
@@ -757,7 +835,7 @@ fn extract(
     triangulation: &Triangulation,
     medial: &MedialGraph,
     fraction: f64,
-) -> Result<Option<PeriodicLayout>, MeshError> {
+) -> Result<Extracted, MeshError> {
     let size = t.size;
     // Orbit keys of the original medial graph.
     let sample_key = |s: u32| -> Option<SampleKey> {
@@ -871,46 +949,63 @@ fn extract(
 
     let rmax = pd.holes().iter().map(|c| c.radius).fold(0.0, f64::max);
     let margin = 1e-6 * size[0].max(size[1]);
-    let lo = [
-        -t.m as f64 * size[0] + rmax + margin,
-        -t.m as f64 * size[1] + rmax + margin,
-    ];
-    let hi = [
-        (t.m + 1) as f64 * size[0] - rmax - margin,
-        (t.m + 1) as f64 * size[1] - rmax - margin,
-    ];
-    let safe = |tri: u32| -> bool {
-        if tri as usize >= triangulation.len() {
+    // Step 4: every triangle used by a kept block is a triangle of the infinite tiling: its
+    // circumcircle, widened by the largest radius, lies inside the array of copies, so no
+    // sample missing from the finite array (or of the auxiliary bounding circle) is in it.
+    // Each offending circle gives the half-widths that would hold it.
+    let reach = rmax + margin;
+    let mut need = t.m;
+    let mut blind = false;
+    // Raises `need` to hold the circle of `tri`; false when it has no circle to measure.
+    let measure = |tri: u32, need: &mut [i32; 2]| -> bool {
+        let circle = (tri as usize)
+            .lt(&triangulation.len())
+            .then(|| {
+                let p = triangulation
+                    .triangle(tri as usize)
+                    .map(|s| samples.points[s as usize]);
+                let c = circumcenter(p[0], p[1], p[2])?;
+                Some((c, (c[0] - p[0][0]).hypot(c[1] - p[0][1])))
+            })
+            .flatten();
+        let Some((c, r)) = circle else {
             return false;
-        }
-        let v = triangulation.triangle(tri as usize);
-        let p = v.map(|s| samples.points[s as usize]);
-        match circumcenter(p[0], p[1], p[2]) {
-            Some(c) => {
-                let r = (c[0] - p[0][0]).hypot(c[1] - p[0][1]);
-                c[0] - r > lo[0] && c[0] + r < hi[0] && c[1] - r > lo[1] && c[1] + r < hi[1]
+        };
+        for a in 0..2 {
+            // Below: -m L + reach < c - r; above: (m + 1) L - reach > c + r.
+            let below = (r + reach - c[a]) / size[a];
+            let above = (c[a] + r + reach) / size[a] - 1.0;
+            let m = below.max(above).floor() + 1.0;
+            if !m.is_finite() {
+                return false;
             }
-            None => false,
+            if m > need[a] as f64 {
+                need[a] = m.min((i32::MAX / 4) as f64) as i32;
+            }
         }
+        true
     };
     let kept: Vec<usize> = (0..aux.blocks.len())
         .filter(|&b| aux.blocks[b].wall.is_some_and(|c| is_canonical(t, c)))
         .collect();
-    // Step 4: every triangle used by a kept block is a triangle of the infinite tiling.
     for &b in &kept {
         let e = contracted.kept[b / 2] as usize;
         let arc = &medial.arcs[e];
         if arc.circles.iter().any(|&c| c < 0) {
-            return Ok(None);
+            blind = true;
+            continue;
         }
         let ends = arc
             .ends
             .iter()
             .flat_map(|&v| &members[contracted.cluster_of[v as usize] as usize])
             .map(|&v| medial.vertices[v as usize].triangle);
-        if !ends.chain(arc.triangles.iter().copied()).all(safe) {
-            return Ok(None);
+        for tri in ends.chain(arc.triangles.iter().copied()) {
+            blind |= !measure(tri, &mut need);
         }
+    }
+    if blind || need != t.m {
+        return Ok(Extracted::TooSmall { need, blind });
     }
     let shift_point = |p: Point, d: (i32, i32)| -> Point {
         [p[0] + d.0 as f64 * size[0], p[1] + d.1 as f64 * size[1]]
@@ -1168,7 +1263,7 @@ fn extract(
         })
         .collect();
     triples.sort_unstable();
-    Ok(Some(PeriodicLayout {
+    Ok(Extracted::Layout(PeriodicLayout {
         layout,
         medial_vertices: vertex_orbits.len(),
         medial_arcs: arc_orbits.len() + collapsed_orbits.len(),
@@ -1678,6 +1773,49 @@ pub fn period_of(layout: &BlockLayout) -> Option<[f64; 2]> {
 mod tests {
     use super::*;
 
+    /// The array of copies may reach 7 long periods a side: `7 x 7` for a square box, up to
+    /// `7 A` copies along the short side of a box of aspect ratio `A` (odd counts, so at most
+    /// `2 m + 1 <= 7 A`).
+    #[test]
+    fn the_array_is_capped_at_seven_long_periods_a_side() {
+        assert_eq!(max_half_widths([1.0, 1.0]), [3, 3]);
+        assert_eq!(max_half_widths([10.0, 0.5]), [3, 69]);
+        assert_eq!(max_half_widths([0.3, 1.0]), [11, 3]);
+        for size in [
+            [1.0f64, 1.0],
+            [10.0, 0.5],
+            [0.3, 1.0],
+            [1.0, 7.3],
+            [1e6, 1.0],
+        ] {
+            let l = size[0].max(size[1]);
+            let m = max_half_widths(size);
+            for a in 0..2 {
+                let side = (2 * m[a] + 1) as f64 * size[a];
+                assert!(side <= 7.0 * l * (1.0 + 1e-12), "{size:?}: {m:?}");
+                assert!(
+                    side + 2.0 * size[a] > 7.0 * l,
+                    "{size:?}: {m:?} not the largest"
+                );
+            }
+        }
+    }
+
+    /// The next tiling holds what the offending circles need; a blind step grows both axes
+    /// by half (at least one); the cap bounds everything, and nothing to grow ends the search.
+    #[test]
+    fn the_tiling_grows_to_what_the_circles_need() {
+        let cap = [3, 69];
+        assert_eq!(next_tiling([1, 1], [1, 11], false, cap), Some([1, 11]));
+        assert_eq!(next_tiling([1, 11], [1, 11], true, cap), Some([2, 16]));
+        assert_eq!(next_tiling([1, 1], [5, 200], false, cap), Some([3, 69]));
+        assert_eq!(next_tiling([3, 69], [5, 200], false, cap), None);
+        assert_eq!(next_tiling([3, 69], [3, 69], true, cap), None);
+        assert_eq!(next_tiling([2, 4], [1, 1], false, cap), None);
+        // Never shrinks.
+        assert_eq!(next_tiling([2, 4], [1, 9], false, cap), Some([2, 9]));
+    }
+
     /// A pair of holes 1e-5 of their radius apart across the box's edge: the canonical
     /// copies are sampled adaptively (densely only facing the contact: far fewer samples than
     /// the `2 pi r / gap` a uniform sampling needs, and the samples on the far half of each
@@ -1695,7 +1833,7 @@ mod tests {
             ],
         )
         .unwrap();
-        let t = Tiling::new(&pd, 1).unwrap();
+        let t = Tiling::new(&pd, [1, 1]).unwrap();
         let opts = SamplingOptions::default();
         let (samples, _, _) = sample_tiling(&t, &pd.nearest_gaps(), &opts, false).unwrap();
         let uniform = std::f64::consts::TAU * r / (opts.spacing_per_gap * g);
@@ -1728,7 +1866,7 @@ mod tests {
                 far <= 2 + canon.count as usize / 4,
                 "hole {k}: {far} far samples"
             );
-            for (a, b) in tile_offsets(t.m) {
+            for (a, b) in tile_array(t.m) {
                 let copy = pts(t.id(k, a, b));
                 assert_eq!(copy.len(), p0.len());
                 let shift = [a as f64 * t.lq[0], b as f64 * t.lq[1]];
