@@ -24,7 +24,7 @@
 //!    largest radius, so that no sample missing from the finite array (or of the auxiliary
 //!    bounding circle) could lie in it: then it is a triangle of the infinite periodic
 //!    triangulation. If not, the array grows per axis to the half-widths that hold every
-//!    offending circle ([`next_tiling`]; a kept arc on the auxiliary circle grows both axes
+//!    offending circle (`next_tiling`; a kept arc on the auxiliary circle grows both axes
 //!    by half), at most [`MAX_ARRAY_SIDE`] long periods a side: an elongated box with few
 //!    holes has empty circles spanning many short periods, and gets many copies along its
 //!    short side only. Beyond that, or beyond the sample limit, the domain is refused with
@@ -88,7 +88,7 @@ pub const PERIODIC_MAX_PER_CIRCLE: usize = 1 << 14;
 
 /// Longest side of the array of copies, in periods of the longer side `max(Lx, Ly)`: a square
 /// box gets at most `7 x 7` copies, a box of aspect ratio `A` up to `7 A` copies along its
-/// short side (the tiling grows per axis, [`next_tiling`]).
+/// short side (the tiling grows per axis, `next_tiling`).
 pub const MAX_ARRAY_SIDE: f64 = 7.0;
 
 /// Most tilings tried before a periodic domain is refused.
