@@ -74,9 +74,15 @@ fn check(pd: &PeriodicDomain, mesh: &Mesh, first: Option<f64>) {
     let h = pd.hole_count();
     let size = pd.size();
     let l = size[0].max(size[1]);
-    // Six blocks per hole, two fewer per collapsed zero-length arc orbit (co-circular groups).
-    let blocks = 6 * h - 2 * mesh.collapsed_arcs;
-    assert_eq!(mesh.layout.blocks.len(), blocks, "6 h - 2 collapsed blocks");
+    // Six blocks per hole (inserted ones included), two fewer per collapsed zero-length arc
+    // orbit (co-circular groups), two more per split arc, and the templates in inserted holes.
+    let hi = h + mesh.inserted_holes.len();
+    let blocks = 6 * hi + 2 * mesh.split_arcs + mesh.template_blocks - 2 * mesh.collapsed_arcs;
+    assert_eq!(
+        mesh.layout.blocks.len(),
+        blocks,
+        "6 h - 2 collapsed + 2 split + template blocks"
+    );
     assert_eq!(mesh.grids.len(), blocks);
     assert_eq!(mesh.geometry, medial_blocks::mesh::Geometry::Exact);
     let sides: Vec<(usize, usize, Vec<P>)> = (0..mesh.grids.len())
@@ -85,7 +91,7 @@ fn check(pd: &PeriodicDomain, mesh: &Mesh, first: Option<f64>) {
         .collect();
     let mut zigzag = 0;
     for (b, k, nodes) in &sides {
-        if *k == 0 {
+        if *k == 0 && mesh.layout.blocks[*b].wall.is_some() {
             assert!(wall_of(pd, nodes).is_some(), "block {b}: side 0 is a wall");
             continue;
         }
@@ -137,7 +143,11 @@ fn check(pd: &PeriodicDomain, mesh: &Mesh, first: Option<f64>) {
                 area += 0.5 * (cross(q[0], q[1], q[2]) + cross(q[0], q[2], q[3]));
             }
         }
-        // The first grid line off the wall is normal to it.
+        // The first grid line off the wall is normal to it (blocks on a wall: not those
+        // around or inside an inserted hole).
+        if mesh.layout.blocks[b].wall.is_none() {
+            continue;
+        }
         let w = wall_of(pd, &g.side(0)).expect("wall");
         let c = pd.holes()[w];
         for i in 0..=g.ni {

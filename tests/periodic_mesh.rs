@@ -43,10 +43,12 @@ fn random_holes(n: usize, size: [f64; 2], rmin: f64, rmax: f64, seed: u64) -> Ve
 /// Check the periodic invariants of `mesh` for `pd`; returns the quality line.
 fn check(pd: &PeriodicDomain, mesh: &Mesh) {
     let h = pd.hole_count();
-    // Six blocks per hole, two fewer per collapsed (zero-length or short) arc orbit.
+    // Six blocks per hole (inserted ones by refinement included), two fewer per collapsed
+    // (zero-length or short) arc orbit, two more per split arc, and the templates.
+    let hi = h + mesh.inserted_holes.len();
     assert_eq!(
         mesh.layout.blocks.len(),
-        6 * h - 2 * mesh.collapsed_arcs,
+        6 * hi + 2 * mesh.split_arcs + mesh.template_blocks - 2 * mesh.collapsed_arcs,
         "six blocks per hole minus two per collapsed arc"
     );
     let size = pd.size();

@@ -34,6 +34,7 @@ use super::{
     spoke_nodes, validate_options, ArcGeometry, Wall, ZERO_SWEEP,
 };
 use crate::apollonius::{apollonius, Choice};
+use crate::blocking::MAX_TEMPLATE_SWEEP;
 use crate::domain::{Circle, CircleId};
 use crate::geometry::Point;
 use crate::grid::{GridError, MAX_TOTAL_NODES};
@@ -98,8 +99,13 @@ pub struct PeriodicExact {
     /// Arc orbits whose exact walls run against their blocks (see
     /// [`super::ExactMesh::inconsistent_arcs`]).
     pub inconsistent_arcs: Vec<usize>,
-    /// The key of each block ([`super::imposed`]), in block order.
+    /// The key of each block ([`super::imposed`]), in block order (the medial blocks only:
+    /// template blocks, after them, have none).
     pub keys: Vec<BlockKey>,
+    /// Arc orbits split in two so that every inserted hole fits its template.
+    pub split_arcs: usize,
+    /// Template blocks inside the inserted holes (the last blocks).
+    pub template_blocks: usize,
 }
 
 /// `p + (a Lx, b Ly)`: the one formula every translated copy uses.
@@ -120,6 +126,56 @@ impl PeriodicBlocking {
             s: c.radius,
         })
     }
+}
+
+/// The vertex orbits of three circles whose exact empty circle is *poor* for macro Delaunay
+/// refinement (see [`crate::refine`]): the triangle of its three touching points has
+/// circumradius over shortest edge above `limit` (its angles are the block corners there,
+/// paper Lemma 1). Per poor orbit: the ratio, the empty circle's centre (representative
+/// frame) and radius. Orbits whose circle has no exact solve are skipped. A collapsed vertex
+/// of degree `n > 3` is measured on its `n` touching points (shortest distance between two).
+pub(crate) fn poor_vertices(pb: &PeriodicBlocking, limit: f64) -> Vec<(f64, Point, f64)> {
+    let dist = |a: Point, b: Point| (a[0] - b[0]).hypot(a[1] - b[1]);
+    pb.vertices
+        .iter()
+        .filter(|v| v.circles.len() >= 3)
+        .filter_map(|v| {
+            // A collapsed (co-circular) vertex of degree n > 3: the circle of three of its
+            // circles spread around it, touching points the radial projections of its centre
+            // (as `build` places them); the measure is then over all its touching points.
+            let n = v.circles.len();
+            let walls = [
+                pb.wall(v.circles[0])?,
+                pb.wall(v.circles[n / 3])?,
+                pb.wall(v.circles[2 * n / 3])?,
+            ];
+            let sites = walls.map(|w| w.site());
+            let ap = apollonius(sites, Choice::ccw().near(v.near))
+                .or_else(|_| apollonius(sites, Choice::any().near(v.near)))
+                .ok()?;
+            let t: Vec<Point> = if n == 3 {
+                ap.tangent_points.to_vec()
+            } else {
+                v.circles
+                    .iter()
+                    .map(|&c| pb.wall(c).map(|w| w.project(ap.center)))
+                    .collect::<Option<_>>()?
+            };
+            let mut l = f64::INFINITY;
+            for i in 0..n {
+                for j in i + 1..n {
+                    l = l.min(dist(t[i], t[j]));
+                }
+            }
+            let ratio = if l > 0.0 {
+                ap.radius / l
+            } else {
+                f64::INFINITY
+            };
+            let ok = ap.radius.is_finite() && ap.center.iter().all(|x| x.is_finite());
+            (ok && ratio > limit).then_some((ratio, ap.center, ap.radius))
+        })
+        .collect()
 }
 
 /// The exact geometry of a vertex orbit (representative frame).
@@ -145,7 +201,24 @@ impl Vertex {
 /// [`MeshError::Internal`] when the exact geometry disagrees with the combinatorics (the
 /// caller then resamples or falls back to paper mode). Never panics.
 pub fn build(pb: &PeriodicBlocking, options: &Options) -> Result<PeriodicExact, MeshError> {
-    build_checking(pb, options, None)
+    build_checking(pb, options, &[], None)
+}
+
+/// [`build`] with inserted holes: `fluid[k]` marks hole `k` as inserted by macro Delaunay
+/// refinement (fluid, not a wall; see `crate::periodic::refine_periodic`). As in bounded
+/// exact mode ([`super::inserted`]): the spokes on such a hole are equally spaced, arc orbits
+/// around it are split at their middle until it has an even number `k >= 4` of arcs, none
+/// wider than [`MAX_TEMPLATE_SWEEP`], and it is filled with the O-grid / `k`-gon template
+/// ([`crate::templates::fill_inserted_holes`]) whose opposite sides share their counts
+/// (`super::inserted::tie_counts`). The canonical copy of each inserted hole is filled: its
+/// whole ring of blocks is in the period (every kept block has its wall on a canonical
+/// copy), so the template's perimeter nodes are those blocks' wall nodes.
+pub fn build_with_inserted(
+    pb: &PeriodicBlocking,
+    options: &Options,
+    fluid: &[bool],
+) -> Result<PeriodicExact, MeshError> {
+    build_checking(pb, options, fluid, None)
 }
 
 /// How far the fast densities of every arc orbit of `pb` are from the plain formula
@@ -156,7 +229,7 @@ pub fn density_deviation(
     options: &Options,
 ) -> Result<super::densities::Deviation, MeshError> {
     let mut d = super::densities::Deviation::default();
-    build_checking(pb, options, Some(&mut d))?;
+    build_checking(pb, options, &[], Some(&mut d))?;
     Ok(d)
 }
 
@@ -164,12 +237,21 @@ pub fn density_deviation(
 fn build_checking(
     pb: &PeriodicBlocking,
     options: &Options,
+    fluid: &[bool],
     mut check: Option<&mut super::densities::Deviation>,
 ) -> Result<PeriodicExact, MeshError> {
     validate_options(options)?;
     let size = pb.size;
     let h = pb.holes.len();
     let ncirc = h + 1;
+    let is_fluid = |k: usize| fluid.get(k).copied().unwrap_or(false);
+    let cluster = |k: usize| {
+        if is_fluid(k) {
+            super::inserted::FLUID_CLUSTERING
+        } else {
+            clustering_of(options, k as CircleId)
+        }
+    };
     let unknown = || internal("a periodic vertex or arc names an unknown hole".into());
     // 1. Vertex orbits.
     let mut verts = Vec::with_capacity(pb.vertices.len());
@@ -264,6 +346,28 @@ fn build_checking(
         geoms.push(g);
         slots.push(slot);
     }
+    // 2b. Inserted holes: split arc orbits until each fits its template.
+    let split = if fluid.iter().any(|&f| f) {
+        Some(split_for_templates(
+            pb,
+            &mut verts,
+            &mut geoms,
+            &mut targets,
+            &mut slots,
+            fluid,
+        )?)
+    } else {
+        None
+    };
+    let split_arcs = split.as_ref().map_or(0, |s| s.1);
+    let owned;
+    let pb = match split {
+        Some((split_pb, _)) => {
+            owned = split_pb;
+            &owned
+        }
+        None => pb,
+    };
     // 3. Counts: one per hole, one per arc orbit.
     let cell = match options.cell_size {
         Some(x) => x,
@@ -274,7 +378,7 @@ fn build_checking(
     };
     let mut circle_fixed = vec![None; ncirc];
     for (c, n) in &options.wall_cells {
-        if *c >= 0 && (*c as usize) < h {
+        if *c >= 0 && (*c as usize) < h && !is_fluid(*c as usize) {
             circle_fixed[*c as usize + 1] = Some(*n);
         }
     }
@@ -298,7 +402,7 @@ fn build_checking(
             } else {
                 cell
             };
-            let cl = clustering_of(options, k as CircleId);
+            let cl = cluster(k);
             let first = cl.first_height(hole.radius);
             circle_target[k + 1] = clustering::cells_for(len, cell, first, cl.growth) as f64;
         }
@@ -320,8 +424,42 @@ fn build_checking(
     };
     let mut counts = solve(cell, &mut targets)?;
     let keys = block_keys(pb, &verts);
+    // Inserted holes: the layout with its templates (its edges and blocks do not depend on
+    // the counts), whose conformity classes tie arc counts in pairs around every hole.
+    let has_fluid = fluid.iter().any(|&f| f);
+    let fill = |layout: &mut BlockLayout| -> Result<usize, MeshError> {
+        let holes: Vec<(CircleId, crate::domain::Circle)> = (0..h)
+            .filter(|&k| is_fluid(k))
+            .map(|k| (k as CircleId, pb.holes[k]))
+            .collect();
+        crate::templates::fill_inserted_holes(layout, &holes)
+            .map_err(|(c, m)| internal(format!("inserted hole {c}: {m}")))
+    };
+    let templates = if has_fluid {
+        let parts = Parts {
+            pb,
+            verts: &verts,
+            geoms: &geoms,
+            targets: &targets,
+            slots: &slots,
+            cluster: &cluster,
+        };
+        let (mut layout, _, medial_edge) = assemble(&parts, &counts)?;
+        let first = layout.blocks.len();
+        fill(&mut layout)?;
+        let classes = crate::grid::edge_classes(&layout);
+        Some((layout, classes, medial_edge, first))
+    } else {
+        None
+    };
+    let tie = |counts: &mut Counts| {
+        if let Some((_, classes, medial_edge, _)) = &templates {
+            super::inserted::tie_counts(classes, medial_edge, &mut counts.arc);
+        }
+    };
+    tie(&mut counts);
     let mut imposed_used = false;
-    if let Some(imp) = &options.imposed_counts {
+    if let (Some(imp), false) = (&options.imposed_counts, has_fluid) {
         let arcs: Vec<[usize; 2]> = pb
             .arcs
             .iter()
@@ -332,13 +470,27 @@ fn build_checking(
             imposed_used = true;
         }
     }
-    let total_of = |counts: &Counts| {
+    let total_of = |counts: &Counts, cell: f64| {
         let mut total: usize = 0;
         for (o, arc) in pb.arcs.iter().enumerate() {
             for c in arc.circles {
                 let nj = counts.circle[c.0 as usize + 1];
                 total = total.saturating_add((counts.arc[o] + 1).saturating_mul(nj + 1));
             }
+        }
+        if let Some((layout, classes, _, first)) = &templates {
+            // Medial block `2o + s`: sides 0 and 2 along arc orbit `o`, 1 and 3 along spokes.
+            let side_count = |b: usize, k: usize| {
+                let o = b / 2;
+                if k.is_multiple_of(2) {
+                    counts.arc[o]
+                } else {
+                    counts.circle[pb.arcs[o].circles[b % 2].0 as usize + 1]
+                }
+            };
+            total = total.saturating_add(super::inserted::template_nodes(
+                layout, classes, *first, cell, side_count,
+            ));
         }
         total
     };
@@ -351,13 +503,14 @@ fn build_checking(
     let mut cell = cell;
     let mut coarsened = 0;
     let total = loop {
-        let total = total_of(&counts);
+        let total = total_of(&counts, cell);
         if total <= budget || user_sized || coarsened >= super::MAX_COARSENING {
             break total;
         }
         cell *= super::coarsening_step(total, budget);
         coarsened += 1;
         counts = solve(cell, &mut targets)?;
+        tie(&mut counts);
     };
     if total > MAX_TOTAL_NODES {
         return Err(MeshError::Grid(GridError::TooManyNodes {
@@ -365,140 +518,21 @@ fn build_checking(
             limit: MAX_TOTAL_NODES,
         }));
     }
-    // 4. Layout and grids, instance by instance.
-    let mut b = Builder {
+    // 4. Layout and grids, instance by instance; then the templates of the inserted holes.
+    let parts = Parts {
         pb,
         verts: &verts,
-        layout: BlockLayout::default(),
-        centre: HashMap::new(),
-        tangent: HashMap::new(),
-        spokes: HashMap::new(),
+        geoms: &geoms,
+        targets: &targets,
+        slots: &slots,
+        cluster: &cluster,
     };
-    let mut grids = Vec::with_capacity(2 * pb.arcs.len());
-    for (o, arc) in pb.arcs.iter().enumerate() {
-        let g = &geoms[o];
-        let n = counts.arc[o];
-        let nbar = 0.5
-            * (counts.circle[arc.circles[0].0 as usize + 1]
-                + counts.circle[arc.circles[1].0 as usize + 1]) as f64;
-        let weights: Vec<f64> = targets[o]
-            .sq
-            .iter()
-            .zip(&targets[o].ang)
-            .map(|(s, a)| (nbar * s).max(*a))
-            .collect();
-        let params = equidistribute(&weights, n);
-        let mut m_nodes = Vec::with_capacity(n + 1);
-        let mut a_nodes: [Vec<Point>; 2] = [Vec::with_capacity(n + 1), Vec::with_capacity(n + 1)];
-        for &t in &params {
-            let (m, a, _) = g
-                .at(t)
-                .ok_or_else(|| internal(format!("arc orbit {o}: a medial node is not defined")))?;
-            m_nodes.push(m);
-            a_nodes[0].push(a[0]);
-            a_nodes[1].push(a[1]);
-        }
-        let shifts = arc.circles.map(|c| (-c.1, -c.2));
-        let mut medial_edges = [0u32; 2];
-        for side in 0..2 {
-            let d = shifts[side];
-            if side == 1 && shifts[1] == shifts[0] {
-                medial_edges[1] = medial_edges[0];
-                continue;
-            }
-            let v = arc.ends.map(|(w, s)| b.centre_vertex(w, add(s, d)));
-            let mut pts: Vec<Point> = m_nodes.iter().map(|&p| shifted(p, d, size)).collect();
-            pts[0] = b.layout.vertices[v[0] as usize];
-            pts[n] = b.layout.vertices[v[1] as usize];
-            b.layout.edges.push(Edge {
-                ends: v,
-                curve: Curve::Polyline(pts),
-                kind: EdgeKind::Medial,
-            });
-            medial_edges[side] = (b.layout.edges.len() - 1) as u32;
-        }
-        if shifts[0] != shifts[1] {
-            let t = |from: Shift, to: Shift| {
-                Translation([
-                    (to.0 - from.0) as f64 * size[0],
-                    (to.1 - from.1) as f64 * size[1],
-                ])
-            };
-            let [e0, e1] = medial_edges;
-            b.layout.edges[e0 as usize].kind = EdgeKind::Periodic {
-                partner: e1,
-                translation: t(shifts[0], shifts[1]),
-            };
-            b.layout.edges[e1 as usize].kind = EdgeKind::Periodic {
-                partner: e0,
-                translation: t(shifts[1], shifts[0]),
-            };
-        }
-        for side in 0..2 {
-            let d = shifts[side];
-            let hole = arc.circles[side].0;
-            let nj = counts.circle[hole as usize + 1];
-            let cl = clustering_of(options, hole as CircleId);
-            let first = cl.first_height(pb.holes[hole as usize].radius);
-            let [(w0, e0), (w1, e1)] = arc.ends;
-            let (i0, i1) = ((w0, add(e0, d)), (w1, add(e1, d)));
-            let (k0, k1) = (slots[o][0][side], slots[o][1][side]);
-            let sp0 = b.spoke(i0, k0, nj, first, cl.growth);
-            let sp1 = b.spoke(i1, k1, nj, first, cl.growth);
-            let (c0, c1) = (b.centre_vertex(i0.0, i0.1), b.centre_vertex(i1.0, i1.1));
-            let (t0, t1) = (b.tangent_vertex(i0, k0), b.tangent_vertex(i1, k1));
-            let (t_first, t_last) = if side == 0 { (t0, t1) } else { (t1, t0) };
-            let sweep = if side == 0 { g.sweep[0] } else { -g.sweep[1] };
-            let centre = pb.holes[hole as usize].center;
-            let p = b.layout.vertices[t_first as usize];
-            b.layout.edges.push(Edge {
-                ends: [t_first, t_last],
-                curve: Curve::Arc {
-                    center: centre,
-                    radius: pb.holes[hole as usize].radius,
-                    start: (p[1] - centre[1]).atan2(p[0] - centre[0]),
-                    sweep,
-                },
-                kind: EdgeKind::Wall(hole as CircleId),
-            });
-            let wall_edge = (b.layout.edges.len() - 1) as u32;
-            let mut nodes = vec![[0.0; 2]; (n + 1) * (nj + 1)];
-            for i in 0..=n {
-                let k = if side == 0 { i } else { n - i };
-                let col: Vec<Point> = if k == 0 {
-                    b.spokes[&(i0, k0)].1.clone()
-                } else if k == n {
-                    b.spokes[&(i1, k1)].1.clone()
-                } else {
-                    spoke_nodes(
-                        shifted(a_nodes[side][k], d, size),
-                        shifted(m_nodes[k], d, size),
-                        nj,
-                        first,
-                        cl.growth,
-                    )
-                };
-                for (j, q) in col.into_iter().enumerate() {
-                    nodes[i + j * (n + 1)] = q;
-                }
-            }
-            grids.push(BlockGrid { ni: n, nj, nodes });
-            let (fwd, rev) = (SideRef::along, SideRef::against);
-            let me = medial_edges[side];
-            b.layout.blocks.push(if side == 0 {
-                Block {
-                    corners: [t_first, t_last, c1, c0],
-                    sides: [fwd(wall_edge), rev(sp1), rev(me), fwd(sp0)],
-                    wall: Some(hole as CircleId),
-                }
-            } else {
-                Block {
-                    corners: [t_first, t_last, c0, c1],
-                    sides: [fwd(wall_edge), rev(sp0), fwd(me), fwd(sp1)],
-                    wall: Some(hole as CircleId),
-                }
-            });
-        }
+    let (mut layout, mut grids, _) = assemble(&parts, &counts)?;
+    let mut template_blocks = 0;
+    if let Some((_, classes, _, first)) = &templates {
+        template_blocks = fill(&mut layout)?;
+        let t = super::inserted::template_grids(&layout, classes, &grids, *first, cell)?;
+        grids.extend(t);
     }
     if options.smooth > 0 {
         for g in grids.iter_mut() {
@@ -507,13 +541,15 @@ fn build_checking(
         }
     }
     Ok(PeriodicExact {
-        layout: b.layout,
+        layout,
         grids,
         counts,
         cell_size: cell,
         coarsened_from: (coarsened > 0).then_some(default_cell),
         inconsistent_arcs,
         keys,
+        split_arcs,
+        template_blocks,
     })
 }
 
@@ -606,4 +642,393 @@ impl Builder<'_> {
         self.spokes.insert((i, k), (e, nodes));
         e
     }
+}
+
+/// What [`assemble`] reads: the orbits' geometry, targets and slots, the clustering per hole.
+struct Parts<'a> {
+    pb: &'a PeriodicBlocking,
+    verts: &'a [Vertex],
+    geoms: &'a [ArcGeometry],
+    targets: &'a [ArcTarget],
+    slots: &'a [[[usize; 2]; 2]],
+    cluster: &'a dyn Fn(usize) -> super::Clustering,
+}
+
+/// The layout and grids of one period with the counts `counts`, instance by instance, and
+/// the medial edge of each arc orbit (its side-0 block's).
+fn assemble(
+    parts: &Parts,
+    counts: &Counts,
+) -> Result<(BlockLayout, Vec<BlockGrid>, Vec<u32>), MeshError> {
+    let Parts {
+        pb,
+        verts,
+        geoms,
+        targets,
+        slots,
+        cluster,
+    } = *parts;
+    let size = pb.size;
+    let mut medial_edge = Vec::with_capacity(pb.arcs.len());
+    let mut b = Builder {
+        pb,
+        verts,
+        layout: BlockLayout::default(),
+        centre: HashMap::new(),
+        tangent: HashMap::new(),
+        spokes: HashMap::new(),
+    };
+    let mut grids = Vec::with_capacity(2 * pb.arcs.len());
+    for (o, arc) in pb.arcs.iter().enumerate() {
+        let g = &geoms[o];
+        let n = counts.arc[o];
+        let nbar = 0.5
+            * (counts.circle[arc.circles[0].0 as usize + 1]
+                + counts.circle[arc.circles[1].0 as usize + 1]) as f64;
+        let weights: Vec<f64> = targets[o]
+            .sq
+            .iter()
+            .zip(&targets[o].ang)
+            .map(|(s, a)| (nbar * s).max(*a))
+            .collect();
+        let params = equidistribute(&weights, n);
+        let mut m_nodes = Vec::with_capacity(n + 1);
+        let mut a_nodes: [Vec<Point>; 2] = [Vec::with_capacity(n + 1), Vec::with_capacity(n + 1)];
+        for &t in &params {
+            let (m, a, _) = g
+                .at(t)
+                .ok_or_else(|| internal(format!("arc orbit {o}: a medial node is not defined")))?;
+            m_nodes.push(m);
+            a_nodes[0].push(a[0]);
+            a_nodes[1].push(a[1]);
+        }
+        let shifts = arc.circles.map(|c| (-c.1, -c.2));
+        let mut medial_edges = [0u32; 2];
+        for side in 0..2 {
+            let d = shifts[side];
+            if side == 1 && shifts[1] == shifts[0] {
+                medial_edges[1] = medial_edges[0];
+                continue;
+            }
+            let v = arc.ends.map(|(w, s)| b.centre_vertex(w, add(s, d)));
+            let mut pts: Vec<Point> = m_nodes.iter().map(|&p| shifted(p, d, size)).collect();
+            pts[0] = b.layout.vertices[v[0] as usize];
+            pts[n] = b.layout.vertices[v[1] as usize];
+            b.layout.edges.push(Edge {
+                ends: v,
+                curve: Curve::Polyline(pts),
+                kind: EdgeKind::Medial,
+            });
+            medial_edges[side] = (b.layout.edges.len() - 1) as u32;
+        }
+        medial_edge.push(medial_edges[0]);
+        if shifts[0] != shifts[1] {
+            let t = |from: Shift, to: Shift| {
+                Translation([
+                    (to.0 - from.0) as f64 * size[0],
+                    (to.1 - from.1) as f64 * size[1],
+                ])
+            };
+            let [e0, e1] = medial_edges;
+            b.layout.edges[e0 as usize].kind = EdgeKind::Periodic {
+                partner: e1,
+                translation: t(shifts[0], shifts[1]),
+            };
+            b.layout.edges[e1 as usize].kind = EdgeKind::Periodic {
+                partner: e0,
+                translation: t(shifts[1], shifts[0]),
+            };
+        }
+        for side in 0..2 {
+            let d = shifts[side];
+            let hole = arc.circles[side].0;
+            let nj = counts.circle[hole as usize + 1];
+            let cl = cluster(hole as usize);
+            let first = cl.first_height(pb.holes[hole as usize].radius);
+            let [(w0, e0), (w1, e1)] = arc.ends;
+            let (i0, i1) = ((w0, add(e0, d)), (w1, add(e1, d)));
+            let (k0, k1) = (slots[o][0][side], slots[o][1][side]);
+            let sp0 = b.spoke(i0, k0, nj, first, cl.growth);
+            let sp1 = b.spoke(i1, k1, nj, first, cl.growth);
+            let (c0, c1) = (b.centre_vertex(i0.0, i0.1), b.centre_vertex(i1.0, i1.1));
+            let (t0, t1) = (b.tangent_vertex(i0, k0), b.tangent_vertex(i1, k1));
+            let (t_first, t_last) = if side == 0 { (t0, t1) } else { (t1, t0) };
+            let sweep = if side == 0 { g.sweep[0] } else { -g.sweep[1] };
+            let centre = pb.holes[hole as usize].center;
+            let p = b.layout.vertices[t_first as usize];
+            b.layout.edges.push(Edge {
+                ends: [t_first, t_last],
+                curve: Curve::Arc {
+                    center: centre,
+                    radius: pb.holes[hole as usize].radius,
+                    start: (p[1] - centre[1]).atan2(p[0] - centre[0]),
+                    sweep,
+                },
+                kind: EdgeKind::Wall(hole as CircleId),
+            });
+            let wall_edge = (b.layout.edges.len() - 1) as u32;
+            let mut nodes = vec![[0.0; 2]; (n + 1) * (nj + 1)];
+            for i in 0..=n {
+                let k = if side == 0 { i } else { n - i };
+                let col: Vec<Point> = if k == 0 {
+                    b.spokes[&(i0, k0)].1.clone()
+                } else if k == n {
+                    b.spokes[&(i1, k1)].1.clone()
+                } else {
+                    spoke_nodes(
+                        shifted(a_nodes[side][k], d, size),
+                        shifted(m_nodes[k], d, size),
+                        nj,
+                        first,
+                        cl.growth,
+                    )
+                };
+                for (j, q) in col.into_iter().enumerate() {
+                    nodes[i + j * (n + 1)] = q;
+                }
+            }
+            grids.push(BlockGrid { ni: n, nj, nodes });
+            let (fwd, rev) = (SideRef::along, SideRef::against);
+            let me = medial_edges[side];
+            b.layout.blocks.push(if side == 0 {
+                Block {
+                    corners: [t_first, t_last, c1, c0],
+                    sides: [fwd(wall_edge), rev(sp1), rev(me), fwd(sp0)],
+                    wall: Some(hole as CircleId),
+                }
+            } else {
+                Block {
+                    corners: [t_first, t_last, c0, c1],
+                    sides: [fwd(wall_edge), rev(sp0), fwd(me), fwd(sp1)],
+                    wall: Some(hole as CircleId),
+                }
+            });
+        }
+    }
+    Ok((b.layout, grids, medial_edge))
+}
+
+/// The orbits being split for the templates ([`split_for_templates`]).
+struct Splitter<'a> {
+    arcs: Vec<PeriodicArc>,
+    vertices: Vec<PeriodicVertex>,
+    verts: &'a mut Vec<Vertex>,
+    geoms: &'a mut Vec<ArcGeometry>,
+    targets: &'a mut Vec<ArcTarget>,
+    slots: &'a mut Vec<[[usize; 2]; 2]>,
+    fluid: &'a [bool],
+    /// The arc orbits on each inserted hole.
+    on: HashMap<u32, Vec<usize>>,
+    splits: usize,
+}
+
+impl Splitter<'_> {
+    fn is_fluid(&self, k: u32) -> bool {
+        self.fluid.get(k as usize).copied().unwrap_or(false)
+    }
+
+    fn note(&mut self, o: usize) {
+        for c in self.arcs[o].circles {
+            if self.is_fluid(c.0) {
+                self.on.entry(c.0).or_default().push(o);
+            }
+        }
+    }
+
+    /// `(orbit, sweep on hole k)` for every arc around hole `k` (an orbit between a hole and
+    /// its own image twice).
+    fn sweeps(&self, k: u32) -> Vec<(usize, f64)> {
+        let mut list = self.on.get(&k).cloned().unwrap_or_default();
+        list.sort_unstable();
+        list.dedup();
+        let mut out = Vec::new();
+        for o in list {
+            for side in 0..2 {
+                if self.arcs[o].circles[side].0 == k {
+                    out.push((o, self.geoms[o].sweep[side].abs()));
+                }
+            }
+        }
+        out
+    }
+
+    /// The circle of arc orbit `o` other than hole `k`.
+    fn other(&self, o: usize, k: u32) -> u32 {
+        let c = self.arcs[o].circles;
+        if c[0].0 == k {
+            c[1].0
+        } else {
+            c[0].0
+        }
+    }
+
+    fn odd(&self, k: u32) -> bool {
+        self.sweeps(k).len() % 2 == 1
+    }
+
+    /// Split arc orbit `o` at its middle: `o` keeps the first half, a new orbit the second.
+    fn split(&mut self, o: usize) -> Result<(), MeshError> {
+        let (m, a, rho, first, second) = self.geoms[o]
+            .split()
+            .ok_or_else(|| internal(format!("arc orbit {o}: no middle to split at")))?;
+        let densities = |g: &ArcGeometry| {
+            g.densities()
+                .ok_or_else(|| internal(format!("arc orbit {o}: a split half is not defined")))
+        };
+        let (d1, d2) = (densities(&first)?, densities(&second)?);
+        let circles = self.arcs[o].circles;
+        let w = self.verts.len();
+        self.verts.push(Vertex {
+            center: m,
+            radius: rho,
+            tangent: a.to_vec(),
+            circles: circles.to_vec(),
+        });
+        self.vertices.push(PeriodicVertex {
+            circles: circles.to_vec(),
+            near: m,
+        });
+        let end = self.arcs[o].ends[1];
+        let hint = self.arcs[o].hint.map(|x| 0.5 * x);
+        self.arcs[o].ends[1] = (w, (0, 0));
+        self.arcs[o].hint = hint;
+        self.arcs.push(PeriodicArc {
+            circles,
+            ends: [(w, (0, 0)), end],
+            hint,
+        });
+        self.note(self.arcs.len() - 1);
+        let s = self.slots[o];
+        self.slots[o] = [s[0], [0, 1]];
+        self.slots.push([[0, 1], s[1]]);
+        self.geoms[o] = first;
+        self.geoms.push(second);
+        let target = |(sq, ang)| ArcTarget {
+            circles: circles.map(|c| c.0 as usize + 1),
+            sq,
+            ang,
+            known: None,
+        };
+        self.targets[o] = target(d1);
+        self.targets.push(target(d2));
+        self.splits += 1;
+        Ok(())
+    }
+}
+
+/// The widest of `list` (`(orbit, sweep)`; the first of equal ones).
+fn widest(list: &[(usize, f64)]) -> Option<(usize, f64)> {
+    list.iter().copied().fold(None, |best, x| match best {
+        Some(b) if b.1 >= x.1 => Some(b),
+        _ => Some(x),
+    })
+}
+
+/// Split arc orbits at their middle (an exact medial point with its two exact spokes, a
+/// vertex orbit of two circles) until every inserted hole (`fluid`) has an even number
+/// `k >= 4` of arcs around its canonical copy, none wider than [`MAX_TEMPLATE_SWEEP`]:
+/// first the widest arc on each hole while it has fewer than 4 or one too wide, then, for a
+/// hole left with an odd count, its widest arc to a circle that needs no parity (a real hole),
+/// else to another inserted hole with an odd count (both become even). The split orbits are
+/// in the returned blocking (`verts`, `geoms`, `targets` and `slots` extended alike), with the
+/// number of splits. `Err` when a hole cannot be made to fit (the caller meshes without the
+/// inserted holes).
+fn split_for_templates(
+    pb: &PeriodicBlocking,
+    verts: &mut Vec<Vertex>,
+    geoms: &mut Vec<ArcGeometry>,
+    targets: &mut Vec<ArcTarget>,
+    slots: &mut Vec<[[usize; 2]; 2]>,
+    fluid: &[bool],
+) -> Result<(PeriodicBlocking, usize), MeshError> {
+    let mut sp = Splitter {
+        arcs: pb.arcs.clone(),
+        vertices: pb.vertices.clone(),
+        verts,
+        geoms,
+        targets,
+        slots,
+        fluid,
+        on: HashMap::new(),
+        splits: 0,
+    };
+    for o in 0..sp.arcs.len() {
+        sp.note(o);
+    }
+    let mut holes: Vec<u32> = sp.on.keys().copied().collect();
+    holes.sort_unstable();
+    // 1. Widths and at least four arcs.
+    for &k in &holes {
+        for _ in 0..=super::inserted::MAX_SPLITS_PER_HOLE {
+            let list = sp.sweeps(k);
+            let Some((o, w)) = widest(&list) else {
+                break;
+            };
+            if list.len() >= 4 && w <= MAX_TEMPLATE_SWEEP {
+                break;
+            }
+            sp.split(o)?;
+        }
+    }
+    // 2. Parity: from each hole left with an odd count, a breadth-first search over the arc
+    //    orbits (widest first; not those between a hole and its own image, which add two arcs
+    //    to it) to a real hole (which needs no parity) or another inserted hole with an odd
+    //    count; splitting every orbit on the path flips the parity of its two ends only.
+    for &k in &holes {
+        if !sp.odd(k) {
+            continue;
+        }
+        let mut from: HashMap<u32, (u32, usize)> = HashMap::new();
+        let mut queue = std::collections::VecDeque::from([k]);
+        let mut end = None;
+        while let Some(u) = queue.pop_front() {
+            let mut list = sp.sweeps(u);
+            list.sort_by(|a, b| b.1.total_cmp(&a.1).then(a.0.cmp(&b.0)));
+            for (o, _) in list {
+                let j = sp.other(o, u);
+                if j == u || j == k || from.contains_key(&j) {
+                    continue;
+                }
+                from.insert(j, (u, o));
+                if !sp.is_fluid(j) || sp.odd(j) {
+                    end = Some(j);
+                    break;
+                }
+                queue.push_back(j);
+            }
+            if end.is_some() {
+                break;
+            }
+        }
+        let Some(mut j) = end else {
+            return Err(internal(format!(
+                "inserted hole {k} keeps an odd number of arcs"
+            )));
+        };
+        while j != k {
+            let (u, o) = from[&j];
+            sp.split(o)?;
+            j = u;
+        }
+    }
+    for &k in &holes {
+        let list = sp.sweeps(k);
+        let w = widest(&list).map_or(0.0, |x| x.1);
+        if list.len() < 4 || list.len() % 2 == 1 || w > MAX_TEMPLATE_SWEEP {
+            return Err(internal(format!(
+                "inserted hole {k} does not fit its template ({} arcs, widest {w} rad)",
+                list.len()
+            )));
+        }
+    }
+    let splits = sp.splits;
+    Ok((
+        PeriodicBlocking {
+            size: pb.size,
+            holes: pb.holes.clone(),
+            vertices: sp.vertices,
+            arcs: sp.arcs,
+        },
+        splits,
+    ))
 }

@@ -1628,13 +1628,172 @@ fn periodic_frame_here(pd: &PeriodicDomain, options: &Options) -> Result<Periodi
     })
 }
 
-/// Exact mode with resampling; `Ok(None)`: use paper mode.
+/// Exact mode with macro Delaunay refinement and resampling; `Ok(None)`: use paper mode.
+///
+/// With [`Options::refine_ratio`], holes are first inserted where a vertex orbit is poor
+/// ([`refine_periodic`]) and the refined domain is meshed with those holes filled by
+/// templates; if that does not give a valid exact mesh, the domain is meshed without them
+/// (as before refinement existed here), so refinement never makes a layout fail.
 fn mesh_periodic_exact(
     pd: &PeriodicDomain,
     options: &Options,
 ) -> Result<Option<PeriodicFrame>, MeshError> {
     // Exact walls do not follow the samples: a wall with a single sample (the soft invariant
     // (d)) costs nothing, as in bounded exact mode.
+    let sampling = SamplingOptions {
+        soft_rounds: false,
+        ..SamplingOptions::default()
+    };
+    let mut first = None;
+    if options.refine_ratio.is_some() {
+        match refine_periodic(pd, options, &sampling) {
+            Ok(Refinement::Inserted { domain, inserted }) => {
+                let mut fluid = vec![false; domain.hole_count()];
+                fluid[domain.hole_count() - inserted.len()..].fill(true);
+                if let Ok(Some(f)) = exact_attempts(&domain, options, &fluid, None) {
+                    return Ok(Some(f));
+                }
+            }
+            Ok(Refinement::None(p)) => first = p,
+            Err(_) => {}
+        }
+    }
+    exact_attempts(pd, options, &[], first)
+}
+
+/// What [`refine_periodic`] did.
+#[allow(clippy::large_enum_variant)]
+enum Refinement {
+    /// No vertex orbit was poor (or no hole could be inserted): the first layout, made with
+    /// exact mode's collapse fraction, for reuse.
+    None(Option<PeriodicLayout>),
+    /// Holes inserted: the domain with them appended (the last `inserted.len()` holes).
+    Inserted {
+        domain: PeriodicDomain,
+        inserted: Vec<Circle>,
+    },
+}
+
+/// Most rounds of periodic macro Delaunay refinement.
+const MAX_REFINE_ROUNDS: usize = 16;
+
+/// Macro Delaunay refinement on the torus (paper Algorithm 3, as [`crate::refine`] does in
+/// bounded domains): while a vertex orbit is poor (the triangle of its exact empty circle's
+/// touching points has circumradius over shortest edge above [`Options::refine_ratio`]),
+/// insert a hole at the centre of that empty circle with half its radius, wrapped into the
+/// box. Poorest first (ties by centre and radius), several per round when they keep the
+/// smallest gap `G` of the current domain to every image of every hole and to each other
+/// (Lemma 2: an empty circle's half-radius hole always does, up to rounding; a candidate that
+/// does not is skipped). Inserted holes are appended after the domain's own; they are fluid
+/// and filled by templates ([`exact_mode::periodic::build_with_inserted`]). Stops after
+/// [`MAX_REFINE_ROUNDS`] rounds or at [`Options::max_inserted_holes`] (what was inserted so
+/// far is kept).
+fn refine_periodic(
+    pd: &PeriodicDomain,
+    options: &Options,
+    sampling: &SamplingOptions,
+) -> Result<Refinement, MeshError> {
+    let Some(limit) = options.refine_ratio else {
+        return Ok(Refinement::None(None));
+    };
+    crate::ranges::check_refine_ratio(limit)?;
+    let nearly_zero = Options {
+        collapse_fraction: options.collapse_fraction.min(EXACT_COLLAPSE_FRACTION),
+        ..options.clone()
+    };
+    let size = pd.size();
+    let mut current = pd.clone();
+    let mut inserted: Vec<Circle> = Vec::new();
+    for _ in 0..MAX_REFINE_ROUNDS {
+        let p = periodic_layout_with(&current, &nearly_zero, sampling)?;
+        let Some(pb) = &p.blocking else {
+            break;
+        };
+        let mut poor = exact_mode::periodic::poor_vertices(pb, limit);
+        if poor.is_empty() {
+            if inserted.is_empty() {
+                return Ok(Refinement::None(Some(p)));
+            }
+            break;
+        }
+        poor.sort_by(|a, b| {
+            b.0.total_cmp(&a.0)
+                .then(a.1[0].total_cmp(&b.1[0]))
+                .then(a.1[1].total_cmp(&b.1[1]))
+                .then(a.2.total_cmp(&b.2))
+        });
+        let g = current
+            .nearest_gaps()
+            .into_iter()
+            .fold(f64::INFINITY, f64::min);
+        // The gap from `c` to the nearest image of `o` (images in the neighbouring tiles hold
+        // the nearest one: centres are in the box).
+        let image_gap = |c: &Circle, o: &Circle| {
+            let mut d = [c.center[0] - o.center[0], c.center[1] - o.center[1]];
+            for k in 0..2 {
+                d[k] -= (d[k] / size[k]).round() * size[k];
+            }
+            d[0].hypot(d[1]) - c.radius - o.radius
+        };
+        let mut batch: Vec<Circle> = Vec::new();
+        for &(_, centre, rho) in &poor {
+            if inserted.len() + batch.len() >= options.max_inserted_holes {
+                break;
+            }
+            if !(centre[0].is_finite() && centre[1].is_finite()) {
+                continue;
+            }
+            let centre = [wrap(centre[0], size[0]), wrap(centre[1], size[1])];
+            // Half the empty circle's radius (Lemma 2), but small enough for the hole to keep
+            // the gap `G` to its own images: an elongated box's empty circles can be wider
+            // than the short period. A smaller hole at the same centre keeps the gap `G` to
+            // every other circle too (`rho - R >= rho / 2 >= G`).
+            let fit = 0.5 * (size[0].min(size[1]) - g) * (1.0 - 1e-9);
+            let hole = Circle {
+                center: centre,
+                radius: (0.5 * rho).min(fit),
+            };
+            let ok = hole.radius.is_finite()
+                && hole.radius > 0.0
+                && size.iter().all(|&l| l - 2.0 * hole.radius >= g)
+                && current
+                    .holes()
+                    .iter()
+                    .chain(&batch)
+                    .all(|o| image_gap(&hole, o) >= g);
+            if ok {
+                batch.push(hole);
+            }
+        }
+        if batch.is_empty() {
+            break;
+        }
+        let mut holes = current.holes().to_vec();
+        holes.extend_from_slice(&batch);
+        match PeriodicDomain::new(size, holes) {
+            Ok(d) => current = d,
+            Err(_) => break,
+        }
+        inserted.extend_from_slice(&batch);
+    }
+    if inserted.is_empty() {
+        return Ok(Refinement::None(None));
+    }
+    Ok(Refinement::Inserted {
+        domain: current,
+        inserted,
+    })
+}
+
+/// Exact mode with resampling on `pd` (`fluid[k]`: hole `k` was inserted by refinement);
+/// `first`, a layout already made with exact mode's collapse fraction on the default
+/// sampling, is used for the first attempt. `Ok(None)`: use paper mode.
+fn exact_attempts(
+    pd: &PeriodicDomain,
+    options: &Options,
+    fluid: &[bool],
+    mut first: Option<PeriodicLayout>,
+) -> Result<Option<PeriodicFrame>, MeshError> {
     let mut sampling = SamplingOptions {
         soft_rounds: false,
         ..SamplingOptions::default()
@@ -1657,7 +1816,11 @@ fn mesh_periodic_exact(
         //    its spokes go to the radial projections of its centre; the mesh is kept only
         //    without a corner below `MERGED_MIN_ANGLE_DEG` (as bounded exact mode gives up
         //    such collapses).
-        let short = match periodic_layout_with(pd, &nearly_zero, &sampling) {
+        let made = match first.take() {
+            Some(p) => Ok(p),
+            None => periodic_layout_with(pd, &nearly_zero, &sampling),
+        };
+        let short = match made {
             Ok(p) => Some(p),
             Err(MeshError::Internal(_)) => None,
             Err(_) if attempt > 0 => return Ok(None),
@@ -1668,7 +1831,7 @@ fn mesh_periodic_exact(
             if p.collapsed_arcs == 0 || nearly_zero.collapse_fraction == 0.0 {
                 // Nothing collapsed (or nothing short): the zero-only layout is this one.
                 same_as_zero_only = Some(p);
-            } else if let Some(f) = exact_frame(pd, p, options, true)? {
+            } else if let Some(f) = exact_frame(pd, p, options, fluid, true)? {
                 return Ok(Some(f));
             }
         }
@@ -1686,7 +1849,7 @@ fn mesh_periodic_exact(
         if p.blocking.is_none() {
             return Ok(None);
         }
-        if let Some(f) = exact_frame(pd, p, options, false)? {
+        if let Some(f) = exact_frame(pd, p, options, fluid, false)? {
             return Ok(Some(f));
         }
         sampling.min_per_circle = sampling.min_per_circle.saturating_mul(4);
@@ -1710,13 +1873,14 @@ fn exact_frame(
     pd: &PeriodicDomain,
     p: PeriodicLayout,
     options: &Options,
+    fluid: &[bool],
     strict: bool,
 ) -> Result<Option<PeriodicFrame>, MeshError> {
     let Some(pb) = &p.blocking else {
         return Ok(None);
     };
     let x = match timings::span("exact_geometry", || {
-        exact_mode::periodic::build(pb, options)
+        exact_mode::periodic::build_with_inserted(pb, options, fluid)
     }) {
         Ok(x) => x,
         Err(MeshError::Internal(_)) => return Ok(None),
@@ -1733,22 +1897,27 @@ fn exact_frame(
     if !x.inconsistent_arcs.is_empty() || bad {
         return Ok(None);
     }
+    let real = pd.hole_count() - fluid.iter().filter(|&&f| f).count();
     let mesh = Mesh {
         layout: x.layout,
         grids: x.grids,
         medial_vertices: p.medial_vertices,
         medial_arcs: p.medial_arcs,
-        holes: pd.hole_count(),
+        holes: real,
         collapsed_arcs: p.collapsed_arcs,
         cocircular_groups: p.cocircular_groups,
+        inserted_holes: pd.holes()[real..].to_vec(),
+        split_arcs: x.split_arcs,
+        template_blocks: x.template_blocks,
         geometry: crate::mesh::Geometry::Exact,
         coarsened_cell_size: x.coarsened_from.map(|from| [from, x.cell_size]),
-        ..Mesh::default()
     };
+    // Template blocks have no key: node counts are imposed on layouts without them only.
+    let keys = (x.template_blocks == 0).then_some(x.keys);
     Ok(Some(PeriodicFrame {
         mesh,
         triples: p.triples,
-        keys: Some(x.keys),
+        keys,
     }))
 }
 
