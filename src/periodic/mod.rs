@@ -37,6 +37,12 @@
 //!    same arc seen from the other circle's canonical cell) and the translation; the grid
 //!    stage gives partners equal cell counts and copies the nodes.
 //!
+//! # Refinement (exact mode)
+//! Macro Delaunay refinement runs on the torus too (`refine_periodic`): poor vertex orbits
+//! get fluid holes at their empty circles' centres, appended to the domain's holes and
+//! filled by templates ([`exact_mode::periodic::build_with_inserted`]); when the refined
+//! layout gives no valid exact mesh, the unrefined one is meshed.
+//!
 //! Wall corners are placed on the true circles; only the medial geometry comes from the
 //! quantised samples (an error of the order of `1e-14` of the period). That is paper mode
 //! (`--mode paper`). In exact mode (the default) the same orbits are handed to
