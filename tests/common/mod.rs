@@ -245,6 +245,23 @@ pub const INSERTING: &str = r#"{"bounding": {"center": [0.0, 0.0], "radius": 1.0
 /// other circle: the samples before are a prefix of the samples after.
 pub const PREFIX: &str = r#"{"bounding": {"center": [99.80518032777042, 222.13404102732048], "radius": 1.0}, "holes": [{"center": [100.01448901478783, 222.33167266433094], "radius": 0.20821141244148114}, {"center": [99.15416679567457, 222.4725675840845], "radius": 0.24053959701870642}, {"center": [100.49276751007557, 221.92556284706956], "radius": 0.00010638887682197367}, {"center": [100.68302868175985, 221.93803595726027], "radius": 0.00014962206114609836}, {"center": [99.46589073326423, 222.3685354043989], "radius": 0.0001105205087575796}]}"#;
 
+/// Every cell of every grid of `m` as its four corners `(i, j)`, `(i + 1, j)`,
+/// `(i + 1, j + 1)`, `(i, j + 1)` (counter-clockwise in a valid cell).
+pub fn cells(m: &medial_blocks::Mesh) -> impl Iterator<Item = [[f64; 2]; 4]> + '_ {
+    m.grids.iter().flat_map(|g| {
+        (0..g.nj).flat_map(move |j| {
+            (0..g.ni).map(move |i| {
+                [
+                    g.node(i, j),
+                    g.node(i + 1, j),
+                    g.node(i + 1, j + 1),
+                    g.node(i, j + 1),
+                ]
+            })
+        })
+    })
+}
+
 /// Marsaglia's xorshift64 (shifts 13, 7, 17): the tests' small seeded generator (seed non-zero).
 pub struct XorShift(pub u64);
 
