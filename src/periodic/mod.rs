@@ -1653,10 +1653,14 @@ fn mesh_periodic_exact(
     let mut first = None;
     if options.refine_ratio.is_some() {
         match refine_periodic(pd, options, &sampling) {
-            Ok(Refinement::Inserted { domain, inserted }) => {
+            Ok(Refinement::Inserted {
+                domain,
+                inserted,
+                layout,
+            }) => {
                 let mut fluid = vec![false; domain.hole_count()];
                 fluid[domain.hole_count() - inserted.len()..].fill(true);
-                if let Ok(Some(f)) = exact_attempts(&domain, options, &fluid, None) {
+                if let Ok(Some(f)) = exact_attempts(&domain, options, &fluid, layout) {
                     return Ok(Some(f));
                 }
             }
@@ -1673,10 +1677,12 @@ enum Refinement {
     /// No vertex orbit was poor (or no hole could be inserted): the first layout, made with
     /// exact mode's collapse fraction, for reuse.
     None(Option<PeriodicLayout>),
-    /// Holes inserted: the domain with them appended (the last `inserted.len()` holes).
+    /// Holes inserted: the domain with them appended (the last `inserted.len()` holes), and
+    /// its layout when the last round made it (as [`Refinement::None`]'s).
     Inserted {
         domain: PeriodicDomain,
         inserted: Vec<Circle>,
+        layout: Option<PeriodicLayout>,
     },
 }
 
@@ -1710,6 +1716,8 @@ fn refine_periodic(
     let size = pd.size();
     let mut current = pd.clone();
     let mut inserted: Vec<Circle> = Vec::new();
+    // The layout of `current`, when made.
+    let mut last = None;
     for _ in 0..MAX_REFINE_ROUNDS {
         let p = periodic_layout_with(&current, &nearly_zero, sampling)?;
         let Some(pb) = &p.blocking else {
@@ -1720,6 +1728,7 @@ fn refine_periodic(
             if inserted.is_empty() {
                 return Ok(Refinement::None(Some(p)));
             }
+            last = Some(p);
             break;
         }
         poor.sort_by(|a, b| {
@@ -1772,22 +1781,27 @@ fn refine_periodic(
             }
         }
         if batch.is_empty() {
+            last = Some(p);
             break;
         }
         let mut holes = current.holes().to_vec();
         holes.extend_from_slice(&batch);
         match PeriodicDomain::new(size, holes) {
             Ok(d) => current = d,
-            Err(_) => break,
+            Err(_) => {
+                last = Some(p);
+                break;
+            }
         }
         inserted.extend_from_slice(&batch);
     }
     if inserted.is_empty() {
-        return Ok(Refinement::None(None));
+        return Ok(Refinement::None(last));
     }
     Ok(Refinement::Inserted {
         domain: current,
         inserted,
+        layout: last,
     })
 }
 
