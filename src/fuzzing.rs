@@ -673,9 +673,8 @@ pub fn accepted_refusal(domain: &Domain, e: &MeshError) -> bool {
 fn within_limits(e: &MeshError, gaps_and_scale: impl FnOnce() -> (Vec<f64>, f64)) -> bool {
     use crate::grid::GridError;
     match e {
-        MeshError::Grid(GridError::TooManyNodes { .. } | GridError::TooManyCellsPerSide { .. }) => {
-            true
-        }
+        MeshError::Grid(GridError::TooManyNodes { .. } | GridError::TooManyCellsPerSide { .. })
+        | MeshError::Tiling(_) => true,
         MeshError::Sampling { .. } => {
             let (gaps, scale) = gaps_and_scale();
             let min_gap = gaps.into_iter().fold(f64::INFINITY, f64::min);

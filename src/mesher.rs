@@ -135,6 +135,11 @@ pub enum MeshError {
          so far); raise the limit or the refinement ratio"
     )]
     Refinement { inserted: usize, limit: usize },
+    /// A periodic box whose empty regions reach over more copies of the box than the limits
+    /// allow (the tiling of [`crate::periodic`]: at most 7 long periods a side, and the
+    /// sample limit).
+    #[error("periodic tiling: {0}")]
+    Tiling(String),
     #[error("internal invariant broken (please report this layout): {0}")]
     Internal(String),
 }

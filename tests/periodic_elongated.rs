@@ -14,7 +14,7 @@
 
 use medial_blocks::fuzzing::{check_periodic_mesh, Checks};
 use medial_blocks::periodic::{mesh_periodic, periodic_layout, PeriodicDomain};
-use medial_blocks::{Circle, Mesh, Options};
+use medial_blocks::{Circle, Mesh, MeshError, Options};
 
 /// Only zero-length arcs are collapsed, so medial vertices stay exact, and no hole is
 /// inserted (refinement, tested in `periodic_refine.rs`, would mesh another layout).
@@ -166,8 +166,11 @@ fn boxes_too_elongated_for_the_sample_limit_are_refused_with_a_reason() {
     let pd = PeriodicDomain::new([1e6, 1.0], vec![Circle::new(0.3, 0.25, 0.2)]).unwrap();
     let e = mesh_periodic(&pd, &Options::default()).expect_err("needs millions of copies");
     let text = e.to_string();
+    assert!(matches!(e, MeshError::Tiling(_)), "{e:?}");
     assert!(
-        text.contains("copies of the box") && text.contains("limit"),
+        text.starts_with("periodic tiling: ")
+            && text.contains("copies of the box")
+            && text.contains("limit"),
         "{text}"
     );
 }

@@ -1924,3 +1924,28 @@ fn non_object_json_and_sequence_flags() {
         );
     }
 }
+
+/// Row 43: a periodic box whose empty regions would need more copies of the box than the
+/// sample limit allows (one small hole in a box a million times longer than high) is refused
+/// with `MeshError::Tiling`, naming the copies and the limit; elongated boxes within the
+/// limits are meshed (`tests/periodic_elongated.rs`).
+#[test]
+fn periodic_box_too_elongated_for_the_limits() {
+    let pd =
+        medial_blocks::periodic::PeriodicDomain::new([1e6, 1.0], vec![Circle::new(0.3, 0.25, 0.2)])
+            .unwrap();
+    let e = medial_blocks::periodic::mesh_periodic(&pd, &Options::default()).unwrap_err();
+    assert!(matches!(e, MeshError::Tiling(_)), "{e:?}");
+    let s = Scratch::new();
+    s.mesh(
+        "long.json",
+        r#"{"periodic": {"size": [1e6, 1]}, "holes": [{"center": [0.3, 0.25], "radius": 0.2}]}"#,
+        &[],
+        2,
+        &[
+            "periodic tiling: ",
+            "copies of the box are needed",
+            "more than the limit",
+        ],
+    );
+}

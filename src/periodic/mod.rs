@@ -28,7 +28,7 @@
 //!    by half), at most [`MAX_ARRAY_SIDE`] long periods a side: an elongated box with few
 //!    holes has empty circles spanning many short periods, and gets many copies along its
 //!    short side only. Beyond that, or beyond the sample limit, the domain is refused with
-//!    [`MeshError::Sampling`].
+//!    [`MeshError::Tiling`].
 //! 5. Geometry by orbits: medial vertices and arcs are identified up to translation by their
 //!    sample triples (`(hole, sample index, tile)`, normalised). Every instance's geometry
 //!    is its orbit representative's plus the period shift (in the true `Lx`, `Ly`), so both
@@ -533,17 +533,14 @@ pub fn periodic_layout_with(
         let copies = (2 * m[0] as usize + 1) * (2 * m[1] as usize + 1) * pd.hole_count();
         let least = copies.saturating_mul(opts.min_per_circle.next_multiple_of(8).max(8));
         if least > opts.max_total {
-            return Err(MeshError::Sampling {
-                circle: -1,
-                message: format!(
-                    "the periodic tiling needs {} x {} copies of the box ({copies} circles, at \
-                     least {least} samples), more than the limit of {} samples: the empty \
-                     regions are too long for the period",
-                    2 * m[0] + 1,
-                    2 * m[1] + 1,
-                    opts.max_total
-                ),
-            });
+            return Err(MeshError::Tiling(format!(
+                "{} x {} copies of the box are needed ({copies} circles, at least {least} \
+                 samples), more than the limit of {} samples: the empty regions are too long \
+                 for the period",
+                2 * m[0] + 1,
+                2 * m[1] + 1,
+                opts.max_total
+            )));
         }
         let t = Tiling::new(pd, m)?;
         let (samples, tri, medial) = sample_tiling(&t, &gaps, &opts, options.mode == Mode::Paper)?;
@@ -558,15 +555,12 @@ pub fn periodic_layout_with(
             },
         }
     }
-    Err(MeshError::Sampling {
-        circle: -1,
-        message: format!(
-            "the medial axis of the periodic layout reaches beyond a {} x {} tiling (empty \
-             regions far larger than the period); refused",
-            2 * m[0] + 1,
-            2 * m[1] + 1
-        ),
-    })
+    Err(MeshError::Tiling(format!(
+        "the medial axis of the periodic layout reaches beyond a {} x {} array of copies \
+         (empty regions far larger than the period); refused",
+        2 * m[0] + 1,
+        2 * m[1] + 1
+    )))
 }
 
 /// The largest half-widths of the array of copies for a period `size`: `(2 m + 1) L <=`
