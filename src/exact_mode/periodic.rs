@@ -528,17 +528,19 @@ fn build_checking(
         cluster: &cluster,
     };
     let (mut layout, mut grids, _) = assemble(&parts, &counts)?;
-    let mut template_blocks = 0;
-    if let Some((_, classes, _, first)) = &templates {
-        template_blocks = fill(&mut layout)?;
-        let t = super::inserted::template_grids(&layout, classes, &grids, *first, cell)?;
-        grids.extend(t);
-    }
+    // Winslow smoothing of the medial blocks (as in bounded exact mode, not the templates;
+    // it keeps every block's boundary, which the templates copy).
     if options.smooth > 0 {
         for g in grids.iter_mut() {
             let rows = super::smoothing::boundary_layer_rows(g);
             super::smoothing::winslow(g, options.smooth, rows);
         }
+    }
+    let mut template_blocks = 0;
+    if let Some((_, classes, _, first)) = &templates {
+        template_blocks = fill(&mut layout)?;
+        let t = super::inserted::template_grids(&layout, classes, &grids, *first, cell)?;
+        grids.extend(t);
     }
     Ok(PeriodicExact {
         layout,
