@@ -444,7 +444,7 @@ fn build_checking(
             slots: &slots,
             cluster: &cluster,
         };
-        let (mut layout, _, medial_edge) = assemble(&parts, &counts)?;
+        let (mut layout, _, medial_edge) = assemble(&parts, &counts, false)?;
         let first = layout.blocks.len();
         fill(&mut layout)?;
         let classes = crate::grid::edge_classes(&layout);
@@ -527,7 +527,7 @@ fn build_checking(
         slots: &slots,
         cluster: &cluster,
     };
-    let (mut layout, mut grids, _) = assemble(&parts, &counts)?;
+    let (mut layout, mut grids, _) = assemble(&parts, &counts, true)?;
     // Winslow smoothing of the medial blocks (as in bounded exact mode, not the templates;
     // it keeps every block's boundary, which the templates copy).
     if options.smooth > 0 {
@@ -656,11 +656,13 @@ struct Parts<'a> {
     cluster: &'a dyn Fn(usize) -> super::Clustering,
 }
 
-/// The layout and grids of one period with the counts `counts`, instance by instance, and
-/// the medial edge of each arc orbit (its side-0 block's).
+/// The layout and (`with_grids`) grids of one period with the counts `counts`, instance by
+/// instance, and the medial edge of each arc orbit (its side-0 block's). The layout's edges
+/// and blocks do not depend on the counts (only the nodes of its curves do).
 fn assemble(
     parts: &Parts,
     counts: &Counts,
+    with_grids: bool,
 ) -> Result<(BlockLayout, Vec<BlockGrid>, Vec<u32>), MeshError> {
     let Parts {
         pb,
@@ -769,27 +771,29 @@ fn assemble(
                 kind: EdgeKind::Wall(hole as CircleId),
             });
             let wall_edge = (b.layout.edges.len() - 1) as u32;
-            let mut nodes = vec![[0.0; 2]; (n + 1) * (nj + 1)];
-            for i in 0..=n {
-                let k = if side == 0 { i } else { n - i };
-                let col: Vec<Point> = if k == 0 {
-                    b.spokes[&(i0, k0)].1.clone()
-                } else if k == n {
-                    b.spokes[&(i1, k1)].1.clone()
-                } else {
-                    spoke_nodes(
-                        shifted(a_nodes[side][k], d, size),
-                        shifted(m_nodes[k], d, size),
-                        nj,
-                        first,
-                        cl.growth,
-                    )
-                };
-                for (j, q) in col.into_iter().enumerate() {
-                    nodes[i + j * (n + 1)] = q;
+            if with_grids {
+                let mut nodes = vec![[0.0; 2]; (n + 1) * (nj + 1)];
+                for i in 0..=n {
+                    let k = if side == 0 { i } else { n - i };
+                    let col: Vec<Point> = if k == 0 {
+                        b.spokes[&(i0, k0)].1.clone()
+                    } else if k == n {
+                        b.spokes[&(i1, k1)].1.clone()
+                    } else {
+                        spoke_nodes(
+                            shifted(a_nodes[side][k], d, size),
+                            shifted(m_nodes[k], d, size),
+                            nj,
+                            first,
+                            cl.growth,
+                        )
+                    };
+                    for (j, q) in col.into_iter().enumerate() {
+                        nodes[i + j * (n + 1)] = q;
+                    }
                 }
+                grids.push(BlockGrid { ni: n, nj, nodes });
             }
-            grids.push(BlockGrid { ni: n, nj, nodes });
             let (fwd, rev) = (SideRef::along, SideRef::against);
             let me = medial_edges[side];
             b.layout.blocks.push(if side == 0 {
