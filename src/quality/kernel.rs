@@ -170,7 +170,13 @@ pub(super) fn weighted_bin<const N: usize>(x: f64, edges: &[f64; N], weight: f64
 pub(super) struct RatioBins {
     /// Bin of the group `k` (top 16 bits of `1.0` plus `k`), times the weight.
     table: [f64; RATIO_GROUPS],
+    /// The inner edges' representations as signed integers, ascending, and their weighted
+    /// bins (`(k + 1) · weight` from the edge `k + 1` on), for [`RatioBins::bin_by_compares`].
+    inner: [(i64, f64); RATIO_INNER],
 }
+
+/// Inner edges of [`super::RATIO_EDGES`] (all but the first and the last).
+const RATIO_INNER: usize = 9;
 
 /// Groups of 16 top bits covered by [`RatioBins`] (seven binades from 1, 16 groups each, and
 /// up to 128 in all).
@@ -184,12 +190,36 @@ impl RatioBins {
     /// ascending, `edges[0] <= 1`), weight `weight`.
     pub fn new<const N: usize>(edges: &[f64; N], weight: f64) -> RatioBins {
         assert!(edges.iter().all(|e| e.to_bits() << 16 == 0) && edges[0] <= 1.0);
+        assert!(N == RATIO_INNER + 2 && edges.iter().all(|&e| e > 0.0));
         RatioBins {
             table: std::array::from_fn(|k| {
                 let x = f64::from_bits(((ONE_TOP + k as i64) as u64) << 48);
                 weighted_bin(x, edges, weight)
             }),
+            inner: std::array::from_fn(|k| {
+                (edges[k + 1].to_bits() as i64, (k + 1) as f64 * weight)
+            }),
         }
+    }
+
+    /// [`RatioBins::bin`] (the same bits for every `x`, NaN included) by comparing
+    /// representations rather than loading from the table: for the 4-lane (AVX2) row loop,
+    /// where the table load is a gather, slower than nine integer comparisons on an AMD EPYC
+    /// (Zen 3: the quality pass 8% faster at 1e3 bubbles); the 8-lane build keeps the table.
+    ///
+    /// Why the same: the edges are positive, so as signed integers their representations
+    /// ascend with them; for `x >= +0`, `+inf` and positive NaN, `x`'s representation
+    /// compares with theirs as `x` with the edges (NaN above all: the last bin, as the table's
+    /// clamp gives), and every negative representation (negative numbers, `-0.0`, negative
+    /// NaN) is below all of them: bin 0, as the table's clamp gives.
+    #[inline(always)]
+    pub fn bin_by_compares(&self, x: f64) -> f64 {
+        let xb = x.to_bits() as i64;
+        let mut b = 0.0;
+        for &(e, w) in &self.inner {
+            b = if xb >= e { w } else { b };
+        }
+        b
     }
 
     /// `weighted_bin(x, edges, weight)` for `x >= +0` or negative (NaN with the sign clear: the

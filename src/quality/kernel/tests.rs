@@ -143,7 +143,8 @@ fn angle_bin_without_division_equals_the_quotient() {
 /// The ratio bins from the table equal the counted ones ([`weighted_bin`], itself checked
 /// against the search of [`bin`]): at and around every edge and every group boundary of
 /// the table (16 top bits), for zeros of both signs, negative, tiny, subnormal and huge
-/// values, and random bit patterns of either sign.
+/// values, and random bit patterns of either sign; and [`RatioBins::bin_by_compares`]
+/// equals the table on all of them, NaN and infinities too.
 #[test]
 fn ratio_bins_from_the_table_equal_the_counted_ones() {
     let table = RatioBins::new(&RATIO_EDGES, PACK[6]);
@@ -161,13 +162,27 @@ fn ratio_bins_from_the_table_equal_the_counted_ones() {
         xs.push(1.0 + 150.0 * r.next_f64());
         xs.push(f64::from_bits(r.next_u64()));
     }
-    for x in xs.into_iter().filter(|x| !x.is_nan()) {
+    xs.extend([f64::NAN, -f64::NAN, f64::INFINITY, f64::NEG_INFINITY]);
+    let mut nan = 0;
+    for x in xs {
+        // The comparisons give the table's bits on every input, NaN of either sign included.
+        assert_eq!(
+            table.bin(x).to_bits(),
+            table.bin_by_compares(x).to_bits(),
+            "{x:e} ({:#x})",
+            x.to_bits()
+        );
+        if x.is_nan() {
+            nan += 1;
+            continue;
+        }
         assert_eq!(
             table.bin(x).to_bits(),
             weighted_bin(x, &RATIO_EDGES, PACK[6]).to_bits(),
             "{x:e}"
         );
     }
+    assert!(nan > 100, "{nan} NaN patterns");
 }
 
 /// Each skewness threshold is the first dividend where its test holds (and it fails on

@@ -46,8 +46,13 @@ fn wide_and_portable_rows_agree() {
             let mut one = vec![Figures::default(); n];
             let mut two = vec![Figures::default(); n];
             let mut ang = [(); 4].map(|_| vec![0.0; n]);
-            let k1 =
-                row_figures::<true>(refs(&b), refs(&tt), refs(&v), &t, out(&mut one, &mut ang));
+            let k1 = row_figures::<true, true>(
+                refs(&b),
+                refs(&tt),
+                refs(&v),
+                &t,
+                out(&mut one, &mut ang),
+            );
             // SAFETY: `t.wide` says the CPU has AVX2.
             let k2 = unsafe {
                 row_figures_avx2(refs(&b), refs(&tt), refs(&v), &t, out(&mut two, &mut ang))
