@@ -195,6 +195,9 @@ struct Row {
     calls: serde_json::Value,
     fault_stages: serde_json::Value,
     faults: Option<u64>,
+    /// `timings.json`'s `rework`: checks after the first and their seconds (the local-fix
+    /// rounds of the exact build, and any resampling).
+    rework: (u64, f64),
     total: f64,
     cpu: Option<f64>,
     wall: f64,
@@ -263,6 +266,10 @@ fn run_size(bin: &Path, dir: &Path, n: usize, a: &Args) -> Result<Row, String> {
         calls: t["calls"].clone(),
         fault_stages: t["fault_stages"].clone(),
         faults: t["page_faults"].as_u64(),
+        rework: (
+            t["rework"]["checks"].as_u64().unwrap_or(0),
+            t["rework"]["seconds"].as_f64().unwrap_or(0.0),
+        ),
         wall,
     })
 }
@@ -345,8 +352,14 @@ fn print_cpu_table(rows: &[Row]) {
         "triangulations",
         "page faults",
         "grids faults",
+        "rebuilds",
+        "rework s",
     ]);
-    println!("\nProcess CPU seconds per stage (all threads):\n");
+    println!(
+        "\nProcess CPU seconds per stage (all threads); `rebuilds` and `rework s`: the exact \
+         build's local-fix rounds (checks after the first, and the wall seconds of the stages \
+         redone, included in the stage columns above; `rework` of timings.json):\n"
+    );
     println!("| {} |", head.join(" | "));
     println!("|{}", "---:|".repeat(head.len()));
     for r in rows {
@@ -370,6 +383,8 @@ fn print_cpu_table(rows: &[Row]) {
                 .as_u64()
                 .map_or("n/a".into(), |f| f.to_string()),
         );
+        cells.push(r.rework.0.to_string());
+        cells.push(format!("{:.3}", r.rework.1));
         println!("| {} |", cells.join(" | "));
     }
 }
@@ -463,10 +478,13 @@ fn remeshing_table(max: usize, seed: u64, block_cells: usize) {
     use medial_blocks::{mesh, Options};
     println!(
         "\nRemeshing in a running program (library `mesh` + `Report::from_mesh`, the same \
-         layout again after one warm-up run; median of the runs):\n"
+         layout again after one warm-up run; median of the runs; `rework s`: the part of \
+         `mesh` spent on the exact build's local-fix rounds, `Timings::rework`):\n"
     );
-    println!("| particles | runs | mesh s | mesh + report s | growth exp. (mesh + report) |");
-    println!("|---:|---:|---:|---:|---:|");
+    println!(
+        "| particles | runs | mesh s | rework s | mesh + report s | growth exp. (mesh + report) |"
+    );
+    println!("|---:|---:|---:|---:|---:|---:|");
     let options = Options {
         block_cells: Some(block_cells),
         ..Options::default()
@@ -481,34 +499,39 @@ fn remeshing_table(max: usize, seed: u64, block_cells: usize) {
             1_001..=10_000 => 5,
             _ => 3,
         };
-        let mut times: Vec<(f64, f64)> = Vec::new();
+        let mut times: Vec<(f64, f64, f64)> = Vec::new();
         for k in 0..=runs {
+            let rec = medial_blocks::timings::Recording::start();
             let start = Instant::now();
             let Ok(m) = mesh(&domain, &options) else {
                 eprintln!("meshing {n} bubbles in process failed");
                 break;
             };
             let meshed = start.elapsed().as_secs_f64();
+            let rework = rec.finish().rework().seconds;
             std::hint::black_box(Report::from_mesh(&m).cells);
             let reported = start.elapsed().as_secs_f64();
             drop(m);
             if k > 0 {
-                times.push((meshed, reported));
+                times.push((meshed, reported, rework));
             }
         }
         if times.is_empty() {
             continue;
         }
-        let median = |f: fn(&(f64, f64)) -> f64| {
+        let median = |f: fn(&(f64, f64, f64)) -> f64| {
             let mut v: Vec<f64> = times.iter().map(f).collect();
             v.sort_by(f64::total_cmp);
             v[v.len() / 2]
         };
-        let (m, r) = (median(|t| t.0), median(|t| t.1));
+        let (m, r, w) = (median(|t| t.0), median(|t| t.1), median(|t| t.2));
         let growth = prev.map_or("-".to_string(), |(n0, r0)| {
             format!("{:.2}", exponent(n0, r0, n, r))
         });
-        println!("| {n} | {} | {m:.3} | {r:.3} | {growth} |", times.len());
+        println!(
+            "| {n} | {} | {m:.3} | {w:.3} | {r:.3} | {growth} |",
+            times.len()
+        );
         prev = Some((n, r));
     }
 }

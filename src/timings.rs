@@ -48,6 +48,47 @@ pub fn writer_stage(format: &str) -> String {
     format!("write_{format}")
 }
 
+/// The meshing stages whose spans after the first check count as [`Timings::rework`].
+pub const REWORK_STAGES: [&str; 8] = [
+    "sampling",
+    "triangulation",
+    "medial_graph",
+    "blocking",
+    "exact_geometry",
+    "node_counts",
+    "grids",
+    "quality_check",
+];
+
+/// What [`Timings::rework`] found.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct Rework {
+    /// Checks after the first (one per rebuild that got as far as its check).
+    pub checks: usize,
+    /// Exclusive wall seconds of the rework spans.
+    pub seconds: f64,
+    /// Their exclusive process CPU seconds (0 where the CPU clock is unavailable).
+    pub cpu_seconds: f64,
+}
+
+/// One closing of a stage: what [`Timings::spans`] lists, in the order the stages closed.
+///
+/// A stage entered several times (the exact build's local-fix rounds: `blocking`,
+/// `exact_geometry`, `grids` and `quality_check` again per round; resampling attempts) has
+/// one span per entry; the stage's row in [`Timings::stages`] is their sum.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Span {
+    pub stage: String,
+    /// Stages open around it when it closed (0: entered directly under the recording).
+    pub depth: usize,
+    /// Exclusive wall seconds (time in stages entered inside it not counted).
+    pub seconds: f64,
+    /// Exclusive process CPU seconds (all threads); 0 where the CPU clock is unavailable.
+    pub cpu_seconds: f64,
+    /// Exclusive page faults; 0 where the count is unavailable.
+    pub page_faults: u64,
+}
+
 /// What a recording measured.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Timings {
@@ -63,6 +104,9 @@ pub struct Timings {
     /// How many times each stage was entered (resampling attempts, repeated figures), same
     /// order.
     pub calls: Vec<(String, u64)>,
+    /// Every entry of every stage, in the order they closed (see [`Span`]): per stage, the
+    /// spans' count is its `calls` and their exclusive times add up to its row.
+    pub spans: Vec<Span>,
     /// Wall time (seconds) from [`Recording::start`] to [`Recording::finish`].
     pub total_seconds: f64,
     /// Peak resident memory of the process so far (`VmHWM` of `/proc/self/status`), `None`
@@ -93,6 +137,26 @@ impl Timings {
             .map_or(0, |(_, f)| *f)
     }
 
+    /// The work redone after the first exact build was checked: the spans of the meshing
+    /// stages (`sampling` through `quality_check`, see [`REWORK_STAGES`]) that closed after
+    /// the first `quality_check` span. In exact mode these are the local-fix rounds
+    /// (recollapse, cached rebuild, check again) and any resampling; zero when nothing was
+    /// redone or no check ran (paper mode, a single hole).
+    pub fn rework(&self) -> Rework {
+        let Some(first) = self.spans.iter().position(|s| s.stage == "quality_check") else {
+            return Rework::default();
+        };
+        let mut r = Rework::default();
+        for s in &self.spans[first + 1..] {
+            if REWORK_STAGES.contains(&s.stage.as_str()) {
+                r.seconds += s.seconds;
+                r.cpu_seconds += s.cpu_seconds;
+                r.checks += usize::from(s.stage == "quality_check");
+            }
+        }
+        r
+    }
+
     /// Total time not attributed to any stage (never negative).
     pub fn other_seconds(&self) -> f64 {
         let sum: f64 = self.stages.iter().map(|(_, s)| s).sum();
@@ -117,10 +181,14 @@ impl Timings {
 
     /// `{"stages": {name: seconds, ...}, "cpu_stages": {name: seconds, ...} | null,
     /// "fault_stages": {name: count, ...} | null, "calls": {name: count, ...},
-    /// "total_seconds": t, "cpu_seconds": c|null, "page_faults": n|null,
-    /// "peak_memory_bytes": n|null}` with every row of [`Timings::rows`] in `stages` (wall
-    /// time; `other` is the unattributed rest), in `cpu_stages` (process CPU time) and in
-    /// `fault_stages` (page faults).
+    /// "spans": [{"stage": name, "depth": d, "seconds": s, "cpu_seconds": c|null,
+    /// "page_faults": n|null}, ...], "total_seconds": t, "cpu_seconds": c|null,
+    /// "page_faults": n|null, "peak_memory_bytes": n|null}` with every row of
+    /// [`Timings::rows`] in `stages` (wall time; `other` is the unattributed rest), in
+    /// `cpu_stages` (process CPU time) and in `fault_stages` (page faults); `spans` is
+    /// [`Timings::spans`] (each entry of a stage on its own: the local-fix rounds of the
+    /// exact build show as repeated `blocking`, `exact_geometry` and `grids` spans), and
+    /// `"rework": {"checks": n, "seconds": s, "cpu_seconds": c|null}` is [`Timings::rework`].
     pub fn to_json(&self) -> serde_json::Value {
         let stages: serde_json::Map<String, serde_json::Value> = self
             .rows()
@@ -161,11 +229,31 @@ impl Timings {
             .iter()
             .map(|(n, c)| (n.clone(), serde_json::Value::from(*c)))
             .collect();
+        let rework = self.rework();
+        let spans: Vec<serde_json::Value> = self
+            .spans
+            .iter()
+            .map(|sp| {
+                serde_json::json!({
+                    "stage": sp.stage,
+                    "depth": sp.depth,
+                    "seconds": sp.seconds,
+                    "cpu_seconds": self.cpu_seconds.map(|_| sp.cpu_seconds),
+                    "page_faults": self.page_faults.map(|_| sp.page_faults),
+                })
+            })
+            .collect();
         serde_json::json!({
             "stages": stages,
             "cpu_stages": cpu_stages,
             "fault_stages": fault_stages,
             "calls": calls,
+            "spans": spans,
+            "rework": {
+                "checks": rework.checks,
+                "seconds": rework.seconds,
+                "cpu_seconds": self.cpu_seconds.map(|_| rework.cpu_seconds),
+            },
             "total_seconds": self.total_seconds,
             "cpu_seconds": self.cpu_seconds,
             "page_faults": self.page_faults,
@@ -333,6 +421,8 @@ struct Recorder {
     faults_start: Option<u64>,
     /// Per stage: exclusive time and number of entries.
     stages: Vec<(Cow<'static, str>, Measure, u64)>,
+    /// Every closing, in order: name, depth and exclusive measure.
+    spans: Vec<(Cow<'static, str>, usize, Measure)>,
     stack: Vec<Open>,
 }
 
@@ -361,7 +451,9 @@ impl Recorder {
                     _ => 0,
                 },
             };
-            self.add(open.name, total.minus(open.children), 1);
+            let own = total.minus(open.children);
+            self.spans.push((open.name.clone(), self.stack.len(), own));
+            self.add(open.name, own, 1);
             if let Some(parent) = self.stack.last_mut() {
                 parent.children = parent.children.plus(total);
             }
@@ -400,6 +492,7 @@ impl Recording {
                 cpu_start: process_cpu_seconds(),
                 faults_start: process_page_faults(),
                 stages: Vec::new(),
+                spans: Vec::new(),
                 stack: Vec::new(),
             })
         });
@@ -430,6 +523,7 @@ impl Recording {
                 cpu: Vec::new(),
                 faults: Vec::new(),
                 calls: Vec::new(),
+                spans: Vec::new(),
                 total_seconds: 0.0,
                 peak_memory_bytes: peak_memory_bytes(),
                 cpu_seconds: None,
@@ -447,6 +541,10 @@ impl Recording {
                 for (n, m, calls) in &r.stages {
                     o.add(n.clone(), *m, *calls);
                     sum = sum.plus(*m);
+                }
+                let depth = o.stack.len();
+                for (n, d, m) in &r.spans {
+                    o.spans.push((n.clone(), depth + d, *m));
                 }
                 if let Some(parent) = o.stack.last_mut() {
                     parent.children = parent.children.plus(sum);
@@ -482,6 +580,17 @@ impl Recording {
                 Vec::new()
             },
             calls: r.stages.iter().map(|(n, _, c)| (name(n), *c)).collect(),
+            spans: r
+                .spans
+                .iter()
+                .map(|(n, depth, m)| Span {
+                    stage: name(n),
+                    depth: *depth,
+                    seconds: m.wall.as_secs_f64(),
+                    cpu_seconds: if cpu_seconds.is_some() { m.cpu } else { 0.0 },
+                    page_faults: if page_faults.is_some() { m.faults } else { 0 },
+                })
+                .collect(),
             total_seconds: total.as_secs_f64(),
             peak_memory_bytes: peak_memory_bytes(),
             cpu_seconds,
@@ -728,7 +837,78 @@ mod tests {
         assert!(t.stages.iter().all(|(_, s)| *s >= 0.0));
         let sum: f64 = t.stages.iter().map(|(_, s)| s).sum();
         assert!(sum <= t.total_seconds + 1e-9, "{t:?}");
+        // One span per entry, in closing order, at the depth it was entered.
+        let spans: Vec<(&str, usize)> = t
+            .spans
+            .iter()
+            .map(|s| (s.stage.as_str(), s.depth))
+            .collect();
+        assert_eq!(spans, [("b", 1), ("b", 1), ("a", 0), ("c", 0)]);
+        assert_spans_add_up(&t);
         assert!(!is_recording());
+    }
+
+    /// Per stage, the spans' count is its calls, their wall and CPU seconds add up to its row
+    /// (sums of the same durations, to rounding) and their faults to its faults exactly.
+    fn assert_spans_add_up(t: &Timings) {
+        for (name, calls) in &t.calls {
+            let mine: Vec<&Span> = t.spans.iter().filter(|s| &s.stage == name).collect();
+            assert_eq!(mine.len() as u64, *calls, "{name}");
+            let wall: f64 = mine.iter().map(|s| s.seconds).sum();
+            assert!(
+                (wall - t.seconds(name)).abs() <= 1e-9,
+                "{name}: {wall} vs {t:?}"
+            );
+            if let Some((_, cpu)) = t.cpu.iter().find(|(n, _)| n == name) {
+                let sum: f64 = mine.iter().map(|s| s.cpu_seconds).sum();
+                assert!((sum - cpu).abs() <= 1e-9, "{name}: {sum} vs {cpu}");
+            }
+            let faults: u64 = mine.iter().map(|s| s.page_faults).sum();
+            assert_eq!(faults, t.stage_faults(name), "{name}");
+        }
+        assert!(t
+            .spans
+            .iter()
+            .all(|s| t.calls.iter().any(|(n, _)| *n == s.stage)));
+    }
+
+    #[test]
+    fn rework_is_what_follows_the_first_check() {
+        let sp = |stage: &str, seconds: f64| Span {
+            stage: stage.into(),
+            depth: 0,
+            seconds,
+            cpu_seconds: 2.0 * seconds,
+            page_faults: 0,
+        };
+        let mut t = Timings {
+            stages: Vec::new(),
+            cpu: Vec::new(),
+            faults: Vec::new(),
+            calls: Vec::new(),
+            spans: vec![
+                sp("sampling", 1.0),
+                sp("blocking", 2.0),
+                sp("grids", 4.0),
+                sp("quality_check", 0.5),
+                sp("blocking", 0.25),
+                sp("grids", 0.125),
+                sp("quality_check", 0.0625),
+                sp("quality", 8.0),
+                sp("write_json", 16.0),
+            ],
+            total_seconds: 32.0,
+            peak_memory_bytes: None,
+            cpu_seconds: None,
+            page_faults: None,
+        };
+        let r = t.rework();
+        assert_eq!(r.checks, 1);
+        assert_eq!(r.seconds, 0.25 + 0.125 + 0.0625);
+        assert_eq!(r.cpu_seconds, 2.0 * r.seconds);
+        // No check: nothing counts as rework.
+        t.spans.retain(|s| s.stage != "quality_check");
+        assert_eq!(t.rework(), Rework::default());
     }
 
     #[test]
@@ -755,6 +935,15 @@ mod tests {
         let to = outer.finish();
         let names: Vec<&str> = to.stages.iter().map(|(n, _)| n.as_str()).collect();
         assert_eq!(names, ["inner_stage", "outer_stage"]);
+        // The inner span is handed on below the stage that was open around the inner
+        // recording.
+        let spans: Vec<(&str, usize)> = to
+            .spans
+            .iter()
+            .map(|s| (s.stage.as_str(), s.depth))
+            .collect();
+        assert_eq!(spans, [("inner_stage", 1), ("outer_stage", 0)]);
+        assert_spans_add_up(&to);
     }
 
     #[test]
@@ -764,6 +953,29 @@ mod tests {
             cpu: vec![("write_vtk".into(), 0.75), ("grids".into(), 0.25)],
             faults: vec![("write_vtk".into(), 7), ("grids".into(), 900)],
             calls: vec![("write_vtk".into(), 1), ("grids".into(), 2)],
+            spans: vec![
+                Span {
+                    stage: "grids".into(),
+                    depth: 0,
+                    seconds: 0.125,
+                    cpu_seconds: 0.125,
+                    page_faults: 800,
+                },
+                Span {
+                    stage: "grids".into(),
+                    depth: 0,
+                    seconds: 0.125,
+                    cpu_seconds: 0.125,
+                    page_faults: 100,
+                },
+                Span {
+                    stage: "write_vtk".into(),
+                    depth: 1,
+                    seconds: 0.5,
+                    cpu_seconds: 0.75,
+                    page_faults: 7,
+                },
+            ],
             total_seconds: 1.0,
             peak_memory_bytes: None,
             cpu_seconds: Some(1.5),
@@ -783,6 +995,15 @@ mod tests {
         assert_eq!(v["fault_stages"]["input"].as_u64(), Some(0));
         // The unattributed rest: 1000 - 907.
         assert_eq!(v["fault_stages"]["other"].as_u64(), Some(93));
+        let spans = v["spans"].as_array().unwrap();
+        assert_eq!(spans.len(), 3);
+        assert_eq!(spans[1]["stage"], "grids");
+        assert_eq!(spans[1]["page_faults"].as_u64(), Some(100));
+        assert_eq!(spans[2]["depth"].as_u64(), Some(1));
+        assert_eq!(spans[2]["cpu_seconds"].as_f64(), Some(0.75));
+        // No `quality_check` span: no rework.
+        assert_eq!(v["rework"]["checks"].as_u64(), Some(0));
+        assert_eq!(v["rework"]["seconds"].as_f64(), Some(0.0));
         let table = t.table();
         assert!(table.contains("write_vtk"));
         let other = table.lines().find(|l| l.starts_with("other")).unwrap();
@@ -794,6 +1015,7 @@ mod tests {
             ..t
         };
         assert!(none.to_json()["fault_stages"].is_null());
+        assert!(none.to_json()["spans"][0]["page_faults"].is_null());
         assert!(none.to_json()["page_faults"].is_null());
         let grids = none.table();
         let grids = grids.lines().find(|l| l.starts_with("grids")).unwrap();

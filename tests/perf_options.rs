@@ -345,6 +345,7 @@ fn timings_flag_writes_timings_json_and_nothing_else_changes() {
         assert!(x.is_some_and(|x| x >= 0.0), "stage {k}: {t}");
     }
     common::assert_stages_add_up(&t);
+    common::assert_spans_add_up(&t);
     assert!(t["peak_memory_bytes"].is_null() || t["peak_memory_bytes"].as_u64().unwrap() > 0);
     if !t["cpu_stages"].is_null() {
         for k in &keys {

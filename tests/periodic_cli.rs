@@ -1,7 +1,7 @@
 //! `medial-blocks mesh` on periodic input (JSON with "periodic", or CSV with --periodic).
 
 mod common;
-use common::{assert_stages_add_up, bin};
+use common::{assert_spans_add_up, assert_stages_add_up, bin};
 
 #[test]
 fn periodic_json_and_csv() {
@@ -123,5 +123,6 @@ fn periodic_timings_name_the_stages() {
             );
         }
         assert_stages_add_up(&t);
+        assert_spans_add_up(&t);
     }
 }

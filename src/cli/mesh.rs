@@ -44,7 +44,8 @@ Input CSV (file name ending in .csv): x,y,r per line (an optional header line is
 Files in DIR: mesh.vtm + mesh/*.vts (vtk), mesh.vtu (vtu), mesh.xyz + mesh.p3d (plot3d),
   mesh.msh + mesh.geo (gmsh), mesh.svg (svg), mesh.png (png), report.json +
   connectivity.json (json), mesh.cgns (cgns: builds with --features cgns only),
-  timings.json (only with --timings: per-stage seconds, CPU seconds, calls, peak memory).
+  timings.json (only with --timings: per-stage seconds, CPU seconds, calls, peak memory;
+  \"spans\": every entry of every stage in order, e.g. each local-fix round).
 Exit codes: 0 success, 1 output could not be written or internal error, 2 bad input.")]
 pub struct Args {
     /// Domain JSON, or a CSV of holes (`x,y,r`); without it, the built-in 7-hole hexagon.

@@ -104,6 +104,44 @@ pub fn assert_stages_add_up(t: &serde_json::Value) {
     );
 }
 
+/// The `spans` of a `timings.json` (every entry of every stage, in closing order) against its
+/// per-stage figures: per stage, as many spans as `calls`, their seconds adding up to the
+/// stage's row (to rounding), their page faults to its `fault_stages` count exactly, and no
+/// span of a stage that has no row.
+pub fn assert_spans_add_up(t: &serde_json::Value) {
+    let spans = t["spans"].as_array().expect("spans");
+    let calls = t["calls"].as_object().expect("calls");
+    for (name, n) in calls {
+        let mine: Vec<&serde_json::Value> = spans.iter().filter(|s| s["stage"] == **name).collect();
+        assert_eq!(mine.len() as u64, n.as_u64().unwrap(), "{name}: {t}");
+        let wall: f64 = mine.iter().map(|s| s["seconds"].as_f64().unwrap()).sum();
+        let row = t["stages"][name.as_str()].as_f64().unwrap();
+        assert!(
+            (wall - row).abs() <= 1e-9 * row.max(1.0),
+            "{name}: {wall} vs {row}"
+        );
+        if !t["fault_stages"].is_null() {
+            let faults: u64 = mine
+                .iter()
+                .map(|s| s["page_faults"].as_u64().unwrap())
+                .sum();
+            assert_eq!(
+                faults,
+                t["fault_stages"][name.as_str()].as_u64().unwrap(),
+                "{name}"
+            );
+        }
+        assert!(mine.iter().all(|s| s["depth"].is_u64()), "{name}");
+    }
+    for s in spans {
+        let name = s["stage"].as_str().expect("a stage name");
+        assert!(
+            calls.contains_key(name),
+            "span of {name} without calls: {t}"
+        );
+    }
+}
+
 /// Inverted cells, recomputed here from the nodes (not through the crate's quality code): a
 /// cell counts when the cross product of its two edges at some corner, counter-clockwise, is
 /// not positive (zero, negative or NaN).
