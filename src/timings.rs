@@ -262,7 +262,8 @@ impl Timings {
     }
 
     /// A plain-text table: stage, milliseconds, share of the total, CPU milliseconds, calls
-    /// and page faults; then the total and the peak memory.
+    /// and page faults; then the total, the part of it that was [`Timings::rework`] (when
+    /// something was redone) and the peak memory.
     pub fn table(&self) -> String {
         let mut s = format!(
             "{:<18}{:>12}{:>8}{:>12}{:>7}{:>10}\n",
@@ -297,6 +298,16 @@ impl Timings {
             ));
         }
         s.push_str(&format!("{:<18}{:>12.2}\n", "total", 1e3 * total));
+        let rework = self.rework();
+        if rework.checks > 0 {
+            // Already inside the stage rows: a share of them, not a row of its own.
+            s.push_str(&format!(
+                "{:<18}{:>12.2}   local-fix rounds: {} rebuild(s) after the first check\n",
+                "  of which rework",
+                1e3 * rework.seconds,
+                rework.checks
+            ));
+        }
         if let Some(c) = self.cpu_seconds {
             s.push_str(&format!("{:<18}{:>12.2}\n", "cpu (all threads)", 1e3 * c));
         }
@@ -904,11 +915,21 @@ mod tests {
         };
         let r = t.rework();
         assert_eq!(r.checks, 1);
+        let line = t.table();
+        let line = line
+            .lines()
+            .find(|l| l.contains("rework"))
+            .expect("a rework line");
+        assert!(
+            line.contains("437.50") && line.contains("1 rebuild"),
+            "{line}"
+        );
         assert_eq!(r.seconds, 0.25 + 0.125 + 0.0625);
         assert_eq!(r.cpu_seconds, 2.0 * r.seconds);
         // No check: nothing counts as rework.
         t.spans.retain(|s| s.stage != "quality_check");
         assert_eq!(t.rework(), Rework::default());
+        assert!(!t.table().contains("rework"));
     }
 
     #[test]
