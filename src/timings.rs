@@ -48,17 +48,9 @@ pub fn writer_stage(format: &str) -> String {
     format!("write_{format}")
 }
 
-/// The meshing stages whose spans after the first check count as [`Timings::rework`].
-pub const REWORK_STAGES: [&str; 8] = [
-    "sampling",
-    "triangulation",
-    "medial_graph",
-    "blocking",
-    "exact_geometry",
-    "node_counts",
-    "grids",
-    "quality_check",
-];
+/// The meshing stages whose spans after the first check count as [`Timings::rework`]:
+/// [`STAGES`] from `sampling` to `quality_check`.
+pub const REWORK_STAGES: &[&str] = STAGES.split_at(1).1.split_at(8).0;
 
 /// What [`Timings::rework`] found.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
@@ -913,6 +905,9 @@ mod tests {
             cpu_seconds: None,
             page_faults: None,
         };
+        assert_eq!(REWORK_STAGES.first(), Some(&"sampling"));
+        assert_eq!(REWORK_STAGES.last(), Some(&"quality_check"));
+        assert!(!REWORK_STAGES.contains(&"quality") && !REWORK_STAGES.contains(&"input"));
         let r = t.rework();
         assert_eq!(r.checks, 1);
         let line = t.table();

@@ -212,6 +212,46 @@ fn block_cells_in_paper_mode_means_cells() {
     assert_eq!(a.layout, b.layout);
 }
 
+/// The spans of a library run: per stage as many as its calls, adding up to its row; every
+/// check of the exact build but the first is a rework check, and each rebuild it checks
+/// started with a recollapse or a resampling (a `blocking` or `sampling` span since the check
+/// before), never a rebuild of an unchanged collapse. Bubbles at 1e3, a size whose exact build
+/// has local-fix rounds, and a small layout.
+#[test]
+fn spans_add_up_and_every_rebuild_follows_a_recollapse() {
+    for (n, seed) in [(1000, 1), (30, 7)] {
+        let d = layouts::bubbles(n, seed).unwrap();
+        let (_, t) = mesh_timed(&d, &block_cells(16)).unwrap();
+        for (name, calls) in &t.calls {
+            let mine: Vec<_> = t.spans.iter().filter(|s| &s.stage == name).collect();
+            assert_eq!(mine.len() as u64, *calls, "{name}");
+            let wall: f64 = mine.iter().map(|s| s.seconds).sum();
+            assert!((wall - t.seconds(name)).abs() <= 1e-9, "{name}");
+        }
+        let checks: Vec<usize> = (0..t.spans.len())
+            .filter(|&i| t.spans[i].stage == "quality_check")
+            .collect();
+        assert!(!checks.is_empty(), "{n}: no check");
+        assert_eq!(t.rework().checks, checks.len() - 1, "{n}");
+        for w in checks.windows(2) {
+            let between = &t.spans[w[0] + 1..w[1]];
+            assert!(
+                between
+                    .iter()
+                    .any(|s| s.stage == "blocking" || s.stage == "sampling"),
+                "{n}: a rebuild without a recollapse: {:?}",
+                between.iter().map(|s| &s.stage).collect::<Vec<_>>()
+            );
+        }
+        let after: f64 = t.spans[checks[0] + 1..]
+            .iter()
+            .filter(|s| s.stage != "quality")
+            .map(|s| s.seconds)
+            .sum();
+        assert!(t.rework().seconds <= after + 1e-12, "{n}");
+    }
+}
+
 #[test]
 fn mesh_timed_is_mesh_and_times_every_stage() {
     let d = layouts::bubbles(30, 7).unwrap();

@@ -140,6 +140,25 @@ pub fn assert_spans_add_up(t: &serde_json::Value) {
             "span of {name} without calls: {t}"
         );
     }
+    // The rework, recounted: the meshing stages' spans after the first `quality_check`.
+    let first = spans.iter().position(|s| s["stage"] == "quality_check");
+    let after = first.map_or(&[][..], |f| &spans[f + 1..]);
+    let meshing = medial_blocks::timings::REWORK_STAGES;
+    let redone: Vec<&serde_json::Value> = after
+        .iter()
+        .filter(|s| meshing.contains(&s["stage"].as_str().unwrap()))
+        .collect();
+    let checks = redone
+        .iter()
+        .filter(|s| s["stage"] == "quality_check")
+        .count();
+    assert_eq!(t["rework"]["checks"].as_u64(), Some(checks as u64), "{t}");
+    let seconds: f64 = redone.iter().map(|s| s["seconds"].as_f64().unwrap()).sum();
+    let got = t["rework"]["seconds"].as_f64().unwrap();
+    assert!(
+        (seconds - got).abs() <= 1e-12,
+        "rework {got} vs {seconds}: {t}"
+    );
 }
 
 /// Inverted cells, recomputed here from the nodes (not through the crate's quality code): a
