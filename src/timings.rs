@@ -131,20 +131,23 @@ impl Timings {
 
     /// The work redone after the first exact build was checked: the spans of the meshing
     /// stages (`sampling` through `quality_check`, see [`REWORK_STAGES`]) that closed after
-    /// the first `quality_check` span. In exact mode these are the local-fix rounds
-    /// (recollapse, cached rebuild, check again) and any resampling; zero when nothing was
-    /// redone or no check ran (paper mode, a single hole).
+    /// the first `quality_check` span, up to the first span of another stage (the mesh is
+    /// done then: `quality`, a writer, `--compare-modes`' second mesh after them are not
+    /// rework). In exact mode these are the local-fix rounds (recollapse, cached rebuild,
+    /// check again), any resampling and a fallback to the paper pipeline; zero when nothing
+    /// was redone or no check ran (paper mode, a single hole).
     pub fn rework(&self) -> Rework {
         let Some(first) = self.spans.iter().position(|s| s.stage == "quality_check") else {
             return Rework::default();
         };
         let mut r = Rework::default();
-        for s in &self.spans[first + 1..] {
-            if REWORK_STAGES.contains(&s.stage.as_str()) {
-                r.seconds += s.seconds;
-                r.cpu_seconds += s.cpu_seconds;
-                r.checks += usize::from(s.stage == "quality_check");
-            }
+        for s in self.spans[first + 1..]
+            .iter()
+            .take_while(|s| REWORK_STAGES.contains(&s.stage.as_str()))
+        {
+            r.seconds += s.seconds;
+            r.cpu_seconds += s.cpu_seconds;
+            r.checks += usize::from(s.stage == "quality_check");
         }
         r
     }
@@ -899,8 +902,11 @@ mod tests {
                 sp("quality_check", 0.0625),
                 sp("quality", 8.0),
                 sp("write_json", 16.0),
+                // A second mesh after the first one was done (`--compare-modes`).
+                sp("grids", 64.0),
+                sp("quality_check", 128.0),
             ],
-            total_seconds: 32.0,
+            total_seconds: 256.0,
             peak_memory_bytes: None,
             cpu_seconds: None,
             page_faults: None,

@@ -431,6 +431,46 @@ fn timings_flag_writes_timings_json_and_nothing_else_changes() {
     assert_eq!(t["cells"], report["cells"]);
 }
 
+/// `--compare-modes` meshes a second time after the first mesh was written: its stages are
+/// spans of their own, not rework of the first mesh.
+#[test]
+fn compare_modes_second_mesh_is_not_rework() {
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("c");
+    let o = cli(&[
+        "--quiet",
+        "mesh",
+        "-o",
+        out.to_str().unwrap(),
+        "--format",
+        "json",
+        "--timings",
+        "--compare-modes",
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let t: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("timings.json")).unwrap()).unwrap();
+    common::assert_spans_add_up(&t);
+    let spans = t["spans"].as_array().unwrap();
+    let quality = spans.iter().position(|s| s["stage"] == "quality").unwrap();
+    // The second mesh's meshing spans come after the first mesh's report.
+    assert!(
+        spans[quality..].iter().any(|s| s["stage"] == "grids"),
+        "{t}"
+    );
+    // Rework: between the first mesh's first check and its report, nothing later.
+    let check = spans
+        .iter()
+        .position(|s| s["stage"] == "quality_check")
+        .unwrap();
+    let redone: f64 = spans[check + 1..quality]
+        .iter()
+        .map(|s| s["seconds"].as_f64().unwrap())
+        .sum();
+    let got = t["rework"]["seconds"].as_f64().unwrap();
+    assert!((got - redone).abs() <= 1e-12, "{got} vs {redone}: {t}");
+}
+
 #[test]
 fn timings_with_quiet_prints_nothing_but_writes_the_file() {
     let tmp = tempfile::tempdir().unwrap();
