@@ -431,13 +431,12 @@ fn timings_flag_writes_timings_json_and_nothing_else_changes() {
     assert_eq!(t["cells"], report["cells"]);
 }
 
-/// `--compare-modes` meshes a second time after the first mesh was written: its stages are
-/// spans of their own, not rework of the first mesh.
-#[test]
-fn compare_modes_second_mesh_is_not_rework() {
+/// `medial-blocks --quiet mesh -o DIR --format json --timings EXTRA...` on the built-in
+/// example: the process's output and `DIR/timings.json`.
+fn quiet_json_timings(extra: &[&str]) -> (std::process::Output, serde_json::Value) {
     let tmp = tempfile::tempdir().unwrap();
-    let out = tmp.path().join("c");
-    let o = cli(&[
+    let out = tmp.path().join("t");
+    let mut args = vec![
         "--quiet",
         "mesh",
         "-o",
@@ -445,11 +444,20 @@ fn compare_modes_second_mesh_is_not_rework() {
         "--format",
         "json",
         "--timings",
-        "--compare-modes",
-    ]);
+    ];
+    args.extend_from_slice(extra);
+    let o = cli(&args);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let t: serde_json::Value =
+    let t =
         serde_json::from_str(&std::fs::read_to_string(out.join("timings.json")).unwrap()).unwrap();
+    (o, t)
+}
+
+/// `--compare-modes` meshes a second time after the first mesh was written: its stages are
+/// spans of their own, not rework of the first mesh.
+#[test]
+fn compare_modes_second_mesh_is_not_rework() {
+    let (_, t) = quiet_json_timings(&["--compare-modes"]);
     common::assert_spans_add_up(&t);
     let spans = t["spans"].as_array().unwrap();
     let quality = spans.iter().position(|s| s["stage"] == "quality").unwrap();
@@ -473,21 +481,8 @@ fn compare_modes_second_mesh_is_not_rework() {
 
 #[test]
 fn timings_with_quiet_prints_nothing_but_writes_the_file() {
-    let tmp = tempfile::tempdir().unwrap();
-    let out = tmp.path().join("q");
-    let o = cli(&[
-        "--quiet",
-        "mesh",
-        "-o",
-        out.to_str().unwrap(),
-        "--format",
-        "json",
-        "--timings",
-    ]);
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let (o, t) = quiet_json_timings(&[]);
     assert!(o.stdout.is_empty() && o.stderr.is_empty());
-    let t: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(out.join("timings.json")).unwrap()).unwrap();
     assert_eq!(t["blocks"], 36);
 }
 
