@@ -425,24 +425,13 @@ struct Recorder {
     start: Instant,
     cpu_start: Option<f64>,
     faults_start: Option<u64>,
-    /// Per stage: exclusive time and number of entries.
-    stages: Vec<(Cow<'static, str>, Measure, u64)>,
-    /// Every closing, in order: name, depth and exclusive measure.
+    /// Every closing, in order: name, depth and exclusive measure (the per-stage rows are
+    /// their sums, [`per_stage`]).
     spans: Vec<(Cow<'static, str>, usize, Measure)>,
     stack: Vec<Open>,
 }
 
 impl Recorder {
-    fn add(&mut self, name: Cow<'static, str>, m: Measure, calls: u64) {
-        match self.stages.iter_mut().find(|(n, _, _)| *n == name) {
-            Some((_, t, c)) => {
-                *t = t.plus(m);
-                *c += calls;
-            }
-            None => self.stages.push((name, m, calls)),
-        }
-    }
-
     /// Close the innermost open stage.
     fn close(&mut self) {
         if let Some(open) = self.stack.pop() {
@@ -458,13 +447,28 @@ impl Recorder {
                 },
             };
             let own = total.minus(open.children);
-            self.spans.push((open.name.clone(), self.stack.len(), own));
-            self.add(open.name, own, 1);
+            self.spans.push((open.name, self.stack.len(), own));
             if let Some(parent) = self.stack.last_mut() {
                 parent.children = parent.children.plus(total);
             }
         }
     }
+}
+
+/// Per stage, in order of first closing: the sum of its spans' exclusive measures and their
+/// number.
+fn per_stage<'a>(spans: &'a [(Cow<'static, str>, usize, Measure)]) -> Vec<(&'a str, Measure, u64)> {
+    let mut stages: Vec<(&str, Measure, u64)> = Vec::new();
+    for (name, _, m) in spans {
+        match stages.iter_mut().find(|(n, _, _)| *n == name.as_ref()) {
+            Some((_, t, c)) => {
+                *t = t.plus(*m);
+                *c += 1;
+            }
+            None => stages.push((name.as_ref(), *m, 1)),
+        }
+    }
+    stages
 }
 
 thread_local! {
@@ -497,7 +501,6 @@ impl Recording {
                 start: Instant::now(),
                 cpu_start: process_cpu_seconds(),
                 faults_start: process_page_faults(),
-                stages: Vec::new(),
                 spans: Vec::new(),
                 stack: Vec::new(),
             })
@@ -544,13 +547,10 @@ impl Recording {
         ACTIVE.with(|a| {
             if let Some(o) = a.borrow_mut().as_mut() {
                 let mut sum = Measure::default();
-                for (n, m, calls) in &r.stages {
-                    o.add(n.clone(), *m, *calls);
-                    sum = sum.plus(*m);
-                }
                 let depth = o.stack.len();
                 for (n, d, m) in &r.spans {
                     o.spans.push((n.clone(), depth + d, *m));
+                    sum = sum.plus(*m);
                 }
                 if let Some(parent) = o.stack.last_mut() {
                     parent.children = parent.children.plus(sum);
@@ -565,27 +565,24 @@ impl Recording {
             (Some(a), Some(b)) => Some(b.saturating_sub(a)),
             _ => None,
         };
-        let name = |n: &Cow<'static, str>| n.to_string();
+        let stages = per_stage(&r.spans);
+        let name = |n: &str| n.to_string();
         Timings {
-            stages: r
-                .stages
+            stages: stages
                 .iter()
                 .map(|(n, m, _)| (name(n), m.wall.as_secs_f64()))
                 .collect(),
             cpu: if cpu_seconds.is_some() {
-                r.stages.iter().map(|(n, m, _)| (name(n), m.cpu)).collect()
+                stages.iter().map(|(n, m, _)| (name(n), m.cpu)).collect()
             } else {
                 Vec::new()
             },
             faults: if page_faults.is_some() {
-                r.stages
-                    .iter()
-                    .map(|(n, m, _)| (name(n), m.faults))
-                    .collect()
+                stages.iter().map(|(n, m, _)| (name(n), m.faults)).collect()
             } else {
                 Vec::new()
             },
-            calls: r.stages.iter().map(|(n, _, c)| (name(n), *c)).collect(),
+            calls: stages.iter().map(|(n, _, c)| (name(n), *c)).collect(),
             spans: r
                 .spans
                 .iter()

@@ -222,12 +222,7 @@ fn spans_add_up_and_every_rebuild_follows_a_recollapse() {
     for (n, seed) in [(1000, 1), (30, 7)] {
         let d = layouts::bubbles(n, seed).unwrap();
         let (_, t) = mesh_timed(&d, &block_cells(16)).unwrap();
-        for (name, calls) in &t.calls {
-            let mine: Vec<_> = t.spans.iter().filter(|s| &s.stage == name).collect();
-            assert_eq!(mine.len() as u64, *calls, "{name}");
-            let wall: f64 = mine.iter().map(|s| s.seconds).sum();
-            assert!((wall - t.seconds(name)).abs() <= 1e-9, "{name}");
-        }
+        common::assert_spans_add_up(&t.to_json());
         let checks: Vec<usize> = (0..t.spans.len())
             .filter(|&i| t.spans[i].stage == "quality_check")
             .collect();
