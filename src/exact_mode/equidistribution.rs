@@ -11,6 +11,7 @@
 
 /// `n + 1` parameters in `[0, 1]` equidistributing the sub-step weights `w` (`t_0 = 0`,
 /// `t_n = 1` exactly; equal steps when the weights vanish).
+#[cfg(test)]
 pub(crate) fn equidistribute(w: &[f64], n: usize) -> Vec<f64> {
     let mut t = Vec::with_capacity(n + 1);
     equidistribute_into(w, n, &mut t, &mut Vec::with_capacity(w.len() + 1));
@@ -62,6 +63,89 @@ fn fill(w: &[f64], p: &[f64], n: usize, t: &mut Vec<f64>) {
     t.push(1.0);
 }
 
+/// How far a cell may go over one unit of the wall-angle density before
+/// [`arc_params_into`] rescales the weights (relative; rounding, not a second limit).
+const ANG_SLACK: f64 = 1e-6;
+
+/// The node parameters of an arc piece of `n` cells into `t`: [`equidistribute_into`] of its
+/// weights `w` (per sub-step `max(nbar sq_k, ang_k)`, see [`super::counts`]), unless a cell
+/// would then sweep more than one unit of `ang` (more than [`super::MAX_WALL_ANGLE`] of either
+/// wall). That happens when `n` is below the arc's target `sum w`: with a fixed grid per block
+/// (`--block-cells`) along an arc that runs through a narrow gap, the short spokes there draw
+/// every cell and leave one cell to sweep most of a wall (which folds it). The weights then
+/// become `max(alpha w_k, ang_k)`, with the largest `alpha` in `[0, 1]` (to 2^-60) whose total
+/// is at most `n`: every cell carries at most one unit of weight, so at most one unit of `ang`,
+/// and the spacing still follows the spokes wherever the wall angle allows. When `n` is below
+/// `sum ang` itself (a count under the arc's lower bound) `alpha` is 0: the cells share the
+/// wall angle equally.
+///
+/// Arcs whose cells all stay within the limit keep the plain parameters, bit for bit. `w` is
+/// left holding the weights used; `prefix` is scratch.
+pub(crate) fn arc_params_into(
+    w: &mut [f64],
+    ang: &[f64],
+    n: usize,
+    t: &mut Vec<f64>,
+    prefix: &mut Vec<f64>,
+) {
+    equidistribute_into(w, n, t, prefix);
+    if ang.len() != w.len() || largest_cell_ang(ang, t) <= 1.0 + ANG_SLACK {
+        return;
+    }
+    let limit = n as f64;
+    let total = |a: f64| -> f64 { w.iter().zip(ang).map(|(&x, &g)| (a * x).max(g)).sum() };
+    let alpha = if total(0.0) <= limit {
+        let (mut lo, mut hi) = (0.0, 1.0);
+        for _ in 0..60 {
+            let mid = 0.5 * (lo + hi);
+            if total(mid) <= limit {
+                lo = mid;
+            } else {
+                hi = mid;
+            }
+        }
+        lo
+    } else {
+        0.0
+    };
+    for (x, &g) in w.iter_mut().zip(ang) {
+        *x = (alpha * *x).max(g);
+    }
+    equidistribute_into(w, n, t, prefix);
+}
+
+/// The most wall-angle density (`ang`, per sub-step, taken as spread evenly over its
+/// sub-step) that one cell between consecutive parameters `t` (in `[0, 1]`, nondecreasing)
+/// sweeps.
+pub(crate) fn largest_cell_ang(ang: &[f64], t: &[f64]) -> f64 {
+    let k = ang.len();
+    let Some((&first, rest)) = t.split_first() else {
+        return 0.0;
+    };
+    if k == 0 {
+        return 0.0;
+    }
+    let kf = k as f64;
+    // The density before sub-step `s`, summed once, in order.
+    let (mut s, mut before) = (0usize, 0.0);
+    let mut cumulative = |x: f64| {
+        let x = (x * kf).clamp(0.0, kf);
+        while s + 1 < k && (s + 1) as f64 <= x {
+            before += ang[s];
+            s += 1;
+        }
+        before + ang[s] * (x - s as f64)
+    };
+    let mut last = cumulative(first);
+    let mut most = 0.0f64;
+    for &x in rest {
+        let c = cumulative(x);
+        most = most.max(c - last);
+        last = c;
+    }
+    most
+}
+
 /// The sum-then-scan form (the reference of the tests, bit for bit).
 #[doc(hidden)]
 pub fn equidistribute_reference(w: &[f64], n: usize) -> Vec<f64> {
@@ -103,4 +187,134 @@ pub fn equidistribute_bits(w: &[f64], n: usize) -> Vec<u64> {
     let mut prefix = vec![f64::NAN; 3];
     equidistribute_into(w, n, &mut t, &mut prefix);
     t.iter().map(|x| x.to_bits()).collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::layouts::SplitMix64;
+
+    /// The density `ang` (even over each sub-step) inside `[a, b]` (parameters in `[0, 1]`),
+    /// summed sub-step by sub-step from the overlaps: not the running sums of
+    /// [`largest_cell_ang`].
+    fn swept(ang: &[f64], a: f64, b: f64) -> f64 {
+        let k = ang.len() as f64;
+        let (a, b) = (a * k, b * k);
+        ang.iter()
+            .enumerate()
+            .map(|(s, g)| g * ((b.min(s as f64 + 1.0) - a.max(s as f64)).max(0.0)))
+            .sum()
+    }
+
+    fn most_swept(ang: &[f64], t: &[f64]) -> f64 {
+        t.windows(2)
+            .map(|c| swept(ang, c[0], c[1]))
+            .fold(0.0, f64::max)
+    }
+
+    /// Sub-step weights `w >= ang` with a narrow gap: weights up to 1e6 times the rest on a
+    /// few sub-steps, and wall-angle densities up to `ang_max` per sub-step.
+    fn gap_arc(rng: &mut SplitMix64, k: usize, ang_max: f64) -> (Vec<f64>, Vec<f64>) {
+        let ang: Vec<f64> = (0..k).map(|_| ang_max * rng.next_f64()).collect();
+        let at = (rng.next_f64() * k as f64) as usize;
+        let w = ang
+            .iter()
+            .enumerate()
+            .map(|(s, &g)| {
+                let spoke = if s.abs_diff(at) < 3 { 1e6 } else { 1.0 };
+                (spoke * rng.next_f64()).max(g)
+            })
+            .collect();
+        (w, ang)
+    }
+
+    fn well_formed(t: &[f64], n: usize) {
+        assert_eq!(t.len(), n + 1);
+        assert_eq!((t[0], t[n]), (0.0, 1.0));
+        assert!(t.windows(2).all(|c| c[0] <= c[1]), "{t:?}");
+    }
+
+    #[test]
+    fn largest_cell_ang_matches_the_overlap_sums() {
+        let mut rng = SplitMix64(7);
+        for _ in 0..500 {
+            let k = 1 + (rng.next_f64() * 40.0) as usize;
+            let ang: Vec<f64> = (0..k).map(|_| rng.next_f64()).collect();
+            let n = 1 + (rng.next_f64() * 30.0) as usize;
+            let mut t: Vec<f64> = (0..=n).map(|_| rng.next_f64()).collect();
+            t.sort_by(f64::total_cmp);
+            t[0] = 0.0;
+            t[n] = 1.0;
+            let (fast, slow) = (largest_cell_ang(&ang, &t), most_swept(&ang, &t));
+            assert!((fast - slow).abs() <= 1e-12 * (1.0 + slow), "{fast} {slow}");
+        }
+        assert_eq!(largest_cell_ang(&[], &[0.0, 1.0]), 0.0);
+        assert_eq!(largest_cell_ang(&[1.0], &[]), 0.0);
+    }
+
+    /// Arcs whose cells all stay within one unit keep the plain parameters, bit for bit.
+    #[test]
+    fn arcs_within_the_limit_keep_their_parameters() {
+        let mut rng = SplitMix64(11);
+        for _ in 0..300 {
+            let k = 1 + (rng.next_f64() * 64.0) as usize;
+            let ang: Vec<f64> = (0..k).map(|_| 0.05 * rng.next_f64()).collect();
+            let mut w: Vec<f64> = ang.iter().map(|&g| g + rng.next_f64()).collect();
+            // At least as many cells as the total weight: every cell carries at most one unit.
+            let n = (w.iter().sum::<f64>().ceil() as usize).max(1);
+            let plain = equidistribute(&w, n);
+            let (mut t, mut prefix) = (Vec::new(), Vec::new());
+            let before = w.clone();
+            arc_params_into(&mut w, &ang, n, &mut t, &mut prefix);
+            let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<u64>>();
+            assert_eq!(bits(&t), bits(&plain));
+            assert_eq!(bits(&w), bits(&before));
+        }
+    }
+
+    /// With fewer cells than the total weight and a narrow gap drawing the weight, the plain
+    /// parameters leave a cell sweeping several units; the capped ones keep every cell within
+    /// one unit, as long as there are at least `sum ang` cells.
+    #[test]
+    fn a_narrow_gap_no_longer_draws_every_cell() {
+        let mut rng = SplitMix64(13);
+        let mut over = 0;
+        for _ in 0..300 {
+            let k = 256;
+            let (mut w, ang) = gap_arc(&mut rng, k, 0.1);
+            let lower = ang.iter().sum::<f64>().ceil() as usize;
+            let n = lower + (rng.next_f64() * 8.0) as usize;
+            over += usize::from(most_swept(&ang, &equidistribute(&w, n)) > 1.5);
+            let (mut t, mut prefix) = (Vec::new(), Vec::new());
+            arc_params_into(&mut w, &ang, n, &mut t, &mut prefix);
+            well_formed(&t, n);
+            let most = most_swept(&ang, &t);
+            assert!(most <= 1.0 + 1e-9, "{most} with {n} cells");
+            // The weights used are `max(alpha w, ang)`: never below the wall angle.
+            assert!(w.iter().zip(&ang).all(|(x, g)| x >= g));
+        }
+        // The plain parameters were over the limit on most of these arcs.
+        assert!(over > 200, "{over}");
+    }
+
+    /// Below the lower bound (`n < sum ang`) the cells share the wall angle equally.
+    #[test]
+    fn below_the_lower_bound_the_cells_share_the_wall_angle() {
+        let mut rng = SplitMix64(17);
+        for _ in 0..200 {
+            let (mut w, ang) = gap_arc(&mut rng, 64, 1.0);
+            let total: f64 = ang.iter().sum();
+            let n = ((total * rng.next_f64()) as usize).max(1);
+            if n as f64 >= total {
+                continue;
+            }
+            let (mut t, mut prefix) = (Vec::new(), Vec::new());
+            arc_params_into(&mut w, &ang, n, &mut t, &mut prefix);
+            well_formed(&t, n);
+            for c in t.windows(2) {
+                let share = swept(&ang, c[0], c[1]);
+                assert!((share - total / n as f64).abs() <= 1e-9 * total, "{share}");
+            }
+        }
+    }
 }

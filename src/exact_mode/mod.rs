@@ -62,6 +62,8 @@ use crate::layout::{Block, BlockLayout, Curve, Edge, EdgeKind, SideRef};
 use crate::mesh::BlockGrid;
 use crate::mesher::{MeshError, Options};
 use counts::{ArcTarget, CountProblem, Counts, Known};
+use equidistribution::arc_params_into;
+#[cfg(test)]
 use equidistribution::{equidistribute, equidistribute_into};
 use piece_cache::{GeomKey, GridKey, Params, Payload};
 use rayon::prelude::*;
@@ -531,6 +533,11 @@ struct PieceScratch {
     params: Vec<f64>,
 }
 
+thread_local! {
+    /// The weights' running sums of [`summarize`] (one buffer per worker thread).
+    static SUMMARY_PREFIX: std::cell::RefCell<Vec<f64>> = const { std::cell::RefCell::new(Vec::new()) };
+}
+
 /// A piece's densities reduced to what its counts and nodes need: the lower bound and the
 /// target for `nbar` ([`Known`]), and the node parameters `(nbar, n, params)` for the count `n`
 /// it gets before template ties (`uniform`: a fixed grid of that many cells per block, else
@@ -559,9 +566,10 @@ fn summarize(
         min_cells: lb,
         target: Some((nbar, target)),
     };
-    // `ang` is read no more: it holds the weights' running sums.
     let mut params = Vec::with_capacity(n + 1);
-    equidistribute_into(&scratch.sq, n, &mut params, &mut scratch.ang);
+    SUMMARY_PREFIX.with_borrow_mut(|prefix| {
+        arc_params_into(&mut scratch.sq, &scratch.ang, n, &mut params, prefix)
+    });
     Some((known, (nbar, n, params)))
 }
 
@@ -1291,8 +1299,14 @@ pub fn assemble_cached(
                         let weights = &mut scratch.weights;
                         weights.clear();
                         weights.extend(t.sq.iter().zip(&t.ang).map(|(s, a)| (nbar * s).max(*a)));
+                        arc_params_into(
+                            weights,
+                            &t.ang,
+                            n,
+                            &mut scratch.params,
+                            &mut scratch.prefix,
+                        );
                         drop(t);
-                        equidistribute_into(weights, n, &mut scratch.params, &mut scratch.prefix);
                         std::mem::take(&mut scratch.params)
                     }
                 };

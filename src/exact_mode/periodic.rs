@@ -30,7 +30,7 @@
 use super::counts::{ArcTarget, CountProblem, Counts};
 use super::imposed::{vertex_cycle, BlockKey, CircleTag};
 use super::{
-    clustering, clustering_of, equidistribute, exact_sweep, expected_sign, internal, median,
+    arc_params_into, clustering, clustering_of, exact_sweep, expected_sign, internal, median,
     spoke_nodes, validate_options, ArcGeometry, Wall, ZERO_SWEEP,
 };
 use crate::apollonius::{apollonius, Choice};
@@ -689,13 +689,20 @@ fn assemble(
         let nbar = 0.5
             * (counts.circle[arc.circles[0].0 as usize + 1]
                 + counts.circle[arc.circles[1].0 as usize + 1]) as f64;
-        let weights: Vec<f64> = targets[o]
+        let mut weights: Vec<f64> = targets[o]
             .sq
             .iter()
             .zip(&targets[o].ang)
             .map(|(s, a)| (nbar * s).max(*a))
             .collect();
-        let params = equidistribute(&weights, n);
+        let mut params = Vec::with_capacity(n + 1);
+        arc_params_into(
+            &mut weights,
+            &targets[o].ang,
+            n,
+            &mut params,
+            &mut Vec::new(),
+        );
         let mut m_nodes = Vec::with_capacity(n + 1);
         let mut a_nodes: [Vec<Point>; 2] = [Vec::with_capacity(n + 1), Vec::with_capacity(n + 1)];
         for &t in &params {
