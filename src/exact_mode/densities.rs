@@ -169,6 +169,9 @@ impl ArcGeometry {
         sq: &mut Vec<f64>,
         ang: &mut Vec<f64>,
     ) -> Option<()> {
+        if self.blended() {
+            return self.densities_plain_into(sq, ang);
+        }
         #[cfg(target_arch = "x86_64")]
         match lanes {
             // SAFETY: `Lanes::available` checked the CPU's features.
@@ -368,6 +371,9 @@ impl ArcGeometry {
         sq: &mut Vec<f64>,
         ang: &mut Vec<f64>,
     ) -> Option<()> {
+        if self.blended() {
+            return self.densities_plain_into(sq, ang);
+        }
         let k = ARC_SUBSTEPS;
         sq.clear();
         ang.clear();
@@ -409,9 +415,19 @@ impl ArcGeometry {
     /// [`ArcGeometry::at`], `ds` between the spoke mid-points with `hypot`, both wall turns by
     /// `atan2` ([`larger_turn`] takes the larger). The reference of the tests.
     pub(crate) fn densities_plain(&self) -> Option<(Vec<f64>, Vec<f64>)> {
+        let mut sq = Vec::with_capacity(ARC_SUBSTEPS);
+        let mut ang = Vec::with_capacity(ARC_SUBSTEPS);
+        self.densities_plain_into(&mut sq, &mut ang)?;
+        Some((sq, ang))
+    }
+
+    /// [`ArcGeometry::densities_plain`] into `sq` and `ang` (cleared first): what every build
+    /// of the densities gives for an arc with an end off the bisector (its points are not the
+    /// bisector's, which the batched passes compute).
+    pub(crate) fn densities_plain_into(&self, sq: &mut Vec<f64>, ang: &mut Vec<f64>) -> Option<()> {
         let k = ARC_SUBSTEPS;
-        let mut sq = Vec::with_capacity(k);
-        let mut ang = Vec::with_capacity(k);
+        sq.clear();
+        ang.clear();
         let (mut m0, mut a0, mut r0) = self.at(0.0)?;
         for s in 1..=k {
             let (m1, a1, r1) = self.at(s as f64 / k as f64)?;
@@ -424,7 +440,7 @@ impl ArcGeometry {
             ang.push(larger_turn(c0, d0, c1, d1) / MAX_WALL_ANGLE);
             (m0, a0, r0) = (m1, a1, r1);
         }
-        Some((sq, ang))
+        Some(())
     }
 }
 

@@ -289,6 +289,35 @@ pub(crate) struct ArcGeometry {
     /// End vertices, exact: centres and tangent points `[wall 0, wall 1]`.
     ends_m: [Point; 2],
     ends_a: [[Point; 2]; 2],
+    /// Per end, how far its centre is off the bisector: `ends_m[k]` minus the bisector point
+    /// with the same touching point on the parametrised wall ([`ArcGeometry::end_offsets`]);
+    /// zero for an end on the bisector (an Apollonius vertex, a co-circular group's centre),
+    /// non-zero at a vertex merged by short-arc collapse. [`ArcGeometry::at`] fades it out
+    /// along the arc ([`blend`]).
+    offset: [Point; 2],
+}
+
+/// The part of an arc's parameter range over which [`ArcGeometry::at`] fades an end's
+/// offset from the bisector out (from each end; two ends do not overlap).
+pub(crate) const BLEND: f64 = 0.5;
+
+/// An end offset below this fraction of the end's spoke length is rounding (an Apollonius
+/// vertex computed apart from the bisector points): taken as zero.
+const OFFSET_NOISE: f64 = 1e-9;
+
+/// The weight of the offset of the end at parameter distance `s` (`0 <= s`): `1` at the end,
+/// `0` from [`BLEND`] on, with zero slope at both (a smoothstep). Zero slope at the end makes
+/// the arc leave a merged vertex along the bisector's tangent: before, the first medial node
+/// was on the bisector, so the first cell's side ran from the merged centre along the
+/// parametrised wall's normal to it, and the corner cell there flattened (or folded) as the
+/// first node came closer with more cells (the block topology then depended on the
+/// resolution, through the local fixes of the flat and inverted blocks).
+fn blend(s: f64) -> f64 {
+    if s >= BLEND {
+        return 0.0;
+    }
+    let x = s / BLEND;
+    1.0 - x * x * (3.0 - 2.0 * x)
 }
 
 impl ArcGeometry {
@@ -305,12 +334,47 @@ impl ArcGeometry {
             sweep: [w0, w1],
             ends_m,
             ends_a,
+            offset: [[0.0; 2]; 2],
         }
+        .with_offsets()
+    }
+
+    /// `self` with [`ArcGeometry::offset`] computed from its ends.
+    pub(crate) fn with_offsets(mut self) -> Self {
+        self.offset = self.end_offsets();
+        self
+    }
+
+    /// Per end `k`, `ends_m[k]` minus the bisector point whose touching point on the
+    /// parametrised wall is at the end's angle (`start[p] + k sweep[p]`); zero when that point
+    /// is not defined or the difference is rounding ([`OFFSET_NOISE`]).
+    fn end_offsets(&self) -> [Point; 2] {
+        let p = self.param;
+        let q = 1 - p;
+        let mut out = [[0.0; 2]; 2];
+        for (k, o) in out.iter_mut().enumerate() {
+            let theta = self.start[p] + k as f64 * self.sweep[p];
+            let Some((_, m, rho)) = medial_point(&self.walls[p], &self.walls[q], theta) else {
+                continue;
+            };
+            let d = [self.ends_m[k][0] - m[0], self.ends_m[k][1] - m[1]];
+            if d[0].hypot(d[1]) > OFFSET_NOISE * rho && d[0].is_finite() && d[1].is_finite() {
+                *o = d;
+            }
+        }
+        out
+    }
+
+    /// True when an end is off the bisector ([`ArcGeometry::offset`]).
+    pub(crate) fn blended(&self) -> bool {
+        self.offset != [[0.0; 2]; 2]
     }
 
     /// Split at parameter `1/2`: the middle medial point, its touching points and empty-circle
     /// radius, and the two halves (each exactly the same curve as its part of `self`, since the
-    /// bisector does not depend on the parametrisation). `None` when the middle is undefined.
+    /// bisector does not depend on the parametrisation, when no end is off the bisector; else
+    /// each half fades its own end's offset out, and both meet on the bisector at the middle,
+    /// where [`BLEND`] ends). `None` when the middle is undefined.
     pub(crate) fn split(&self) -> Option<(Point, [Point; 2], f64, ArcGeometry, ArcGeometry)> {
         let (m, a, rho) = self.at(0.5)?;
         let half = [0.5 * self.sweep[0], 0.5 * self.sweep[1]];
@@ -342,6 +406,20 @@ impl ArcGeometry {
         let q = 1 - p;
         let theta = self.start[p] + t * self.sweep[p];
         let (a, m, rho) = medial_point(&self.walls[p], &self.walls[q], theta)?;
+        if self.blended() {
+            // Off the bisector near a merged end: the offset faded out, the touching points
+            // the radial projections (spokes stay normal to their walls).
+            let (w0, w1) = (blend(t), blend(1.0 - t));
+            let [o0, o1] = self.offset;
+            let m = [
+                m[0] + w0 * o0[0] + w1 * o1[0],
+                m[1] + w0 * o0[1] + w1 * o1[1],
+            ];
+            let both = [self.walls[0].project(m), self.walls[1].project(m)];
+            let rho = 0.5 * (dist(m, both[0]) + dist(m, both[1]));
+            let ok = both.iter().flatten().chain(&m).all(|x| x.is_finite()) && rho.is_finite();
+            return ok.then_some((m, both, rho));
+        }
         let b = self.walls[q].project(m);
         if !(b[0].is_finite() && b[1].is_finite()) {
             return None;
@@ -648,6 +726,7 @@ impl Piece {
                 sweep: [0.0; 2],
                 ends_m: [[0.0; 2]; 2],
                 ends_a: [[[0.0; 2]; 2]; 2],
+                offset: [[0.0; 2]; 2],
             },
         }
     }
@@ -1652,5 +1731,166 @@ mod tests {
         assert_eq!(n.len(), 10);
         assert_eq!((n[0], n[9]), (a, m));
         assert!((dist(n[0], n[1]) - 1e-3).abs() < 1e-15);
+    }
+}
+
+/// The fading of a merged end's offset from the bisector ([`ArcGeometry::offset`], [`blend`]).
+#[cfg(test)]
+mod blend_tests {
+    use super::*;
+    use crate::layouts::SplitMix64;
+
+    fn hole(x: f64, y: f64, r: f64) -> Wall {
+        Wall { c: [x, y], r, s: r }
+    }
+
+    /// A random arc between two holes from bisector angle `t0` to `t1` on the first, with end
+    /// `k`'s centre moved by `shift[k]` (as a merged centre is): `None` when undefined.
+    fn arc(rng: &mut SplitMix64, shift: [Point; 2]) -> Option<ArcGeometry> {
+        let p = hole(0.0, 0.0, 1.0);
+        let q = hole(
+            2.5 + rng.next_f64(),
+            rng.next_f64() - 0.5,
+            0.3 + rng.next_f64(),
+        );
+        let t0 = 0.5 * (rng.next_f64() - 0.5);
+        let t1 = t0 + 0.3 + 0.4 * rng.next_f64();
+        let (_, m0, _) = medial_point(&p, &q, t0)?;
+        let (_, m1, _) = medial_point(&p, &q, t1)?;
+        let m = [
+            [m0[0] + shift[0][0], m0[1] + shift[0][1]],
+            [m1[0] + shift[1][0], m1[1] + shift[1][1]],
+        ];
+        let ends_a = [
+            [p.project(m[0]), q.project(m[0])],
+            [p.project(m[1]), q.project(m[1])],
+        ];
+        let hints = [
+            turn(p.c, ends_a[0][0], ends_a[1][0]),
+            turn(q.c, ends_a[0][1], ends_a[1][1]),
+        ];
+        Some(ArcGeometry::new([p, q], m, ends_a, hints))
+    }
+
+    fn shift(rng: &mut SplitMix64, size: f64) -> Point {
+        let a = rng.next_f64() * std::f64::consts::TAU;
+        [size * a.cos(), size * a.sin()]
+    }
+
+    #[test]
+    fn blend_is_one_at_the_end_zero_from_blend_on_and_flat_at_both() {
+        assert_eq!(blend(0.0), 1.0);
+        assert_eq!(blend(BLEND), 0.0);
+        assert_eq!(blend(1.0), 0.0);
+        let h = 1e-6;
+        assert!((1.0 - blend(h)).abs() < 1e-10, "zero slope at the end");
+        assert!(blend(BLEND - h) < 1e-10, "zero slope where it ends");
+        let mut last = 1.0;
+        for i in 1..=100 {
+            let w = blend(BLEND * i as f64 / 100.0);
+            assert!(w <= last);
+            last = w;
+        }
+    }
+
+    /// Ends on the bisector (an Apollonius vertex up to rounding) have no offset: the arc's
+    /// points are the bisector's, bit for bit.
+    #[test]
+    fn ends_on_the_bisector_keep_the_bisector_points() {
+        let mut rng = SplitMix64(21);
+        for _ in 0..200 {
+            let Some(g) = arc(&mut rng, [[0.0; 2]; 2]) else {
+                continue;
+            };
+            assert!(!g.blended());
+            for i in 1..8 {
+                let t = i as f64 / 8.0;
+                let (m, a, _) = g.at(t).unwrap();
+                let p = g.param;
+                let theta = g.start[p] + t * g.sweep[p];
+                let (ap, mp, _) = medial_point(&g.walls[p], &g.walls[1 - p], theta).unwrap();
+                assert_eq!((m, a[p]), (mp, ap));
+            }
+        }
+    }
+
+    /// With an end off the bisector, the arc starts at that end (no jump onto the bisector),
+    /// leaves it along the bisector's tangent, runs on the bisector from [`BLEND`] on, and
+    /// every spoke stays normal to its wall.
+    #[test]
+    fn an_end_off_the_bisector_is_joined_smoothly() {
+        let mut rng = SplitMix64(22);
+        let mut checked = 0;
+        for _ in 0..300 {
+            let off = [shift(&mut rng, 0.05), [0.0; 2]];
+            let Some(g) = arc(&mut rng, off) else {
+                continue;
+            };
+            assert!(g.blended());
+            let (c, _, _) = g.at(0.0).unwrap();
+            // Continuity: the first points approach the end (the old jump was the offset).
+            let eps = 1e-7;
+            let (m, _, _) = g.at(eps).unwrap();
+            let (m2, _, _) = g.at(2.0 * eps).unwrap();
+            assert!(dist(m, c) < 1e-3 * 0.05, "{} from the end", dist(m, c));
+            // The departure direction is the bisector's at the end's touching angle.
+            let p = g.param;
+            let bis = |t: f64| {
+                let theta = g.start[p] + t * g.sweep[p];
+                medial_point(&g.walls[p], &g.walls[1 - p], theta).unwrap().1
+            };
+            let (b0, b1) = (bis(0.0), bis(2.0 * eps));
+            let (u, v) = ([m2[0] - c[0], m2[1] - c[1]], [b1[0] - b0[0], b1[1] - b0[1]]);
+            let sin = (u[0] * v[1] - u[1] * v[0]) / (dist(m2, c) * dist(b1, b0));
+            assert!(
+                sin.abs() < 1e-3,
+                "departs {} rad off the bisector",
+                sin.asin()
+            );
+            for i in 0..=20 {
+                let t = i as f64 / 20.0;
+                let (m, a, _) = g.at(t).unwrap();
+                for (k, w) in g.walls.iter().enumerate() {
+                    // The touching point is on the ray from the wall's centre through `m`.
+                    let (x, y) = (
+                        [a[k][0] - w.c[0], a[k][1] - w.c[1]],
+                        [m[0] - w.c[0], m[1] - w.c[1]],
+                    );
+                    let cross = (x[0] * y[1] - x[1] * y[0]) / (w.r * y[0].hypot(y[1]));
+                    assert!(cross.abs() < 1e-12 && x[0] * y[0] + x[1] * y[1] > 0.0);
+                }
+                if (BLEND..1.0).contains(&t) {
+                    let b = bis(t);
+                    assert!(dist(m, b) <= 1e-12 * (1.0 + b[0].hypot(b[1])), "off at {t}");
+                }
+            }
+            checked += 1;
+        }
+        assert!(checked > 200, "{checked}");
+    }
+
+    /// The densities of an arc with an end off the bisector are the plain ones in every build.
+    #[test]
+    fn blended_densities_are_the_plain_ones_in_every_build() {
+        let mut rng = SplitMix64(23);
+        for _ in 0..50 {
+            let off = [shift(&mut rng, 0.03), shift(&mut rng, 0.03)];
+            let Some(g) = arc(&mut rng, off) else {
+                continue;
+            };
+            let plain = g.densities_plain().unwrap();
+            let bits = |v: &(Vec<f64>, Vec<f64>)| {
+                let b = |x: &[f64]| x.iter().map(|y| y.to_bits()).collect::<Vec<u64>>();
+                (b(&v.0), b(&v.1))
+            };
+            let (mut sq, mut ang) = (Vec::new(), Vec::new());
+            g.densities_into_scalar(&mut sq, &mut ang).unwrap();
+            assert_eq!(bits(&(sq, ang)), bits(&plain));
+            for lanes in crate::lanes::Lanes::ALL {
+                let (mut sq, mut ang) = (Vec::new(), Vec::new());
+                g.densities_with(lanes, &mut sq, &mut ang).unwrap();
+                assert_eq!(bits(&(sq, ang)), bits(&plain));
+            }
+        }
     }
 }

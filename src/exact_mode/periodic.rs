@@ -328,7 +328,9 @@ fn build_checking(
             sweep: [w0, w1],
             ends_m,
             ends_a,
-        };
+            offset: [[0.0; 2]; 2],
+        }
+        .with_offsets();
         if let Some(d) = check.as_deref_mut() {
             d.add(&g);
         }
