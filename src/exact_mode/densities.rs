@@ -15,7 +15,7 @@
 //! arcs and on every piece of real layouts (`tests/perf_densities.rs`).
 
 use super::{dist, larger_turn, medial_point_u, mid, turn_parts, ArcGeometry, Wall};
-use super::{ARC_SUBSTEPS, MAX_WALL_ANGLE};
+use super::{ARC_SUBSTEPS, BLEND, MAX_WALL_ANGLE};
 use crate::geometry::Point;
 use crate::lanes::Lanes;
 
@@ -169,9 +169,19 @@ impl ArcGeometry {
         sq: &mut Vec<f64>,
         ang: &mut Vec<f64>,
     ) -> Option<()> {
-        if self.blended() {
-            return self.densities_plain_into(sq, ang);
-        }
+        self.densities_on_bisector(lanes, b, sq, ang)?;
+        self.patch_blend(sq, ang)
+    }
+
+    /// [`ArcGeometry::densities_on`] of the arc's bisector points (what every sub-step is,
+    /// except by an end off the bisector: [`ArcGeometry::patch_blend`]).
+    fn densities_on_bisector(
+        &self,
+        lanes: Lanes,
+        b: &mut Passes,
+        sq: &mut Vec<f64>,
+        ang: &mut Vec<f64>,
+    ) -> Option<()> {
         #[cfg(target_arch = "x86_64")]
         match lanes {
             // SAFETY: `Lanes::available` checked the CPU's features.
@@ -183,6 +193,48 @@ impl ArcGeometry {
             _ => {}
         }
         self.densities_batched(b, sq, ang)
+    }
+
+    /// By an end off the bisector ([`ArcGeometry::blended`]), the sub-steps that start
+    /// within [`BLEND`] of it, again from [`ArcGeometry::at`]'s points with the plain formula
+    /// (the batched passes computed them on the bisector): the same in every build.
+    fn patch_blend(&self, sq: &mut [f64], ang: &mut [f64]) -> Option<()> {
+        if !self.blended() {
+            return Some(());
+        }
+        let k = ARC_SUBSTEPS;
+        if sq.len() != k || ang.len() != k {
+            return None;
+        }
+        let zone = ((BLEND * k as f64).ceil() as usize).min(k);
+        let ranges = [
+            (self.offset[0] != [0.0; 2]).then_some(0..zone),
+            (self.offset[1] != [0.0; 2]).then_some(k - zone..k),
+        ];
+        for range in ranges.into_iter().flatten() {
+            let mut p0 = self.at(range.start as f64 / k as f64)?;
+            for s in range {
+                let p1 = self.at((s + 1) as f64 / k as f64)?;
+                (sq[s], ang[s]) = self.plain_step(p0, p1);
+                p0 = p1;
+            }
+        }
+        Some(())
+    }
+
+    /// The plain formula's `(sq, ang)` of the sub-step between the points `p0` and `p1` (as
+    /// [`ArcGeometry::at`] gives them).
+    fn plain_step(&self, p0: (Point, [Point; 2], f64), p1: (Point, [Point; 2], f64)) -> (f64, f64) {
+        let ((m0, a0, r0), (m1, a1, r1)) = (p0, p1);
+        let ds =
+            0.5 * (dist(mid(m0, a0[0]), mid(m1, a1[0])) + dist(mid(m0, a0[1]), mid(m1, a1[1])));
+        let rho = 0.5 * (r0 + r1);
+        let (c0, d0) = turn_parts(self.walls[0].c, a0[0], a1[0]);
+        let (c1, d1) = turn_parts(self.walls[1].c, a0[1], a1[1]);
+        (
+            if rho > 0.0 { ds / rho } else { 0.0 },
+            larger_turn(c0, d0, c1, d1) / MAX_WALL_ANGLE,
+        )
     }
 
     /// [`ArcGeometry::densities_batched`] compiled for AVX-512 (8-lane vectors).
@@ -371,9 +423,12 @@ impl ArcGeometry {
         sq: &mut Vec<f64>,
         ang: &mut Vec<f64>,
     ) -> Option<()> {
-        if self.blended() {
-            return self.densities_plain_into(sq, ang);
-        }
+        self.densities_into_scalar_bisector(sq, ang)?;
+        self.patch_blend(sq, ang)
+    }
+
+    /// [`ArcGeometry::densities_into_scalar`] of the arc's bisector points.
+    fn densities_into_scalar_bisector(&self, sq: &mut Vec<f64>, ang: &mut Vec<f64>) -> Option<()> {
         let k = ARC_SUBSTEPS;
         sq.clear();
         ang.clear();
@@ -421,24 +476,18 @@ impl ArcGeometry {
         Some((sq, ang))
     }
 
-    /// [`ArcGeometry::densities_plain`] into `sq` and `ang` (cleared first): what every build
-    /// of the densities gives for an arc with an end off the bisector (its points are not the
-    /// bisector's, which the batched passes compute).
+    /// [`ArcGeometry::densities_plain`] into `sq` and `ang` (cleared first).
     pub(crate) fn densities_plain_into(&self, sq: &mut Vec<f64>, ang: &mut Vec<f64>) -> Option<()> {
         let k = ARC_SUBSTEPS;
         sq.clear();
         ang.clear();
-        let (mut m0, mut a0, mut r0) = self.at(0.0)?;
+        let mut p0 = self.at(0.0)?;
         for s in 1..=k {
-            let (m1, a1, r1) = self.at(s as f64 / k as f64)?;
-            let ds =
-                0.5 * (dist(mid(m0, a0[0]), mid(m1, a1[0])) + dist(mid(m0, a0[1]), mid(m1, a1[1])));
-            let rho = 0.5 * (r0 + r1);
-            sq.push(if rho > 0.0 { ds / rho } else { 0.0 });
-            let (c0, d0) = turn_parts(self.walls[0].c, a0[0], a1[0]);
-            let (c1, d1) = turn_parts(self.walls[1].c, a0[1], a1[1]);
-            ang.push(larger_turn(c0, d0, c1, d1) / MAX_WALL_ANGLE);
-            (m0, a0, r0) = (m1, a1, r1);
+            let p1 = self.at(s as f64 / k as f64)?;
+            let (x, a) = self.plain_step(p0, p1);
+            sq.push(x);
+            ang.push(a);
+            p0 = p1;
         }
         Some(())
     }
