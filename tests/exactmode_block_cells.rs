@@ -41,6 +41,16 @@ fn circle_of(d: &Domain, id: i32) -> Circle {
     }
 }
 
+/// The angle (degrees) between the wall nodes `a` and `b`, seen from the centre of `c`.
+fn swept_deg(c: &Circle, a: [f64; 2], b: [f64; 2]) -> f64 {
+    let u = [a[0] - c.center[0], a[1] - c.center[1]];
+    let v = [b[0] - c.center[0], b[1] - c.center[1]];
+    (u[0] * v[1] - u[1] * v[0])
+        .atan2(u[0] * v[0] + u[1] * v[1])
+        .abs()
+        .to_degrees()
+}
+
 /// The largest angle (degrees) one wall cell of a block on an input circle sweeps, seen from
 /// the circle's centre, and the block where it is.
 fn largest_wall_cell_deg(d: &Domain, m: &Mesh) -> (f64, usize) {
@@ -53,12 +63,7 @@ fn largest_wall_cell_deg(d: &Domain, m: &Mesh) -> (f64, usize) {
         let c = circle_of(d, id);
         let wall = m.grids[b].side(0);
         for w in wall.windows(2) {
-            let u = [w[0][0] - c.center[0], w[0][1] - c.center[1]];
-            let v = [w[1][0] - c.center[0], w[1][1] - c.center[1]];
-            let angle = (u[0] * v[1] - u[1] * v[0])
-                .atan2(u[0] * v[0] + u[1] * v[1])
-                .abs()
-                .to_degrees();
+            let angle = swept_deg(&c, w[0], w[1]);
             if angle > worst.0 {
                 worst = (angle, b);
             }
@@ -200,12 +205,7 @@ fn periodic_narrow_gaps_keep_wall_cells_within_15_degrees() {
                 })
                 .unwrap_or_else(|| panic!("{what}: block {b}'s wall is on no hole"));
             for w in wall.windows(2) {
-                let u = [w[0][0] - c.center[0], w[0][1] - c.center[1]];
-                let v = [w[1][0] - c.center[0], w[1][1] - c.center[1]];
-                let deg = (u[0] * v[1] - u[1] * v[0])
-                    .atan2(u[0] * v[0] + u[1] * v[1])
-                    .abs()
-                    .to_degrees();
+                let deg = swept_deg(c, w[0], w[1]);
                 assert!(
                     deg <= LIMIT_DEG * (1.0 + SLACK),
                     "{what}: a wall cell of block {b} sweeps {deg} degrees"
