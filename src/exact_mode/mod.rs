@@ -18,7 +18,10 @@
 //!   fluid at `a` (`u` for a hole, `-u` for the bounding circle), the medial point is
 //!   `m = a + rho n` where the empty circle's radius `rho` solves `|m - c_q|^2 = (rho + s_q)^2`,
 //!   linear in `rho` after squaring: `rho = (s_q^2 - |d|^2) / (2 (d . n - s_q))`, `d = a - c_q`.
-//!   The touching point on `q` is `c_q + |s_q| (m - c_q) / |m - c_q|`;
+//!   The touching point on `q` is `c_q + |s_q| (m - c_q) / |m - c_q|`. An end off the
+//!   bisector (a vertex merged by short-arc collapse, [`collapsed`]) has its offset faded out
+//!   over the first half of the arc (`ArcGeometry::offset`; touching points there are the
+//!   radial projections of the shifted point);
 //! - each block (side 0 on a circle, side 2 on the arc) is the ruled surface of the spokes from
 //!   its wall to the arc's nodes: the grid line `i` runs straight from the touching point
 //!   `a(m_i)` to `m_i`, along the circle's normal. All spokes of one circle pass through its
@@ -27,7 +30,8 @@
 //! - nodes along a spoke follow the circle's [`Clustering`]; nodes along the arc equidistribute
 //!   `max(nbar ds / rho, dtheta / 15 deg)` (`ds` along the spoke mid-curves, `nbar` the mean
 //!   wall-normal count of the two circles), so cells are near square on average and no cell
-//!   spans more than about 15 degrees of wall; counts come from [`counts::CountProblem`].
+//!   spans more than about 15 degrees of wall, also when a count is below its target
+//!   (`equidistribution::arc_params_into`); counts come from [`counts::CountProblem`].
 //!
 //! Shared sides are bitwise identical: each arc's medial nodes and each vertex spoke's nodes
 //! are computed once and copied into both blocks; the ends of every arc are exactly the
