@@ -470,17 +470,9 @@ impl ArcGeometry {
     /// [`ArcGeometry::at`], `ds` between the spoke mid-points with `hypot`, both wall turns by
     /// `atan2` ([`larger_turn`] takes the larger). The reference of the tests.
     pub(crate) fn densities_plain(&self) -> Option<(Vec<f64>, Vec<f64>)> {
-        let mut sq = Vec::with_capacity(ARC_SUBSTEPS);
-        let mut ang = Vec::with_capacity(ARC_SUBSTEPS);
-        self.densities_plain_into(&mut sq, &mut ang)?;
-        Some((sq, ang))
-    }
-
-    /// [`ArcGeometry::densities_plain`] into `sq` and `ang` (cleared first).
-    pub(crate) fn densities_plain_into(&self, sq: &mut Vec<f64>, ang: &mut Vec<f64>) -> Option<()> {
         let k = ARC_SUBSTEPS;
-        sq.clear();
-        ang.clear();
+        let mut sq = Vec::with_capacity(k);
+        let mut ang = Vec::with_capacity(k);
         let mut p0 = self.at(0.0)?;
         for s in 1..=k {
             let p1 = self.at(s as f64 / k as f64)?;
@@ -489,7 +481,7 @@ impl ArcGeometry {
             ang.push(a);
             p0 = p1;
         }
-        Some(())
+        Some((sq, ang))
     }
 }
 
