@@ -157,25 +157,14 @@ impl ArcGeometry {
             Ok(mut b) => self.densities_on(lanes, &mut b, sq, ang),
             // Never reentered; a fresh set of buffers if it were.
             Err(_) => self.densities_on(lanes, &mut Box::default(), sq, ang),
-        })
-    }
-
-    /// [`ArcGeometry::densities_with`] on the buffers `b` (the dispatch happens once the
-    /// buffers are borrowed, so the whole body is compiled in each build).
-    fn densities_on(
-        &self,
-        lanes: Lanes,
-        b: &mut Passes,
-        sq: &mut Vec<f64>,
-        ang: &mut Vec<f64>,
-    ) -> Option<()> {
-        self.densities_on_bisector(lanes, b, sq, ang)?;
+        })?;
         self.patch_blend(sq, ang)
     }
 
-    /// [`ArcGeometry::densities_on`] of the arc's bisector points (what every sub-step is,
-    /// except by an end off the bisector: [`ArcGeometry::patch_blend`]).
-    fn densities_on_bisector(
+    /// [`ArcGeometry::densities_with`] of the arc's bisector points, on the buffers `b` (the
+    /// dispatch happens once the buffers are borrowed, so the whole body is compiled in each
+    /// build); [`ArcGeometry::patch_blend`] then redoes the sub-steps by an end off it.
+    fn densities_on(
         &self,
         lanes: Lanes,
         b: &mut Passes,

@@ -122,7 +122,7 @@ pub(crate) fn arc_params_into(
 /// The most wall-angle density (`ang`, per sub-step, taken as spread evenly over its
 /// sub-step) that one cell between consecutive parameters `t` (in `[0, 1]`, nondecreasing)
 /// sweeps.
-pub(crate) fn largest_cell_ang(ang: &[f64], t: &[f64]) -> f64 {
+fn largest_cell_ang(ang: &[f64], t: &[f64]) -> f64 {
     let k = ang.len();
     let Some((&first, rest)) = t.split_first() else {
         return 0.0;
