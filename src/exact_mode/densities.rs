@@ -15,7 +15,7 @@
 //! arcs and on every piece of real layouts (`tests/perf_densities.rs`).
 
 use super::{dist, larger_turn, medial_point_u, mid, turn_parts, ArcGeometry, Wall};
-use super::{ARC_SUBSTEPS, BLEND, MAX_WALL_ANGLE};
+use super::{ARC_SUBSTEPS, MAX_WALL_ANGLE};
 use crate::geometry::Point;
 use crate::lanes::Lanes;
 
@@ -153,17 +153,19 @@ impl ArcGeometry {
         sq: &mut Vec<f64>,
         ang: &mut Vec<f64>,
     ) -> Option<()> {
+        if self.blended() {
+            return self.plain_into(sq, ang);
+        }
         PASSES.with(|b| match b.try_borrow_mut() {
             Ok(mut b) => self.densities_on(lanes, &mut b, sq, ang),
             // Never reentered; a fresh set of buffers if it were.
             Err(_) => self.densities_on(lanes, &mut Box::default(), sq, ang),
-        })?;
-        self.patch_blend(sq, ang)
+        })
     }
 
     /// [`ArcGeometry::densities_with`] of the arc's bisector points, on the buffers `b` (the
     /// dispatch happens once the buffers are borrowed, so the whole body is compiled in each
-    /// build); [`ArcGeometry::patch_blend`] then redoes the sub-steps by an end off it.
+    /// build). Only for an arc with no end off the bisector.
     fn densities_on(
         &self,
         lanes: Lanes,
@@ -184,29 +186,23 @@ impl ArcGeometry {
         self.densities_batched(b, sq, ang)
     }
 
-    /// By an end off the bisector ([`ArcGeometry::blended`]), the sub-steps that start
-    /// within [`BLEND`] of it, again from [`ArcGeometry::at`]'s points with the plain formula
-    /// (the batched passes computed them on the bisector): the same in every build.
-    fn patch_blend(&self, sq: &mut [f64], ang: &mut [f64]) -> Option<()> {
-        if !self.blended() {
-            return Some(());
-        }
+    /// The plain formula's densities into `sq` and `ang` (cleared first), from
+    /// [`ArcGeometry::at`]'s points: [`ArcGeometry::densities_plain`], and the densities of
+    /// an arc with an end off the bisector ([`ArcGeometry::blended`]: every point of such an
+    /// arc is off it, [`super::blend`], so the batched passes over the bisector do not apply).
+    fn plain_into(&self, sq: &mut Vec<f64>, ang: &mut Vec<f64>) -> Option<()> {
         let k = ARC_SUBSTEPS;
-        if sq.len() != k || ang.len() != k {
-            return None;
-        }
-        let zone = ((BLEND * k as f64).ceil() as usize).min(k);
-        let ranges = [
-            (self.offset[0] != [0.0; 2]).then_some(0..zone),
-            (self.offset[1] != [0.0; 2]).then_some(k - zone..k),
-        ];
-        for range in ranges.into_iter().flatten() {
-            let mut p0 = self.at(range.start as f64 / k as f64)?;
-            for s in range {
-                let p1 = self.at((s + 1) as f64 / k as f64)?;
-                (sq[s], ang[s]) = self.plain_step(p0, p1);
-                p0 = p1;
-            }
+        sq.clear();
+        ang.clear();
+        sq.reserve(k);
+        ang.reserve(k);
+        let mut p0 = self.at(0.0)?;
+        for s in 1..=k {
+            let p1 = self.at(s as f64 / k as f64)?;
+            let (x, a) = self.plain_step(p0, p1);
+            sq.push(x);
+            ang.push(a);
+            p0 = p1;
         }
         Some(())
     }
@@ -412,8 +408,10 @@ impl ArcGeometry {
         sq: &mut Vec<f64>,
         ang: &mut Vec<f64>,
     ) -> Option<()> {
-        self.densities_into_scalar_bisector(sq, ang)?;
-        self.patch_blend(sq, ang)
+        if self.blended() {
+            return self.plain_into(sq, ang);
+        }
+        self.densities_into_scalar_bisector(sq, ang)
     }
 
     /// [`ArcGeometry::densities_into_scalar`] of the arc's bisector points.
@@ -459,17 +457,8 @@ impl ArcGeometry {
     /// [`ArcGeometry::at`], `ds` between the spoke mid-points with `hypot`, both wall turns by
     /// `atan2` ([`larger_turn`] takes the larger). The reference of the tests.
     pub(crate) fn densities_plain(&self) -> Option<(Vec<f64>, Vec<f64>)> {
-        let k = ARC_SUBSTEPS;
-        let mut sq = Vec::with_capacity(k);
-        let mut ang = Vec::with_capacity(k);
-        let mut p0 = self.at(0.0)?;
-        for s in 1..=k {
-            let p1 = self.at(s as f64 / k as f64)?;
-            let (x, a) = self.plain_step(p0, p1);
-            sq.push(x);
-            ang.push(a);
-            p0 = p1;
-        }
+        let (mut sq, mut ang) = (Vec::new(), Vec::new());
+        self.plain_into(&mut sq, &mut ang)?;
         Some((sq, ang))
     }
 }
