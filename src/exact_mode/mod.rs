@@ -159,19 +159,13 @@ fn dist(a: Point, b: Point) -> f64 {
     len(a[0] - b[0], a[1] - b[1])
 }
 
-/// The length of `(x, y)`: `sqrt(x² + y²)` (within an ulp or so of the exact length) when the
-/// squared length is in `[1e-280, 1e280]`, else `hypot` (no underflow or overflow in the
-/// squares), as the quality report's edge lengths (`quality::kernel`). libm's `hypot` took 3%
-/// of the CPU at 1e4 and 1e5 bubbles (issue 8): the spokes' touching points
-/// ([`Wall::project`]) and lengths of every arc node, and the blended arcs' densities.
+/// The length of `(x, y)` ([`crate::geometry::length`]: `sqrt(x² + y²)`, `hypot` only near
+/// underflow or overflow). libm's `hypot` took 3% of the CPU at 1e4 and 1e5 bubbles (issue 8):
+/// the spokes' touching points ([`Wall::project`]) and lengths of every arc node, and the
+/// blended arcs' densities.
 #[inline]
 fn len(x: f64, y: f64) -> f64 {
-    let sq = x * x + y * y;
-    if (1e-280..=1e280).contains(&sq) {
-        sq.sqrt()
-    } else {
-        x.hypot(y)
-    }
+    crate::geometry::length(x, y)
 }
 
 fn mid(a: Point, b: Point) -> Point {

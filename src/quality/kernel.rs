@@ -9,19 +9,14 @@ use crate::lanes::Lanes;
 
 /// Squared edge lengths inside this range take `sqrt(x² + y²)` (no underflow or overflow in
 /// the squares or in the products of two lengths); outside it, and for NaN, `hypot`.
-pub(super) const SQ_MIN: f64 = 1e-280;
-pub(super) const SQ_MAX: f64 = 1e280;
+pub(super) const SQ_MIN: f64 = crate::geometry::LENGTH_SQ_MIN;
+pub(super) const SQ_MAX: f64 = crate::geometry::LENGTH_SQ_MAX;
 
-/// The length of the edge `(x, y)`: `sqrt(x² + y²)` (within an ulp or so of the exact
-/// length) when the squared length is in `[SQ_MIN, SQ_MAX]`, else `hypot`.
+/// The length of the edge `(x, y)` ([`crate::geometry::length`]): `sqrt(x² + y²)` when the
+/// squared length is in `[SQ_MIN, SQ_MAX]`, else `hypot`.
 #[inline(always)]
 pub(super) fn edge_len(x: f64, y: f64) -> f64 {
-    let sq = x * x + y * y;
-    if (SQ_MIN..=SQ_MAX).contains(&sq) {
-        sq.sqrt()
-    } else {
-        x.hypot(y)
-    }
+    crate::geometry::length(x, y)
 }
 
 /// Cross and dot products at the four corners, with the reference expressions.
