@@ -53,6 +53,16 @@ pub struct Known {
     pub target: Option<(f64, f64)>,
 }
 
+/// The weight of one sub-step of an arc (see the module docs): `max(nbar sq_k, ang_k)`, the
+/// larger of the spoke-length density scaled to the mean wall-normal count `nbar` and the
+/// wall-angle density. An arc's target count is the sum of its weights, and its nodes
+/// equidistribute them (`super::equidistribution`); every caller forms them here, so the
+/// counts and the nodes see the same values bit for bit.
+#[inline]
+pub(crate) fn weight(nbar: f64, sq: f64, ang: f64) -> f64 {
+    (nbar * sq).max(ang)
+}
+
 impl ArcTarget {
     /// The target for `nbar` when it is known without the densities (see [`ArcTarget::known`]);
     /// `None` when the densities are needed but not held.
@@ -87,7 +97,7 @@ impl ArcTarget {
         self.sq
             .iter()
             .zip(&self.ang)
-            .map(|(s, a)| (nbar * s).max(*a))
+            .map(|(&s, &a)| weight(nbar, s, a))
             .sum()
     }
     /// The lower bound `ceil(sum ang)` (at least 1), or the known one.

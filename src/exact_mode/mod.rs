@@ -658,7 +658,7 @@ fn summarize(
     };
     // The weights replace `sq` in place (the same values as collected into a new vector).
     for (s, a) in scratch.sq.iter_mut().zip(&scratch.ang) {
-        *s = (nbar * *s).max(*a);
+        *s = counts::weight(nbar, *s, *a);
     }
     let known = Known {
         min_cells: lb,
@@ -1397,7 +1397,11 @@ pub fn assemble_cached(
                         }
                         let weights = &mut scratch.weights;
                         weights.clear();
-                        weights.extend(t.sq.iter().zip(&t.ang).map(|(s, a)| (nbar * s).max(*a)));
+                        weights.extend(
+                            t.sq.iter()
+                                .zip(&t.ang)
+                                .map(|(&s, &a)| counts::weight(nbar, s, a)),
+                        );
                         arc_params_into(
                             weights,
                             &t.ang,

@@ -695,7 +695,7 @@ fn assemble(
             .sq
             .iter()
             .zip(&targets[o].ang)
-            .map(|(s, a)| (nbar * s).max(*a))
+            .map(|(&s, &a)| super::counts::weight(nbar, s, a))
             .collect();
         let mut params = Vec::with_capacity(n + 1);
         arc_params_into(
