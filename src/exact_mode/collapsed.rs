@@ -14,8 +14,9 @@
 //!   cluster's circles. The arcs were short (below `collapse_fraction` of the local radius), so
 //!   the centre moves by at most that fraction off the bisectors of its arcs; each arc fades
 //!   that offset out over its whole parameter range (towards the other end's offset, zero on
-//!   the bisector), leaving the centre along the bisector's tangent (`ArcGeometry::at`; before, it jumped onto the bisector after
-//!   its end node, and the corner cell there flattened as the cells got finer).
+//!   the bisector), leaving the centre along the bisector's tangent (`ArcGeometry::at`;
+//!   before, it jumped onto the bisector after its end node, and the corner cell there
+//!   flattened as the cells got finer).
 //!
 //! In every case the tangent point on a circle is the radial projection of the centre, so every
 //! spoke at a collapsed vertex is exactly normal to its wall. Inserted holes are handled by

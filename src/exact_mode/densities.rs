@@ -454,7 +454,7 @@ impl ArcGeometry {
     }
 
     /// The plain formula the fast [`ArcGeometry::densities_into`] stands for: every point from
-    /// [`ArcGeometry::at`], `ds` between the spoke mid-points with `hypot`, both wall turns by
+    /// [`ArcGeometry::at`], `ds` between the spoke mid-points (`super::dist`), both wall turns by
     /// `atan2` ([`larger_turn`] takes the larger). The reference of the tests.
     pub(crate) fn densities_plain(&self) -> Option<(Vec<f64>, Vec<f64>)> {
         let (mut sq, mut ang) = (Vec::new(), Vec::new());

@@ -60,7 +60,7 @@ pub use piece_cache::PieceCache;
 use crate::apollonius::{apollonius, Choice, Site};
 use crate::blocking::Blocking;
 use crate::domain::{CircleId, Domain};
-use crate::geometry::Point;
+use crate::geometry::{length, Point};
 use crate::grid::{GridError, MAX_CELLS_PER_SIDE, MAX_TOTAL_NODES};
 use crate::layout::{Block, BlockLayout, Curve, Edge, EdgeKind, SideRef};
 use crate::mesh::BlockGrid;
@@ -133,7 +133,7 @@ impl Wall {
     /// The touching point of the empty circle centred at `m`.
     fn project(&self, m: Point) -> Point {
         let d = [m[0] - self.c[0], m[1] - self.c[1]];
-        let l = len(d[0], d[1]);
+        let l = length(d[0], d[1]);
         [self.c[0] + self.r * d[0] / l, self.c[1] + self.r * d[1] / l]
     }
 }
@@ -155,17 +155,12 @@ fn medial_point_u(p: &Wall, q: &Wall, u: Point) -> Option<(Point, Point, f64)> {
     (rho.is_finite() && rho >= 0.0 && m[0].is_finite() && m[1].is_finite()).then_some((a, m, rho))
 }
 
-fn dist(a: Point, b: Point) -> f64 {
-    len(a[0] - b[0], a[1] - b[1])
-}
-
-/// The length of `(x, y)` ([`crate::geometry::length`]: `sqrt(x² + y²)`, `hypot` only near
-/// underflow or overflow). libm's `hypot` took 3% of the CPU at 1e4 and 1e5 bubbles (issue 8):
-/// the spokes' touching points ([`Wall::project`]) and lengths of every arc node, and the
+/// `|a - b|` by [`crate::geometry::length`] (`sqrt(x² + y²)`, `hypot` only near underflow or
+/// overflow), as [`Wall::project`]'s: libm's `hypot` took 3% of the CPU at 1e4 and 1e5
+/// bubbles (issue 8), for the touching points and spoke lengths of every arc node and the
 /// blended arcs' densities.
-#[inline]
-fn len(x: f64, y: f64) -> f64 {
-    crate::geometry::length(x, y)
+fn dist(a: Point, b: Point) -> f64 {
+    length(a[0] - b[0], a[1] - b[1])
 }
 
 fn mid(a: Point, b: Point) -> Point {
