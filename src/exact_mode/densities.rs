@@ -153,9 +153,6 @@ impl ArcGeometry {
         sq: &mut Vec<f64>,
         ang: &mut Vec<f64>,
     ) -> Option<()> {
-        if self.blended() {
-            return self.plain_into(sq, ang);
-        }
         PASSES.with(|b| match b.try_borrow_mut() {
             Ok(mut b) => self.densities_on(lanes, &mut b, sq, ang),
             // Never reentered; a fresh set of buffers if it were.
@@ -163,9 +160,8 @@ impl ArcGeometry {
         })
     }
 
-    /// [`ArcGeometry::densities_with`] of the arc's bisector points, on the buffers `b` (the
-    /// dispatch happens once the buffers are borrowed, so the whole body is compiled in each
-    /// build). Only for an arc with no end off the bisector.
+    /// [`ArcGeometry::densities_with`] on the buffers `b` (the dispatch happens once the
+    /// buffers are borrowed, so the whole body is compiled in each build).
     fn densities_on(
         &self,
         lanes: Lanes,
@@ -173,6 +169,9 @@ impl ArcGeometry {
         sq: &mut Vec<f64>,
         ang: &mut Vec<f64>,
     ) -> Option<()> {
+        if self.blended() {
+            return self.densities_plain_into(sq, ang);
+        }
         #[cfg(target_arch = "x86_64")]
         match lanes {
             // SAFETY: `Lanes::available` checked the CPU's features.
@@ -184,42 +183,6 @@ impl ArcGeometry {
             _ => {}
         }
         self.densities_batched(b, sq, ang)
-    }
-
-    /// The plain formula's densities into `sq` and `ang` (cleared first), from
-    /// [`ArcGeometry::at`]'s points: [`ArcGeometry::densities_plain`], and the densities of
-    /// an arc with an end off the bisector ([`ArcGeometry::blended`]: every point of such an
-    /// arc is off it, [`super::blend`], so the batched passes over the bisector do not apply).
-    fn plain_into(&self, sq: &mut Vec<f64>, ang: &mut Vec<f64>) -> Option<()> {
-        let k = ARC_SUBSTEPS;
-        sq.clear();
-        ang.clear();
-        sq.reserve(k);
-        ang.reserve(k);
-        let mut p0 = self.at(0.0)?;
-        for s in 1..=k {
-            let p1 = self.at(s as f64 / k as f64)?;
-            let (x, a) = self.plain_step(p0, p1);
-            sq.push(x);
-            ang.push(a);
-            p0 = p1;
-        }
-        Some(())
-    }
-
-    /// The plain formula's `(sq, ang)` of the sub-step between the points `p0` and `p1` (as
-    /// [`ArcGeometry::at`] gives them).
-    fn plain_step(&self, p0: (Point, [Point; 2], f64), p1: (Point, [Point; 2], f64)) -> (f64, f64) {
-        let ((m0, a0, r0), (m1, a1, r1)) = (p0, p1);
-        let ds =
-            0.5 * (dist(mid(m0, a0[0]), mid(m1, a1[0])) + dist(mid(m0, a0[1]), mid(m1, a1[1])));
-        let rho = 0.5 * (r0 + r1);
-        let (c0, d0) = turn_parts(self.walls[0].c, a0[0], a1[0]);
-        let (c1, d1) = turn_parts(self.walls[1].c, a0[1], a1[1]);
-        (
-            if rho > 0.0 { ds / rho } else { 0.0 },
-            larger_turn(c0, d0, c1, d1) / MAX_WALL_ANGLE,
-        )
     }
 
     /// [`ArcGeometry::densities_batched`] compiled for AVX-512 (8-lane vectors).
@@ -409,13 +372,8 @@ impl ArcGeometry {
         ang: &mut Vec<f64>,
     ) -> Option<()> {
         if self.blended() {
-            return self.plain_into(sq, ang);
+            return self.densities_plain_into(sq, ang);
         }
-        self.densities_into_scalar_bisector(sq, ang)
-    }
-
-    /// [`ArcGeometry::densities_into_scalar`] of the arc's bisector points.
-    fn densities_into_scalar_bisector(&self, sq: &mut Vec<f64>, ang: &mut Vec<f64>) -> Option<()> {
         let k = ARC_SUBSTEPS;
         sq.clear();
         ang.clear();
@@ -457,9 +415,32 @@ impl ArcGeometry {
     /// [`ArcGeometry::at`], `ds` between the spoke mid-points (`super::dist`), both wall turns by
     /// `atan2` ([`larger_turn`] takes the larger). The reference of the tests.
     pub(crate) fn densities_plain(&self) -> Option<(Vec<f64>, Vec<f64>)> {
-        let (mut sq, mut ang) = (Vec::new(), Vec::new());
-        self.plain_into(&mut sq, &mut ang)?;
+        let mut sq = Vec::with_capacity(ARC_SUBSTEPS);
+        let mut ang = Vec::with_capacity(ARC_SUBSTEPS);
+        self.densities_plain_into(&mut sq, &mut ang)?;
         Some((sq, ang))
+    }
+
+    /// [`ArcGeometry::densities_plain`] into `sq` and `ang` (cleared first): what every build
+    /// of the densities gives for an arc with an end off the bisector (every point of such an
+    /// arc is off the bisector, [`super::blend`], which the batched passes compute).
+    pub(crate) fn densities_plain_into(&self, sq: &mut Vec<f64>, ang: &mut Vec<f64>) -> Option<()> {
+        let k = ARC_SUBSTEPS;
+        sq.clear();
+        ang.clear();
+        let (mut m0, mut a0, mut r0) = self.at(0.0)?;
+        for s in 1..=k {
+            let (m1, a1, r1) = self.at(s as f64 / k as f64)?;
+            let ds =
+                0.5 * (dist(mid(m0, a0[0]), mid(m1, a1[0])) + dist(mid(m0, a0[1]), mid(m1, a1[1])));
+            let rho = 0.5 * (r0 + r1);
+            sq.push(if rho > 0.0 { ds / rho } else { 0.0 });
+            let (c0, d0) = turn_parts(self.walls[0].c, a0[0], a1[0]);
+            let (c1, d1) = turn_parts(self.walls[1].c, a0[1], a1[1]);
+            ang.push(larger_turn(c0, d0, c1, d1) / MAX_WALL_ANGLE);
+            (m0, a0, r0) = (m1, a1, r1);
+        }
+        Some(())
     }
 }
 
