@@ -350,10 +350,10 @@ pub struct CellMetrics {
     pub aspect_ratio: f64,
 }
 
-/// The reference edge length ([`kernel::edge_len`]: `sqrt(x² + y²)`, `hypot` only near
+/// The reference edge length ([`crate::geometry::length`]: `sqrt(x² + y²)`, `hypot` only near
 /// underflow or overflow).
 fn len(a: Point, b: Point) -> f64 {
-    kernel::edge_len(b[0] - a[0], b[1] - a[1])
+    crate::geometry::length(b[0] - a[0], b[1] - a[1])
 }
 
 /// Ratio `a / b` of two non-negative lengths, `a >= b`: infinite when `b == 0 < a`, 1 when

@@ -12,13 +12,6 @@ use crate::lanes::Lanes;
 pub(super) const SQ_MIN: f64 = crate::geometry::LENGTH_SQ_MIN;
 pub(super) const SQ_MAX: f64 = crate::geometry::LENGTH_SQ_MAX;
 
-/// The length of the edge `(x, y)` ([`crate::geometry::length`]): `sqrt(x² + y²)` when the
-/// squared length is in `[SQ_MIN, SQ_MAX]`, else `hypot`.
-#[inline(always)]
-pub(super) fn edge_len(x: f64, y: f64) -> f64 {
-    crate::geometry::length(x, y)
-}
-
 /// Cross and dot products at the four corners, with the reference expressions.
 #[inline]
 pub(super) fn corner_products(p: &[Point; 4]) -> ([f64; 4], [f64; 4]) {

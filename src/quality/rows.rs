@@ -33,7 +33,7 @@
 //!
 //! Why this gives the reference's numbers: every figure is computed with the reference's own
 //! functions ([`angle_deg`](super::angle_deg), [`length_figures`], [`skewness`], the `sqrt` length of
-//! [`super::kernel::edge_len`]) on the same operands, except that the reference forms a
+//! [`crate::geometry::length`]) on the same operands, except that the reference forms a
 //! corner's two edge vectors as differences `a - o` where this pass may use the negated
 //! difference `-(o - a)` of the neighbouring corner: the two are equal except possibly for the
 //! sign of a zero component, so products and sums agree except possibly for the sign of a zero
@@ -85,7 +85,7 @@ const BAND_NODES: usize = 512;
 /// scalar remainder: the padding cells have NaN edges and count nowhere).
 const PAD: usize = 16;
 
-/// `sqrt(x² + y²)`, or NaN outside `[SQ_MIN, SQ_MAX]` (where [`super::kernel::edge_len`] takes
+/// `sqrt(x² + y²)`, or NaN outside `[SQ_MIN, SQ_MAX]` (where [`crate::geometry::length`] takes
 /// `hypot`); a select rather than a branch, so that the edge loops vectorise.
 #[inline(always)]
 fn checked_len(x: f64, y: f64) -> f64 {

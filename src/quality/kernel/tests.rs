@@ -306,7 +306,7 @@ fn least_scaled_jacobian_equals_the_four_divisions() {
         let (cross, _) = corner_products(&p);
         let edges = [0, 1, 2, 3].map(|k| {
             let (a, b) = (p[k], p[(k + 1) % 4]);
-            edge_len(b[0] - a[0], b[1] - a[1])
+            crate::geometry::length(b[0] - a[0], b[1] - a[1])
         });
         let ok = edges.iter().all(|&l| (SQ_MIN..=SQ_MAX).contains(&(l * l)))
             && cross.iter().all(|&c| c != 0.0 && c.is_finite());
