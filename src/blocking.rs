@@ -731,7 +731,10 @@ pub fn arc_key(medial: &MedialGraph, arc: usize) -> Vec<CircleId> {
 ///
 /// `collapse_thin_walls`: also collapse every arc the sampling left with a single-sample wall
 /// (the paper pipeline needs it: its walls follow the samples, so such an arc would give a
-/// zero-sweep wall; exact mode computes exact walls and does not).
+/// zero-sweep wall; exact mode computes exact walls and does not). It also says how a short
+/// arc is measured: by its sampled polyline when true (the paper pipeline's blocks follow
+/// it), by the chord between its ends' exact Apollonius centres when false (exact mode's
+/// blocks are built on those centres; [`crate::collapse::ArcLength`]).
 pub fn collapsed_blocking_with(
     domain: &Domain,
     options: &Options,
@@ -812,6 +815,11 @@ pub fn collapsed_blocking_seeded(
         &groups,
         &sampled.samples.points,
         options.collapse_fraction,
+        if collapse_thin_walls {
+            crate::collapse::ArcLength::Polyline
+        } else {
+            crate::collapse::ArcLength::Chord
+        },
     );
     release_triangulation(&mut refined.sampled);
     let (layout, chosen, contracted, excluded) =

@@ -42,7 +42,9 @@ pub struct Options {
     /// `Some(2.0)` (the paper's; smallest angle below about 14.48 degrees); `None` disables it.
     pub refine_ratio: Option<f64>,
     /// Collapse medial arcs shorter than this fraction of the local empty-circle radius
-    /// ([`crate::collapse`]). Default [`DEFAULT_COLLAPSE_FRACTION`]; `0` collapses only
+    /// ([`crate::collapse`]; paper mode measures an arc by its sampled polyline, exact mode
+    /// by the chord between its ends' Apollonius centres, [`crate::collapse::ArcLength`]).
+    /// Default [`DEFAULT_COLLAPSE_FRACTION`]; `0` collapses only
     /// zero-length arcs (which are always collapsed) and, in exact mode, arcs whose exact
     /// geometry runs backwards (nearly co-circular circles whose sampled Delaunay diagonal is
     /// not the exact one; see [`mesh`]).

@@ -166,7 +166,7 @@ fn broken_arcs_give_the_one_by_one_error() {
 /// two threads.
 #[test]
 fn parallel_selection_equals_the_one_by_one_selection() {
-    use medial_blocks::collapse::Selection;
+    use medial_blocks::collapse::{ArcLength, Selection};
     for d in domains() {
         let cb =
             collapsed_blocking_with(&d, &Options::default(), &SamplingOptions::default(), false)
@@ -174,7 +174,11 @@ fn parallel_selection_equals_the_one_by_one_selection() {
         let s = sample_and_triangulate(&cb.refined.domain, &SamplingOptions::default()).unwrap();
         let circles = medial_blocks::cocircular::vertex_circles(&cb.refined.domain, &s.medial);
         let groups = medial_blocks::cocircular::cocircular_groups(&s.medial, &circles);
-        for fraction in [Options::default().collapse_fraction, 0.0, 0.5, f64::NAN] {
+        let fractions = [Options::default().collapse_fraction, 0.0, 0.5, f64::NAN];
+        for (fraction, how) in fractions
+            .into_iter()
+            .flat_map(|f| [(f, ArcLength::Polyline), (f, ArcLength::Chord)])
+        {
             let args = (&s.medial, &s.triangulation, &circles[..], &groups[..]);
             let reference = Selection::new_one_by_one(
                 args.0,
@@ -183,6 +187,7 @@ fn parallel_selection_equals_the_one_by_one_selection() {
                 args.3,
                 &s.samples.points,
                 fraction,
+                how,
             );
             for threads in [1, 2] {
                 let pool = rayon::ThreadPoolBuilder::new()
@@ -190,9 +195,13 @@ fn parallel_selection_equals_the_one_by_one_selection() {
                     .build()
                     .unwrap();
                 let got = pool.install(|| {
-                    Selection::new(args.0, args.1, args.2, args.3, &s.samples.points, fraction)
+                    let points = &s.samples.points;
+                    Selection::new(args.0, args.1, args.2, args.3, points, fraction, how)
                 });
-                assert!(got == reference, "fraction {fraction}, {threads} threads");
+                assert!(
+                    got == reference,
+                    "fraction {fraction}, {how:?}, {threads} threads"
+                );
             }
         }
     }

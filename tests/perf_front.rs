@@ -16,7 +16,7 @@ mod common;
 
 use medial_blocks::blocking::{block_area, blocks, collapsed_blocking_with};
 use medial_blocks::cocircular::{vertex_circles, vertex_circles_reusing, vertex_circles_taking};
-use medial_blocks::collapse::{select_forced, Selection};
+use medial_blocks::collapse::{select_forced, ArcLength, Selection};
 use medial_blocks::domain::{Circle, Domain};
 use medial_blocks::geometry::verify::verify_exact;
 use medial_blocks::geometry::Triangulation;
@@ -369,6 +369,7 @@ fn kept_selection_equals_select_forced() {
                 &cb.groups,
                 &s.samples.points,
                 fraction,
+                ArcLength::Polyline,
             );
             for round in 0..6 {
                 let p = [0.0, 0.1, 0.5][round % 3];

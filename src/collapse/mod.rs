@@ -20,8 +20,8 @@
 //!
 //! Selection ([`select`]): zero-length arcs ([`crate::cocircular::is_zero_length`]) always,
 //! then the *forced* arcs of [`select_forced`] (arcs with a single-sample wall that sampling
-//! could not remove) always, then arcs whose sampled length is below `fraction` times the smaller empty-circle radius of
-//! its two ends, shortest (relative) first. An arc is skipped when its ends are already in one
+//! could not remove) always, then arcs whose length ([`ArcLength`]) is below `fraction` times
+//! the smaller empty-circle radius of its two ends, shortest (relative) first. An arc is skipped when its ends are already in one
 //! cluster (collapsing a cycle would delete every block around a hole) or when another
 //! remaining arc joins the same two clusters (it would become a loop). The blocking checks
 //! the result and gives up short (non-zero) collapses that leave a block with non-positive
@@ -46,6 +46,40 @@ pub struct Candidate {
     /// the sampling left with a single-sample wall, [`crate::sampling::thin_walls`]); false
     /// for a short one (given up when its collapse leaves a block without area).
     pub zero: bool,
+}
+
+/// How a medial arc is measured for the short-arc test.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum ArcLength {
+    /// The sampled polyline through the circumcentres of its triangles
+    /// ([`crate::cocircular::arc_length`]): the paper pipeline, whose blocks follow it.
+    #[default]
+    Polyline,
+    /// The chord between the exact Apollonius centres of its two ends (the polyline when
+    /// either end has none): exact mode, whose blocks are built on those centres. It depends
+    /// only on the arc's circles, not on how finely they are sampled, so the same layout
+    /// collapses the same arcs at every sampling density (and after a local resampling);
+    /// for an arc short enough to be collapsed, it is the exact arc's length to within
+    /// its tiny curvature.
+    Chord,
+}
+
+/// The length of `arc` measured as `how` says (`circles` the vertex circles).
+pub fn measured_length(
+    arc: &crate::medial::MedialArc,
+    circles: &[Option<Apollonius>],
+    how: ArcLength,
+) -> f64 {
+    let centre = |v: u32| {
+        circles
+            .get(v as usize)
+            .and_then(|c| c.as_ref())
+            .map(|c| c.center)
+    };
+    match (how, centre(arc.ends[0]), centre(arc.ends[1])) {
+        (ArcLength::Chord, Some(a), Some(b)) => crate::geometry::length(b[0] - a[0], b[1] - a[1]),
+        _ => arc_length(arc),
+    }
 }
 
 /// The union-find forest of the arcs marked in `collapse` (one flag per arc): each root is the
@@ -99,7 +133,8 @@ pub fn select(
     select_forced(medial, tri, circles, groups, points, fraction, exclude, &[])
 }
 
-/// [`select`], with the arcs flagged in `forced` (one flag per arc; missing flags are false)
+/// [`select`] (arcs measured by their sampled polylines, [`ArcLength::Polyline`]), with the
+/// arcs flagged in `forced` (one flag per arc; missing flags are false)
 /// collapsed like zero-length arcs: right after them, shortest sampled length first, ties by
 /// arc id. Used for the arcs with a single-sample (zero-sweep) wall that resampling could not
 /// remove ([`crate::sampling::thin_walls`]): collapsing such an arc moves no wall corner on the
@@ -115,20 +150,29 @@ pub fn select_forced(
     exclude: &[bool],
     forced: &[bool],
 ) -> Vec<Candidate> {
-    Selection::new(medial, tri, circles, groups, points, fraction).select(exclude, forced)
+    Selection::new(
+        medial,
+        tri,
+        circles,
+        groups,
+        points,
+        fraction,
+        ArcLength::Polyline,
+    )
+    .select(exclude, forced)
 }
 
 /// The part of [`select_forced`] that depends on neither `exclude` nor `forced`, computed once
 /// and kept for the local rebuilds ([`crate::blocking::CollapsedBlocking::recollapse`]): the
-/// zero-length arcs, every arc's sampled length, and the short candidates (relative length
-/// below the fraction) already sorted. Filtering a sorted list keeps it sorted, so
-/// [`Selection::select`] is [`select_forced`] exactly.
+/// zero-length arcs, every arc's measured length ([`ArcLength`]), and the short candidates
+/// (relative length below the fraction) already sorted. Filtering a sorted list keeps it
+/// sorted, so with [`ArcLength::Polyline`] [`Selection::select`] is [`select_forced`] exactly.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Selection {
     /// Zero-length arcs, in arc order.
     zero: Vec<u32>,
     is_zero: Vec<bool>,
-    /// Sampled length per arc.
+    /// Length per arc, measured as [`ArcLength`] says.
     length: Vec<f64>,
     /// `(relative length, arc)` of the non-zero arcs below the fraction, sorted.
     short: Vec<(f64, u32)>,
@@ -171,7 +215,7 @@ fn sort_by_length(medial: &MedialGraph, short: &mut [(f64, u32)]) {
 impl Selection {
     /// The per-arc data of [`select_forced`] (same arguments less `exclude` and `forced`).
     ///
-    /// Each arc's zero-length test, sampled length and relative length are functions of the
+    /// Each arc's zero-length test, measured length and relative length are functions of the
     /// arc alone, computed in parallel (and the block successors meanwhile), then gathered in
     /// arc order: the selection of [`Selection::new_one_by_one`] (tested equal in
     /// `tests/perf_blocks_parallel.rs`), for every thread count.
@@ -182,12 +226,13 @@ impl Selection {
         groups: &[CocircularGroup],
         points: &[Point],
         fraction: f64,
+        lengths: ArcLength,
     ) -> Selection {
         use rayon::prelude::*;
         let group = group_of(medial, groups);
         let m = medial.arcs.len();
         let relative = fraction > 0.0;
-        // Per arc: zero-length, sampled length, relative length (NaN when not asked for).
+        // Per arc: zero-length, measured length, relative length (NaN when not asked for).
         let (per_arc, next): (Vec<(bool, f64, f64)>, _) = rayon::join(
             || {
                 medial
@@ -198,7 +243,7 @@ impl Selection {
                         if is_zero_length(arc, medial, tri, &group) {
                             return (true, 0.0, f64::NAN);
                         }
-                        let length = arc_length(arc);
+                        let length = measured_length(arc, circles, lengths);
                         if !relative {
                             return (false, length, f64::NAN);
                         }
@@ -236,6 +281,7 @@ impl Selection {
         groups: &[CocircularGroup],
         points: &[Point],
         fraction: f64,
+        lengths: ArcLength,
     ) -> Selection {
         let group = group_of(medial, groups);
         let m = medial.arcs.len();
@@ -248,7 +294,7 @@ impl Selection {
                 is_zero[e] = true;
                 continue;
             }
-            length[e] = arc_length(arc);
+            length[e] = measured_length(arc, circles, lengths);
             if fraction > 0.0 {
                 let r = local_radius(medial, circles, points, arc.ends[0]).min(local_radius(
                     medial,
