@@ -5,6 +5,7 @@
 //! ```sh
 //! cargo run --release --example adversarial_sweep                     # 20 layouts of each kind
 //! cargo run --release --example adversarial_sweep -- --count 50 --seed 7 --kinds near_touch,ring
+//! cargo run --release --example adversarial_sweep -- --save layouts  # also write each layout
 //! ```
 //!
 //! Kinds: `near_touch` (bubbles grown until some nearly touch a neighbour, gaps down to 1e-7
@@ -47,7 +48,14 @@ impl Rng {
     }
 }
 
-const KINDS: [&str; 6] = ["near_touch", "boundary", "sizes", "lattice", "ring", "dense"];
+const KINDS: [&str; 6] = [
+    "near_touch",
+    "boundary",
+    "sizes",
+    "lattice",
+    "ring",
+    "dense",
+];
 
 fn dist(a: &Circle, b: &Circle) -> f64 {
     (a.center[0] - b.center[0]).hypot(a.center[1] - b.center[1])
@@ -73,7 +81,10 @@ fn scatter(
         if reach <= 0.0 {
             continue;
         }
-        let (rho, phi) = (reach * rng.f().sqrt(), rng.range(0.0, std::f64::consts::TAU));
+        let (rho, phi) = (
+            reach * rng.f().sqrt(),
+            rng.range(0.0, std::f64::consts::TAU),
+        );
         let c = Circle::new(rho * phi.cos(), rho * phi.sin(), r);
         if holes
             .iter()
@@ -149,7 +160,11 @@ fn layout(kind: &str, rng: &mut Rng) -> Option<Domain> {
             for j in 0..m {
                 for i in 0..m {
                     let shift = if hex && j % 2 == 1 { 0.5 } else { 0.0 };
-                    let y = if hex { j as f64 * 0.75f64.sqrt() } else { j as f64 };
+                    let y = if hex {
+                        j as f64 * 0.75f64.sqrt()
+                    } else {
+                        j as f64
+                    };
                     let x = i as f64 + shift - 0.5 * m as f64;
                     let y = y - 0.5 * m as f64;
                     h.push(Circle::new(
@@ -208,7 +223,12 @@ fn smallest_angle(m: &medial_blocks::Mesh) -> f64 {
     for g in &m.grids {
         for j in 0..g.nj {
             for i in 0..g.ni {
-                let q = [g.node(i, j), g.node(i + 1, j), g.node(i + 1, j + 1), g.node(i, j + 1)];
+                let q = [
+                    g.node(i, j),
+                    g.node(i + 1, j),
+                    g.node(i + 1, j + 1),
+                    g.node(i, j + 1),
+                ];
                 for k in 0..4 {
                     let (o, a, b) = (q[k], q[(k + 1) % 4], q[(k + 3) % 4]);
                     let (u, v) = ([a[0] - o[0], a[1] - o[1]], [b[0] - o[0], b[1] - o[1]]);
@@ -231,7 +251,9 @@ fn main() {
             .and_then(|i| args.get(i + 1).cloned())
     };
     if args.iter().any(|a| a == "--help" || a == "-h") {
-        println!("adversarial_sweep [--count N] [--seed S] [--kinds a,b,...]; kinds: {KINDS:?}");
+        println!(
+            "adversarial_sweep [--count N] [--seed S] [--kinds a,b,...] [--save DIR]; kinds: {KINDS:?}"
+        );
         return;
     }
     let count: usize = value("--count").and_then(|v| v.parse().ok()).unwrap_or(20);
@@ -239,6 +261,8 @@ fn main() {
     let kinds: Vec<String> = value("--kinds")
         .map(|k| k.split(',').map(str::to_string).collect())
         .unwrap_or_else(|| KINDS.iter().map(|k| k.to_string()).collect());
+    // Write every layout as DIR/KIND-CASE.json (to rerun one with the CLI).
+    let save = value("--save");
     let (mut failed, mut meshed, mut least) = (0, 0, f64::INFINITY);
     for kind in &kinds {
         if !KINDS.contains(&kind.as_str()) {
@@ -246,7 +270,8 @@ fn main() {
             std::process::exit(2);
         }
         for case in 0..count {
-            let mut rng = Rng(seed.wrapping_mul(1_000_003) ^ (case as u64) << 20 ^ kind.len() as u64);
+            let mut rng =
+                Rng(seed.wrapping_mul(1_000_003) ^ (case as u64) << 20 ^ kind.len() as u64);
             let Some(d) = layout(kind, &mut rng) else {
                 continue;
             };
@@ -255,13 +280,25 @@ fn main() {
                 smooth: [0, 0, 5][rng.below(3)],
                 ..Options::default()
             };
+            if let Some(dir) = &save {
+                let path = format!("{dir}/{kind}-{case}.json");
+                if let Err(e) = std::fs::write(&path, d.to_json_string()) {
+                    eprintln!("cannot write {path}: {e}");
+                }
+            }
             let start = Instant::now();
             let outcome = mesh(&d, &options);
             let seconds = start.elapsed().as_secs_f64();
             let name = format!("{kind} case {case} ({} holes)", d.hole_count());
             let verdict = match &outcome {
                 Err(e) => Err(format!("error: {e}")),
-                Ok(m) => match check_mesh_with(&d, m, Checks { no_inverted_cells: true }) {
+                Ok(m) => match check_mesh_with(
+                    &d,
+                    m,
+                    Checks {
+                        no_inverted_cells: true,
+                    },
+                ) {
                     Err(e) => Err(format!("check: {e}")),
                     Ok(_) if m.geometry != Geometry::Exact => Err("paper fallback".into()),
                     Ok(_) => Ok(m),

@@ -10,16 +10,8 @@ use medial_blocks::blocking::{collapsed_blocking_excluding, CollapsedBlocking};
 use medial_blocks::exact_mode::collapsed::{build_collapsed_cached, build_collapsed_on};
 use medial_blocks::exact_mode::{exact_vertices_with, ExactMesh, ExactVertex, PieceCache};
 use medial_blocks::layouts::{self, SplitMix64};
-use medial_blocks::mesher::Options;
-use medial_blocks::sampling::SamplingOptions;
+use medial_blocks::mesher::{exact_sampling, Options};
 use medial_blocks::{Circle, Domain};
-
-fn exact_sampling() -> SamplingOptions {
-    SamplingOptions {
-        soft_rounds: false,
-        ..SamplingOptions::default()
-    }
-}
 
 fn single(cb: &CollapsedBlocking) -> Vec<ExactVertex> {
     exact_vertices_with(
