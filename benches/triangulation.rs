@@ -3,13 +3,13 @@
 //! sizes 1e4, 1e5, 1e6 (select with e.g. `cargo bench --bench triangulation -- 1000000`); and
 //! the pipeline's own sample points (`triangulate/pipeline/<engine>/<particles>`): the
 //! boundary samples exact mode triangulates first (`sample_and_triangulate` with
-//! `soft_rounds: false`, as the mesher samples) on `layouts::bubbles(n, 1)` for n = 1e3, 1e4,
+//! `mesher::exact_sampling()`, as the mesher samples) on `layouts::bubbles(n, 1)` for n = 1e3, 1e4,
 //! 1e5, capped by `MEDIAL_BENCH_MAX` (default `1e4`) as in the pipeline bench.
 
 use criterion::{black_box, criterion_group, criterion_main, BenchmarkId, Criterion};
 use medial_blocks::geometry::{Point, Triangulation};
 use medial_blocks::layouts;
-use medial_blocks::sampling::{sample_and_triangulate, SamplingOptions};
+use medial_blocks::sampling::sample_and_triangulate;
 use spade::{DelaunayTriangulation, Point2, Triangulation as _};
 use std::time::Duration;
 
@@ -90,10 +90,7 @@ fn bench_pipeline_points(c: &mut Criterion) {
             continue;
         }
         let domain = layouts::bubbles(n, 1).expect("bubbles");
-        let exact_mode = SamplingOptions {
-            soft_rounds: false,
-            ..SamplingOptions::default()
-        };
+        let exact_mode = medial_blocks::mesher::exact_sampling();
         let sampled = sample_and_triangulate(&domain, &exact_mode).expect("sampling");
         compare(&mut group, n, &sampled.samples.points);
     }

@@ -19,7 +19,7 @@
 //!
 //! Then, in this process, the triangulation engine vs spade (`bulk_load`) vs delaunator on
 //! the sample points the exact pipeline triangulates (its first sampling of the same layouts:
-//! `SamplingOptions { soft_rounds: false, .. }`, as `mesher` samples in exact mode; best of a
+//! `mesher::exact_sampling()`, as `mesher` samples in exact mode; best of a
 //! few runs each, interleaved), up to `--tri-max` (default: `--max`). Its last column is the
 //! CLI's median total of the table above in units of spade's time on the same points: a
 //! yardstick for the machine, since the sessions of this project run on machines whose speed
@@ -38,7 +38,7 @@
 
 use medial_blocks::geometry::{Point, Triangulation};
 use medial_blocks::layouts;
-use medial_blocks::sampling::{sample_and_triangulate, SamplingOptions};
+use medial_blocks::sampling::sample_and_triangulate;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 use std::time::Instant;
@@ -425,11 +425,8 @@ fn triangulation_table(max: usize, seed: u64, rows: &[Row]) {
         let Ok(domain) = layouts::bubbles(n, seed) else {
             continue;
         };
-        // Exact mode's sampling (the mode of the table above): no soft resampling rounds.
-        let exact_mode = SamplingOptions {
-            soft_rounds: false,
-            ..SamplingOptions::default()
-        };
+        // Exact mode's sampling (the mode of the table above).
+        let exact_mode = medial_blocks::mesher::exact_sampling();
         let sampled = match sample_and_triangulate(&domain, &exact_mode) {
             Ok(s) => s,
             Err(e) => {
