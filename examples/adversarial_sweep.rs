@@ -16,35 +16,29 @@
 //! options (`block_cells` 4 to 32 or the default counts, smoothing). A case fails when meshing
 //! returns an error, when [`medial_blocks::fuzzing::check_mesh_with`] refuses the mesh
 //! (conformity, walls on their circles, areas, no inverted cell), or when exact mode fell
-//! back to the paper pipeline; the smallest corner angle of every mesh is printed, and the
-//! smallest over the sweep. The exit status is 1 when a case failed.
+//! back to the paper pipeline; the smallest corner angle of every mesh (`quality::measure`) is
+//! printed, and the smallest over the sweep. The exit status is 1 when a case failed.
 
 use medial_blocks::domain::{Circle, Domain};
 use medial_blocks::fuzzing::{check_mesh_with, Checks};
+use medial_blocks::layouts::SplitMix64;
 use medial_blocks::mesh::Geometry;
+use medial_blocks::quality::measure;
 use medial_blocks::{mesh, Options};
 use std::time::Instant;
 
-/// A small deterministic generator (SplitMix64).
-struct Rng(u64);
+/// A deterministic generator ([`SplitMix64`]) with the draws the layouts use.
+struct Rng(SplitMix64);
 
 impl Rng {
-    fn next_u64(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^ (z >> 31)
-    }
-    /// Uniform in `[0, 1)`.
     fn f(&mut self) -> f64 {
-        (self.next_u64() >> 11) as f64 / (1u64 << 53) as f64
+        self.0.next_f64()
     }
     fn range(&mut self, lo: f64, hi: f64) -> f64 {
         lo + (hi - lo) * self.f()
     }
     fn below(&mut self, n: usize) -> usize {
-        (self.next_u64() % n as u64) as usize
+        (self.0.next_u64() % n as u64) as usize
     }
 }
 
@@ -217,32 +211,6 @@ fn layout(kind: &str, rng: &mut Rng) -> Option<Domain> {
     }
 }
 
-/// The smallest corner angle (degrees) of every cell.
-fn smallest_angle(m: &medial_blocks::Mesh) -> f64 {
-    let mut least = f64::INFINITY;
-    for g in &m.grids {
-        for j in 0..g.nj {
-            for i in 0..g.ni {
-                let q = [
-                    g.node(i, j),
-                    g.node(i + 1, j),
-                    g.node(i + 1, j + 1),
-                    g.node(i, j + 1),
-                ];
-                for k in 0..4 {
-                    let (o, a, b) = (q[k], q[(k + 1) % 4], q[(k + 3) % 4]);
-                    let (u, v) = ([a[0] - o[0], a[1] - o[1]], [b[0] - o[0], b[1] - o[1]]);
-                    let angle = (u[0] * v[1] - u[1] * v[0])
-                        .atan2(u[0] * v[0] + u[1] * v[1])
-                        .to_degrees();
-                    least = least.min(angle);
-                }
-            }
-        }
-    }
-    least
-}
-
 fn main() {
     let args: Vec<String> = std::env::args().skip(1).collect();
     let value = |flag: &str| {
@@ -270,8 +238,9 @@ fn main() {
             std::process::exit(2);
         }
         for case in 0..count {
-            let mut rng =
-                Rng(seed.wrapping_mul(1_000_003) ^ (case as u64) << 20 ^ kind.len() as u64);
+            let mut rng = Rng(SplitMix64(
+                seed.wrapping_mul(1_000_003) ^ (case as u64) << 20 ^ kind.len() as u64,
+            ));
             let Some(d) = layout(kind, &mut rng) else {
                 continue;
             };
@@ -307,7 +276,7 @@ fn main() {
             match verdict {
                 Ok(m) => {
                     meshed += 1;
-                    let angle = smallest_angle(m);
+                    let angle = measure(&m.grids).min_angle_deg;
                     least = least.min(angle);
                     println!(
                         "ok   {name}: {} blocks, smallest angle {angle:.2} deg, {seconds:.3} s",
