@@ -6,10 +6,13 @@
 //! projections (an independent slow solver of the same least-squares problem), the corner
 //! angles of regular templates worked out by hand, and a layout from a sweep of unseen
 //! layouts whose inserted hole is touched by a 3-degree arc (cells of 3.4 degrees before).
+//! Where the ladder of the core starts ([`medial_blocks::templates::ladder_turn`]): the same
+//! template quality whichever arc the angles start from (they are sorted from 0, so rounding
+//! decided it), checked against every start.
 
 use medial_blocks::domain::Domain;
 use medial_blocks::mesh::BlockGrid;
-use medial_blocks::templates::{core_angles, spread_angles, template_min_angle};
+use medial_blocks::templates::{core_angles, ladder_turn, spread_angles, template_min_angle};
 use medial_blocks::{mesh, Options};
 use proptest::prelude::*;
 use std::f64::consts::{PI, TAU};
@@ -101,6 +104,35 @@ proptest! {
         }
     }
 
+    /// The ladder's start makes the template as good as any start can, whichever arc the
+    /// (sorted) angles begin with: every cyclic start `s` of the same arcs (as a layout
+    /// rotated so that arc `s` starts first) reaches the same smallest corner angle, which is
+    /// the best over all `k` starts with their own core angles.
+    #[test]
+    fn the_ladder_start_does_not_depend_on_the_first_arc(theta in angles(), half in 0usize..2) {
+        prop_assume!(theta.windows(2).all(|w| w[0] < w[1]));
+        // An even count, as the template needs.
+        let theta: Vec<f64> = if theta.len() % 2 == 1 { theta[half..theta.len() - 1 + half].to_vec() } else { theta };
+        let k = theta.len();
+        prop_assume!(k >= 4);
+        let starting_at = |s: usize| -> Vec<f64> {
+            (0..k).map(|i| theta[(i + s) % k] + if i + s >= k { TAU } else { 0.0 }).collect()
+        };
+        let score = |t: &[f64]| {
+            let (turn, phi) = ladder_turn(t);
+            prop_assert!(turn < k / 2);
+            let turned: Vec<f64> = (0..k).map(|i| t[(i + turn) % k] + if i + turn >= k { TAU } else { 0.0 }).collect();
+            Ok(template_min_angle(&turned, &phi))
+        };
+        let best = (0..k)
+            .map(|s| { let t = starting_at(s); template_min_angle(&t, &core_angles(&t)) })
+            .fold(f64::NEG_INFINITY, f64::max);
+        for s in 0..k {
+            let got = score(&starting_at(s))?;
+            prop_assert!((got - best).abs() <= 1e-9, "start {s}: {got} against the best {best}");
+        }
+    }
+
     /// The chosen core is never worse than the rays (by the templates' smallest corner
     /// angle), and when it moves, no core gap is below a quarter of the regular one.
     #[test]
@@ -179,6 +211,45 @@ fn min_cell_angle(grid: &BlockGrid) -> f64 {
         }
     }
     least
+}
+
+/// 23 holes on a ring around an inserted centre hole, and 23 more on a second ring: the
+/// centre hole's template has 24 arcs (one split in two), and its smallest angle was 15.7 or
+/// 7.8 degrees depending on which arc's start angle rounded below zero (it did at 24
+/// samples per circle, not at 32). Meshed at four rotations of the whole layout.
+#[test]
+fn a_ring_around_an_inserted_hole_keeps_its_smallest_angle_at_every_rotation() {
+    let mut least = Vec::new();
+    for rotation in [0.0, 1e-3, 0.05, 1.0] {
+        let mut holes = Vec::new();
+        for (ring, radius, phase) in [(1.0, 0.0687, 0.0), (2.0, 0.0687, PI / 23.0)] {
+            for i in 0..23 {
+                let t = rotation + phase + TAU * i as f64 / 23.0;
+                holes.push(medial_blocks::Circle::new(
+                    ring * t.cos(),
+                    ring * t.sin(),
+                    radius,
+                ));
+            }
+        }
+        let domain = Domain::bounded(medial_blocks::Circle::new(0.0, 0.0, 3.19), holes).unwrap();
+        let options = Options {
+            block_cells: Some(8),
+            ..Options::default()
+        };
+        let m = mesh(&domain, &options).unwrap();
+        assert_eq!(m.inserted_holes.len(), 1, "rotation {rotation}");
+        let first_template = m.layout.blocks.len() - m.template_blocks;
+        least.push(
+            m.grids[first_template..]
+                .iter()
+                .map(min_cell_angle)
+                .fold(f64::INFINITY, f64::min),
+        );
+    }
+    for a in &least {
+        assert!(*a > 15.0, "template cells down to {a} degrees ({least:?})");
+    }
 }
 
 #[test]
