@@ -219,9 +219,8 @@ fn main() {
             .and_then(|i| args.get(i + 1).cloned())
     };
     if args.iter().any(|a| a == "--help" || a == "-h") {
-        println!(
-            "adversarial_sweep [--count N] [--seed S] [--kinds a,b,...] [--save DIR]; kinds: {KINDS:?}"
-        );
+        println!("adversarial_sweep [--count N] [--seed S] [--kinds a,b,...] [--save DIR]");
+        println!("kinds: {KINDS:?}");
         return;
     }
     let count: usize = value("--count").and_then(|v| v.parse().ok()).unwrap_or(20);

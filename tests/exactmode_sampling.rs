@@ -11,8 +11,8 @@
 //! kept one truly short arc and left cells with aspect ratios above 100).
 //!
 //! The oracle: two samplings of the same layout (exact mode's own, 24 samples per circle at
-//! least, and one with 128 and a quarter of its spacing) whose sampled medial graphs have the same arcs (named by their circles, which
-//! survive resampling) must choose the same arcs to collapse, named the same way.
+//! least, and one with 128 and a quarter of its spacing) must choose the same arcs to
+//! collapse, named by their circles (which survive resampling).
 
 use medial_blocks::blocking::arc_key;
 use medial_blocks::cocircular::cocircular_groups;

@@ -64,6 +64,15 @@ fn dykstra(theta: &[f64], gap: f64) -> Vec<f64> {
     x
 }
 
+/// The increasing angles `theta` (within one turn) taken from index `s` on, those before it
+/// one turn up: the same arcs listed from arc `s`.
+fn starting_at(theta: &[f64], s: usize) -> Vec<f64> {
+    let k = theta.len();
+    (0..k)
+        .map(|i| theta[(i + s) % k] + if i + s >= k { TAU } else { 0.0 })
+        .collect()
+}
+
 /// Increasing angles within one turn: `k` sorted uniform draws, some pulled together.
 fn angles() -> impl Strategy<Value = Vec<f64>> {
     (
@@ -112,23 +121,26 @@ proptest! {
     fn the_ladder_start_does_not_depend_on_the_first_arc(theta in angles(), half in 0usize..2) {
         prop_assume!(theta.windows(2).all(|w| w[0] < w[1]));
         // An even count, as the template needs.
-        let theta: Vec<f64> = if theta.len() % 2 == 1 { theta[half..theta.len() - 1 + half].to_vec() } else { theta };
+        let theta: Vec<f64> = if theta.len() % 2 == 1 {
+            theta[half..theta.len() - 1 + half].to_vec()
+        } else {
+            theta
+        };
         let k = theta.len();
         prop_assume!(k >= 4);
-        let starting_at = |s: usize| -> Vec<f64> {
-            (0..k).map(|i| theta[(i + s) % k] + if i + s >= k { TAU } else { 0.0 }).collect()
-        };
         let score = |t: &[f64]| {
             let (turn, phi) = ladder_turn(t);
             prop_assert!(turn < k / 2);
-            let turned: Vec<f64> = (0..k).map(|i| t[(i + turn) % k] + if i + turn >= k { TAU } else { 0.0 }).collect();
-            Ok(template_min_angle(&turned, &phi))
+            Ok(template_min_angle(&starting_at(t, turn), &phi))
         };
         let best = (0..k)
-            .map(|s| { let t = starting_at(s); template_min_angle(&t, &core_angles(&t)) })
+            .map(|s| {
+                let t = starting_at(&theta, s);
+                template_min_angle(&t, &core_angles(&t))
+            })
             .fold(f64::NEG_INFINITY, f64::max);
         for s in 0..k {
-            let got = score(&starting_at(s))?;
+            let got = score(&starting_at(&theta, s))?;
             prop_assert!((got - best).abs() <= 1e-9, "start {s}: {got} against the best {best}");
         }
     }

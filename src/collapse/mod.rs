@@ -21,9 +21,10 @@
 //! Selection ([`select`]): zero-length arcs ([`crate::cocircular::is_zero_length`]) always,
 //! then the *forced* arcs of [`select_forced`] (arcs with a single-sample wall that sampling
 //! could not remove) always, then arcs whose length ([`ArcLength`]) is below `fraction` times
-//! the smaller empty-circle radius of its two ends, shortest (relative) first. An arc is skipped when its ends are already in one
-//! cluster (collapsing a cycle would delete every block around a hole) or when another
-//! remaining arc joins the same two clusters (it would become a loop). The blocking checks
+//! the smaller empty-circle radius of its two ends, shortest (relative) first. An arc is
+//! skipped when its ends are already in one cluster (collapsing a cycle would delete every
+//! block around a hole) or when another remaining arc joins the same two clusters (it would
+//! become a loop). The blocking checks
 //! the result and gives up short (non-zero) collapses that leave a block with non-positive
 //! area ([`crate::blocking`]).
 
