@@ -65,22 +65,25 @@ pub enum ArcLength {
     Chord,
 }
 
-/// The length of `arc` measured as `how` says (`circles` the vertex circles).
+/// The length of `arc` measured as `how` says; `centre(v)` is the Apollonius centre of medial
+/// vertex `v`, when solved.
 pub fn measured_length(
     arc: &crate::medial::MedialArc,
-    circles: &[Option<Apollonius>],
+    centre: impl Fn(u32) -> Option<Point>,
     how: ArcLength,
 ) -> f64 {
-    let centre = |v: u32| {
-        circles
-            .get(v as usize)
-            .and_then(|c| c.as_ref())
-            .map(|c| c.center)
-    };
     match (how, centre(arc.ends[0]), centre(arc.ends[1])) {
         (ArcLength::Chord, Some(a), Some(b)) => crate::geometry::length(b[0] - a[0], b[1] - a[1]),
         _ => arc_length(arc),
     }
+}
+
+/// The Apollonius centre of vertex `v` from the vertex circles `circles`, when solved.
+fn centre_in(circles: &[Option<Apollonius>], v: u32) -> Option<Point> {
+    circles
+        .get(v as usize)
+        .and_then(|c| c.as_ref())
+        .map(|c| c.center)
 }
 
 /// The union-find forest of the arcs marked in `collapse` (one flag per arc): each root is the
@@ -244,7 +247,7 @@ impl Selection {
                         if is_zero_length(arc, medial, tri, &group) {
                             return (true, 0.0, f64::NAN);
                         }
-                        let length = measured_length(arc, circles, lengths);
+                        let length = measured_length(arc, |v| centre_in(circles, v), lengths);
                         if !relative {
                             return (false, length, f64::NAN);
                         }
@@ -295,7 +298,7 @@ impl Selection {
                 is_zero[e] = true;
                 continue;
             }
-            length[e] = measured_length(arc, circles, lengths);
+            length[e] = measured_length(arc, |v| centre_in(circles, v), lengths);
             if fraction > 0.0 {
                 let r = local_radius(medial, circles, points, arc.ends[0]).min(local_radius(
                     medial,

@@ -545,7 +545,20 @@ pub fn periodic_layout_with(
         let t = Tiling::new(pd, m)?;
         let (samples, tri, medial) = sample_tiling(&t, &gaps, &opts, options.mode == Mode::Paper)?;
         let extracted = timings::span("blocking", || {
-            extract(pd, &t, &samples, &tri, &medial, options.collapse_fraction)
+            // Exact mode builds on the Apollonius centres: it measures short arcs by them.
+            let how = match options.mode {
+                Mode::Exact => collapse::ArcLength::Chord,
+                Mode::Paper => collapse::ArcLength::Polyline,
+            };
+            extract(
+                pd,
+                &t,
+                &samples,
+                &tri,
+                &medial,
+                options.collapse_fraction,
+                how,
+            )
         })?;
         match extracted {
             Extracted::Layout(p) => return Ok(p),
@@ -681,7 +694,9 @@ impl OrbitForest {
 ///   criteria of [`cocircular::is_zero_length`] hold (all sampled points equal, or one exactly
 ///   co-circular Delaunay edge crossed).
 /// - Then arcs shorter than `fraction` times the smaller empty-circle radius of their ends
-///   ([`cocircular::arc_length`], [`cocircular::local_radius`]), shortest (relative) first,
+///   (measured as `how` says, [`collapse::ArcLength`]: exact mode the chord between the two
+///   Apollonius centres, paper mode [`cocircular::arc_length`]; [`cocircular::local_radius`]),
+///   shortest (relative) first,
 ///   except the representatives in `exclude`.
 ///
 /// As in [`collapse::select`], an arc orbit is skipped when its ends are already in one
@@ -700,6 +715,7 @@ fn select_collapse(
     akeys: &[Option<ArcKey>],
     arc_by_key: &HashMap<ArcKey, usize>,
     fraction: f64,
+    how: collapse::ArcLength,
     exclude: &[usize],
 ) -> Selection {
     let rep_of: Vec<Option<usize>> = akeys
@@ -749,7 +765,8 @@ fn select_collapse(
         if a != b && (same || cocircular::is_zero_length(arc, medial, tri, &[])) {
             zero.push(r);
         } else if fraction > 0.0 && !exclude.contains(&r) {
-            let rel = cocircular::arc_length(arc) / radius(a).min(radius(b));
+            let centre = |v: u32| circles.get(&v).and_then(|c| c.as_ref()).map(|c| c.center);
+            let rel = collapse::measured_length(arc, centre, how) / radius(a).min(radius(b));
             if rel.is_finite() && rel < fraction {
                 short.push((rel, r));
             }
@@ -823,8 +840,9 @@ fn not_translation_consistent(what: &str) -> MeshError {
 /// Keep the canonical cells; [`Extracted::TooSmall`] when the tiling is too small (step 4).
 ///
 /// Zero-length medial arcs (co-circular hole groups, e.g. every corner of a square lattice)
-/// and arcs shorter than `fraction` of the local radius are collapsed ([`select_collapse`],
-/// [`collapse::contract`]) before Blocking2D, the same arcs in every copy. A contracted vertex is identified up to translation by its
+/// and arcs shorter than `fraction` of the local radius (measured as `how` says) are collapsed
+/// ([`select_collapse`], [`collapse::contract`]) before Blocking2D, the same arcs in every
+/// copy. A contracted vertex is identified up to translation by its
 /// [`ClusterKey`], so its instances are its orbit representative plus the period shift like
 /// any other vertex. A kept block with a non-positive outline area is an
 /// [`MeshError::Internal`].
@@ -835,6 +853,7 @@ fn extract(
     triangulation: &Triangulation,
     medial: &MedialGraph,
     fraction: f64,
+    how: collapse::ArcLength,
 ) -> Result<Extracted, MeshError> {
     let size = t.size;
     // Orbit keys of the original medial graph.
@@ -889,6 +908,7 @@ fn extract(
             &akeys,
             &arc_by_key,
             fraction,
+            how,
             &exclude,
         );
         let contracted = collapse::contract(medial, &sel.flags)?;
