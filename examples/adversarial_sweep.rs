@@ -12,19 +12,22 @@
 //! of a radius), `boundary` (holes nearly touching the bounding circle), `sizes` (radii over
 //! four decades), `lattice` (square and hexagonal arrays perturbed by 0 to 1e-3: co-circular
 //! quadruples), `ring` (holes evenly on one or two rings, with or without a centre hole),
-//! `dense` (random packings with gaps down to 1e-6). Each layout is meshed with random
+//! `dense` (random packings with gaps down to 1e-6), `periodic` (periodic boxes of 3 to 40
+//! holes, gaps down to 1e-5 across the period too). Each layout is meshed with random
 //! options (`block_cells` 4 to 32 or the default counts, smoothing). A case fails when meshing
 //! returns an error, when [`medial_blocks::fuzzing::check_mesh_with`] refuses the mesh
-//! (conformity, walls on their circles, areas, no inverted cell), or when exact mode fell
+//! (conformity, walls on their circles, areas, no inverted cell;
+//! [`medial_blocks::fuzzing::periodic::check_periodic_mesh`] for a box), or when exact mode fell
 //! back to the paper pipeline; the smallest corner angle of every mesh (`quality::measure`) is
 //! printed, and the smallest over the sweep. The exit status is 1 when a case failed.
 
-use medial_blocks::domain::{Circle, Domain};
+use medial_blocks::domain::{AnyDomain, Circle, Domain};
+use medial_blocks::fuzzing::periodic::check_periodic_mesh;
 use medial_blocks::fuzzing::{check_mesh_with, Checks};
 use medial_blocks::layouts::SplitMix64;
 use medial_blocks::mesh::Geometry;
 use medial_blocks::quality::measure;
-use medial_blocks::{mesh, Options};
+use medial_blocks::{mesh_any, Options, PeriodicDomain};
 use std::time::Instant;
 
 /// A deterministic generator ([`SplitMix64`]) with the draws the layouts use.
@@ -42,14 +45,20 @@ impl Rng {
     }
 }
 
-const KINDS: [&str; 6] = [
+const KINDS: [&str; 7] = [
     "near_touch",
     "boundary",
     "sizes",
     "lattice",
     "ring",
     "dense",
+    "periodic",
 ];
+
+/// Every mesh must pass the invariants with no inverted cell.
+const CHECKS: Checks = Checks {
+    no_inverted_cells: true,
+};
 
 fn dist(a: &Circle, b: &Circle) -> f64 {
     (a.center[0] - b.center[0]).hypot(a.center[1] - b.center[1])
@@ -120,7 +129,41 @@ fn grow_to_touch(rng: &mut Rng, big: f64, holes: &mut [Circle], boundary: bool) 
     }
 }
 
-fn layout(kind: &str, rng: &mut Rng) -> Option<Domain> {
+/// A periodic box `[lx, 1]` (`lx` 1 to 2.5) with 3 to 40 holes, radii 0.03 to 0.15, at least
+/// `10^-u` apart across the period too (`u` 1 to 5).
+fn periodic_layout(rng: &mut Rng) -> Option<AnyDomain> {
+    let size = [rng.range(1.0, 2.5), 1.0];
+    let (n, gap) = (3 + rng.below(38), 10f64.powf(-rng.range(1.0, 5.0)));
+    let mut holes: Vec<Circle> = Vec::new();
+    for _ in 0..200 * n {
+        if holes.len() == n {
+            break;
+        }
+        let c = Circle::new(rng.f() * size[0], rng.f() * size[1], rng.range(0.03, 0.15));
+        let apart = holes.iter().all(|o| {
+            let wrapped = |k: usize| {
+                let d = c.center[k] - o.center[k];
+                d - (d / size[k]).round() * size[k]
+            };
+            wrapped(0).hypot(wrapped(1)) >= c.radius + o.radius + gap
+        });
+        if apart {
+            holes.push(c);
+        }
+    }
+    match PeriodicDomain::new(size, holes) {
+        Ok(d) => Some(AnyDomain::Periodic(d)),
+        Err(e) => {
+            eprintln!("skipped a periodic layout: {e}");
+            None
+        }
+    }
+}
+
+fn layout(kind: &str, rng: &mut Rng) -> Option<AnyDomain> {
+    if kind == "periodic" {
+        return periodic_layout(rng);
+    }
     let n = 20 + rng.below(280);
     let (big, holes) = match kind {
         "near_touch" | "boundary" => {
@@ -203,7 +246,7 @@ fn layout(kind: &str, rng: &mut Rng) -> Option<Domain> {
         return None;
     }
     match Domain::bounded(Circle::new(0.0, 0.0, big), holes) {
-        Ok(d) => Some(d),
+        Ok(d) => Some(AnyDomain::Bounded(d)),
         Err(e) => {
             eprintln!("skipped a {kind} layout: {e}");
             None
@@ -250,23 +293,24 @@ fn main() {
             };
             if let Some(dir) = &save {
                 let path = format!("{dir}/{kind}-{case}.json");
-                if let Err(e) = std::fs::write(&path, d.to_json_string()) {
+                let json = match &d {
+                    AnyDomain::Bounded(d) => d.to_json_string(),
+                    AnyDomain::Periodic(d) => d.to_json_string(),
+                };
+                if let Err(e) = std::fs::write(&path, json) {
                     eprintln!("cannot write {path}: {e}");
                 }
             }
             let start = Instant::now();
-            let outcome = mesh(&d, &options);
+            let outcome = mesh_any(&d, &options);
             let seconds = start.elapsed().as_secs_f64();
             let name = format!("{kind} case {case} ({} holes)", d.hole_count());
             let verdict = match &outcome {
                 Err(e) => Err(format!("error: {e}")),
-                Ok(m) => match check_mesh_with(
-                    &d,
-                    m,
-                    Checks {
-                        no_inverted_cells: true,
-                    },
-                ) {
+                Ok(m) => match match &d {
+                    AnyDomain::Bounded(d) => check_mesh_with(d, m, CHECKS),
+                    AnyDomain::Periodic(d) => check_periodic_mesh(d, m, CHECKS),
+                } {
                     Err(e) => Err(format!("check: {e}")),
                     Ok(_) if m.geometry != Geometry::Exact => Err("paper fallback".into()),
                     Ok(_) => Ok(m),
