@@ -35,8 +35,8 @@ pub const EXACT_RESAMPLING: usize = 2;
 /// sampling as before.
 pub const EXACT_MIN_PER_CIRCLE: usize = 24;
 
-/// The sampling exact mode starts from: [`EXACT_MIN_PER_CIRCLE`] samples per circle at
-/// least, and no soft resampling rounds (its walls are exact, so a single-sample wall costs
+/// The sampling exact mode starts from (in bounded domains and periodic boxes):
+/// [`EXACT_MIN_PER_CIRCLE`] samples per circle at least, and no soft resampling rounds (its walls are exact, so a single-sample wall costs
 /// it nothing, [`SamplingOptions::soft_rounds`]).
 pub fn exact_sampling() -> SamplingOptions {
     SamplingOptions {

@@ -1658,12 +1658,10 @@ fn mesh_periodic_exact(
     pd: &PeriodicDomain,
     options: &Options,
 ) -> Result<Option<PeriodicFrame>, MeshError> {
-    // Exact walls do not follow the samples: a wall with a single sample (the soft invariant
-    // (d)) costs nothing, as in bounded exact mode.
-    let sampling = SamplingOptions {
-        soft_rounds: false,
-        ..SamplingOptions::default()
-    };
+    // Bounded exact mode's sampling: exact walls do not follow the samples, so a wall with a
+    // single sample (the soft invariant (d)) costs nothing, and only the combinatorics come
+    // from the samples (24 per circle at least, `mesher::EXACT_MIN_PER_CIRCLE`).
+    let sampling = crate::mesher::exact_sampling();
     let mut first = None;
     if options.refine_ratio.is_some() {
         match refine_periodic(pd, options, &sampling) {
@@ -1828,10 +1826,7 @@ fn exact_attempts(
     fluid: &[bool],
     mut first: Option<PeriodicLayout>,
 ) -> Result<Option<PeriodicFrame>, MeshError> {
-    let mut sampling = SamplingOptions {
-        soft_rounds: false,
-        ..SamplingOptions::default()
-    };
+    let mut sampling = crate::mesher::exact_sampling();
     // The fallback layout: only zero-length arcs collapsed (exact co-circular groups, one
     // empty circle per collapsed vertex).
     let zero_only = Options {
