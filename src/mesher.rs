@@ -36,8 +36,8 @@ pub const EXACT_RESAMPLING: usize = 2;
 pub const EXACT_MIN_PER_CIRCLE: usize = 24;
 
 /// The sampling exact mode starts from (in bounded domains and periodic boxes):
-/// [`EXACT_MIN_PER_CIRCLE`] samples per circle at least, and no soft resampling rounds (its walls are exact, so a single-sample wall costs
-/// it nothing, [`SamplingOptions::soft_rounds`]).
+/// [`EXACT_MIN_PER_CIRCLE`] samples per circle at least, and no soft resampling rounds (its
+/// walls are exact, so a single-sample wall costs it nothing, [`SamplingOptions::soft_rounds`]).
 pub fn exact_sampling() -> SamplingOptions {
     SamplingOptions {
         soft_rounds: false,
@@ -67,10 +67,10 @@ pub struct Options {
     /// Collapse medial arcs shorter than this fraction of the local empty-circle radius
     /// ([`crate::collapse`]; paper mode measures an arc by its sampled polyline, exact mode
     /// by the chord between its ends' Apollonius centres, [`crate::collapse::ArcLength`]).
-    /// Default [`DEFAULT_COLLAPSE_FRACTION`]; `0` collapses only
-    /// zero-length arcs (which are always collapsed) and, in exact mode, arcs whose exact
-    /// geometry runs backwards (nearly co-circular circles whose sampled Delaunay diagonal is
-    /// not the exact one; see [`mesh`]).
+    /// Default [`DEFAULT_COLLAPSE_FRACTION`]; `0` collapses only zero-length arcs (which are
+    /// always collapsed) and, in exact mode, arcs whose exact geometry runs backwards (nearly
+    /// co-circular circles whose sampled Delaunay diagonal is not the exact one; see
+    /// [`mesh`]).
     pub collapse_fraction: f64,
     /// The most holes refinement may insert before [`MeshError::Refinement`]. Default
     /// [`DEFAULT_MAX_INSERTED_HOLES`].

@@ -753,6 +753,7 @@ fn select_collapse(
         Some(Some(c)) => c.radius,
         _ => cocircular::local_radius(medial, &[], points, v),
     };
+    let centre = |v: u32| circles.get(&v).and_then(|c| c.as_ref()).map(|c| c.center);
     let mut zero: Vec<usize> = Vec::new();
     let mut short: Vec<(f64, usize)> = Vec::new();
     for &r in reps.iter().filter(|r| orbit_ends.contains_key(r)) {
@@ -765,7 +766,6 @@ fn select_collapse(
         if a != b && (same || cocircular::is_zero_length(arc, medial, tri, &[])) {
             zero.push(r);
         } else if fraction > 0.0 && !exclude.contains(&r) {
-            let centre = |v: u32| circles.get(&v).and_then(|c| c.as_ref()).map(|c| c.center);
             let rel = collapse::measured_length(arc, centre, how) / radius(a).min(radius(b));
             if rel.is_finite() && rel < fraction {
                 short.push((rel, r));
