@@ -392,12 +392,24 @@ pub fn spread_angles(theta: &[f64], gap: f64) -> Option<Vec<f64>> {
 /// [`INSERTED_CORE_FRACTION`]): the ring blocks (the arc's tangent at its ends) and the
 /// ladder's core blocks. Negative when a corner is reflex or the blocks fold.
 pub fn template_min_angle(theta: &[f64], phi: &[f64]) -> f64 {
+    let q: Vec<Point> = phi
+        .iter()
+        .map(|&a| on_circle([0.0; 2], INSERTED_CORE_FRACTION, a))
+        .collect();
+    core_min_angle(theta, &q)
+}
+
+/// [`template_min_angle`] for core vertices `q` anywhere (a unit hole centred at the origin):
+/// the smallest corner angle (radians) of the ring blocks `p_i p_{i+1} q_{i+1} q_i` (the
+/// arc's tangent at `p_i` and `p_{i+1}`) and of the ladder's core blocks
+/// `q_j q_{j+1} q_{k-2-j} q_{k-1-j}`. Negative when a corner is reflex or the blocks fold.
+pub fn core_min_angle(theta: &[f64], q: &[Point]) -> f64 {
     let k = theta.len();
-    if k < 4 || phi.len() != k {
+    if k < 4 || q.len() != k {
         return -1.0;
     }
     let p = |i: usize| on_circle([0.0; 2], 1.0, theta[i % k]);
-    let q = |i: usize| on_circle([0.0; 2], INSERTED_CORE_FRACTION, phi[i % k]);
+    let q = |i: usize| q[i % k];
     let sub = |a: [f64; 2], b: [f64; 2]| [a[0] - b[0], a[1] - b[1]];
     // Interior angle at a corner of a counter-clockwise block entered along `a`, left along
     // `b`: half a turn less the left turn (negative turn: reflex, reported as negative).
@@ -433,6 +445,280 @@ pub fn template_min_angle(theta: &[f64], phi: &[f64]) -> f64 {
     least
 }
 
+/// Interior angle at a corner of a counter-clockwise polygon entered along `a`, left along
+/// `b`: half a turn less the left turn; `-1` for a reflex corner or no turn.
+fn interior_angle(a: [f64; 2], b: [f64; 2]) -> f64 {
+    let turn = (a[0] * b[1] - a[1] * b[0]).atan2(a[0] * b[0] + a[1] * b[1]);
+    if turn <= 0.0 {
+        -1.0
+    } else {
+        std::f64::consts::PI - turn
+    }
+}
+
+/// The smallest and largest corner angles (radians) of the counter-clockwise quadrilaterals
+/// `quads`; the smallest is negative when one is reflex or folded.
+fn corner_extremes(quads: impl Iterator<Item = [Point; 4]>) -> (f64, f64) {
+    let sub = |a: Point, b: Point| [a[0] - b[0], a[1] - b[1]];
+    let (mut least, mut most) = (f64::INFINITY, f64::NEG_INFINITY);
+    for c in quads {
+        for t in 0..4 {
+            let angle = interior_angle(sub(c[t], c[(t + 3) % 4]), sub(c[(t + 1) % 4], c[t]));
+            least = least.min(angle);
+            most = most.max(angle);
+        }
+    }
+    (least, most)
+}
+
+/// How far the corners of a template are from the worst a quadrilateral can have: the
+/// smaller of its smallest corner angle and half a turn less its largest (radians; negative
+/// when a block folds). The ring blocks' corners on the arc are taken along the arc's
+/// tangent, as in [`core_min_angle`].
+fn template_score(theta: &[f64], ring: &[Point], core: impl Iterator<Item = [Point; 4]>) -> f64 {
+    let k = theta.len();
+    if k < 4 || ring.len() != k {
+        return -1.0;
+    }
+    let p = |i: usize| on_circle([0.0; 2], 1.0, theta[i % k]);
+    let sub = |a: Point, b: Point| [a[0] - b[0], a[1] - b[1]];
+    let tangent = |i: usize| [-theta[i % k].sin(), theta[i % k].cos()];
+    let (mut least, mut most) = (f64::INFINITY, f64::NEG_INFINITY);
+    for i in 0..k {
+        let j = (i + 1) % k;
+        let (pi, pj, qi, qj) = (p(i), p(j), ring[i], ring[j]);
+        for angle in [
+            interior_angle(sub(pi, qi), tangent(i)),
+            interior_angle(tangent(j), sub(qj, pj)),
+            interior_angle(sub(qj, pj), sub(qi, qj)),
+            interior_angle(sub(qi, qj), sub(pi, qi)),
+        ] {
+            least = least.min(angle);
+            most = most.max(angle);
+        }
+    }
+    let (l, m) = corner_extremes(core);
+    let (least, most) = (least.min(l), most.max(m));
+    if least < 0.0 {
+        least
+    } else {
+        least.min(std::f64::consts::PI - most)
+    }
+}
+
+/// The `a x b` grid core of an inserted-hole template (see [`grid_cores`]): the core
+/// polygon's `k = 2 (a + b)` vertices on the four sides of a quadrilateral, and the blocks of
+/// an `a x b` arrangement inside it.
+#[derive(Debug, Clone, PartialEq)]
+pub struct GridCore {
+    /// Blocks along the sides `q_0 .. q_a` and `q_{a+b} .. q_{2a+b}`.
+    pub a: usize,
+    /// Blocks along the sides `q_a .. q_{a+b}` and `q_{2a+b} .. q_0`.
+    pub b: usize,
+    /// Vertex `(x, y)` (`x <= a`, `y <= b`) at `x + y (a + 1)`, for a unit hole at the
+    /// origin: `(x, 0)` is `q_x`, `(a, y)` is `q_{a+y}`, `(x, b)` is `q_{2a+b-x}` and `(0, y)`
+    /// is `q_{(k-y) mod k}`.
+    pub nodes: Vec<Point>,
+}
+
+impl GridCore {
+    /// Grid coordinates `(x, y)` of core polygon vertex `q_i`.
+    pub fn of_ring(a: usize, b: usize, i: usize) -> (usize, usize) {
+        let k = 2 * (a + b);
+        let i = i % k;
+        if i <= a {
+            (i, 0)
+        } else if i <= a + b {
+            (a, i - a)
+        } else if i <= 2 * a + b {
+            (2 * a + b - i, b)
+        } else {
+            (0, k - i)
+        }
+    }
+
+    /// Vertex `(x, y)`.
+    pub fn at(&self, x: usize, y: usize) -> Point {
+        self.nodes[x + y * (self.a + 1)]
+    }
+
+    /// The core polygon's vertices `q_0 .. q_{k-1}`.
+    pub fn ring(&self) -> Vec<Point> {
+        (0..2 * (self.a + self.b))
+            .map(|i| {
+                let (x, y) = Self::of_ring(self.a, self.b, i);
+                self.at(x, y)
+            })
+            .collect()
+    }
+
+    /// The core blocks, counter-clockwise corners `(x, y), (x + 1, y), (x + 1, y + 1),
+    /// (x, y + 1)`.
+    pub fn blocks(&self) -> impl Iterator<Item = [Point; 4]> + '_ {
+        (0..self.b).flat_map(move |y| {
+            (0..self.a).map(move |x| {
+                [
+                    self.at(x, y),
+                    self.at(x + 1, y),
+                    self.at(x + 1, y + 1),
+                    self.at(x, y + 1),
+                ]
+            })
+        })
+    }
+}
+
+/// Sizes (fractions of the hole radius) of the quadrilaterals [`grid_cores`] tries: how far
+/// their corners are from the centre.
+pub const GRID_CORE_REACH: [f64; 3] = [0.45, 0.55, 0.65];
+
+/// The grid cores [`ladder_core`] tries for arcs whose ends are at the increasing angles
+/// `theta` (a unit hole at the origin; `k = theta.len()` even, at least 4; `m = k / 2`):
+/// for each split `a + b = m` (`a >= b >= 1`; all of them up to `m = 8`, beyond that the
+/// two most nearly square and the ladder `b = 1`) and each size of [`GRID_CORE_REACH`], the
+/// quadrilateral whose corners lie on the rays through the arc ends `p_0, p_a, p_{a+b},
+/// p_{2a+b}` at that distance, the other core vertices on its sides, where the rays through
+/// their arc ends cross them (or, second, equally spaced along each side), and the inner
+/// vertices by transfinite interpolation of the sides ([`crate::grid::tfi`]). A
+/// quadrilateral with a corner of half a turn or more is skipped.
+///
+/// Why: the ladder on the circle ([`core_angles`]) has end blocks with two corners of about
+/// `2 pi / k`, so a hole that many arcs reach (a ring of 41 holes around an inserted one)
+/// gave cells of 8.8 degrees; on a quadrilateral every core block is a quadrilateral with
+/// corners near right angles.
+pub fn grid_cores(theta: &[f64]) -> Vec<GridCore> {
+    let k = theta.len();
+    if k < 4 || k % 2 == 1 || theta.iter().any(|t| !t.is_finite()) {
+        return Vec::new();
+    }
+    let m = k / 2;
+    let splits: Vec<usize> = if m <= 8 {
+        (1..=m / 2).collect()
+    } else {
+        let mut b = vec![1, m / 2 - 1, m / 2];
+        b.dedup();
+        b
+    };
+    let dir = |t: f64| [t.cos(), t.sin()];
+    let mut out = Vec::new();
+    for &b in &splits {
+        let a = m - b;
+        let corners = [0, a, a + b, 2 * a + b];
+        let corner_angle = |j: usize| {
+            let i = corners[j % 4];
+            theta[i] + if j >= 4 { std::f64::consts::TAU } else { 0.0 }
+        };
+        if (0..4).any(|j| corner_angle(j + 1) - corner_angle(j) >= 0.95 * std::f64::consts::PI) {
+            continue;
+        }
+        for &reach in &GRID_CORE_REACH {
+            let c: Vec<Point> = (0..4)
+                .map(|j| {
+                    let d = dir(corner_angle(j));
+                    [reach * d[0], reach * d[1]]
+                })
+                .collect();
+            for along_rays in [true, false] {
+                let mut q = vec![[0.0; 2]; k];
+                for j in 0..4 {
+                    let (i0, i1) = (corners[j], if j == 3 { k } else { corners[j + 1] });
+                    let (c0, c1) = (c[j], c[(j + 1) % 4]);
+                    let e = [c1[0] - c0[0], c1[1] - c0[1]];
+                    for (n, i) in (i0..i1).enumerate() {
+                        let t = if n == 0 {
+                            0.0
+                        } else if along_rays {
+                            // The ray at theta_i meets c0 + t e where cross(c0 + t e, d) = 0.
+                            let d = dir(theta[i]);
+                            let den = d[0] * e[1] - d[1] * e[0];
+                            let t = (c0[0] * d[1] - c0[1] * d[0]) / den;
+                            if t.is_finite() {
+                                t.clamp(0.0, 1.0)
+                            } else {
+                                n as f64 / (i1 - i0) as f64
+                            }
+                        } else {
+                            n as f64 / (i1 - i0) as f64
+                        };
+                        q[i] = if n == 0 {
+                            c0
+                        } else {
+                            [c0[0] + t * e[0], c0[1] + t * e[1]]
+                        };
+                    }
+                }
+                let side = |from: usize, to: usize| -> Vec<Point> {
+                    (from..=to).map(|i| q[i % k]).collect()
+                };
+                let Some(g) = crate::grid::tfi(
+                    &side(0, a),
+                    &side(a, a + b),
+                    &side(a + b, 2 * a + b),
+                    &side(2 * a + b, k),
+                ) else {
+                    continue;
+                };
+                out.push(GridCore {
+                    a,
+                    b,
+                    nodes: g.nodes,
+                });
+            }
+        }
+    }
+    out
+}
+
+/// The core of an inserted-hole template: where its vertices are and how it is cut.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Core {
+    /// On the circle of [`INSERTED_CORE_FRACTION`] of the radius, at these angles
+    /// ([`core_angles`]), cut by the ladder.
+    Circle(Vec<f64>),
+    /// An `a x b` grid core ([`grid_cores`]).
+    Grid(GridCore),
+}
+
+/// Where the ladder of an inserted-hole template starts and its core: [`ladder_turn`]'s
+/// circle core, unless its smallest corner angle is below [`INSERTED_CORE_GOOD_ANGLE_DEG`]
+/// and a grid core ([`grid_cores`]) of some start scores better: the smaller of its smallest
+/// corner angle and half a turn less its largest (ties: the circle, then the smaller start
+/// and the earlier candidate). Returns the start and the core (vertices for the arcs taken
+/// from that start).
+pub fn ladder_core(theta: &[f64]) -> (usize, Core) {
+    use std::f64::consts::TAU;
+    let k = theta.len();
+    let (turn, phi) = ladder_turn(theta);
+    let turned = |r: usize| -> Vec<f64> {
+        (0..k)
+            .map(|i| theta[(i + r) % k] + if i + r >= k { TAU } else { 0.0 })
+            .collect()
+    };
+    let t = turned(turn);
+    if k < 4 || template_min_angle(&t, &phi) >= INSERTED_CORE_GOOD_ANGLE_DEG.to_radians() {
+        return (turn, Core::Circle(phi));
+    }
+    let q: Vec<Point> = phi
+        .iter()
+        .map(|&a| on_circle([0.0; 2], INSERTED_CORE_FRACTION, a))
+        .collect();
+    let m = k / 2;
+    let ladder = (0..m - 1).map(|j| [q[j], q[j + 1], q[k - 2 - j], q[k - 1 - j]]);
+    let mut best_score = template_score(&t, &q, ladder);
+    let mut best = (turn, Core::Circle(phi));
+    for r in 0..m {
+        let t = turned(r);
+        for g in grid_cores(&t) {
+            let score = template_score(&t, &g.ring(), g.blocks());
+            if score > best_score {
+                best_score = score;
+                best = (r, Core::Grid(g));
+            }
+        }
+    }
+    best
+}
+
 /// Fill inserted hole `hole` (a hole added by macro Delaunay refinement, paper Algorithm 3;
 /// it is fluid, not a wall) with template blocks conforming to the blocks around it. Returns
 /// the number of blocks added.
@@ -446,6 +732,12 @@ pub fn template_min_angle(theta: &[f64], phi: &[f64]) -> f64 {
 ///   `p_i q_i`;
 /// - the *core* `k`-gon cut into `k/2 - 1` quadrilaterals by the chords `q_j q_{k-1-j}`
 ///   (a ladder; for `k = 4` the single core square of the standard O-grid).
+///
+/// When a block of that template has a corner below [`INSERTED_CORE_GOOD_ANGLE_DEG`] (many
+/// arcs: the ladder's end blocks have corners of about `2 pi / k`), the core vertices may
+/// instead lie on the sides of a quadrilateral and the core be an `a x b` arrangement of
+/// blocks (`a + b = k / 2`, new inner vertices), whichever [`ladder_core`] scores better
+/// ([`GridCore`]); its opposite sides tie arcs in pairs just as the ladder's chords do.
 ///
 /// Every template edge is a whole block side, so conformity only adds equal-count classes
 /// (arc `i` with core edge `i`, opposite core edges, all segments `p_i q_i`): no node-count
@@ -563,16 +855,33 @@ fn fill_with_walls(
             return Err(format!("an arc sweeps {} radians", arcs[i].2));
         }
     }
-    let (turn, phi) = ladder_turn(&arcs.iter().map(|a| a.1).collect::<Vec<f64>>());
+    let (turn, core) = ladder_core(&arcs.iter().map(|a| a.1).collect::<Vec<f64>>());
     arcs.rotate_left(turn);
     let c = circle.center;
     let p: Vec<u32> = arcs.iter().map(|a| a.3).collect();
     let q0 = layout.vertices.len() as u32;
-    for phi in phi {
-        layout
-            .vertices
-            .push(on_circle(c, INSERTED_CORE_FRACTION * circle.radius, phi));
-    }
+    let grid = match core {
+        Core::Circle(phi) => {
+            for phi in phi {
+                layout
+                    .vertices
+                    .push(on_circle(c, INSERTED_CORE_FRACTION * circle.radius, phi));
+            }
+            None
+        }
+        Core::Grid(g) => {
+            let place = |[x, y]: Point| [c[0] + circle.radius * x, c[1] + circle.radius * y];
+            for v in g.ring() {
+                layout.vertices.push(place(v));
+            }
+            for y in 1..g.b {
+                for x in 1..g.a {
+                    layout.vertices.push(place(g.at(x, y)));
+                }
+            }
+            Some((g.a, g.b))
+        }
+    };
     let q = |i: usize| q0 + (i % k) as u32;
     let push_edge = |layout: &mut BlockLayout, ends: [u32; 2]| -> usize {
         layout.edges.push(Edge {
@@ -602,6 +911,26 @@ fn fill_with_walls(
             wall: None,
         });
     }
+    match grid {
+        None => ladder_blocks(layout, k, q0, &core, push_edge),
+        Some((a, b)) => grid_blocks(layout, a, b, q0, &core, push_edge),
+    }
+    for a in &arcs {
+        layout.edges[a.0].kind = EdgeKind::Interface;
+    }
+    let hole_edges: Vec<usize> = arcs.iter().map(|a| a.0).collect();
+    Ok((layout.blocks.len() - first_block, hole_edges))
+}
+
+/// The ladder's blocks in the core `k`-gon on the circle (`core[i]` the edge `q_i q_{i+1}`).
+fn ladder_blocks(
+    layout: &mut BlockLayout,
+    k: usize,
+    q0: u32,
+    core: &[usize],
+    push_edge: impl Fn(&mut BlockLayout, [u32; 2]) -> usize,
+) {
+    let q = |i: usize| q0 + (i % k) as u32;
     // Ladder: chord_j joins q_j and q_{k-1-j}; chord_0 is core edge k-1 (q_{k-1} -> q_0),
     // chord_{m-1} is core edge m-1 (q_{m-1} -> q_m).
     let m = k / 2;
@@ -627,9 +956,78 @@ fn fill_with_walls(
             wall: None,
         });
     }
-    for a in &arcs {
-        layout.edges[a.0].kind = EdgeKind::Interface;
+}
+
+/// The blocks of an `a x b` grid core ([`GridCore`]): core polygon vertex `q_i` is layout
+/// vertex `q0 + i`, the inner vertex `(x, y)` is `q0 + k + (x - 1) + (y - 1) (a - 1)`, and
+/// `core[i]` is the edge `q_i q_{i+1}`. Blocks row by row from `(0, 0)`, corners
+/// `(x, y), (x + 1, y), (x + 1, y + 1), (x, y + 1)`.
+fn grid_blocks(
+    layout: &mut BlockLayout,
+    a: usize,
+    b: usize,
+    q0: u32,
+    core: &[usize],
+    push_edge: impl Fn(&mut BlockLayout, [u32; 2]) -> usize,
+) {
+    let k = 2 * (a + b);
+    let vertex = |x: usize, y: usize| -> u32 {
+        if y == 0 {
+            q0 + x as u32
+        } else if x == a {
+            q0 + (a + y) as u32
+        } else if y == b {
+            q0 + (2 * a + b - x) as u32
+        } else if x == 0 {
+            q0 + ((k - y) % k) as u32
+        } else {
+            q0 + (k + (x - 1) + (y - 1) * (a - 1)) as u32
+        }
+    };
+    // (edge, whether it is stored from (x, y) to (x + 1, y)) of the horizontal edge at (x, y).
+    let mut horizontal: Vec<(usize, bool)> = Vec::with_capacity(a * (b + 1));
+    for y in 0..=b {
+        for x in 0..a {
+            horizontal.push(if y == 0 {
+                (core[x], true)
+            } else if y == b {
+                (core[2 * a + b - 1 - x], false)
+            } else {
+                (push_edge(layout, [vertex(x, y), vertex(x + 1, y)]), true)
+            });
+        }
     }
-    let hole_edges: Vec<usize> = arcs.iter().map(|a| a.0).collect();
-    Ok((layout.blocks.len() - first_block, hole_edges))
+    // Likewise the vertical edge at (x, y): stored from (x, y) to (x, y + 1)?
+    let mut vertical: Vec<(usize, bool)> = Vec::with_capacity((a + 1) * b);
+    for y in 0..b {
+        for x in 0..=a {
+            vertical.push(if x == a {
+                (core[a + y], true)
+            } else if x == 0 {
+                (core[k - 1 - y], false)
+            } else {
+                (push_edge(layout, [vertex(x, y), vertex(x, y + 1)]), true)
+            });
+        }
+    }
+    let h = |x: usize, y: usize| horizontal[x + y * a];
+    let v = |x: usize, y: usize| vertical[x + y * (a + 1)];
+    for y in 0..b {
+        for x in 0..a {
+            let (s0, f0) = h(x, y);
+            let (s1, f1) = v(x + 1, y);
+            let (s2, f2) = h(x, y + 1);
+            let (s3, f3) = v(x, y);
+            layout.blocks.push(Block {
+                corners: [
+                    vertex(x, y),
+                    vertex(x + 1, y),
+                    vertex(x + 1, y + 1),
+                    vertex(x, y + 1),
+                ],
+                sides: [side(s0, !f0), side(s1, !f1), side(s2, f2), side(s3, f3)],
+                wall: None,
+            });
+        }
+    }
 }

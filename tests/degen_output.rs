@@ -154,6 +154,76 @@ fn ring(k: usize, sweeps: &[f64]) -> BlockLayout {
     layout
 }
 
+/// Many arcs around an inserted hole (a void that dozens of particles border): the template
+/// is still a valid conforming quadrangulation of the polygon, its core is an `a x b`
+/// arrangement with `a + b = k / 2` (the ladder is `b = 1`), and no cell is a sliver. On the
+/// ladder of a circle core the end blocks had corners of `360 / k` degrees (9 degrees at
+/// `k = 40`).
+#[test]
+fn template_of_many_arcs_has_no_sliver_cells() {
+    let unit = Circle::new(0.0, 0.0, 1.0);
+    let tau = std::f64::consts::TAU;
+    for k in [20usize, 24, 30, 40, 42, 64] {
+        for uneven in [false, true] {
+            let mut sweeps: Vec<f64> = (0..k)
+                .map(|i| {
+                    if uneven {
+                        1.0 + 0.5 * (i % 5) as f64
+                    } else {
+                        1.0
+                    }
+                })
+                .collect();
+            let total: f64 = sweeps.iter().sum();
+            sweeps.iter_mut().for_each(|s| *s *= tau / total);
+            let mut layout = ring(k, &sweeps);
+            let added = fill_inserted_hole(&mut layout, 5, unit).unwrap();
+            // k ring blocks and a x b core blocks.
+            let core = added - k;
+            assert!(
+                (1..=k / 4).any(|b| b * (k / 2 - b) == core),
+                "k = {k}: {core} core blocks"
+            );
+            for b in 0..layout.blocks.len() {
+                assert!(block_area(&layout, b) > 0.0, "k = {k}: block {b}");
+            }
+            // Every edge is the side of one block (the outer walls of the outer blocks) or two.
+            let mut uses = vec![0usize; layout.edges.len()];
+            for b in &layout.blocks {
+                for s in b.sides {
+                    uses[s.edge as usize] += 1;
+                }
+            }
+            for (e, &n) in uses.iter().enumerate() {
+                let outer = layout.edges[e].kind == EdgeKind::Wall(-1);
+                assert_eq!(n, if outer { 1 } else { 2 }, "k = {k}: edge {e}");
+            }
+            let grids = build_grids(&layout, 4).unwrap();
+            let area: f64 = (0..layout.blocks.len())
+                .map(|b| block_area(&layout, b))
+                .sum();
+            let poly: f64 = (0..k)
+                .map(|i| {
+                    let a = layout.vertices[k + i];
+                    let c = layout.vertices[k + (i + 1) % k];
+                    0.5 * (a[0] * c[1] - a[1] * c[0])
+                })
+                .sum();
+            assert!((area - poly).abs() < 1e-9 * poly, "{area} vs {poly}");
+            let q = medial_blocks::quality::measure(&grids[k..]);
+            assert_eq!(q.inverted_cells, 0, "k = {k}");
+            // A circle core whose blocks have corners of 20 degrees or more is kept (k = 20
+            // uneven); the grid cores of these polygons have cells of 45 degrees or more.
+            let bound = if k >= 24 { 40.0 } else { 18.0 };
+            assert!(
+                q.min_angle_deg > bound,
+                "k = {k}, uneven {uneven}: template cells down to {} degrees",
+                q.min_angle_deg
+            );
+        }
+    }
+}
+
 #[test]
 fn template_conforms_for_even_side_counts_and_refuses_odd() {
     let unit = Circle::new(0.0, 0.0, 1.0);

@@ -12,7 +12,9 @@
 
 use medial_blocks::domain::Domain;
 use medial_blocks::mesh::BlockGrid;
-use medial_blocks::templates::{core_angles, ladder_turn, spread_angles, template_min_angle};
+use medial_blocks::templates::{
+    core_angles, ladder_core, ladder_turn, spread_angles, template_min_angle, Core, GridCore,
+};
 use medial_blocks::{mesh, Options};
 use proptest::prelude::*;
 use std::f64::consts::{PI, TAU};
@@ -161,6 +163,123 @@ proptest! {
     }
 }
 
+/// Increasing angles within one turn, an even count from 4 to 64 (many arcs: a void that
+/// dozens of particles border), some of them bunched.
+fn many_angles() -> impl Strategy<Value = Vec<f64>> {
+    (2usize..33, prop::collection::vec(0.05f64..1.0, 64)).prop_map(|(m, w)| {
+        let k = 2 * m;
+        let total: f64 = w[..k].iter().sum();
+        let mut acc = 0.0;
+        (0..k)
+            .map(|i| {
+                let t = acc / total * TAU;
+                acc += w[i];
+                t
+            })
+            .collect()
+    })
+}
+
+/// The smallest and largest corner angles (radians) of the blocks of an inserted-hole
+/// template on a unit hole with arc ends at `theta` and core vertices `q`: the ring blocks
+/// (the arc's tangent at `p_i`) and the `core` quadrilaterals, each from `atan2` of its two
+/// edges (reflex corners count as their full angle). Independent of the template code.
+fn template_corners(theta: &[f64], q: &[[f64; 2]], core: &[[[f64; 2]; 4]]) -> (f64, f64) {
+    let k = theta.len();
+    let angle = |u: [f64; 2], v: [f64; 2]| {
+        // Counter-clockwise from u to v, in [0, 2 pi).
+        (u[0] * v[1] - u[1] * v[0])
+            .atan2(u[0] * v[0] + u[1] * v[1])
+            .rem_euclid(TAU)
+    };
+    let sub = |a: [f64; 2], b: [f64; 2]| [a[0] - b[0], a[1] - b[1]];
+    let neg = |a: [f64; 2]| [-a[0], -a[1]];
+    let mut quads: Vec<[([f64; 2], [f64; 2]); 4]> = Vec::new();
+    for i in 0..k {
+        let j = (i + 1) % k;
+        let (pi, pj) = (
+            [theta[i].cos(), theta[i].sin()],
+            [theta[j].cos(), theta[j].sin()],
+        );
+        let (ti, tj) = (
+            [-theta[i].sin(), theta[i].cos()],
+            [-theta[j].sin(), theta[j].cos()],
+        );
+        // Corner: (direction to the next corner, direction to the previous one).
+        quads.push([
+            (ti, sub(q[i], pi)),
+            (sub(q[j], pj), neg(tj)),
+            (sub(q[i], q[j]), sub(pj, q[j])),
+            (sub(pi, q[i]), sub(q[j], q[i])),
+        ]);
+    }
+    for c in core {
+        quads.push([0, 1, 2, 3].map(|t| (sub(c[(t + 1) % 4], c[t]), sub(c[(t + 3) % 4], c[t]))));
+    }
+    let (mut least, mut most) = (f64::INFINITY, 0.0f64);
+    for quad in quads {
+        for (next, prev) in quad {
+            let a = angle(next, prev);
+            least = least.min(a);
+            most = most.max(a);
+        }
+    }
+    (least, most)
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(64))]
+
+    /// The core [`ladder_core`] picks is never worse than the ladder on the circle
+    /// ([`ladder_turn`]): a grid core is taken only when the circle's blocks have a corner
+    /// below 20 degrees, and then its blocks' corners are all further from 0 and from half a
+    /// turn than the circle ladder's worst.
+    #[test]
+    fn a_grid_core_is_taken_only_when_it_beats_the_circle(theta in many_angles()) {
+        let k = theta.len();
+        let (turn, phi) = ladder_turn(&theta);
+        let t = starting_at(&theta, turn);
+        let circle_q: Vec<[f64; 2]> =
+            phi.iter().map(|a| [0.5 * a.cos(), 0.5 * a.sin()]).collect();
+        let ladder: Vec<[[f64; 2]; 4]> = (0..k / 2 - 1)
+            .map(|j| [circle_q[j], circle_q[j + 1], circle_q[k - 2 - j], circle_q[k - 1 - j]])
+            .collect();
+        let (lo, hi) = template_corners(&t, &circle_q, &ladder);
+        let circle_score = lo.min(PI - hi);
+        match ladder_core(&theta) {
+            (r, Core::Circle(p)) => {
+                prop_assert_eq!(r, turn);
+                prop_assert_eq!(p, phi);
+            }
+            (r, Core::Grid(g)) => {
+                prop_assert!(template_min_angle(&t, &phi).to_degrees() < 20.0);
+                prop_assert_eq!(2 * (g.a + g.b), k);
+                prop_assert!(g.a >= g.b && g.b >= 1);
+                let t = starting_at(&theta, r);
+                let q = g.ring();
+                for (i, v) in q.iter().enumerate() {
+                    prop_assert_eq!(GridCore::of_ring(g.a, g.b, i), {
+                        let at = (0..=g.b)
+                            .flat_map(|y| (0..=g.a).map(move |x| (x, y)))
+                            .find(|&(x, y)| g.at(x, y) == *v);
+                        at.unwrap()
+                    });
+                }
+                let blocks: Vec<[[f64; 2]; 4]> = g.blocks().collect();
+                prop_assert_eq!(blocks.len(), g.a * g.b);
+                let (lo, hi) = template_corners(&t, &q, &blocks);
+                prop_assert!(hi < PI, "a reflex corner");
+                prop_assert!(
+                    lo.min(PI - hi) > circle_score,
+                    "grid {} x {}: corners {lo}..{hi} against the circle's {circle_score}",
+                    g.a,
+                    g.b
+                );
+            }
+        }
+    }
+}
+
 #[test]
 fn regular_templates_have_the_corner_angles_worked_out_by_hand() {
     // k = 4: ring blocks with right angles at the arc, 135 degrees at the core; a square core.
@@ -279,4 +398,44 @@ fn an_inserted_hole_touched_by_a_narrow_arc_has_no_sliver_cells() {
     // cells went down to 3.4 degrees.
     assert!(least > 10.0, "template cells down to {least} degrees");
     medial_blocks::fuzzing::check_mesh(&domain, &m).unwrap();
+}
+
+/// `n` holes evenly on the unit circle around an empty centre (the sweep's `ring` kind): macro
+/// Delaunay refinement inserts a hole at the centre that all `n` gaps reach, so its template
+/// has `n` arcs or more. On the ladder of a circle core the two end blocks have corners of
+/// about `360 / k` degrees (8.8 degrees for 41 holes, the smallest angle of the sweep); the
+/// grid core ([`medial_blocks::templates::grid_cores`]) has no corner that sharp.
+#[test]
+fn a_hole_ringed_by_many_others_gets_a_grid_core_without_slivers() {
+    for n in [29usize, 41, 60] {
+        let r = 0.3 * PI / n as f64;
+        let holes: Vec<_> = (0..n)
+            .map(|i| {
+                let t = TAU * i as f64 / n as f64;
+                medial_blocks::Circle::new(t.cos(), t.sin(), r)
+            })
+            .collect();
+        let domain = Domain::bounded(medial_blocks::Circle::new(0.0, 0.0, 2.45), holes).unwrap();
+        let options = Options {
+            block_cells: Some(8),
+            ..Options::default()
+        };
+        let m = mesh(&domain, &options).unwrap();
+        let centre = m
+            .inserted_holes
+            .iter()
+            .filter(|c| c.center[0].hypot(c.center[1]) < 1e-9)
+            .count();
+        assert_eq!(centre, 1, "n = {n}: {:?}", m.inserted_holes);
+        let first_template = m.layout.blocks.len() - m.template_blocks;
+        let least = m.grids[first_template..]
+            .iter()
+            .map(min_cell_angle)
+            .fold(f64::INFINITY, f64::min);
+        assert!(
+            least > 14.0,
+            "n = {n}: template cells down to {least} degrees"
+        );
+        medial_blocks::fuzzing::check_mesh(&domain, &m).unwrap();
+    }
 }

@@ -10,9 +10,9 @@
 //! The template needs an even number `k >= 4` of arcs, none wider than
 //! [`crate::blocking::MAX_TEMPLATE_SWEEP`]; `prepare` splits the widest arc on the hole at its
 //! middle (an exact medial point with its two exact spokes) until that holds. Its node counts
-//! tie arcs in pairs (the ladder of the core pairs opposite core edges, each core edge has its
-//! arc's count): `tie_counts` gives every class of opposite sides one count, the largest its
-//! arcs asked for, which also makes the hole's perimeter even.
+//! tie arcs in pairs (the ladder or grid of the core pairs opposite core edges, each core edge
+//! has its arc's count): `tie_counts` gives every class of opposite sides one count, the
+//! largest its arcs asked for, which also makes the hole's perimeter even.
 
 use super::{internal, Clustering, ExactVertex, Piece};
 use crate::blocking::MAX_TEMPLATE_SWEEP;
