@@ -116,3 +116,49 @@ fn cli_failure_midway_exits_1_without_report() {
     assert!(!out.join("report.json").exists());
     assert_no_leftovers(&out);
 }
+
+/// A reader that stops early (`medial-blocks mesh ... | head -1`) ends the run as it ends
+/// `cat`: no panic, no backtrace, and the files (written before the summary) complete. Rust
+/// ignores `SIGPIPE`, so the summary's `println!` used to panic with "failed printing to
+/// stdout: Broken pipe".
+#[cfg(unix)]
+#[test]
+fn a_closed_stdout_pipe_ends_the_run_without_a_panic() {
+    use std::io::Read;
+    use std::os::unix::process::ExitStatusExt;
+    use std::process::Stdio;
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("out");
+    for args in [
+        vec!["mesh", "--cells", "4", "--format", "json", "-o"],
+        vec!["example", "bubbles", "--holes", "20000"],
+    ] {
+        let mut cmd = Command::new(env!("CARGO_BIN_EXE_medial-blocks"));
+        cmd.args(&args);
+        if args[0] == "mesh" {
+            cmd.arg(&out);
+        }
+        let mut child = cmd
+            .stdout(Stdio::piped())
+            .stderr(Stdio::piped())
+            .spawn()
+            .unwrap();
+        // Read one byte, then close our end of the pipe, as `head -c 1` does.
+        let mut stdout = child.stdout.take().unwrap();
+        let mut first = [0u8; 1];
+        stdout.read_exact(&mut first).unwrap();
+        drop(stdout);
+        let o = child.wait_with_output().unwrap();
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(!err.contains("panicked"), "{args:?}: {err}");
+        assert!(
+            o.status.success() || o.status.signal() == Some(libc::SIGPIPE),
+            "{args:?}: {:?} {err}",
+            o.status
+        );
+    }
+    // The mesh run's files are complete: the report parses.
+    let report = std::fs::read_to_string(out.join("report.json")).unwrap();
+    let v: serde_json::Value = serde_json::from_str(&report).unwrap();
+    assert!(v["cells"].as_u64().unwrap() > 0);
+}

@@ -137,6 +137,7 @@ fn command_line_error(e: clap::Error) -> ExitCode {
 }
 
 pub fn run() -> ExitCode {
+    restore_sigpipe();
     let cli = match Cli::try_parse() {
         Ok(cli) => cli,
         Err(e) => return command_line_error(e),
@@ -164,5 +165,20 @@ pub fn run() -> ExitCode {
             eprintln!("error: {}", f.message);
             ExitCode::from(f.code)
         }
+    }
+}
+
+/// Let a closed pipe end the process quietly, as it ends `cat` or `grep`: Rust ignores
+/// `SIGPIPE`, so `medial-blocks mesh ... | head -1` made the summary's `println!` panic with
+/// "failed printing to stdout: Broken pipe" (and a backtrace) once `head` had exited. With
+/// the default action the process stops at the first write to the closed pipe; the files it
+/// writes are complete by then (the summary is printed after them), and writes to files are
+/// unaffected.
+fn restore_sigpipe() {
+    #[cfg(unix)]
+    // SAFETY: setting the disposition of SIGPIPE to its default, before any other thread
+    // exists; no handler is installed.
+    unsafe {
+        libc::signal(libc::SIGPIPE, libc::SIG_DFL);
     }
 }
