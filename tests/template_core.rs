@@ -439,3 +439,36 @@ fn a_hole_ringed_by_many_others_gets_a_grid_core_without_slivers() {
         medial_blocks::fuzzing::check_mesh(&domain, &m).unwrap();
     }
 }
+
+/// The periodic build fills its inserted holes with the same templates: 30 holes on a ring in
+/// a 4 x 4 box leave a void whose inserted hole all 30 gaps reach (template cells of 12
+/// degrees on the circle ladder), and it meshes exact with the grid core, no cell under 14
+/// degrees, and passes the periodic mesh checks.
+#[test]
+fn a_periodic_void_ringed_by_many_holes_gets_a_grid_core() {
+    let n = 30;
+    let holes: Vec<_> = (0..n)
+        .map(|i| {
+            let t = TAU * i as f64 / n as f64;
+            medial_blocks::Circle::new(2.0 + t.cos(), 2.0 + t.sin(), 0.3 * PI / n as f64)
+        })
+        .collect();
+    let pd = medial_blocks::PeriodicDomain::new([4.0, 4.0], holes).unwrap();
+    let options = Options {
+        block_cells: Some(8),
+        ..Options::default()
+    };
+    let m = medial_blocks::periodic::mesh_periodic(&pd, &options).unwrap();
+    assert_eq!(m.geometry, medial_blocks::mesh::Geometry::Exact);
+    assert!(m
+        .inserted_holes
+        .iter()
+        .any(|c| (c.center[0] - 2.0).hypot(c.center[1] - 2.0) < 1e-9));
+    let least = m
+        .grids
+        .iter()
+        .map(min_cell_angle)
+        .fold(f64::INFINITY, f64::min);
+    assert!(least > 14.0, "cells down to {least} degrees");
+    medial_blocks::fuzzing::periodic::check_periodic_mesh(&pd, &m, Default::default()).unwrap();
+}
