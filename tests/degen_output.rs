@@ -154,6 +154,22 @@ fn ring(k: usize, sweeps: &[f64]) -> BlockLayout {
     layout
 }
 
+/// The blocks of `layout` (a [`ring`] of `k` arcs with its hole filled) cover the outer
+/// polygon exactly: their areas add up to the polygon's (vertices `k..2k`).
+fn assert_covers_the_polygon(layout: &BlockLayout, k: usize) {
+    let area: f64 = (0..layout.blocks.len())
+        .map(|b| block_area(layout, b))
+        .sum();
+    let poly: f64 = (0..k)
+        .map(|i| {
+            let a = layout.vertices[k + i];
+            let c = layout.vertices[k + (i + 1) % k];
+            0.5 * (a[0] * c[1] - a[1] * c[0])
+        })
+        .sum();
+    assert!((area - poly).abs() < 1e-9 * poly, "{area} vs {poly}");
+}
+
 /// Many arcs around an inserted hole (a void that dozens of particles border): the template
 /// is still a valid conforming quadrangulation of the polygon, its core is an `a x b`
 /// arrangement with `a + b = k / 2` (the ladder is `b = 1`), and no cell is a sliver. On the
@@ -199,17 +215,7 @@ fn template_of_many_arcs_has_no_sliver_cells() {
                 assert_eq!(n, if outer { 1 } else { 2 }, "k = {k}: edge {e}");
             }
             let grids = build_grids(&layout, 4).unwrap();
-            let area: f64 = (0..layout.blocks.len())
-                .map(|b| block_area(&layout, b))
-                .sum();
-            let poly: f64 = (0..k)
-                .map(|i| {
-                    let a = layout.vertices[k + i];
-                    let c = layout.vertices[k + (i + 1) % k];
-                    0.5 * (a[0] * c[1] - a[1] * c[0])
-                })
-                .sum();
-            assert!((area - poly).abs() < 1e-9 * poly, "{area} vs {poly}");
+            assert_covers_the_polygon(&layout, k);
             let q = medial_blocks::quality::measure(&grids[k..]);
             assert_eq!(q.inverted_cells, 0, "k = {k}");
             // A circle core whose blocks have corners of 20 degrees or more is kept (k = 20
@@ -245,17 +251,7 @@ fn template_conforms_for_even_side_counts_and_refuses_odd() {
         // The grids conform (build_grids copies each edge's nodes to both sides) and cover
         // the annulus between the outer polygon and nothing: total area is the polygon's.
         let grids = build_grids(&layout, 3).unwrap();
-        let area: f64 = (0..layout.blocks.len())
-            .map(|b| block_area(&layout, b))
-            .sum();
-        let poly: f64 = (0..k)
-            .map(|i| {
-                let a = layout.vertices[k + i];
-                let c = layout.vertices[k + (i + 1) % k];
-                0.5 * (a[0] * c[1] - a[1] * c[0])
-            })
-            .sum();
-        assert!((area - poly).abs() < 1e-9 * poly, "{area} vs {poly}");
+        assert_covers_the_polygon(&layout, k);
         let q = medial_blocks::quality::measure(&grids);
         assert_eq!(q.inverted_cells, 0, "k = {k}");
     }
