@@ -953,6 +953,23 @@ pub fn assemble_cached(
             circle_fixed[cidx(*c)] = Some(*n);
         }
     }
+    // Circles facing each other across a medial arc, both equally spaced along their spokes
+    // (no first height): their counts stay within `counts::MAX_COUNT_RATIO` of each other, so
+    // the cells facing each other across the arc do too.
+    let equally_spaced: Vec<bool> = (0..ncirc)
+        .map(|slot| {
+            let id = slot as CircleId - 1;
+            cluster(id).first_height(domain.circle(id).radius).is_none()
+        })
+        .collect();
+    let mut neighbours: Vec<[usize; 2]> = pieces
+        .iter()
+        .map(|p| p.circles.map(cidx))
+        .filter(|&[a, b]| a != b && equally_spaced[a] && equally_spaced[b])
+        .map(|[a, b]| [a.min(b), a.max(b)])
+        .collect();
+    neighbours.sort_unstable();
+    neighbours.dedup();
     // The count problem for target cell size `h`, without its arcs.
     let circle_problem = |h: f64| {
         let mut circle_target = vec![1.0; ncirc];
@@ -969,6 +986,7 @@ pub fn assemble_cached(
             // hole, which makes its perimeter even without the parity repair.
             template: vec![false; ncirc],
             arcs: Vec::new(),
+            neighbours: neighbours.clone(),
         }
     };
 

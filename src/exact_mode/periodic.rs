@@ -408,11 +408,29 @@ fn build_checking(
             let first = cl.first_height(hole.radius);
             circle_target[k + 1] = clustering::cells_for(len, cell, first, cl.growth) as f64;
         }
+        // Holes facing each other across an arc orbit, both equally spaced along their spokes:
+        // counts within `counts::MAX_COUNT_RATIO` of each other, as in bounded domains.
+        let equally_spaced = |slot: usize| {
+            slot >= 1
+                && pb
+                    .holes
+                    .get(slot - 1)
+                    .is_some_and(|hole| cluster(slot - 1).first_height(hole.radius).is_none())
+        };
+        let mut neighbours: Vec<[usize; 2]> = arcs
+            .iter()
+            .map(|a| a.circles)
+            .filter(|&[a, b]| a != b && equally_spaced(a) && equally_spaced(b))
+            .map(|[a, b]| [a.min(b), a.max(b)])
+            .collect();
+        neighbours.sort_unstable();
+        neighbours.dedup();
         let problem = CountProblem {
             circle_target,
             circle_fixed: circle_fixed.clone(),
             template: vec![false; ncirc],
             arcs: std::mem::take(arcs),
+            neighbours,
         };
         // `--block-cells n`: n x n per block (arcs raised where a wall turns over 15 degrees
         // per cell), as in bounded domains.
