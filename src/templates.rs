@@ -392,57 +392,21 @@ pub fn spread_angles(theta: &[f64], gap: f64) -> Option<Vec<f64>> {
 /// [`INSERTED_CORE_FRACTION`]): the ring blocks (the arc's tangent at its ends) and the
 /// ladder's core blocks. Negative when a corner is reflex or the blocks fold.
 pub fn template_min_angle(theta: &[f64], phi: &[f64]) -> f64 {
+    let k = theta.len();
+    if k < 4 || phi.len() != k {
+        return -1.0;
+    }
     let q: Vec<Point> = phi
         .iter()
         .map(|&a| on_circle([0.0; 2], INSERTED_CORE_FRACTION, a))
         .collect();
-    core_min_angle(theta, &q)
+    template_extremes(theta, &q, ladder_quads(&q)).0
 }
 
-/// [`template_min_angle`] for core vertices `q` anywhere (a unit hole centred at the origin):
-/// the smallest corner angle (radians) of the ring blocks `p_i p_{i+1} q_{i+1} q_i` (the
-/// arc's tangent at `p_i` and `p_{i+1}`) and of the ladder's core blocks
-/// `q_j q_{j+1} q_{k-2-j} q_{k-1-j}`. Negative when a corner is reflex or the blocks fold.
-pub fn core_min_angle(theta: &[f64], q: &[Point]) -> f64 {
-    let k = theta.len();
-    if k < 4 || q.len() != k {
-        return -1.0;
-    }
-    let p = |i: usize| on_circle([0.0; 2], 1.0, theta[i % k]);
-    let q = |i: usize| q[i % k];
-    let sub = |a: [f64; 2], b: [f64; 2]| [a[0] - b[0], a[1] - b[1]];
-    // Interior angle at a corner of a counter-clockwise block entered along `a`, left along
-    // `b`: half a turn less the left turn (negative turn: reflex, reported as negative).
-    let interior = |a: [f64; 2], b: [f64; 2]| {
-        let turn = (a[0] * b[1] - a[1] * b[0]).atan2(a[0] * b[0] + a[1] * b[1]);
-        if turn <= 0.0 {
-            -1.0
-        } else {
-            std::f64::consts::PI - turn
-        }
-    };
-    let tangent = |i: usize| [-theta[i % k].sin(), theta[i % k].cos()];
-    let mut least = f64::INFINITY;
-    for i in 0..k {
-        let j = i + 1;
-        let corners = [
-            interior(sub(p(i), q(i)), tangent(i)),
-            interior(tangent(j), sub(q(j), p(j))),
-            interior(sub(q(j), p(j)), sub(q(i), q(j))),
-            interior(sub(q(i), q(j)), sub(p(i), q(i))),
-        ];
-        least = corners.iter().fold(least, |m, &c| m.min(c));
-    }
-    let m = k / 2;
-    for j in 0..m - 1 {
-        let c = [q(j), q(j + 1), q(k - 2 - j), q(k - 1 - j)];
-        for t in 0..4 {
-            let a = sub(c[t], c[(t + 3) % 4]);
-            let b = sub(c[(t + 1) % 4], c[t]);
-            least = least.min(interior(a, b));
-        }
-    }
-    least
+/// The ladder's core blocks `q_j q_{j+1} q_{k-2-j} q_{k-1-j}` on the core polygon `q`.
+fn ladder_quads(q: &[Point]) -> impl Iterator<Item = [Point; 4]> + '_ {
+    let k = q.len();
+    (0..(k / 2).saturating_sub(1)).map(move |j| [q[j], q[j + 1], q[k - 2 - j], q[k - 1 - j]])
 }
 
 /// Interior angle at a corner of a counter-clockwise polygon entered along `a`, left along
@@ -456,16 +420,39 @@ fn interior_angle(a: [f64; 2], b: [f64; 2]) -> f64 {
     }
 }
 
-/// The smallest and largest corner angles (radians) of the counter-clockwise quadrilaterals
-/// `quads`; the smallest is negative when one is reflex or folded.
-fn corner_extremes(quads: impl Iterator<Item = [Point; 4]>) -> (f64, f64) {
+/// The smallest and largest corner angles (radians) of the template blocks of a unit hole
+/// whose arc ends are at angles `theta`, core polygon `ring` (`q_i`) and core blocks `core`
+/// (counter-clockwise quadrilaterals): the ring blocks `p_i p_{i+1} q_{i+1} q_i` take the
+/// arc's tangent at `p_i` and `p_{i+1}`. The smallest is negative when a corner is reflex or
+/// a block folds. The caller checks `ring.len() == theta.len() >= 4`.
+fn template_extremes(
+    theta: &[f64],
+    ring: &[Point],
+    core: impl Iterator<Item = [Point; 4]>,
+) -> (f64, f64) {
+    let k = theta.len();
+    let p = |i: usize| on_circle([0.0; 2], 1.0, theta[i % k]);
     let sub = |a: Point, b: Point| [a[0] - b[0], a[1] - b[1]];
+    let tangent = |i: usize| [-theta[i % k].sin(), theta[i % k].cos()];
     let (mut least, mut most) = (f64::INFINITY, f64::NEG_INFINITY);
-    for c in quads {
+    let mut add = |angle: f64| {
+        least = least.min(angle);
+        most = most.max(angle);
+    };
+    for i in 0..k {
+        let j = i + 1;
+        let (pi, pj, qi, qj) = (p(i), p(j), ring[i], ring[j % k]);
+        add(interior_angle(sub(pi, qi), tangent(i)));
+        add(interior_angle(tangent(j), sub(qj, pj)));
+        add(interior_angle(sub(qj, pj), sub(qi, qj)));
+        add(interior_angle(sub(qi, qj), sub(pi, qi)));
+    }
+    for c in core {
         for t in 0..4 {
-            let angle = interior_angle(sub(c[t], c[(t + 3) % 4]), sub(c[(t + 1) % 4], c[t]));
-            least = least.min(angle);
-            most = most.max(angle);
+            add(interior_angle(
+                sub(c[t], c[(t + 3) % 4]),
+                sub(c[(t + 1) % 4], c[t]),
+            ));
         }
     }
     (least, most)
@@ -473,32 +460,12 @@ fn corner_extremes(quads: impl Iterator<Item = [Point; 4]>) -> (f64, f64) {
 
 /// How far the corners of a template are from the worst a quadrilateral can have: the
 /// smaller of its smallest corner angle and half a turn less its largest (radians; negative
-/// when a block folds). The ring blocks' corners on the arc are taken along the arc's
-/// tangent, as in [`core_min_angle`].
+/// when a block folds), see [`template_extremes`].
 fn template_score(theta: &[f64], ring: &[Point], core: impl Iterator<Item = [Point; 4]>) -> f64 {
-    let k = theta.len();
-    if k < 4 || ring.len() != k {
+    if theta.len() < 4 || ring.len() != theta.len() {
         return -1.0;
     }
-    let p = |i: usize| on_circle([0.0; 2], 1.0, theta[i % k]);
-    let sub = |a: Point, b: Point| [a[0] - b[0], a[1] - b[1]];
-    let tangent = |i: usize| [-theta[i % k].sin(), theta[i % k].cos()];
-    let (mut least, mut most) = (f64::INFINITY, f64::NEG_INFINITY);
-    for i in 0..k {
-        let j = (i + 1) % k;
-        let (pi, pj, qi, qj) = (p(i), p(j), ring[i], ring[j]);
-        for angle in [
-            interior_angle(sub(pi, qi), tangent(i)),
-            interior_angle(tangent(j), sub(qj, pj)),
-            interior_angle(sub(qj, pj), sub(qi, qj)),
-            interior_angle(sub(qi, qj), sub(pi, qi)),
-        ] {
-            least = least.min(angle);
-            most = most.max(angle);
-        }
-    }
-    let (l, m) = corner_extremes(core);
-    let (least, most) = (least.min(l), most.max(m));
+    let (least, most) = template_extremes(theta, ring, core);
     if least < 0.0 {
         least
     } else {
@@ -703,8 +670,7 @@ pub fn ladder_core(theta: &[f64]) -> (usize, Core) {
         .map(|&a| on_circle([0.0; 2], INSERTED_CORE_FRACTION, a))
         .collect();
     let m = k / 2;
-    let ladder = (0..m - 1).map(|j| [q[j], q[j + 1], q[k - 2 - j], q[k - 1 - j]]);
-    let mut best_score = template_score(&t, &q, ladder);
+    let mut best_score = template_score(&t, &q, ladder_quads(&q));
     let mut best = (turn, Core::Circle(phi));
     for r in 0..m {
         let t = turned(r);
