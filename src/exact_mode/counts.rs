@@ -148,6 +148,22 @@ pub struct Counts {
     pub arc: Vec<usize>,
 }
 
+/// [`CountProblem::neighbours`] from the circle pairs of the medial arcs: the pairs of two
+/// distinct circles that are both equally spaced along their spokes (no first height), each
+/// pair once, smaller index first, sorted.
+pub fn facing_pairs(
+    pairs: impl Iterator<Item = [usize; 2]>,
+    equally_spaced: impl Fn(usize) -> bool,
+) -> Vec<[usize; 2]> {
+    let mut out: Vec<[usize; 2]> = pairs
+        .filter(|&[a, b]| a != b && equally_spaced(a) && equally_spaced(b))
+        .map(|[a, b]| [a.min(b), a.max(b)])
+        .collect();
+    out.sort_unstable();
+    out.dedup();
+    out
+}
+
 fn round_count(x: f64) -> usize {
     if x.is_finite() && x > 1.0 {
         (x.round() as usize).min(super::super::grid::MAX_CELLS_PER_SIDE)

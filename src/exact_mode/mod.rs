@@ -962,14 +962,9 @@ pub fn assemble_cached(
             cluster(id).first_height(domain.circle(id).radius).is_none()
         })
         .collect();
-    let mut neighbours: Vec<[usize; 2]> = pieces
-        .iter()
-        .map(|p| p.circles.map(cidx))
-        .filter(|&[a, b]| a != b && equally_spaced[a] && equally_spaced[b])
-        .map(|[a, b]| [a.min(b), a.max(b)])
-        .collect();
-    neighbours.sort_unstable();
-    neighbours.dedup();
+    let neighbours = counts::facing_pairs(pieces.iter().map(|p| p.circles.map(cidx)), |c| {
+        equally_spaced[c]
+    });
     // The count problem for target cell size `h`, without its arcs.
     let circle_problem = |h: f64| {
         let mut circle_target = vec![1.0; ncirc];

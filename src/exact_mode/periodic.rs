@@ -417,14 +417,8 @@ fn build_checking(
                     .get(slot - 1)
                     .is_some_and(|hole| cluster(slot - 1).first_height(hole.radius).is_none())
         };
-        let mut neighbours: Vec<[usize; 2]> = arcs
-            .iter()
-            .map(|a| a.circles)
-            .filter(|&[a, b]| a != b && equally_spaced(a) && equally_spaced(b))
-            .map(|[a, b]| [a.min(b), a.max(b)])
-            .collect();
-        neighbours.sort_unstable();
-        neighbours.dedup();
+        let neighbours =
+            super::counts::facing_pairs(arcs.iter().map(|a| a.circles), equally_spaced);
         let problem = CountProblem {
             circle_target,
             circle_fixed: circle_fixed.clone(),
