@@ -285,6 +285,16 @@ pub fn core_angles(theta: &[f64]) -> Vec<f64> {
     best
 }
 
+/// The increasing angles `theta` (within one turn) taken from index `r` on, those before `r`
+/// one turn up: the arcs as seen by a ladder that starts at arc `r`.
+fn turned_angles(theta: &[f64], r: usize) -> Vec<f64> {
+    use std::f64::consts::TAU;
+    let k = theta.len();
+    (0..k)
+        .map(|i| theta[(i + r) % k] + if i + r >= k { TAU } else { 0.0 })
+        .collect()
+}
+
 /// Where the ladder of an inserted-hole template starts, and its core angles
 /// ([`core_angles`]): the arcs whose ends are at the increasing angles `theta` (within one
 /// turn) are taken from arc `turn` on (`turn < k / 2`; turning by `k / 2` gives the same
@@ -299,13 +309,8 @@ pub fn core_angles(theta: &[f64]) -> Vec<f64> {
 /// gave a smallest angle of 15.7 or 7.8 degrees depending on which arc's start rounded below
 /// zero.
 pub fn ladder_turn(theta: &[f64]) -> (usize, Vec<f64>) {
-    use std::f64::consts::TAU;
     let k = theta.len();
-    let turned = |r: usize| -> Vec<f64> {
-        (0..k)
-            .map(|i| theta[(i + r) % k] + if i + r >= k { TAU } else { 0.0 })
-            .collect()
-    };
+    let turned = |r: usize| turned_angles(theta, r);
     let mut best = (0, core_angles(theta));
     let mut best_score = template_min_angle(theta, &best.1);
     for r in 1..k / 2 {
@@ -653,14 +658,9 @@ pub enum Core {
 /// and the earlier candidate). Returns the start and the core (vertices for the arcs taken
 /// from that start).
 pub fn ladder_core(theta: &[f64]) -> (usize, Core) {
-    use std::f64::consts::TAU;
     let k = theta.len();
     let (turn, phi) = ladder_turn(theta);
-    let turned = |r: usize| -> Vec<f64> {
-        (0..k)
-            .map(|i| theta[(i + r) % k] + if i + r >= k { TAU } else { 0.0 })
-            .collect()
-    };
+    let turned = |r: usize| turned_angles(theta, r);
     let t = turned(turn);
     if k < 4 || template_min_angle(&t, &phi) >= INSERTED_CORE_GOOD_ANGLE_DEG.to_radians() {
         return (turn, Core::Circle(phi));
