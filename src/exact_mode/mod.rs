@@ -44,6 +44,7 @@ pub mod collapsed;
 pub mod counts;
 pub mod densities;
 pub mod equidistribution;
+pub mod grading;
 pub mod grid_nodes;
 pub mod imposed;
 pub mod inserted;
@@ -624,6 +625,7 @@ struct PieceScratch {
     weights: Vec<f64>,
     prefix: Vec<f64>,
     params: Vec<f64>,
+    graded: grading::Scratch,
 }
 
 thread_local! {
@@ -1336,12 +1338,49 @@ pub fn assemble_cached(
         let first = cl.first_height(domain.circle(c).radius);
         (counts.circle[cidx(c)], first, cl.growth)
     };
+    // The end-cell width every arc at a vertex aims for ([`grading`]), per vertex: the
+    // natural end widths of the arcs there, estimated from their geometry and counts,
+    // averaged with the weights of the arcs' rigidity.
+    // Only for size-driven counts: a fixed grid per block (`--block-cells`) keeps its
+    // equidistributed nodes (grading there traded growth for skewness, see `grading`).
+    let graded = options.block_cells.is_none();
+    let estimates: Vec<[Option<(f64, f64)>; 2]> = if graded {
+        pieces
+            .par_iter()
+            .enumerate()
+            .map(|(e, p)| {
+                let radius = p
+                    .ends
+                    .map(|v| vertices.get(v).map_or(f64::NAN, |x| x.radius));
+                grading::end_estimates(&p.geom, counts.arc[e], radius)
+            })
+            .collect()
+    } else {
+        Vec::new()
+    };
+    let vertex_widths = grading::vertex_widths(
+        vertices.len(),
+        pieces.iter().map(|p| p.ends).zip(&estimates),
+        |v| {
+            if !graded {
+                return None;
+            }
+            let x = &vertices[v];
+            let n = x
+                .circles
+                .iter()
+                .map(|&c| counts.circle.get(cidx(c)).copied().unwrap_or(0));
+            grading::vertex_width(x.radius, n)
+        },
+    );
+    drop(estimates);
+    let end_widths = |p: &Piece| p.ends.map(|v| vertex_widths.get(v).copied().flatten());
     let grid_keys: Vec<GridKey> = pieces
         .par_iter()
         .enumerate()
         .map(|(e, p)| {
             let sides = [side_inputs(p, 0), side_inputs(p, 1)];
-            GridKey::of(counts.arc[e], sides, options.smooth)
+            GridKey::of(counts.arc[e], sides, options.smooth, end_widths(p))
         })
         .collect();
     let reuse: Vec<Option<Payload>> = cache.take_grids(&found, &grid_keys);
@@ -1421,6 +1460,9 @@ pub fn assemble_cached(
                         std::mem::take(&mut scratch.params)
                     }
                 };
+                // End grading towards the vertices' widths (the natural parameters stay what
+                // the summaries and the cache compare).
+                let params = grading::grade_piece(g, params, end_widths(p), &mut scratch.graded);
                 let mut m_nodes = Vec::with_capacity(n + 1);
                 let PieceScratch {
                     a_nodes, grid: gs, ..

@@ -73,12 +73,18 @@ impl GeomKey {
 /// Besides the geometry, everything a piece's grids depend on: `n`, the wall-normal count, first
 /// height (flag and bits) and growth of each side, and the smoothing sweeps.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
-pub(crate) struct GridKey([u64; 10]);
+pub(crate) struct GridKey([u64; 12]);
 
 impl GridKey {
-    /// `sides[k] = (nj, first height, growth)` of the block on `circles[k]`.
-    pub(crate) fn of(n: usize, sides: [(usize, Option<f64>, f64); 2], smooth: usize) -> GridKey {
-        let mut w = [0u64; 10];
+    /// `sides[k] = (nj, first height, growth)` of the block on `circles[k]`; `widths` the end
+    /// widths the grading aims for ([`super::grading`]).
+    pub(crate) fn of(
+        n: usize,
+        sides: [(usize, Option<f64>, f64); 2],
+        smooth: usize,
+        widths: [Option<f64>; 2],
+    ) -> GridKey {
+        let mut w = [0u64; 12];
         w[0] = n as u64;
         for (k, (nj, first, growth)) in sides.into_iter().enumerate() {
             w[1 + 4 * k] = nj as u64;
@@ -87,6 +93,9 @@ impl GridKey {
             w[4 + 4 * k] = growth.to_bits();
         }
         w[9] = smooth as u64;
+        // NaN bits never come from a width (`vertex_width` is finite): `None`'s mark.
+        w[10] = widths[0].map_or(u64::MAX, f64::to_bits);
+        w[11] = widths[1].map_or(u64::MAX, f64::to_bits);
         GridKey(w)
     }
 }
