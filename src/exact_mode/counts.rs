@@ -53,6 +53,9 @@ pub struct Known {
     pub min_cells: usize,
     /// `(nbar, target(nbar))`, if known.
     pub target: Option<(f64, f64)>,
+    /// `(nbar, n, widths)`: the end-cell widths `[end][side]` of the natural node
+    /// parameters for that `nbar` and `n` cells (`super::grading::end_widths`), if known.
+    pub ends: Option<(f64, usize, [[f64; 2]; 2])>,
 }
 
 /// The weight of one sub-step of an arc (see the module docs): `max(nbar sq_k, ang_k)`, the
@@ -75,6 +78,18 @@ impl ArcTarget {
                 ..
             }) if nb.to_bits() == nbar.to_bits() => Some(t),
             _ if self.holds_densities() => Some(self.target(nbar)),
+            _ => None,
+        }
+    }
+
+    /// The natural end-cell widths for `nbar` and `n` cells when [`ArcTarget::known`] holds
+    /// them.
+    pub fn known_ends(&self, nbar: f64, n: usize) -> Option<[[f64; 2]; 2]> {
+        match self.known {
+            Some(Known {
+                ends: Some((nb, m, w)),
+                ..
+            }) if nb.to_bits() == nbar.to_bits() && m == n => Some(w),
             _ => None,
         }
     }
@@ -485,6 +500,7 @@ mod tests {
             a.known = Some(Known {
                 min_cells: a.min_cells(),
                 target: Some((nbar, a.target(nbar))),
+                ends: None,
             });
             a.sq.clear();
             a.ang.clear();

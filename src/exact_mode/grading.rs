@@ -29,77 +29,6 @@ use super::{dist, mid, ArcGeometry};
 /// natural spacing then multiplies it).
 pub const MAX_STEP: f64 = 1.2;
 
-/// The end-cell width every arc at a vertex aims for: the vertex's radius over the mean of
-/// `counts` (the wall-normal counts of the circles touching it). `None` when either is not
-/// a positive finite number.
-pub fn vertex_width(radius: f64, counts: impl IntoIterator<Item = usize>) -> Option<f64> {
-    let (mut sum, mut k) = (0usize, 0usize);
-    for c in counts {
-        sum = sum.saturating_add(c);
-        k += 1;
-    }
-    let mean = sum as f64 / k as f64;
-    let w = radius / mean;
-    (k > 0 && sum > 0 && w.is_finite() && w > 0.0).then_some(w)
-}
-
-/// The natural end widths of an arc piece of `n` cells whose ends have the radii `radius`,
-/// each with the weight of that estimate in its vertex's target ([`vertex_widths`]). From
-/// the geometry alone (so the same whatever a cache holds): with `L` the mid-curve chord of
-/// the whole piece, one cell is `L` wide; more cells equidistribute about `L / rho` over `n`
-/// (the spoke-length density), so the end cell at radius `r_k` is about `r_k L / (rho n)`,
-/// `rho` the geometric mean of the end radii. The weight `1 / n²`: arcs of few cells can
-/// hardly be graded, so the others adapt to them.
-pub(crate) fn end_estimates(
-    g: &ArcGeometry,
-    n: usize,
-    radius: [f64; 2],
-) -> [Option<(f64, f64)>; 2] {
-    let Some(chord) = (n > 0).then(|| mid_width(g, 0.0, 1.0)).flatten() else {
-        return [None; 2];
-    };
-    let weight = 1.0 / (n as f64 * n as f64);
-    let rho = (radius[0] * radius[1]).sqrt();
-    radius.map(|r| {
-        let w = if n == 1 {
-            chord
-        } else {
-            r * chord / (rho * n as f64)
-        };
-        (w.is_finite() && w > 0.0).then_some((w, weight))
-    })
-}
-
-/// The target width of each of `count` vertices: the weighted geometric mean of the end
-/// estimates `(ends, [estimate at ends[0], at ends[1]])` of the pieces meeting there (summed
-/// in the order given), or `fallback(v)` where no piece gave one.
-pub(crate) fn vertex_widths<'a>(
-    count: usize,
-    pieces: impl Iterator<Item = ([usize; 2], &'a [Option<(f64, f64)>; 2])>,
-    fallback: impl Fn(usize) -> Option<f64> + Sync,
-) -> Vec<Option<f64>> {
-    let mut acc = vec![(0.0f64, 0.0f64); count];
-    for (ends, est) in pieces {
-        for k in 0..2 {
-            if let (Some(a), Some((w, weight))) = (acc.get_mut(ends[k]), est[k]) {
-                a.0 += weight * w.ln();
-                a.1 += weight;
-            }
-        }
-    }
-    acc.iter()
-        .enumerate()
-        .map(|(v, &(s, wsum))| {
-            let w = (s / wsum).exp();
-            if wsum > 0.0 && w.is_finite() && w > 0.0 {
-                Some(w)
-            } else {
-                fallback(v)
-            }
-        })
-        .collect()
-}
-
 /// The increments `delta_0..delta_{n-1}` (sum 1) whose first and last are as near as
 /// [`MAX_STEP`] allows to `rho[0] / n` and `rho[1] / n` (see the module docs), into `out`.
 /// `rho` are the wanted ratios of the end cells to the natural ones; non-finite or
@@ -248,34 +177,38 @@ pub(crate) struct Scratch {
     out: Vec<f64>,
 }
 
-/// The width of the cell between arc parameters `ta` and `tb` in the measure of the weights:
-/// the mean of the two spoke mid-curve chords (`None` where the arc is not defined).
-fn mid_width(g: &ArcGeometry, ta: f64, tb: f64) -> Option<f64> {
-    let (ma, aa, _) = g.at(ta)?;
-    let (mb, ab, _) = g.at(tb)?;
-    let w = 0.5 * (dist(mid(ma, aa[0]), mid(mb, ab[0])) + dist(mid(ma, aa[1]), mid(mb, ab[1])));
-    (w.is_finite() && w > 0.0).then_some(w)
+/// The widths of the cell between the end spoke at arc parameter `te` and the grid line at
+/// `tc` on both sides (`[side]`): the distance between the two lines' mid-points, normal to
+/// the end spoke (the cell's height across the spoke, as the report's growth ratio measures
+/// it; `None` where the arc is not defined or a width is not positive).
+fn side_widths(g: &ArcGeometry, te: f64, tc: f64) -> Option<[f64; 2]> {
+    let (me, ae, _) = g.at(te)?;
+    let (mc, ac, _) = g.at(tc)?;
+    let w = [0, 1].map(|s| {
+        let (p, q) = (mid(me, ae[s]), mid(mc, ac[s]));
+        let d = [ae[s][0] - me[0], ae[s][1] - me[1]];
+        let c = [q[0] - p[0], q[1] - p[1]];
+        (c[0] * d[1] - c[1] * d[0]).abs() / dist(me, ae[s])
+    });
+    w.iter().all(|x| x.is_finite() && *x > 0.0).then_some(w)
+}
+
+/// The widths of a piece's end cells for its parameters `t`: `[end][side]` (`None` for fewer
+/// than one cell or where a width is not defined).
+pub(crate) fn end_widths(g: &ArcGeometry, t: &[f64]) -> Option<[[f64; 2]; 2]> {
+    let n = t.len().checked_sub(1).filter(|&n| n > 0)?;
+    Some([side_widths(g, t[0], t[1])?, side_widths(g, t[n], t[n - 1])?])
 }
 
 /// The parameters of a piece with natural parameters `t`, graded so that its end cells
-/// approach `widths` (those of its start and end vertices, [`vertex_width`]; `None`: that end
-/// keeps its natural cell). Returns `t` itself when nothing changes, else the graded
-/// parameters (and keeps `t`'s buffer in `scratch`).
-pub(crate) fn grade_piece(
-    g: &ArcGeometry,
-    t: Vec<f64>,
-    widths: [Option<f64>; 2],
-    scratch: &mut Scratch,
-) -> Vec<f64> {
+/// become `rho[end]` times their natural widths (as near as [`increments`] allows). Returns
+/// `t` itself when nothing changes, else the graded parameters (and keeps `t`'s buffer in
+/// `scratch`).
+pub(crate) fn grade_piece(t: Vec<f64>, rho: [f64; 2], scratch: &mut Scratch) -> Vec<f64> {
     let n = t.len().saturating_sub(1);
-    if n < 2 || widths.iter().all(Option::is_none) {
+    if n < 2 || rho == [1.0, 1.0] {
         return t;
     }
-    let natural = [mid_width(g, t[0], t[1]), mid_width(g, t[n - 1], t[n])];
-    let rho = [0, 1].map(|k| match (widths[k], natural[k]) {
-        (Some(w), Some(nat)) => w / nat,
-        _ => 1.0,
-    });
     increments(n, rho, &mut scratch.delta);
     let uniform = scratch
         .delta
@@ -286,6 +219,168 @@ pub(crate) fn grade_piece(
     }
     graded_params(&t, &scratch.delta, &mut scratch.out);
     std::mem::replace(&mut scratch.out, t)
+}
+
+/// What [`end_ratios`] reads of one piece.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct EndInput {
+    /// Its end vertices.
+    pub ends: [usize; 2],
+    /// `slots[side][end]`: the spoke (slot of the vertex) of side `side` at end `end`.
+    pub slots: [[usize; 2]; 2],
+    /// Its cell count.
+    pub n: usize,
+    /// Its natural end widths `[end][side]` ([`end_widths`]); `None`: not graded, and not
+    /// a constraint on its neighbours.
+    pub widths: Option<[[f64; 2]; 2]>,
+}
+
+/// How much the log width of an end cell of a piece of `n` cells may move, about: the
+/// increments ramp by at most [`MAX_STEP`] per cell over about half the piece.
+fn reach(n: usize) -> f64 {
+    MAX_STEP.ln() * (n.saturating_sub(1) as f64 / 2.0)
+}
+
+/// The ratios `rho[end]` each piece's end cell is graded by, from one small least-squares
+/// problem per vertex: with `x` the log ratio of every piece end at the vertex, minimise
+/// `sum over spokes (x_i + u_i - x_j - u_j)^2 + sum_i (x_i / reach_i)^2`, `u` the log natural
+/// widths of the two cells beside a spoke (one on each side: the blocks on its circle) and
+/// `reach_i` how far piece end `i` can be graded ([`reach`]: a piece of one cell not at all,
+/// so its neighbours adapt to it). Vertices are solved in parallel; the result does not
+/// depend on the thread count.
+pub(crate) fn end_ratios(inputs: &[EndInput], vertex_count: usize) -> Vec<[f64; 2]> {
+    use rayon::prelude::*;
+    // Piece ends by vertex (counting sort: piece order within a vertex).
+    let mut start = vec![0usize; vertex_count + 1];
+    for p in inputs {
+        for &v in &p.ends {
+            if v < vertex_count {
+                start[v + 1] += 1;
+            }
+        }
+    }
+    for v in 0..vertex_count {
+        start[v + 1] += start[v];
+    }
+    let mut fill = start.clone();
+    let mut at = vec![(0u32, 0u8); start[vertex_count]];
+    for (e, p) in inputs.iter().enumerate() {
+        for (k, &v) in p.ends.iter().enumerate() {
+            if v < vertex_count {
+                at[fill[v]] = (e as u32, k as u8);
+                fill[v] += 1;
+            }
+        }
+    }
+    let solved: Vec<Vec<f64>> = (0..vertex_count)
+        .into_par_iter()
+        .map(|v| solve_vertex(inputs, &at[start[v]..start[v + 1]]))
+        .collect();
+    let mut rho = vec![[1.0; 2]; inputs.len()];
+    for v in 0..vertex_count {
+        for (&(e, k), &x) in at[start[v]..start[v + 1]].iter().zip(&solved[v]) {
+            rho[e as usize][k as usize] = x.exp();
+        }
+    }
+    rho
+}
+
+/// The log ratios of the piece ends `ends` (`(piece, end)`) at one vertex (see
+/// [`end_ratios`]); 0 for a piece end without widths.
+fn solve_vertex(inputs: &[EndInput], ends: &[(u32, u8)]) -> Vec<f64> {
+    let k = ends.len();
+    let mut a = vec![0.0; k * k];
+    let mut b = vec![0.0; k];
+    // Every pair of piece ends sharing a spoke (the same slot), one on each of its sides.
+    let spoke = |i: usize, side: usize| {
+        let (e, end) = ends[i];
+        inputs[e as usize].slots[side][end as usize]
+    };
+    let log_width = |i: usize, side: usize| {
+        let (e, end) = ends[i];
+        inputs[e as usize]
+            .widths
+            .map(|w| w[end as usize][side].ln())
+    };
+    let mut any = false;
+    for i in 0..k {
+        for j in i + 1..k {
+            for si in 0..2 {
+                for sj in 0..2 {
+                    if spoke(i, si) != spoke(j, sj) {
+                        continue;
+                    }
+                    let (Some(ui), Some(uj)) = (log_width(i, si), log_width(j, sj)) else {
+                        continue;
+                    };
+                    // Residual x_i - x_j + (ui - uj).
+                    let r = ui - uj;
+                    a[i * k + i] += 1.0;
+                    a[j * k + j] += 1.0;
+                    a[i * k + j] -= 1.0;
+                    a[j * k + i] -= 1.0;
+                    b[i] -= r;
+                    b[j] += r;
+                    any = true;
+                }
+            }
+        }
+    }
+    if !any {
+        return vec![0.0; k];
+    }
+    for (i, &(e, _)) in ends.iter().enumerate() {
+        let p = &inputs[e as usize];
+        let reach = if p.widths.is_some() { reach(p.n) } else { 0.0 };
+        a[i * k + i] += if reach > 0.0 {
+            1.0 / (reach * reach)
+        } else {
+            1e12
+        };
+    }
+    let x = solve_dense(a, b, k).unwrap_or_else(|| vec![0.0; k]);
+    // Within each piece end's reach (the increments would clamp further anyway).
+    x.iter()
+        .zip(ends)
+        .map(|(&x, &(e, _))| {
+            let r = reach(inputs[e as usize].n);
+            if x.is_finite() {
+                x.clamp(-r, r)
+            } else {
+                0.0
+            }
+        })
+        .collect()
+}
+
+/// `A x = b` for a symmetric positive definite `k x k` matrix `a` (row major), by Gaussian
+/// elimination with partial pivoting; `None` when singular or not finite.
+fn solve_dense(mut a: Vec<f64>, mut b: Vec<f64>, k: usize) -> Option<Vec<f64>> {
+    for c in 0..k {
+        let p = (c..k).max_by(|&i, &j| a[i * k + c].abs().total_cmp(&a[j * k + c].abs()))?;
+        if !(a[p * k + c].abs() > 0.0) {
+            return None;
+        }
+        if p != c {
+            for j in 0..k {
+                a.swap(p * k + j, c * k + j);
+            }
+            b.swap(p, c);
+        }
+        for i in c + 1..k {
+            let f = a[i * k + c] / a[c * k + c];
+            for j in c..k {
+                a[i * k + j] -= f * a[c * k + j];
+            }
+            b[i] -= f * b[c];
+        }
+    }
+    let mut x = vec![0.0; k];
+    for c in (0..k).rev() {
+        let s: f64 = (c + 1..k).map(|j| a[c * k + j] * x[j]).sum();
+        x[c] = (b[c] - s) / a[c * k + c];
+    }
+    x.iter().all(|v| v.is_finite()).then_some(x)
 }
 
 #[cfg(test)]
@@ -363,13 +458,5 @@ mod tests {
         for (a, b) in out.iter().zip(&t) {
             assert!((a - b).abs() < 1e-12);
         }
-    }
-
-    #[test]
-    fn vertex_width_is_radius_over_mean_count() {
-        assert_eq!(vertex_width(3.0, [2, 4, 6]), Some(0.75));
-        assert_eq!(vertex_width(3.0, []), None);
-        assert_eq!(vertex_width(0.0, [2]), None);
-        assert_eq!(vertex_width(f64::NAN, [2]), None);
     }
 }

@@ -660,12 +660,45 @@ fn summarize(
     let known = Known {
         min_cells: lb,
         target: Some((nbar, target)),
+        ends: None,
     };
     let mut params = Vec::with_capacity(n + 1);
     SUMMARY_PREFIX.with_borrow_mut(|prefix| {
         arc_params_into(&mut scratch.sq, &scratch.ang, n, &mut params, prefix)
     });
     Some((known, (nbar, n, params)))
+}
+
+/// The natural node parameters of piece `e` (geometry `g`, densities held by `t` or computed
+/// here) for `nbar` and `n` cells ([`arc_params_into`] of its weights), and its target for
+/// `nbar` (the sum of the weights, as [`ArcTarget::target`]).
+fn natural_params(
+    e: usize,
+    g: &ArcGeometry,
+    t: &ArcTarget,
+    nbar: f64,
+    n: usize,
+    scratch: &mut PieceScratch,
+) -> Result<(Vec<f64>, f64), MeshError> {
+    let computed;
+    let (sq, ang): (&[f64], &[f64]) = if t.holds_densities() {
+        (&t.sq, &t.ang)
+    } else {
+        computed = g
+            .densities()
+            .ok_or_else(|| internal(format!("arc {e}: the exact medial arc is not defined")))?;
+        (&computed.0, &computed.1)
+    };
+    let weights = &mut scratch.weights;
+    weights.clear();
+    weights.extend(
+        sq.iter()
+            .zip(ang)
+            .map(|(&s, &a)| counts::weight(nbar, s, a)),
+    );
+    let target = weights.iter().sum();
+    arc_params_into(weights, ang, n, &mut scratch.params, &mut scratch.prefix);
+    Ok((std::mem::take(&mut scratch.params), target))
 }
 
 /// What exact mode built, beyond the mesh.
@@ -1338,49 +1371,74 @@ pub fn assemble_cached(
         let first = cl.first_height(domain.circle(c).radius);
         (counts.circle[cidx(c)], first, cl.growth)
     };
-    // The end-cell width every arc at a vertex aims for ([`grading`]), per vertex: the
-    // natural end widths of the arcs there, estimated from their geometry and counts,
-    // averaged with the weights of the arcs' rigidity.
-    // Only for size-driven counts: a fixed grid per block (`--block-cells`) keeps its
-    // equidistributed nodes (grading there traded growth for skewness, see `grading`).
+    let nbar_of = |p: &Piece| {
+        0.5 * (counts.circle[cidx(p.circles[0])] + counts.circle[cidx(p.circles[1])]) as f64
+    };
+    // End grading ([`grading`]): the natural end widths of every piece for its final `nbar`
+    // and count (known to the memo, or from the parameters of its summary, or computed here
+    // from its densities: those parameters then serve the grids as the summary's), then one
+    // small least-squares problem per vertex for the ratios of the end cells. Only for
+    // size-driven counts: a fixed grid per block (`--block-cells`) keeps its equidistributed
+    // nodes, bit for bit.
     let graded = options.block_cells.is_none();
-    let estimates: Vec<[Option<(f64, f64)>; 2]> = if graded {
+    let mut arc_targets = arc_targets;
+    let mut first_params = first_params;
+    let natural: Vec<Option<[[f64; 2]; 2]>> = if graded {
         pieces
             .par_iter()
+            .zip(arc_targets.par_iter_mut())
+            .zip(first_params.par_iter_mut())
             .enumerate()
-            .map(|(e, p)| {
-                let radius = p
-                    .ends
-                    .map(|v| vertices.get(v).map_or(f64::NAN, |x| x.radius));
-                grading::end_estimates(&p.geom, counts.arc[e], radius)
+            .map_init(PieceScratch::default, |scratch, (e, ((p, t), first))| {
+                let (n, nbar) = (counts.arc[e], nbar_of(p));
+                if let Some(w) = t.known_ends(nbar, n) {
+                    return Ok(Some(w));
+                }
+                if let Some((nb, m, params)) = first {
+                    if nb.to_bits() == nbar.to_bits() && *m == n {
+                        return Ok(grading::end_widths(&p.geom, params));
+                    }
+                }
+                // The grids then take these parameters as the summary's, and the memo the
+                // target (as when the grids compute them).
+                let (params, target) = natural_params(e, &p.geom, t, nbar, n, scratch)?;
+                let w = grading::end_widths(&p.geom, &params);
+                if !t.holds_densities() {
+                    t.known = Some(Known {
+                        min_cells: t.min_cells(),
+                        target: Some((nbar, target)),
+                        ends: None,
+                    });
+                }
+                *first = Some((nbar, n, params));
+                Ok(w)
             })
-            .collect()
+            .collect::<Result<_, MeshError>>()?
     } else {
         Vec::new()
     };
-    let vertex_widths = grading::vertex_widths(
-        vertices.len(),
-        pieces.iter().map(|p| p.ends).zip(&estimates),
-        |v| {
-            if !graded {
-                return None;
-            }
-            let x = &vertices[v];
-            let n = x
-                .circles
-                .iter()
-                .map(|&c| counts.circle.get(cidx(c)).copied().unwrap_or(0));
-            grading::vertex_width(x.radius, n)
-        },
-    );
-    drop(estimates);
-    let end_widths = |p: &Piece| p.ends.map(|v| vertex_widths.get(v).copied().flatten());
+    let rho: Vec<[f64; 2]> = if graded {
+        let inputs: Vec<grading::EndInput> = pieces
+            .iter()
+            .zip(&natural)
+            .enumerate()
+            .map(|(e, (p, nat))| grading::EndInput {
+                ends: p.ends,
+                slots: [p.slots[0], p.slots[1]],
+                n: counts.arc[e],
+                widths: *nat,
+            })
+            .collect();
+        grading::end_ratios(&inputs, vertices.len())
+    } else {
+        vec![[1.0; 2]; pieces.len()]
+    };
     let grid_keys: Vec<GridKey> = pieces
         .par_iter()
         .enumerate()
         .map(|(e, p)| {
             let sides = [side_inputs(p, 0), side_inputs(p, 1)];
-            GridKey::of(counts.arc[e], sides, options.smooth, end_widths(p))
+            GridKey::of(counts.arc[e], sides, options.smooth, rho[e])
         })
         .collect();
     let reuse: Vec<Option<Payload>> = cache.take_grids(&found, &grid_keys);
@@ -1405,6 +1463,7 @@ pub fn assemble_cached(
                 let mut known = Known {
                     min_cells: t.min_cells(),
                     target: None,
+                    ends: natural.get(e).copied().flatten().map(|w| (nbar, n, w)),
                 };
                 if let Some((m_nodes, pair, inverted)) = reused {
                     if !uniform {
@@ -1426,43 +1485,17 @@ pub fn assemble_cached(
                         params
                     }
                     None => {
-                        let t = if t.holds_densities() {
-                            t
-                        } else {
-                            let (sq, ang) = g.densities().ok_or_else(|| {
-                                internal(format!("arc {e}: the exact medial arc is not defined"))
-                            })?;
-                            ArcTarget {
-                                sq,
-                                ang,
-                                known: None,
-                                ..t
-                            }
-                        };
+                        let (params, target) = natural_params(e, g, &t, nbar, n, scratch)?;
                         if !uniform {
-                            known.target = Some((nbar, t.target(nbar)));
+                            known.target = Some((nbar, target));
                         }
-                        let weights = &mut scratch.weights;
-                        weights.clear();
-                        weights.extend(
-                            t.sq.iter()
-                                .zip(&t.ang)
-                                .map(|(&s, &a)| counts::weight(nbar, s, a)),
-                        );
-                        arc_params_into(
-                            weights,
-                            &t.ang,
-                            n,
-                            &mut scratch.params,
-                            &mut scratch.prefix,
-                        );
                         drop(t);
-                        std::mem::take(&mut scratch.params)
+                        params
                     }
                 };
-                // End grading towards the vertices' widths (the natural parameters stay what
-                // the summaries and the cache compare).
-                let params = grading::grade_piece(g, params, end_widths(p), &mut scratch.graded);
+                // End grading (the natural parameters stay what the summaries and the memo
+                // compare).
+                let params = grading::grade_piece(params, rho[e], &mut scratch.graded);
                 let mut m_nodes = Vec::with_capacity(n + 1);
                 let PieceScratch {
                     a_nodes, grid: gs, ..

@@ -76,13 +76,13 @@ impl GeomKey {
 pub(crate) struct GridKey([u64; 12]);
 
 impl GridKey {
-    /// `sides[k] = (nj, first height, growth)` of the block on `circles[k]`; `widths` the end
-    /// widths the grading aims for ([`super::grading`]).
+    /// `sides[k] = (nj, first height, growth)` of the block on `circles[k]`; `rho` the end
+    /// grading's ratios ([`super::grading`]).
     pub(crate) fn of(
         n: usize,
         sides: [(usize, Option<f64>, f64); 2],
         smooth: usize,
-        widths: [Option<f64>; 2],
+        rho: [f64; 2],
     ) -> GridKey {
         let mut w = [0u64; 12];
         w[0] = n as u64;
@@ -93,9 +93,8 @@ impl GridKey {
             w[4 + 4 * k] = growth.to_bits();
         }
         w[9] = smooth as u64;
-        // NaN bits never come from a width (`vertex_width` is finite): `None`'s mark.
-        w[10] = widths[0].map_or(u64::MAX, f64::to_bits);
-        w[11] = widths[1].map_or(u64::MAX, f64::to_bits);
+        w[10] = rho[0].to_bits();
+        w[11] = rho[1].to_bits();
         GridKey(w)
     }
 }
@@ -418,6 +417,7 @@ mod tests {
         let known = Known {
             min_cells: 1,
             target: None,
+            ends: None,
         };
         let mut cache = PieceCache::default();
         let n = keys.len();
