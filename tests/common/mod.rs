@@ -366,3 +366,59 @@ pub fn structure_hash(t: &medial_blocks::geometry::Triangulation) -> u64 {
     }
     h
 }
+
+/// Height of the cell at position `p` along side `s` of `g`, normal to the side: its area
+/// over its edge on the side (the report's growth ratio, computed again here from the nodes).
+pub fn side_cell_height(g: &medial_blocks::mesh::BlockGrid, s: usize, p: usize) -> f64 {
+    let (ni, nj) = (g.ni, g.nj);
+    let (i, j) = match s {
+        0 => (p, 0),
+        1 => (ni - 1, p),
+        2 => (ni - 1 - p, nj - 1),
+        _ => (0, nj - 1 - p),
+    };
+    let q = [
+        g.node(i, j),
+        g.node(i + 1, j),
+        g.node(i + 1, j + 1),
+        g.node(i, j + 1),
+    ];
+    let area = 0.5
+        * ((q[2][0] - q[0][0]) * (q[3][1] - q[1][1]) - (q[2][1] - q[0][1]) * (q[3][0] - q[1][0]));
+    let (a, b) = (q[s], q[(s + 1) % 4]);
+    area.abs() / (a[0] - b[0]).hypot(a[1] - b[1])
+}
+
+/// The growth ratios across the interfaces of `m` whose edge `kind` accepts (each interface
+/// once, face by face, from [`side_cell_height`]): `(faces, faces over limit, largest ratio)`.
+pub fn interface_growth(
+    m: &medial_blocks::Mesh,
+    kind: impl Fn(&medial_blocks::layout::EdgeKind) -> bool,
+    limit: f64,
+) -> (usize, usize, f64) {
+    let conn = medial_blocks::connectivity::connectivity(&m.layout, &m.grids).unwrap();
+    let (mut faces, mut over, mut worst) = (0, 0, 1.0f64);
+    for bc in &conn {
+        for sc in &bc.sides {
+            let Some(p) = sc.partner else { continue };
+            let edge = m.layout.blocks[bc.block].sides[sc.side].edge as usize;
+            if !kind(&m.layout.edges[edge].kind) || (p.block, p.side) < (bc.block, sc.side) {
+                continue;
+            }
+            let (ga, gb) = (&m.grids[bc.block], &m.grids[p.block]);
+            let len = if sc.side % 2 == 0 { ga.ni } else { ga.nj };
+            for i in 0..len {
+                let q = if p.same_direction { i } else { len - 1 - i };
+                let (ha, hb) = (
+                    side_cell_height(ga, sc.side, i),
+                    side_cell_height(gb, p.side, q),
+                );
+                let r = ha.max(hb) / ha.min(hb);
+                faces += 1;
+                over += usize::from(r > limit);
+                worst = worst.max(r);
+            }
+        }
+    }
+    (faces, over, worst)
+}
