@@ -44,7 +44,7 @@ pub mod collapsed;
 pub mod counts;
 pub mod densities;
 pub mod equidistribution;
-pub mod grading;
+pub(crate) mod grading;
 pub mod grid_nodes;
 pub mod imposed;
 pub mod inserted;
