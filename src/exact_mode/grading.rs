@@ -526,10 +526,12 @@ mod tests {
             let before = spoke_ratios(&inputs, &[[1.0; 2]; 3]);
             let after = spoke_ratios(&inputs, &rho);
             // The spokes of the rigid arc: matched up to the flexible arcs' small pull
-            // towards their natural cells (and the side ratios no single scale can fix).
+            // towards their natural cells (and the side ratios no single scale can fix),
+            // unless that would widen a cell more than `WIDEN_MAX`.
             for s in [0, 1] {
+                let bound = (0.25 * before[s].ln() + 0.12).max(before[s].ln() - WIDEN_MAX.ln());
                 assert!(
-                    after[s].ln() <= 0.25 * before[s].ln() + 0.12,
+                    after[s].ln() <= bound + 1e-9,
                     "spoke {s}: {} -> {}",
                     before[s],
                     after[s]

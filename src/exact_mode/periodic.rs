@@ -457,6 +457,7 @@ fn build_checking(
             targets: &targets,
             slots: &slots,
             cluster: &cluster,
+            rho: &[],
         };
         let (mut layout, _, medial_edge) = assemble(&parts, &counts, false)?;
         let first = layout.blocks.len();
@@ -533,6 +534,12 @@ fn build_checking(
         }));
     }
     // 4. Layout and grids, instance by instance; then the templates of the inserted holes.
+    // The arcs' end grading first, for size-driven counts (as in bounded domains).
+    let rho = if options.block_cells.is_none() {
+        end_ratios(pb, &verts, &geoms, &targets, &slots, &counts)
+    } else {
+        Vec::new()
+    };
     let parts = Parts {
         pb,
         verts: &verts,
@@ -540,6 +547,7 @@ fn build_checking(
         targets: &targets,
         slots: &slots,
         cluster: &cluster,
+        rho: &rho,
     };
     let (mut layout, mut grids, _) = assemble(&parts, &counts, true)?;
     // Winslow smoothing of the medial blocks (as in bounded exact mode, not the templates;
@@ -660,6 +668,44 @@ impl Builder<'_> {
     }
 }
 
+/// The end grading's ratios of every arc orbit ([`super::grading::end_ratios`]), from its
+/// natural node parameters for the counts `counts` (those [`assemble`] starts from). A spoke
+/// orbit is a slot of a vertex orbit, so the orbits' vertex indices and slots pose the same
+/// per-vertex problems as a bounded domain's vertices.
+fn end_ratios(
+    pb: &PeriodicBlocking,
+    verts: &[Vertex],
+    geoms: &[ArcGeometry],
+    targets: &[ArcTarget],
+    slots: &[[[usize; 2]; 2]],
+    counts: &Counts,
+) -> Vec<[f64; 2]> {
+    let mut inputs = Vec::with_capacity(pb.arcs.len());
+    let (mut params, mut prefix) = (Vec::new(), Vec::new());
+    for (o, arc) in pb.arcs.iter().enumerate() {
+        let n = counts.arc[o];
+        let nbar = 0.5
+            * (counts.circle[arc.circles[0].0 as usize + 1]
+                + counts.circle[arc.circles[1].0 as usize + 1]) as f64;
+        let t = &targets[o];
+        let mut weights: Vec<f64> =
+            t.sq.iter()
+                .zip(&t.ang)
+                .map(|(&s, &a)| super::counts::weight(nbar, s, a))
+                .collect();
+        arc_params_into(&mut weights, &t.ang, n, &mut params, &mut prefix);
+        // `slots[o][end][side]`; the grading reads `[side][end]`.
+        let s = slots[o];
+        inputs.push(super::grading::EndInput {
+            ends: arc.ends.map(|(w, _)| w),
+            slots: [[s[0][0], s[1][0]], [s[0][1], s[1][1]]],
+            n,
+            widths: super::grading::end_widths(&geoms[o], &params),
+        });
+    }
+    super::grading::end_ratios(&inputs, verts.len())
+}
+
 /// What [`assemble`] reads: the orbits' geometry, targets and slots, the clustering per hole.
 struct Parts<'a> {
     pb: &'a PeriodicBlocking,
@@ -668,6 +714,8 @@ struct Parts<'a> {
     targets: &'a [ArcTarget],
     slots: &'a [[[usize; 2]; 2]],
     cluster: &'a dyn Fn(usize) -> super::Clustering,
+    /// The end grading's ratios per arc orbit ([`super::grading`]); empty: not graded.
+    rho: &'a [[f64; 2]],
 }
 
 /// The layout and (`with_grids`) grids of one period with the counts `counts`, instance by
@@ -685,7 +733,9 @@ fn assemble(
         targets,
         slots,
         cluster,
+        rho,
     } = *parts;
+    let mut graded = super::grading::Scratch::default();
     let size = pb.size;
     let mut medial_edge = Vec::with_capacity(pb.arcs.len());
     let mut b = Builder {
@@ -717,6 +767,9 @@ fn assemble(
             &mut params,
             &mut Vec::new(),
         );
+        if let Some(&r) = rho.get(o) {
+            params = super::grading::grade_piece(params, r, &mut graded);
+        }
         let mut m_nodes = Vec::with_capacity(n + 1);
         let mut a_nodes: [Vec<Point>; 2] = [Vec::with_capacity(n + 1), Vec::with_capacity(n + 1)];
         for &t in &params {
