@@ -1,6 +1,6 @@
 //! End grading of the nodes along an arc piece, so that the cells on either side of a spoke
-//! have about the same width (size-driven counts only; `--block-cells` grids keep their
-//! equidistributed nodes).
+//! have about the same width (size-driven counts only, in bounded domains and, over arc
+//! orbits, periodic boxes; `--block-cells` grids keep their equidistributed nodes).
 //!
 //! Why: the blocks on one circle share its spokes, but each arc equidistributes its own
 //! weights over its own count (`equidistribution::arc_params_into`), and arcs leave a medial
