@@ -668,6 +668,27 @@ impl Builder<'_> {
     }
 }
 
+/// The natural node parameters of arc orbit `o` for the counts `counts` into `params`
+/// ([`arc_params_into`] of its weights for its `nbar`).
+fn orbit_params(
+    pb: &PeriodicBlocking,
+    targets: &[ArcTarget],
+    counts: &Counts,
+    o: usize,
+    params: &mut Vec<f64>,
+) {
+    let c = pb.arcs[o].circles;
+    let nbar =
+        0.5 * (counts.circle[c[0].0 as usize + 1] + counts.circle[c[1].0 as usize + 1]) as f64;
+    let t = &targets[o];
+    let mut weights: Vec<f64> =
+        t.sq.iter()
+            .zip(&t.ang)
+            .map(|(&s, &a)| super::counts::weight(nbar, s, a))
+            .collect();
+    arc_params_into(&mut weights, &t.ang, counts.arc[o], params, &mut Vec::new());
+}
+
 /// The end grading's ratios of every arc orbit ([`super::grading::end_ratios`]), from its
 /// natural node parameters for the counts `counts` (those [`assemble`] starts from). A spoke
 /// orbit is a slot of a vertex orbit, so the orbits' vertex indices and slots pose the same
@@ -681,19 +702,10 @@ fn end_ratios(
     counts: &Counts,
 ) -> Vec<[f64; 2]> {
     let mut inputs = Vec::with_capacity(pb.arcs.len());
-    let (mut params, mut prefix) = (Vec::new(), Vec::new());
+    let mut params = Vec::new();
     for (o, arc) in pb.arcs.iter().enumerate() {
         let n = counts.arc[o];
-        let nbar = 0.5
-            * (counts.circle[arc.circles[0].0 as usize + 1]
-                + counts.circle[arc.circles[1].0 as usize + 1]) as f64;
-        let t = &targets[o];
-        let mut weights: Vec<f64> =
-            t.sq.iter()
-                .zip(&t.ang)
-                .map(|(&s, &a)| super::counts::weight(nbar, s, a))
-                .collect();
-        arc_params_into(&mut weights, &t.ang, n, &mut params, &mut prefix);
+        orbit_params(pb, targets, counts, o, &mut params);
         // `slots[o][end][side]`; the grading reads `[side][end]`.
         let s = slots[o];
         inputs.push(super::grading::EndInput {
@@ -750,23 +762,8 @@ fn assemble(
     for (o, arc) in pb.arcs.iter().enumerate() {
         let g = &geoms[o];
         let n = counts.arc[o];
-        let nbar = 0.5
-            * (counts.circle[arc.circles[0].0 as usize + 1]
-                + counts.circle[arc.circles[1].0 as usize + 1]) as f64;
-        let mut weights: Vec<f64> = targets[o]
-            .sq
-            .iter()
-            .zip(&targets[o].ang)
-            .map(|(&s, &a)| super::counts::weight(nbar, s, a))
-            .collect();
         let mut params = Vec::with_capacity(n + 1);
-        arc_params_into(
-            &mut weights,
-            &targets[o].ang,
-            n,
-            &mut params,
-            &mut Vec::new(),
-        );
+        orbit_params(pb, targets, counts, o, &mut params);
         if let Some(&r) = rho.get(o) {
             params = super::grading::grade_piece(params, r, &mut graded);
         }
