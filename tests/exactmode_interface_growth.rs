@@ -89,7 +89,7 @@ fn periodic_cells_facing_across_a_medial_arc_stay_within_three_halves() {
         let (worst_count, faces, _, _) = medial_growth(&m);
         assert!(faces > 0);
         // Across spokes the end grading works on arc orbits as in bounded domains: 28-34% of
-        // these layouts' spoke faces were over 1.5 before it, 5-11% after (the rest beside
+        // these layouts' spoke faces were over 1.5 before it, 6-12% after (the rest beside
         // arcs of one or two cells, which cannot be graded).
         let (spoke_faces, over, _) = common::interface_growth(&m, |k| *k == EdgeKind::Spoke, 1.5);
         assert!(
@@ -106,7 +106,8 @@ fn periodic_cells_facing_across_a_medial_arc_stay_within_three_halves() {
 
 /// Across spokes: the arcs' end grading leaves under 1% of the spoke faces of size-driven
 /// meshes over 1.5 (15% before it, from the different spacings of neighbouring arcs) and none
-/// over 2.2 (3.4 before), with no inverted cell and every mesh invariant of `check_mesh`.
+/// over 2.8 (3.4 before; the largest left are beside sharp corner cells the grading leaves
+/// alone), with no inverted cell and every mesh invariant of `check_mesh`.
 #[test]
 fn cells_across_a_spoke_stay_within_three_halves() {
     let spoke = |k: &EdgeKind| *k == EdgeKind::Spoke;
@@ -119,8 +120,45 @@ fn cells_across_a_spoke_stay_within_three_halves() {
             over * 100 < faces,
             "{n} bubbles: {over} of {faces} spoke faces over 1.5"
         );
-        assert!(worst < 2.2, "{n} bubbles: growth {worst} across a spoke");
+        assert!(worst < 2.8, "{n} bubbles: growth {worst} across a spoke");
         assert_eq!(common::count_inverted_cells(&m.grids), 0);
         medial_blocks::fuzzing::check_mesh(&domain, &m).unwrap();
+    }
+}
+
+/// The grading leaves alone an end whose corner cell at its vertex it would make sharper,
+/// below `grading::GUARD_ANGLE` (20 degrees): two layouts of mixed sizes (from the
+/// adversarial sweep) whose smallest angle, at such a corner, fell from 16.10 to 14.32 and
+/// from 14.57 to 13.80 degrees when every end was graded. Angles from the nodes here (atan2
+/// of each corner), not the report.
+#[test]
+fn sharp_corner_cells_are_not_made_sharper() {
+    for (file, smallest) in [
+        ("mixed_sizes_sharp_corner_a.json", 16.09),
+        ("mixed_sizes_sharp_corner_b.json", 14.56),
+    ] {
+        let path = format!("{}/tests/data/{file}", env!("CARGO_MANIFEST_DIR"));
+        let domain =
+            medial_blocks::Domain::from_json_str(&std::fs::read_to_string(path).unwrap()).unwrap();
+        let m = mesh(&domain, &Options::default()).unwrap();
+        let mut least = f64::INFINITY;
+        for q in common::cells(&m) {
+            for k in 0..4 {
+                let (o, a, b) = (q[k], q[(k + 1) % 4], q[(k + 3) % 4]);
+                let (u, v) = ([a[0] - o[0], a[1] - o[1]], [b[0] - o[0], b[1] - o[1]]);
+                let angle = (u[0] * v[1] - u[1] * v[0])
+                    .atan2(u[0] * v[0] + u[1] * v[1])
+                    .to_degrees();
+                least = least.min(angle);
+            }
+        }
+        assert!(least >= smallest, "{file}: smallest angle {least}");
+        // Still graded elsewhere: 13-14% of the spoke faces over 1.5 (48% of the first
+        // layout's before the grading; arcs of one or two cells beside tiny holes are left).
+        let (faces, over, _) = common::interface_growth(&m, |k| *k == EdgeKind::Spoke, 1.5);
+        assert!(
+            over * 4 < faces,
+            "{file}: {over} of {faces} spoke faces over 1.5"
+        );
     }
 }

@@ -14,15 +14,15 @@
 //! between the end spoke's and the next grid line's mid-points, normal to the spoke) plus a
 //! penalty `(x / reach)^2` for how far the piece can be graded ([`reach`]: a piece of one
 //! cell not at all, so its neighbours adapt to it); no end cell is widened more than
-//! [`WIDEN_MAX`]. At 1e3 bubbles 744 of 217 576 interface faces are then over 1.5 (15 851
-//! before; largest 3.41 -> 2.11), the equiangle skewness over 0.5 falls from 115 112 to 82 083
-//! cells, the largest aspect ratio from 6.6 to 4.5, the mean smallest angle rises from 75.8 to
-//! 77.0 degrees; the smallest angle and scaled Jacobian move by 0.005 degree and 1e-4 (1e4:
-//! 159 042 -> 4 602 faces over 1.5). The smallest angle of a layout can drop a little where an
-//! end cell at a vertex is regraded along a curving medial arc (at most 0.54 degrees over 420
-//! sweep layouts, none below the sweep's smallest). (With `--block-cells` the same grading
-//! took the outside count from 67 618 to 43 643 faces but the skewed cells from 30 245 to
-//! 38 593, so fixed grids per block are left as they are.)
+//! [`WIDEN_MAX`], and an end whose corner cell at the vertex would get sharper, below
+//! [`GUARD_ANGLE`], keeps its natural cell ([`grade_piece`]). At 1e3 bubbles 999 of 217 576
+//! interface faces are then over 1.5 (15 851 before; spoke faces 15 358 -> 482 of 102 131),
+//! the equiangle skewness over 0.5 falls from 115 112 to 83 657 cells, the mean smallest
+//! angle rises from 75.8 to 77.0 degrees, and the smallest angle and scaled Jacobian are
+//! unchanged (1e4: 159 042 -> 6 801 faces over 1.5, smallest angle 14.651 -> 14.656). Over
+//! 420 sweep layouts no smallest angle fell by more than 0.1 degree. (With `--block-cells`
+//! an earlier form of this grading took the outside count from 67 618 to 43 643 faces but
+//! the skewed cells from 30 245 to 38 593, so fixed grids per block are left as they are.)
 //!
 //! How, per piece ([`grade_piece`]): the natural parameters `t_i` (cell `i` carries `1 / n`
 //! of the arc's weight) are re-sampled at `u_i = delta_0 + ... + delta_{i-1}` on their
@@ -35,6 +35,7 @@
 //! construction; the natural parameters (what the memo compares) are unchanged.
 
 use super::{dist, mid, ArcGeometry};
+use crate::geometry::Point;
 
 /// The largest ratio of consecutive increments along an arc that the grading introduces (the
 /// natural spacing then multiplies it).
@@ -211,32 +212,85 @@ pub(crate) fn end_widths(g: &ArcGeometry, t: &[f64]) -> Option<[[f64; 2]; 2]> {
     Some([side_widths(g, t[0], t[1])?, side_widths(g, t[n], t[n - 1])?])
 }
 
-/// The parameters of a piece with natural parameters `t`, graded so that its end cells
-/// become `rho[end]` times their natural widths (as near as [`increments`] allows). Returns
-/// `t` itself when nothing changes, else the graded parameters (and keeps `t`'s buffer in
-/// `scratch`).
-pub(crate) fn grade_piece(t: Vec<f64>, rho: [f64; 2], scratch: &mut Scratch) -> Vec<f64> {
+/// The parameters of a piece (geometry `g`) with natural parameters `t`, graded so that its
+/// end cells become `rho[end]` times their natural widths (as near as [`increments`]
+/// allows). An end whose corner cell at its vertex would then have a smaller angle than
+/// with the natural parameters, below [`GUARD_ANGLE`], keeps its natural end cell (the
+/// grading is done again with ratio 1 there). Returns `t` itself when nothing changes, else
+/// the graded parameters (and keeps `t`'s buffer in `scratch`).
+pub(crate) fn grade_piece(
+    g: &ArcGeometry,
+    t: Vec<f64>,
+    mut rho: [f64; 2],
+    scratch: &mut Scratch,
+) -> Vec<f64> {
     let n = t.len().saturating_sub(1);
-    if n < 2 || rho == [1.0, 1.0] {
-        return t;
+    for _round in 0..2 {
+        if n < 2 || rho == [1.0, 1.0] {
+            return t;
+        }
+        increments(n, rho, &mut scratch.delta);
+        let uniform = scratch
+            .delta
+            .iter()
+            .all(|&d| (d * n as f64 - 1.0).abs() <= 1e-12);
+        if uniform {
+            return t;
+        }
+        graded_params(&t, &scratch.delta, &mut scratch.out);
+        let o = &scratch.out;
+        let ends = [(t[0], t[1], o[0], o[1]), (t[n], t[n - 1], o[n], o[n - 1])];
+        let mut kept = false;
+        for (k, &(te, tc, ge, gc)) in ends.iter().enumerate() {
+            if rho[k] == 1.0 {
+                continue;
+            }
+            let graded = corner_angle(g, ge, gc);
+            if graded.is_some_and(|a| a < GUARD_ANGLE) && graded < corner_angle(g, te, tc) {
+                rho[k] = 1.0;
+                kept = true;
+            }
+        }
+        if !kept {
+            return std::mem::replace(&mut scratch.out, t);
+        }
     }
-    increments(n, rho, &mut scratch.delta);
-    let uniform = scratch
-        .delta
-        .iter()
-        .all(|&d| (d * n as f64 - 1.0).abs() <= 1e-12);
-    if uniform {
-        return t;
+    // Both ends kept (the second round returns before this for any other outcome).
+    t
+}
+
+/// Corner cells at a vertex whose smallest angle is below this (degrees) are not made worse
+/// by the grading ([`grade_piece`]).
+pub const GUARD_ANGLE: f64 = 20.0;
+
+/// The smallest angle (degrees) of the cells between the end spoke at arc parameter `te`
+/// and the grid line at `tc` where they meet the medial arc, on either side: the angles at
+/// the two medial nodes between the chord joining them and each spoke, and their
+/// supplements (the cell's corners on the spokes one row in). `None` where not defined.
+fn corner_angle(g: &ArcGeometry, te: f64, tc: f64) -> Option<f64> {
+    let (me, ae, _) = g.at(te)?;
+    let (mc, ac, _) = g.at(tc)?;
+    let angle = |o: Point, p: Point, q: Point| {
+        let (u, v) = ([p[0] - o[0], p[1] - o[1]], [q[0] - o[0], q[1] - o[1]]);
+        (u[0] * v[1] - u[1] * v[0])
+            .abs()
+            .atan2(u[0] * v[0] + u[1] * v[1])
+            .to_degrees()
+    };
+    let mut least = f64::INFINITY;
+    for s in 0..2 {
+        for a in [angle(me, mc, ae[s]), angle(mc, me, ac[s])] {
+            least = least.min(a).min(180.0 - a);
+        }
     }
-    graded_params(&t, &scratch.delta, &mut scratch.out);
-    std::mem::replace(&mut scratch.out, t)
+    least.is_finite().then_some(least)
 }
 
 /// The most an end cell is widened (its natural width times this). Widening an end cell moves
-/// the first grid line off the vertex along a medial arc that may curve there, which narrows
-/// the corner cell's angle at the vertex (a layout of mixed sizes lost 1.8 degrees of its
-/// smallest angle to a 3.6-fold widening); at most 2: 227 of 102 131 spoke faces of 1e3
-/// bubbles stay over 1.5 (120 unbounded, 1 101 at 1.5).
+/// the first grid line off the vertex along a medial arc that may curve there, which can
+/// narrow the corner cell's angle at the vertex (a layout of mixed sizes lost 1.8 degrees of
+/// its smallest angle to a 3.6-fold widening, before [`GUARD_ANGLE`]); at most 2: 227 of
+/// 102 131 spoke faces of 1e3 bubbles stayed over 1.5 (120 unbounded, 1 101 at 1.5).
 pub const WIDEN_MAX: f64 = 2.0;
 
 /// What [`end_ratios`] reads of one piece.

@@ -1495,7 +1495,7 @@ pub fn assemble_cached(
                 };
                 // End grading (the natural parameters stay what the summaries and the memo
                 // compare).
-                let params = grading::grade_piece(params, rho[e], &mut scratch.graded);
+                let params = grading::grade_piece(g, params, rho[e], &mut scratch.graded);
                 let mut m_nodes = Vec::with_capacity(n + 1);
                 let PieceScratch {
                     a_nodes, grid: gs, ..

@@ -765,7 +765,7 @@ fn assemble(
         let mut params = Vec::with_capacity(n + 1);
         orbit_params(pb, targets, counts, o, &mut params);
         if let Some(&r) = rho.get(o) {
-            params = super::grading::grade_piece(params, r, &mut graded);
+            params = super::grading::grade_piece(g, params, r, &mut graded);
         }
         let mut m_nodes = Vec::with_capacity(n + 1);
         let mut a_nodes: [Vec<Point>; 2] = [Vec::with_capacity(n + 1), Vec::with_capacity(n + 1)];
