@@ -1457,9 +1457,7 @@ pub fn assemble_cached(
             |scratch, (e, (((p, t), reused), first))| {
                 let g = &p.geom;
                 let n = counts.arc[e];
-                let nbar = 0.5
-                    * (counts.circle[cidx(p.circles[0])] + counts.circle[cidx(p.circles[1])])
-                        as f64;
+                let nbar = nbar_of(p);
                 let mut known = Known {
                     min_cells: t.min_cells(),
                     target: None,
