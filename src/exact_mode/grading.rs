@@ -34,7 +34,7 @@
 //! little or not at all. Both blocks of a piece share its parameters, so conformity holds by
 //! construction; the natural parameters (what the memo compares) are unchanged.
 
-use super::{dist, mid, ArcGeometry};
+use super::{dist, mid, turn_parts, ArcGeometry};
 use crate::geometry::Point;
 
 /// The largest ratio of consecutive increments along an arc that the grading introduces (the
@@ -271,11 +271,8 @@ fn corner_angle(g: &ArcGeometry, te: f64, tc: f64) -> Option<f64> {
     let (me, ae, _) = g.at(te)?;
     let (mc, ac, _) = g.at(tc)?;
     let angle = |o: Point, p: Point, q: Point| {
-        let (u, v) = ([p[0] - o[0], p[1] - o[1]], [q[0] - o[0], q[1] - o[1]]);
-        (u[0] * v[1] - u[1] * v[0])
-            .abs()
-            .atan2(u[0] * v[0] + u[1] * v[1])
-            .to_degrees()
+        let (cross, dot) = turn_parts(o, p, q);
+        cross.abs().atan2(dot).to_degrees()
     };
     let mut least = f64::INFINITY;
     for s in 0..2 {
