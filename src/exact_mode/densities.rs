@@ -75,6 +75,10 @@ struct Passes {
     sqa: [f64; ARC_SUBSTEPS],
     ca: [f64; ARC_SUBSTEPS],
     da: [f64; ARC_SUBSTEPS],
+    /// The turn parts of the second wall, for blended arcs (both walls' turns are measured,
+    /// [`ArcGeometry::densities_blended`]).
+    cb: [f64; ARC_SUBSTEPS],
+    db: [f64; ARC_SUBSTEPS],
 }
 
 impl Default for Passes {
@@ -92,6 +96,8 @@ impl Default for Passes {
             sqa: [0.0; ARC_SUBSTEPS],
             ca: [0.0; ARC_SUBSTEPS],
             da: [0.0; ARC_SUBSTEPS],
+            cb: [0.0; ARC_SUBSTEPS],
+            db: [0.0; ARC_SUBSTEPS],
         }
     }
 }
@@ -169,9 +175,6 @@ impl ArcGeometry {
         sq: &mut Vec<f64>,
         ang: &mut Vec<f64>,
     ) -> Option<()> {
-        if self.blended() {
-            return self.densities_plain_into(sq, ang);
-        }
         #[cfg(target_arch = "x86_64")]
         match lanes {
             // SAFETY: `Lanes::available` checked the CPU's features.
@@ -214,6 +217,9 @@ impl ArcGeometry {
         sq: &mut Vec<f64>,
         ang: &mut Vec<f64>,
     ) -> Option<()> {
+        if self.blended() {
+            return self.densities_blended(b, sq, ang);
+        }
         const K: usize = ARC_SUBSTEPS;
         const N: usize = K + 1;
         let Passes {
@@ -229,6 +235,7 @@ impl ArcGeometry {
             sqa,
             ca,
             da,
+            ..
         } = b;
         sq.clear();
         ang.clear();
@@ -361,6 +368,159 @@ impl ArcGeometry {
                 *a = larger_of_turns(c, d, turn_p, tan_p) / MAX_WALL_ANGLE;
             }
         }
+        Some(())
+    }
+
+    /// [`ArcGeometry::densities_plain_into`] of a blended arc (an end off the bisector), bit
+    /// for bit, in passes over arrays: the unit vectors (`cos` and `sin` of the very angles of
+    /// [`ArcGeometry::at`], one point after the other), then every point (the expressions of
+    /// `at`'s blended branch: bisector point, faded offsets, projections on both walls), then
+    /// every sub-step's length density and both walls' turn parts, and last the larger turn
+    /// ([`larger_turn`], one `atan2` where it is clear) one sub-step after the other. The
+    /// divisions and square roots of independent points run side by side in vector lanes
+    /// (the same IEEE operations on the same operands, nothing fused or reassociated).
+    ///
+    /// A squared length outside `[LENGTH_SQ_MIN, LENGTH_SQ_MAX]` (where `length` takes
+    /// `hypot`) sends the arc to the plain formula. `None` exactly when the plain formula
+    /// gives it: some point not defined.
+    #[inline(always)]
+    fn densities_blended(
+        &self,
+        b: &mut Passes,
+        sq: &mut Vec<f64>,
+        ang: &mut Vec<f64>,
+    ) -> Option<()> {
+        use crate::geometry::{LENGTH_SQ_MAX, LENGTH_SQ_MIN};
+        const K: usize = ARC_SUBSTEPS;
+        const N: usize = K + 1;
+        let Passes {
+            ux,
+            uy,
+            mx,
+            my,
+            r,
+            tx,
+            ty,
+            hx,
+            hy,
+            sqa,
+            ca,
+            da,
+            cb,
+            db,
+        } = b;
+        sq.clear();
+        ang.clear();
+        let p = self.param;
+        let q = 1 - p;
+        let (wp, wq) = (&self.walls[p], &self.walls[q]);
+        let [w0, w1] = &self.walls;
+        let [o0, o1] = self.offset;
+        let in_range = |x: f64| (LENGTH_SQ_MIN..=LENGTH_SQ_MAX).contains(&x);
+        // Pass 1: the unit vectors of `at(s / K)` (`medial_point`'s `cos` and `sin`).
+        for s in 1..K {
+            let t = s as f64 / K as f64;
+            let theta = self.start[p] + t * self.sweep[p];
+            (ux[s], uy[s]) = (theta.cos(), theta.sin());
+        }
+        // Pass 2: every point, as `at`: the ends exactly, the interior points from the
+        // bisector point (`medial_point_u`) moved by the faded offsets and projected on both
+        // walls (`Wall::project`), the radius the mean of the two spokes (`dist`).
+        for (s, k) in [(0, 0.0), (K, 1.0)] {
+            let (m, a, rho) = self.at(k)?;
+            (mx[s], my[s], r[s]) = (m[0], m[1], rho);
+            for w in 0..2 {
+                (tx[w][s], ty[w][s]) = (a[w][0], a[w][1]);
+            }
+        }
+        let neg = wp.s < 0.0;
+        let (mut ok, mut fits) = (true, true);
+        {
+            let [t0x, t1x] = tx;
+            let [t0y, t1y] = ty;
+            for s in 1..K {
+                let (u0, u1) = (ux[s], uy[s]);
+                let a0 = wp.c[0] + wp.r * u0;
+                let a1 = wp.c[1] + wp.r * u1;
+                let (n0, n1) = if neg { (-u0, -u1) } else { (u0, u1) };
+                let d0 = a0 - wq.c[0];
+                let d1 = a1 - wq.c[1];
+                let den = 2.0 * (d0 * n0 + d1 * n1 - wq.s);
+                let rho = (wq.s * wq.s - (d0 * d0 + d1 * d1)) / den;
+                let m0 = a0 + rho * n0;
+                let m1 = a1 + rho * n1;
+                ok &= rho.is_finite() & (rho >= 0.0) & m0.is_finite() & m1.is_finite();
+                // `blend` of an interior parameter and of its complement (both in (0, 1)).
+                let t = s as f64 / K as f64;
+                let (f, g) = (t, 1.0 - t);
+                let (b0, b1) = (1.0 - f * f * (3.0 - 2.0 * f), 1.0 - g * g * (3.0 - 2.0 * g));
+                let m0 = m0 + b0 * o0[0] + b1 * o1[0];
+                let m1 = m1 + b0 * o0[1] + b1 * o1[1];
+                // `Wall::project` on each wall, then `dist` back to the point.
+                let (e0, e1) = (m0 - w0.c[0], m1 - w0.c[1]);
+                let (f0, f1) = (m0 - w1.c[0], m1 - w1.c[1]);
+                let (le, lf) = (e0 * e0 + e1 * e1, f0 * f0 + f1 * f1);
+                fits &= in_range(le) & in_range(lf);
+                let (le, lf) = (le.sqrt(), lf.sqrt());
+                let (pe0, pe1) = (w0.c[0] + w0.r * e0 / le, w0.c[1] + w0.r * e1 / le);
+                let (pf0, pf1) = (w1.c[0] + w1.r * f0 / lf, w1.c[1] + w1.r * f1 / lf);
+                let (g0, g1) = (m0 - pe0, m1 - pe1);
+                let (h0, h1) = (m0 - pf0, m1 - pf1);
+                let (lg, lh) = (g0 * g0 + g1 * g1, h0 * h0 + h1 * h1);
+                fits &= in_range(lg) & in_range(lh);
+                let radius = 0.5 * (lg.sqrt() + lh.sqrt());
+                ok &= pe0.is_finite()
+                    & pe1.is_finite()
+                    & pf0.is_finite()
+                    & pf1.is_finite()
+                    & m0.is_finite()
+                    & m1.is_finite()
+                    & radius.is_finite();
+                (mx[s], my[s], r[s]) = (m0, m1, radius);
+                (t0x[s], t0y[s], t1x[s], t1y[s]) = (pe0, pe1, pf0, pf1);
+            }
+        }
+        if !fits {
+            return self.densities_plain_into(sq, ang);
+        }
+        if !ok {
+            return None;
+        }
+        // Pass 3: the spoke mid-points (`mid`), then every sub-step's length density (`dist`
+        // of consecutive mid-points) and both walls' turn parts (`turn_parts`).
+        for w in 0..2 {
+            for s in 0..N {
+                hx[w][s] = 0.5 * (mx[s] + tx[w][s]);
+                hy[w][s] = 0.5 * (my[s] + ty[w][s]);
+            }
+        }
+        for s in 1..N {
+            let mut ds = 0.0;
+            for w in 0..2 {
+                let x = hx[w][s - 1] - hx[w][s];
+                let y = hy[w][s - 1] - hy[w][s];
+                let l = x * x + y * y;
+                fits &= in_range(l);
+                let l = l.sqrt();
+                ds = if w == 0 { l } else { ds + l };
+            }
+            let ds = 0.5 * ds;
+            let rho = 0.5 * (r[s - 1] + r[s]);
+            sqa[s - 1] = if rho > 0.0 { ds / rho } else { 0.0 };
+            let (u0, u1) = (tx[0][s - 1] - w0.c[0], ty[0][s - 1] - w0.c[1]);
+            let (v0, v1) = (tx[0][s] - w0.c[0], ty[0][s] - w0.c[1]);
+            ca[s - 1] = u0 * v1 - u1 * v0;
+            da[s - 1] = u0 * v0 + u1 * v1;
+            let (u0, u1) = (tx[1][s - 1] - w1.c[0], ty[1][s - 1] - w1.c[1]);
+            let (v0, v1) = (tx[1][s] - w1.c[0], ty[1][s] - w1.c[1]);
+            cb[s - 1] = u0 * v1 - u1 * v0;
+            db[s - 1] = u0 * v0 + u1 * v1;
+        }
+        if !fits {
+            return self.densities_plain_into(sq, ang);
+        }
+        sq.extend_from_slice(&sqa[..]);
+        ang.extend((0..K).map(|s| larger_turn(ca[s], da[s], cb[s], db[s]) / MAX_WALL_ANGLE));
         Some(())
     }
 

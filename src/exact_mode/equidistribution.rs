@@ -126,14 +126,19 @@ pub(crate) fn arc_params_into(
 /// sums: no cell carries more than `G k W`, with `G` the largest density, `k` the sub-steps
 /// and `W` the widest cell (in parameter), and the rounding of those sums is at most a few
 /// hundred ulps of their total `<= G k` (the `1e-12 G k` term, with a margin of
-/// `ANG_SLACK / 2` besides). False when a density is negative or not finite (the full
-/// computation decides those).
+/// `ANG_SLACK / 2` besides). False when a density is negative (`-0.0` too) or a density or a
+/// parameter is not finite (the full computation decides those).
 fn within_ang_limit(ang: &[f64], t: &[f64]) -> bool {
-    let mut g = 0.0f64;
-    let mut ok = true;
-    for &x in ang {
-        ok &= (x >= 0.0) & x.is_finite();
-        g = if x > g { x } else { g };
+    // Non-negative finite floats order as their bits; every other bit pattern (negative,
+    // `-0.0` included, infinite, NaN) is at least that of `+inf`: one unsigned maximum (a
+    // reduction the compiler vectorises) gives both the largest density and the check.
+    let top = ang.iter().fold(0u64, |m, x| m.max(x.to_bits()));
+    if top >= f64::INFINITY.to_bits() {
+        return false;
+    }
+    let g = f64::from_bits(top);
+    if !t.iter().all(|x| x.is_finite()) {
+        return false;
     }
     let mut widest = 0.0f64;
     for c in t.windows(2) {
@@ -141,7 +146,7 @@ fn within_ang_limit(ang: &[f64], t: &[f64]) -> bool {
         widest = if d > widest { d } else { widest };
     }
     let gk = g * ang.len() as f64;
-    ok && gk * widest + 1e-12 * gk <= 1.0 + 0.5 * ANG_SLACK
+    gk * widest + 1e-12 * gk <= 1.0 + 0.5 * ANG_SLACK
 }
 
 /// The most wall-angle density (`ang`, per sub-step, taken as spread evenly over its
@@ -317,6 +322,9 @@ mod tests {
         assert!(!within_ang_limit(&[0.1, f64::NAN], &[0.0, 1.0]));
         assert!(!within_ang_limit(&[0.1, -0.1], &[0.0, 1.0]));
         assert!(!within_ang_limit(&[0.1, f64::INFINITY], &[0.0, 1.0]));
+        assert!(!within_ang_limit(&[0.1, -0.0], &[0.0, 1.0]));
+        assert!(!within_ang_limit(&[0.1, 0.1], &[0.0, f64::NAN, 1.0]));
+        assert!(within_ang_limit(&[0.1, 0.0], &[0.0, 0.5, 1.0]));
     }
 
     /// Arcs whose cells all stay within one unit keep the plain parameters, bit for bit.
