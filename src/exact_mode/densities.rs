@@ -13,6 +13,10 @@
 //!
 //! The ends are the exact end points, as in `at`. Tested against the plain formula on random
 //! arcs and on every piece of real layouts (`tests/perf_densities.rs`).
+//!
+//! Arcs with an end off the bisector (blended, `exact_mode::blend`) are the exception: every
+//! build gives the plain formula's values bit for bit (`ArcGeometry::densities_blended`, the
+//! same operations in passes over arrays).
 
 use super::{dist, larger_turn, medial_point_u, mid, turn_parts, ArcGeometry, Wall};
 use super::{ARC_SUBSTEPS, MAX_WALL_ANGLE};
@@ -583,7 +587,8 @@ impl ArcGeometry {
 
     /// [`ArcGeometry::densities_plain`] into `sq` and `ang` (cleared first): what every build
     /// of the densities gives for an arc with an end off the bisector (every point of such an
-    /// arc is off the bisector, [`super::blend`], which the batched passes compute).
+    /// arc is off the bisector, [`super::blend`]), there computed in passes over arrays
+    /// ([`ArcGeometry::densities_blended`]), here point by point.
     pub(crate) fn densities_plain_into(&self, sq: &mut Vec<f64>, ang: &mut Vec<f64>) -> Option<()> {
         let k = ARC_SUBSTEPS;
         sq.clear();
