@@ -1852,12 +1852,18 @@ mod blend_tests {
     /// A random arc between two holes from bisector angle `t0` to `t1` on the first, with end
     /// `k`'s centre moved by `shift[k]` (as a merged centre is): `None` when undefined.
     fn arc(rng: &mut SplitMix64, shift: [Point; 2]) -> Option<ArcGeometry> {
-        let p = hole(0.0, 0.0, 1.0);
+        arc_scaled(rng, shift, 1.0)
+    }
+
+    /// [`arc`] with every length times `scale` (`shift` too).
+    fn arc_scaled(rng: &mut SplitMix64, shift: [Point; 2], scale: f64) -> Option<ArcGeometry> {
+        let p = hole(0.0, 0.0, scale);
         let q = hole(
-            2.5 + rng.next_f64(),
-            rng.next_f64() - 0.5,
-            0.3 + rng.next_f64(),
+            scale * (2.5 + rng.next_f64()),
+            scale * (rng.next_f64() - 0.5),
+            scale * (0.3 + rng.next_f64()),
         );
+        let shift = shift.map(|v| v.map(|x| scale * x));
         let t0 = 0.5 * (rng.next_f64() - 0.5);
         let t1 = t0 + 0.3 + 0.4 * rng.next_f64();
         let (_, m0, _) = medial_point(&p, &q, t0)?;
@@ -2018,5 +2024,36 @@ mod blend_tests {
             checked += 1;
         }
         assert!(checked > 40, "{checked}");
+    }
+
+    /// Blended arcs so small or so large that some squared lengths leave `length`'s `sqrt`
+    /// range (where it takes `hypot`): every build still gives the plain formula's bits (the
+    /// passes hand such an arc to the plain formula), and the arcs are defined.
+    #[test]
+    fn blended_densities_at_extreme_scales_are_the_plain_formula() {
+        let mut rng = SplitMix64(41);
+        let mut checked = 0;
+        for case in 0..40 {
+            let scale = [
+                2f64.powi(-480),
+                2f64.powi(480),
+                2f64.powi(-470),
+                2f64.powi(465),
+            ][case % 4];
+            let off = [shift(&mut rng, 0.03), shift(&mut rng, 0.03)];
+            let Some(g) = arc_scaled(&mut rng, off, scale) else {
+                continue;
+            };
+            assert!(g.blended());
+            let (psq, pang) = g.densities_plain().unwrap();
+            let bits = |x: &[f64]| x.iter().map(|y| y.to_bits()).collect::<Vec<u64>>();
+            for lanes in crate::lanes::Lanes::ALL {
+                let (mut bsq, mut bang) = (Vec::new(), vec![2.0]);
+                g.densities_with(lanes, &mut bsq, &mut bang).unwrap();
+                assert_eq!((bits(&bsq), bits(&bang)), (bits(&psq), bits(&pang)));
+            }
+            checked += 1;
+        }
+        assert!(checked > 30, "{checked}");
     }
 }
