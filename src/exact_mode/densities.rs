@@ -106,6 +106,61 @@ impl Default for Passes {
     }
 }
 
+/// The touching point `a` on the parametrised wall `wp` at the unit vector `(u0, u1)`, the
+/// empty circle's radius `rho` and its centre `m`: the expressions of `medial_point_u`
+/// written out (`neg`: `wp.s < 0`), shared by the batched passes of both kinds of arc.
+#[inline(always)]
+fn bisector_point(wp: &Wall, wq: &Wall, neg: bool, u0: f64, u1: f64) -> (Point, f64, Point) {
+    let a0 = wp.c[0] + wp.r * u0;
+    let a1 = wp.c[1] + wp.r * u1;
+    let (n0, n1) = if neg { (-u0, -u1) } else { (u0, u1) };
+    let d0 = a0 - wq.c[0];
+    let d1 = a1 - wq.c[1];
+    let den = 2.0 * (d0 * n0 + d1 * n1 - wq.s);
+    let rho = (wq.s * wq.s - (d0 * d0 + d1 * d1)) / den;
+    ([a0, a1], rho, [a0 + rho * n0, a1 + rho * n1])
+}
+
+/// Every point's two spoke mid-points (`mid(m, t[wall])`): `h[k][wall][s]` from the centres
+/// `m[k][s]` and the touching points `t[k][wall][s]` (`k` the coordinate).
+#[inline(always)]
+fn spoke_midpoints(
+    m: [&[f64; ARC_SUBSTEPS + 1]; 2],
+    t: [&[[f64; ARC_SUBSTEPS + 1]; 2]; 2],
+    h: [&mut [[f64; ARC_SUBSTEPS + 1]; 2]; 2],
+) {
+    for (k, hk) in h.into_iter().enumerate() {
+        for (hw, tw) in hk.iter_mut().zip(t[k]) {
+            for ((x, &mc), &tc) in hw.iter_mut().zip(m[k]).zip(tw) {
+                *x = 0.5 * (mc + tc);
+            }
+        }
+    }
+}
+
+/// Sub-step `s`'s length density (`dist` of consecutive spoke mid-points `h`, over the mean
+/// radius `r`), and the two squared distances its `sqrt`s took (`[wall]`).
+#[inline(always)]
+fn length_density(
+    h: [&[[f64; ARC_SUBSTEPS + 1]; 2]; 2],
+    r: &[f64; ARC_SUBSTEPS + 1],
+    s: usize,
+) -> (f64, [f64; 2]) {
+    let [hx, hy] = h;
+    let mut squares = [0.0; 2];
+    let mut ds = 0.0;
+    for w in 0..2 {
+        let x = hx[w][s - 1] - hx[w][s];
+        let y = hy[w][s - 1] - hy[w][s];
+        squares[w] = x * x + y * y;
+        let l = squares[w].sqrt();
+        ds = if w == 0 { l } else { ds + l };
+    }
+    let ds = 0.5 * ds;
+    let rho = 0.5 * (r[s - 1] + r[s]);
+    (if rho > 0.0 { ds / rho } else { 0.0 }, squares)
+}
+
 thread_local! {
     /// This thread's [`Passes`].
     static PASSES: std::cell::RefCell<Box<Passes>> = std::cell::RefCell::new(Box::default());
@@ -130,6 +185,25 @@ impl ArcGeometry {
         let p = self.param;
         let theta = self.start[p] + (s as f64 / ARC_SUBSTEPS as f64) * self.sweep[p];
         [theta.cos(), theta.sin()]
+    }
+
+    /// The exact end points (`at(0)`, `at(1)`) into slots 0 and `ARC_SUBSTEPS` of the
+    /// centres and radii `mr` and the touching points `t` of the batched passes.
+    #[inline(always)]
+    fn put_ends(
+        &self,
+        mr: [&mut [f64; ARC_SUBSTEPS + 1]; 3],
+        t: [&mut [[f64; ARC_SUBSTEPS + 1]; 2]; 2],
+    ) -> Option<()> {
+        let ([mx, my, r], [tx, ty]) = (mr, t);
+        for (s, k) in [(0, 0.0), (ARC_SUBSTEPS, 1.0)] {
+            let (m, a, rho) = self.at(k)?;
+            (mx[s], my[s], r[s]) = (m[0], m[1], rho);
+            for w in 0..2 {
+                (tx[w][s], ty[w][s]) = (a[w][0], a[w][1]);
+            }
+        }
+        Some(())
     }
 
     /// Sub-step densities for the count problem: `(sq, ang)` per sub-step.
@@ -277,14 +351,7 @@ impl ArcGeometry {
         }
         // Pass 2: every point: medial point `m`, radius `r`, touching points `t[wall]` (the
         // expressions of `medial_point_u` and `project`, written out).
-        let (m0, a0, r0) = self.at(0.0)?;
-        let (m1, a1, r1) = self.at(1.0)?;
-        for (s, (m, a, rho)) in [(0, (m0, a0, r0)), (K, (m1, a1, r1))] {
-            (mx[s], my[s], r[s]) = (m[0], m[1], rho);
-            for w in 0..2 {
-                (tx[w][s], ty[w][s]) = (a[w][0], a[w][1]);
-            }
-        }
+        self.put_ends([mx, my, r], [tx, ty])?;
         let neg = wp.s < 0.0;
         let mut ok = true;
         {
@@ -304,15 +371,7 @@ impl ArcGeometry {
             };
             for s in 1..K {
                 let (u0, u1) = (ux[s], uy[s]);
-                let a0 = wp.c[0] + wp.r * u0;
-                let a1 = wp.c[1] + wp.r * u1;
-                let (n0, n1) = if neg { (-u0, -u1) } else { (u0, u1) };
-                let d0 = a0 - wq.c[0];
-                let d1 = a1 - wq.c[1];
-                let den = 2.0 * (d0 * n0 + d1 * n1 - wq.s);
-                let rho = (wq.s * wq.s - (d0 * d0 + d1 * d1)) / den;
-                let m0 = a0 + rho * n0;
-                let m1 = a1 + rho * n1;
+                let ([a0, a1], rho, [m0, m1]) = bisector_point(wp, wq, neg, u0, u1);
                 let e0 = m0 - wq.c[0];
                 let e1 = m1 - wq.c[1];
                 let l = (e0 * e0 + e1 * e1).sqrt();
@@ -333,28 +392,12 @@ impl ArcGeometry {
         }
         // Pass 3: every point's spoke mid-points, then every sub-step's length density and
         // the other wall's turn parts.
-        for w in 0..2 {
-            for s in 0..N {
-                hx[w][s] = 0.5 * (mx[s] + tx[w][s]);
-                hy[w][s] = 0.5 * (my[s] + ty[w][s]);
-            }
-        }
+        spoke_midpoints([mx, my], [tx, ty], [hx, hy]);
         let cq = wq.c;
         for s in 1..N {
-            let mut ds = 0.0;
-            for w in 0..2 {
-                let x = hx[w][s - 1] - hx[w][s];
-                let y = hy[w][s - 1] - hy[w][s];
-                let l = (x * x + y * y).sqrt();
-                ds = if w == 0 { l } else { ds + l };
-            }
-            let ds = 0.5 * ds;
-            let rho = 0.5 * (r[s - 1] + r[s]);
-            sqa[s - 1] = if rho > 0.0 { ds / rho } else { 0.0 };
-            let (u0, u1) = (tx[q][s - 1] - cq[0], ty[q][s - 1] - cq[1]);
-            let (v0, v1) = (tx[q][s] - cq[0], ty[q][s] - cq[1]);
-            ca[s - 1] = u0 * v1 - u1 * v0;
-            da[s - 1] = u0 * v0 + u1 * v1;
+            (sqa[s - 1], _) = length_density([hx, hy], r, s);
+            (ca[s - 1], da[s - 1]) =
+                turn_parts(cq, [tx[q][s - 1], ty[q][s - 1]], [tx[q][s], ty[q][s]]);
         }
         sq.extend_from_slice(&sqa[..]);
         // `larger_of_turns(c, d, turn_p, tan_p) / MAX_WALL_ANGLE`: first its common case (the
@@ -430,13 +473,7 @@ impl ArcGeometry {
         // Pass 2: every point, as `at`: the ends exactly, the interior points from the
         // bisector point (`medial_point_u`) moved by the faded offsets and projected on both
         // walls (`Wall::project`), the radius the mean of the two spokes (`dist`).
-        for (s, k) in [(0, 0.0), (K, 1.0)] {
-            let (m, a, rho) = self.at(k)?;
-            (mx[s], my[s], r[s]) = (m[0], m[1], rho);
-            for w in 0..2 {
-                (tx[w][s], ty[w][s]) = (a[w][0], a[w][1]);
-            }
-        }
+        self.put_ends([mx, my, r], [tx, ty])?;
         let neg = wp.s < 0.0;
         let (mut ok, mut fits) = (true, true);
         {
@@ -444,15 +481,7 @@ impl ArcGeometry {
             let [t0y, t1y] = ty;
             for s in 1..K {
                 let (u0, u1) = (ux[s], uy[s]);
-                let a0 = wp.c[0] + wp.r * u0;
-                let a1 = wp.c[1] + wp.r * u1;
-                let (n0, n1) = if neg { (-u0, -u1) } else { (u0, u1) };
-                let d0 = a0 - wq.c[0];
-                let d1 = a1 - wq.c[1];
-                let den = 2.0 * (d0 * n0 + d1 * n1 - wq.s);
-                let rho = (wq.s * wq.s - (d0 * d0 + d1 * d1)) / den;
-                let m0 = a0 + rho * n0;
-                let m1 = a1 + rho * n1;
+                let (_, rho, [m0, m1]) = bisector_point(wp, wq, neg, u0, u1);
                 ok &= rho.is_finite() & (rho >= 0.0) & m0.is_finite() & m1.is_finite();
                 // `blend` of an interior parameter and of its complement (both in (0, 1)).
                 let t = s as f64 / K as f64;
@@ -492,33 +521,15 @@ impl ArcGeometry {
         }
         // Pass 3: the spoke mid-points (`mid`), then every sub-step's length density (`dist`
         // of consecutive mid-points) and both walls' turn parts (`turn_parts`).
-        for w in 0..2 {
-            for s in 0..N {
-                hx[w][s] = 0.5 * (mx[s] + tx[w][s]);
-                hy[w][s] = 0.5 * (my[s] + ty[w][s]);
-            }
-        }
+        spoke_midpoints([mx, my], [tx, ty], [hx, hy]);
         for s in 1..N {
-            let mut ds = 0.0;
-            for w in 0..2 {
-                let x = hx[w][s - 1] - hx[w][s];
-                let y = hy[w][s - 1] - hy[w][s];
-                let l = x * x + y * y;
-                fits &= in_range(l);
-                let l = l.sqrt();
-                ds = if w == 0 { l } else { ds + l };
-            }
-            let ds = 0.5 * ds;
-            let rho = 0.5 * (r[s - 1] + r[s]);
-            sqa[s - 1] = if rho > 0.0 { ds / rho } else { 0.0 };
-            let (u0, u1) = (tx[0][s - 1] - w0.c[0], ty[0][s - 1] - w0.c[1]);
-            let (v0, v1) = (tx[0][s] - w0.c[0], ty[0][s] - w0.c[1]);
-            ca[s - 1] = u0 * v1 - u1 * v0;
-            da[s - 1] = u0 * v0 + u1 * v1;
-            let (u0, u1) = (tx[1][s - 1] - w1.c[0], ty[1][s - 1] - w1.c[1]);
-            let (v0, v1) = (tx[1][s] - w1.c[0], ty[1][s] - w1.c[1]);
-            cb[s - 1] = u0 * v1 - u1 * v0;
-            db[s - 1] = u0 * v0 + u1 * v1;
+            let (d, [l0, l1]) = length_density([hx, hy], r, s);
+            sqa[s - 1] = d;
+            fits &= in_range(l0) & in_range(l1);
+            let (a, b) = ([tx[0][s - 1], ty[0][s - 1]], [tx[0][s], ty[0][s]]);
+            (ca[s - 1], da[s - 1]) = turn_parts(w0.c, a, b);
+            let (a, b) = ([tx[1][s - 1], ty[1][s - 1]], [tx[1][s], ty[1][s]]);
+            (cb[s - 1], db[s - 1]) = turn_parts(w1.c, a, b);
         }
         if !fits {
             return self.densities_plain_into(sq, ang);
