@@ -18,7 +18,7 @@
 //! build gives the plain formula's values bit for bit (`ArcGeometry::densities_blended`, the
 //! same operations in passes over arrays).
 
-use super::{dist, larger_turn, medial_point_u, mid, turn_parts, ArcGeometry, Wall};
+use super::{blend, dist, larger_turn, medial_point_u, mid, turn_parts, ArcGeometry, Wall};
 use super::{ARC_SUBSTEPS, MAX_WALL_ANGLE};
 use crate::geometry::Point;
 use crate::lanes::Lanes;
@@ -28,8 +28,14 @@ pub const RESTART: usize = 16;
 
 /// `|a - b|` as `sqrt`, without `hypot`'s overflow guard.
 fn len(a: Point, b: Point) -> f64 {
+    squared_distance(a, b).sqrt()
+}
+
+/// `|a - b|²`, the square [`len`] takes the root of.
+#[inline(always)]
+fn squared_distance(a: Point, b: Point) -> f64 {
     let (x, y) = (a[0] - b[0], a[1] - b[1]);
-    (x * x + y * y).sqrt()
+    x * x + y * y
 }
 
 /// The touching point on `w` of the empty circle centred at `m` (as [`Wall::project`], with
@@ -483,34 +489,20 @@ impl ArcGeometry {
                 let (u0, u1) = (ux[s], uy[s]);
                 let (_, rho, [m0, m1]) = bisector_point(wp, wq, neg, u0, u1);
                 ok &= rho.is_finite() & (rho >= 0.0) & m0.is_finite() & m1.is_finite();
-                // `blend` of an interior parameter and of its complement (both in (0, 1)).
+                // The offsets faded by `blend` (an interior parameter and its complement).
                 let t = s as f64 / K as f64;
-                let (f, g) = (t, 1.0 - t);
-                let (b0, b1) = (1.0 - f * f * (3.0 - 2.0 * f), 1.0 - g * g * (3.0 - 2.0 * g));
-                let m0 = m0 + b0 * o0[0] + b1 * o1[0];
-                let m1 = m1 + b0 * o0[1] + b1 * o1[1];
-                // `Wall::project` on each wall, then `dist` back to the point.
-                let (e0, e1) = (m0 - w0.c[0], m1 - w0.c[1]);
-                let (f0, f1) = (m0 - w1.c[0], m1 - w1.c[1]);
-                let (le, lf) = (e0 * e0 + e1 * e1, f0 * f0 + f1 * f1);
-                fits &= in_range(le) & in_range(lf);
-                let (le, lf) = (le.sqrt(), lf.sqrt());
-                let (pe0, pe1) = (w0.c[0] + w0.r * e0 / le, w0.c[1] + w0.r * e1 / le);
-                let (pf0, pf1) = (w1.c[0] + w1.r * f0 / lf, w1.c[1] + w1.r * f1 / lf);
-                let (g0, g1) = (m0 - pe0, m1 - pe1);
-                let (h0, h1) = (m0 - pf0, m1 - pf1);
-                let (lg, lh) = (g0 * g0 + g1 * g1, h0 * h0 + h1 * h1);
-                fits &= in_range(lg) & in_range(lh);
-                let radius = 0.5 * (lg.sqrt() + lh.sqrt());
-                ok &= pe0.is_finite()
-                    & pe1.is_finite()
-                    & pf0.is_finite()
-                    & pf1.is_finite()
-                    & m0.is_finite()
-                    & m1.is_finite()
-                    & radius.is_finite();
-                (mx[s], my[s], r[s]) = (m0, m1, radius);
-                (t0x[s], t0y[s], t1x[s], t1y[s]) = (pe0, pe1, pf0, pf1);
+                let (b0, b1) = (blend(t), blend(1.0 - t));
+                let m = [m0 + b0 * o0[0] + b1 * o1[0], m1 + b0 * o0[1] + b1 * o1[1]];
+                // `Wall::project` on each wall, then `dist` back to the point, by `sqrt`
+                // (`project`, `len`): the same values while every squared length is in range.
+                let (pe, pf) = (project(w0, m), project(w1, m));
+                let radius = 0.5 * (len(m, pe) + len(m, pf));
+                let sq = |x: Point| in_range(squared_distance(m, x));
+                fits &= sq(w0.c) & sq(w1.c) & sq(pe) & sq(pf);
+                let finite = |x: Point| x[0].is_finite() & x[1].is_finite();
+                ok &= finite(pe) & finite(pf) & finite(m) & radius.is_finite();
+                (mx[s], my[s], r[s]) = (m[0], m[1], radius);
+                (t0x[s], t0y[s], t1x[s], t1y[s]) = (pe[0], pe[1], pf[0], pf[1]);
             }
         }
         if !fits {
