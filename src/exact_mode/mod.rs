@@ -2016,11 +2016,7 @@ mod blend_tests {
             g.densities_into_scalar(&mut sq, &mut ang).unwrap();
             assert_eq!((bits(&sq), bits(&ang)), (bits(&psq), bits(&pang)));
             assert_eq!(sq.len(), ARC_SUBSTEPS);
-            for lanes in crate::lanes::Lanes::ALL {
-                let (mut bsq, mut bang) = (Vec::new(), vec![2.0]);
-                g.densities_with(lanes, &mut bsq, &mut bang).unwrap();
-                assert_eq!((bits(&bsq), bits(&bang)), (bits(&sq), bits(&ang)));
-            }
+            every_build_gives(&g, &sq, &ang);
             checked += 1;
         }
         assert!(checked > 40, "{checked}");
@@ -2046,14 +2042,23 @@ mod blend_tests {
             };
             assert!(g.blended());
             let (psq, pang) = g.densities_plain().unwrap();
-            let bits = |x: &[f64]| x.iter().map(|y| y.to_bits()).collect::<Vec<u64>>();
-            for lanes in crate::lanes::Lanes::ALL {
-                let (mut bsq, mut bang) = (Vec::new(), vec![2.0]);
-                g.densities_with(lanes, &mut bsq, &mut bang).unwrap();
-                assert_eq!((bits(&bsq), bits(&bang)), (bits(&psq), bits(&pang)));
-            }
+            every_build_gives(&g, &psq, &pang);
             checked += 1;
         }
         assert!(checked > 30, "{checked}");
+    }
+
+    /// Every vector build's densities of `g` are `sq` and `ang`, bit for bit.
+    fn every_build_gives(g: &ArcGeometry, sq: &[f64], ang: &[f64]) {
+        let bits = |x: &[f64]| x.iter().map(|y| y.to_bits()).collect::<Vec<u64>>();
+        for lanes in crate::lanes::Lanes::ALL {
+            let (mut bsq, mut bang) = (Vec::new(), vec![2.0]);
+            g.densities_with(lanes, &mut bsq, &mut bang).unwrap();
+            assert_eq!(
+                (bits(&bsq), bits(&bang)),
+                (bits(sq), bits(ang)),
+                "{lanes:?}"
+            );
+        }
     }
 }
