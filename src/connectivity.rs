@@ -117,7 +117,8 @@ fn side_node(s: usize, p: usize, ni: usize, nj: usize) -> [usize; 2] {
     [i + 1, j + 1]
 }
 
-/// Compute the connectivity of every block.
+/// Compute the connectivity of every block: [`Connectivity::new`], then every block's record
+/// ([`Connectivity::to_vec`]).
 ///
 /// The blocks are visited in parallel (on the current rayon pool); each block's entry depends
 /// only on the layout, the grids and the edge users, so the result, and the error (that of the
@@ -126,178 +127,274 @@ pub fn connectivity(
     layout: &BlockLayout,
     grids: &[BlockGrid],
 ) -> Result<Vec<BlockConnectivity>, ConnectivityError> {
-    if layout.blocks.len() != grids.len() {
-        return Err(ConnectivityError::GridCount {
-            layout: layout.blocks.len(),
-            grids: grids.len(),
-        });
-    }
-    let users = EdgeUsers::new(layout)?;
-    // Blocks in parallel, written in place in block order; an error keeps the one of the
-    // smallest block (the one a visit in block order meets first: each block's result does not
-    // depend on the others), the placeholder entries are then dropped.
-    let first_error = std::sync::Mutex::new(None::<(usize, ConnectivityError)>);
-    let mut out = Vec::with_capacity(layout.blocks.len());
-    (0..layout.blocks.len())
-        .into_par_iter()
-        .with_min_len(PARALLEL_BLOCKS)
-        .map(|b| {
-            if let Some(ahead) = layout.blocks.get(b + PREFETCH_BLOCKS) {
-                users.prefetch(layout, ahead);
-            }
-            block_connectivity(layout, grids, &users, b).unwrap_or_else(|e| {
-                let mut first = first_error.lock().unwrap_or_else(|p| p.into_inner());
-                if first.as_ref().is_none_or(|(at, _)| b < *at) {
-                    *first = Some((b, e));
+    Connectivity::new(layout, grids).map(|c| c.to_vec())
+}
+
+/// The block connectivity of a mesh, checked, without the per-block records: the partner of
+/// every block side (8 bytes a side, where a [`SideConnectivity`] takes about 170: at 1e5
+/// particles 19 MB instead of 0.4 GB of fresh memory, issue 8). [`Connectivity::block`] forms
+/// a block's [`BlockConnectivity`] when it is needed, equal to the entry of [`connectivity`].
+///
+/// ```
+/// use medial_blocks::connectivity::{connectivity, Connectivity};
+/// use medial_blocks::{mesh, Domain, Options};
+///
+/// let m = mesh(&Domain::hexagon_example(), &Options::default()).unwrap();
+/// let conn = Connectivity::new(&m.layout, &m.grids).unwrap();
+/// let records = connectivity(&m.layout, &m.grids).unwrap();
+/// assert_eq!(conn.len(), records.len());
+/// assert_eq!(conn.block(3), Some(records[3].clone()));
+/// assert_eq!(conn.partner(3, 2), records[3].sides[2].partner);
+/// ```
+#[derive(Debug, Clone)]
+pub struct Connectivity<'a> {
+    layout: &'a BlockLayout,
+    grids: &'a [BlockGrid],
+    /// Per block, per side: [`pack`]ed partner, or [`NO_PARTNER`] for a wall.
+    partners: Vec<[u64; 4]>,
+}
+
+/// [`Connectivity::partners`] entry of a side without a partner (a wall or the outer boundary).
+const NO_PARTNER: u64 = u64::MAX;
+
+/// A partner in 8 bytes: `(4 block + side) << 1 | same_direction`.
+fn pack(p: Partner) -> u64 {
+    ((4 * p.block as u64 + p.side as u64) << 1) | u64::from(p.same_direction)
+}
+
+/// The partner of a [`pack`]ed entry (`None` for [`NO_PARTNER`]).
+fn unpack(x: u64) -> Option<Partner> {
+    (x != NO_PARTNER).then_some(Partner {
+        block: (x >> 3) as usize,
+        side: ((x >> 1) & 3) as usize,
+        same_direction: x & 1 == 1,
+    })
+}
+
+impl<'a> Connectivity<'a> {
+    /// Check the layout's topology against the grids and find every side's partner: the
+    /// errors of [`connectivity`] (the first failing block in block order, and its first
+    /// failing side), blocks in parallel on the current rayon pool.
+    pub fn new(
+        layout: &'a BlockLayout,
+        grids: &'a [BlockGrid],
+    ) -> Result<Connectivity<'a>, ConnectivityError> {
+        if layout.blocks.len() != grids.len() {
+            return Err(ConnectivityError::GridCount {
+                layout: layout.blocks.len(),
+                grids: grids.len(),
+            });
+        }
+        let users = EdgeUsers::new(layout)?;
+        // Blocks in parallel, written in place in block order; an error keeps the one of the
+        // smallest block (the one a visit in block order meets first: each block's result
+        // does not depend on the others).
+        let first_error = std::sync::Mutex::new(None::<(usize, ConnectivityError)>);
+        let mut partners = Vec::with_capacity(layout.blocks.len());
+        (0..layout.blocks.len())
+            .into_par_iter()
+            .with_min_len(PARALLEL_BLOCKS)
+            .map(|b| {
+                if let Some(ahead) = layout.blocks.get(b + PREFETCH_BLOCKS) {
+                    users.prefetch(layout, ahead);
                 }
-                placeholder()
+                let mut packed = [NO_PARTNER; 4];
+                for (s, x) in packed.iter_mut().enumerate() {
+                    match side_partner(layout, &users, b, s) {
+                        Ok(p) => *x = p.map_or(NO_PARTNER, pack),
+                        Err(e) => {
+                            let mut first = first_error.lock().unwrap_or_else(|p| p.into_inner());
+                            if first.as_ref().is_none_or(|(at, _)| b < *at) {
+                                *first = Some((b, e));
+                            }
+                            break;
+                        }
+                    }
+                }
+                packed
             })
+            .collect_into_vec(&mut partners);
+        match first_error.into_inner().unwrap_or_else(|p| p.into_inner()) {
+            Some((_, e)) => Err(e),
+            None => Ok(Connectivity {
+                layout,
+                grids,
+                partners,
+            }),
+        }
+    }
+
+    /// Number of blocks.
+    pub fn len(&self) -> usize {
+        self.partners.len()
+    }
+
+    /// True when the mesh has no block.
+    pub fn is_empty(&self) -> bool {
+        self.partners.is_empty()
+    }
+
+    /// The partner of side `side` of block `block` (`None` for a wall, the outer boundary, or
+    /// a block or side out of range).
+    pub fn partner(&self, block: usize, side: usize) -> Option<Partner> {
+        unpack(*self.partners.get(block)?.get(side)?)
+    }
+
+    /// The record of block `b`, as [`connectivity`] gives it (`None` when `b` is out of range).
+    pub fn block(&self, b: usize) -> Option<BlockConnectivity> {
+        let packed = self.partners.get(b)?;
+        let g = &self.grids[b];
+        Some(BlockConnectivity {
+            block: b,
+            dims: [g.ni + 1, g.nj + 1],
+            sides: [0, 1, 2, 3].map(|s| side_record(self.layout, self.grids, b, s, packed[s])),
         })
-        .collect_into_vec(&mut out);
-    match first_error.into_inner().unwrap_or_else(|p| p.into_inner()) {
-        Some((_, e)) => Err(e),
-        None => Ok(out),
+    }
+
+    /// Every block's record, in block order (blocks in parallel on the current rayon pool).
+    pub fn to_vec(&self) -> Vec<BlockConnectivity> {
+        let mut out = Vec::with_capacity(self.len());
+        (0..self.len())
+            .into_par_iter()
+            .with_min_len(PARALLEL_BLOCKS)
+            .map(|b| self.block(b).unwrap_or_else(placeholder))
+            .collect_into_vec(&mut out);
+        out
     }
 }
 
-/// Blocks per task of [`connectivity`]'s parallel loop (each block is cheap: a task of this
+/// Blocks per task of [`Connectivity`]'s parallel loops (each block is cheap: a task of this
 /// many amortises the scheduling).
 const PARALLEL_BLOCKS: usize = 512;
 
-/// The entry written for a block whose connectivity failed (never returned).
+/// The entry of a block out of range (never returned: [`Connectivity::to_vec`] asks only for
+/// blocks in range).
 fn placeholder() -> BlockConnectivity {
-    let side = SideConnectivity {
-        side: 0,
-        name: SIDE_NAMES[0],
-        kind: SideKind::Wall,
-        circle: None,
-        partner: None,
-        cgns: None,
-        translation: None,
-    };
     BlockConnectivity {
         block: usize::MAX,
         dims: [0, 0],
-        sides: [side; 4],
+        sides: [0, 1, 2, 3].map(wall_side(0)),
     }
 }
 
-/// The connectivity of block `b` (the body of [`connectivity`]'s loop).
-fn block_connectivity(
+/// The record of a side on the wall of `circle` (the outer boundary for a negative id).
+fn wall_side(circle: CircleId) -> impl Fn(usize) -> SideConnectivity {
+    move |s| SideConnectivity {
+        side: s,
+        name: SIDE_NAMES[s],
+        kind: if circle < 0 {
+            SideKind::Outer
+        } else {
+            SideKind::Wall
+        },
+        circle: Some(circle),
+        partner: None,
+        cgns: None,
+        translation: None,
+    }
+}
+
+/// The partner of side `s` of block `b`, checked against its edge's users: `None` on a wall
+/// (the edge has one user), the other user of an interface edge (two users), the one user of
+/// a periodic edge's partner edge.
+fn side_partner(
     layout: &BlockLayout,
-    grids: &[BlockGrid],
     users: &EdgeUsers,
     b: usize,
-) -> Result<BlockConnectivity, ConnectivityError> {
-    {
-        let block = &layout.blocks[b];
-        let g = &grids[b];
-        let side_of = |s: usize| {
-            let e = block.sides[s].edge as usize;
-            let edge = &layout.edges[e];
-            let u = users.of(e);
-            match edge.kind {
-                EdgeKind::Wall(c) => {
-                    if u.len() != 1 {
-                        return Err(ConnectivityError::EdgeUse {
-                            edge: e,
-                            count: u.len(),
-                        });
-                    }
-                    Ok(SideConnectivity {
-                        side: s,
-                        name: SIDE_NAMES[s],
-                        kind: if c < 0 {
-                            SideKind::Outer
-                        } else {
-                            SideKind::Wall
-                        },
-                        circle: Some(c),
-                        partner: None,
-                        cgns: None,
-                        translation: None,
-                    })
-                }
-                kind => {
-                    let periodic = match kind {
-                        EdgeKind::Periodic {
-                            partner,
-                            translation,
-                        } => Some((partner as usize, translation.0)),
-                        _ => None,
-                    };
-                    let (pb, ps) = match periodic {
-                        Some((p, _)) => {
-                            if p >= layout.edges.len() {
-                                return Err(ConnectivityError::MissingEdge { edge: p });
-                            }
-                            let pu = users.of(p);
-                            if u.len() != 1 || pu.len() != 1 {
-                                return Err(ConnectivityError::EdgeUse {
-                                    edge: e,
-                                    count: u.len(),
-                                });
-                            }
-                            pu.get(0)
-                        }
-                        None => {
-                            if u.len() != 2 {
-                                return Err(ConnectivityError::EdgeUse {
-                                    edge: e,
-                                    count: u.len(),
-                                });
-                            }
-                            if u.get(0) == (b, s) {
-                                u.get(1)
-                            } else {
-                                u.get(0)
-                            }
-                        }
-                    };
-                    let same = layout.blocks[pb].sides[ps].reversed == block.sides[s].reversed;
-                    let pg = &grids[pb];
-                    let n = if s.is_multiple_of(2) { g.ni } else { g.nj };
-                    let q = |p: usize| if same { p } else { n - p };
-                    let (aa, sa) = along(s);
-                    let (ab, sb) = along(ps);
-                    let (na, ia) = inward(s);
-                    let (nb, ib) = inward(ps);
-                    let dir = if same { 1 } else { -1 };
-                    let mut transform = [0i32; 2];
-                    transform[aa] = sa * sb * dir * (ab as i32 + 1);
-                    transform[na] = -ia * ib * (nb as i32 + 1);
-                    Ok(SideConnectivity {
-                        side: s,
-                        name: SIDE_NAMES[s],
-                        kind: if periodic.is_some() {
-                            SideKind::Periodic
-                        } else {
-                            SideKind::Interface
-                        },
-                        circle: None,
-                        partner: Some(Partner {
-                            block: pb,
-                            side: ps,
-                            same_direction: same,
-                        }),
-                        cgns: Some(Cgns1to1 {
-                            point_range: [side_node(s, 0, g.ni, g.nj), side_node(s, n, g.ni, g.nj)],
-                            point_range_donor: [
-                                side_node(ps, q(0), pg.ni, pg.nj),
-                                side_node(ps, q(n), pg.ni, pg.nj),
-                            ],
-                            transform,
-                        }),
-                        translation: periodic.map(|(_, t)| t),
-                    })
-                }
+    s: usize,
+) -> Result<Option<Partner>, ConnectivityError> {
+    let block = &layout.blocks[b];
+    let e = block.sides[s].edge as usize;
+    let u = users.of(e);
+    let count_error = ConnectivityError::EdgeUse {
+        edge: e,
+        count: u.len(),
+    };
+    let (pb, ps) = match layout.edges[e].kind {
+        EdgeKind::Wall(_) if u.len() == 1 => return Ok(None),
+        EdgeKind::Wall(_) => return Err(count_error),
+        EdgeKind::Periodic { partner, .. } => {
+            let p = partner as usize;
+            if p >= layout.edges.len() {
+                return Err(ConnectivityError::MissingEdge { edge: p });
             }
-        };
-        Ok(BlockConnectivity {
-            block: b,
-            dims: [g.ni + 1, g.nj + 1],
-            sides: [side_of(0)?, side_of(1)?, side_of(2)?, side_of(3)?],
-        })
+            let pu = users.of(p);
+            if u.len() != 1 || pu.len() != 1 {
+                return Err(count_error);
+            }
+            pu.get(0)
+        }
+        _ if u.len() != 2 => return Err(count_error),
+        _ if u.get(0) == (b, s) => u.get(1),
+        _ => u.get(0),
+    };
+    Ok(Some(Partner {
+        block: pb,
+        side: ps,
+        same_direction: layout.blocks[pb].sides[ps].reversed == block.sides[s].reversed,
+    }))
+}
+
+/// The record of side `s` of block `b` whose [`pack`]ed partner is `packed` (from
+/// [`side_partner`]): kind, circle and translation from the side's edge, the CGNS terms from
+/// the two blocks' node counts.
+fn side_record(
+    layout: &BlockLayout,
+    grids: &[BlockGrid],
+    b: usize,
+    s: usize,
+    packed: u64,
+) -> SideConnectivity {
+    let kind = layout.edges[layout.blocks[b].sides[s].edge as usize].kind;
+    let Some(Partner {
+        block: pb,
+        side: ps,
+        same_direction: same,
+    }) = unpack(packed)
+    else {
+        return wall_side(match kind {
+            EdgeKind::Wall(c) => c,
+            _ => 0,
+        })(s);
+    };
+    let (g, pg) = (&grids[b], &grids[pb]);
+    let n = if s.is_multiple_of(2) { g.ni } else { g.nj };
+    let q = |p: usize| if same { p } else { n - p };
+    let (aa, sa) = along(s);
+    let (ab, sb) = along(ps);
+    let (na, ia) = inward(s);
+    let (nb, ib) = inward(ps);
+    let dir = if same { 1 } else { -1 };
+    let mut transform = [0i32; 2];
+    transform[aa] = sa * sb * dir * (ab as i32 + 1);
+    transform[na] = -ia * ib * (nb as i32 + 1);
+    let translation = match kind {
+        EdgeKind::Periodic { translation, .. } => Some(translation.0),
+        _ => None,
+    };
+    SideConnectivity {
+        side: s,
+        name: SIDE_NAMES[s],
+        kind: if translation.is_some() {
+            SideKind::Periodic
+        } else {
+            SideKind::Interface
+        },
+        circle: None,
+        partner: Some(Partner {
+            block: pb,
+            side: ps,
+            same_direction: same,
+        }),
+        cgns: Some(Cgns1to1 {
+            point_range: [side_node(s, 0, g.ni, g.nj), side_node(s, n, g.ni, g.nj)],
+            point_range_donor: [
+                side_node(ps, q(0), pg.ni, pg.nj),
+                side_node(ps, q(n), pg.ni, pg.nj),
+            ],
+            transform,
+        }),
+        translation,
     }
 }
 

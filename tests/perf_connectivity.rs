@@ -8,11 +8,15 @@
 //!   partner side, bit for bit, as `same_direction` says;
 //! - broken layouts give the same errors as the per-edge lists did: an edge used three times
 //!   is `EdgeUse` with count 3 (of the first side in block order to meet it), a side naming a
-//!   missing edge is `MissingEdge`, a grid count mismatch is `GridCount`.
+//!   missing edge is `MissingEdge`, a grid count mismatch is `GridCount`;
+//! - the compact form (`Connectivity`: 8 bytes of partner per side, each block's record formed
+//!   on demand) answers every side's partner and every block's record as the records of
+//!   `connectivity` do (which the checks above hold to the layout and the nodes), and `None`
+//!   out of range.
 
 mod common;
 
-use medial_blocks::connectivity::{connectivity, ConnectivityError, SideKind};
+use medial_blocks::connectivity::{connectivity, Connectivity, ConnectivityError, SideKind};
 use medial_blocks::layout::EdgeKind;
 use medial_blocks::{layouts, mesh, Mesh, Options};
 
@@ -73,6 +77,29 @@ fn partners_counts_and_nodes_agree() {
             }
         }
         assert_eq!(sides, 4 * m.layout.blocks.len());
+    }
+}
+
+#[test]
+fn compact_form_answers_as_the_records() {
+    for m in meshes() {
+        let records = connectivity(&m.layout, &m.grids).unwrap();
+        let conn = Connectivity::new(&m.layout, &m.grids).unwrap();
+        let n = records.len();
+        assert_eq!((conn.len(), conn.is_empty()), (n, n == 0));
+        let mut partners = 0;
+        for (b, bc) in records.iter().enumerate() {
+            assert_eq!(conn.block(b).as_ref(), Some(bc));
+            for (s, sc) in bc.sides.iter().enumerate() {
+                assert_eq!(conn.partner(b, s), sc.partner, "block {b} side {s}");
+                partners += usize::from(sc.partner.is_some());
+            }
+            assert_eq!(conn.partner(b, 4), None);
+        }
+        assert!(partners > 0);
+        assert_eq!(conn.block(n), None);
+        assert_eq!(conn.partner(n, 0), None);
+        assert_eq!(conn.to_vec(), records);
     }
 }
 

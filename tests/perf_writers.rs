@@ -12,9 +12,11 @@
 mod common;
 
 use medial_blocks::connectivity::{
-    connectivity, BlockConnectivity, Cgns1to1, Partner, SideConnectivity, SideKind,
+    connectivity, BlockConnectivity, Cgns1to1, Connectivity, Partner, SideConnectivity, SideKind,
 };
-use medial_blocks::output::connectivity::{write_json, File, CHUNK, CONVENTIONS, WAVE};
+use medial_blocks::output::connectivity::{
+    write_json, write_json_from, File, CHUNK, CONVENTIONS, WAVE,
+};
 use medial_blocks::output::report::Report;
 use medial_blocks::output::{write_files, write_files_prepared, Encoding, Format};
 use medial_blocks::{layouts, Mesh};
@@ -55,6 +57,15 @@ fn written(blocks: &[BlockConnectivity]) -> Vec<u8> {
     std::fs::read(&path).unwrap()
 }
 
+/// The file [`write_json_from`] writes for the connectivity of `m`.
+fn written_from(m: &Mesh) -> Vec<u8> {
+    let conn = Connectivity::new(&m.layout, &m.grids).unwrap();
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("connectivity.json");
+    write_json_from(&conn, &path).unwrap();
+    std::fs::read(&path).unwrap()
+}
+
 fn meshes() -> Vec<Mesh> {
     let bubbles = layouts::bubbles(12, 3).unwrap();
     common::small_meshes(&bubbles, &bubbles)
@@ -68,9 +79,36 @@ fn connectivity_json_is_serde_on_real_meshes() {
         periodic |= conn
             .iter()
             .any(|b| b.sides.iter().any(|s| s.kind == SideKind::Periodic));
-        assert_eq!(written(&conn), serde_bytes(&conn));
+        let want = serde_bytes(&conn);
+        assert_eq!(written(&conn), want);
+        assert_eq!(written_from(&m), want);
     }
     assert!(periodic, "a periodic mesh with translations is covered");
+}
+
+/// The records formed wave by wave from the compact connectivity ([`write_json_from`]) are
+/// serde_json's bytes of the records of `connectivity` on a mesh of more than one wave of
+/// blocks, on one thread and on three.
+#[test]
+fn connectivity_json_from_the_compact_form_spans_waves() {
+    let m = medial_blocks::mesh(
+        &layouts::bubbles(400, 7).unwrap(),
+        &medial_blocks::Options::default(),
+    )
+    .unwrap();
+    let blocks = m.layout.blocks.len();
+    assert!(blocks > CHUNK * WAVE, "{blocks} blocks: more than one wave");
+    let want = serde_bytes(&connectivity(&m.layout, &m.grids).unwrap());
+    for threads in [1, 3] {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap();
+        assert!(
+            pool.install(|| written_from(&m)) == want,
+            "{threads} threads"
+        );
+    }
 }
 
 /// `n` synthetic blocks: every optional field, odd floats and integers, an escaped name.
@@ -173,7 +211,7 @@ fn connectivity_json_at_wave_boundaries() {
 #[test]
 fn shared_connectivity_gives_the_same_report_and_files() {
     for m in meshes() {
-        let conn = connectivity(&m.layout, &m.grids).unwrap();
+        let conn = Connectivity::new(&m.layout, &m.grids).unwrap();
         let r = Report::from_mesh_with(&m, Some(&conn));
         assert_eq!(r, Report::from_mesh(&m));
         let a = tempfile::tempdir().unwrap();

@@ -681,12 +681,11 @@ pub fn run(args: Args, global: Global) -> Result<(), Failure> {
     let want_report = !global.quiet || formats.contains(&Format::Json);
     let conn = want_report.then(|| {
         timings::span("quality", || {
-            medial_blocks::connectivity::connectivity(&mesh.layout, &mesh.grids).ok()
+            medial_blocks::connectivity::Connectivity::new(&mesh.layout, &mesh.grids).ok()
         })
     });
     let conn = conn.flatten();
-    let summary_report =
-        want_report.then(|| report::Report::from_mesh_with(&mesh, conn.as_deref()));
+    let summary_report = want_report.then(|| report::Report::from_mesh_with(&mesh, conn.as_ref()));
     let written = timings::span("write", || {
         write_files_prepared(
             &mesh,
@@ -694,7 +693,7 @@ pub fn run(args: Args, global: Global) -> Result<(), Failure> {
             &formats,
             encoding(args.binary),
             summary_report.as_ref(),
-            conn.as_deref(),
+            conn.as_ref(),
             |f| {
                 bar.set_message(format!("writing {}", f.name()));
             },
@@ -736,6 +735,7 @@ pub fn run(args: Args, global: Global) -> Result<(), Failure> {
     // The process exits right after this: returning the grids and the connectivity to the
     // allocator one block at a time (~600 K allocations at 1e5 particles) would only delay
     // the exit, the kernel frees the whole address space at once (issue 8).
-    std::mem::forget((mesh, conn, summary_report));
+    std::mem::forget((conn, summary_report));
+    std::mem::forget(mesh);
     Ok(())
 }

@@ -31,7 +31,7 @@ pub mod vtu;
 #[cfg(feature = "cgns")]
 pub mod cgns;
 
-use crate::connectivity::BlockConnectivity;
+use crate::connectivity::Connectivity;
 use crate::mesh::Mesh;
 use crate::quality::well_formed;
 pub use binary::Encoding;
@@ -298,7 +298,7 @@ pub fn write_files_reporting(
 }
 
 /// [`write_files_reporting`] with the block connectivity already computed: `conn` must be
-/// [`crate::connectivity::connectivity`]`(&mesh.layout, &mesh.grids)` when given (the CLI
+/// [`Connectivity::new`]`(&mesh.layout, &mesh.grids)` when given (the CLI
 /// computes it once for the report and `connectivity.json`), and the formats that have a
 /// binary form written in `encoding`.
 pub fn write_files_prepared(
@@ -307,7 +307,7 @@ pub fn write_files_prepared(
     formats: &[Format],
     encoding: Encoding,
     report: Option<&report::Report>,
-    conn: Option<&[BlockConnectivity]>,
+    conn: Option<&Connectivity>,
     mut progress: impl FnMut(Format),
 ) -> io::Result<()> {
     std::fs::create_dir_all(dir)?;
@@ -384,7 +384,7 @@ fn publish(staging: &Path, dir: &Path) -> io::Result<()> {
 /// What the caller of [`write_files_prepared`] already computed.
 struct Prepared<'a> {
     report: Option<&'a report::Report>,
-    conn: Option<&'a [BlockConnectivity]>,
+    conn: Option<&'a Connectivity<'a>>,
     encoding: Encoding,
 }
 
@@ -428,12 +428,12 @@ fn write_into(
                 let conn = match prepared.conn {
                     Some(c) => c,
                     None => {
-                        computed = crate::connectivity::connectivity(&mesh.layout, &mesh.grids)
+                        computed = Connectivity::new(&mesh.layout, &mesh.grids)
                             .map_err(io::Error::other)?;
                         &computed
                     }
                 };
-                connectivity::write_json(conn, &dir.join("connectivity.json"))?;
+                connectivity::write_json_from(conn, &dir.join("connectivity.json"))?;
                 let path = dir.join("report.json");
                 match prepared.report {
                     Some(r) => report::write_json(r, &path)?,

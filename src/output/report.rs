@@ -3,7 +3,7 @@
 
 use super::write_atomic;
 use crate::cocircular::CocircularGroup;
-use crate::connectivity::{connectivity, BlockConnectivity};
+use crate::connectivity::Connectivity;
 use crate::domain::Circle;
 use crate::mesh::Mesh;
 use crate::quality::{measure_all_with, QualityMetrics};
@@ -74,19 +74,19 @@ impl Report {
     pub fn from_mesh(mesh: &Mesh) -> Report {
         let _stage = crate::timings::enter("quality");
         crate::timings::on_pool_worker(|| {
-            let conn = connectivity(&mesh.layout, &mesh.grids).ok();
-            Report::build(mesh, conn.as_deref())
+            let conn = Connectivity::new(&mesh.layout, &mesh.grids).ok();
+            Report::build(mesh, conn.as_ref())
         })
     }
 
     /// [`Report::from_mesh`] with the block connectivity already computed (`conn` must be
-    /// `connectivity(&mesh.layout, &mesh.grids).ok()`), for a caller that also writes it.
-    pub fn from_mesh_with(mesh: &Mesh, conn: Option<&[BlockConnectivity]>) -> Report {
+    /// `Connectivity::new(&mesh.layout, &mesh.grids).ok()`), for a caller that also writes it.
+    pub fn from_mesh_with(mesh: &Mesh, conn: Option<&Connectivity>) -> Report {
         let _stage = crate::timings::enter("quality");
         crate::timings::on_pool_worker(|| Report::build(mesh, conn))
     }
 
-    fn build(mesh: &Mesh, conn: Option<&[BlockConnectivity]>) -> Report {
+    fn build(mesh: &Mesh, conn: Option<&Connectivity>) -> Report {
         let (q, quality) = measure_all_with(&mesh.layout, &mesh.grids, conn);
         Report {
             holes: mesh.holes,

@@ -8,7 +8,9 @@
 //! the order, so both give the same figures.
 
 use super::{angle_deg, corners, len, ratio, well_formed, MetricSummary, CHUNK};
+#[cfg(test)]
 use crate::connectivity::BlockConnectivity;
+use crate::connectivity::Connectivity;
 use crate::geometry::Point;
 use crate::layout::{BlockLayout, Curve, EdgeKind};
 use crate::mesh::BlockGrid;
@@ -54,7 +56,9 @@ fn side_cell_height(grid: &BlockGrid, s: usize, p: usize) -> f64 {
 /// The growth ratios across every interface of `conn` (each interface once), counted into
 /// `m`. Blocks are visited in parallel in fixed chunks of [`CHUNK`]; counts and extremes do
 /// not depend on the order (a ratio is at least 1 or infinite: never NaN nor a zero whose
-/// sign a fold could pick), so the result is that of a sequential visit.
+/// sign a fold could pick), so the result is that of a sequential visit. The reference of the
+/// fused pass ([`Plan`], [`Sides`]), kept for the tests.
+#[cfg(test)]
 pub(super) fn growth_ratios(
     conn: &[BlockConnectivity],
     grids: &[BlockGrid],
@@ -78,6 +82,7 @@ pub(super) fn growth_ratios(
 
 /// The growth ratios across the interfaces of one block that it owns (each interface is
 /// owned by the side with the smaller (block, side)).
+#[cfg(test)]
 fn block_growth_ratios(
     bc: &crate::connectivity::BlockConnectivity,
     grids: &[BlockGrid],
@@ -194,11 +199,11 @@ const LOCAL: u8 = 1;
 /// Bit of [`Plan::need`]: the side's heights are paired with a side of another chunk.
 const SPILL: u8 = 2;
 
-/// Which block sides the fused pass measures for the growth ratios, for a connectivity with
-/// one entry per grid in grid order: every interface [`block_growth_ratios`] measures (owned
-/// by its smaller (block, side)), its two sides in the same chunk of [`CHUNK`] blocks or not.
+/// Which block sides the fused pass measures for the growth ratios, for the connectivity of
+/// the grids: every interface [`block_growth_ratios`] measures (owned by its smaller (block,
+/// side)), its two sides in the same chunk of [`CHUNK`] blocks or not.
 pub(super) struct Plan<'a> {
-    conn: &'a [BlockConnectivity],
+    conn: &'a Connectivity<'a>,
     grids: &'a [BlockGrid],
     /// Per block side (`4 b + s`): [`LOCAL`] and [`SPILL`] bits.
     need: Vec<u8>,
@@ -209,27 +214,35 @@ pub(super) struct Plan<'a> {
     chunk_spill: Vec<usize>,
 }
 
+/// The interfaces of blocks `blocks` that their side `(b, s)` owns (the smaller (block, side)
+/// of the two): `(b, s, partner)`, in block then side order.
+fn owned<'c>(
+    conn: &'c Connectivity<'_>,
+    blocks: std::ops::Range<usize>,
+) -> impl Iterator<Item = (usize, usize, crate::connectivity::Partner)> + 'c {
+    blocks
+        .flat_map(|b| (0..4).map(move |s| (b, s)))
+        .filter_map(|(b, s)| {
+            let p = conn.partner(b, s)?;
+            ((p.block, p.side) >= (b, s)).then_some((b, s, p))
+        })
+}
+
 impl<'a> Plan<'a> {
-    /// `conn` must have one entry per grid, in grid order.
-    pub fn new(conn: &'a [BlockConnectivity], grids: &'a [BlockGrid]) -> Plan<'a> {
+    /// `conn` must be the connectivity of `grids` (one block per grid).
+    pub fn new(conn: &'a Connectivity<'a>, grids: &'a [BlockGrid]) -> Plan<'a> {
         let mut need = vec![0u8; 4 * conn.len()];
-        for bc in conn {
-            for sc in &bc.sides {
-                let Some(p) = sc.partner else { continue };
-                if (p.block, p.side) < (bc.block, sc.side) {
-                    continue;
-                }
-                if interface_cells(grids, bc.block, sc.side, p.block, p.side).is_none() {
-                    continue;
-                }
-                let bit = if bc.block / CHUNK == p.block / CHUNK {
-                    LOCAL
-                } else {
-                    SPILL
-                };
-                need[4 * bc.block + sc.side] |= bit;
-                need[4 * p.block + p.side] |= bit;
+        for (b, s, p) in owned(conn, 0..conn.len()) {
+            if interface_cells(grids, b, s, p.block, p.side).is_none() {
+                continue;
             }
+            let bit = if b / CHUNK == p.block / CHUNK {
+                LOCAL
+            } else {
+                SPILL
+            };
+            need[4 * b + s] |= bit;
+            need[4 * p.block + p.side] |= bit;
         }
         let mut spill_at = vec![usize::MAX; need.len()];
         let mut chunk_spill = Vec::with_capacity(conn.len() / CHUNK + 2);
@@ -251,6 +264,12 @@ impl<'a> Plan<'a> {
             spill_at,
             chunk_spill,
         }
+    }
+
+    /// The blocks of chunk `c`.
+    fn chunk(&self, c: usize) -> std::ops::Range<usize> {
+        let n = self.conn.len();
+        (c * CHUNK).min(n)..((c + 1) * CHUNK).min(n)
     }
 
     /// Sides paired within their chunk, and sides paired across chunks.
@@ -279,33 +298,27 @@ impl<'a> Plan<'a> {
     /// left in `spill` (chunks of owners in parallel, merged into `m`).
     pub fn pair_spilled(&self, spill: &[f64], m: &mut MetricSummary) {
         let empty = MetricSummary::new(&m.histogram.edges, m.acceptable);
-        let parts: Vec<MetricSummary> = self
-            .conn
-            .par_chunks(CHUNK)
-            .map(|chunk| {
+        let parts: Vec<MetricSummary> = (0..self.conn.len().div_ceil(CHUNK))
+            .into_par_iter()
+            .map(|c| {
                 let mut part = empty.clone();
-                for bc in chunk {
-                    for sc in &bc.sides {
-                        let Some(p) = sc.partner else { continue };
-                        if (p.block, p.side) < (bc.block, sc.side)
-                            || bc.block / CHUNK == p.block / CHUNK
-                        {
-                            continue;
-                        }
-                        let Some(n) =
-                            interface_cells(self.grids, bc.block, sc.side, p.block, p.side)
-                        else {
-                            continue;
-                        };
-                        let a = 4 * bc.block + sc.side;
-                        let (ha, hb) = (self.spill_at[a], self.spill_at[4 * p.block + p.side]);
-                        pair(
-                            &spill[ha..ha + n],
-                            &spill[hb..hb + n],
-                            p.same_direction,
-                            &mut part,
-                        );
+                for (b, s, p) in owned(self.conn, self.chunk(c)) {
+                    if b / CHUNK == p.block / CHUNK {
+                        continue;
                     }
+                    let Some(n) = interface_cells(self.grids, b, s, p.block, p.side) else {
+                        continue;
+                    };
+                    let (ha, hb) = (
+                        self.spill_at[4 * b + s],
+                        self.spill_at[4 * p.block + p.side],
+                    );
+                    pair(
+                        &spill[ha..ha + n],
+                        &spill[hb..hb + n],
+                        p.same_direction,
+                        &mut part,
+                    );
                 }
                 part
             })
@@ -407,27 +420,21 @@ impl Sides {
     /// The growth ratios of the interfaces within chunk `c` (after every block of it).
     pub fn pair_local(&self, plan: &Plan, c: usize, m: &mut MetricSummary) {
         let first = c * CHUNK;
-        let blocks = plan.conn.get(first..).unwrap_or(&[]);
-        for bc in blocks.iter().take(CHUNK) {
-            for sc in &bc.sides {
-                let Some(p) = sc.partner else { continue };
-                if (p.block, p.side) < (bc.block, sc.side) || bc.block / CHUNK != p.block / CHUNK {
-                    continue;
-                }
-                let Some(n) = interface_cells(plan.grids, bc.block, sc.side, p.block, p.side)
-                else {
-                    continue;
-                };
-                let a = 4 * bc.block + sc.side;
-                let ha = self.at[a - 4 * first];
-                let hb = self.at[4 * (p.block - first) + p.side];
-                pair(
-                    &self.heights[ha..ha + n],
-                    &self.heights[hb..hb + n],
-                    p.same_direction,
-                    m,
-                );
+        for (b, s, p) in owned(plan.conn, plan.chunk(c)) {
+            if b / CHUNK != p.block / CHUNK {
+                continue;
             }
+            let Some(n) = interface_cells(plan.grids, b, s, p.block, p.side) else {
+                continue;
+            };
+            let ha = self.at[4 * (b - first) + s];
+            let hb = self.at[4 * (p.block - first) + p.side];
+            pair(
+                &self.heights[ha..ha + n],
+                &self.heights[hb..hb + n],
+                p.same_direction,
+                m,
+            );
         }
     }
 }
