@@ -437,7 +437,11 @@ fn write_into(
                 let path = dir.join("report.json");
                 match prepared.report {
                     Some(r) => report::write_json(r, &path)?,
-                    None => report::write_json(&report::Report::from_mesh(mesh), &path)?,
+                    // The connectivity just written, not checked a second time.
+                    None => report::write_json(
+                        &report::Report::from_mesh_with(mesh, Some(conn)),
+                        &path,
+                    )?,
                 }
             }
         }
