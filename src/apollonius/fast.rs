@@ -22,7 +22,7 @@
 //! - validity of each root (`rho > 0`, each `sigma_i = rho + s_i` certainly non-zero with the
 //!   site's sense), its orientation (the sign of the sum of `solve.rs`, which is invariant under
 //!   translation), the order of the valid roots by radius, the root kept by the
-//!   [`Choice`](super::Choice) (orientation, then the hint's certainly smaller distance);
+//!   [`Choice`] (orientation, then the hint's certainly smaller distance);
 //! - every output is the `f64` nearest to every value of its ball ([`Ball::round`]), which is
 //!   the exact solve's correctly rounded value; zero, subnormal and near-midpoint values give
 //!   up.

@@ -175,7 +175,7 @@ fn turn(c: Point, a: Point, b: Point) -> f64 {
     cross.atan2(dot)
 }
 
-/// `(cross, dot)` of `a - c` and `b - c`: [`turn`] is `cross.atan2(dot)`.
+/// `(cross, dot)` of `a - c` and `b - c`: `turn` (kept for the tests) is `cross.atan2(dot)`.
 fn turn_parts(c: Point, a: Point, b: Point) -> (f64, f64) {
     let u = [a[0] - c[0], a[1] - c[1]];
     let v = [b[0] - c[0], b[1] - c[1]];

@@ -48,8 +48,9 @@ fn interleave(mut x: u32) -> u32 {
     x
 }
 
-/// [`hilbert`] without a loop over the bit levels, for `order <= 16` (the same index: checked
-/// against it exhaustively at the order used, [`HILBERT_ORDER`]).
+/// `hilbert` (the reference loop, kept for the tests) without a loop over the bit levels, for
+/// `order <= 16` (the same index: checked against it exhaustively at the order used,
+/// [`HILBERT_ORDER`]).
 ///
 /// The rotation state of every level is a prefix of the quadrant transforms above it; that
 /// prefix is a composition of the four transforms (identity, swap, complement, both), written

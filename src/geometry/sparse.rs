@@ -1,6 +1,7 @@
-//! [`Triangulation::extended`] without rebuilding the whole triangulation (issue 8: at 1e5
-//! particles refinement inserts a few hundred samples into 6 M triangles, and the builder's
-//! half-edge arrays cost a second or so to rebuild and compact).
+//! [`Triangulation::extended`](super::triangulation::Triangulation::extended) without
+//! rebuilding the whole triangulation (issue 8: at 1e5 particles refinement inserts a few
+//! hundred samples into 6 M triangles, and the builder's half-edge arrays cost a second or so
+//! to rebuild and compact).
 //!
 //! [`extend`] replays what the resumed builder ([`super::build::Builder::resume`] then
 //! [`super::build::Builder::insert`], then the compaction of `Triangulation::finish`) does, on

@@ -103,7 +103,7 @@ pub(super) fn skewness(min_angle_deg: f64, max_angle_deg: f64) -> f64 {
     (max_angle_deg - 90.0).max(90.0 - min_angle_deg) / 90.0
 }
 
-/// The angle histogram's bin of an angle `x >= +0` (degrees), as a float: the rule of [`bin`]
+/// The angle histogram's bin of an angle `x >= +0` (degrees), as a float: the rule of `bin` (the tests' oracle)
 /// for [`super::ANGLE_EDGES`] (0, 10, ..., 130, 135, 140, ..., 180): the inner edges at or below `x`
 /// are the multiples of 10 from 10 up (`floor(x / 10)` of them) and 135 when `x >= 135`, at
 /// most 18 in all (the last bin): `min(floor(x / 10) + [x >= 135], 18)`, by arithmetic rather
@@ -131,7 +131,7 @@ pub(super) fn angle_bin_unsigned(x: f64) -> f64 {
 }
 
 /// `weight` times the number of inner edges `edges[1..N - 1]` at or below `x`: for a finite
-/// `x`, the rule of [`bin`] (the number of `edges[1..]` at or below `x`, at most `N - 2`: the
+/// `x`, the rule of `bin` (the tests' oracle) (the number of `edges[1..]` at or below `x`, at most `N - 2`: the
 /// last edge is at or below `x` only when every inner edge is), scaled. With weights `32ᵏ` the bins
 /// of several values add up, exactly (integers below `2⁵³`), into one packed word of 5-bit
 /// fields, see [`PACK`], no packing.

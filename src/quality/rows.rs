@@ -32,7 +32,7 @@
 //! ([`least_scaled_jacobian`]; a cell whose corner pick is uncertain takes the reference path).
 //!
 //! Why this gives the reference's numbers: every figure is computed with the reference's own
-//! functions ([`angle_deg`](super::angle_deg), [`length_figures`], [`skewness`], the `sqrt` length of
+//! functions ([`angle_deg`](super::angle_deg), [`length_figures`](super::kernel::length_figures), [`skewness`](super::kernel::skewness), the `sqrt` length of
 //! [`crate::geometry::length`]) on the same operands, except that the reference forms a
 //! corner's two edge vectors as differences `a - o` where this pass may use the negated
 //! difference `-(o - a)` of the neighbouring corner: the two are equal except possibly for the
@@ -457,7 +457,7 @@ fn row_figures<const SPLIT: bool, const TABLE: bool>(
     k
 }
 
-/// Edge ratio and aspect ratio from the edge lengths, the expressions of [`length_figures`]
+/// Edge ratio and aspect ratio from the edge lengths, the expressions of [`length_figures`](super::kernel::length_figures)
 /// for the fast path's positive finite lengths (elsewhere the results are not used): no NaN,
 /// no zero, so the plain compares are `f64::min` / `max` and [`super::ratio`] is the
 /// division.
@@ -473,7 +473,7 @@ fn edge_ratios(edges: &[f64; 4]) -> (f64, f64) {
 /// outside counts and samples in plain arrays, and the extremes as plain numbers (`+-inf`
 /// until a finite value came), turned into [`MetricSummary`] fields by [`Chunk::finish`].
 /// Folding `x` into `+inf` gives `x`, so this is the sequence of `Option` folds of
-/// [`MetricSummary::add_value`].
+/// `MetricSummary::add_value` (the tests' reference).
 pub(super) struct Chunk {
     /// The reference path's counts.
     metrics: QualityMetrics,
@@ -543,7 +543,7 @@ impl Chunk {
         e[1] = e[1].max(hi);
     }
 
-    /// [`MetricSummary::add_value`].
+    /// `MetricSummary::add_value` (the tests' reference).
     fn add_value(&mut self, which: usize, x: f64) {
         let m = Self::summary(&mut self.metrics, which);
         m.samples += 1;
@@ -553,7 +553,7 @@ impl Chunk {
         }
     }
 
-    /// [`MetricSummary::add`].
+    /// `MetricSummary::add` (the tests' reference).
     fn add(&mut self, which: usize, x: f64) {
         self.add_value(which, x);
         let m = Self::summary(&mut self.metrics, which);
