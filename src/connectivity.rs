@@ -253,29 +253,18 @@ impl<'a> Connectivity<'a> {
 
     /// Every block's record, in block order (blocks in parallel on the current rayon pool).
     pub fn to_vec(&self) -> Vec<BlockConnectivity> {
-        let mut out = Vec::with_capacity(self.len());
         (0..self.len())
             .into_par_iter()
             .with_min_len(PARALLEL_BLOCKS)
-            .map(|b| self.block(b).unwrap_or_else(placeholder))
-            .collect_into_vec(&mut out);
-        out
+            .map(|b| self.block(b))
+            .collect::<Option<Vec<_>>>()
+            .unwrap_or_default()
     }
 }
 
 /// Blocks per task of [`Connectivity`]'s parallel loops (each block is cheap: a task of this
 /// many amortises the scheduling).
 const PARALLEL_BLOCKS: usize = 512;
-
-/// The entry of a block out of range (never returned: [`Connectivity::to_vec`] asks only for
-/// blocks in range).
-fn placeholder() -> BlockConnectivity {
-    BlockConnectivity {
-        block: usize::MAX,
-        dims: [0, 0],
-        sides: [0, 1, 2, 3].map(wall_side(0)),
-    }
-}
 
 /// The record of a side on the wall of `circle` (the outer boundary for a negative id).
 fn wall_side(circle: CircleId) -> impl Fn(usize) -> SideConnectivity {
@@ -352,6 +341,7 @@ fn side_record(
         same_direction: same,
     }) = unpack(packed)
     else {
+        // No partner: a wall side ([`Connectivity::new`] checked the edge's kind and users).
         return wall_side(match kind {
             EdgeKind::Wall(c) => c,
             _ => 0,
