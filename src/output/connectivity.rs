@@ -95,8 +95,8 @@ fn write_blocks(
         } else {
             w.write_all(b"[")?;
             let wave = CHUNK * WAVE;
-            let mut waves = (0..n.div_ceil(wave)).map(|wi| (wi, wi * wave..n.min((wi + 1) * wave)));
-            let format = |(wi, blocks)| format_wave(wi, blocks, &block);
+            let mut waves = (0..n.div_ceil(wave)).map(|wi| wi * wave..n.min((wi + 1) * wave));
+            let format = |blocks| format_wave(blocks, &block);
             let mut pending = waves.next().map(format);
             while let Some(texts) = pending.take() {
                 let next = waves.next();
@@ -113,10 +113,9 @@ fn write_blocks(
     })
 }
 
-/// The text of wave `wi` (`blocks` its blocks), one buffer per chunk of [`CHUNK`] blocks: each
+/// The text of the wave of blocks `blocks`, one buffer per chunk of [`CHUNK`] blocks: each
 /// block preceded by its separator (none before the file's first block) and its indentation.
 fn format_wave(
-    wi: usize,
     blocks: std::ops::Range<usize>,
     block: &(impl Fn(&mut Vec<u8>, usize) + Sync),
 ) -> Vec<Vec<u8>> {
@@ -127,7 +126,7 @@ fn format_wave(
             let hi = (lo + CHUNK).min(blocks.end);
             let mut out = Vec::with_capacity((hi - lo) * 1024);
             for b in lo..hi {
-                if wi > 0 || b > lo || ci > 0 {
+                if b > 0 {
                     out.push(b',');
                 }
                 out.extend_from_slice(b"\n    ");
