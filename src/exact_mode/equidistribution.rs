@@ -18,8 +18,9 @@ pub(crate) fn equidistribute(w: &[f64], n: usize) -> Vec<f64> {
     t
 }
 
-/// `equidistribute` (the allocating form, kept for the tests) written into `t` (cleared first), with `prefix` the running sums'
-/// buffer: the same values, in buffers reused from piece to piece.
+/// `equidistribute` (the allocating form, kept for the tests) written into `t` (cleared
+/// first), with `prefix` the running sums' buffer: the same values, in buffers reused from
+/// piece to piece.
 pub(crate) fn equidistribute_into(w: &[f64], n: usize, t: &mut Vec<f64>, prefix: &mut Vec<f64>) {
     t.clear();
     prefix.clear();

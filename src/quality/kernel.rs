@@ -103,13 +103,13 @@ pub(super) fn skewness(min_angle_deg: f64, max_angle_deg: f64) -> f64 {
     (max_angle_deg - 90.0).max(90.0 - min_angle_deg) / 90.0
 }
 
-/// The angle histogram's bin of an angle `x >= +0` (degrees), as a float: the rule of `bin` (the tests' oracle)
-/// for [`super::ANGLE_EDGES`] (0, 10, ..., 130, 135, 140, ..., 180): the inner edges at or below `x`
-/// are the multiples of 10 from 10 up (`floor(x / 10)` of them) and 135 when `x >= 135`, at
-/// most 18 in all (the last bin): `min(floor(x / 10) + [x >= 135], 18)`, by arithmetic rather
-/// than a search, so that the vectorised row loop computes it; and without a division (the
-/// row loop's costliest operation): `floor(x / 10)` is `q = floor(fl(x · 0.1))`, less one when
-/// `10 q > x`.
+/// The angle histogram's bin of an angle `x >= +0` (degrees), as a float: the rule of the
+/// tests' oracle `bin` for [`super::ANGLE_EDGES`] (0, 10, ..., 130, 135, 140, ..., 180): the
+/// inner edges at or below `x` are the multiples of 10 from 10 up (`floor(x / 10)` of them) and
+/// 135 when `x >= 135`, at most 18 in all (the last bin):
+/// `min(floor(x / 10) + [x >= 135], 18)`, by arithmetic rather than a search, so that the
+/// vectorised row loop computes it; and without a division (the row loop's costliest
+/// operation): `floor(x / 10)` is `q = floor(fl(x · 0.1))`, less one when `10 q > x`.
 ///
 /// Why: let `k = floor(x / 10)` (exact quotient), `x` finite, `0 <= x < 2⁵⁰`. The float `0.1`
 /// is above `1/10` by a relative `δ = 5.6e-17`, so `x · 0.1 >= x / 10 >= k`, and `k` is a
@@ -131,10 +131,10 @@ pub(super) fn angle_bin_unsigned(x: f64) -> f64 {
 }
 
 /// `weight` times the number of inner edges `edges[1..N - 1]` at or below `x`: for a finite
-/// `x`, the rule of `bin` (the tests' oracle) (the number of `edges[1..]` at or below `x`, at most `N - 2`: the
-/// last edge is at or below `x` only when every inner edge is), scaled. With weights `32ᵏ` the bins
-/// of several values add up, exactly (integers below `2⁵³`), into one packed word of 5-bit
-/// fields, see [`PACK`], no packing.
+/// `x`, the rule of the tests' oracle `bin` (the number of `edges[1..]` at or below `x`, at
+/// most `N - 2`: the last edge is at or below `x` only when every inner edge is), scaled. With
+/// weights `32ᵏ` the bins of several values add up, exactly (integers below `2⁵³`), into one
+/// packed word of 5-bit fields, see [`PACK`], no packing.
 ///
 /// One comparison and one select of a constant per edge (no addition): the edges ascend, so
 /// the edges at or below `x` are the first ones, and the last edge `x` passes (in edge order)

@@ -32,17 +32,18 @@
 //! ([`least_scaled_jacobian`]; a cell whose corner pick is uncertain takes the reference path).
 //!
 //! Why this gives the reference's numbers: every figure is computed with the reference's own
-//! functions ([`angle_deg`](super::angle_deg), [`length_figures`](super::kernel::length_figures), [`skewness`](super::kernel::skewness), the `sqrt` length of
-//! [`crate::geometry::length`]) on the same operands, except that the reference forms a
-//! corner's two edge vectors as differences `a - o` where this pass may use the negated
-//! difference `-(o - a)` of the neighbouring corner: the two are equal except possibly for the
-//! sign of a zero component, so products and sums agree except possibly for the sign of a zero
-//! result. A zero cross product sends the cell to the reference path; [`angle_deg`](super::angle_deg) does not
-//! look at the sign of a zero; lengths only use squares. Cells with an edge whose squared
-//! length is outside `[SQ_MIN, SQ_MAX]` (or not a number) take the reference path too. On this
-//! path no figure is NaN or a zero of either sign (angles are `M + s a` with `M = 0` only for
-//! `s a >= +0`), so folding extremes with `min` / `max` in any grouping gives the reference's
-//! bits; sums are taken in cell order.
+//! functions ([`angle_deg`](super::angle_deg),
+//! [`length_figures`](super::kernel::length_figures), [`skewness`](super::kernel::skewness),
+//! the `sqrt` length of [`crate::geometry::length`]) on the same operands, except that the
+//! reference forms a corner's two edge vectors as differences `a - o` where this pass may use
+//! the negated difference `-(o - a)` of the neighbouring corner: the two are equal except
+//! possibly for the sign of a zero component, so products and sums agree except possibly for
+//! the sign of a zero result. A zero cross product sends the cell to the reference path;
+//! [`angle_deg`](super::angle_deg) does not look at the sign of a zero; lengths only use
+//! squares. Cells with an edge whose squared length is outside `[SQ_MIN, SQ_MAX]` (or not a
+//! number) take the reference path too. On this path no figure is NaN or a zero of either sign
+//! (angles are `M + s a` with `M = 0` only for `s a >= +0`), so folding extremes with `min` /
+//! `max` in any grouping gives the reference's bits; sums are taken in cell order.
 
 use super::kernel::{
     angle_bin_unsigned, cell_products, corner_products, least_scaled_jacobian, packed_bins,
@@ -457,10 +458,10 @@ fn row_figures<const SPLIT: bool, const TABLE: bool>(
     k
 }
 
-/// Edge ratio and aspect ratio from the edge lengths, the expressions of [`length_figures`](super::kernel::length_figures)
-/// for the fast path's positive finite lengths (elsewhere the results are not used): no NaN,
-/// no zero, so the plain compares are `f64::min` / `max` and [`super::ratio`] is the
-/// division.
+/// Edge ratio and aspect ratio from the edge lengths, the expressions of
+/// [`length_figures`](super::kernel::length_figures) for the fast path's positive finite
+/// lengths (elsewhere the results are not used): no NaN, no zero, so the plain compares are
+/// `f64::min` / `max` and [`super::ratio`] is the division.
 #[inline(always)]
 fn edge_ratios(edges: &[f64; 4]) -> (f64, f64) {
     let (lo, hi) = (fold(*edges, less), fold(*edges, more));

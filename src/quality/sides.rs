@@ -1,11 +1,11 @@
 //! Per-side figures of the report: the growth ratio across block interfaces and the wall
-//! orthogonality. The reference passes (`growth_ratios`, `wall_orthogonality`, kept for the tests) read each
-//! block side again after the cell pass (the partner block's grid is then far from the cache);
-//! the cell pass of [`super::block_stats`] instead takes each block's side-cell heights and
-//! wall deviations while its nodes are in L1 ([`Sides`]), and pairs the heights of an
-//! interface afterwards: within a chunk of blocks at the chunk's end, across chunks from a
-//! buffer ([`Plan`]). Growth ratio counts and extremes and the `max_nan` fold do not depend on
-//! the order, so both give the same figures.
+//! orthogonality. The reference passes (`growth_ratios`, `wall_orthogonality`, kept for the
+//! tests) read each block side again after the cell pass (the partner block's grid is then far
+//! from the cache); the cell pass of [`super::block_stats`] instead takes each block's
+//! side-cell heights and wall deviations while its nodes are in L1 ([`Sides`]), and pairs the
+//! heights of an interface afterwards: within a chunk of blocks at the chunk's end, across
+//! chunks from a buffer ([`Plan`]). Growth ratio counts and extremes and the `max_nan` fold do
+//! not depend on the order, so both give the same figures.
 
 use super::{angle_deg, corners, len, ratio, well_formed, MetricSummary, CHUNK};
 #[cfg(test)]
@@ -181,8 +181,8 @@ pub(super) fn block_wall_orthogonality(
 }
 
 /// The number of cells along the interface from side `sa` of block `a` to side `sb` of block
-/// `b` when `block_growth_ratios` (the tests' reference) measures it (both grids present and well formed, the same
-/// non-zero count on both sides, no empty grid), else `None`.
+/// `b` when the tests' reference `block_growth_ratios` measures it (both grids present and
+/// well formed, the same non-zero count on both sides, no empty grid), else `None`.
 fn interface_cells(grids: &[BlockGrid], a: usize, sa: usize, b: usize, sb: usize) -> Option<usize> {
     let (ga, gb) = (grids.get(a)?, grids.get(b)?);
     if sa >= 4 || sb >= 4 || !well_formed(ga) || !well_formed(gb) {
@@ -200,8 +200,8 @@ const LOCAL: u8 = 1;
 const SPILL: u8 = 2;
 
 /// Which block sides the fused pass measures for the growth ratios, for the connectivity of
-/// the grids: every interface `block_growth_ratios` (the tests' reference) measures (owned by its smaller (block,
-/// side)), its two sides in the same chunk of [`CHUNK`] blocks or not.
+/// the grids: every interface the tests' reference `block_growth_ratios` measures (owned by
+/// its smaller (block, side)), its two sides in the same chunk of [`CHUNK`] blocks or not.
 pub(super) struct Plan<'a> {
     conn: &'a Connectivity<'a>,
     grids: &'a [BlockGrid],
@@ -339,10 +339,10 @@ fn side_cells(grid: &BlockGrid, s: usize) -> usize {
 }
 
 /// The growth ratios of one interface from the heights of its owner side `ha` and of the
-/// partner side `hb` (same length), with the expression of `block_growth_ratios` (the tests' reference), counted
-/// as `MetricSummary::add` does: a ratio is at least 1 or infinite, never NaN, so its bin
-/// is the number of inner edges at or below it (the rule of [`super::Histogram::add`] for
-/// increasing edges), counted without a search.
+/// partner side `hb` (same length), with the expression of the tests' reference
+/// `block_growth_ratios`, counted as `MetricSummary::add` does: a ratio is at least 1 or
+/// infinite, never NaN, so its bin is the number of inner edges at or below it (the rule of
+/// [`super::Histogram::add`] for increasing edges), counted without a search.
 #[inline]
 fn pair(ha: &[f64], hb: &[f64], same_direction: bool, m: &mut MetricSummary) {
     let n = ha.len();
