@@ -224,11 +224,45 @@ impl Numbering {
         out.extend(base..base + inner);
         out.push(end);
     }
+
+    /// The points of [`Self::edge_chain`] (the two layout vertices, the interior nodes of the
+    /// side that numbers the edge between them) into `out` (cleared first).
+    pub fn edge_points(
+        &self,
+        layout: &BlockLayout,
+        grids: &[BlockGrid],
+        e: usize,
+        out: &mut Vec<Point>,
+    ) {
+        out.clear();
+        let Some((b, s)) = self.edge_owner(e) else {
+            return;
+        };
+        let block = &layout.blocks[b];
+        let side = block.sides[s];
+        let [from, to] = [
+            block.corners[s] as usize,
+            block.corners[(s + 1) % 4] as usize,
+        ];
+        let (start, end) = if side.reversed {
+            (to, from)
+        } else {
+            (from, to)
+        };
+        out.push(layout.vertices[start]);
+        let nodes = side_interior(&grids[b], s);
+        if side.reversed {
+            out.extend(nodes.rev());
+        } else {
+            out.extend(nodes);
+        }
+        out.push(layout.vertices[end]);
+    }
 }
 
 /// The number of cells along side `s` of `grid`.
 fn side_cells(grid: &BlockGrid, s: usize) -> usize {
-    if s % 2 == 0 {
+    if s.is_multiple_of(2) {
         grid.ni
     } else {
         grid.nj

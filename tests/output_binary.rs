@@ -240,6 +240,96 @@ fn vtu_binary_holds_the_ascii_values_bit_for_bit() {
     }
 }
 
+/// The `.vtu` writers stream (issue 8): points block by block from the compact numbering, the
+/// cell figures a chunk of blocks at a time (binary: each array's part written at its place).
+/// On a mesh of many waves of chunks at 1 and at 3 threads, the binary file's cell arrays
+/// are `cell_fields` of every block in block order, its points the merged nodes of
+/// `number_nodes`, its connectivity their ids, the ASCII file holds the same values, and the
+/// thread count changes no byte of either.
+#[test]
+fn vtu_streamed_over_many_waves_holds_every_block() {
+    use medial_blocks::numbering::number_nodes;
+    use medial_blocks::quality::cell_fields;
+    let opts = Options {
+        block_cells: Some(5),
+        ..Options::default()
+    };
+    let m = mesh(&layouts::bubbles(220, 9).unwrap(), &opts).unwrap();
+    assert!(
+        m.grids.len() > 3 * 4 * 64,
+        "{} blocks: one wave",
+        m.grids.len()
+    );
+    let dir = tempfile::tempdir().unwrap();
+    let write = |threads: usize, encoding: Encoding| {
+        let path = dir.path().join(format!("{threads}-{encoding:?}.vtu"));
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap();
+        pool.install(|| vtu::write_vtu_encoded(&m, &path, encoding).unwrap());
+        std::fs::read(path).unwrap()
+    };
+    let binary = write(1, Encoding::Binary);
+    assert_eq!(binary, write(3, Encoding::Binary));
+    let ascii = write(3, Encoding::Ascii);
+    assert_eq!(ascii, write(1, Encoding::Ascii));
+    assert_same_vtk(&ascii, &binary, "many waves");
+
+    let (_, arrays) = read_binary_vtk(&binary);
+    let of = |n: &str| &arrays.iter().find(|a| a.name == n).unwrap().words;
+    let fields: Vec<_> = m.grids.iter().map(cell_fields).collect();
+    for (k, name) in vtk::CELL_ARRAYS.iter().enumerate() {
+        let want: Vec<u64> = fields
+            .iter()
+            .flat_map(|f| {
+                let values = match k {
+                    0 => &f.min_angle_deg,
+                    1 => &f.max_angle_deg,
+                    2 => &f.min_jacobian,
+                    3 => &f.equiangle_skewness,
+                    4 => &f.edge_ratio,
+                    5 => &f.scaled_jacobian,
+                    _ => &f.aspect_ratio,
+                };
+                values.iter().map(|x| x.to_bits())
+            })
+            .collect();
+        assert_eq!(of(name), &want, "{name}");
+    }
+    let nodes = number_nodes(&m.layout, &m.grids);
+    let points: Vec<u64> = nodes
+        .coords
+        .iter()
+        .flat_map(|p| [p[0].to_bits(), p[1].to_bits(), 0f64.to_bits()])
+        .collect();
+    assert_eq!(of("Points"), &points);
+    let mut corners = Vec::new();
+    for (g, ids) in m.grids.iter().zip(&nodes.block_nodes) {
+        let id = |i: usize, j: usize| u64::from(ids[i + j * (g.ni + 1)]);
+        for j in 0..g.nj {
+            for i in 0..g.ni {
+                corners.extend([id(i, j), id(i + 1, j), id(i + 1, j + 1), id(i, j + 1)]);
+            }
+        }
+    }
+    assert_eq!(of("connectivity"), &corners);
+
+    // The `.msh` writers stream the same numbering: the binary and ASCII files agree, and
+    // their nodes are the merged nodes in id order.
+    let (a, b) = (dir.path().join("a.msh"), dir.path().join("b.msh"));
+    gmsh::write_msh(&m, &a).unwrap();
+    gmsh::write_msh_encoded(&m, &b, Encoding::Binary).unwrap();
+    let ascii = read_ascii_msh(&std::fs::read(a).unwrap());
+    assert_eq!(ascii, read_binary_msh(&std::fs::read(b).unwrap()));
+    let msh_points: Vec<u64> = ascii
+        .nodes
+        .iter()
+        .flat_map(|e| e.records.iter().flat_map(|r| r[1..].iter().copied()))
+        .collect();
+    assert_eq!(msh_points, points);
+}
+
 // ---------------------------------------------------------------------------------------
 // Gmsh MSH 4.1
 // ---------------------------------------------------------------------------------------

@@ -15,8 +15,7 @@ use super::text::{self, write_chunked};
 use super::write_atomic;
 use crate::layout::EdgeKind;
 use crate::mesh::Mesh;
-use crate::numbering::number_nodes;
-use crate::numbering::GlobalNodes;
+use crate::numbering::Numbering;
 use std::collections::BTreeSet;
 use std::io::{self, Write};
 use std::path::Path;
@@ -83,6 +82,7 @@ pub fn write_msh(mesh: &Mesh, path: &Path) -> io::Result<()> {
 
 /// Write `mesh` as Gmsh 4.1 to `path`, ASCII or binary.
 pub fn write_msh_encoded(mesh: &Mesh, path: &Path, encoding: Encoding) -> io::Result<()> {
+    super::check_mesh(mesh)?;
     let parts = Parts::new(mesh);
     write_atomic(path, |w| match encoding {
         Encoding::Ascii => write_ascii(w, mesh, &parts),
@@ -90,11 +90,12 @@ pub fn write_msh_encoded(mesh: &Mesh, path: &Path, encoding: Encoding) -> io::Re
     })
 }
 
-/// What both encodings write: the global nodes, the line chain of every layout edge (from
-/// the first block side that uses it), the physical groups present, and the first element
-/// tag of every edge's lines and of every block's quads.
+/// What both encodings write: the numbering of the merged nodes (their coordinates and the
+/// blocks' ids are formed as they are written, issue 8), the line chain of every layout edge
+/// (from the first block side that uses it), the physical groups present, and the first
+/// element tag of every edge's lines and of every block's quads.
 struct Parts {
-    nodes: GlobalNodes,
+    nodes: Numbering,
     edge_lines: Vec<Option<Vec<u32>>>,
     walls: BTreeSet<i32>,
     has_outer: bool,
@@ -108,32 +109,15 @@ struct Parts {
 impl Parts {
     fn new(mesh: &Mesh) -> Parts {
         let layout = &mesh.layout;
-        let nodes = number_nodes(layout, &mesh.grids);
+        let nodes = Numbering::new(layout, &mesh.grids);
         // Line elements of every edge, from the first block side that uses it.
-        let mut edge_lines: Vec<Option<Vec<u32>>> = vec![None; layout.edges.len()];
-        for (b, block) in layout.blocks.iter().enumerate() {
-            let g = &mesh.grids[b];
-            let ids = &nodes.block_nodes[b];
-            for (s, side) in block.sides.iter().enumerate() {
-                let e = side.edge as usize;
-                if edge_lines[e].is_some() {
-                    continue;
-                }
-                let mut chain: Vec<u32> = match s {
-                    0 => (0..=g.ni).map(|i| ids[i]).collect(),
-                    1 => (0..=g.nj).map(|j| ids[g.ni + j * (g.ni + 1)]).collect(),
-                    2 => (0..=g.ni)
-                        .rev()
-                        .map(|i| ids[i + g.nj * (g.ni + 1)])
-                        .collect(),
-                    _ => (0..=g.nj).rev().map(|j| ids[j * (g.ni + 1)]).collect(),
-                };
-                if side.reversed {
-                    chain.reverse();
-                }
-                edge_lines[e] = Some(chain);
-            }
-        }
+        let mut chain = Vec::new();
+        let edge_lines: Vec<Option<Vec<u32>>> = (0..layout.edges.len())
+            .map(|e| {
+                nodes.edge_chain(layout, &mesh.grids, e, &mut chain);
+                (!chain.is_empty()).then(|| chain.iter().map(|&id| id as u32).collect())
+            })
+            .collect();
         let walls: BTreeSet<i32> = layout
             .edges
             .iter()
@@ -199,9 +183,12 @@ impl Parts {
         self.edge_lines[e].as_deref().unwrap_or(&[])
     }
 
-    /// The bounding box of edge `e`'s nodes.
-    fn edge_box(&self, e: usize) -> [f64; 4] {
-        bbox(self.chain(e).iter().map(|&n| self.nodes.coords[n as usize]))
+    /// The bounding box of edge `e`'s nodes (in the chain's order).
+    fn edge_box(&self, mesh: &Mesh, e: usize) -> [f64; 4] {
+        let mut points = Vec::new();
+        self.nodes
+            .edge_points(&mesh.layout, &mesh.grids, e, &mut points);
+        bbox(points.into_iter())
     }
 
     /// The number of elements (lines and quads).
@@ -225,7 +212,7 @@ fn write_ascii<W: Write>(w: &mut W, mesh: &Mesh, parts: &Parts) -> io::Result<()
     write_chunked(w, layout.edges.len(), 1024, |r, out| {
         for e in r {
             text::int(out, e + 1);
-            entity_box(out, parts.edge_box(e));
+            entity_box(out, parts.edge_box(mesh, e));
             out.extend_from_slice(b" 1 ");
             text::int(out, physical_of(layout.edges[e].kind));
             out.extend_from_slice(b" 0\n");
@@ -248,7 +235,7 @@ fn write_ascii<W: Write>(w: &mut W, mesh: &Mesh, parts: &Parts) -> io::Result<()
     })?;
     writeln!(w, "$EndEntities")?;
 
-    let n = nodes.coords.len();
+    let n = nodes.len();
     writeln!(w, "$Nodes\n1 {n} 1 {n}\n2 1 0 {n}")?;
     write_chunked(w, n, 8192, |r, out| {
         for k in r {
@@ -256,8 +243,8 @@ fn write_ascii<W: Write>(w: &mut W, mesh: &Mesh, parts: &Parts) -> io::Result<()
             out.push(b'\n');
         }
     })?;
-    write_chunked(w, n, 4096, |r, out| {
-        for p in &nodes.coords[r] {
+    super::write_merged_points(w, mesh, nodes, |points, out| {
+        for p in points {
             text::exp(out, p[0]);
             out.push(b' ');
             text::exp(out, p[1]);
@@ -313,8 +300,10 @@ fn signed_curve(side: &crate::layout::SideRef) -> i64 {
 /// Every quad of block `b` in file order: `[tag, n0, n1, n2, n3]` (1-based node tags,
 /// counter-clockwise from `(i, j)`).
 fn quads(parts: &Parts, mesh: &Mesh, b: usize, mut each: impl FnMut([usize; 5])) {
-    let (g, ids) = (&mesh.grids[b], &parts.nodes.block_nodes[b]);
-    let at = |i: usize, j: usize| ids[i + j * (g.ni + 1)] as usize + 1;
+    let g = &mesh.grids[b];
+    let mut ids = Vec::new();
+    parts.nodes.block_ids(&mesh.layout, b, g, &mut ids);
+    let at = |i: usize, j: usize| ids[i + j * (g.ni + 1)] + 1;
     let mut tag = parts.first_quad[b];
     for j in 0..g.nj {
         for i in 0..g.ni {
@@ -376,7 +365,7 @@ fn write_binary<W: Write>(w: &mut W, mesh: &Mesh, parts: &Parts) -> io::Result<(
     }
     for (e, edge) in layout.edges.iter().enumerate() {
         bin.int(e as i64 + 1)?;
-        bin.bbox(parts.edge_box(e));
+        bin.bbox(parts.edge_box(mesh, e));
         bin.size(1);
         bin.int(physical_of(edge.kind).into())?;
         bin.size(0);
@@ -395,7 +384,7 @@ fn write_binary<W: Write>(w: &mut W, mesh: &Mesh, parts: &Parts) -> io::Result<(
     w.write_all(&out)?;
     w.write_all(b"\n$EndEntities\n")?;
 
-    let n = nodes.coords.len();
+    let n = nodes.len();
     let mut head = Vec::new();
     let mut bin = Bin(&mut head);
     for v in [1, n, 1, n] {
@@ -412,8 +401,8 @@ fn write_binary<W: Write>(w: &mut W, mesh: &Mesh, parts: &Parts) -> io::Result<(
             Bin(out).size(k + 1);
         }
     })?;
-    write_chunked(w, n, 1 << 15, |r, out| {
-        for p in &nodes.coords[r] {
+    super::write_merged_points(w, mesh, nodes, |points, out| {
+        for p in points {
             let mut bin = Bin(out);
             bin.double(p[0]);
             bin.double(p[1]);

@@ -33,10 +33,11 @@ pub mod cgns;
 
 use crate::connectivity::Connectivity;
 use crate::mesh::Mesh;
+use crate::numbering::Numbering;
 use crate::quality::well_formed;
 pub use binary::Encoding;
 use std::fs::File;
-use std::io::{self, BufWriter};
+use std::io::{self, BufWriter, Write};
 use std::path::Path;
 
 /// Write `path` atomically: `body` writes into a buffered temporary file next to `path`,
@@ -146,6 +147,31 @@ pub(crate) fn check_mesh(mesh: &Mesh) -> io::Result<()> {
         ));
     }
     Ok(())
+}
+
+/// Blocks per chunk when the points or the cells of a run of blocks are formed in parallel.
+const BLOCKS_PER_CHUNK: usize = 16;
+
+/// The points of the merged mesh ([`Numbering`]) in id order, as `points(points, out)` formats
+/// them:
+/// the layout vertices in chunks of 4 096, then the points the blocks add, a chunk of blocks
+/// at a time.
+pub(crate) fn write_merged_points<W: Write>(
+    w: &mut W,
+    mesh: &Mesh,
+    nodes: &Numbering,
+    points: impl Fn(&[crate::geometry::Point], &mut Vec<u8>) + Sync,
+) -> io::Result<()> {
+    let vertices = &mesh.layout.vertices;
+    text::write_chunked(w, vertices.len(), 4096, |r, out| points(&vertices[r], out))?;
+    text::write_chunked(w, mesh.grids.len(), BLOCKS_PER_CHUNK, |blocks, out| {
+        let mut added = Vec::new();
+        for b in blocks {
+            added.clear();
+            nodes.block_points(&mesh.layout, b, &mesh.grids[b], &mut added);
+            points(&added, out);
+        }
+    })
 }
 
 /// A writer the CLI's `--format` can name.

@@ -2,21 +2,27 @@
 //! quadrilaterals (VTK cell type 9), nodes shared by blocks merged through
 //! [`crate::numbering`].
 //!
-//! Points are the global nodes in [`number_nodes`] order (z = 0). Cells come block by block,
+//! Points are the global nodes in [`crate::numbering::number_nodes`] order (z = 0). Cells come block by block,
 //! in each block in the order `i + j * ni` with corners `(i, j), (i + 1, j), (i + 1, j + 1),
 //! (i, j + 1)` (counter-clockwise). Cell data: `block_id` (Int32) and the quality figures of
 //! [`crate::quality::CellFields`] (Float64), the same arrays as the `.vts` files. ASCII,
 //! floats in Rust's shortest round-trip formatting, so the file is deterministic; or, with
 //! [`Encoding::Binary`], the same values as raw appended data, streamed in parallel chunks.
+//!
+//! Memory (issue 8): nothing of the size of the mesh is held beside it. The merged nodes come
+//! block by block from a [`Numbering`] (the points each block adds, the ids of its cells'
+//! corners), and the cell figures are computed a chunk of blocks at a time: in the binary file
+//! once, each array's part of a chunk written at its place in the appended data (every size is
+//! known in advance); in the ASCII file once per array, for the cells of each chunk of lines.
 
 use super::binary::{self, Appended, Encoding};
 use super::text::{self, write_chunked};
 use super::{check_mesh, write_atomic};
 use crate::mesh::Mesh;
-use crate::numbering::{number_nodes, GlobalNodes};
-use crate::quality::{cell_fields, CellFields};
+use crate::numbering::Numbering;
+use crate::quality::cell_fields;
 use rayon::prelude::*;
-use std::io::{self, Write};
+use std::io::{self, Seek, SeekFrom, Write};
 use std::path::Path;
 
 /// Write `mesh` as one VTK XML UnstructuredGrid at `path` (atomically).
@@ -35,17 +41,36 @@ pub fn write_vtu_encoded(mesh: &Mesh, path: &Path, encoding: Encoding) -> io::Re
     })
 }
 
-/// The global nodes, the first cell of every block (and the total at the end), and the
-/// cell fields of every block.
-fn prepare(mesh: &Mesh) -> (GlobalNodes, Vec<usize>, Vec<CellFields>) {
-    let nodes = number_nodes(&mesh.layout, &mesh.grids);
+/// The numbering of the merged nodes and the first cell of every block (and the total at the
+/// end).
+fn prepare(mesh: &Mesh) -> (Numbering, Vec<usize>) {
+    let nodes = Numbering::new(&mesh.layout, &mesh.grids);
     let mut first_cell = Vec::with_capacity(mesh.grids.len() + 1);
     first_cell.push(0);
     for g in &mesh.grids {
         first_cell.push(first_cell.last().copied().unwrap_or(0) + g.cells());
     }
-    let fields = mesh.grids.par_iter().map(cell_fields).collect();
-    (nodes, first_cell, fields)
+    (nodes, first_cell)
+}
+
+/// The values of cell array `k` ([`super::vtk::CELL_ARRAYS`]) of the cells `cells` (global
+/// cell numbers) into `out`: the figures of every block the range meets, computed here.
+fn cell_values(
+    mesh: &Mesh,
+    first_cell: &[usize],
+    k: usize,
+    cells: std::ops::Range<usize>,
+    out: &mut Vec<f64>,
+) {
+    if cells.is_empty() {
+        return;
+    }
+    for b in block_of(first_cell, cells.start)..=block_of(first_cell, cells.end - 1) {
+        let f = cell_fields(&mesh.grids[b]);
+        let from = cells.start.max(first_cell[b]) - first_cell[b];
+        let to = cells.end.min(first_cell[b + 1]) - first_cell[b];
+        out.extend_from_slice(&super::vtk::cell_array(&f, k)[from..to]);
+    }
 }
 
 /// The XML up to the `<Points>` opening: the file header and the piece's counts.
@@ -66,13 +91,15 @@ fn piece_open<W: Write>(w: &mut W, points: usize, cells: usize) -> io::Result<()
 /// The four corners of every cell of `blocks`, in file order (global node numbers).
 fn cell_corners_of(
     mesh: &Mesh,
-    nodes: &GlobalNodes,
+    nodes: &Numbering,
     blocks: std::ops::Range<usize>,
     mut each: impl FnMut([usize; 4]),
 ) {
+    let mut ids = Vec::new();
     for b in blocks {
-        let (g, ids) = (&mesh.grids[b], &nodes.block_nodes[b]);
-        let id = |i: usize, j: usize| ids[i + j * (g.ni + 1)] as usize;
+        let g = &mesh.grids[b];
+        nodes.block_ids(&mesh.layout, b, g, &mut ids);
+        let id = |i: usize, j: usize| ids[i + j * (g.ni + 1)];
         for j in 0..g.nj {
             for i in 0..g.ni {
                 each([id(i, j), id(i + 1, j), id(i + 1, j + 1), id(i, j + 1)]);
@@ -88,10 +115,10 @@ fn block_of(first_cell: &[usize], k: usize) -> usize {
 
 /// The binary file: every array `format="appended"`, then the raw data, each array's bytes
 /// formed in parallel chunks ([`write_chunked`]) and written in order.
-fn write_binary<W: Write>(w: &mut W, mesh: &Mesh) -> io::Result<()> {
-    let (nodes, first_cell, fields) = prepare(mesh);
+fn write_binary<W: Write + Seek>(w: &mut W, mesh: &Mesh) -> io::Result<()> {
+    let (nodes, first_cell) = prepare(mesh);
     let cells = first_cell.last().copied().unwrap_or(0);
-    let points = nodes.coords.len();
+    let points = nodes.len();
     piece_open(w, points, cells)?;
     let mut at = Appended::default();
     let mut head = Vec::new();
@@ -116,9 +143,7 @@ fn write_binary<W: Write>(w: &mut W, mesh: &Mesh) -> io::Result<()> {
     head.extend_from_slice(binary::APPENDED_OPEN);
     head.extend_from_slice(&binary::array_header(24 * points));
     w.write_all(&head)?;
-    write_chunked(w, points, 8192, |r, out| {
-        binary::points_xyz(out, &nodes.coords[r])
-    })?;
+    super::write_merged_points(w, mesh, &nodes, |p, out| binary::points_xyz(out, p))?;
     w.write_all(&binary::array_header(32 * cells))?;
     write_chunked(w, mesh.grids.len(), 64, |blocks, out| {
         cell_corners_of(mesh, &nodes, blocks, |c| {
@@ -143,25 +168,63 @@ fn write_binary<W: Write>(w: &mut W, mesh: &Mesh) -> io::Result<()> {
     chunked(w, 4, &|k, out| {
         out.extend_from_slice(&(block_of(&first_cell, k) as i32).to_le_bytes())
     })?;
-    for k in 0..super::vtk::CELL_ARRAYS.len() {
-        w.write_all(&binary::array_header(8 * cells))?;
-        write_chunked(w, fields.len(), 64, |blocks, out| {
-            for f in &fields[blocks] {
-                binary::f64s(out, super::vtk::cell_array(f, k));
-            }
-        })?;
-    }
+    fields_binary(w, mesh, &first_cell)?;
     w.write_all(binary::APPENDED_CLOSE)
 }
 
-fn write_to<W: Write>(w: &mut W, mesh: &Mesh) -> io::Result<()> {
-    let (nodes, first_cell, fields) = prepare(mesh);
+/// The cell arrays of [`super::vtk::CELL_ARRAYS`] in the appended data, from the writer's
+/// position on (each its byte count, then 8 bytes a cell), ending there after the last: the
+/// figures of a chunk of blocks are computed once (a wave of chunks in parallel) and each
+/// array's part is written at its place, so the bytes are those of writing the arrays one
+/// after the other, and no array of the mesh's size is held.
+fn fields_binary<W: Write + Seek>(w: &mut W, mesh: &Mesh, first_cell: &[usize]) -> io::Result<()> {
     let cells = first_cell.last().copied().unwrap_or(0);
-    piece_open(w, nodes.coords.len(), cells)?;
+    let arrays = super::vtk::CELL_ARRAYS.len();
+    let start = w.stream_position()?;
+    let stride = 8 + 8 * cells as u64;
+    for k in 0..arrays {
+        w.seek(SeekFrom::Start(start + k as u64 * stride))?;
+        w.write_all(&binary::array_header(8 * cells))?;
+    }
+    let blocks = mesh.grids.len();
+    let chunk = 64;
+    let chunks = blocks.div_ceil(chunk);
+    let wave = 4 * rayon::current_num_threads().max(1);
+    let mut first = 0;
+    while first < chunks {
+        let last = (first + wave).min(chunks);
+        let parts: Vec<Vec<Vec<u8>>> = (first..last)
+            .into_par_iter()
+            .map(|c| {
+                let mut parts = vec![Vec::new(); arrays];
+                for b in c * chunk..((c + 1) * chunk).min(blocks) {
+                    let f = cell_fields(&mesh.grids[b]);
+                    for (k, part) in parts.iter_mut().enumerate() {
+                        binary::f64s(part, super::vtk::cell_array(&f, k));
+                    }
+                }
+                parts
+            })
+            .collect();
+        for (c, parts) in (first..last).zip(&parts) {
+            let at = 8 + 8 * first_cell[c * chunk] as u64;
+            for (k, part) in parts.iter().enumerate() {
+                w.seek(SeekFrom::Start(start + k as u64 * stride + at))?;
+                w.write_all(part)?;
+            }
+        }
+        first = last;
+    }
+    w.seek(SeekFrom::Start(start + arrays as u64 * stride))?;
+    Ok(())
+}
+
+fn write_to<W: Write>(w: &mut W, mesh: &Mesh) -> io::Result<()> {
+    let (nodes, first_cell) = prepare(mesh);
+    let cells = first_cell.last().copied().unwrap_or(0);
+    piece_open(w, nodes.len(), cells)?;
     writeln!(w, "{POINTS_HEADER}")?;
-    write_chunked(w, nodes.coords.len(), 4096, |r, out| {
-        point_lines(out, &nodes.coords[r])
-    })?;
+    super::write_merged_points(w, mesh, &nodes, |p, out| point_lines(out, p))?;
     writeln!(w, "        </DataArray>")?;
     writeln!(w, "      </Points>")?;
     writeln!(w, "      <Cells>")?;
@@ -205,14 +268,18 @@ fn write_to<W: Write>(w: &mut W, mesh: &Mesh) -> io::Result<()> {
             w,
             "        <DataArray type=\"Float64\" Name=\"{name}\" format=\"ascii\">"
         )?;
-        let values: Vec<f64> = fields
-            .iter()
-            .flat_map(|f| super::vtk::cell_array(f, k).iter().copied())
-            .collect();
-        let lines = values.len().div_ceil(FLOATS_PER_LINE);
+        let lines = cells.div_ceil(FLOATS_PER_LINE);
         write_chunked(w, lines, 1024, |r, out| {
-            let end = (r.end * FLOATS_PER_LINE).min(values.len());
-            float_lines(out, &values[r.start * FLOATS_PER_LINE..end])
+            let end = (r.end * FLOATS_PER_LINE).min(cells);
+            let mut values = Vec::with_capacity(end - r.start * FLOATS_PER_LINE);
+            cell_values(
+                mesh,
+                &first_cell,
+                k,
+                r.start * FLOATS_PER_LINE..end,
+                &mut values,
+            );
+            float_lines(out, &values)
         })?;
         writeln!(w, "        </DataArray>")?;
     }
