@@ -79,7 +79,9 @@ pub struct Numbering {
 
 impl Numbering {
     /// The numbering of `grids` (one per layout block, same order; extra grids or blocks are
-    /// left out). Only the grids' `ni`, `nj` are read.
+    /// left out). Only the grids' `ni`, `nj` are read. The other methods expect what the
+    /// writers check first (`output::check_mesh`): every block's corners and sides name
+    /// vertices and edges of the layout, and every grid is well formed; they panic otherwise.
     pub fn new(layout: &BlockLayout, grids: &[BlockGrid]) -> Numbering {
         let vertices = layout.vertices.len();
         let mut edge_base = vec![usize::MAX; layout.edges.len()];

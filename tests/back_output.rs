@@ -9,7 +9,7 @@ use medial_blocks::grid::build_grids;
 use medial_blocks::layout::BlockLayout;
 use medial_blocks::mesh::Mesh;
 use medial_blocks::output::report::{write_json, Report};
-use medial_blocks::output::{svg, vtk};
+use medial_blocks::output::{gmsh, svg, vtk, vtu, Encoding};
 use medial_blocks::quality::measure;
 use medial_blocks::templates::{annulus, disk};
 use std::path::Path;
@@ -216,6 +216,29 @@ fn writers_refuse_inconsistent_meshes_without_panicking() {
     let (_, mut mesh, _) = meshes().remove(0);
     mesh.grids[0].nodes.pop();
     assert!(vtk::write_multiblock(&mesh, tmp.path()).is_err());
+    // The unstructured writers (merged nodes) check the mesh first too.
+    assert!(vtu::write_vtu(&mesh, &tmp.path().join("m.vtu")).is_err());
+    assert!(gmsh::write_msh(&mesh, &tmp.path().join("m.msh")).is_err());
+    for corrupt in [
+        |m: &mut Mesh| m.layout.blocks[1].sides[2].edge = m.layout.edges.len() as u32,
+        |m: &mut Mesh| m.layout.blocks[0].corners[3] = m.layout.vertices.len() as u32 + 7,
+    ] {
+        let (_, mut mesh, _) = meshes().remove(0);
+        corrupt(&mut mesh);
+        for encoding in [Encoding::Ascii, Encoding::Binary] {
+            let err = vtu::write_vtu_encoded(&mesh, &tmp.path().join("m.vtu"), encoding)
+                .expect_err("a dangling edge or vertex");
+            assert_eq!(err.kind(), std::io::ErrorKind::InvalidInput);
+            assert!(
+                err.to_string().contains("the layout does not have"),
+                "{err}"
+            );
+            assert!(gmsh::write_msh_encoded(&mesh, &tmp.path().join("m.msh"), encoding).is_err());
+        }
+        assert!(vtk::write_multiblock(&mesh, tmp.path()).is_err());
+        assert!(svg::write(&mesh, &tmp.path().join("m.svg")).is_err());
+    }
+    assert!(!tmp.path().join("m.vtu").exists() && !tmp.path().join("m.msh").exists());
     // Report of a malformed mesh: no panic.
     let _ = Report::from_mesh(&mesh);
     // Unwritable target: an error, no panic.

@@ -146,6 +146,20 @@ pub(crate) fn check_mesh(mesh: &Mesh) -> io::Result<()> {
             format!("grid {b}: node count does not match its ni, nj"),
         ));
     }
+    let (vertices, edges) = (mesh.layout.vertices.len(), mesh.layout.edges.len());
+    let dangling = |block: &crate::layout::Block| {
+        block.corners.iter().any(|&v| v as usize >= vertices)
+            || block.sides.iter().any(|s| s.edge as usize >= edges)
+    };
+    if let Some(b) = mesh.layout.blocks.iter().position(dangling) {
+        return Err(io::Error::new(
+            io::ErrorKind::InvalidInput,
+            format!(
+                "block {b}: a corner or side names a vertex or edge the layout does not have \
+                 ({vertices} vertices, {edges} edges)"
+            ),
+        ));
+    }
     Ok(())
 }
 
