@@ -5,10 +5,24 @@
 //! Before the writers streamed, `mesh.vtu` held every cell's seven figures and the merged
 //! nodes again (about 80 bytes a cell) and `mesh.msh` the merged nodes and every block's ids
 //! (about 20 bytes a cell); the bound allowed here is 12 bytes a cell, room for the chunks in
-//! flight at one thread. Not a timing: the peak of one process is the same from run to run up
-//! to allocator noise far below the bound.
+//! flight at one thread. `mesh.png` parsed the whole SVG text into one tree (1 000 bubbles:
+//! 74 MB beside the mesh); now it draws the text in parts, the same pixels as the whole
+//! document (checked here against the former writer, kept as the reference). Not a timing:
+//! the peak of one process is the same from run to run up to allocator noise far below the
+//! bounds.
 
 mod common;
+
+use medial_blocks::output::{png, svg};
+use medial_blocks::{layouts, mesh, Options};
+
+fn bubbles(holes: &str, dir: &std::path::Path) -> std::path::PathBuf {
+    let input = dir.join(format!("b{holes}.json"));
+    let o = common::run(&["example", "bubbles", "--holes", holes, "--seed", "4"]);
+    assert!(o.status.success());
+    std::fs::write(&input, &o.stdout).unwrap();
+    input
+}
 
 fn peak(input: &std::path::Path, format: &str, extra: &[&str]) -> (u64, u64) {
     let dir = tempfile::tempdir().unwrap();
@@ -41,10 +55,7 @@ fn peak(input: &std::path::Path, format: &str, extra: &[&str]) -> (u64, u64) {
 #[test]
 fn unstructured_writers_stream_beside_the_mesh() {
     let dir = tempfile::tempdir().unwrap();
-    let input = dir.path().join("b.json");
-    let o = common::run(&["example", "bubbles", "--holes", "300", "--seed", "4"]);
-    assert!(o.status.success());
-    std::fs::write(&input, &o.stdout).unwrap();
+    let input = bubbles("300", dir.path());
     let (base, cells) = peak(&input, "json", &[]);
     if base == 0 {
         eprintln!("no peak memory on this platform: nothing to compare");
@@ -66,5 +77,73 @@ fn unstructured_writers_stream_beside_the_mesh() {
              {:.1} bytes a cell",
             more as f64 / cells as f64
         );
+    }
+}
+
+#[test]
+fn png_draws_in_parts_beside_the_mesh() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = bubbles("1000", dir.path());
+    let (base, _) = peak(&input, "json", &[]);
+    if base == 0 {
+        eprintln!("no peak memory on this platform: nothing to compare");
+        return;
+    }
+    let (p, _) = peak(&input, "png", &[]);
+    let more = p.saturating_sub(base);
+    // The pixmap (about 6 MB) and a part's text and tree; the whole tree took 74 MB here.
+    assert!(
+        more < 40 << 20,
+        "png: {more} bytes beside the mesh's run ({base})"
+    );
+}
+
+/// The former writer: the whole SVG text, one tree, one drawing.
+fn reference_png(m: &medial_blocks::Mesh, width: u32) -> Vec<u8> {
+    let text = svg::to_string(m).unwrap();
+    let tree = resvg::usvg::Tree::from_str(&text, &resvg::usvg::Options::default()).unwrap();
+    let size = tree.size();
+    let scale = width as f32 / size.width();
+    let height = (size.height() * scale).ceil().max(1.0) as u32;
+    let mut pixmap = resvg::tiny_skia::Pixmap::new(width, height).unwrap();
+    pixmap.fill(resvg::tiny_skia::Color::WHITE);
+    resvg::render(
+        &tree,
+        resvg::tiny_skia::Transform::from_scale(scale, scale),
+        &mut pixmap.as_mut(),
+    );
+    pixmap.encode_png().unwrap()
+}
+
+#[test]
+fn png_in_parts_is_the_whole_picture() {
+    let dir = tempfile::tempdir().unwrap();
+    let periodic = medial_blocks::periodic::PeriodicDomain::new(
+        [2.0, 1.0],
+        vec![
+            medial_blocks::Circle::new(0.1, 0.1, 0.2),
+            medial_blocks::Circle::new(1.2, 0.6, 0.25),
+        ],
+    )
+    .unwrap();
+    let opts = Options {
+        block_cells: Some(6),
+        ..Options::default()
+    };
+    let meshes = [
+        mesh(&layouts::bubbles(40, 3).unwrap(), &opts).unwrap(),
+        mesh(&layouts::square_lattice(9).unwrap(), &Options::default()).unwrap(),
+        medial_blocks::periodic::mesh_periodic(&periodic, &Options::default()).unwrap(),
+    ];
+    for (k, m) in meshes.iter().enumerate() {
+        let want = reference_png(m, 320);
+        for part in [1, 3000, 40_000, usize::MAX] {
+            let path = dir.path().join(format!("{k}-{part}.png"));
+            png::write_in_parts(m, &path, 320, part).unwrap();
+            assert!(
+                std::fs::read(&path).unwrap() == want,
+                "mesh {k}, parts of {part} bytes"
+            );
+        }
     }
 }

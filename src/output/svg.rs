@@ -215,10 +215,20 @@ pub fn write(mesh: &Mesh, path_out: &Path) -> io::Result<()> {
 
 /// The SVG document as a string (same checks as [`write()`]).
 pub fn to_string(mesh: &Mesh) -> io::Result<String> {
-    check_mesh(mesh)?;
     let mut buf = Vec::new();
-    write_to(&mut buf, mesh)?;
+    write_checked(&mut buf, mesh)?;
     String::from_utf8(buf).map_err(io::Error::other)
+}
+
+/// The SVG document into `w` (same checks as [`write()`]). Its lines, which
+/// [`super::png`] relies on: the `<svg>` element's opening line first and `</svg>` last;
+/// between them the top-level elements, each on its own line indented two spaces, and groups
+/// (not nested) opened by a line `  <g ...>` and closed by `  </g>`, holding elements one per
+/// line, indented four; no group sets opacity, a clip, a mask or a filter, so drawing the
+/// elements in document order is drawing the picture.
+pub(crate) fn write_checked<W: Write>(w: &mut W, mesh: &Mesh) -> io::Result<()> {
+    check_mesh(mesh)?;
+    write_to(w, mesh)
 }
 
 /// Write the SVG document to `w` (no checks beyond [`write()`]'s; used by it).
