@@ -353,6 +353,9 @@ fn key(p: Point) -> Key {
 /// - every node of a wall side lies on its circle (relative tolerance `1e-9`);
 /// - every circle has a wall, and the sum of the cells' signed areas equals the area between
 ///   the wall polygons (holds even for folded cells, fails on gaps or overlaps);
+/// - the writers' merged numbering ([`crate::numbering::Numbering`]): its node count is
+///   `V + sum over used edges (n_e - 1) + sum over blocks (ni - 1)(nj - 1)`, and every block
+///   node but the corners has an id below it whose point is that node, bit for bit;
 /// - with [`Checks::no_inverted_cells`], no cell with a corner Jacobian `<= 0`.
 pub fn check_mesh_with(domain: &Domain, m: &Mesh, checks: Checks) -> Result<CheckReport, String> {
     let h = domain.hole_count();
@@ -384,6 +387,7 @@ pub fn check_mesh_with(domain: &Domain, m: &Mesh, checks: Checks) -> Result<Chec
     check_counts(h, m)?;
     let wall_of = check_topology(m)?;
     check_conformity(m, &wall_of)?;
+    check_numbering(m)?;
     let circles: Vec<Circle> = std::iter::once(domain.bounding())
         .chain(domain.holes().iter().copied())
         .collect();
@@ -546,6 +550,49 @@ fn check_counts(h: usize, m: &Mesh) -> Result<(), String> {
 
 /// Every block side has positive length (its nodes are not all one point): a zero-length
 /// medial arc must have been collapsed, and no wall arc may have zero sweep.
+/// The merged numbering of the unstructured writers against the grids (see
+/// [`check_mesh_with`]); the layout's references are checked already ([`check_topology`]).
+fn check_numbering(m: &Mesh) -> Result<(), String> {
+    let n = crate::numbering::Numbering::new(&m.layout, &m.grids);
+    let mut first_side = vec![None; m.layout.edges.len()];
+    let mut interiors = 0;
+    for (block, g) in m.layout.blocks.iter().zip(&m.grids) {
+        for (s, side) in block.sides.iter().enumerate() {
+            let cells = if s % 2 == 0 { g.ni } else { g.nj };
+            first_side[side.edge as usize].get_or_insert(cells - 1);
+        }
+        interiors += (g.ni - 1) * (g.nj - 1);
+    }
+    let want = m.layout.vertices.len() + first_side.iter().flatten().sum::<usize>() + interiors;
+    if n.len() != want {
+        return Err(format!(
+            "the merged numbering has {} nodes, not {want}",
+            n.len()
+        ));
+    }
+    let mut points = m.layout.vertices.clone();
+    let mut ids = Vec::new();
+    for (b, g) in m.grids.iter().enumerate() {
+        n.block_points(&m.layout, b, g, &mut points);
+        n.block_ids(&m.layout, b, g, &mut ids);
+        let corners = [0, g.ni, g.nj * (g.ni + 1), g.ni + g.nj * (g.ni + 1)];
+        for (k, (&id, p)) in ids.iter().zip(&g.nodes).enumerate() {
+            if corners.contains(&k) {
+                continue;
+            }
+            match points.get(id) {
+                Some(q) if q.map(f64::to_bits) == p.map(f64::to_bits) => {}
+                other => {
+                    return Err(format!(
+                        "block {b} node {k}: merged id {id} holds {other:?}, not {p:?}"
+                    ))
+                }
+            }
+        }
+    }
+    Ok(())
+}
+
 fn check_sides(m: &Mesh) -> Result<(), String> {
     for (b, g) in m.grids.iter().enumerate() {
         for s in 0..4 {
