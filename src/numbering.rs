@@ -195,6 +195,23 @@ impl Numbering {
         }
     }
 
+    /// The side that numbers edge `e` (`block`, `side`) and the layout vertices the edge runs
+    /// between, in its direction.
+    fn edge_ends(&self, layout: &BlockLayout, e: usize) -> Option<(usize, usize, [usize; 2])> {
+        let (b, s) = self.edge_owner(e)?;
+        let block = &layout.blocks[b];
+        let [from, to] = [block.corners[s], block.corners[(s + 1) % 4]].map(|v| v as usize);
+        Some((
+            b,
+            s,
+            if block.sides[s].reversed {
+                [to, from]
+            } else {
+                [from, to]
+            },
+        ))
+    }
+
     /// The ids of edge `e`'s nodes in the edge's direction (its two layout vertices and the
     /// interior nodes between them) into `out` (cleared first; left empty for an edge no block
     /// uses): the chain of the side that numbers it.
@@ -206,19 +223,8 @@ impl Numbering {
         out: &mut Vec<usize>,
     ) {
         out.clear();
-        let Some((b, s)) = self.edge_owner(e) else {
+        let Some((b, s, [start, end])) = self.edge_ends(layout, e) else {
             return;
-        };
-        let block = &layout.blocks[b];
-        let side = block.sides[s];
-        let [from, to] = [
-            block.corners[s] as usize,
-            block.corners[(s + 1) % 4] as usize,
-        ];
-        let (start, end) = if side.reversed {
-            (to, from)
-        } else {
-            (from, to)
         };
         let inner = side_cells(&grids[b], s).saturating_sub(1);
         let base = self.edge_base[e];
@@ -237,23 +243,12 @@ impl Numbering {
         out: &mut Vec<Point>,
     ) {
         out.clear();
-        let Some((b, s)) = self.edge_owner(e) else {
+        let Some((b, s, [start, end])) = self.edge_ends(layout, e) else {
             return;
-        };
-        let block = &layout.blocks[b];
-        let side = block.sides[s];
-        let [from, to] = [
-            block.corners[s] as usize,
-            block.corners[(s + 1) % 4] as usize,
-        ];
-        let (start, end) = if side.reversed {
-            (to, from)
-        } else {
-            (from, to)
         };
         out.push(layout.vertices[start]);
         let nodes = side_interior(&grids[b], s);
-        if side.reversed {
+        if layout.blocks[b].sides[s].reversed {
             out.extend(nodes.rev());
         } else {
             out.extend(nodes);
