@@ -63,6 +63,28 @@ pub fn number_nodes(layout: &BlockLayout, grids: &[BlockGrid]) -> GlobalNodes {
 /// the edge's direction), then the block's interior nodes (`i` fastest). So the ids a block
 /// adds are consecutive, and [`Numbering::block_points`] of blocks `0, 1, ...` after the
 /// vertices lists every node once, in id order.
+///
+/// ```
+/// use medial_blocks::numbering::Numbering;
+/// use medial_blocks::{layouts, mesh, Options};
+///
+/// let m = mesh(&layouts::hexagon(), &Options::default()).unwrap();
+/// let n = Numbering::new(&m.layout, &m.grids);
+/// // The merged points in id order: the vertices, then what each block adds.
+/// let mut points = m.layout.vertices.clone();
+/// for (b, g) in m.grids.iter().enumerate() {
+///     n.block_points(&m.layout, b, g, &mut points);
+/// }
+/// assert_eq!(points.len(), n.len());
+/// // Every node of a block but its corners (layout vertices) is the point of its id.
+/// let mut ids = Vec::new();
+/// let g = &m.grids[0];
+/// n.block_ids(&m.layout, 0, g, &mut ids);
+/// assert_eq!(points[ids[1]], g.node(1, 0));
+/// assert_eq!(points[ids[g.ni + 2]], g.node(1, 1));
+/// // Shared nodes are merged: fewer points than block nodes.
+/// assert!(n.len() < m.grids.iter().map(|g| g.nodes.len()).sum::<usize>());
+/// ```
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct Numbering {
     vertices: usize,
