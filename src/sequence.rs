@@ -25,6 +25,12 @@
 //! no inverted cell (`same_node_counts_as_previous`, `node_counts_from_frame`), else the
 //! frame keeps its own counts (`node_counts_not_kept` says why). Every decision depends on the
 //! frames only, never on scheduling: the files are byte-identical for any thread count.
+//!
+//! Each frame's files are written once (issue 8): pass 1 meshes a wave of frames (as many
+//! as threads) at a time, decides in frame order which are later frames of a run to be meshed
+//! again, and writes only the others; pass 2 writes the frames it meshes again (or, when the
+//! run's counts are not kept, the frame's own mesh, meshed once more). Runs are decided on the
+//! meshes: a frame whose files cannot be written is reported failed but does not end its run.
 
 use crate::domain::{AnyDomain, CircleId};
 use crate::exact_mode::imposed::{vertex_cycle, BlockKey, ImposedCounts};
@@ -313,11 +319,22 @@ struct Out<'a> {
     encoding: Encoding,
 }
 
+/// Write frame `index`'s files and describe it (a failed frame when writing fails).
 fn finish(index: usize, fm: FrameMesh, out: Out, dir: &Path) -> Done {
-    let dir_of_frame = frame_dir(dir, index);
-    if let Err(e) = write_files_encoded(&fm.mesh, &dir_of_frame, out.formats, out.encoding) {
-        return failed(index, format!("cannot write frame {index}: {e}"));
+    match write_frame(index, &fm, out, dir) {
+        Ok(()) => describe(index, &fm),
+        Err(e) => failed(index, e),
     }
+}
+
+/// Write frame `index`'s files into `dir/frame_NNNNN/`.
+fn write_frame(index: usize, fm: &FrameMesh, out: Out, dir: &Path) -> Result<(), String> {
+    write_files_encoded(&fm.mesh, &frame_dir(dir, index), out.formats, out.encoding)
+        .map_err(|e| format!("cannot write frame {index}: {e}"))
+}
+
+/// What the summary and the run decisions need of a meshed frame.
+fn describe(index: usize, fm: &FrameMesh) -> Done {
     let q = measure(&fm.mesh.grids);
     let keys = match &fm.keys {
         Some(k) => k.iter().map(|k| format!("{k:?}")).collect(),
@@ -344,7 +361,7 @@ fn finish(index: usize, fm: FrameMesh, out: Out, dir: &Path) -> Done {
         },
         structure: fm.structure(),
         counts: fm.mesh.grids.iter().map(|g| [g.ni, g.nj]).collect(),
-        combinatorics: Some(fm.combinatorics),
+        combinatorics: Some(fm.combinatorics.clone()),
         keys: Some(keys),
     }
 }
@@ -392,31 +409,64 @@ pub fn run_sequence(
         .num_threads(threads)
         .build()
         .map_err(io::Error::other)?;
-    let mut done: Vec<Done> = pool.install(|| {
-        frames
-            .par_iter()
-            .enumerate()
-            .map(|(i, f)| {
-                let d = run_frame(i, f, options, out, dir);
-                progress();
-                d
-            })
-            .collect()
-    });
-    // Runs: the first frame of each frame's run.
-    let mut start: Vec<usize> = (0..done.len()).collect();
-    for i in 1..done.len() {
-        if linked(&done[i - 1], &done[i]) {
-            start[i] = start[i - 1];
+    // Pass 1, a wave of frames at a time (as many as threads, so as many meshes held as
+    // before): mesh them in parallel, then decide in frame order which are runs' later frames
+    // to be meshed again with their run's counts, and write only the others. A frame meshed
+    // again is written once, by pass 2 (issue 8: a moving layout re-meshes nearly every
+    // frame, and the writing, not the meshing, is most of a frame with the VTK files).
+    let wave = pool.install(rayon::current_num_threads).max(1);
+    let mut done: Vec<Done> = Vec::with_capacity(frames.len());
+    let mut start: Vec<usize> = Vec::with_capacity(frames.len());
+    let mut redo: Vec<(usize, Structure)> = Vec::new();
+    for first in (0..frames.len()).step_by(wave) {
+        let last = (first + wave).min(frames.len());
+        let meshed: Vec<Result<FrameMesh, String>> = pool.install(|| {
+            (first..last)
+                .into_par_iter()
+                .map(|i| {
+                    let m = match &frames[i] {
+                        Ok(d) => mesh_frame(d, options).map_err(|e| e.to_string()),
+                        Err(e) => Err(e.clone()),
+                    };
+                    progress();
+                    m
+                })
+                .collect()
+        });
+        let mut to_write = Vec::new();
+        for (i, m) in (first..last).zip(meshed) {
+            let d = match &m {
+                Ok(fm) => describe(i, fm),
+                Err(e) => failed(i, e.clone()),
+            };
+            let s = match done.last() {
+                Some(prev) if linked(prev, &d) => start[i - 1],
+                _ => i,
+            };
+            let want = (s != i)
+                .then(|| done[s].structure.clone())
+                .flatten()
+                .filter(|want| d.structure.as_ref() != Some(want));
+            start.push(s);
+            done.push(d);
+            match (m, want) {
+                (Ok(_), Some(want)) => redo.push((i, want)),
+                (Ok(fm), None) => to_write.push((i, fm)),
+                (Err(_), _) => {}
+            }
+        }
+        let written: Vec<(usize, Result<(), String>)> = pool.install(|| {
+            to_write
+                .par_iter()
+                .map(|(i, fm)| (*i, write_frame(*i, fm, out, dir)))
+                .collect()
+        });
+        for (i, r) in written {
+            if let Err(e) = r {
+                done[i] = failed(i, e);
+            }
         }
     }
-    let redo: Vec<(usize, Structure)> = (0..done.len())
-        .filter(|&i| start[i] != i)
-        .filter_map(|i| {
-            let want = done[start[i]].structure.clone()?;
-            (done[i].structure.as_ref() != Some(&want)).then_some((i, want))
-        })
-        .collect();
     let redone: Vec<(usize, Result<Done, String>)> = pool.install(|| {
         redo.par_iter()
             .map(|(i, want)| (*i, reuse_counts(*i, &frames[*i], want, options, out, dir)))
@@ -428,10 +478,27 @@ pub fn run_sequence(
             Err(why) => done[i].summary.node_counts_not_kept = Some(why),
         }
     }
+    // A frame that keeps its own counts was not written in pass 1: mesh it again (the same
+    // mesh: a frame's mesh is a function of the frame) and write it.
+    let own: Vec<usize> = redo
+        .iter()
+        .map(|(i, _)| *i)
+        .filter(|&i| done[i].summary.node_counts_not_kept.is_some())
+        .collect();
+    let rewritten: Vec<(usize, Done)> = pool.install(|| {
+        own.par_iter()
+            .map(|&i| (i, run_frame(i, &frames[i], options, out, dir)))
+            .collect()
+    });
+    for (i, d) in rewritten {
+        if !d.summary.ok {
+            done[i] = d;
+        }
+    }
     let mut out = Vec::with_capacity(done.len());
     for i in 0..done.len() {
         let mut s = done[i].summary.clone();
-        if start[i] != i && s.node_counts_not_kept.is_none() {
+        if s.ok && start[i] != i && s.node_counts_not_kept.is_none() {
             s.node_counts_from_frame = Some(start[i]);
         }
         if i > 0 {
