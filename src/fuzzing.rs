@@ -548,8 +548,6 @@ fn check_counts(h: usize, m: &Mesh) -> Result<(), String> {
     }
 }
 
-/// Every block side has positive length (its nodes are not all one point): a zero-length
-/// medial arc must have been collapsed, and no wall arc may have zero sweep.
 /// The merged numbering of the unstructured writers against the grids (see
 /// [`check_mesh_with`]); the layout's references are checked already ([`check_topology`]).
 fn check_numbering(m: &Mesh) -> Result<(), String> {
@@ -593,6 +591,8 @@ fn check_numbering(m: &Mesh) -> Result<(), String> {
     Ok(())
 }
 
+/// Every block side has positive length (its nodes are not all one point): a zero-length
+/// medial arc must have been collapsed, and no wall arc may have zero sweep.
 fn check_sides(m: &Mesh) -> Result<(), String> {
     for (b, g) in m.grids.iter().enumerate() {
         for s in 0..4 {
