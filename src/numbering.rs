@@ -87,7 +87,6 @@ pub fn number_nodes(layout: &BlockLayout, grids: &[BlockGrid]) -> GlobalNodes {
 /// ```
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct Numbering {
-    vertices: usize,
     /// Id of edge `e`'s first interior node (`usize::MAX` for an edge no block uses).
     edge_base: Vec<usize>,
     /// The block side that numbers edge `e`: `4 block + side` of the first side using it
@@ -127,7 +126,6 @@ impl Numbering {
         }
         block_base.push(next);
         Numbering {
-            vertices,
             edge_base,
             edge_owner,
             block_base,
@@ -135,9 +133,9 @@ impl Numbering {
         }
     }
 
-    /// The number of global nodes.
+    /// The number of global nodes (`block_base` always ends with it).
     pub fn len(&self) -> usize {
-        self.block_base.last().copied().unwrap_or(self.vertices)
+        self.block_base.last().copied().unwrap_or(0)
     }
 
     /// True when there is no node.
@@ -176,7 +174,7 @@ impl Numbering {
                     Some((s, 0)) => block.corners[s] as usize,
                     Some((s, p)) => {
                         let side = block.sides[s];
-                        let n = if s % 2 == 0 { ni } else { nj };
+                        let n = side_cells(grid, s);
                         let pos = if side.reversed { n - p } else { p };
                         self.edge_base[side.edge as usize] + pos - 1
                     }
