@@ -33,22 +33,41 @@ pub fn write_chunked<W: Write + ?Sized>(
     chunk: usize,
     f: impl Fn(Range<usize>, &mut Vec<u8>) + Sync,
 ) -> io::Result<()> {
+    in_waves(
+        n,
+        chunk,
+        |r| {
+            let mut out = Vec::new();
+            f(r, &mut out);
+            out
+        },
+        |_, text| w.write_all(&text),
+    )
+}
+
+/// The items `0..n` in chunks of `chunk`: `make(range)` on the rayon pool, a few chunks per
+/// thread at a time (memory stays bounded), then `take(range, made)` for each chunk in
+/// order, so what `take` sees does not depend on the number of threads. The first error of
+/// `take` stops it.
+pub(crate) fn in_waves<T: Send>(
+    n: usize,
+    chunk: usize,
+    make: impl Fn(Range<usize>) -> T + Sync,
+    mut take: impl FnMut(Range<usize>, T) -> io::Result<()>,
+) -> io::Result<()> {
     let chunk = chunk.max(1);
     let chunks = n.div_ceil(chunk);
     let wave = 4 * rayon::current_num_threads().max(1);
+    let range = |c: usize| c * chunk..((c + 1) * chunk).min(n);
     let mut first = 0;
     while first < chunks {
         let last = (first + wave).min(chunks);
-        let texts: Vec<Vec<u8>> = (first..last)
+        let made: Vec<T> = (first..last)
             .into_par_iter()
-            .map(|c| {
-                let mut out = Vec::new();
-                f(c * chunk..((c + 1) * chunk).min(n), &mut out);
-                out
-            })
+            .map(|c| make(range(c)))
             .collect();
-        for t in &texts {
-            w.write_all(t)?;
+        for (c, m) in (first..last).zip(made) {
+            take(range(c), m)?;
         }
         first = last;
     }

@@ -21,7 +21,6 @@ use super::{check_mesh, write_atomic};
 use crate::mesh::Mesh;
 use crate::numbering::Numbering;
 use crate::quality::cell_fields;
-use rayon::prelude::*;
 use std::io::{self, Seek, SeekFrom, Write};
 use std::path::Path;
 
@@ -186,35 +185,28 @@ fn fields_binary<W: Write + Seek>(w: &mut W, mesh: &Mesh, first_cell: &[usize]) 
         w.seek(SeekFrom::Start(start + k as u64 * stride))?;
         w.write_all(&binary::array_header(8 * cells))?;
     }
-    let blocks = mesh.grids.len();
-    let chunk = 64;
-    let chunks = blocks.div_ceil(chunk);
-    let wave = 4 * rayon::current_num_threads().max(1);
-    let mut first = 0;
-    while first < chunks {
-        let last = (first + wave).min(chunks);
-        let parts: Vec<Vec<Vec<u8>>> = (first..last)
-            .into_par_iter()
-            .map(|c| {
-                let mut parts = vec![Vec::new(); arrays];
-                for b in c * chunk..((c + 1) * chunk).min(blocks) {
-                    let f = cell_fields(&mesh.grids[b]);
-                    for (k, part) in parts.iter_mut().enumerate() {
-                        binary::f64s(part, super::vtk::cell_array(&f, k));
-                    }
+    text::in_waves(
+        mesh.grids.len(),
+        64,
+        |blocks| {
+            let mut parts = vec![Vec::new(); arrays];
+            for b in blocks {
+                let f = cell_fields(&mesh.grids[b]);
+                for (k, part) in parts.iter_mut().enumerate() {
+                    binary::f64s(part, super::vtk::cell_array(&f, k));
                 }
-                parts
-            })
-            .collect();
-        for (c, parts) in (first..last).zip(&parts) {
-            let at = 8 + 8 * first_cell[c * chunk] as u64;
+            }
+            parts
+        },
+        |blocks, parts| {
+            let at = 8 + 8 * first_cell[blocks.start] as u64;
             for (k, part) in parts.iter().enumerate() {
                 w.seek(SeekFrom::Start(start + k as u64 * stride + at))?;
                 w.write_all(part)?;
             }
-        }
-        first = last;
-    }
+            Ok(())
+        },
+    )?;
     w.seek(SeekFrom::Start(start + arrays as u64 * stride))?;
     Ok(())
 }
