@@ -19,18 +19,20 @@
 //! blocks in the same order (`same_block_structure_as_previous`).
 //!
 //! Exact mode sizes cells from the geometry, so two such frames need not have the same node
-//! counts on their own. [`run_sequence`] therefore meshes in two passes: every frame with its
-//! own counts, then every later frame of a run of equal combinatorics again with the counts
-//! of the run's first frame imposed by key; the result is kept when it has those counts and
-//! no inverted cell (`same_node_counts_as_previous`, `node_counts_from_frame`), else the
-//! frame keeps its own counts (`node_counts_not_kept` says why). Every decision depends on the
-//! frames only, never on scheduling: the files are byte-identical for any thread count.
+//! counts on their own. [`run_sequence`] therefore settles the frames in order: a frame that
+//! continues a run is meshed with the counts of the run's first frame imposed by key and keeps
+//! that mesh when it has those keys and counts, the run's combinatorics and no inverted cell
+//! (`same_node_counts_as_previous`, `node_counts_from_frame`); else it is meshed with its own
+//! counts, and continues the run with them (`node_counts_not_kept` says why) or starts a new
+//! run. Every decision depends on the frames only, never on scheduling: the files are
+//! byte-identical for any thread count.
 //!
-//! Each frame's files are written once (issue 8): pass 1 meshes a wave of frames (as many
-//! as threads) at a time, decides in frame order which are later frames of a run to be meshed
-//! again, and writes only the others; pass 2 writes the frames it meshes again (or, when the
-//! run's counts are not kept, the frame's own mesh, meshed once more). Runs are decided on the
-//! meshes: a frame whose files cannot be written is reported failed but does not end its run.
+//! Each frame is meshed once when it keeps its run's counts, and written once (issue 8): a
+//! wave of frames (as many as threads) is meshed in parallel with the run's counts, the
+//! frames not kept are meshed again with their own, and the wave is settled in frame order up
+//! to the first frame that starts a new run. A run's first frame is meshed alone (the frames
+//! after it need its counts). Runs are decided on the meshes: a frame whose files cannot be
+//! written is reported failed but does not end its run.
 
 use crate::domain::{AnyDomain, CircleId};
 use crate::exact_mode::imposed::{vertex_cycle, BlockKey, ImposedCounts};
@@ -293,38 +295,11 @@ fn failed(index: usize, error: String) -> Done {
     }
 }
 
-/// Mesh frame `index` (with `options`, which may impose counts) and write it.
-fn run_frame(
-    index: usize,
-    frame: &Result<AnyDomain, String>,
-    options: &Options,
-    out: Out,
-    dir: &Path,
-) -> Done {
-    let domain = match frame {
-        Ok(d) => d,
-        Err(e) => return failed(index, e.clone()),
-    };
-    let fm = match mesh_frame(domain, options) {
-        Ok(fm) => fm,
-        Err(e) => return failed(index, e.to_string()),
-    };
-    finish(index, fm, out, dir)
-}
-
 /// What every frame writes: the formats, and the encoding of those with a binary form.
 #[derive(Clone, Copy)]
 struct Out<'a> {
     formats: &'a [Format],
     encoding: Encoding,
-}
-
-/// Write frame `index`'s files and describe it (a failed frame when writing fails).
-fn finish(index: usize, fm: FrameMesh, out: Out, dir: &Path) -> Done {
-    match write_frame(index, &fm, out, dir) {
-        Ok(()) => describe(index, &fm),
-        Err(e) => failed(index, e),
-    }
 }
 
 /// Write frame `index`'s files into `dir/frame_NNNNN/`.
@@ -366,34 +341,99 @@ fn describe(index: usize, fm: &FrameMesh) -> Done {
     }
 }
 
-/// Frames `i - 1` and `i` are in one run: both meshed, the same combinatorics and the same
-/// unique block keys.
-fn linked(a: &Done, b: &Done) -> bool {
-    let same_keys = match (&a.structure, &b.structure) {
-        (Some(x), Some(y)) => x.len() == y.len() && x.iter().zip(y).all(|(p, q)| p.0 == q.0),
-        _ => false,
+/// A run of frames with the same combinatorics: its first frame, that frame's unique block
+/// keys with their counts (imposed on the later frames), and its combinatorics.
+struct Run {
+    start: usize,
+    want: Structure,
+    combinatorics: Vec<[CircleTag; 3]>,
+}
+
+impl Run {
+    /// The run that a frame meshed with its own counts starts (`None` for a failed frame or
+    /// one whose block keys are not unique: its counts cannot be imposed by key).
+    fn starting_at(index: usize, d: &Done) -> Option<Run> {
+        Some(Run {
+            start: index,
+            want: d.structure.clone()?,
+            combinatorics: d.combinatorics.clone()?,
+        })
+        .filter(|_| d.summary.ok)
+    }
+
+    /// A frame meshed with its own counts continues this run: meshed, the same combinatorics
+    /// and the same unique block keys as the run's first frame.
+    fn continued_by(&self, d: &Done) -> bool {
+        let same_keys = d.structure.as_ref().is_some_and(|y| {
+            y.len() == self.want.len() && y.iter().zip(&self.want).all(|(p, q)| p.0 == q.0)
+        });
+        d.summary.ok && d.combinatorics.as_ref() == Some(&self.combinatorics) && same_keys
+    }
+}
+
+/// Mesh `frame` with its own counts.
+fn own_mesh(frame: &Result<AnyDomain, String>, options: &Options) -> Result<FrameMesh, String> {
+    match frame {
+        Ok(d) => mesh_frame(d, options).map_err(|e| e.to_string()),
+        Err(e) => Err(e.clone()),
+    }
+}
+
+/// Mesh a later frame of `run` with the run's counts imposed by key: `Ok` when the mesh is
+/// kept (it has exactly the run's keys and counts, the run's combinatorics and no inverted
+/// cell), else `Err` with the reason (the frame is then meshed with its own counts).
+fn with_run_counts(
+    frame: &Result<AnyDomain, String>,
+    run: &Run,
+    options: &Options,
+) -> Result<FrameMesh, String> {
+    let domain = frame.as_ref().map_err(|e| e.clone())?;
+    let imposed = ImposedCounts(run.want.iter().cloned().collect());
+    let opts = Options {
+        imposed_counts: Some(std::sync::Arc::new(imposed)),
+        ..options.clone()
     };
-    a.summary.ok
-        && b.summary.ok
-        && a.combinatorics.is_some()
-        && a.combinatorics == b.combinatorics
-        && same_keys
+    let fm = mesh_frame(domain, &opts)
+        .map_err(|e| format!("meshing with the run's counts failed: {e}"))?;
+    if fm.structure().as_ref() != Some(&run.want) {
+        return Err("the run's node counts do not fit this frame's blocks".into());
+    }
+    if fm.combinatorics != run.combinatorics {
+        return Err("with the run's node counts this frame's combinatorics differ".into());
+    }
+    let inverted = crate::quality::inverted_cells(&fm.mesh.grids);
+    if inverted > 0 {
+        return Err(format!(
+            "the run's node counts give {inverted} inverted cells in this frame"
+        ));
+    }
+    Ok(fm)
 }
 
 /// Mesh every frame into `dir/frame_NNNNN/` with `formats` (those with a binary form in
-/// `encoding`), on `threads` threads (0: rayon's
-/// default), calling `progress` once per frame of the first pass; then write `dir/mesh.pvd`
-/// (when `formats` has VTK) and `dir/summary.json`. A frame that fails is reported in the
-/// summary and does not stop the others. Errors: only failures to create `dir` or write the
-/// summary files.
+/// `encoding`), on `threads` threads (0: rayon's default), calling `progress` once per frame
+/// as it is settled; then write `dir/mesh.pvd` (when `formats` has VTK) and
+/// `dir/summary.json`. A frame that fails is reported in the summary and does not stop the
+/// others. Errors: only failures to create `dir` or write the summary files.
 ///
-/// Node counts (issue 6): pass 1 meshes every frame with its own counts. Consecutive frames
-/// with the same combinatorics and the same unique block keys form a *run*; every later
-/// frame of a run is meshed again in pass 2 with the counts of the run's first frame imposed
-/// by key ([`Options::imposed_counts`]). The result is kept if it has exactly those keys and
-/// counts and no inverted cell, else the frame keeps its own counts and the summary says why
-/// (`node_counts_not_kept`). Both passes depend only on the frames, so the output is the
-/// same for any thread count and any scheduling.
+/// Node counts (issue 6), frame by frame in order: a frame that does not continue a run is
+/// meshed with its own counts and starts a run (when it meshes and its block keys are
+/// unique). A frame after a run's frame is meshed with the counts of the run's first frame
+/// imposed by key ([`Options::imposed_counts`]) and continues the run when that mesh has
+/// exactly the run's keys and counts, the run's combinatorics and no inverted cell. Else it
+/// is meshed with its own counts: it continues the run when it has the run's combinatorics
+/// and block keys (the summary then says why the run's counts were not kept, unless its own
+/// counts are the run's), and starts a new run otherwise. A failed frame ends its run; a
+/// frame whose files cannot be written is reported failed without ending its run.
+///
+/// Each frame is meshed once when it continues a run with the run's counts (issue 8: the
+/// earlier two passes meshed every later frame of a run twice). The frames are taken a wave
+/// at a time (as many as threads): with a run going on, the wave's frames are meshed in
+/// parallel with the run's counts, those not kept again with their own, and the wave is
+/// settled in frame order up to the first frame that starts a new run (the frames after it
+/// are meshed again in the next wave, with the new run's counts); a frame that continues no
+/// run is meshed alone (its mesh uses every thread). Every decision is the sequential rule
+/// above, so the output is the same for any thread count and any scheduling.
 pub fn run_sequence(
     frames: &[Result<AnyDomain, String>],
     options: &Options,
@@ -409,90 +449,108 @@ pub fn run_sequence(
         .num_threads(threads)
         .build()
         .map_err(io::Error::other)?;
-    // Pass 1, a wave of frames at a time (as many as threads, so as many meshes held as
-    // before): mesh them in parallel, then decide in frame order which are runs' later frames
-    // to be meshed again with their run's counts, and write only the others. A frame meshed
-    // again is written once, by pass 2 (issue 8: a moving layout re-meshes nearly every
-    // frame, and the writing, not the meshing, is most of a frame with the VTK files).
     let wave = pool.install(rayon::current_num_threads).max(1);
     let mut done: Vec<Done> = Vec::with_capacity(frames.len());
     let mut start: Vec<usize> = Vec::with_capacity(frames.len());
-    let mut redo: Vec<(usize, Structure)> = Vec::new();
-    for first in (0..frames.len()).step_by(wave) {
-        let last = (first + wave).min(frames.len());
-        let meshed: Vec<Result<FrameMesh, String>> = pool.install(|| {
-            (first..last)
-                .into_par_iter()
-                .map(|i| {
-                    let m = match &frames[i] {
-                        Ok(d) => mesh_frame(d, options).map_err(|e| e.to_string()),
-                        Err(e) => Err(e.clone()),
-                    };
-                    progress();
-                    m
-                })
-                .collect()
-        });
-        let mut to_write = Vec::new();
-        for (i, m) in (first..last).zip(meshed) {
-            let d = match &m {
-                Ok(fm) => describe(i, fm),
-                Err(e) => failed(i, e.clone()),
-            };
-            let s = match done.last() {
-                Some(prev) if linked(prev, &d) => start[i - 1],
-                _ => i,
-            };
-            let want = (s != i)
-                .then(|| done[s].structure.clone())
-                .flatten()
-                .filter(|want| d.structure.as_ref() != Some(want));
-            start.push(s);
-            done.push(d);
-            match (m, want) {
-                (Ok(_), Some(want)) => redo.push((i, want)),
-                (Ok(fm), None) => to_write.push((i, fm)),
-                (Err(_), _) => {}
+    let mut run: Option<Run> = None;
+    let mut i = 0;
+    while i < frames.len() {
+        // The frames settled by this wave, with the meshes to write.
+        let mut to_write: Vec<(usize, FrameMesh)> = Vec::new();
+        match run.take() {
+            None => {
+                let m = pool.install(|| own_mesh(&frames[i], options));
+                let d = match &m {
+                    Ok(fm) => describe(i, fm),
+                    Err(e) => failed(i, e.clone()),
+                };
+                run = Run::starting_at(i, &d);
+                start.push(i);
+                done.push(d);
+                if let Ok(fm) = m {
+                    to_write.push((i, fm));
+                }
+                i += 1;
             }
+            Some(r) => {
+                let last = (i + wave).min(frames.len());
+                let mut tries: Vec<Option<Result<FrameMesh, String>>> = pool.install(|| {
+                    (i..last)
+                        .into_par_iter()
+                        .map(|k| Some(with_run_counts(&frames[k], &r, options)))
+                        .collect()
+                });
+                let rejected: Vec<usize> = (i..last)
+                    .filter(|&k| matches!(tries[k - i], Some(Err(_))))
+                    .collect();
+                let mut owns: Vec<Option<Result<FrameMesh, String>>> = pool.install(|| {
+                    rejected
+                        .par_iter()
+                        .map(|&k| Some(own_mesh(&frames[k], options)))
+                        .collect()
+                });
+                let mut next = last;
+                let mut continuing = Some(r);
+                for k in i..last {
+                    let Some(r) = continuing.take() else { break };
+                    match tries[k - i].take() {
+                        Some(Ok(fm)) => {
+                            start.push(r.start);
+                            done.push(describe(k, &fm));
+                            to_write.push((k, fm));
+                            continuing = Some(r);
+                        }
+                        Some(Err(why)) => {
+                            let slot = rejected.binary_search(&k).ok();
+                            let m = slot
+                                .and_then(|s| owns[s].take())
+                                .unwrap_or_else(|| Err("internal: frame not meshed".into()));
+                            let mut d = match &m {
+                                Ok(fm) => describe(k, fm),
+                                Err(e) => failed(k, e.clone()),
+                            };
+                            if r.continued_by(&d) {
+                                if d.structure.as_ref() != Some(&r.want) {
+                                    d.summary.node_counts_not_kept = Some(why);
+                                }
+                                start.push(r.start);
+                                continuing = Some(r);
+                            } else {
+                                start.push(k);
+                                continuing = Run::starting_at(k, &d);
+                                // The wave's later frames were meshed for the run that ended.
+                                next = k + 1;
+                                done.push(d);
+                                if let Ok(fm) = m {
+                                    to_write.push((k, fm));
+                                }
+                                break;
+                            }
+                            done.push(d);
+                            if let Ok(fm) = m {
+                                to_write.push((k, fm));
+                            }
+                        }
+                        None => break,
+                    }
+                }
+                run = continuing;
+                i = next;
+            }
+        }
+        for _ in &to_write {
+            progress();
         }
         let written: Vec<(usize, Result<(), String>)> = pool.install(|| {
             to_write
                 .par_iter()
-                .map(|(i, fm)| (*i, write_frame(*i, fm, out, dir)))
+                .map(|(k, fm)| (*k, write_frame(*k, fm, out, dir)))
                 .collect()
         });
-        for (i, r) in written {
+        for (k, r) in written {
             if let Err(e) = r {
-                done[i] = failed(i, e);
+                done[k] = failed(k, e);
             }
-        }
-    }
-    let redone: Vec<(usize, Result<Done, String>)> = pool.install(|| {
-        redo.par_iter()
-            .map(|(i, want)| (*i, reuse_counts(*i, &frames[*i], want, options, out, dir)))
-            .collect()
-    });
-    for (i, r) in redone {
-        match r {
-            Ok(d) => done[i] = d,
-            Err(why) => done[i].summary.node_counts_not_kept = Some(why),
-        }
-    }
-    // A frame that keeps its own counts was not written in pass 1: mesh it again (the same
-    // mesh: a frame's mesh is a function of the frame) and write it.
-    let own: Vec<usize> = redo
-        .iter()
-        .map(|(i, _)| *i)
-        .filter(|&i| done[i].summary.node_counts_not_kept.is_some())
-        .collect();
-    let rewritten: Vec<(usize, Done)> = pool.install(|| {
-        own.par_iter()
-            .map(|&i| (i, run_frame(i, &frames[i], options, out, dir)))
-            .collect()
-    });
-    for (i, d) in rewritten {
-        if !d.summary.ok {
-            done[i] = d;
         }
     }
     let mut out = Vec::with_capacity(done.len());
@@ -527,42 +585,6 @@ pub fn run_sequence(
         writeln!(w)
     })?;
     Ok(summary)
-}
-
-/// Pass 2 for frame `index`: mesh it with the counts `want` imposed; `Err` (why) when the
-/// result does not have exactly those keys and counts or has an inverted cell (nothing is
-/// written then).
-fn reuse_counts(
-    index: usize,
-    frame: &Result<AnyDomain, String>,
-    want: &Structure,
-    options: &Options,
-    out: Out,
-    dir: &Path,
-) -> Result<Done, String> {
-    let domain = frame.as_ref().map_err(|e| e.clone())?;
-    let imposed = ImposedCounts(want.iter().cloned().collect());
-    let opts = Options {
-        imposed_counts: Some(std::sync::Arc::new(imposed)),
-        ..options.clone()
-    };
-    let fm = mesh_frame(domain, &opts)
-        .map_err(|e| format!("meshing with the run's counts failed: {e}"))?;
-    if fm.structure().as_ref() != Some(want) {
-        return Err("the run's node counts do not fit this frame's blocks".into());
-    }
-    let inverted = crate::quality::inverted_cells(&fm.mesh.grids);
-    if inverted > 0 {
-        return Err(format!(
-            "the run's node counts give {inverted} inverted cells in this frame"
-        ));
-    }
-    let d = finish(index, fm, out, dir);
-    if d.summary.ok {
-        Ok(d)
-    } else {
-        Err(d.summary.error.unwrap_or_default())
-    }
 }
 
 /// Write the ParaView collection of the successful frames (`timestep` = frame index).

@@ -271,3 +271,182 @@ fn one_hole_motions_keep_blocks_and_node_counts() {
     );
     check_run(&text, 5);
 }
+
+/// What the sequential rule of [`run_sequence`] says about one frame, worked out here frame by
+/// frame from [`mesh_frame`] alone (the slow oracle: no waves, every mesh made on its own).
+#[derive(Debug, PartialEq)]
+struct Expected {
+    ok: bool,
+    node_counts_from_frame: Option<usize>,
+    counts_not_kept: bool,
+    dims: Vec<[u64; 2]>,
+}
+
+/// The rule, frame by frame: a frame after a run's frame is meshed with the run's first
+/// frame's counts imposed and kept when that mesh has the run's keys and counts, the run's
+/// combinatorics and no inverted cell; else it is meshed with its own counts and continues
+/// the run when it has the run's combinatorics and keys, or starts a new run.
+fn sequential_rule(text: &str, opts: &Options) -> (Vec<Expected>, usize, usize) {
+    let frames = parse_frames(text);
+    // (first frame, its keys and counts, its combinatorics)
+    type Run = (
+        usize,
+        Vec<(medial_blocks::exact_mode::imposed::BlockKey, [usize; 2])>,
+        Vec<[medial_blocks::sequence::CircleTag; 3]>,
+    );
+    let mut run: Option<Run> = None;
+    let mut out = Vec::new();
+    let (mut imposed_kept, mut own_differ) = (0, 0);
+    let dims_of = |m: &medial_blocks::sequence::FrameMesh| {
+        m.mesh
+            .grids
+            .iter()
+            .map(|g| [g.ni as u64 + 1, g.nj as u64 + 1])
+            .collect::<Vec<_>>()
+    };
+    for (k, frame) in frames.iter().enumerate() {
+        let Ok(domain) = frame else {
+            out.push(Expected {
+                ok: false,
+                node_counts_from_frame: None,
+                counts_not_kept: false,
+                dims: vec![],
+            });
+            run = None;
+            continue;
+        };
+        if let Some((s, want, comb)) = &run {
+            let imposed = Options {
+                imposed_counts: Some(Arc::new(ImposedCounts(want.iter().cloned().collect()))),
+                ..opts.clone()
+            };
+            if let Ok(m) = mesh_frame(domain, &imposed) {
+                if m.structure().as_ref() == Some(want)
+                    && &m.combinatorics == comb
+                    && common::count_inverted_cells(&m.mesh.grids) == 0
+                {
+                    imposed_kept += 1;
+                    let own = mesh_frame(domain, opts).ok().and_then(|o| o.structure());
+                    own_differ += usize::from(own.as_ref() != Some(want));
+                    out.push(Expected {
+                        ok: true,
+                        node_counts_from_frame: Some(*s),
+                        counts_not_kept: false,
+                        dims: dims_of(&m),
+                    });
+                    continue;
+                }
+            }
+        }
+        let Ok(own) = mesh_frame(domain, opts) else {
+            out.push(Expected {
+                ok: false,
+                node_counts_from_frame: None,
+                counts_not_kept: false,
+                dims: vec![],
+            });
+            run = None;
+            continue;
+        };
+        let structure = own.structure();
+        let continues = run.as_ref().is_some_and(|(_, want, comb)| {
+            &own.combinatorics == comb
+                && structure.as_ref().is_some_and(|st| {
+                    st.len() == want.len() && st.iter().zip(want).all(|(a, b)| a.0 == b.0)
+                })
+        });
+        if continues {
+            let (s, want, _) = run.as_ref().unwrap();
+            let same = structure.as_ref() == Some(want);
+            out.push(Expected {
+                ok: true,
+                node_counts_from_frame: same.then_some(*s),
+                counts_not_kept: !same,
+                dims: dims_of(&own),
+            });
+        } else {
+            out.push(Expected {
+                ok: true,
+                node_counts_from_frame: None,
+                counts_not_kept: false,
+                dims: dims_of(&own),
+            });
+            run = structure.map(|st| (k, st, own.combinatorics.clone()));
+        }
+    }
+    (out, imposed_kept, own_differ)
+}
+
+/// [`run_sequence`] settles every frame as the sequential rule does, on 1, 2 and 3 threads
+/// (waves of 1, 2 and 3 frames, which speculate differently), with the same files each time:
+/// a sequence with runs whose later frames need the run's counts imposed, a change of
+/// combinatorics inside a wave, and a failed frame.
+#[test]
+fn waves_settle_frames_as_the_sequential_rule() {
+    // Four holes near a square, one moving along its side: the medial vertices flip at two
+    // frames (the four nearly co-circular), then a failed frame, then the start again.
+    let frame = |k: usize| {
+        let d = -0.25 + 0.06 * k as f64;
+        format!(
+            r#"{{"bounding": {{"center": [0, 0], "radius": 4}}, "holes": [{{"center": [1.5, 1.5], "radius": 0.5}}, {{"center": [-1.5, 1.5], "radius": 0.6}}, {{"center": [-1.5, -1.5], "radius": 0.5}}, {{"center": [{}, {}], "radius": 0.6}}]}}"#,
+            1.5 + d,
+            -1.5 - 0.5 * d
+        )
+    };
+    let mut lines: Vec<String> = (0..10).map(frame).collect();
+    lines.push(bounded_frames(1, 0.0, &[0]));
+    lines.extend([frame(0), frame(1), frame(2)]);
+    let text = lines.join("\n");
+    let opts = Options {
+        cells: 6,
+        ..Options::default()
+    };
+    let (want, imposed_kept, own_differ) = sequential_rule(&text, &opts);
+    let starts: Vec<usize> = (1..want.len())
+        .filter(|&k| {
+            want[k].ok
+                && want[k - 1].ok
+                && want[k].node_counts_from_frame.is_none()
+                && !want[k].counts_not_kept
+        })
+        .collect();
+    assert!(
+        imposed_kept >= 8,
+        "frames meshed with their run's counts: {imposed_kept}"
+    );
+    assert!(
+        own_differ >= 1,
+        "frames whose own counts differ from their run's: {own_differ}"
+    );
+    assert!(
+        starts.len() >= 2,
+        "new runs after a meshed frame: {starts:?}"
+    );
+    assert!(!want[10].ok && want[11].ok && want[12].node_counts_from_frame == Some(11));
+    let dir = tempfile::tempdir().unwrap();
+    let mut trees = Vec::new();
+    for threads in [1, 2, 3] {
+        let d = dir.path().join(format!("t{threads}"));
+        let s = run(&text, &d, threads);
+        for (k, (f, e)) in s.frames.iter().zip(&want).enumerate() {
+            assert_eq!(f.ok, e.ok, "frame {k}, {threads} threads: {f:?}");
+            assert_eq!(
+                f.node_counts_from_frame, e.node_counts_from_frame,
+                "frame {k}, {threads} threads: {f:?}"
+            );
+            assert_eq!(
+                f.node_counts_not_kept.is_some(),
+                e.counts_not_kept,
+                "frame {k}, {threads} threads: {f:?}"
+            );
+            if f.ok {
+                assert_eq!(dims(&d, k), e.dims, "frame {k}, {threads} threads");
+            }
+        }
+        trees.push(tree(&d));
+    }
+    assert!(
+        trees[0] == trees[1] && trees[1] == trees[2],
+        "outputs differ between thread counts"
+    );
+}
