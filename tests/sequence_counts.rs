@@ -282,6 +282,15 @@ struct Expected {
     dims: Vec<[u64; 2]>,
 }
 
+impl Expected {
+    const FAILED: Expected = Expected {
+        ok: false,
+        node_counts_from_frame: None,
+        counts_not_kept: false,
+        dims: Vec::new(),
+    };
+}
+
 /// The rule, frame by frame: a frame after a run's frame is meshed with the run's first
 /// frame's counts imposed and kept when that mesh has the run's keys and counts, the run's
 /// combinatorics and no inverted cell; else it is meshed with its own counts and continues
@@ -305,13 +314,9 @@ fn sequential_rule(text: &str, opts: &Options) -> (Vec<Expected>, usize, usize) 
             .collect::<Vec<_>>()
     };
     for (k, frame) in frames.iter().enumerate() {
+        // A failed frame ends its run.
         let Ok(domain) = frame else {
-            out.push(Expected {
-                ok: false,
-                node_counts_from_frame: None,
-                counts_not_kept: false,
-                dims: vec![],
-            });
+            out.push(Expected::FAILED);
             run = None;
             continue;
         };
@@ -339,12 +344,7 @@ fn sequential_rule(text: &str, opts: &Options) -> (Vec<Expected>, usize, usize) 
             }
         }
         let Ok(own) = mesh_frame(domain, opts) else {
-            out.push(Expected {
-                ok: false,
-                node_counts_from_frame: None,
-                counts_not_kept: false,
-                dims: vec![],
-            });
+            out.push(Expected::FAILED);
             run = None;
             continue;
         };
