@@ -25,7 +25,8 @@ fn untuned_bin() -> std::process::Command {
     c.env_remove("GLIBC_TUNABLES")
         .env_remove("MEDIAL_BLOCKS_HUGE_PAGES")
         .env_remove("MALLOC_TRIM_THRESHOLD_")
-        .env_remove("MALLOC_TOP_PAD_");
+        .env_remove("MALLOC_TOP_PAD_")
+        .env_remove("MALLOC_MMAP_THRESHOLD_");
     c
 }
 
@@ -124,6 +125,7 @@ fn user_malloc_settings_are_left_alone() {
         [("GLIBC_TUNABLES", "glibc.malloc.tcache_count=7")],
         [("MALLOC_TOP_PAD_", "1048576")],
         [("MALLOC_TRIM_THRESHOLD_", "131072")],
+        [("MALLOC_MMAP_THRESHOLD_", "131072")],
         // The tool's own marker without its tunables (a restart whose environment was
         // stripped) must not restart again.
         [("MEDIAL_BLOCKS_HUGE_PAGES", "on")],
