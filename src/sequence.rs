@@ -39,7 +39,8 @@ use crate::exact_mode::imposed::{vertex_cycle, BlockKey, ImposedCounts};
 use crate::layout::BlockLayout;
 use crate::mesh::Mesh;
 use crate::mesher::{mesh, MeshError, Options};
-use crate::output::{write_atomic, write_files_encoded, Encoding, Format};
+use crate::output::report::Report;
+use crate::output::{write_atomic, write_files_prepared, Encoding, Format};
 use crate::quality::measure;
 use rayon::prelude::*;
 use serde::Serialize;
@@ -302,15 +303,53 @@ struct Out<'a> {
     encoding: Encoding,
 }
 
-/// Write frame `index`'s files into `dir/frame_NNNNN/`.
-fn write_frame(index: usize, fm: &FrameMesh, out: Out, dir: &Path) -> Result<(), String> {
-    write_files_encoded(&fm.mesh, &frame_dir(dir, index), out.formats, out.encoding)
-        .map_err(|e| format!("cannot write frame {index}: {e}"))
+/// A meshed frame to write: its mesh, and its quality report when the formats write one
+/// (measured once, for `report.json` and the summary line: issue 8).
+struct Meshed {
+    fm: FrameMesh,
+    report: Option<Report>,
 }
 
-/// What the summary and the run decisions need of a meshed frame.
-fn describe(index: usize, fm: &FrameMesh) -> Done {
-    let q = measure(&fm.mesh.grids);
+impl Meshed {
+    /// Frame `index`'s mesh `fm` for a sequence that writes `out`, and what the summary and
+    /// the run decisions need of it.
+    fn new(index: usize, fm: FrameMesh, out: Out) -> (Done, Meshed) {
+        let report = out
+            .formats
+            .contains(&Format::Json)
+            .then(|| Report::from_mesh(&fm.mesh));
+        let done = describe(index, &fm, report.as_ref());
+        (done, Meshed { fm, report })
+    }
+}
+
+/// Write frame `index`'s files into `dir/frame_NNNNN/` (`report.json` from `m.report`).
+fn write_frame(index: usize, m: &Meshed, out: Out, dir: &Path) -> Result<(), String> {
+    crate::timings::on_pool_worker(|| {
+        write_files_prepared(
+            &m.fm.mesh,
+            &frame_dir(dir, index),
+            out.formats,
+            out.encoding,
+            m.report.as_ref(),
+            None,
+            |_| {},
+        )
+    })
+    .map_err(|e| format!("cannot write frame {index}: {e}"))
+}
+
+/// What the summary and the run decisions need of a meshed frame: its figures from
+/// `report` when given (which must be [`Report::from_mesh`] of its mesh: the same figures as
+/// [`measure`]), else measured.
+fn describe(index: usize, fm: &FrameMesh, report: Option<&Report>) -> Done {
+    let q = match report {
+        Some(r) => (r.cells, r.min_angle_deg, r.max_angle_deg, r.inverted_cells),
+        None => {
+            let q = measure(&fm.mesh.grids);
+            (q.cells, q.min_angle_deg, q.max_angle_deg, q.inverted_cells)
+        }
+    };
     let keys = match &fm.keys {
         Some(k) => k.iter().map(|k| format!("{k:?}")).collect(),
         None => block_keys(&fm.mesh.layout)
@@ -324,10 +363,10 @@ fn describe(index: usize, fm: &FrameMesh) -> Done {
             ok: true,
             error: None,
             blocks: fm.mesh.layout.blocks.len(),
-            cells: q.cells,
-            min_angle_deg: q.min_angle_deg,
-            max_angle_deg: q.max_angle_deg,
-            inverted_cells: q.inverted_cells,
+            cells: q.0,
+            min_angle_deg: q.1,
+            max_angle_deg: q.2,
+            inverted_cells: q.3,
             same_combinatorics_as_previous: false,
             same_block_structure_as_previous: false,
             same_node_counts_as_previous: false,
@@ -371,10 +410,17 @@ impl Run {
     }
 }
 
-/// Mesh `frame` with its own counts.
-fn own_mesh(frame: &Result<AnyDomain, String>, options: &Options) -> Result<FrameMesh, String> {
+/// Mesh frame `index` with its own counts.
+fn own_mesh(
+    index: usize,
+    frame: &Result<AnyDomain, String>,
+    options: &Options,
+    out: Out,
+) -> Result<(Done, Meshed), String> {
     match frame {
-        Ok(d) => mesh_frame(d, options).map_err(|e| e.to_string()),
+        Ok(d) => mesh_frame(d, options)
+            .map(|fm| Meshed::new(index, fm, out))
+            .map_err(|e| e.to_string()),
         Err(e) => Err(e.clone()),
     }
 }
@@ -383,10 +429,12 @@ fn own_mesh(frame: &Result<AnyDomain, String>, options: &Options) -> Result<Fram
 /// kept (it has exactly the run's keys and counts, the run's combinatorics and no inverted
 /// cell), else `Err` with the reason (the frame is then meshed with its own counts).
 fn with_run_counts(
+    index: usize,
     frame: &Result<AnyDomain, String>,
     run: &Run,
     options: &Options,
-) -> Result<FrameMesh, String> {
+    out: Out,
+) -> Result<(Done, Meshed), String> {
     let domain = frame.as_ref().map_err(|e| e.clone())?;
     let imposed = ImposedCounts(run.want.iter().cloned().collect());
     let opts = Options {
@@ -407,7 +455,15 @@ fn with_run_counts(
             "the run's node counts give {inverted} inverted cells in this frame"
         ));
     }
-    Ok(fm)
+    Ok(Meshed::new(index, fm, out))
+}
+
+/// Frame `index`'s summary line and decisions, and its mesh to write (none when it failed).
+fn settle(index: usize, m: Result<(Done, Meshed), String>) -> (Done, Option<Meshed>) {
+    match m {
+        Ok((d, m)) => (d, Some(m)),
+        Err(e) => (failed(index, e), None),
+    }
 }
 
 /// Mesh every frame into `dir/frame_NNNNN/` with `formats` (those with a binary form in
@@ -456,82 +512,70 @@ pub fn run_sequence(
     let mut i = 0;
     while i < frames.len() {
         // The frames settled by this wave, with the meshes to write.
-        let mut to_write: Vec<(usize, FrameMesh)> = Vec::new();
+        let mut to_write: Vec<(usize, Meshed)> = Vec::new();
         match run.take() {
             None => {
-                let m = pool.install(|| own_mesh(&frames[i], options));
-                let d = match &m {
-                    Ok(fm) => describe(i, fm),
-                    Err(e) => failed(i, e.clone()),
-                };
+                let (d, m) = settle(i, pool.install(|| own_mesh(i, &frames[i], options, out)));
                 run = Run::starting_at(i, &d);
                 start.push(i);
                 done.push(d);
-                if let Ok(fm) = m {
-                    to_write.push((i, fm));
-                }
+                to_write.extend(m.map(|m| (i, m)));
                 i += 1;
             }
             Some(r) => {
                 let last = (i + wave).min(frames.len());
-                let mut tries: Vec<Option<Result<FrameMesh, String>>> = pool.install(|| {
+                let mut tries: Vec<Option<Result<(Done, Meshed), String>>> = pool.install(|| {
                     (i..last)
                         .into_par_iter()
-                        .map(|k| Some(with_run_counts(&frames[k], &r, options)))
+                        .map(|k| Some(with_run_counts(k, &frames[k], &r, options, out)))
                         .collect()
                 });
                 let rejected: Vec<usize> = (i..last)
                     .filter(|&k| matches!(tries[k - i], Some(Err(_))))
                     .collect();
-                let mut owns: Vec<Option<Result<FrameMesh, String>>> = pool.install(|| {
+                let mut owns: Vec<Option<Result<(Done, Meshed), String>>> = pool.install(|| {
                     rejected
                         .par_iter()
-                        .map(|&k| Some(own_mesh(&frames[k], options)))
+                        .map(|&k| Some(own_mesh(k, &frames[k], options, out)))
                         .collect()
                 });
                 let mut next = last;
                 let mut continuing = Some(r);
                 for k in i..last {
-                    let Some(r) = continuing.take() else { break };
-                    match tries[k - i].take() {
-                        Some(Ok(fm)) => {
+                    let (Some(r), Some(tried)) = (continuing.take(), tries[k - i].take()) else {
+                        break;
+                    };
+                    let why = match tried {
+                        Ok((d, m)) => {
                             start.push(r.start);
-                            done.push(describe(k, &fm));
-                            to_write.push((k, fm));
-                            continuing = Some(r);
-                        }
-                        Some(Err(why)) => {
-                            let slot = rejected.binary_search(&k).ok();
-                            let m = slot
-                                .and_then(|s| owns[s].take())
-                                .unwrap_or_else(|| Err("internal: frame not meshed".into()));
-                            let mut d = match &m {
-                                Ok(fm) => describe(k, fm),
-                                Err(e) => failed(k, e.clone()),
-                            };
-                            if r.continued_by(&d) {
-                                if d.structure.as_ref() != Some(&r.want) {
-                                    d.summary.node_counts_not_kept = Some(why);
-                                }
-                                start.push(r.start);
-                                continuing = Some(r);
-                            } else {
-                                start.push(k);
-                                continuing = Run::starting_at(k, &d);
-                                // The wave's later frames were meshed for the run that ended.
-                                next = k + 1;
-                                done.push(d);
-                                if let Ok(fm) = m {
-                                    to_write.push((k, fm));
-                                }
-                                break;
-                            }
                             done.push(d);
-                            if let Ok(fm) = m {
-                                to_write.push((k, fm));
-                            }
+                            to_write.push((k, m));
+                            continuing = Some(r);
+                            continue;
                         }
-                        None => break,
+                        Err(why) => why,
+                    };
+                    let own = rejected
+                        .binary_search(&k)
+                        .ok()
+                        .and_then(|s| owns[s].take())
+                        .unwrap_or_else(|| Err("internal: frame not meshed".into()));
+                    let (mut d, m) = settle(k, own);
+                    to_write.extend(m.map(|m| (k, m)));
+                    if r.continued_by(&d) {
+                        if d.structure.as_ref() != Some(&r.want) {
+                            d.summary.node_counts_not_kept = Some(why);
+                        }
+                        start.push(r.start);
+                        done.push(d);
+                        continuing = Some(r);
+                    } else {
+                        start.push(k);
+                        continuing = Run::starting_at(k, &d);
+                        done.push(d);
+                        // The wave's later frames were meshed for the run that ended.
+                        next = k + 1;
+                        break;
                     }
                 }
                 run = continuing;
@@ -544,7 +588,7 @@ pub fn run_sequence(
         let written: Vec<(usize, Result<(), String>)> = pool.install(|| {
             to_write
                 .par_iter()
-                .map(|(k, fm)| (*k, write_frame(*k, fm, out, dir)))
+                .map(|(k, m)| (*k, write_frame(*k, m, out, dir)))
                 .collect()
         });
         for (k, r) in written {

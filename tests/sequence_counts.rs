@@ -280,6 +280,9 @@ struct Expected {
     node_counts_from_frame: Option<usize>,
     counts_not_kept: bool,
     dims: Vec<[u64; 2]>,
+    /// Cells, smallest and largest angle, inverted cells of the kept mesh, by
+    /// [`medial_blocks::quality::measure`] (the summary takes them from `report.json`'s pass).
+    figures: (usize, f64, f64, usize),
 }
 
 impl Expected {
@@ -288,6 +291,7 @@ impl Expected {
         node_counts_from_frame: None,
         counts_not_kept: false,
         dims: Vec::new(),
+        figures: (0, 0.0, 0.0, 0),
     };
 }
 
@@ -312,6 +316,10 @@ fn sequential_rule(text: &str, opts: &Options) -> (Vec<Expected>, usize, usize) 
             .iter()
             .map(|g| [g.ni as u64 + 1, g.nj as u64 + 1])
             .collect::<Vec<_>>()
+    };
+    let figures_of = |m: &medial_blocks::sequence::FrameMesh| {
+        let q = medial_blocks::quality::measure(&m.mesh.grids);
+        (q.cells, q.min_angle_deg, q.max_angle_deg, q.inverted_cells)
     };
     for (k, frame) in frames.iter().enumerate() {
         // A failed frame ends its run.
@@ -338,6 +346,7 @@ fn sequential_rule(text: &str, opts: &Options) -> (Vec<Expected>, usize, usize) 
                         node_counts_from_frame: Some(*s),
                         counts_not_kept: false,
                         dims: dims_of(&m),
+                        figures: figures_of(&m),
                     });
                     continue;
                 }
@@ -363,6 +372,7 @@ fn sequential_rule(text: &str, opts: &Options) -> (Vec<Expected>, usize, usize) 
                 node_counts_from_frame: same.then_some(*s),
                 counts_not_kept: !same,
                 dims: dims_of(&own),
+                figures: figures_of(&own),
             });
         } else {
             out.push(Expected {
@@ -370,6 +380,7 @@ fn sequential_rule(text: &str, opts: &Options) -> (Vec<Expected>, usize, usize) 
                 node_counts_from_frame: None,
                 counts_not_kept: false,
                 dims: dims_of(&own),
+                figures: figures_of(&own),
             });
             run = structure.map(|st| (k, st, own.combinatorics.clone()));
         }
@@ -441,6 +452,8 @@ fn waves_settle_frames_as_the_sequential_rule() {
             );
             if f.ok {
                 assert_eq!(dims(&d, k), e.dims, "frame {k}, {threads} threads");
+                let got = (f.cells, f.min_angle_deg, f.max_angle_deg, f.inverted_cells);
+                assert_eq!(got, e.figures, "frame {k}, {threads} threads");
             }
         }
         trees.push(tree(&d));
