@@ -513,6 +513,7 @@ pub fn run_sequence(
     while i < frames.len() {
         // The frames settled by this wave, with the meshes to write.
         let mut to_write: Vec<(usize, Meshed)> = Vec::new();
+        let settled_before = done.len();
         match run.take() {
             None => {
                 let (d, m) = settle(i, pool.install(|| own_mesh(i, &frames[i], options, out)));
@@ -582,7 +583,8 @@ pub fn run_sequence(
                 i = next;
             }
         }
-        for _ in &to_write {
+        // Once per frame settled (failed ones too).
+        for _ in settled_before..done.len() {
             progress();
         }
         let written: Vec<(usize, Result<(), String>)> = pool.install(|| {

@@ -43,21 +43,27 @@ fn periodic_frames(n: usize, step: f64) -> String {
 }
 
 fn run(text: &str, dir: &Path, threads: usize) -> SequenceSummary {
+    let ticks = std::sync::atomic::AtomicUsize::new(0);
     let frames = parse_frames(text);
     let opts = Options {
         cells: 6,
         ..Options::default()
     };
-    run_sequence(
+    let summary = run_sequence(
         &frames,
         &opts,
         &[medial_blocks::output::Format::Json],
         medial_blocks::output::Encoding::Ascii,
         dir,
         threads,
-        &|| {},
+        &|| {
+            ticks.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+        },
     )
-    .unwrap()
+    .unwrap();
+    // The progress display advances once per frame, failed frames included.
+    assert_eq!(ticks.into_inner(), frames.len(), "progress ticks");
+    summary
 }
 
 /// `[ni, nj]` per block from `frame_NNNNN/connectivity.json`.
