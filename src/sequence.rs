@@ -411,12 +411,7 @@ impl Run {
 }
 
 /// Mesh frame `index` with its own counts.
-fn own_mesh(
-    index: usize,
-    frame: &Result<AnyDomain, String>,
-    options: &Options,
-    out: Out,
-) -> Result<(Done, Meshed), String> {
+fn own_mesh(index: usize, frame: &Result<AnyDomain, String>, options: &Options, out: Out) -> Own {
     match frame {
         Ok(d) => mesh_frame(d, options)
             .map(|fm| Meshed::new(index, fm, out))
@@ -425,41 +420,63 @@ fn own_mesh(
     }
 }
 
+/// A frame meshed with its own counts: its summary line and mesh, or why it failed.
+type Own = Result<(Done, Meshed), String>;
+
+/// Why a frame does not keep its run's counts, and its own mesh when the attempt was it: a
+/// build that never applied the imposed counts ([`ImposedCounts::applied`]; its keys did
+/// not match the run's, as after a change of combinatorics) made exactly the mesh (or the
+/// error) of the frame's own counts.
+struct Rejected {
+    why: String,
+    own: Option<Box<Own>>,
+}
+
 /// Mesh a later frame of `run` with the run's counts imposed by key: `Ok` when the mesh is
 /// kept (it has exactly the run's keys and counts, the run's combinatorics and no inverted
-/// cell), else `Err` with the reason (the frame is then meshed with its own counts).
+/// cell), else the reason (the frame is then meshed with its own counts, unless the attempt
+/// already was that meshing, see [`Rejected`]).
 fn with_run_counts(
     index: usize,
     frame: &Result<AnyDomain, String>,
     run: &Run,
     options: &Options,
     out: Out,
-) -> Result<(Done, Meshed), String> {
-    let domain = frame.as_ref().map_err(|e| e.clone())?;
-    let imposed = ImposedCounts(run.want.iter().cloned().collect());
+) -> Result<(Done, Meshed), Rejected> {
+    let domain = frame.as_ref().map_err(|e| Rejected {
+        why: e.clone(),
+        own: Some(Box::new(Err(e.clone()))),
+    })?;
+    let imposed = std::sync::Arc::new(ImposedCounts::new(run.want.iter().cloned().collect()));
     let opts = Options {
-        imposed_counts: Some(std::sync::Arc::new(imposed)),
+        imposed_counts: Some(imposed.clone()),
         ..options.clone()
     };
-    let fm = mesh_frame(domain, &opts)
-        .map_err(|e| format!("meshing with the run's counts failed: {e}"))?;
-    if fm.structure().as_ref() != Some(&run.want) {
-        return Err("the run's node counts do not fit this frame's blocks".into());
-    }
-    if fm.combinatorics != run.combinatorics {
-        return Err("with the run's node counts this frame's combinatorics differ".into());
-    }
-    let inverted = crate::quality::inverted_cells(&fm.mesh.grids);
-    if inverted > 0 {
-        return Err(format!(
-            "the run's node counts give {inverted} inverted cells in this frame"
-        ));
-    }
-    Ok(Meshed::new(index, fm, out))
+    let meshed = mesh_frame(domain, &opts);
+    // Without the counts applied, this was the frame's own meshing.
+    let as_own = !imposed.applied();
+    let fm = meshed.map_err(|e| Rejected {
+        why: format!("meshing with the run's counts failed: {e}"),
+        own: as_own.then(|| Box::new(Err(e.to_string()))),
+    })?;
+    let why = if fm.structure().as_ref() != Some(&run.want) {
+        "the run's node counts do not fit this frame's blocks".to_string()
+    } else if fm.combinatorics != run.combinatorics {
+        "with the run's node counts this frame's combinatorics differ".to_string()
+    } else {
+        match crate::quality::inverted_cells(&fm.mesh.grids) {
+            0 => return Ok(Meshed::new(index, fm, out)),
+            n => format!("the run's node counts give {n} inverted cells in this frame"),
+        }
+    };
+    Err(Rejected {
+        why,
+        own: as_own.then(|| Box::new(Ok(Meshed::new(index, fm, out)))),
+    })
 }
 
 /// Frame `index`'s summary line and decisions, and its mesh to write (none when it failed).
-fn settle(index: usize, m: Result<(Done, Meshed), String>) -> (Done, Option<Meshed>) {
+fn settle(index: usize, m: Own) -> (Done, Option<Meshed>) {
     match m {
         Ok((d, m)) => (d, Some(m)),
         Err(e) => (failed(index, e), None),
@@ -525,16 +542,17 @@ pub fn run_sequence(
             }
             Some(r) => {
                 let last = (i + wave).min(frames.len());
-                let mut tries: Vec<Option<Result<(Done, Meshed), String>>> = pool.install(|| {
+                let mut tries: Vec<Option<Result<(Done, Meshed), Rejected>>> = pool.install(|| {
                     (i..last)
                         .into_par_iter()
                         .map(|k| Some(with_run_counts(k, &frames[k], &r, options, out)))
                         .collect()
                 });
+                // The frames not kept whose own mesh is still to be made.
                 let rejected: Vec<usize> = (i..last)
-                    .filter(|&k| matches!(tries[k - i], Some(Err(_))))
+                    .filter(|&k| matches!(&tries[k - i], Some(Err(r)) if r.own.is_none()))
                     .collect();
-                let mut owns: Vec<Option<Result<(Done, Meshed), String>>> = pool.install(|| {
+                let mut owns: Vec<Option<Own>> = pool.install(|| {
                     rejected
                         .par_iter()
                         .map(|&k| Some(own_mesh(k, &frames[k], options, out)))
@@ -546,7 +564,7 @@ pub fn run_sequence(
                     let (Some(r), Some(tried)) = (continuing.take(), tries[k - i].take()) else {
                         break;
                     };
-                    let why = match tried {
+                    let Rejected { why, own } = match tried {
                         Ok((d, m)) => {
                             start.push(r.start);
                             done.push(d);
@@ -554,12 +572,14 @@ pub fn run_sequence(
                             continuing = Some(r);
                             continue;
                         }
-                        Err(why) => why,
+                        Err(rejected) => rejected,
                     };
-                    let own = rejected
-                        .binary_search(&k)
-                        .ok()
-                        .and_then(|s| owns[s].take())
+                    let own = own
+                        .map(|own| *own)
+                        .or_else(|| {
+                            let slot = rejected.binary_search(&k).ok()?;
+                            owns[slot].take()
+                        })
                         .unwrap_or_else(|| Err("internal: frame not meshed".into()));
                     let (mut d, m) = settle(k, own);
                     to_write.extend(m.map(|m| (k, m)));

@@ -986,7 +986,7 @@ fn exact_transition(
             }
         }
         let opts = Options {
-            imposed_counts: Some(Arc::new(ImposedCounts(want))),
+            imposed_counts: Some(Arc::new(ImposedCounts::new(want))),
             ..options.clone()
         };
         // An error of the rebuild (the imposed counts exceed a limit) leaves the paper

@@ -153,7 +153,7 @@ fn reused_counts_are_the_first_frames_and_byte_identical_for_1_and_2_threads() {
     let f0 = mesh_frame(frames[0].as_ref().unwrap(), &opts).unwrap();
     let want = f0.structure().unwrap();
     let imposed = Options {
-        imposed_counts: Some(Arc::new(ImposedCounts(want.iter().cloned().collect()))),
+        imposed_counts: Some(Arc::new(ImposedCounts::new(want.iter().cloned().collect()))),
         ..opts.clone()
     };
     let f2 = mesh_frame(frames[2].as_ref().unwrap(), &imposed).unwrap();
@@ -185,7 +185,7 @@ fn counts_that_do_not_fit_are_ignored() {
     let own = mesh_frame(frames[0].as_ref().unwrap(), &opts).unwrap();
     let foreign = mesh_frame(other[0].as_ref().unwrap(), &opts).unwrap();
     let imposed = Options {
-        imposed_counts: Some(Arc::new(ImposedCounts(
+        imposed_counts: Some(Arc::new(ImposedCounts::new(
             foreign.structure().unwrap().into_iter().collect(),
         ))),
         ..opts.clone()
@@ -195,8 +195,8 @@ fn counts_that_do_not_fit_are_ignored() {
     // Partial counts (one block missing) are not used either.
     let mut partial: Vec<_> = own.structure().unwrap();
     partial.pop();
-    let mut doubled = ImposedCounts(partial.into_iter().collect());
-    for v in doubled.0.values_mut() {
+    let mut doubled = ImposedCounts::new(partial.into_iter().collect());
+    for v in doubled.counts.values_mut() {
         *v = [2 * v[0], 2 * v[1]];
     }
     let again = mesh_frame(
@@ -305,7 +305,7 @@ impl Expected {
 /// frame's counts imposed and kept when that mesh has the run's keys and counts, the run's
 /// combinatorics and no inverted cell; else it is meshed with its own counts and continues
 /// the run when it has the run's combinatorics and keys, or starts a new run.
-fn sequential_rule(text: &str, opts: &Options) -> (Vec<Expected>, usize, usize) {
+fn sequential_rule(text: &str, opts: &Options) -> (Vec<Expected>, usize, usize, usize) {
     let frames = parse_frames(text);
     // (first frame, its keys and counts, its combinatorics)
     type Run = (
@@ -315,7 +315,7 @@ fn sequential_rule(text: &str, opts: &Options) -> (Vec<Expected>, usize, usize) 
     );
     let mut run: Option<Run> = None;
     let mut out = Vec::new();
-    let (mut imposed_kept, mut own_differ) = (0, 0);
+    let (mut imposed_kept, mut own_differ, mut unapplied_own) = (0, 0, 0);
     let dims_of = |m: &medial_blocks::sequence::FrameMesh| {
         m.mesh
             .grids
@@ -334,12 +334,19 @@ fn sequential_rule(text: &str, opts: &Options) -> (Vec<Expected>, usize, usize) 
             run = None;
             continue;
         };
+        // The rejected attempt with the run's counts, when they were never applied.
+        let mut unapplied = None;
         if let Some((s, want, comb)) = &run {
+            let counts = Arc::new(ImposedCounts::new(want.iter().cloned().collect()));
             let imposed = Options {
-                imposed_counts: Some(Arc::new(ImposedCounts(want.iter().cloned().collect()))),
+                imposed_counts: Some(counts.clone()),
                 ..opts.clone()
             };
-            if let Ok(m) = mesh_frame(domain, &imposed) {
+            let attempt = mesh_frame(domain, &imposed);
+            if !counts.applied() {
+                unapplied = Some(attempt.as_ref().ok().map(|m| common::node_bits(&m.mesh)));
+            }
+            if let Ok(m) = attempt {
                 if m.structure().as_ref() == Some(want)
                     && &m.combinatorics == comb
                     && common::count_inverted_cells(&m.mesh.grids) == 0
@@ -347,6 +354,8 @@ fn sequential_rule(text: &str, opts: &Options) -> (Vec<Expected>, usize, usize) 
                     imposed_kept += 1;
                     let own = mesh_frame(domain, opts).ok().and_then(|o| o.structure());
                     own_differ += usize::from(own.as_ref() != Some(want));
+                    // Counts that differ from the frame's own were applied.
+                    assert!(counts.applied() || own.as_ref() == Some(want), "frame {k}");
                     out.push(Expected {
                         ok: true,
                         node_counts_from_frame: Some(*s),
@@ -358,7 +367,17 @@ fn sequential_rule(text: &str, opts: &Options) -> (Vec<Expected>, usize, usize) 
                 }
             }
         }
-        let Ok(own) = mesh_frame(domain, opts) else {
+        let own = mesh_frame(domain, opts);
+        if let Some(bits) = unapplied {
+            // Counts never applied changed nothing: the attempt was the frame's own mesh.
+            assert_eq!(
+                bits,
+                own.as_ref().ok().map(|m| common::node_bits(&m.mesh)),
+                "frame {k}"
+            );
+            unapplied_own += 1;
+        }
+        let Ok(own) = own else {
             out.push(Expected::FAILED);
             run = None;
             continue;
@@ -391,7 +410,7 @@ fn sequential_rule(text: &str, opts: &Options) -> (Vec<Expected>, usize, usize) 
             run = structure.map(|st| (k, st, own.combinatorics.clone()));
         }
     }
-    (out, imposed_kept, own_differ)
+    (out, imposed_kept, own_differ, unapplied_own)
 }
 
 /// [`run_sequence`] settles every frame as the sequential rule does, on 1, 2 and 3 threads
@@ -418,7 +437,7 @@ fn waves_settle_frames_as_the_sequential_rule() {
         cells: 6,
         ..Options::default()
     };
-    let (want, imposed_kept, own_differ) = sequential_rule(&text, &opts);
+    let (want, imposed_kept, own_differ, unapplied_own) = sequential_rule(&text, &opts);
     let starts: Vec<usize> = (1..want.len())
         .filter(|&k| {
             want[k].ok
@@ -438,6 +457,10 @@ fn waves_settle_frames_as_the_sequential_rule() {
     assert!(
         starts.len() >= 2,
         "new runs after a meshed frame: {starts:?}"
+    );
+    assert!(
+        unapplied_own >= 2,
+        "attempts that were the own mesh: {unapplied_own}"
     );
     assert!(!want[10].ok && want[11].ok && want[12].node_counts_from_frame == Some(11));
     let dir = tempfile::tempdir().unwrap();

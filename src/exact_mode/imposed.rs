@@ -12,6 +12,7 @@
 
 use crate::geometry::Point;
 use std::collections::BTreeMap;
+use std::sync::atomic::{AtomicBool, Ordering};
 
 /// A circle: `(id, a, b)` (see the module documentation).
 pub type CircleTag = (i64, i64, i64);
@@ -19,9 +20,54 @@ pub type CircleTag = (i64, i64, i64);
 /// `(wall, circles around corner 3, circles around corner 2)`.
 pub type BlockKey = (CircleTag, Vec<CircleTag>, Vec<CircleTag>);
 
-/// Counts imposed on blocks by key: `[ni, nj]` (cells along the wall, cells along the spokes).
-#[derive(Debug, Clone, PartialEq, Eq, Default)]
-pub struct ImposedCounts(pub BTreeMap<BlockKey, [usize; 2]>);
+/// Counts imposed on blocks by key: `[ni, nj]` (cells along the wall, cells along the spokes),
+/// and whether a build has applied them.
+///
+/// A build applies them only through [`ImposedCounts::counts_for`]; when it never did, the
+/// options' imposed counts changed nothing, and the mesh is the one made without them
+/// (`Options::imposed_counts` is read nowhere else): a sequence then keeps that mesh as the
+/// frame's own instead of meshing it again ([`crate::sequence`], issue 8).
+#[derive(Debug, Default)]
+pub struct ImposedCounts {
+    pub counts: BTreeMap<BlockKey, [usize; 2]>,
+    /// Set by [`ImposedCounts::counts_for`] when it gives counts (shared through the options'
+    /// `Arc`: every build of one meshing with these options sees the same flag).
+    applied: AtomicBool,
+}
+
+impl ImposedCounts {
+    /// Impose `counts`, not applied yet.
+    pub fn new(counts: BTreeMap<BlockKey, [usize; 2]>) -> ImposedCounts {
+        ImposedCounts {
+            counts,
+            applied: AtomicBool::new(false),
+        }
+    }
+
+    /// Whether [`ImposedCounts::counts_for`] has given counts to a build.
+    pub fn applied(&self) -> bool {
+        self.applied.load(Ordering::Relaxed)
+    }
+}
+
+/// The same counts and the same flag.
+impl Clone for ImposedCounts {
+    fn clone(&self) -> ImposedCounts {
+        ImposedCounts {
+            counts: self.counts.clone(),
+            applied: AtomicBool::new(self.applied()),
+        }
+    }
+}
+
+/// The counts compared (the flag is what happened to them, not what they are).
+impl PartialEq for ImposedCounts {
+    fn eq(&self, other: &ImposedCounts) -> bool {
+        self.counts == other.counts
+    }
+}
+
+impl Eq for ImposedCounts {}
 
 /// The circles around a medial vertex at `center`, each with its touching point, as the
 /// rotation-normalised counter-clockwise cycle (duplicates of one tag counted once).
@@ -45,21 +91,22 @@ impl ImposedCounts {
     /// `keys[2e + s]`, arc `e` joins the count indices `arc_circles[e]` and there are
     /// `ncirc` circle counts: `Some((circle, arc))` when every key is known and the imposed
     /// counts are consistent (both blocks of an arc the same `ni`, all blocks on a circle the
-    /// same `nj`), else `None` (the build keeps its own counts).
+    /// same `nj`), else `None` (the build keeps its own counts). Giving counts marks them
+    /// [`applied`](ImposedCounts::applied): the caller must use them.
     pub fn counts_for(
         &self,
         keys: &[BlockKey],
         arc_circles: &[[usize; 2]],
         ncirc: usize,
     ) -> Option<(Vec<usize>, Vec<usize>)> {
-        if keys.len() != 2 * arc_circles.len() || self.0.len() != keys.len() {
+        if keys.len() != 2 * arc_circles.len() || self.counts.len() != keys.len() {
             return None;
         }
         let mut circle: Vec<Option<usize>> = vec![None; ncirc];
         let mut arc = Vec::with_capacity(arc_circles.len());
         for (e, cs) in arc_circles.iter().enumerate() {
-            let a = self.0.get(&keys[2 * e])?;
-            let b = self.0.get(&keys[2 * e + 1])?;
+            let a = self.counts.get(&keys[2 * e])?;
+            let b = self.counts.get(&keys[2 * e + 1])?;
             if a[0] != b[0] || a[0] == 0 {
                 return None;
             }
@@ -74,6 +121,7 @@ impl ImposedCounts {
             }
         }
         let circle = circle.into_iter().map(|c| c.unwrap_or(1)).collect();
+        self.applied.store(true, Ordering::Relaxed);
         Some((circle, arc))
     }
 }
