@@ -31,11 +31,17 @@
 //! wave of frames (as many as threads) is meshed in parallel with the run's counts, the
 //! frames not kept are meshed again with their own, and the wave is settled in frame order up
 //! to the first frame that starts a new run. A run's first frame is meshed alone (the frames
-//! after it need its counts). Runs are decided on the meshes: a frame whose files cannot be
+//! after it need its counts). An attempt whose counts no build applied
+//! ([`ImposedCounts::applied`]: its keys never matched, as after a change of combinatorics)
+//! made exactly the frame's own mesh, which is kept as such; and the attempts that a change
+//! of run leaves unused are kept for the next wave, where they stand for the new run's
+//! attempt when its counts could not be given to any of their builds either
+//! ([`ImposedCounts::could_take`]). So a layout whose combinatorics change at every frame is
+//! meshed once per frame too. Runs are decided on the meshes: a frame whose files cannot be
 //! written is reported failed but does not end its run.
 
 use crate::domain::{AnyDomain, CircleId};
-use crate::exact_mode::imposed::{vertex_cycle, BlockKey, ImposedCounts};
+use crate::exact_mode::imposed::{vertex_cycle, BlockKey, ImposedCounts, Offer};
 use crate::layout::BlockLayout;
 use crate::mesh::Mesh;
 use crate::mesher::{mesh, MeshError, Options};
@@ -430,6 +436,47 @@ type Own = Result<(Done, Meshed), String>;
 struct Rejected {
     why: String,
     own: Option<Box<Own>>,
+    /// The builds the attempt's counts were offered to ([`ImposedCounts::offers`]).
+    offers: Vec<Offer>,
+}
+
+/// Whether frame `fm` keeps `run`'s counts: `None` when it has exactly the run's keys and
+/// counts, the run's combinatorics and no inverted cell, else why not.
+fn verdict(fm: &FrameMesh, run: &Run) -> Option<String> {
+    if fm.structure().as_ref() != Some(&run.want) {
+        return Some("the run's node counts do not fit this frame's blocks".to_string());
+    }
+    if fm.combinatorics != run.combinatorics {
+        return Some("with the run's node counts this frame's combinatorics differ".to_string());
+    }
+    match crate::quality::inverted_cells(&fm.mesh.grids) {
+        0 => None,
+        n => Some(format!(
+            "the run's node counts give {n} inverted cells in this frame"
+        )),
+    }
+}
+
+/// [`with_run_counts`] for a frame whose own mesh (or error) `own` is known, from an attempt
+/// with other counts that were never applied to the builds `offers`, when `run`'s counts could
+/// not be given to any of them either ([`ImposedCounts::could_take`]): meshing with them would
+/// make the same builds, so the outcome is judged on `own` without meshing again.
+fn judged_again(own: Own, offers: Vec<Offer>, run: &Run) -> Result<(Done, Meshed), Rejected> {
+    match own {
+        Err(e) => Err(Rejected {
+            why: format!("meshing with the run's counts failed: {e}"),
+            own: Some(Box::new(Err(e))),
+            offers,
+        }),
+        Ok((d, m)) => match verdict(&m.fm, run) {
+            None => Ok((d, m)),
+            Some(why) => Err(Rejected {
+                why,
+                own: Some(Box::new(Ok((d, m)))),
+                offers,
+            }),
+        },
+    }
 }
 
 /// Mesh a later frame of `run` with the run's counts imposed by key: `Ok` when the mesh is
@@ -446,6 +493,7 @@ fn with_run_counts(
     let domain = frame.as_ref().map_err(|e| Rejected {
         why: e.clone(),
         own: Some(Box::new(Err(e.clone()))),
+        offers: Vec::new(),
     })?;
     let imposed = std::sync::Arc::new(ImposedCounts::new(run.want.iter().cloned().collect()));
     let opts = Options {
@@ -455,24 +503,20 @@ fn with_run_counts(
     let meshed = mesh_frame(domain, &opts);
     // Without the counts applied, this was the frame's own meshing.
     let as_own = !imposed.applied();
+    let offers = imposed.offers();
     let fm = meshed.map_err(|e| Rejected {
         why: format!("meshing with the run's counts failed: {e}"),
         own: as_own.then(|| Box::new(Err(e.to_string()))),
+        offers: offers.clone(),
     })?;
-    let why = if fm.structure().as_ref() != Some(&run.want) {
-        "the run's node counts do not fit this frame's blocks".to_string()
-    } else if fm.combinatorics != run.combinatorics {
-        "with the run's node counts this frame's combinatorics differ".to_string()
-    } else {
-        match crate::quality::inverted_cells(&fm.mesh.grids) {
-            0 => return Ok(Meshed::new(index, fm, out)),
-            n => format!("the run's node counts give {n} inverted cells in this frame"),
-        }
-    };
-    Err(Rejected {
-        why,
-        own: as_own.then(|| Box::new(Ok(Meshed::new(index, fm, out)))),
-    })
+    match verdict(&fm, run) {
+        None => Ok(Meshed::new(index, fm, out)),
+        Some(why) => Err(Rejected {
+            why,
+            own: as_own.then(|| Box::new(Ok(Meshed::new(index, fm, out)))),
+            offers,
+        }),
+    }
 }
 
 /// Frame `index`'s summary line and decisions, and its mesh to write (none when it failed).
@@ -526,6 +570,9 @@ pub fn run_sequence(
     let mut done: Vec<Done> = Vec::with_capacity(frames.len());
     let mut start: Vec<usize> = Vec::with_capacity(frames.len());
     let mut run: Option<Run> = None;
+    // Attempts of frames after a change of run, whose counts were never applied: their own
+    // meshes, and the builds they were offered (see [`judged_again`]).
+    let mut spare: Vec<Option<(Own, Vec<Offer>)>> = (0..frames.len()).map(|_| None).collect();
     let mut i = 0;
     while i < frames.len() {
         // The frames settled by this wave, with the meshes to write.
@@ -533,7 +580,12 @@ pub fn run_sequence(
         let settled_before = done.len();
         match run.take() {
             None => {
-                let (d, m) = settle(i, pool.install(|| own_mesh(i, &frames[i], options, out)));
+                // An unused attempt whose counts were never applied is the own mesh.
+                let own = match spare[i].take() {
+                    Some((own, _)) => own,
+                    None => pool.install(|| own_mesh(i, &frames[i], options, out)),
+                };
+                let (d, m) = settle(i, own);
                 run = Run::starting_at(i, &d);
                 start.push(i);
                 done.push(d);
@@ -542,10 +594,20 @@ pub fn run_sequence(
             }
             Some(r) => {
                 let last = (i + wave).min(frames.len());
+                let want = ImposedCounts::new(r.want.iter().cloned().collect());
+                let known: Vec<Option<(Own, Vec<Offer>)>> = (i..last)
+                    .map(|k| spare[k].take().filter(|(_, o)| !want.could_take(o)))
+                    .collect();
                 let mut tries: Vec<Option<Result<(Done, Meshed), Rejected>>> = pool.install(|| {
                     (i..last)
                         .into_par_iter()
-                        .map(|k| Some(with_run_counts(k, &frames[k], &r, options, out)))
+                        .zip(known)
+                        .map(|(k, known)| {
+                            Some(match known {
+                                Some((own, offers)) => judged_again(own, offers, &r),
+                                None => with_run_counts(k, &frames[k], &r, options, out),
+                            })
+                        })
                         .collect()
                 });
                 // The frames not kept whose own mesh is still to be made.
@@ -564,7 +626,7 @@ pub fn run_sequence(
                     let (Some(r), Some(tried)) = (continuing.take(), tries[k - i].take()) else {
                         break;
                     };
-                    let Rejected { why, own } = match tried {
+                    let Rejected { why, own, .. } = match tried {
                         Ok((d, m)) => {
                             start.push(r.start);
                             done.push(d);
@@ -597,6 +659,17 @@ pub fn run_sequence(
                         // The wave's later frames were meshed for the run that ended.
                         next = k + 1;
                         break;
+                    }
+                }
+                // Keep the own meshes among the attempts the change of run left unused.
+                for k in next..last {
+                    if let Some(Err(Rejected {
+                        own: Some(own),
+                        offers,
+                        ..
+                    })) = tries[k - i].take()
+                    {
+                        spare[k] = Some((*own, offers));
                     }
                 }
                 run = continuing;

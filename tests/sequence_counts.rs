@@ -413,6 +413,40 @@ fn sequential_rule(text: &str, opts: &Options) -> (Vec<Expected>, usize, usize, 
     (out, imposed_kept, own_differ, unapplied_own)
 }
 
+/// [`run_sequence`] on 1, 2 and 3 threads (waves of 1, 2 and 3 frames, which speculate
+/// differently) settles every frame of `text` as `want` (the sequential rule) says, with the
+/// same files each time.
+fn settle_as_the_rule(text: &str, want: &[Expected]) {
+    let dir = tempfile::tempdir().unwrap();
+    let mut trees = Vec::new();
+    for threads in [1, 2, 3] {
+        let d = dir.path().join(format!("t{threads}"));
+        let s = run(text, &d, threads);
+        for (k, (f, e)) in s.frames.iter().zip(want).enumerate() {
+            assert_eq!(f.ok, e.ok, "frame {k}, {threads} threads: {f:?}");
+            assert_eq!(
+                f.node_counts_from_frame, e.node_counts_from_frame,
+                "frame {k}, {threads} threads: {f:?}"
+            );
+            assert_eq!(
+                f.node_counts_not_kept.is_some(),
+                e.counts_not_kept,
+                "frame {k}, {threads} threads: {f:?}"
+            );
+            if f.ok {
+                assert_eq!(dims(&d, k), e.dims, "frame {k}, {threads} threads");
+                let got = (f.cells, f.min_angle_deg, f.max_angle_deg, f.inverted_cells);
+                assert_eq!(got, e.figures, "frame {k}, {threads} threads");
+            }
+        }
+        trees.push(tree(&d));
+    }
+    assert!(
+        trees[0] == trees[1] && trees[1] == trees[2],
+        "outputs differ between thread counts"
+    );
+}
+
 /// [`run_sequence`] settles every frame as the sequential rule does, on 1, 2 and 3 threads
 /// (waves of 1, 2 and 3 frames, which speculate differently), with the same files each time:
 /// a sequence with runs whose later frames need the run's counts imposed, a change of
@@ -463,32 +497,51 @@ fn waves_settle_frames_as_the_sequential_rule() {
         "attempts that were the own mesh: {unapplied_own}"
     );
     assert!(!want[10].ok && want[11].ok && want[12].node_counts_from_frame == Some(11));
-    let dir = tempfile::tempdir().unwrap();
-    let mut trees = Vec::new();
-    for threads in [1, 2, 3] {
-        let d = dir.path().join(format!("t{threads}"));
-        let s = run(&text, &d, threads);
-        for (k, (f, e)) in s.frames.iter().zip(&want).enumerate() {
-            assert_eq!(f.ok, e.ok, "frame {k}, {threads} threads: {f:?}");
-            assert_eq!(
-                f.node_counts_from_frame, e.node_counts_from_frame,
-                "frame {k}, {threads} threads: {f:?}"
-            );
-            assert_eq!(
-                f.node_counts_not_kept.is_some(),
-                e.counts_not_kept,
-                "frame {k}, {threads} threads: {f:?}"
-            );
-            if f.ok {
-                assert_eq!(dims(&d, k), e.dims, "frame {k}, {threads} threads");
-                let got = (f.cells, f.min_angle_deg, f.max_angle_deg, f.inverted_cells);
-                assert_eq!(got, e.figures, "frame {k}, {threads} threads");
-            }
+    settle_as_the_rule(&text, &want);
+}
+
+/// Thirty bubbles jittered by up to 8% of their radius per frame: the combinatorics change at
+/// most frames, so the attempts of a wave's frames after a change (made with the counts of a
+/// run that ended) are reused as those frames' own meshes where the new run's counts could not
+/// apply to them; settled as the rule says on 1, 2 and 3 threads.
+#[test]
+fn changing_layouts_settle_as_the_sequential_rule() {
+    let mut d = medial_blocks::layouts::bubbles(30, 4).unwrap();
+    let mut rng = common::XorShift(0x9e37_79b9_7f4a_7c15);
+    let mut lines = Vec::new();
+    for _ in 0..8 {
+        lines.push(d.to_json_string());
+        let holes: Vec<_> = d
+            .holes()
+            .iter()
+            .map(|h| {
+                let a = std::f64::consts::TAU * rng.unit();
+                let s = 0.08 * h.radius * rng.unit();
+                medial_blocks::Circle::new(
+                    h.center[0] + s * a.cos(),
+                    h.center[1] + s * a.sin(),
+                    h.radius,
+                )
+            })
+            .collect();
+        match medial_blocks::Domain::bounded(d.bounding(), holes) {
+            Ok(next) => d = next,
+            Err(_) => break,
         }
-        trees.push(tree(&d));
     }
+    let text = lines.join("\n");
+    let opts = Options {
+        cells: 6,
+        ..Options::default()
+    };
+    let (want, _, _, unapplied_own) = sequential_rule(&text, &opts);
+    let starts = (1..want.len())
+        .filter(|&k| want[k].node_counts_from_frame.is_none() && !want[k].counts_not_kept)
+        .count();
+    assert!(starts >= 3, "changes of combinatorics: {starts}");
     assert!(
-        trees[0] == trees[1] && trees[1] == trees[2],
-        "outputs differ between thread counts"
+        unapplied_own >= 3,
+        "attempts that were the own mesh: {unapplied_own}"
     );
+    settle_as_the_rule(&text, &want);
 }

@@ -12,7 +12,9 @@
 
 use crate::geometry::Point;
 use std::collections::BTreeMap;
+use std::hash::{Hash, Hasher};
 use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Mutex;
 
 /// A circle: `(id, a, b)` (see the module documentation).
 pub type CircleTag = (i64, i64, i64);
@@ -33,6 +35,42 @@ pub struct ImposedCounts {
     /// Set by [`ImposedCounts::counts_for`] when it gives counts (shared through the options'
     /// `Arc`: every build of one meshing with these options sees the same flag).
     applied: AtomicBool,
+    /// The keys of every build offered these counts ([`Offer`]), in the order offered.
+    offers: Mutex<Vec<Offer>>,
+}
+
+/// The block keys of one build that was offered imposed counts, in brief: enough to tell that
+/// other counts could not have been given to it. [`ImposedCounts::counts_for`] gives counts
+/// only when the build has as many keys as the counts and finds each of them: with distinct
+/// keys, the same set, hence the same wrapping sum of key hashes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Offer {
+    len: usize,
+    sum: u64,
+    distinct: bool,
+}
+
+/// A key's hash (`DefaultHasher::new()` has fixed keys: the same on every run).
+fn key_hash(k: &BlockKey) -> u64 {
+    let mut h = std::hash::DefaultHasher::new();
+    k.hash(&mut h);
+    h.finish()
+}
+
+impl Offer {
+    /// The offer of a build with block keys `keys`.
+    fn of(keys: &[BlockKey]) -> Offer {
+        let mut hashes: Vec<u64> = keys.iter().map(key_hash).collect();
+        let sum = hashes.iter().fold(0u64, |a, &h| a.wrapping_add(h));
+        hashes.sort_unstable();
+        // Equal hashes count as repeated keys: a collision only makes `could_take` say yes.
+        let distinct = hashes.windows(2).all(|w| w[0] != w[1]);
+        Offer {
+            len: keys.len(),
+            sum,
+            distinct,
+        }
+    }
 }
 
 impl ImposedCounts {
@@ -41,6 +79,7 @@ impl ImposedCounts {
         ImposedCounts {
             counts,
             applied: AtomicBool::new(false),
+            offers: Mutex::new(Vec::new()),
         }
     }
 
@@ -48,14 +87,39 @@ impl ImposedCounts {
     pub fn applied(&self) -> bool {
         self.applied.load(Ordering::Relaxed)
     }
+
+    /// The builds offered these counts so far ([`Offer`]).
+    pub fn offers(&self) -> Vec<Offer> {
+        self.offers
+            .lock()
+            .unwrap_or_else(|e| e.into_inner())
+            .clone()
+    }
+
+    /// Whether these counts might be given to one of the builds `offers` describe: `false`
+    /// only when [`ImposedCounts::counts_for`] would refuse each of them (another number of
+    /// keys, or distinct keys that are not these counts' keys). A meshing whose builds were
+    /// offered other counts that it never applied made every build as without counts; when
+    /// these could not have been given to any of those builds either, meshing with these
+    /// makes the same builds again: the same mesh, or the same error.
+    pub fn could_take(&self, offers: &[Offer]) -> bool {
+        let mine = self
+            .counts
+            .keys()
+            .fold(0u64, |a, k| a.wrapping_add(key_hash(k)));
+        offers
+            .iter()
+            .any(|o| o.len == self.counts.len() && (!o.distinct || o.sum == mine))
+    }
 }
 
-/// The same counts and the same flag.
+/// The same counts, flag and offers.
 impl Clone for ImposedCounts {
     fn clone(&self) -> ImposedCounts {
         ImposedCounts {
             counts: self.counts.clone(),
             applied: AtomicBool::new(self.applied()),
+            offers: Mutex::new(self.offers()),
         }
     }
 }
@@ -99,6 +163,10 @@ impl ImposedCounts {
         arc_circles: &[[usize; 2]],
         ncirc: usize,
     ) -> Option<(Vec<usize>, Vec<usize>)> {
+        self.offers
+            .lock()
+            .unwrap_or_else(|e| e.into_inner())
+            .push(Offer::of(keys));
         if keys.len() != 2 * arc_circles.len() || self.counts.len() != keys.len() {
             return None;
         }
@@ -220,5 +288,57 @@ mod tests {
         numbered.sort();
         numbered.dedup();
         assert_eq!(numbered.len(), 3);
+    }
+}
+
+#[cfg(test)]
+mod offer_tests {
+    use super::{BlockKey, ImposedCounts};
+
+    fn key(w: i64, a: i64) -> BlockKey {
+        (
+            (w, 0, 0),
+            vec![(a, 0, 0), (a + 1, 0, 0)],
+            vec![(a + 2, 0, 0)],
+        )
+    }
+
+    /// `could_take` says no only where `counts_for` refuses: another number of keys, or other
+    /// distinct keys; repeated keys (which `counts_for` may accept with missing ones) and the
+    /// same keys in another order say yes. Offers are recorded whether or not counts are given,
+    /// and `applied` only when they are.
+    #[test]
+    fn could_take_only_refuses_what_counts_for_refuses() {
+        let keys: Vec<BlockKey> = (0..4).map(|i| key(i / 2, 10 * i)).collect();
+        let imposed = ImposedCounts::new(keys.iter().map(|k| (k.clone(), [3, 2])).collect());
+        // Two arcs on circles 0 and 1, each arc's blocks on both circles.
+        let arcs = [[0, 1], [0, 1]];
+        let mut other = keys.clone();
+        other[3] = key(7, 70);
+        let offered = ImposedCounts::new(Default::default());
+        assert!(offered.counts_for(&other, &arcs, 2).is_none());
+        assert!(!offered.applied());
+        let no = offered.offers();
+        assert_eq!(no.len(), 1);
+        assert!(!imposed.could_take(&no));
+        assert!(imposed.counts_for(&other, &arcs, 2).is_none());
+        // The same keys, reversed: taken, and `counts_for` gives them.
+        let reversed: Vec<BlockKey> = keys.iter().rev().cloned().collect();
+        let probe = ImposedCounts::new(Default::default());
+        assert!(probe.counts_for(&reversed, &arcs, 2).is_none());
+        assert!(imposed.could_take(&probe.offers()));
+        assert!(imposed.counts_for(&keys, &arcs, 2).is_some());
+        assert!(imposed.applied());
+        // A repeated key: `counts_for` finds every key of the build, so it could give counts.
+        let mut repeated = keys.clone();
+        repeated[1] = repeated[0].clone();
+        let probe = ImposedCounts::new(Default::default());
+        let _ = probe.counts_for(&repeated, &arcs, 2);
+        assert!(imposed.could_take(&probe.offers()));
+        // Another number of keys: refused by both.
+        let probe = ImposedCounts::new(Default::default());
+        let _ = probe.counts_for(&keys[..2], &arcs[..1], 2);
+        assert!(!imposed.could_take(&probe.offers()));
+        assert!(imposed.counts_for(&keys[..2], &arcs[..1], 2).is_none());
     }
 }
