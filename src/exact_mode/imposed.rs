@@ -289,19 +289,6 @@ mod tests {
         numbered.dedup();
         assert_eq!(numbered.len(), 3);
     }
-}
-
-#[cfg(test)]
-mod offer_tests {
-    use super::{BlockKey, ImposedCounts};
-
-    fn key(w: i64, a: i64) -> BlockKey {
-        (
-            (w, 0, 0),
-            vec![(a, 0, 0), (a + 1, 0, 0)],
-            vec![(a + 2, 0, 0)],
-        )
-    }
 
     /// `could_take` says no only where `counts_for` refuses: another number of keys, or other
     /// distinct keys; repeated keys (which `counts_for` may accept with missing ones) and the
@@ -309,12 +296,14 @@ mod offer_tests {
     /// and `applied` only when they are.
     #[test]
     fn could_take_only_refuses_what_counts_for_refuses() {
-        let keys: Vec<BlockKey> = (0..4).map(|i| key(i / 2, 10 * i)).collect();
+        let keys: Vec<BlockKey> = (0..4)
+            .map(|i| key(i / 2, &[10 * i, 10 * i + 1], &[10 * i + 2]))
+            .collect();
         let imposed = ImposedCounts::new(keys.iter().map(|k| (k.clone(), [3, 2])).collect());
         // Two arcs on circles 0 and 1, each arc's blocks on both circles.
         let arcs = [[0, 1], [0, 1]];
         let mut other = keys.clone();
-        other[3] = key(7, 70);
+        other[3] = key(7, &[70, 71], &[72]);
         let offered = ImposedCounts::new(Default::default());
         assert!(offered.counts_for(&other, &arcs, 2).is_none());
         assert!(!offered.applied());
