@@ -377,7 +377,11 @@ fn sample_tiling(
             opts.max_per_circle
         ),
     };
-    let mut density = vec![0u32; t.h];
+    // Density doublings per orbit, from exact mode's local resampling first
+    // ([`SamplingOptions::boost`]: slot `k + 1` is canonical hole `k`, shared by its orbit).
+    let mut density: Vec<u32> = (0..t.h)
+        .map(|k| opts.boost.get(k + 1).map_or(0, |&b| b.min(16)))
+        .collect();
     let all: Vec<usize> = (0..t.h).collect();
     let mut plans: Vec<(u64, Vec<u64>)> = plan(&density, &all)
         .into_iter()
@@ -1860,7 +1864,7 @@ fn exact_attempts(
             if p.collapsed_arcs == 0 || nearly_zero.collapse_fraction == 0.0 {
                 // Nothing collapsed (or nothing short): the zero-only layout is this one.
                 same_as_zero_only = Some(p);
-            } else if let Some(f) = exact_frame(pd, p, options, fluid, true)? {
+            } else if let Framed::Done(f) = exact_frame(pd, p, options, fluid, true)? {
                 return Ok(Some(f));
             }
         }
@@ -1878,13 +1882,59 @@ fn exact_attempts(
         if p.blocking.is_none() {
             return Ok(None);
         }
-        if let Some(f) = exact_frame(pd, p, options, fluid, false)? {
-            return Ok(Some(f));
+        match exact_frame(pd, p, options, fluid, false)? {
+            Framed::Done(f) => return Ok(Some(f)),
+            // Refine 4x only the orbits around the disagreement (issue 8: as bounded exact
+            // mode does; a global resampling quadrupled the samples of every copy of every
+            // hole, seconds for a thousand holes), everywhere when it is not known.
+            Framed::Failed(around) if !around.is_empty() => {
+                for k in around {
+                    let slot = k as usize + 1;
+                    if sampling.boost.len() <= slot {
+                        sampling.boost.resize(slot + 1, 0);
+                    }
+                    sampling.boost[slot] += 2;
+                }
+            }
+            Framed::Failed(_) => {
+                sampling.min_per_circle = sampling.min_per_circle.saturating_mul(4);
+                sampling.spacing_per_gap *= 0.25;
+            }
         }
-        sampling.min_per_circle = sampling.min_per_circle.saturating_mul(4);
-        sampling.spacing_per_gap *= 0.25;
     }
     Ok(None)
+}
+
+/// What [`exact_frame`] made of a layout.
+#[allow(clippy::large_enum_variant)]
+enum Framed {
+    Done(PeriodicFrame),
+    /// No valid exact mesh: the canonical holes (indices into the domain's holes, sorted,
+    /// distinct) of the arc orbits that disagreed and of their end vertex orbits, or none
+    /// when the place is not known (the exact construction failed, a template block).
+    Failed(Vec<u32>),
+}
+
+/// The canonical holes around the blocks `bad` of the exact build of `pb` (block `2o + s`
+/// is side `s` of arc orbit `o`): those of the arc orbit and of its two end vertex orbits.
+/// Empty when a block is not a medial block (a template's), so that the caller refines
+/// everywhere.
+fn holes_around(pb: &PeriodicBlocking, bad: &[usize]) -> Vec<u32> {
+    let mut out = Vec::new();
+    for &b in bad {
+        let Some(arc) = pb.arcs.get(b / 2) else {
+            return Vec::new();
+        };
+        out.extend(arc.circles.iter().map(|t| t.0));
+        for &(v, _) in &arc.ends {
+            if let Some(v) = pb.vertices.get(v) {
+                out.extend(v.circles.iter().map(|t| t.0));
+            }
+        }
+    }
+    out.sort_unstable();
+    out.dedup();
+    out
 }
 
 /// Periodic exact mode collapses arcs shorter than this fraction of the local empty-circle
@@ -1894,37 +1944,49 @@ fn exact_attempts(
 /// degrees of smallest angle on random layouts).
 pub const EXACT_COLLAPSE_FRACTION: f64 = 1e-3;
 
-/// The exact mesh of `p` (its [`PeriodicLayout::blocking`]): `None` without exact input, when
-/// an arc runs backwards, a cell is inverted, or (`strict`) a cell has a corner angle below
-/// [`crate::mesher::MERGED_MIN_ANGLE_DEG`]. Errors other than [`MeshError::Internal`] are
-/// returned.
+/// The exact mesh of `p` (its [`PeriodicLayout::blocking`]), or [`Framed::Failed`] without
+/// exact input, when an arc runs backwards, a cell is inverted, or (`strict`) a cell has a
+/// corner angle below [`crate::mesher::MERGED_MIN_ANGLE_DEG`]. Errors other than
+/// [`MeshError::Internal`] are returned.
 fn exact_frame(
     pd: &PeriodicDomain,
     p: PeriodicLayout,
     options: &Options,
     fluid: &[bool],
     strict: bool,
-) -> Result<Option<PeriodicFrame>, MeshError> {
+) -> Result<Framed, MeshError> {
     let Some(pb) = &p.blocking else {
-        return Ok(None);
+        return Ok(Framed::Failed(Vec::new()));
     };
     let x = match timings::span("exact_geometry", || {
         exact_mode::periodic::build_with_inserted(pb, options, fluid)
     }) {
         Ok(x) => x,
-        Err(MeshError::Internal(_)) => return Ok(None),
+        Err(MeshError::Internal(_)) => return Ok(Framed::Failed(Vec::new())),
         Err(e) => return Err(e),
     };
-    let bad = timings::span("quality_check", || {
+    let bad: Vec<usize> = timings::span("quality_check", || {
         use rayon::prelude::*;
-        crate::quality::inverted_cells(&x.grids) > 0
-            || (strict
-                && x.grids.par_iter().any(|g| {
-                    crate::quality::has_corner_below(g, crate::mesher::MERGED_MIN_ANGLE_DEG)
-                }))
+        let mut bad = crate::quality::inverted_blocks(&x.grids);
+        if strict {
+            bad.extend(
+                x.grids
+                    .par_iter()
+                    .enumerate()
+                    .filter(|(_, g)| {
+                        crate::quality::has_corner_below(g, crate::mesher::MERGED_MIN_ANGLE_DEG)
+                    })
+                    .map(|(b, _)| b)
+                    .collect::<Vec<usize>>(),
+            );
+        }
+        bad.extend(x.inconsistent_arcs.iter().flat_map(|&o| [2 * o, 2 * o + 1]));
+        bad.sort_unstable();
+        bad.dedup();
+        bad
     });
-    if !x.inconsistent_arcs.is_empty() || bad {
-        return Ok(None);
+    if !bad.is_empty() {
+        return Ok(Framed::Failed(holes_around(pb, &bad)));
     }
     let real = pd.hole_count() - fluid.iter().filter(|&&f| f).count();
     let mesh = Mesh {
@@ -1943,7 +2005,7 @@ fn exact_frame(
     };
     // Template blocks have no key: node counts are imposed on layouts without them only.
     let keys = (x.template_blocks == 0).then_some(x.keys);
-    Ok(Some(PeriodicFrame {
+    Ok(Framed::Done(PeriodicFrame {
         mesh,
         triples: p.triples,
         keys,
@@ -2082,5 +2144,75 @@ mod tests {
             let grid = &samples.grid[first..first + canon.count as usize];
             assert!(grid.windows(2).all(|w| w[0] < w[1]) && grid.iter().all(|&x| x < n));
         }
+    }
+
+    /// Exact mode's local resampling: a boost on slot `k + 1` refines the whole orbit of hole
+    /// `k` (every copy alike) and no other orbit.
+    #[test]
+    fn a_boost_refines_its_orbit_only() {
+        let pd = PeriodicDomain::new(
+            [3.0, 2.0],
+            vec![
+                Circle::new(0.7, 0.6, 0.3),
+                Circle::new(2.1, 1.3, 0.25),
+                Circle::new(1.5, 0.4, 0.2),
+            ],
+        )
+        .unwrap();
+        let t = Tiling::new(&pd, [1, 1]).unwrap();
+        let plain = crate::mesher::exact_sampling();
+        let boosted = SamplingOptions {
+            boost: vec![0, 0, 2],
+            ..plain.clone()
+        };
+        let counts = |opts: &SamplingOptions| -> Vec<Vec<u32>> {
+            let (samples, _, _) = sample_tiling(&t, &pd.nearest_gaps(), opts, false).unwrap();
+            (0..3)
+                .map(|k| {
+                    tile_array(t.m)
+                        .map(|(a, b)| samples.of_circle(t.id(k, a, b)).count)
+                        .collect()
+                })
+                .collect()
+        };
+        let (before, after) = (counts(&plain), counts(&boosted));
+        for k in 0..3 {
+            // Every copy of an orbit alike.
+            assert!(
+                after[k].iter().all(|&c| c == after[k][0]),
+                "hole {k}: {after:?}"
+            );
+            if k == 1 {
+                assert!(after[k][0] >= 3 * before[k][0], "{before:?} -> {after:?}");
+            } else {
+                assert_eq!(after[k], before[k]);
+            }
+        }
+    }
+
+    /// The holes around bad blocks: those of the block's arc orbit and of its two end vertex
+    /// orbits; none (refine everywhere) for a block that is not a medial block.
+    #[test]
+    fn the_holes_around_a_bad_block_are_those_of_its_arc_and_ends() {
+        let vertex = |c: [u32; 3]| PeriodicVertex {
+            circles: c.iter().map(|&k| (k, 0, 0)).collect(),
+            near: [0.0, 0.0],
+        };
+        let arc = |c: [u32; 2], ends: [usize; 2]| PeriodicArc {
+            circles: [(c[0], 0, 0), (c[1], 1, 0)],
+            ends: [(ends[0], (0, 0)), (ends[1], (0, 1))],
+            hint: [0.0, 0.0],
+        };
+        let pb = PeriodicBlocking {
+            size: [1.0, 1.0],
+            holes: Vec::new(),
+            vertices: vec![vertex([0, 1, 2]), vertex([1, 2, 7]), vertex([3, 4, 5])],
+            arcs: vec![arc([1, 2], [0, 1]), arc([3, 4], [2, 2])],
+        };
+        assert_eq!(holes_around(&pb, &[1]), vec![0, 1, 2, 7]);
+        assert_eq!(holes_around(&pb, &[2]), vec![3, 4, 5]);
+        assert_eq!(holes_around(&pb, &[0, 3]), vec![0, 1, 2, 3, 4, 5, 7]);
+        assert_eq!(holes_around(&pb, &[2, 4]), Vec::<u32>::new());
+        assert_eq!(holes_around(&pb, &[]), Vec::<u32>::new());
     }
 }
