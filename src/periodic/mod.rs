@@ -6,7 +6,11 @@
 //!    repeated over an `Nx x Ny` array of tiles, `N = 2m + 1` per axis (`m = [1, 1]` first:
 //!    the paper's three-by-three tiling), inside an auxiliary bounding circle centred on the
 //!    box and enclosing the whole array. Circle `(k, a, b)` is hole `k` moved by
-//!    `(a Lx, b Ly)`.
+//!    `(a Lx, b Ly)`. A box with many holes takes only a *band* of that array: the copies
+//!    whose centres are within a reach of the box (`initial_reach`: three radii and four
+//!    radii of the mean empty area per hole, per axis; the whole array from a period on).
+//!    Issue 8: 1 000 holes had 9 000 circles to sample, triangulate and block; the band has
+//!    about 1 400. Step 4 below checks the band like the array and grows it (`next_extent`).
 //! 2. Exactly periodic sampling: the canonical copy of hole `k` is sampled adaptively (as in
 //!    bounded domains, [`crate::sampling::sample_adaptive`]: densely only where a circle is
 //!    close), every copy gets the same samples (densities and resampling act on whole orbits
@@ -20,12 +24,13 @@
 //!    each hole's *cell*. On the torus `V = 2h` medial vertices, `E = 3h` arcs, so the kept
 //!    blocks number `2E = 6h`. Their union is one period with a zig-zag boundary.
 //! 4. Safety check: every Delaunay triangle the kept blocks use (medial vertices and the
-//!    triangles along their arcs) must have its circumcircle inside the array shrunk by the
-//!    largest radius, so that no sample missing from the finite array (or of the auxiliary
-//!    bounding circle) could lie in it: then it is a triangle of the infinite periodic
-//!    triangulation. If not, the array grows per axis to the half-widths that hold every
-//!    offending circle (`next_tiling`; a kept arc on the auxiliary circle grows both axes
-//!    by half), at most [`MAX_ARRAY_SIDE`] long periods a side: an elongated box with few
+//!    triangles along their arcs) must have its circumcircle inside the array (or band)
+//!    shrunk by the largest radius, so that no sample missing from the finite tiling (or of
+//!    the auxiliary bounding circle) could lie in it: then it is a triangle of the infinite
+//!    periodic triangulation. A band too narrow for them grows first (by at least half, into
+//!    the whole array once it would reach a period). Otherwise the array grows per axis to
+//!    the half-widths that hold every offending circle (`next_tiling`; a kept arc on the
+//!    auxiliary circle grows both axes by half), at most [`MAX_ARRAY_SIDE`] long periods a side: an elongated box with few
 //!    holes has empty circles spanning many short periods, and gets many copies along its
 //!    short side only. Beyond that, or beyond the sample limit, the domain is refused with
 //!    [`MeshError::Tiling`].
@@ -151,37 +156,86 @@ fn normalise_arc(a: &ArcKey) -> (ArcKey, (i32, i32)) {
         .unwrap_or((*a, (0, 0)))
 }
 
-/// The auxiliary tiled domain of half-widths `m = [mx, my]`: `(2 mx + 1) x (2 my + 1)` tiles.
+/// The auxiliary tiled domain of half-widths `m = [mx, my]`: the copies of the holes in the
+/// `(2 mx + 1) x (2 my + 1)` tiles whose centres are within `reach` of the box (issue 8: a box
+/// with many holes needs only a band of copies around it, not eight more boxes).
 struct Tiling {
     m: [i32; 2],
     n: [i32; 2],
     h: usize,
     size: [f64; 2],
+    /// Per axis, the distance beyond the box `[0, L]` within which every copy's centre is in
+    /// the tiling: `m L` when the whole array is (a *full* axis), less for a band.
+    reach: [f64; 2],
     domain: Domain,
+    /// Hole id of copy `(a, b)` of hole `k` at `(k n0 + a + m0) n1 + b + m1`, or -1 when the
+    /// copy is outside the reach.
+    ids: Vec<CircleId>,
+    /// `(hole, a, b)` of each hole id, increasing (ids are given in that order).
+    keys: Vec<CircleKey>,
+    /// Per hole, the number of its copies in the tiling.
+    copies: Vec<usize>,
     /// Quantum and quantised periods.
     quantum: f64,
     lq: [f64; 2],
 }
 
 impl Tiling {
+    /// Every copy of the `(2 mx + 1) x (2 my + 1)` array.
+    #[cfg(test)]
     fn new(pd: &PeriodicDomain, m: [i32; 2]) -> Result<Tiling, MeshError> {
+        let size = pd.size();
+        Tiling::with_reach(pd, m, [0, 1].map(|a| m[a] as f64 * size[a]))
+    }
+
+    /// The copies of the array of half-widths `m` whose centres are within `reach` of the
+    /// box; an axis with `reach >= m L` takes the whole array (no test on the centres).
+    fn with_reach(pd: &PeriodicDomain, m: [i32; 2], reach: [f64; 2]) -> Result<Tiling, MeshError> {
         let size = pd.size();
         let n = [2 * m[0] + 1, 2 * m[1] + 1];
         let h = pd.hole_count();
         let max_l = size[0].max(size[1]);
-        let mut holes = Vec::with_capacity(h * (n[0] * n[1]) as usize);
-        for c in pd.holes() {
-            for (a, b) in tile_array(m) {
-                holes.push(Circle {
-                    center: [
-                        c.center[0] + a as f64 * size[0],
-                        c.center[1] + b as f64 * size[1],
-                    ],
-                    radius: c.radius,
+        let full = [0, 1].map(|a| reach[a] >= m[a] as f64 * size[a]);
+        let reach = [0, 1].map(|a| {
+            if full[a] {
+                m[a] as f64 * size[a]
+            } else {
+                reach[a]
+            }
+        });
+        let per_hole = (n[0] * n[1]) as usize;
+        let mut holes = Vec::with_capacity(h * per_hole);
+        let mut ids = vec![-1; h * per_hole];
+        let mut keys = Vec::with_capacity(h * per_hole);
+        let mut copies = vec![0; h];
+        for (k, c) in pd.holes().iter().enumerate() {
+            for (j, (a, b)) in tile_array(m).enumerate() {
+                let center = [
+                    c.center[0] + a as f64 * size[0],
+                    c.center[1] + b as f64 * size[1],
+                ];
+                let within = (0..2).all(|x| {
+                    full[x] || (-reach[x] <= center[x] && center[x] <= size[x] + reach[x])
                 });
+                if within || (a, b) == (0, 0) {
+                    ids[k * per_hole + j] = holes.len() as CircleId;
+                    keys.push((k as u32, a, b));
+                    copies[k] += 1;
+                    holes.push(Circle {
+                        center,
+                        radius: c.radius,
+                    });
+                }
             }
         }
-        let half = 0.5 * (n[0] as f64 * size[0]).hypot(n[1] as f64 * size[1]);
+        let side = |a: usize| {
+            if full[a] {
+                n[a] as f64 * size[a]
+            } else {
+                size[a] + 2.0 * reach[a]
+            }
+        };
+        let half = 0.5 * side(0).hypot(side(1));
         let bounding = Circle {
             center: [0.5 * size[0], 0.5 * size[1]],
             radius: half + max_l,
@@ -189,8 +243,9 @@ impl Tiling {
         let domain = Domain::bounded(bounding, holes).map_err(|e| {
             MeshError::Internal(format!("the tiled periodic domain is invalid: {e}"))
         })?;
-        let extent =
-            (m[0] as f64 * size[0]).max(m[1] as f64 * size[1]) + 2.0 * max_l + bounding.radius;
+        // The quantum of the whole array (a band of it is quantised alike).
+        let whole = 0.5 * (n[0] as f64 * size[0]).hypot(n[1] as f64 * size[1]) + max_l;
+        let extent = (m[0] as f64 * size[0]).max(m[1] as f64 * size[1]) + 2.0 * max_l + whole;
         let e = extent.log2().ceil();
         let quantum = 2f64.powi(e as i32 - 50);
         if !(quantum.is_normal() && e.is_finite()) {
@@ -205,7 +260,11 @@ impl Tiling {
             n,
             h,
             size,
+            reach,
             domain,
+            ids,
+            keys,
+            copies,
             quantum,
             lq: [q(size[0]), q(size[1])],
         })
@@ -215,10 +274,17 @@ impl Tiling {
         (x / self.quantum).round() * self.quantum
     }
 
-    /// Circle id of copy `(a, b)` of hole `k`.
+    /// Circle id of copy `(a, b)` of hole `k` (-1 when that copy is not in the tiling; the
+    /// canonical copy `(0, 0)` always is).
     fn id(&self, k: usize, a: i32, b: i32) -> CircleId {
-        (k as i32 * self.n[0] * self.n[1] + (a + self.m[0]) * self.n[1] + (b + self.m[1]))
-            as CircleId
+        if a.abs() > self.m[0] || b.abs() > self.m[1] {
+            return -1;
+        }
+        let j = ((a + self.m[0]) * self.n[1] + (b + self.m[1])) as usize;
+        self.ids
+            .get(k * (self.n[0] * self.n[1]) as usize + j)
+            .copied()
+            .unwrap_or(-1)
     }
 
     /// `(hole, a, b)` of a hole id of the tiling (`None` for the bounding circle).
@@ -226,14 +292,7 @@ impl Tiling {
         if id < 0 {
             return None;
         }
-        let nn = self.n[0] * self.n[1];
-        let k = id / nn;
-        let r = id % nn;
-        Some((
-            k as u32,
-            r / self.n[1] - self.m[0],
-            r % self.n[1] - self.m[1],
-        ))
+        self.keys.get(id as usize).copied()
     }
 
     /// Samples of the tiling: `plans[k]` the grid size and grid indices of hole `k`'s
@@ -281,14 +340,13 @@ impl Tiling {
                     .collect()
             })
             .collect();
-        for (k, pts) in canon.iter().enumerate() {
+        for (id, &(k, a, bb)) in self.keys.iter().enumerate() {
+            let k = k as usize;
             let (n, ks) = &plans[k];
-            for (a, bb) in tile_array(self.m) {
-                let (dx, dy) = (a as f64 * self.lq[0], bb as f64 * self.lq[1]);
-                let moved = pts.iter().map(|p| [p[0] + dx, p[1] + dy]).collect();
-                let gap = gaps.get(k + 1).copied().unwrap_or(f64::NAN);
-                push_circle(&mut s, self.id(k, a, bb), moved, ks, *n, gap);
-            }
+            let (dx, dy) = (a as f64 * self.lq[0], bb as f64 * self.lq[1]);
+            let moved = canon[k].iter().map(|p| [p[0] + dx, p[1] + dy]).collect();
+            let gap = gaps.get(k + 1).copied().unwrap_or(f64::NAN);
+            push_circle(&mut s, id as CircleId, moved, ks, *n, gap);
         }
         s
     }
@@ -319,13 +377,12 @@ fn sample_tiling(
         .iter()
         .map(|h| b.radius - crate::domain::dist(h.center, b.center) - h.radius)
         .fold(f64::INFINITY, f64::min);
-    let per_tile = (t.n[0] * t.n[1]) as usize;
     let mut slot_gaps = vec![bgap];
-    for &g in gaps_canonical.iter().take(t.h) {
-        for _ in 0..per_tile {
-            slot_gaps.push(g);
-        }
-    }
+    slot_gaps.extend(
+        t.keys
+            .iter()
+            .map(|&(k, _, _)| gaps_canonical.get(k as usize).copied().unwrap_or(f64::NAN)),
+    );
     // The auxiliary bounding circle: uniform, with the cap the uniform sampler had.
     let bounding_opts = SamplingOptions {
         max_per_circle: opts.max_per_circle.min(PERIODIC_MAX_PER_CIRCLE),
@@ -363,10 +420,9 @@ fn sample_tiling(
                 })
                 .collect();
         }
-        let mut slot_density = vec![0u32; 1 + t.h * per_tile];
-        for (j, &d) in density.iter().enumerate() {
-            slot_density[1 + j * per_tile..1 + (j + 1) * per_tile].fill(d);
-        }
+        let slot_density: Vec<u32> = std::iter::once(0)
+            .chain(t.keys.iter().map(|&(k, _, _)| density[k as usize]))
+            .collect();
         let slots: Vec<usize> = ks.iter().map(|&k| canonical_slot(k)).collect();
         crate::sampling::adaptive_grids(&t.domain, opts, &slot_gaps, &slot_density, &slots)
     };
@@ -391,7 +447,12 @@ fn sample_tiling(
     let mut gaps = vec![bgap];
     gaps.extend_from_slice(gaps_canonical);
     for round in 0..=opts.max_rounds {
-        let total = bcount + plans.iter().map(|p| p.1.len()).sum::<usize>() * per_tile;
+        let total = bcount
+            + plans
+                .iter()
+                .zip(&t.copies)
+                .map(|(p, &c)| p.1.len() * c)
+                .sum::<usize>();
         if total > opts.max_total {
             return Err(MeshError::Sampling {
                 circle: -1,
@@ -528,11 +589,23 @@ pub fn periodic_layout_with(
     options: &Options,
     sampling: &SamplingOptions,
 ) -> Result<PeriodicLayout, MeshError> {
+    layout_from(pd, options, sampling, initial_reach(pd))
+}
+
+/// [`periodic_layout_with`] from a band of copies within `first_reach` of the box (per axis;
+/// from a period on, the whole 3 x 3 array).
+fn layout_from(
+    pd: &PeriodicDomain,
+    options: &Options,
+    sampling: &SamplingOptions,
+    first_reach: [f64; 2],
+) -> Result<PeriodicLayout, MeshError> {
     crate::ranges::check_collapse_fraction(options.collapse_fraction)?;
     let gaps = pd.nearest_gaps();
     let opts = sampling.clone();
     let cap = max_half_widths(pd.size());
     let mut m = [1, 1];
+    let mut reach = first_reach;
     for _ in 0..MAX_TILING_ROUNDS {
         let copies = (2 * m[0] as usize + 1) * (2 * m[1] as usize + 1) * pd.hole_count();
         let least = copies.saturating_mul(opts.min_per_circle.next_multiple_of(8).max(8));
@@ -546,7 +619,7 @@ pub fn periodic_layout_with(
                 opts.max_total
             )));
         }
-        let t = Tiling::new(pd, m)?;
+        let t = Tiling::with_reach(pd, m, reach)?;
         let (samples, tri, medial) = sample_tiling(&t, &gaps, &opts, options.mode == Mode::Paper)?;
         let extracted = timings::span("blocking", || {
             // Exact mode builds on the Apollonius centres: it measures short arcs by them.
@@ -566,8 +639,12 @@ pub fn periodic_layout_with(
         })?;
         match extracted {
             Extracted::Layout(p) => return Ok(p),
-            Extracted::TooSmall { need, blind } => match next_tiling(m, need, blind, cap) {
-                Some(next) => m = next,
+            Extracted::TooSmall {
+                need,
+                need_reach,
+                blind,
+            } => match next_extent(&t, need, need_reach, blind, cap) {
+                Some(next) => (m, reach) = next,
                 None => break,
             },
         }
@@ -611,15 +688,95 @@ fn next_tiling(m: [i32; 2], need: [i32; 2], blind: bool, cap: [i32; 2]) -> Optio
     (next != m).then_some(next)
 }
 
+/// The first reach of the copies around the box, per axis (a full axis when at least the
+/// period): three largest radii (a canonical circle centred on the box's edge, a neighbour
+/// within its sampling's reach, which is below a radius, and step 4's widening) and four radii
+/// of the mean empty area per hole (a typical empty circle, twice: its triangles' circles
+/// reach across it). Step 4 checks it; a box whose empty circles are larger grows it.
+fn initial_reach(pd: &PeriodicDomain) -> [f64; 2] {
+    let size = pd.size();
+    let h = pd.hole_count().max(1) as f64;
+    let rmax = pd.holes().iter().map(|c| c.radius).fold(0.0, f64::max);
+    let holes_area: f64 = pd
+        .holes()
+        .iter()
+        .map(|c| std::f64::consts::PI * c.radius * c.radius)
+        .sum();
+    let empty = ((size[0] * size[1] - holes_area) / h).max(0.0);
+    let d = 3.0 * rmax + 4.0 * (empty / std::f64::consts::PI).sqrt();
+    [d; 2]
+}
+
+/// The next extent `(m, reach)` after the tiling `t` was too small (see
+/// [`Extracted::TooSmall`]). When a band is too narrow or a kept arc is `blind`, only the
+/// bands grow: to a quarter beyond
+/// what the circles need, at least by half (twice when `blind`), and into the whole 3-wide
+/// array once they would reach a period (the circles measured on a band that is too narrow
+/// can be far wider than the true ones, across the missing copies, so they do not size the
+/// arrays). When the bands hold the circles, the whole arrays grow as [`next_tiling`] says
+/// (a band keeps its reach: `next_tiling` leaves its half-width 1). With whole arrays on both
+/// axes, [`next_tiling`]. `None` when nothing can grow.
+fn next_extent(
+    t: &Tiling,
+    need: [i32; 2],
+    need_reach: [f64; 2],
+    blind: bool,
+    cap: [i32; 2],
+) -> Option<([i32; 2], [f64; 2])> {
+    let size = t.size;
+    let band = |a: usize| t.reach[a] < t.m[a] as f64 * size[a];
+    if !(band(0) || band(1)) {
+        let m = next_tiling(t.m, need, blind, cap)?;
+        return Some((m, [0, 1].map(|a| m[a] as f64 * size[a])));
+    }
+    let mut m = t.m;
+    let mut reach = t.reach;
+    let band_short = (0..2).any(|a| band(a) && !below(need_reach[a], t.reach[a]));
+    if !(blind || band_short) {
+        // The bands hold the circles: the whole arrays grow to what they need.
+        let m = next_tiling(t.m, need, false, cap)?;
+        for a in (0..2).filter(|&a| !band(a)) {
+            reach[a] = m[a] as f64 * size[a];
+        }
+        return Some((m, reach));
+    }
+    for a in (0..2).filter(|&a| band(a)) {
+        let mut d = t.reach[a];
+        if !below(need_reach[a], d) {
+            d = (1.25 * need_reach[a]).max(1.5 * d);
+        }
+        if blind {
+            d = d.max(2.0 * t.reach[a]);
+        }
+        if !below(d, size[a]) {
+            m[a] = 1;
+            reach[a] = size[a];
+        } else {
+            reach[a] = d;
+        }
+    }
+    (m != t.m || reach != t.reach).then_some((m, reach))
+}
+
+/// `x < limit`, false for NaN (a reach that is not a number is never enough).
+fn below(x: f64, limit: f64) -> bool {
+    x < limit
+}
+
 /// What [`extract`] makes of a tiling.
 #[allow(clippy::large_enum_variant)]
 enum Extracted {
     /// One period's blocks.
     Layout(PeriodicLayout),
     /// The tiling is too small (step 4): `need` are the half-widths whose array holds every
-    /// offending circumcircle (at least the current ones), `blind` is set when a kept arc
-    /// reaches the auxiliary bounding circle (no circle to measure).
-    TooSmall { need: [i32; 2], blind: bool },
+    /// offending circumcircle (at least the current ones), `need_reach` the distances beyond
+    /// the box that the circles (widened as step 4 does) reach, per axis; `blind` is set
+    /// when a kept arc reaches the auxiliary bounding circle (no circle to measure).
+    TooSmall {
+        need: [i32; 2],
+        need_reach: [f64; 2],
+        blind: bool,
+    },
 }
 
 /// A contracted medial vertex (a cluster of collapsed vertices) up to nothing: the samples of
@@ -974,14 +1131,19 @@ fn extract(
     let rmax = pd.holes().iter().map(|c| c.radius).fold(0.0, f64::max);
     let margin = 1e-6 * size[0].max(size[1]);
     // Step 4: every triangle used by a kept block is a triangle of the infinite tiling: its
-    // circumcircle, widened by the largest radius, lies inside the array of copies, so no
-    // sample missing from the finite array (or of the auxiliary bounding circle) is in it.
-    // Each offending circle gives the half-widths that would hold it.
+    // circumcircle, widened by the largest radius, lies inside the region whose copies are
+    // all in the tiling (the array, or the band within `t.reach` of the box), so no sample
+    // missing from the tiling (or of the auxiliary bounding circle) is in it. Each offending
+    // circle gives the half-widths, and the reach, that would hold it. (The orbit
+    // representatives the layout reads are kept instances: an arc's has a canonical circle,
+    // a vertex's a canonical sample, so it is a corner of a kept block and measured too.)
     let reach = rmax + margin;
     let mut need = t.m;
+    let mut need_reach = [0.0f64; 2];
     let mut blind = false;
-    // Raises `need` to hold the circle of `tri`; false when it has no circle to measure.
-    let measure = |tri: u32, need: &mut [i32; 2]| -> bool {
+    // Raises `need` and `need_reach` to hold the circle of `tri`; false when it has no circle
+    // to measure.
+    let measure = |tri: u32, need: &mut [i32; 2], need_reach: &mut [f64; 2]| -> bool {
         let circle = (tri as usize)
             .lt(&triangulation.len())
             .then(|| {
@@ -1006,6 +1168,8 @@ fn extract(
             if m > need[a] as f64 {
                 need[a] = m.min((i32::MAX / 4) as f64) as i32;
             }
+            let beyond = (r + reach - c[a]).max(c[a] + r + reach - size[a]);
+            need_reach[a] = need_reach[a].max(beyond);
         }
         true
     };
@@ -1025,11 +1189,23 @@ fn extract(
             .flat_map(|&v| &members[contracted.cluster_of[v as usize] as usize])
             .map(|&v| medial.vertices[v as usize].triangle);
         for tri in ends.chain(arc.triangles.iter().copied()) {
-            blind |= !measure(tri, &mut need);
+            blind |= !measure(tri, &mut need, &mut need_reach);
         }
     }
-    if blind || need != t.m {
-        return Ok(Extracted::TooSmall { need, blind });
+    // A full axis holds the circles when the array does; a band when they end inside it.
+    let short = (0..2).any(|a| {
+        if t.reach[a] >= t.m[a] as f64 * size[a] {
+            need[a] != t.m[a]
+        } else {
+            !below(need_reach[a], t.reach[a])
+        }
+    });
+    if blind || short {
+        return Ok(Extracted::TooSmall {
+            need,
+            need_reach,
+            blind,
+        });
     }
     let shift_point = |p: Point, d: (i32, i32)| -> Point {
         [p[0] + d.0 as f64 * size[0], p[1] + d.1 as f64 * size[1]]
@@ -2143,6 +2319,141 @@ mod tests {
             let first = canon.first as usize;
             let grid = &samples.grid[first..first + canon.count as usize];
             assert!(grid.windows(2).all(|w| w[0] < w[1]) && grid.iter().all(|&x| x < n));
+        }
+    }
+
+    /// `n` random holes (radii 0.5 to 1, gaps at least 0.05 to every image) in a square box
+    /// with about 30% of its area in holes.
+    fn random_box(n: usize, seed: u64) -> PeriodicDomain {
+        let mut rng = crate::layouts::SplitMix64(seed);
+        let l = (n as f64 * std::f64::consts::PI * 0.5625 / 0.3).sqrt();
+        let mut holes: Vec<Circle> = Vec::new();
+        let mut tries = 0;
+        while holes.len() < n && tries < 200 * n {
+            tries += 1;
+            let r = 0.5 + 0.5 * rng.next_f64();
+            let c = [l * rng.next_f64(), l * rng.next_f64()];
+            let apart = holes.iter().all(|o| {
+                let d = [0, 1].map(|a| {
+                    let x = c[a] - o.center[a];
+                    x - (x / l).round() * l
+                });
+                d[0].hypot(d[1]) > r + o.radius + 0.05
+            });
+            if apart {
+                holes.push(Circle::new(c[0], c[1], r));
+            }
+        }
+        PeriodicDomain::new([l, l], holes).unwrap()
+    }
+
+    /// A band of copies holds exactly the copies whose centres are within the reach of the
+    /// box (brute force over the array), the canonical ones always; ids and keys are inverse;
+    /// an axis whose reach is the array's holds every copy along it.
+    #[test]
+    fn a_band_holds_the_copies_within_its_reach() {
+        let pd = random_box(40, 3);
+        let l = pd.size();
+        for reach in [[0.0, 0.0], [1.5, 4.0], [l[0], 2.5], [l[0], l[1]]] {
+            let t = Tiling::with_reach(&pd, [1, 1], reach).unwrap();
+            let mut count = 0;
+            for (k, c) in pd.holes().iter().enumerate() {
+                for (a, b) in tile_array([1, 1]) {
+                    let p = [c.center[0] + a as f64 * l[0], c.center[1] + b as f64 * l[1]];
+                    let inside = (0..2).all(|x| -reach[x] <= p[x] && p[x] <= l[x] + reach[x]);
+                    let id = t.id(k, a, b);
+                    assert_eq!(id >= 0, inside || (a, b) == (0, 0), "{reach:?} {k} {a} {b}");
+                    if id >= 0 {
+                        count += 1;
+                        assert_eq!(t.key(id), Some((k as u32, a, b)));
+                        let h = t.domain.holes()[id as usize];
+                        assert_eq!((h.center, h.radius), (p, c.radius));
+                    }
+                }
+            }
+            assert_eq!(t.domain.holes().len(), count);
+            assert_eq!(t.copies.iter().sum::<usize>(), count);
+            if reach == l {
+                assert_eq!(count, 9 * pd.hole_count());
+            }
+        }
+    }
+
+    /// The band gives the layout of the whole 3 x 3 array (the oracle: step 4 makes every
+    /// kept triangle one of the infinite tiling, so the band and the array must agree): the
+    /// same medial combinatorics, counts and block corners (up to rounding: an orbit's
+    /// representative may be another instance), on boxes of 30 to 200 holes, with far fewer
+    /// copies.
+    #[test]
+    fn a_band_of_copies_gives_the_whole_arrays_layout() {
+        let exact = crate::mesher::exact_sampling();
+        let options = Options {
+            collapse_fraction: EXACT_COLLAPSE_FRACTION,
+            ..Options::default()
+        };
+        // The last box has its holes in one corner: its empty circles are far wider than the
+        // first band, which has to grow (`next_extent`).
+        let clustered = {
+            let b = random_box(60, 5);
+            let holes = b
+                .holes()
+                .iter()
+                .map(|c| Circle::new(c.center[0], c.center[1], c.radius));
+            PeriodicDomain::new([4.0 * b.size()[0], 3.0 * b.size()[1]], holes.collect()).unwrap()
+        };
+        for (n, seed) in [(30, 1), (60, 2), (120, 3), (200, 4), (60, 0)] {
+            let pd = if seed == 0 {
+                clustered.clone()
+            } else {
+                random_box(n, seed)
+            };
+            let band = periodic_layout_with(&pd, &options, &exact).unwrap();
+            let whole = layout_from(&pd, &options, &exact, [f64::INFINITY; 2]).unwrap();
+            assert_eq!(band.triples, whole.triples, "{n} holes");
+            assert_eq!(
+                (band.medial_vertices, band.medial_arcs, band.collapsed_arcs),
+                (
+                    whole.medial_vertices,
+                    whole.medial_arcs,
+                    whole.collapsed_arcs
+                )
+            );
+            assert_eq!(band.layout.blocks.len(), whole.layout.blocks.len());
+            // Every block of the band has a block of the array with the same corners.
+            let corners = |p: &PeriodicLayout, b: &Block| -> Vec<[f64; 2]> {
+                b.corners
+                    .iter()
+                    .map(|&c| p.layout.vertices[c as usize])
+                    .collect()
+            };
+            // Vertices are circumcentres of sample triangles, computed on another instance
+            // (another shift) in the band: 1.3e-10 apart for an empty circle of 20 periods'
+            // fifth in the clustered box.
+            let tol = 1e-9 * pd.size()[0];
+            let mut unmatched: Vec<Vec<[f64; 2]>> = whole
+                .layout
+                .blocks
+                .iter()
+                .map(|b| corners(&whole, b))
+                .collect();
+            for b in &band.layout.blocks {
+                let x = corners(&band, b);
+                let close = |y: &Vec<[f64; 2]>| {
+                    x.iter()
+                        .zip(y)
+                        .all(|(p, q)| (p[0] - q[0]).abs().max((p[1] - q[1]).abs()) <= tol)
+                };
+                let at = unmatched.iter().position(close);
+                assert!(
+                    at.is_some(),
+                    "{n} holes: a block {x:?} not in the array's layout"
+                );
+                unmatched.swap_remove(at.unwrap());
+            }
+            if n >= 120 {
+                let first = Tiling::with_reach(&pd, [1, 1], initial_reach(&pd)).unwrap();
+                assert!(first.keys.len() * 2 < 9 * n, "{} copies", first.keys.len());
+            }
         }
     }
 
