@@ -40,6 +40,7 @@ use crate::geometry::Point;
 use crate::grid::{GridError, MAX_TOTAL_NODES};
 use crate::layout::{Block, BlockLayout, Curve, Edge, EdgeKind, SideRef, Translation};
 use crate::mesh::BlockGrid;
+use rayon::prelude::*;
 use crate::mesher::{MeshError, Options};
 use std::collections::HashMap;
 
@@ -747,8 +748,39 @@ fn assemble(
         cluster,
         rho,
     } = *parts;
-    let mut graded = super::grading::Scratch::default();
     let size = pb.size;
+    // 1. Per arc orbit, in parallel: its node parameters (graded) and its medial and wall
+    //    nodes (the exact geometry's evaluations: most of this stage's work).
+    type ArcNodes = (Vec<Point>, [Vec<Point>; 2]);
+    let arc_nodes: Vec<ArcNodes> = (0..pb.arcs.len())
+        .into_par_iter()
+        .map_init(
+            super::grading::Scratch::default,
+            |graded, o| -> Result<ArcNodes, MeshError> {
+                let g = &geoms[o];
+                let n = counts.arc[o];
+                let mut params = Vec::with_capacity(n + 1);
+                orbit_params(pb, targets, counts, o, &mut params);
+                if let Some(&r) = rho.get(o) {
+                    params = super::grading::grade_piece(g, params, r, graded);
+                }
+                let mut m_nodes = Vec::with_capacity(n + 1);
+                let mut a_nodes = [Vec::with_capacity(n + 1), Vec::with_capacity(n + 1)];
+                for &t in &params {
+                    let (m, a, _) = g.at(t).ok_or_else(|| {
+                        internal(format!("arc orbit {o}: a medial node is not defined"))
+                    })?;
+                    m_nodes.push(m);
+                    a_nodes[0].push(a[0]);
+                    a_nodes[1].push(a[1]);
+                }
+                Ok((m_nodes, a_nodes))
+            },
+        )
+        .collect::<Result<_, _>>()?;
+    // 2. The layout, serially (vertices and edges numbered in first-use order), with what each
+    //    block's grid needs; 3. the grids, in parallel.
+    let mut jobs: Vec<GridJob> = Vec::with_capacity(2 * pb.arcs.len());
     let mut medial_edge = Vec::with_capacity(pb.arcs.len());
     let mut b = Builder {
         pb,
@@ -758,25 +790,10 @@ fn assemble(
         tangent: HashMap::new(),
         spokes: HashMap::new(),
     };
-    let mut grids = Vec::with_capacity(2 * pb.arcs.len());
     for (o, arc) in pb.arcs.iter().enumerate() {
         let g = &geoms[o];
         let n = counts.arc[o];
-        let mut params = Vec::with_capacity(n + 1);
-        orbit_params(pb, targets, counts, o, &mut params);
-        if let Some(&r) = rho.get(o) {
-            params = super::grading::grade_piece(g, params, r, &mut graded);
-        }
-        let mut m_nodes = Vec::with_capacity(n + 1);
-        let mut a_nodes: [Vec<Point>; 2] = [Vec::with_capacity(n + 1), Vec::with_capacity(n + 1)];
-        for &t in &params {
-            let (m, a, _) = g
-                .at(t)
-                .ok_or_else(|| internal(format!("arc orbit {o}: a medial node is not defined")))?;
-            m_nodes.push(m);
-            a_nodes[0].push(a[0]);
-            a_nodes[1].push(a[1]);
-        }
+        let m_nodes = &arc_nodes[o].0;
         let shifts = arc.circles.map(|c| (-c.1, -c.2));
         let mut medial_edges = [0u32; 2];
         for side in 0..2 {
@@ -843,27 +860,15 @@ fn assemble(
             });
             let wall_edge = (b.layout.edges.len() - 1) as u32;
             if with_grids {
-                let mut nodes = vec![[0.0; 2]; (n + 1) * (nj + 1)];
-                for i in 0..=n {
-                    let k = if side == 0 { i } else { n - i };
-                    let col: Vec<Point> = if k == 0 {
-                        b.spokes[&(i0, k0)].1.clone()
-                    } else if k == n {
-                        b.spokes[&(i1, k1)].1.clone()
-                    } else {
-                        spoke_nodes(
-                            shifted(a_nodes[side][k], d, size),
-                            shifted(m_nodes[k], d, size),
-                            nj,
-                            first,
-                            cl.growth,
-                        )
-                    };
-                    for (j, q) in col.into_iter().enumerate() {
-                        nodes[i + j * (n + 1)] = q;
-                    }
-                }
-                grids.push(BlockGrid { ni: n, nj, nodes });
+                jobs.push(GridJob {
+                    o,
+                    side,
+                    d,
+                    nj,
+                    first,
+                    growth: cl.growth,
+                    ends: [(i0, k0), (i1, k1)],
+                });
             }
             let (fwd, rev) = (SideRef::along, SideRef::against);
             let me = medial_edges[side];
@@ -882,7 +887,52 @@ fn assemble(
             });
         }
     }
+    let spokes = &b.spokes;
+    let grids: Vec<BlockGrid> = jobs
+        .par_iter()
+        .map(|job| {
+            let n = counts.arc[job.o];
+            let (m_nodes, a_nodes) = &arc_nodes[job.o];
+            let nj = job.nj;
+            let mut nodes = vec![[0.0; 2]; (n + 1) * (nj + 1)];
+            for i in 0..=n {
+                let k = if job.side == 0 { i } else { n - i };
+                let spoke = |e: usize| spokes.get(&job.ends[e]).map(|s| &s.1);
+                let fresh;
+                let col: &[Point] = if k == 0 || k == n {
+                    spoke(if k == 0 { 0 } else { 1 })
+                        .ok_or_else(|| internal(format!("arc orbit {}: a spoke not made", job.o)))?
+                } else {
+                    fresh = spoke_nodes(
+                        shifted(a_nodes[job.side][k], job.d, size),
+                        shifted(m_nodes[k], job.d, size),
+                        nj,
+                        job.first,
+                        job.growth,
+                    );
+                    &fresh
+                };
+                for (j, q) in col.iter().enumerate() {
+                    nodes[i + j * (n + 1)] = *q;
+                }
+            }
+            Ok(BlockGrid { ni: n, nj, nodes })
+        })
+        .collect::<Result<_, MeshError>>()?;
     Ok((b.layout, grids, medial_edge))
+}
+
+/// What [`assemble`] needs to make the grid of the block on side `side` of arc orbit `o`
+/// (instance shifted by `d`), once the layout is made.
+struct GridJob {
+    o: usize,
+    side: usize,
+    d: Shift,
+    nj: usize,
+    first: Option<f64>,
+    growth: f64,
+    /// The spokes at its ends (tangent point instances and slots), end `A` then end `B`.
+    ends: [(Instance, usize); 2],
 }
 
 /// The orbits being split for the templates ([`split_for_templates`]).
