@@ -1841,8 +1841,7 @@ fn mesh_periodic_exact(
     // Bounded exact mode's sampling: exact walls do not follow the samples, so a wall with a
     // single sample (the soft invariant (d)) costs nothing, and only the combinatorics come
     // from the samples (24 per circle at least, `mesher::EXACT_MIN_PER_CIRCLE`).
-    let mut sampling = crate::mesher::exact_sampling();
-    if let Ok(v) = std::env::var("MB_MIN") { sampling.min_per_circle = v.parse().unwrap(); }
+    let sampling = crate::mesher::exact_sampling();
     let mut first = None;
     if options.refine_ratio.is_some() {
         match refine_periodic(pd, options, &sampling) {
@@ -2008,7 +2007,6 @@ fn exact_attempts(
     mut first: Option<PeriodicLayout>,
 ) -> Result<Option<PeriodicFrame>, MeshError> {
     let mut sampling = crate::mesher::exact_sampling();
-    if let Ok(v) = std::env::var("MB_MIN") { sampling.min_per_circle = v.parse().unwrap(); }
     // The fallback layout: only zero-length arcs collapsed (exact co-circular groups, one
     // empty circle per collapsed vertex).
     let zero_only = Options {
@@ -2140,7 +2138,7 @@ fn exact_frame(
         exact_mode::periodic::build_with_inserted(pb, options, fluid)
     }) {
         Ok(x) => x,
-        Err(MeshError::Internal(e)) => { if std::env::var("MB_DEBUG").is_ok() { eprintln!("exact_frame internal {e}"); } return Ok(Framed::Failed(Vec::new())) },
+        Err(MeshError::Internal(_)) => return Ok(Framed::Failed(Vec::new())),
         Err(e) => return Err(e),
     };
     let bad: Vec<usize> = timings::span("quality_check", || {
@@ -2164,7 +2162,6 @@ fn exact_frame(
         bad
     });
     if !bad.is_empty() {
-        if std::env::var("MB_DEBUG").is_ok() { eprintln!("exact_frame strict={strict} inconsistent={:?} inverted={:?} bad={:?} collapsed={}", x.inconsistent_arcs, crate::quality::inverted_blocks(&x.grids), bad, p.collapsed_arcs); }
         return Ok(Framed::Failed(holes_around(pb, &bad)));
     }
     let real = pd.hole_count() - fluid.iter().filter(|&&f| f).count();
