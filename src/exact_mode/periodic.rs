@@ -40,9 +40,11 @@ use crate::geometry::Point;
 use crate::grid::{GridError, MAX_TOTAL_NODES};
 use crate::layout::{Block, BlockLayout, Curve, Edge, EdgeKind, SideRef, Translation};
 use crate::mesh::BlockGrid;
-use rayon::prelude::*;
 use crate::mesher::{MeshError, Options};
-use std::collections::HashMap;
+use rayon::prelude::*;
+/// Hash maps with a fast hasher (issue 8: SipHash of the orbit keys was 4% of a periodic
+/// mesh); nothing reads them in iteration order.
+type HashMap<K, V> = std::collections::HashMap<K, V, foldhash::fast::RandomState>;
 
 /// A circle of the tiling: hole `k` moved by `(a Lx, b Ly)`.
 pub type Tag = (u32, i32, i32);
@@ -786,9 +788,9 @@ fn assemble(
         pb,
         verts,
         layout: BlockLayout::default(),
-        centre: HashMap::new(),
-        tangent: HashMap::new(),
-        spokes: HashMap::new(),
+        centre: HashMap::default(),
+        tangent: HashMap::default(),
+        spokes: HashMap::default(),
     };
     for (o, arc) in pb.arcs.iter().enumerate() {
         let g = &geoms[o];
@@ -1076,7 +1078,7 @@ fn split_for_templates(
         targets,
         slots,
         fluid,
-        on: HashMap::new(),
+        on: HashMap::default(),
         splits: 0,
     };
     for o in 0..sp.arcs.len() {
@@ -1105,7 +1107,7 @@ fn split_for_templates(
         if !sp.odd(k) {
             continue;
         }
-        let mut from: HashMap<u32, (u32, usize)> = HashMap::new();
+        let mut from: HashMap<u32, (u32, usize)> = HashMap::default();
         let mut queue = std::collections::VecDeque::from([k]);
         let mut end = None;
         while let Some(u) = queue.pop_front() {

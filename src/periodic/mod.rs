@@ -91,7 +91,9 @@ use crate::sampling::{
     Samples, SamplingOptions, ViolationKind,
 };
 use crate::timings;
-use std::collections::HashMap;
+/// Hash maps with a fast hasher (issue 8: SipHash of the orbit keys was 4% of a periodic
+/// mesh); nothing reads them in iteration order.
+type HashMap<K, V> = std::collections::HashMap<K, V, foldhash::fast::RandomState>;
 
 /// Most samples on the auxiliary bounding circle of the periodic tiling (sampled uniformly;
 /// the holes are sampled adaptively within [`SamplingOptions::max_per_circle`]).
@@ -891,8 +893,8 @@ fn select_collapse(
     ends.dedup();
     let circles = circles_of(domain, medial, &ends);
     // Vertex orbits of the representatives' ends, with the ends' shifts.
-    let mut orbit_index: HashMap<VertexKey, usize> = HashMap::new();
-    let mut orbit_ends: HashMap<usize, OrbitEnds> = HashMap::new();
+    let mut orbit_index: HashMap<VertexKey, usize> = HashMap::default();
+    let mut orbit_ends: HashMap<usize, OrbitEnds> = HashMap::default();
     for &r in &reps {
         let mut out = [(0, (0, 0)); 2];
         let mut ok = true;
@@ -952,7 +954,7 @@ fn select_collapse(
         })
     };
     let rel = |c: OrbitEnds| (c[1].1 .0 - c[0].1 .0, c[1].1 .1 - c[0].1 .1);
-    let mut taken: HashMap<usize, bool> = HashMap::new();
+    let mut taken: HashMap<usize, bool> = HashMap::default();
     for &(r, is_zero) in &order {
         let c = clusters(&forest, r);
         if c[0].0 == c[1].0 {
@@ -1041,7 +1043,7 @@ fn extract(
         Some((c, v))
     };
     let akeys: Vec<Option<ArcKey>> = (0..medial.arcs.len()).map(arc_key).collect();
-    let mut arc_by_key: HashMap<ArcKey, usize> = HashMap::new();
+    let mut arc_by_key: HashMap<ArcKey, usize> = HashMap::default();
     for (e, k) in akeys.iter().enumerate() {
         if let Some(k) = k {
             if arc_by_key.insert(*k, e).is_some() {
@@ -1121,7 +1123,7 @@ fn extract(
         Some(key)
     };
     let ckeys: Vec<Option<ClusterKey>> = (0..graph.vertices.len()).map(cluster_key).collect();
-    let mut cluster_by_key: HashMap<ClusterKey, usize> = HashMap::new();
+    let mut cluster_by_key: HashMap<ClusterKey, usize> = HashMap::default();
     for (c, k) in ckeys.iter().enumerate() {
         if let Some(k) = k {
             cluster_by_key.insert(k.clone(), c);
@@ -1212,7 +1214,7 @@ fn extract(
     };
     // Positions of contracted vertex instances: orbit representative + shift. The orbits of
     // their members and collapsed arcs are recorded for the torus counts.
-    let mut vpos: HashMap<usize, Point> = HashMap::new();
+    let mut vpos: HashMap<usize, Point> = HashMap::default();
     let mut vertex_orbits: Vec<VertexKey> = Vec::new();
     let mut collapsed_orbits: Vec<ArcKey> = Vec::new();
     let mut cluster_orbits: Vec<usize> = Vec::new();
@@ -1248,8 +1250,8 @@ fn extract(
     };
 
     let mut layout = BlockLayout::default();
-    let mut new_vertex: HashMap<u32, u32> = HashMap::new();
-    let mut new_edge: HashMap<u32, (u32, bool)> = HashMap::new();
+    let mut new_vertex: HashMap<u32, u32> = HashMap::default();
+    let mut new_edge: HashMap<u32, (u32, bool)> = HashMap::default();
     // (new edge, original arc, offset of the other circle)
     let mut periodic: Vec<(u32, usize, (i32, i32))> = Vec::new();
     let mut arc_orbits: Vec<ArcKey> = Vec::new();
