@@ -48,3 +48,26 @@ fn a_disagreeing_periodic_box_is_resampled_and_exact() {
         6 * h - 2 * mesh.collapsed_arcs + 2 * mesh.split_arcs
     );
 }
+
+/// 100 random holes whose first layout has a short arc collapsed and arcs running backwards:
+/// the zero-only layout of the same sampling would have them too, so exact mode resamples
+/// around them at once: one exact build per sampling (it was two), and the mesh is exact.
+#[test]
+fn backwards_arcs_are_resampled_without_the_zero_only_layout() {
+    let pd = domain(include_str!("data/periodic_backwards_100.json"));
+    let options = Options {
+        block_cells: Some(4),
+        ..Options::default()
+    };
+    let rec = timings::Recording::start();
+    let mesh = mesh_periodic(&pd, &options).unwrap();
+    let t = rec.finish();
+    // The first sampling (its layout with the short collapse, exact build: arcs backwards),
+    // then the sampling refined around them (layout, exact build: done). Before, the first
+    // sampling's zero-only layout and exact build came in between: three of each.
+    let (tri, exact) = (calls(&t, "triangulation"), calls(&t, "exact_geometry"));
+    assert_eq!((tri, exact), (2, 2), "{:?}", t.calls);
+    assert!(mesh.collapsed_arcs >= 1);
+    assert_eq!(mesh.geometry, Geometry::Exact);
+    assert_eq!(common::count_inverted_cells(&mesh.grids), 0);
+}

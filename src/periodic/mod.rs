@@ -2042,8 +2042,23 @@ fn exact_attempts(
             if p.collapsed_arcs == 0 || nearly_zero.collapse_fraction == 0.0 {
                 // Nothing collapsed (or nothing short): the zero-only layout is this one.
                 same_as_zero_only = Some(p);
-            } else if let Framed::Done(f) = exact_frame(pd, p, options, fluid, true)? {
-                return Ok(Some(f));
+            } else {
+                match exact_frame(pd, p, options, fluid, true)? {
+                    Framed::Done(f) => return Ok(Some(f)),
+                    // Arcs running backwards come from the sampling, not from the collapse:
+                    // the zero-only layout of the same sampling has them too (issue 8: at
+                    // 10 000 holes it had the same ones, for a layout and an exact build more
+                    // per attempt). Resample around them at once; the last attempt still
+                    // tries the zero-only layout.
+                    Framed::Failed {
+                        holes,
+                        backwards: true,
+                    } if attempt < EXACT_RESAMPLING => {
+                        refine_around(&mut sampling, holes);
+                        continue;
+                    }
+                    Framed::Failed { .. } => {}
+                }
             }
         }
         // 2. Only zero-length arcs collapsed.
@@ -2062,25 +2077,27 @@ fn exact_attempts(
         }
         match exact_frame(pd, p, options, fluid, false)? {
             Framed::Done(f) => return Ok(Some(f)),
-            // Refine 4x only the orbits around the disagreement (issue 8: as bounded exact
-            // mode does; a global resampling quadrupled the samples of every copy of every
-            // hole, seconds for a thousand holes), everywhere when it is not known.
-            Framed::Failed(around) if !around.is_empty() => {
-                for k in around {
-                    let slot = k as usize + 1;
-                    if sampling.boost.len() <= slot {
-                        sampling.boost.resize(slot + 1, 0);
-                    }
-                    sampling.boost[slot] += 2;
-                }
-            }
-            Framed::Failed(_) => {
-                sampling.min_per_circle = sampling.min_per_circle.saturating_mul(4);
-                sampling.spacing_per_gap *= 0.25;
-            }
+            Framed::Failed { holes, .. } => refine_around(&mut sampling, holes),
         }
     }
     Ok(None)
+}
+
+/// Refine `sampling` 4x on the orbits of `holes` (issue 8: as bounded exact mode does; a
+/// global resampling quadrupled the samples of every copy of every hole, seconds for a
+/// thousand holes), everywhere when `holes` is empty (the place is not known).
+fn refine_around(sampling: &mut SamplingOptions, holes: Vec<u32>) {
+    if holes.is_empty() {
+        sampling.min_per_circle = sampling.min_per_circle.saturating_mul(4);
+        sampling.spacing_per_gap *= 0.25;
+    }
+    for k in holes {
+        let slot = k as usize + 1;
+        if sampling.boost.len() <= slot {
+            sampling.boost.resize(slot + 1, 0);
+        }
+        sampling.boost[slot] += 2;
+    }
 }
 
 /// What [`exact_frame`] made of a layout.
@@ -2089,8 +2106,12 @@ enum Framed {
     Done(PeriodicFrame),
     /// No valid exact mesh: the canonical holes (indices into the domain's holes, sorted,
     /// distinct) of the arc orbits that disagreed and of their end vertex orbits, or none
-    /// when the place is not known (the exact construction failed, a template block).
-    Failed(Vec<u32>),
+    /// when the place is not known (the exact construction failed, a template block);
+    /// `backwards` when arcs ran backwards (the sampled combinatorics were wrong there).
+    Failed {
+        holes: Vec<u32>,
+        backwards: bool,
+    },
 }
 
 /// The canonical holes around the blocks `bad` of the exact build of `pb` (block `2o + s`
@@ -2134,13 +2155,21 @@ fn exact_frame(
     strict: bool,
 ) -> Result<Framed, MeshError> {
     let Some(pb) = &p.blocking else {
-        return Ok(Framed::Failed(Vec::new()));
+        return Ok(Framed::Failed {
+            holes: Vec::new(),
+            backwards: false,
+        });
     };
     let x = match timings::span("exact_geometry", || {
         exact_mode::periodic::build_with_inserted(pb, options, fluid)
     }) {
         Ok(x) => x,
-        Err(MeshError::Internal(_)) => return Ok(Framed::Failed(Vec::new())),
+        Err(MeshError::Internal(_)) => {
+            return Ok(Framed::Failed {
+                holes: Vec::new(),
+                backwards: false,
+            })
+        }
         Err(e) => return Err(e),
     };
     let bad: Vec<usize> = timings::span("quality_check", || {
@@ -2164,7 +2193,10 @@ fn exact_frame(
         bad
     });
     if !bad.is_empty() {
-        return Ok(Framed::Failed(holes_around(pb, &bad)));
+        return Ok(Framed::Failed {
+            holes: holes_around(pb, &bad),
+            backwards: !x.inconsistent_arcs.is_empty(),
+        });
     }
     let real = pd.hole_count() - fluid.iter().filter(|&&f| f).count();
     let mesh = Mesh {
