@@ -60,6 +60,77 @@ pub fn generate(layout: Layout, holes: Option<usize>, seed: u64) -> Result<Domai
     }
 }
 
+/// `n` random non-overlapping bubbles in a periodic square box, as [`bubbles`] makes them
+/// (radii uniform in `[0.3, 0.6]`, gaps at least 0.1 to every image of every bubble) at the
+/// same density: the box's area is that of [`bubbles`]' disk without its rim,
+/// `pi n 0.2575 / 0.35`. Centres are uniform in the box, so bubbles cross its edges.
+///
+/// Rejection sampling on a grid of cells at least as wide as the largest exclusion distance,
+/// wrapped around the box: each try checks its cell and the eight around it (the distinct
+/// ones, on a small box), with the nearest-image distance, so linear time in `n`.
+///
+/// ```
+/// let pd = medial_blocks::layouts::periodic_bubbles(50, 7).unwrap();
+/// assert_eq!(pd.hole_count(), 50);
+/// ```
+pub fn periodic_bubbles(
+    n: usize,
+    seed: u64,
+) -> Result<crate::periodic::PeriodicDomain, LayoutError> {
+    if n == 0 {
+        return Err(LayoutError::TooFew { min: 1, got: 0 });
+    }
+    if n > MAX_GENERATED {
+        return Err(LayoutError::TooMany {
+            max: MAX_GENERATED,
+            got: n,
+        });
+    }
+    let side = (std::f64::consts::PI * n as f64 * 0.2575 / 0.35).sqrt();
+    let reach = 2.0 * BUBBLE_R[1] + BUBBLE_GAP;
+    let cells = ((side / reach).floor() as usize).max(1);
+    let width = side / cells as f64;
+    let index = |v: f64| ((v / width).floor().max(0.0) as usize).min(cells - 1);
+    let nearest = |d: f64| d - (d / side).round() * side;
+    let mut grid: Vec<Vec<u32>> = vec![Vec::new(); cells * cells];
+    let mut holes: Vec<Circle> = Vec::with_capacity(n);
+    let mut rng = SplitMix64(seed);
+    let max_tries = 200 * n as u64 + 10_000;
+    let mut tries = 0u64;
+    while holes.len() < n && tries < max_tries {
+        tries += 1;
+        let r = BUBBLE_R[0] + (BUBBLE_R[1] - BUBBLE_R[0]) * rng.next_f64();
+        let (x, y) = (side * rng.next_f64(), side * rng.next_f64());
+        let (ci, cj) = (index(x), index(y));
+        let mut around: Vec<usize> = Vec::with_capacity(9);
+        for dj in [cells - 1, 0, 1] {
+            for di in [cells - 1, 0, 1] {
+                around.push((ci + di) % cells + ((cj + dj) % cells) * cells);
+            }
+        }
+        around.sort_unstable();
+        around.dedup();
+        let free = around.iter().all(|&g| {
+            grid[g].iter().all(|&h| {
+                let o = holes[h as usize];
+                let d = nearest(o.center[0] - x).hypot(nearest(o.center[1] - y));
+                d >= o.radius + r + BUBBLE_GAP
+            })
+        });
+        if free {
+            grid[ci + cj * cells].push(holes.len() as u32);
+            holes.push(Circle::new(x, y, r));
+        }
+    }
+    if holes.len() < n {
+        return Err(LayoutError::Placement {
+            placed: holes.len(),
+            wanted: n,
+        });
+    }
+    Ok(crate::periodic::PeriodicDomain::new([side, side], holes)?)
+}
+
 /// The paper's *Hexagon*: [`Domain::hexagon_example`] (7 holes, 36 blocks).
 pub fn hexagon() -> Domain {
     Domain::hexagon_example()

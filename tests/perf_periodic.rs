@@ -71,3 +71,65 @@ fn backwards_arcs_are_resampled_without_the_zero_only_layout() {
     assert_eq!(mesh.geometry, Geometry::Exact);
     assert_eq!(common::count_inverted_cells(&mesh.grids), 0);
 }
+
+/// `layouts::periodic_bubbles`: `n` bubbles, radii in `[0.3, 0.6]`, centres in the box, the
+/// box's area `pi n 0.2575 / 0.35`, and every pair at least 0.1 apart at their nearest images
+/// (brute force over the nine images, not the generator's grid); the same seed gives the
+/// same layout, another seed another one.
+#[test]
+fn periodic_bubbles_keep_their_gaps_across_the_box() {
+    use medial_blocks::layouts::periodic_bubbles;
+    for (n, seed) in [(1, 1), (2, 5), (7, 2), (300, 3)] {
+        let pd = periodic_bubbles(n, seed).unwrap();
+        let [lx, ly] = pd.size();
+        assert_eq!(lx, ly);
+        let area = std::f64::consts::PI * n as f64 * 0.2575 / 0.35;
+        assert!((lx * ly - area).abs() <= 1e-9 * area, "{lx} for {n}");
+        let holes = pd.holes();
+        assert_eq!(holes.len(), n);
+        for h in holes {
+            assert!((0.3..=0.6).contains(&h.radius));
+            assert!((0.0..lx).contains(&h.center[0]) && (0.0..ly).contains(&h.center[1]));
+        }
+        for (i, a) in holes.iter().enumerate() {
+            for b in &holes[i + 1..] {
+                let gap = (-1..=1)
+                    .flat_map(|dx| (-1..=1).map(move |dy| (dx, dy)))
+                    .map(|(dx, dy)| {
+                        let x = a.center[0] - b.center[0] + dx as f64 * lx;
+                        let y = a.center[1] - b.center[1] + dy as f64 * ly;
+                        x.hypot(y) - a.radius - b.radius
+                    })
+                    .fold(f64::INFINITY, f64::min);
+                assert!(gap >= 0.1 - 1e-12, "{n} bubbles, seed {seed}: gap {gap}");
+            }
+        }
+        assert_eq!(periodic_bubbles(n, seed).unwrap(), pd);
+        if n > 1 {
+            assert_ne!(periodic_bubbles(n, seed + 1).unwrap(), pd);
+        }
+    }
+    assert!(periodic_bubbles(0, 1).is_err());
+}
+
+/// `medial-blocks example periodic-bubbles` writes the library's layout as a periodic domain
+/// (read back through the `mesh` input parser, bit for bit), and meshes in exact mode.
+#[test]
+fn the_cli_writes_periodic_bubbles() {
+    let o = common::run(&[
+        "example",
+        "periodic-bubbles",
+        "--holes",
+        "30",
+        "--seed",
+        "2",
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let pd = domain(&String::from_utf8(o.stdout).unwrap());
+    assert_eq!(pd, medial_blocks::layouts::periodic_bubbles(30, 2).unwrap());
+    let mesh = mesh_periodic(&pd, &Options::default()).unwrap();
+    assert_eq!(mesh.geometry, Geometry::Exact);
+    assert_eq!(common::count_inverted_cells(&mesh.grids), 0);
+    let o = common::run(&["example", "periodic-bubbles", "--holes", "0"]);
+    assert_eq!(o.status.code(), Some(2));
+}

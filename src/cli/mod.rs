@@ -49,7 +49,7 @@ enum Command {
     Triangulate(triangulate::Args),
     /// Mesh a domain of circles (JSON or CSV), or the built-in example.
     Mesh(Box<mesh::Args>),
-    /// Write a ready-made domain JSON (hexagon, lattice, bubbles, square-lattice).
+    /// Write a ready-made domain JSON (hexagon, lattice, bubbles, square-lattice, periodic-bubbles).
     Example(example::Args),
     /// Mesh a sequence of frames (JSON Lines, one domain per line) in parallel, with a
     /// ParaView time series.
