@@ -256,98 +256,119 @@ fn build_checking(
         }
     };
     let unknown = || internal("a periodic vertex or arc names an unknown hole".into());
-    // 1. Vertex orbits.
-    let mut verts = Vec::with_capacity(pb.vertices.len());
-    for (k, v) in pb.vertices.iter().enumerate() {
-        let n = v.circles.len();
-        if n < 3 {
-            return Err(internal(format!("vertex orbit {k} has {n} circles")));
-        }
-        // Three circles in counter-clockwise order, spread around a vertex of degree n > 3
-        // (a co-circular group: every three of its circles have the same empty circle).
-        let pick = [0, n / 3, 2 * n / 3];
-        let walls = [
-            pb.wall(v.circles[pick[0]]).ok_or_else(unknown)?,
-            pb.wall(v.circles[pick[1]]).ok_or_else(unknown)?,
-            pb.wall(v.circles[pick[2]]).ok_or_else(unknown)?,
-        ];
-        let sites = walls.map(|w| w.site());
-        let ap = apollonius(sites, Choice::ccw().near(v.near))
-            .or_else(|_| apollonius(sites, Choice::any().near(v.near)))
-            .map_err(|e| internal(format!("no Apollonius circle for vertex orbit {k}: {e}")))?;
-        let tangent = if n == 3 {
-            ap.tangent_points.to_vec()
-        } else {
-            // Every spoke of a collapsed vertex is the radial projection of its centre, so
-            // it is exactly normal to its wall (as in `super::collapsed`).
-            v.circles
-                .iter()
-                .map(|&c| pb.wall(c).map(|w| w.project(ap.center)).ok_or_else(unknown))
-                .collect::<Result<Vec<Point>, MeshError>>()?
-        };
-        verts.push(Vertex {
-            center: ap.center,
-            radius: ap.radius,
-            tangent,
-            circles: v.circles.clone(),
-        });
-    }
-    // 2. Arc orbits.
+    // 1. Vertex orbits, in parallel (each its own Apollonius solve); the first error in
+    //    orbit order is the one returned.
+    let solved: Vec<Result<Vertex, MeshError>> = pb
+        .vertices
+        .par_iter()
+        .enumerate()
+        .map(|(k, v)| -> Result<Vertex, MeshError> {
+            let n = v.circles.len();
+            if n < 3 {
+                return Err(internal(format!("vertex orbit {k} has {n} circles")));
+            }
+            // Three circles in counter-clockwise order, spread around a vertex of degree
+            // n > 3 (a co-circular group: every three of its circles have the same empty
+            // circle).
+            let pick = [0, n / 3, 2 * n / 3];
+            let walls = [
+                pb.wall(v.circles[pick[0]]).ok_or_else(unknown)?,
+                pb.wall(v.circles[pick[1]]).ok_or_else(unknown)?,
+                pb.wall(v.circles[pick[2]]).ok_or_else(unknown)?,
+            ];
+            let sites = walls.map(|w| w.site());
+            let ap = apollonius(sites, Choice::ccw().near(v.near))
+                .or_else(|_| apollonius(sites, Choice::any().near(v.near)))
+                .map_err(|e| internal(format!("no Apollonius circle for vertex orbit {k}: {e}")))?;
+            let tangent = if n == 3 {
+                ap.tangent_points.to_vec()
+            } else {
+                // Every spoke of a collapsed vertex is the radial projection of its centre,
+                // so it is exactly normal to its wall (as in `super::collapsed`).
+                v.circles
+                    .iter()
+                    .map(|&c| pb.wall(c).map(|w| w.project(ap.center)).ok_or_else(unknown))
+                    .collect::<Result<Vec<Point>, MeshError>>()?
+            };
+            Ok(Vertex {
+                center: ap.center,
+                radius: ap.radius,
+                tangent,
+                circles: v.circles.clone(),
+            })
+        })
+        .collect();
+    let mut verts = solved
+        .into_iter()
+        .collect::<Result<Vec<Vertex>, MeshError>>()?;
+    // 2. Arc orbits, in parallel (exact sweeps and densities); then in orbit order the
+    //    first error, the density check and the arcs that run backwards.
+    type ArcOrbit = (ArcGeometry, ArcTarget, [[usize; 2]; 2], bool);
+    let made: Vec<Result<ArcOrbit, MeshError>> = pb
+        .arcs
+        .par_iter()
+        .enumerate()
+        .map(|(o, arc)| -> Result<ArcOrbit, MeshError> {
+            let walls = [
+                pb.wall(arc.circles[0]).ok_or_else(unknown)?,
+                pb.wall(arc.circles[1]).ok_or_else(unknown)?,
+            ];
+            let mut ends_a = [[[0.0; 2]; 2]; 2];
+            let mut ends_m = [[0.0; 2]; 2];
+            let mut slot = [[0usize; 2]; 2];
+            for (j, &(w, s)) in arc.ends.iter().enumerate() {
+                let v = verts
+                    .get(w)
+                    .ok_or_else(|| internal(format!("arc orbit {o} has an unknown end vertex")))?;
+                ends_m[j] = shifted(v.center, s, size);
+                for (side, &c) in arc.circles.iter().enumerate() {
+                    let k = v.slot(c, s).ok_or_else(|| {
+                        internal(format!("arc orbit {o}: an end vertex does not touch {c:?}"))
+                    })?;
+                    slot[j][side] = k;
+                    ends_a[j][side] = shifted(v.tangent[k], s, size);
+                }
+            }
+            let (s0, w0) = exact_sweep(&walls[0], ends_a[0][0], ends_a[1][0], arc.hint[0]);
+            let (s1, w1) = exact_sweep(&walls[1], ends_a[0][1], ends_a[1][1], -arc.hint[1]);
+            let wrong = |w: f64| w.abs() > ZERO_SWEEP && w * expected_sign(0) < 0.0;
+            let g = ArcGeometry {
+                walls,
+                param: if w1.abs() > w0.abs() { 1 } else { 0 },
+                start: [s0, s1],
+                sweep: [w0, w1],
+                ends_m,
+                ends_a,
+                offset: [[0.0; 2]; 2],
+            }
+            .with_offsets();
+            let (sq, ang) = g.densities().ok_or_else(|| {
+                internal(format!(
+                    "arc orbit {o}: the exact medial arc is not defined"
+                ))
+            })?;
+            let target = ArcTarget {
+                circles: arc.circles.map(|c| c.0 as usize + 1),
+                sq,
+                ang,
+                known: None,
+            };
+            Ok((g, target, slot, wrong(w0) || wrong(-w1)))
+        })
+        .collect();
     let mut geoms = Vec::with_capacity(pb.arcs.len());
     let mut targets = Vec::with_capacity(pb.arcs.len());
     let mut slots = Vec::with_capacity(pb.arcs.len());
     let mut inconsistent_arcs = Vec::new();
-    for (o, arc) in pb.arcs.iter().enumerate() {
-        let walls = [
-            pb.wall(arc.circles[0]).ok_or_else(unknown)?,
-            pb.wall(arc.circles[1]).ok_or_else(unknown)?,
-        ];
-        let mut ends_a = [[[0.0; 2]; 2]; 2];
-        let mut ends_m = [[0.0; 2]; 2];
-        let mut slot = [[0usize; 2]; 2];
-        for (j, &(w, s)) in arc.ends.iter().enumerate() {
-            let v = verts
-                .get(w)
-                .ok_or_else(|| internal(format!("arc orbit {o} has an unknown end vertex")))?;
-            ends_m[j] = shifted(v.center, s, size);
-            for (side, &c) in arc.circles.iter().enumerate() {
-                let k = v.slot(c, s).ok_or_else(|| {
-                    internal(format!("arc orbit {o}: an end vertex does not touch {c:?}"))
-                })?;
-                slot[j][side] = k;
-                ends_a[j][side] = shifted(v.tangent[k], s, size);
-            }
-        }
-        let (s0, w0) = exact_sweep(&walls[0], ends_a[0][0], ends_a[1][0], arc.hint[0]);
-        let (s1, w1) = exact_sweep(&walls[1], ends_a[0][1], ends_a[1][1], -arc.hint[1]);
-        let wrong = |w: f64| w.abs() > ZERO_SWEEP && w * expected_sign(0) < 0.0;
-        if wrong(w0) || wrong(-w1) {
+    for (o, m) in made.into_iter().enumerate() {
+        let (g, target, slot, backwards) = m?;
+        if backwards {
             inconsistent_arcs.push(o);
         }
-        let g = ArcGeometry {
-            walls,
-            param: if w1.abs() > w0.abs() { 1 } else { 0 },
-            start: [s0, s1],
-            sweep: [w0, w1],
-            ends_m,
-            ends_a,
-            offset: [[0.0; 2]; 2],
-        }
-        .with_offsets();
         if let Some(d) = check.as_deref_mut() {
             d.add(&g);
         }
-        let (sq, ang) = g.densities().ok_or_else(|| {
-            internal(format!(
-                "arc orbit {o}: the exact medial arc is not defined"
-            ))
-        })?;
-        targets.push(ArcTarget {
-            circles: arc.circles.map(|c| c.0 as usize + 1),
-            sq,
-            ang,
-            known: None,
-        });
+        targets.push(target);
         geoms.push(g);
         slots.push(slot);
     }
