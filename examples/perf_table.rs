@@ -3,8 +3,11 @@
 //! ```text
 //! cargo run --release --example perf_table -- [--max 1e5] [--seed 1] [--block-cells 16]
 //!     [--format json] [--tri-max N] [--warm-max N] [--force] [--no-build] [--huge-pages]
-//!     [--runs N]
+//!     [--runs N] [--periodic]
 //! ```
+//!
+//! `--periodic` meshes `medial-blocks example periodic-bubbles` instead (the same bubbles in a
+//! periodic box, `layouts::periodic_bubbles`) and prints only the CLI table.
 //!
 //! For n = 1e2, 1e3, 1e4, 1e5 (up to `--max`) it writes `layouts::bubbles(n, seed)` with the
 //! release CLI (`medial-blocks example bubbles`), then meshes it in a child process:
@@ -72,6 +75,8 @@ struct Args {
     huge_pages: bool,
     /// CLI runs per size (`--runs`); `None`: 5 up to 1e3, 3 at 1e4, 1 above.
     runs: Option<usize>,
+    /// Periodic boxes (`example periodic-bubbles`) instead of bounded bubbles.
+    periodic: bool,
 }
 
 fn parse_size(s: &str) -> Result<usize, String> {
@@ -95,6 +100,7 @@ fn parse_args() -> Result<Args, String> {
         build: true,
         huge_pages: false,
         runs: None,
+        periodic: false,
     };
     let mut it = std::env::args().skip(1);
     while let Some(flag) = it.next() {
@@ -113,6 +119,7 @@ fn parse_args() -> Result<Args, String> {
             "--force" => a.force = true,
             "--no-build" => a.build = false,
             "--huge-pages" => a.huge_pages = true,
+            "--periodic" => a.periodic = true,
             "--runs" => {
                 a.runs = Some(
                     value()?
@@ -126,7 +133,7 @@ fn parse_args() -> Result<Args, String> {
                 println!(
                     "perf_table [--max 1e5] [--seed 1] [--block-cells 16] [--format json] \
                      [--tri-max N] [--warm-max N] [--force] [--no-build] [--huge-pages] \
-                     [--runs N]"
+                     [--runs N] [--periodic]"
                 );
                 std::process::exit(0);
             }
@@ -218,8 +225,13 @@ fn median_run(runs: usize, mut run: impl FnMut() -> Result<Row, String>) -> Resu
 fn run_size(bin: &Path, dir: &Path, n: usize, a: &Args) -> Result<Row, String> {
     let input = dir.join(format!("bubbles_{n}.json"));
     let out = dir.join(format!("out_{n}"));
+    let kind = if a.periodic {
+        "periodic-bubbles"
+    } else {
+        "bubbles"
+    };
     let st = Command::new(bin)
-        .args(["--quiet", "example", "bubbles", "--holes"])
+        .args(["--quiet", "example", kind, "--holes"])
         .arg(n.to_string())
         .arg("--seed")
         .arg(a.seed.to_string())
@@ -228,7 +240,7 @@ fn run_size(bin: &Path, dir: &Path, n: usize, a: &Args) -> Result<Row, String> {
         .status()
         .map_err(|e| format!("cannot run {}: {e}", bin.display()))?;
     if !st.success() {
-        return Err(format!("example bubbles --holes {n} failed"));
+        return Err(format!("example {kind} --holes {n} failed"));
     }
     let start = Instant::now();
     let o = Command::new(bin)
@@ -593,11 +605,12 @@ fn main() {
         }
     }
     println!(
-        "Exact mode, `--block-cells {}`, `--format {}`{}, bubbles seed {}, {} threads ({}); \
+        "Exact mode, `--block-cells {}`, `--format {}`{}, {}bubbles seed {}, {} threads ({}); \
          each row the median of {} runs; load average {load_before} before, {} after the runs.\n",
         a.block_cells,
         a.format,
         if a.huge_pages { ", `--huge-pages`" } else { "" },
+        if a.periodic { "periodic " } else { "" },
         a.seed,
         std::thread::available_parallelism().map_or(1, |n| n.get()),
         cpu_model(),
@@ -610,6 +623,10 @@ fn main() {
     print_cpu_table(&rows);
     for n in &notes {
         println!("\n{}", n.replace('\n', " "));
+    }
+    if a.periodic {
+        // The triangulation and remeshing tables are of bounded bubbles.
+        return;
     }
     triangulation_table(a.tri_max.unwrap_or(a.max), a.seed, &rows);
     remeshing_table(a.warm_max.unwrap_or(a.max), a.seed, a.block_cells);
