@@ -77,6 +77,78 @@ pub fn periodic_bubbles(
     n: usize,
     seed: u64,
 ) -> Result<crate::periodic::PeriodicDomain, LayoutError> {
+    hole_count(n)?;
+    let side = (std::f64::consts::PI * n as f64 * 0.2575 / 0.35).sqrt();
+    let reach = 2.0 * BUBBLE_R[1] + BUBBLE_GAP;
+    let cells = ((side / reach).floor() as usize).max(1);
+    let width = side / cells as f64;
+    let index = |v: f64| ((v / width).floor().max(0.0) as usize).min(cells - 1);
+    let nearest = |d: f64| d - (d / side).round() * side;
+    let holes = place_bubbles(
+        n,
+        seed,
+        cells,
+        |rng, _| {
+            let (x, y) = (side * rng.next_f64(), side * rng.next_f64());
+            ([x, y], [index(x), index(y)])
+        },
+        |[ci, cj]| {
+            let mut around: Vec<[usize; 2]> = Vec::with_capacity(9);
+            for dj in [cells - 1, 0, 1] {
+                for di in [cells - 1, 0, 1] {
+                    around.push([(ci + di) % cells, (cj + dj) % cells]);
+                }
+            }
+            around.sort_unstable();
+            around.dedup();
+            around
+        },
+        |a, b| nearest(a[0] - b[0]).hypot(nearest(a[1] - b[1])),
+    );
+    all_placed(&holes, n)?;
+    Ok(crate::periodic::PeriodicDomain::new([side, side], holes)?)
+}
+
+/// The rejection sampling of the bubble generators: at most `200 n + 10 000` tries, each a
+/// radius uniform in [`BUBBLE_R`] and then a centre and its grid cell from `candidate`; a try
+/// is kept when every bubble in the cells `around` its cell is at least [`BUBBLE_GAP`] away
+/// (`dist` between centres). The grid has `cells x cells` cells at least as wide as the
+/// largest exclusion distance, so the cells around a centre hold every bubble that could be
+/// too close: linear time in `n`. Fewer than `n` bubbles when the tries run out.
+fn place_bubbles(
+    n: usize,
+    seed: u64,
+    cells: usize,
+    mut candidate: impl FnMut(&mut SplitMix64, f64) -> ([f64; 2], [usize; 2]),
+    around: impl Fn([usize; 2]) -> Vec<[usize; 2]>,
+    dist: impl Fn([f64; 2], [f64; 2]) -> f64,
+) -> Vec<Circle> {
+    // Bubble ids per grid cell, row-major.
+    let mut grid: Vec<Vec<u32>> = vec![Vec::new(); cells * cells];
+    let mut holes: Vec<Circle> = Vec::with_capacity(n);
+    let mut rng = SplitMix64(seed);
+    let max_tries = 200 * n as u64 + 10_000;
+    let mut tries = 0u64;
+    while holes.len() < n && tries < max_tries {
+        tries += 1;
+        let r = BUBBLE_R[0] + (BUBBLE_R[1] - BUBBLE_R[0]) * rng.next_f64();
+        let (c, [ci, cj]) = candidate(&mut rng, r);
+        let free = around([ci, cj]).into_iter().all(|[gi, gj]| {
+            grid[gi + gj * cells].iter().all(|&h| {
+                let o = holes[h as usize];
+                dist(o.center, c) >= o.radius + r + BUBBLE_GAP
+            })
+        });
+        if free {
+            grid[ci + cj * cells].push(holes.len() as u32);
+            holes.push(Circle::new(c[0], c[1], r));
+        }
+    }
+    holes
+}
+
+/// A hole count the generators make: 1 to [`MAX_GENERATED`].
+fn hole_count(n: usize) -> Result<(), LayoutError> {
     if n == 0 {
         return Err(LayoutError::TooFew { min: 1, got: 0 });
     }
@@ -86,49 +158,18 @@ pub fn periodic_bubbles(
             got: n,
         });
     }
-    let side = (std::f64::consts::PI * n as f64 * 0.2575 / 0.35).sqrt();
-    let reach = 2.0 * BUBBLE_R[1] + BUBBLE_GAP;
-    let cells = ((side / reach).floor() as usize).max(1);
-    let width = side / cells as f64;
-    let index = |v: f64| ((v / width).floor().max(0.0) as usize).min(cells - 1);
-    let nearest = |d: f64| d - (d / side).round() * side;
-    let mut grid: Vec<Vec<u32>> = vec![Vec::new(); cells * cells];
-    let mut holes: Vec<Circle> = Vec::with_capacity(n);
-    let mut rng = SplitMix64(seed);
-    let max_tries = 200 * n as u64 + 10_000;
-    let mut tries = 0u64;
-    while holes.len() < n && tries < max_tries {
-        tries += 1;
-        let r = BUBBLE_R[0] + (BUBBLE_R[1] - BUBBLE_R[0]) * rng.next_f64();
-        let (x, y) = (side * rng.next_f64(), side * rng.next_f64());
-        let (ci, cj) = (index(x), index(y));
-        let mut around: Vec<usize> = Vec::with_capacity(9);
-        for dj in [cells - 1, 0, 1] {
-            for di in [cells - 1, 0, 1] {
-                around.push((ci + di) % cells + ((cj + dj) % cells) * cells);
-            }
-        }
-        around.sort_unstable();
-        around.dedup();
-        let free = around.iter().all(|&g| {
-            grid[g].iter().all(|&h| {
-                let o = holes[h as usize];
-                let d = nearest(o.center[0] - x).hypot(nearest(o.center[1] - y));
-                d >= o.radius + r + BUBBLE_GAP
-            })
-        });
-        if free {
-            grid[ci + cj * cells].push(holes.len() as u32);
-            holes.push(Circle::new(x, y, r));
-        }
-    }
+    Ok(())
+}
+
+/// [`LayoutError::Placement`] when rejection sampling placed fewer than `n` bubbles.
+fn all_placed(holes: &[Circle], n: usize) -> Result<(), LayoutError> {
     if holes.len() < n {
         return Err(LayoutError::Placement {
             placed: holes.len(),
             wanted: n,
         });
     }
-    Ok(crate::periodic::PeriodicDomain::new([side, side], holes)?)
+    Ok(())
 }
 
 /// The paper's *Hexagon*: [`Domain::hexagon_example`] (7 holes, 36 blocks).
@@ -173,15 +214,7 @@ pub fn lattice() -> Result<Domain, LayoutError> {
 /// `(k - 1) / sqrt(2) + 0.9`. Every four neighbouring holes are co-circular: the degenerate
 /// case of the medial axis.
 pub fn square_lattice(n: usize) -> Result<Domain, LayoutError> {
-    if n == 0 {
-        return Err(LayoutError::TooFew { min: 1, got: 0 });
-    }
-    if n > MAX_GENERATED {
-        return Err(LayoutError::TooMany {
-            max: MAX_GENERATED,
-            got: n,
-        });
-    }
+    hole_count(n)?;
     let k = ((n as f64).sqrt().round() as usize).max(1);
     let half = (k as f64 - 1.0) / 2.0;
     let mut holes = Vec::with_capacity(k * k);
@@ -227,58 +260,33 @@ const BUBBLE_GAP: f64 = 0.1;
 /// so each try checks a 3 x 3 block of cells: linear time in `n` (100 000 bubbles in well under
 /// a second).
 pub fn bubbles(n: usize, seed: u64) -> Result<Domain, LayoutError> {
-    if n == 0 {
-        return Err(LayoutError::TooFew { min: 1, got: 0 });
-    }
-    if n > MAX_GENERATED {
-        return Err(LayoutError::TooMany {
-            max: MAX_GENERATED,
-            got: n,
-        });
-    }
+    hole_count(n)?;
     let big_r = (n as f64 * 0.2575 / 0.35).sqrt() + 1.0;
     let cell = 2.0 * BUBBLE_R[1] + BUBBLE_GAP;
     let cells = ((2.0 * big_r / cell).ceil() as usize).max(1);
     let index = |v: f64| (((v + big_r) / cell).floor().max(0.0) as usize).min(cells - 1);
-    // Bubble ids per grid cell, row-major.
-    let mut grid: Vec<Vec<u32>> = vec![Vec::new(); cells * cells];
-    let mut holes: Vec<Circle> = Vec::with_capacity(n);
-    let mut rng = SplitMix64(seed);
-    let max_tries = 200 * n as u64 + 10_000;
-    let mut tries = 0u64;
-    while holes.len() < n && tries < max_tries {
-        tries += 1;
-        let r = BUBBLE_R[0] + (BUBBLE_R[1] - BUBBLE_R[0]) * rng.next_f64();
-        // Uniform in the disk the centre may occupy.
-        let reach = big_r - r - BUBBLE_GAP;
-        let (u, t) = (rng.next_f64(), rng.next_f64());
-        let rho = reach * u.sqrt();
-        let phi = std::f64::consts::TAU * t;
-        let (x, y) = (rho * phi.cos(), rho * phi.sin());
-        let (ci, cj) = (index(x), index(y));
-        let mut free = true;
-        'scan: for gj in cj.saturating_sub(1)..=(cj + 1).min(cells - 1) {
-            for gi in ci.saturating_sub(1)..=(ci + 1).min(cells - 1) {
-                for &h in &grid[gi + gj * cells] {
-                    let o = holes[h as usize];
-                    let d = (o.center[0] - x).hypot(o.center[1] - y);
-                    if d < o.radius + r + BUBBLE_GAP {
-                        free = false;
-                        break 'scan;
-                    }
-                }
-            }
-        }
-        if free {
-            grid[ci + cj * cells].push(holes.len() as u32);
-            holes.push(Circle::new(x, y, r));
-        }
-    }
-    if holes.len() < n {
-        return Err(LayoutError::Placement {
-            placed: holes.len(),
-            wanted: n,
-        });
-    }
+    let holes = place_bubbles(
+        n,
+        seed,
+        cells,
+        |rng, r| {
+            // Uniform in the disk the centre may occupy.
+            let reach = big_r - r - BUBBLE_GAP;
+            let (u, t) = (rng.next_f64(), rng.next_f64());
+            let rho = reach * u.sqrt();
+            let phi = std::f64::consts::TAU * t;
+            let (x, y) = (rho * phi.cos(), rho * phi.sin());
+            ([x, y], [index(x), index(y)])
+        },
+        |[ci, cj]| {
+            let rows = cj.saturating_sub(1)..=(cj + 1).min(cells - 1);
+            rows.flat_map(|gj| {
+                (ci.saturating_sub(1)..=(ci + 1).min(cells - 1)).map(move |gi| [gi, gj])
+            })
+            .collect()
+        },
+        |a, b| (a[0] - b[0]).hypot(a[1] - b[1]),
+    );
+    all_placed(&holes, n)?;
     Ok(Domain::bounded(Circle::new(0.0, 0.0, big_r), holes)?)
 }

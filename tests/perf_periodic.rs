@@ -23,19 +23,25 @@ fn domain(json: &str) -> PeriodicDomain {
     }
 }
 
-/// 60 random holes whose first sampling disagrees with the exact geometry: the exact attempt
-/// is repeated on a finer sampling around the disagreement (exact mode's local resampling),
-/// and the mesh is exact with no inverted cell.
-#[test]
-fn a_disagreeing_periodic_box_is_resampled_and_exact() {
-    let pd = domain(include_str!("data/periodic_resampled_60.json"));
+/// The periodic domain of `json` meshed in exact mode (4 x 4 cells a block), with its
+/// stage timings.
+fn mesh_recorded(json: &str) -> (PeriodicDomain, medial_blocks::Mesh, timings::Timings) {
+    let pd = domain(json);
     let options = Options {
         block_cells: Some(4),
         ..Options::default()
     };
     let rec = timings::Recording::start();
     let mesh = mesh_periodic(&pd, &options).unwrap();
-    let t = rec.finish();
+    (pd, mesh, rec.finish())
+}
+
+/// 60 random holes whose first sampling disagrees with the exact geometry: the exact attempt
+/// is repeated on a finer sampling around the disagreement (exact mode's local resampling),
+/// and the mesh is exact with no inverted cell.
+#[test]
+fn a_disagreeing_periodic_box_is_resampled_and_exact() {
+    let (pd, mesh, t) = mesh_recorded(include_str!("data/periodic_resampled_60.json"));
     assert!(calls(&t, "triangulation") >= 2, "{:?}", t.calls);
     assert_eq!(mesh.geometry, Geometry::Exact);
     assert_eq!(common::count_inverted_cells(&mesh.grids), 0);
@@ -54,14 +60,7 @@ fn a_disagreeing_periodic_box_is_resampled_and_exact() {
 /// around them at once: one exact build per sampling (it was two), and the mesh is exact.
 #[test]
 fn backwards_arcs_are_resampled_without_the_zero_only_layout() {
-    let pd = domain(include_str!("data/periodic_backwards_100.json"));
-    let options = Options {
-        block_cells: Some(4),
-        ..Options::default()
-    };
-    let rec = timings::Recording::start();
-    let mesh = mesh_periodic(&pd, &options).unwrap();
-    let t = rec.finish();
+    let (_, mesh, t) = mesh_recorded(include_str!("data/periodic_backwards_100.json"));
     // The first sampling (its layout with the short collapse, exact build: arcs backwards),
     // then the sampling refined around them (layout, exact build: done). Before, the first
     // sampling's zero-only layout and exact build came in between: three of each.

@@ -30,8 +30,8 @@
 use super::counts::{ArcTarget, CountProblem, Counts};
 use super::imposed::{vertex_cycle, BlockKey, CircleTag};
 use super::{
-    arc_params_into, clustering, clustering_of, exact_sweep, expected_sign, internal, median,
-    spoke_nodes, validate_options, ArcGeometry, Wall, ZERO_SWEEP,
+    arc_params_into, clustering, clustering_of, expected_sign, internal, median, spoke_nodes,
+    validate_options, ArcGeometry, Wall, ZERO_SWEEP,
 };
 use crate::apollonius::{apollonius, Choice};
 use crate::blocking::MAX_TEMPLATE_SWEEP;
@@ -329,19 +329,9 @@ fn build_checking(
                     ends_a[j][side] = shifted(v.tangent[k], s, size);
                 }
             }
-            let (s0, w0) = exact_sweep(&walls[0], ends_a[0][0], ends_a[1][0], arc.hint[0]);
-            let (s1, w1) = exact_sweep(&walls[1], ends_a[0][1], ends_a[1][1], -arc.hint[1]);
+            let g = ArcGeometry::new(walls, ends_m, ends_a, [arc.hint[0], -arc.hint[1]]);
+            let [w0, w1] = g.sweep;
             let wrong = |w: f64| w.abs() > ZERO_SWEEP && w * expected_sign(0) < 0.0;
-            let g = ArcGeometry {
-                walls,
-                param: if w1.abs() > w0.abs() { 1 } else { 0 },
-                start: [s0, s1],
-                sweep: [w0, w1],
-                ends_m,
-                ends_a,
-                offset: [[0.0; 2]; 2],
-            }
-            .with_offsets();
             let (sq, ang) = g.densities().ok_or_else(|| {
                 internal(format!(
                     "arc orbit {o}: the exact medial arc is not defined"
