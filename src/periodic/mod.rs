@@ -30,9 +30,9 @@
 //!    periodic triangulation. A band too narrow for them grows first (by at least half, into
 //!    the whole array once it would reach a period). Otherwise the array grows per axis to
 //!    the half-widths that hold every offending circle (`next_tiling`; a kept arc on the
-//!    auxiliary circle grows both axes by half), at most [`MAX_ARRAY_SIDE`] long periods a side: an elongated box with few
-//!    holes has empty circles spanning many short periods, and gets many copies along its
-//!    short side only. Beyond that, or beyond the sample limit, the domain is refused with
+//!    auxiliary circle grows both axes by half), at most [`MAX_ARRAY_SIDE`] long periods a
+//!    side: an elongated box with few holes has empty circles spanning many short periods,
+//!    and gets many copies along its short side only. Beyond that, or beyond the sample limit, the domain is refused with
 //!    [`MeshError::Tiling`].
 //! 5. Geometry by orbits: medial vertices and arcs are identified up to translation by their
 //!    sample triples (`(hole, sample index, tile)`, normalised). Every instance's geometry
@@ -170,8 +170,8 @@ struct Tiling {
     /// the tiling: `m L` when the whole array is (a *full* axis), less for a band.
     reach: [f64; 2],
     domain: Domain,
-    /// Hole id of copy `(a, b)` of hole `k` at `(k n0 + a + m0) n1 + b + m1`, or -1 when the
-    /// copy is outside the reach.
+    /// Hole id of copy `(a, b)` of hole `k` at `k n0 n1 + (a + m0) n1 + b + m1`, or -1 when
+    /// the copy is outside the reach.
     ids: Vec<CircleId>,
     /// `(hole, a, b)` of each hole id, increasing (ids are given in that order).
     keys: Vec<CircleKey>,
