@@ -32,8 +32,8 @@
 //!    the half-widths that hold every offending circle (`next_tiling`; a kept arc on the
 //!    auxiliary circle grows both axes by half), at most [`MAX_ARRAY_SIDE`] long periods a
 //!    side: an elongated box with few holes has empty circles spanning many short periods,
-//!    and gets many copies along its short side only. Beyond that, or beyond the sample limit, the domain is refused with
-//!    [`MeshError::Tiling`].
+//!    and gets many copies along its short side only. Beyond that, or beyond the sample
+//!    limit, the domain is refused with [`MeshError::Tiling`].
 //! 5. Geometry by orbits: medial vertices and arcs are identified up to translation by their
 //!    sample triples (`(hole, sample index, tile)`, normalised). Every instance's geometry
 //!    is its orbit representative's plus the period shift (in the true `Lx`, `Ly`), so both
