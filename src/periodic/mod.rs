@@ -169,6 +169,8 @@ struct Tiling {
     /// Per axis, the distance beyond the box `[0, L]` within which every copy's centre is in
     /// the tiling: `m L` when the whole array is (a *full* axis), less for a band.
     reach: [f64; 2],
+    /// Per axis, whether the tiling is a band along it (not the whole array).
+    band: [bool; 2],
     domain: Domain,
     /// Hole id of copy `(a, b)` of hole `k` at `k n0 n1 + (a + m0) n1 + b + m1`, or -1 when
     /// the copy is outside the reach.
@@ -263,6 +265,7 @@ impl Tiling {
             h,
             size,
             reach,
+            band: full.map(|f| !f),
             domain,
             ids,
             keys,
@@ -711,9 +714,8 @@ fn initial_reach(pd: &PeriodicDomain) -> [f64; 2] {
 
 /// The next extent `(m, reach)` after the tiling `t` was too small (see
 /// [`Extracted::TooSmall`]). When a band is too narrow or a kept arc is `blind`, only the
-/// bands grow: to a quarter beyond
-/// what the circles need, at least by half (twice when `blind`), and into the whole 3-wide
-/// array once they would reach a period (the circles measured on a band that is too narrow
+/// bands grow: to a quarter beyond what the circles need, at least by half (twice when
+/// `blind`), and into the whole 3-wide array once they would reach a period (the circles measured on a band that is too narrow
 /// can be far wider than the true ones, across the missing copies, so they do not size the
 /// arrays). When the bands hold the circles, the whole arrays grow as [`next_tiling`] says
 /// (a band keeps its reach: `next_tiling` leaves its half-width 1). With whole arrays on both
@@ -726,7 +728,7 @@ fn next_extent(
     cap: [i32; 2],
 ) -> Option<([i32; 2], [f64; 2])> {
     let size = t.size;
-    let band = |a: usize| t.reach[a] < t.m[a] as f64 * size[a];
+    let band = |a: usize| t.band[a];
     if !(band(0) || band(1)) {
         let m = next_tiling(t.m, need, blind, cap)?;
         return Some((m, [0, 1].map(|a| m[a] as f64 * size[a])));
@@ -1196,10 +1198,10 @@ fn extract(
     }
     // A full axis holds the circles when the array does; a band when they end inside it.
     let short = (0..2).any(|a| {
-        if t.reach[a] >= t.m[a] as f64 * size[a] {
-            need[a] != t.m[a]
-        } else {
+        if t.band[a] {
             !below(need_reach[a], t.reach[a])
+        } else {
+            need[a] != t.m[a]
         }
     });
     if blind || short {
