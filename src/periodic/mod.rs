@@ -91,6 +91,7 @@ use crate::sampling::{
     Samples, SamplingOptions, ViolationKind,
 };
 use crate::timings;
+use rayon::prelude::*;
 /// Hash maps with a fast hasher (issue 8: SipHash of the orbit keys was 4% of a periodic
 /// mesh); nothing reads them in iteration order.
 type HashMap<K, V> = std::collections::HashMap<K, V, foldhash::fast::RandomState>;
@@ -956,13 +957,26 @@ fn select_collapse(
         })
     };
     let rel = |c: OrbitEnds| (c[1].1 .0 - c[0].1 .0, c[1].1 .1 - c[0].1 .1);
+    // The arc orbits at each vertex orbit, and the vertex orbits of each root's tree: an arc
+    // orbit parallel to `r` has an end in the tree of `r`'s first root, so only the arc
+    // orbits at that tree's vertex orbits are looked at (issue 8: every arc orbit was, for
+    // each arc orbit collapsed, 1.1 s at 100 000 holes).
+    let mut incident: Vec<Vec<usize>> = vec![Vec::new(); n];
+    let mut at_ends: Vec<usize> = orbit_ends.keys().copied().collect();
+    at_ends.sort_unstable();
+    for &f in &at_ends {
+        for (x, _) in orbit_ends[&f] {
+            incident[x].push(f);
+        }
+    }
+    let mut tree: Vec<Vec<usize>> = (0..n).map(|x| vec![x]).collect();
     let mut taken: HashMap<usize, bool> = HashMap::default();
     for &(r, is_zero) in &order {
         let c = clusters(&forest, r);
         if c[0].0 == c[1].0 {
             continue;
         }
-        let parallel = orbit_ends.keys().any(|&f| {
+        let parallel = tree[c[0].0].iter().flat_map(|&x| &incident[x]).any(|&f| {
             if f == r || taken.contains_key(&f) {
                 return false;
             }
@@ -978,6 +992,8 @@ fn select_collapse(
         let (x, y) = (c[0].0, c[1].0);
         forest.parent[y] = x;
         forest.link[y] = (c[0].1 .0 - c[1].1 .0, c[0].1 .1 - c[1].1 .1);
+        let moved = std::mem::take(&mut tree[y]);
+        tree[x].extend(moved);
         taken.insert(r, is_zero);
     }
     let flags: Vec<bool> = rep_of
@@ -1035,7 +1051,10 @@ fn extract(
         key.sort_unstable();
         Some(key)
     };
-    let vkeys: Vec<Option<VertexKey>> = (0..medial.vertices.len()).map(vertex_key).collect();
+    let vkeys: Vec<Option<VertexKey>> = (0..medial.vertices.len())
+        .into_par_iter()
+        .map(vertex_key)
+        .collect();
     let arc_key = |e: usize| -> Option<ArcKey> {
         let a = &medial.arcs[e];
         let mut c = [t.key(a.circles[0])?, t.key(a.circles[1])?];
@@ -1044,7 +1063,10 @@ fn extract(
         v.sort_unstable();
         Some((c, v))
     };
-    let akeys: Vec<Option<ArcKey>> = (0..medial.arcs.len()).map(arc_key).collect();
+    let akeys: Vec<Option<ArcKey>> = (0..medial.arcs.len())
+        .into_par_iter()
+        .map(arc_key)
+        .collect();
     let mut arc_by_key: HashMap<ArcKey, usize> = HashMap::default();
     for (e, k) in akeys.iter().enumerate() {
         if let Some(k) = k {
@@ -1079,17 +1101,22 @@ fn extract(
         let contracted = collapse::contract(medial, &sel.flags)?;
         let (aux, vertex_samples) = blocking::blocks(&t.domain, samples, &contracted.graph)?;
         let nv = contracted.graph.vertices.len() as u32;
-        let mut bad: Vec<u32> = Vec::new();
-        for (b, block) in aux.blocks.iter().enumerate() {
-            let canonical = block.wall.is_some_and(|c| is_canonical(t, c));
-            if canonical && blocking::block_area(&aux, b) <= 0.0 {
-                bad.extend(block.corners.iter().filter(|&&v| v < nv));
-            }
-        }
+        let mut bad: Vec<u32> = aux
+            .blocks
+            .par_iter()
+            .enumerate()
+            .filter(|(b, block)| {
+                block.wall.is_some_and(|c| is_canonical(t, c))
+                    && blocking::block_area(&aux, *b) <= 0.0
+            })
+            .flat_map_iter(|(_, block)| block.corners.into_iter().filter(|&v| v < nv))
+            .collect();
+        bad.sort_unstable();
+        bad.dedup();
         let mut changed = false;
         for (e, arc) in medial.arcs.iter().enumerate() {
             let c = contracted.cluster_of[arc.ends[0] as usize];
-            if sel.short[e] && bad.contains(&c) {
+            if sel.short[e] && bad.binary_search(&c).is_ok() {
                 if let Some(r) = sel.rep_of[e] {
                     if !exclude.contains(&r) {
                         exclude.push(r);
@@ -1142,22 +1169,14 @@ fn extract(
     // representatives the layout reads are kept instances: an arc's has a canonical circle,
     // a vertex's a canonical sample, so it is a corner of a kept block and measured too.)
     let reach = rmax + margin;
-    let mut need = t.m;
-    let mut need_reach = [0.0f64; 2];
-    let mut blind = false;
-    // Raises `need` and `need_reach` to hold the circle of `tri`; false when it has no circle
-    // to measure.
+    // Raises `need` and `need_reach` to hold the circle of triangle `tri` (in range); false
+    // when it has no circle to measure.
     let measure = |tri: u32, need: &mut [i32; 2], need_reach: &mut [f64; 2]| -> bool {
-        let circle = (tri as usize)
-            .lt(&triangulation.len())
-            .then(|| {
-                let p = triangulation
-                    .triangle(tri as usize)
-                    .map(|s| samples.points[s as usize]);
-                let c = circumcenter(p[0], p[1], p[2])?;
-                Some((c, (c[0] - p[0][0]).hypot(c[1] - p[0][1])))
-            })
-            .flatten();
+        let p = triangulation
+            .triangle(tri as usize)
+            .map(|s| samples.points[s as usize]);
+        let circle =
+            circumcenter(p[0], p[1], p[2]).map(|c| (c, (c[0] - p[0][0]).hypot(c[1] - p[0][1])));
         let Some((c, r)) = circle else {
             return false;
         };
@@ -1180,6 +1199,11 @@ fn extract(
     let kept: Vec<usize> = (0..aux.blocks.len())
         .filter(|&b| aux.blocks[b].wall.is_some_and(|c| is_canonical(t, c)))
         .collect();
+    // Each triangle once (issue 8: the blocks around a vertex share its triangle, the two
+    // blocks of an arc its triangles), measured in parallel: `need` and `need_reach` are
+    // maxima, `blind` a disjunction, so the result does not depend on the order.
+    let mut used = vec![false; triangulation.len()];
+    let mut blind = false;
     for &b in &kept {
         let e = contracted.kept[b / 2] as usize;
         let arc = &medial.arcs[e];
@@ -1193,9 +1217,35 @@ fn extract(
             .flat_map(|&v| &members[contracted.cluster_of[v as usize] as usize])
             .map(|&v| medial.vertices[v as usize].triangle);
         for tri in ends.chain(arc.triangles.iter().copied()) {
-            blind |= !measure(tri, &mut need, &mut need_reach);
+            match used.get_mut(tri as usize) {
+                Some(u) => *u = true,
+                None => blind = true,
+            }
         }
     }
+    let (need, need_reach, unmeasured) = used
+        .par_iter()
+        .enumerate()
+        .filter(|(_, &u)| u)
+        .fold(
+            || (t.m, [0.0f64; 2], false),
+            |(mut need, mut need_reach, blind), (tri, _)| {
+                let ok = measure(tri as u32, &mut need, &mut need_reach);
+                (need, need_reach, blind || !ok)
+            },
+        )
+        .reduce(
+            || (t.m, [0.0f64; 2], false),
+            |a, b| {
+                (
+                    [a.0[0].max(b.0[0]), a.0[1].max(b.0[1])],
+                    [a.1[0].max(b.1[0]), a.1[1].max(b.1[1])],
+                    a.2 || b.2,
+                )
+            },
+        );
+    drop(used);
+    let blind = blind || unmeasured;
     // A full axis holds the circles when the array does; a band when they end inside it.
     let short = (0..2).any(|a| {
         if t.band[a] {
@@ -1216,7 +1266,8 @@ fn extract(
     };
     // Positions of contracted vertex instances: orbit representative + shift. The orbits of
     // their members and collapsed arcs are recorded for the torus counts.
-    let mut vpos: HashMap<usize, Point> = HashMap::default();
+    // (Dense tables indexed by vertex, cluster and edge ids rather than hash maps: issue 8.)
+    let mut vpos: Vec<Option<Point>> = vec![None; graph.vertices.len()];
     let mut vertex_orbits: Vec<VertexKey> = Vec::new();
     let mut collapsed_orbits: Vec<ArcKey> = Vec::new();
     let mut cluster_orbits: Vec<usize> = Vec::new();
@@ -1224,8 +1275,8 @@ fn extract(
                            vorbits: &mut Vec<VertexKey>,
                            corbits: &mut Vec<ArcKey>|
      -> Result<Point, MeshError> {
-        if let Some(p) = vpos.get(&c) {
-            return Ok(*p);
+        if let Some(p) = vpos[c] {
+            return Ok(p);
         }
         let key = ckeys[c]
             .as_ref()
@@ -1247,13 +1298,14 @@ fn extract(
         }
         cluster_orbits.push(r);
         let p = shift_point(graph.vertices[r].position, d);
-        vpos.insert(c, p);
+        vpos[c] = Some(p);
         Ok(p)
     };
 
     let mut layout = BlockLayout::default();
-    let mut new_vertex: HashMap<u32, u32> = HashMap::default();
-    let mut new_edge: HashMap<u32, (u32, bool)> = HashMap::default();
+    const NONE: u32 = u32::MAX;
+    let mut new_vertex: Vec<u32> = vec![NONE; aux.vertices.len()];
+    let mut new_edge: Vec<(u32, bool)> = vec![(NONE, false); aux.edges.len()];
     // (new edge, original arc, offset of the other circle)
     let mut periodic: Vec<(u32, usize, (i32, i32))> = Vec::new();
     let mut arc_orbits: Vec<ArcKey> = Vec::new();
@@ -1262,7 +1314,10 @@ fn extract(
         let block = &aux.blocks[b];
         let mut corners = [0u32; 4];
         for (i, &v) in block.corners.iter().enumerate() {
-            if let Some(&nv) = new_vertex.get(&v) {
+            let nv = *new_vertex
+                .get(v as usize)
+                .ok_or_else(|| MeshError::Internal("a block corner out of range".into()))?;
+            if nv != NONE {
                 corners[i] = nv;
                 continue;
             }
@@ -1284,7 +1339,7 @@ fn extract(
             };
             layout.vertices.push(p);
             let nv = (layout.vertices.len() - 1) as u32;
-            new_vertex.insert(v, nv);
+            new_vertex[v as usize] = nv;
             corners[i] = nv;
         }
         let mut sides = [SideRef {
@@ -1292,7 +1347,10 @@ fn extract(
             reversed: false,
         }; 4];
         for (k, side) in block.sides.iter().enumerate() {
-            if let Some(&(ne, flip)) = new_edge.get(&side.edge) {
+            let (ne, flip) = *new_edge
+                .get(side.edge as usize)
+                .ok_or_else(|| MeshError::Internal("a block side out of range".into()))?;
+            if ne != NONE {
                 sides[k] = SideRef {
                     edge: ne,
                     reversed: side.reversed ^ flip,
@@ -1302,8 +1360,9 @@ fn extract(
             let edge = &aux.edges[side.edge as usize];
             let end = |v: u32| {
                 new_vertex
-                    .get(&v)
+                    .get(v as usize)
                     .copied()
+                    .filter(|&nv| nv != NONE)
                     .ok_or_else(|| inconsistent("an edge end that is not a block corner"))
             };
             let ends = [end(edge.ends[0])?, end(edge.ends[1])?];
@@ -1363,7 +1422,7 @@ fn extract(
             };
             layout.edges.push(Edge { ends, curve, kind });
             let ne = (layout.edges.len() - 1) as u32;
-            new_edge.insert(side.edge, (ne, flip));
+            new_edge[side.edge as usize] = (ne, flip);
             sides[k] = SideRef {
                 edge: ne,
                 reversed: side.reversed ^ flip,
@@ -1393,17 +1452,18 @@ fn extract(
             translation,
         };
     }
-    // No block with zero or negative area leaves this stage.
-    for b in 0..layout.blocks.len() {
-        let a = blocking::block_area(&layout, b);
-        let positive = a > 0.0;
-        if !positive {
-            return Err(MeshError::Internal(format!(
-                "periodic block {b} has a non-positive area {} (a degenerate medial arc \
-                 that was not collapsed)",
-                crate::numfmt::Num(a)
-            )));
-        }
+    // No block with zero or negative area leaves this stage (the first such block, measured
+    // in parallel).
+    let flat = (0..layout.blocks.len())
+        .into_par_iter()
+        .map(|b| (b, blocking::block_area(&layout, b)))
+        .find_first(|&(_, a)| !(a > 0.0));
+    if let Some((b, a)) = flat {
+        return Err(MeshError::Internal(format!(
+            "periodic block {b} has a non-positive area {} (a degenerate medial arc that \
+             was not collapsed)",
+            crate::numfmt::Num(a)
+        )));
     }
     vertex_orbits.sort_unstable();
     vertex_orbits.dedup();
@@ -2162,10 +2222,19 @@ fn exact_frame(
             backwards: false,
         });
     };
+    // A build with arcs running backwards stops before its grids (the mesh would not be
+    // kept): the holes around those arcs are resampled.
     let x = match timings::span("exact_geometry", || {
-        exact_mode::periodic::build_with_inserted(pb, options, fluid)
+        exact_mode::periodic::build_unless_backwards(pb, options, fluid)
     }) {
-        Ok(x) => x,
+        Ok(exact_mode::periodic::Built::Mesh(x)) => *x,
+        Ok(exact_mode::periodic::Built::Backwards(arcs)) => {
+            let bad: Vec<usize> = arcs.iter().flat_map(|&o| [2 * o, 2 * o + 1]).collect();
+            return Ok(Framed::Failed {
+                holes: holes_around(pb, &bad),
+                backwards: true,
+            });
+        }
         Err(MeshError::Internal(_)) => {
             return Ok(Framed::Failed {
                 holes: Vec::new(),
@@ -2175,7 +2244,6 @@ fn exact_frame(
         Err(e) => return Err(e),
     };
     let bad: Vec<usize> = timings::span("quality_check", || {
-        use rayon::prelude::*;
         let mut bad = crate::quality::inverted_blocks(&x.grids);
         if strict {
             bad.extend(
@@ -2189,15 +2257,15 @@ fn exact_frame(
                     .collect::<Vec<usize>>(),
             );
         }
-        bad.extend(x.inconsistent_arcs.iter().flat_map(|&o| [2 * o, 2 * o + 1]));
         bad.sort_unstable();
         bad.dedup();
         bad
     });
+    // (No arc of a whole build runs backwards: `build_unless_backwards`.)
     if !bad.is_empty() {
         return Ok(Framed::Failed {
             holes: holes_around(pb, &bad),
-            backwards: !x.inconsistent_arcs.is_empty(),
+            backwards: false,
         });
     }
     let real = pd.hole_count() - fluid.iter().filter(|&&f| f).count();
@@ -2495,6 +2563,62 @@ mod tests {
 
     /// Exact mode's local resampling: a boost on slot `k + 1` refines the whole orbit of hole
     /// `k` (every copy alike) and no other orbit.
+    /// The exact build that stops at backwards arcs (issue 8) reports exactly the arc orbits
+    /// the whole build finds running backwards, and when there are none it is the whole build
+    /// (same layout, same nodes to the bit). The oracle is the whole build itself.
+    #[test]
+    fn a_build_stopped_at_backwards_arcs_names_the_whole_builds_arcs() {
+        use crate::exact_mode::periodic::{build_unless_backwards, build_with_inserted, Built};
+        let pd = match crate::domain::AnyDomain::from_json_str(include_str!(
+            "../../tests/data/periodic_backwards_100.json"
+        ))
+        .unwrap()
+        {
+            crate::domain::AnyDomain::Periodic(pd) => pd,
+            _ => unreachable!("a periodic file"),
+        };
+        let options = Options {
+            block_cells: Some(4),
+            ..Options::default()
+        };
+        let nearly_zero = Options {
+            collapse_fraction: options.collapse_fraction.min(EXACT_COLLAPSE_FRACTION),
+            ..options.clone()
+        };
+        let zero_only = Options {
+            collapse_fraction: 0.0,
+            ..options.clone()
+        };
+        let mut seen = [false; 2];
+        let plain = random_box(30, 3);
+        let cases = [(&pd, &nearly_zero), (&pd, &zero_only), (&plain, &nearly_zero)];
+        for (pd, opts) in cases {
+            let p = periodic_layout_with(pd, opts, &crate::mesher::exact_sampling()).unwrap();
+            let pb = p.blocking.as_ref().expect("exact input");
+            let whole = build_with_inserted(pb, &options, &[]).unwrap();
+            match build_unless_backwards(pb, &options, &[]).unwrap() {
+                Built::Backwards(arcs) => {
+                    seen[0] = true;
+                    assert!(!arcs.is_empty());
+                    assert_eq!(arcs, whole.inconsistent_arcs);
+                }
+                Built::Mesh(x) => {
+                    seen[1] = true;
+                    assert!(whole.inconsistent_arcs.is_empty());
+                    assert_eq!(x.layout.blocks.len(), whole.layout.blocks.len());
+                    let bits = |g: &[crate::mesh::BlockGrid]| -> Vec<u64> {
+                        g.iter()
+                            .flat_map(|g| g.nodes.iter().flat_map(|p| p.map(f64::to_bits)))
+                            .collect()
+                    };
+                    assert_eq!(bits(&x.grids), bits(&whole.grids));
+                }
+            }
+        }
+        // The file's first layout has arcs running backwards (`tests/perf_periodic.rs`).
+        assert_eq!(seen, [true, true]);
+    }
+
     #[test]
     fn a_boost_refines_its_orbit_only() {
         let pd = PeriodicDomain::new(
