@@ -1457,7 +1457,7 @@ fn extract(
     let flat = (0..layout.blocks.len())
         .into_par_iter()
         .map(|b| (b, blocking::block_area(&layout, b)))
-        .find_first(|&(_, a)| !(a > 0.0));
+        .find_first(|&(_, a)| a.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater));
     if let Some((b, a)) = flat {
         return Err(MeshError::Internal(format!(
             "periodic block {b} has a non-positive area {} (a degenerate medial arc that \
