@@ -580,7 +580,9 @@ pub fn validate_options(options: &Options) -> Result<(), MeshError> {
 }
 
 /// The nodes of one spoke from the wall point `a` (`j = 0`) to the medial point `m`
-/// (`j = n`), `n + 1` nodes with the given clustering; the ends are exactly `a` and `m`.
+/// (`j = n`), `n + 1` nodes with the given clustering; the ends are exactly `a` and `m`
+/// (the tests' single-spoke form of [`spoke_column`]).
+#[cfg(test)]
 fn spoke_nodes(a: Point, m: Point, n: usize, first: Option<f64>, growth: f64) -> Vec<Point> {
     let mut out = vec![[0.0; 2]; n + 1];
     let mut d = Vec::with_capacity(n + 1);

@@ -30,8 +30,8 @@
 use super::counts::{ArcTarget, CountProblem, Counts};
 use super::imposed::{vertex_cycle, BlockKey, CircleTag};
 use super::{
-    arc_params_into, clustering, clustering_of, expected_sign, internal, median, spoke_nodes,
-    validate_options, ArcGeometry, Wall, ZERO_SWEEP,
+    arc_params_into, clustering, clustering_of, expected_sign, internal, median, validate_options,
+    ArcGeometry, Wall, ZERO_SWEEP,
 };
 use crate::apollonius::{apollonius, Choice};
 use crate::blocking::MAX_TEMPLATE_SWEEP;
@@ -669,8 +669,8 @@ struct Builder<'a> {
     layout: BlockLayout,
     centre: HashMap<Instance, u32>,
     tangent: HashMap<(Instance, usize), u32>,
-    /// Spoke edge and nodes (wall to centre) per tangent point instance.
-    spokes: HashMap<(Instance, usize), (u32, Vec<Point>)>,
+    /// Spoke edge (centre to wall) per tangent point instance.
+    spokes: HashMap<(Instance, usize), u32>,
 }
 
 impl Builder<'_> {
@@ -694,25 +694,21 @@ impl Builder<'_> {
         self.tangent.insert((i, k), v);
         v
     }
-    /// The spoke edge of tangent point `k` of instance `i`, its nodes computed once.
-    fn spoke(&mut self, i: Instance, k: usize, nj: usize, first: Option<f64>, growth: f64) -> u32 {
-        if let Some((e, _)) = self.spokes.get(&(i, k)) {
-            return *e;
+    /// The spoke edge of tangent point `k` of instance `i` (its nodes are its blocks' end
+    /// columns, made with the grids from the positions of its two ends).
+    fn spoke(&mut self, i: Instance, k: usize) -> u32 {
+        if let Some(&e) = self.spokes.get(&(i, k)) {
+            return e;
         }
         let c = self.centre_vertex(i.0, i.1);
         let t = self.tangent_vertex(i, k);
-        let (a, m) = (
-            self.layout.vertices[t as usize],
-            self.layout.vertices[c as usize],
-        );
-        let nodes = spoke_nodes(a, m, nj, first, growth);
         self.layout.edges.push(Edge {
             ends: [c, t],
             curve: Curve::Segment,
             kind: EdgeKind::Spoke,
         });
         let e = (self.layout.edges.len() - 1) as u32;
-        self.spokes.insert((i, k), (e, nodes));
+        self.spokes.insert((i, k), e);
         e
     }
 }
@@ -888,8 +884,8 @@ fn assemble(
             let [(w0, e0), (w1, e1)] = arc.ends;
             let (i0, i1) = ((w0, add(e0, d)), (w1, add(e1, d)));
             let (k0, k1) = (slots[o][0][side], slots[o][1][side]);
-            let sp0 = b.spoke(i0, k0, nj, first, cl.growth);
-            let sp1 = b.spoke(i1, k1, nj, first, cl.growth);
+            let sp0 = b.spoke(i0, k0);
+            let sp1 = b.spoke(i1, k1);
             let (c0, c1) = (b.centre_vertex(i0.0, i0.1), b.centre_vertex(i1.0, i1.1));
             let (t0, t1) = (b.tangent_vertex(i0, k0), b.tangent_vertex(i1, k1));
             let (t_first, t_last) = if side == 0 { (t0, t1) } else { (t1, t0) };
@@ -935,37 +931,46 @@ fn assemble(
             });
         }
     }
-    let spokes = &b.spokes;
+    // Column `i` of a block is the spoke from its wall node to its medial node; its end
+    // columns are the spokes of its end vertices (the tangent point to the centre), the same
+    // nodes in both blocks at a spoke (`GridScratch` gives each column exactly the nodes of
+    // `super::spoke_column`, as the spokes' own nodes were computed before, issue 8).
+    let (spokes, layout) = (&b.spokes, &b.layout);
+    let spoke_ends = |o: usize, end: &(Instance, usize)| -> Result<(Point, Point), MeshError> {
+        let e = spokes
+            .get(end)
+            .ok_or_else(|| internal(format!("arc orbit {o}: a spoke not made")))?;
+        let [c, t] = layout.edges[*e as usize].ends;
+        Ok((layout.vertices[t as usize], layout.vertices[c as usize]))
+    };
     let grids: Vec<BlockGrid> = jobs
         .par_iter()
-        .map(|job| {
-            let n = counts.arc[job.o];
-            let (m_nodes, a_nodes) = &arc_nodes[job.o];
-            let nj = job.nj;
-            let mut nodes = vec![[0.0; 2]; (n + 1) * (nj + 1)];
-            for i in 0..=n {
-                let k = if job.side == 0 { i } else { n - i };
-                let spoke = |e: usize| spokes.get(&job.ends[e]).map(|s| &s.1);
-                let fresh;
-                let col: &[Point] = if k == 0 || k == n {
-                    spoke(if k == 0 { 0 } else { 1 })
-                        .ok_or_else(|| internal(format!("arc orbit {}: a spoke not made", job.o)))?
-                } else {
-                    fresh = spoke_nodes(
-                        shifted(a_nodes[job.side][k], job.d, size),
-                        shifted(m_nodes[k], job.d, size),
-                        nj,
-                        job.first,
-                        job.growth,
-                    );
-                    &fresh
-                };
-                for (j, q) in col.iter().enumerate() {
-                    nodes[i + j * (n + 1)] = *q;
+        .map_init(
+            super::grid_nodes::GridScratch::default,
+            |scratch, job| -> Result<BlockGrid, MeshError> {
+                let n = counts.arc[job.o];
+                let (m_nodes, a_nodes) = &arc_nodes[job.o];
+                scratch.clear();
+                for i in 0..=n {
+                    let k = if job.side == 0 { i } else { n - i };
+                    let (a, m) = if k == 0 || k == n {
+                        spoke_ends(job.o, &job.ends[if k == 0 { 0 } else { 1 }])?
+                    } else {
+                        (
+                            shifted(a_nodes[job.side][k], job.d, size),
+                            shifted(m_nodes[k], job.d, size),
+                        )
+                    };
+                    scratch.push(a, m);
                 }
-            }
-            Ok(BlockGrid { ni: n, nj, nodes })
-        })
+                let nodes = scratch.nodes(job.nj, job.first, job.growth);
+                Ok(BlockGrid {
+                    ni: n,
+                    nj: job.nj,
+                    nodes,
+                })
+            },
+        )
         .collect::<Result<_, MeshError>>()?;
     Ok((b.layout, grids, medial_edge))
 }

@@ -2591,7 +2591,11 @@ mod tests {
         };
         let mut seen = [false; 2];
         let plain = random_box(30, 3);
-        let cases = [(&pd, &nearly_zero), (&pd, &zero_only), (&plain, &nearly_zero)];
+        let cases = [
+            (&pd, &nearly_zero),
+            (&pd, &zero_only),
+            (&plain, &nearly_zero),
+        ];
         for (pd, opts) in cases {
             let p = periodic_layout_with(pd, opts, &crate::mesher::exact_sampling()).unwrap();
             let pb = p.blocking.as_ref().expect("exact input");
