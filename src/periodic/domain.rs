@@ -131,28 +131,14 @@ impl PeriodicDomain {
             }
             h.center = [wrap(h.center[0], size[0]), wrap(h.center[1], size[1])];
         }
-        // Overlaps with images: a k-d tree over the 3 x 3 tiling, queried for the canonical
-        // copies (tile (0, 0) is stored first, then the tiles of `shifts`, so tiling index
-        // `k h + j` is hole `j` moved by `shifts[k - 1]`).
+        // Overlaps with images: the nearest hole or image of each canonical copy over the
+        // 3 x 3 tiling ([`nearest_images`]: tile (0, 0) first, then the tiles of `shifts`, so
+        // tiling index `k h + j` is hole `j` moved by `shifts[k - 1]`).
         let h = holes.len();
         let shifts: Vec<(i32, i32)> = tile_offsets(1).filter(|&o| o != (0, 0)).collect();
-        let mut tiling = Vec::with_capacity(9 * h);
-        tiling.extend_from_slice(&holes);
-        for &(a, b) in &shifts {
-            for c in &holes {
-                tiling.push(Circle {
-                    center: [
-                        c.center[0] + a as f64 * size[0],
-                        c.center[1] + b as f64 * size[1],
-                    ],
-                    radius: c.radius,
-                });
-            }
-        }
-        let index = HoleIndex::new(&tiling);
         let mut worst: Option<(usize, usize, [i32; 2], f64)> = None;
-        for i in 0..h {
-            if let Some((k, gap)) = index.nearest_gap(i) {
+        for (i, nearest) in nearest_images(size, &holes).into_iter().enumerate() {
+            if let Some((k, gap)) = nearest {
                 if gap <= tol {
                     let (j, shift) = match (k / h).checked_sub(1) {
                         None => (k, [0, 0]),
@@ -257,28 +243,65 @@ impl PeriodicDomain {
 
     /// Each hole's smallest gap to another hole or to an image (of itself or another hole).
     pub fn nearest_gaps(&self) -> Vec<f64> {
-        let h = self.holes.len();
-        let mut tiling = self.holes.clone();
-        for (a, b) in tile_offsets(1).filter(|&o| o != (0, 0)) {
-            for c in &self.holes {
-                tiling.push(Circle {
-                    center: [
-                        c.center[0] + a as f64 * self.size[0],
-                        c.center[1] + b as f64 * self.size[1],
-                    ],
-                    radius: c.radius,
-                });
-            }
-        }
-        let index = HoleIndex::new(&tiling);
-        (0..h)
-            .map(|i| {
-                index
-                    .nearest_gap(i)
-                    .map_or(self.size[0].min(self.size[1]), |(_, g)| g)
-            })
+        nearest_images(self.size, &self.holes)
+            .into_iter()
+            .map(|n| n.map_or(self.size[0].min(self.size[1]), |(_, g)| g))
             .collect()
     }
+}
+
+/// For each hole of `holes` (centres in the box of `size`), its nearest other hole or image
+/// by gap, as the k-d tree ([`HoleIndex::nearest_gap`]) over the whole 3 x 3 tiling answers
+/// it: `(k, gap)` with tiling index `k = t h + j` for hole `j` moved by the `t`-th shift
+/// (`t = 0` the box itself, then [`tile_offsets`]`(1)` without `(0, 0)`), the exact
+/// floating-point minimum gap, ties to the smaller `k`.
+///
+/// Only the images that can answer are put in the tree (issue 8: the nine copies of 100 000
+/// holes, tree and queries built serially, took about a second per call, and a periodic mesh
+/// calls it once per layout). A hole's nearest gap is at most `g_i`, its nearest gap among
+/// the canonical holes alone, so its answer is within `g_i + r_i + r_max` of its centre: the
+/// images whose centres lie within `max_i (g_i + r_i) + r_max` (widened by a relative 1e-9
+/// for rounding) of the box are every candidate of every query. Kept in tiling order, their
+/// indices in the smaller tree are in the same order as `k`: the same ties.
+fn nearest_images(size: [f64; 2], holes: &[Circle]) -> Vec<Option<(usize, f64)>> {
+    use rayon::prelude::*;
+    let h = holes.len();
+    let canonical = HoleIndex::new(holes).nearest_gap_each();
+    let rmax = holes.iter().map(|c| c.radius).fold(0.0, f64::max);
+    let reach = canonical
+        .iter()
+        .zip(holes)
+        .map(|(n, c)| n.map_or(f64::INFINITY, |(_, g)| g) + c.radius)
+        .fold(0.0, f64::max)
+        + rmax;
+    let m = reach + 1e-9 * (reach.abs() + size[0].max(size[1]));
+    // NaN or infinite reach: every image.
+    let near = |p: [f64; 2]| !m.is_finite() || (0..2).all(|a| p[a] >= -m && p[a] <= size[a] + m);
+    let mut tiling = Vec::with_capacity(h);
+    let mut index_of: Vec<usize> = Vec::with_capacity(h);
+    tiling.extend_from_slice(holes);
+    index_of.extend(0..h);
+    for (t, (a, b)) in tile_offsets(1).filter(|&o| o != (0, 0)).enumerate() {
+        for (j, c) in holes.iter().enumerate() {
+            let center = [
+                c.center[0] + a as f64 * size[0],
+                c.center[1] + b as f64 * size[1],
+            ];
+            if near(center) {
+                tiling.push(Circle {
+                    center,
+                    radius: c.radius,
+                });
+                index_of.push((t + 1) * h + j);
+            }
+        }
+    }
+    let index = HoleIndex::new(&tiling);
+    (0..h)
+        .into_par_iter()
+        .with_min_len(256)
+        .map(|i| index.nearest_gap(i).map(|(k, g)| (index_of[k], g)))
+        .collect()
 }
 
 /// The tile offsets `(a, b)` with `|a|, |b| <= m`, in lexicographic order.
@@ -289,4 +312,85 @@ pub fn tile_offsets(m: i32) -> impl Iterator<Item = (i32, i32)> {
 /// The tile offsets `(a, b)` with `|a| <= m[0]` and `|b| <= m[1]`, in lexicographic order.
 pub fn tile_array(m: [i32; 2]) -> impl Iterator<Item = (i32, i32)> {
     (-m[0]..=m[0]).flat_map(move |a| (-m[1]..=m[1]).map(move |b| (a, b)))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+
+    /// The nearest hole or image of each canonical hole by brute force over the whole 3 x 3
+    /// tiling: the exact floating-point minimum of [`crate::domain::gap`], ties to the
+    /// smaller tiling index.
+    fn brute_force(size: [f64; 2], holes: &[Circle]) -> Vec<Option<(usize, f64)>> {
+        let h = holes.len();
+        let mut tiling = holes.to_vec();
+        for (a, b) in tile_offsets(1).filter(|&o| o != (0, 0)) {
+            tiling.extend(holes.iter().map(|c| Circle {
+                center: [
+                    c.center[0] + a as f64 * size[0],
+                    c.center[1] + b as f64 * size[1],
+                ],
+                radius: c.radius,
+            }));
+        }
+        (0..h)
+            .map(|i| {
+                let mut best: Option<(usize, f64)> = None;
+                for (k, c) in tiling.iter().enumerate().filter(|&(k, _)| k != i) {
+                    let g = crate::domain::gap(&tiling[i], c);
+                    if best.is_none_or(|(_, b)| g < b) {
+                        best = Some((k, g));
+                    }
+                }
+                best
+            })
+            .collect()
+    }
+
+    fn bits(v: &[Option<(usize, f64)>]) -> Vec<Option<(usize, u64)>> {
+        v.iter().map(|n| n.map(|(k, g)| (k, g.to_bits()))).collect()
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(64))]
+        /// [`nearest_images`] (a tree over the canonical holes and the images near the box)
+        /// answers as the brute force over every image: random boxes dense and sparse, holes
+        /// on a lattice (ties between images) and a single hole (only its own images).
+        #[test]
+        fn nearest_images_equal_the_brute_force_over_the_whole_tiling(
+            size in (1.0..20.0f64, 1.0..20.0f64),
+            raw in proptest::collection::vec((0.0..1.0f64, 0.0..1.0f64, 0.01..0.2f64), 1..60),
+            lattice in 0usize..4,
+        ) {
+            let size = [size.0, size.1];
+            let holes: Vec<Circle> = if lattice > 0 {
+                // A k x k lattice of equal holes: every hole has its nearest at the same gap in
+                // several directions.
+                let k = lattice + 1;
+                let r = 0.2 * size[0].min(size[1]) / k as f64;
+                (0..k * k)
+                    .map(|n| Circle {
+                        center: [
+                            (n % k) as f64 * size[0] / k as f64,
+                            (n / k) as f64 * size[1] / k as f64,
+                        ],
+                        radius: r,
+                    })
+                    .collect()
+            } else {
+                let scale = size[0].min(size[1]) * 0.5;
+                raw.iter()
+                    .map(|&(x, y, r)| Circle {
+                        center: [x * size[0], y * size[1]],
+                        radius: r * scale,
+                    })
+                    .collect()
+            };
+            prop_assert_eq!(
+                bits(&nearest_images(size, &holes)),
+                bits(&brute_force(size, &holes))
+            );
+        }
+    }
 }
