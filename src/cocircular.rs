@@ -49,6 +49,23 @@ pub fn vertex_circles(domain: &Domain, medial: &MedialGraph) -> Vec<Option<Apoll
     vertex_circles_reusing(domain, medial, None)
 }
 
+/// [`vertex_circles`] of the vertices `vs` of `medial` only, in the order of `vs` (in
+/// parallel; the same answers).
+pub fn vertex_circles_of(
+    domain: &Domain,
+    medial: &MedialGraph,
+    vs: &[u32],
+) -> Vec<Option<Apollonius>> {
+    vs.par_iter()
+        .map(|&v| {
+            medial
+                .vertices
+                .get(v as usize)
+                .and_then(|m| vertex_circle(domain, m))
+        })
+        .collect()
+}
+
 /// The solve of one medial vertex: a function of its circle ids (in order), the circles of
 /// `domain` they name, and its position (the hint).
 fn vertex_circle(domain: &Domain, v: &MedialVertex) -> Option<Apollonius> {

@@ -803,23 +803,9 @@ fn normalise_cluster(key: &[SampleKey]) -> (ClusterKey, (i32, i32)) {
 }
 
 /// The exact Apollonius circles of the medial vertices `vs` of the tiling (see
-/// [`cocircular::vertex_circles`]).
-fn circles_of(
-    domain: &Domain,
-    medial: &MedialGraph,
-    vs: &[u32],
-) -> HashMap<u32, Option<Apollonius>> {
-    let sub = MedialGraph {
-        vertices: vs
-            .iter()
-            .map(|&v| medial.vertices[v as usize].clone())
-            .collect(),
-        arcs: Vec::new(),
-    };
-    vs.iter()
-        .copied()
-        .zip(cocircular::vertex_circles(domain, &sub))
-        .collect()
+/// [`cocircular::vertex_circles`]), in the order of `vs`.
+fn circles_of(domain: &Domain, medial: &MedialGraph, vs: &[u32]) -> Vec<Option<Apollonius>> {
+    cocircular::vertex_circles_of(domain, medial, vs)
 }
 
 /// The arcs of the tiling chosen for collapse (see [`select_collapse`]).
@@ -894,7 +880,13 @@ fn select_collapse(
     let mut ends: Vec<u32> = reps.iter().flat_map(|&r| medial.arcs[r].ends).collect();
     ends.sort_unstable();
     ends.dedup();
-    let circles = circles_of(domain, medial, &ends);
+    let solved = circles_of(domain, medial, &ends);
+    // Vertex `v`'s circle, when `v` is an end of a representative and solved (`ends` is
+    // sorted).
+    let circle = |v: u32| -> Option<&Apollonius> {
+        let at = ends.binary_search(&v).ok()?;
+        solved[at].as_ref()
+    };
     // Vertex orbits of the representatives' ends, with the ends' shifts.
     let mut orbit_index: HashMap<VertexKey, usize> = HashMap::default();
     let mut orbit_ends: HashMap<usize, OrbitEnds> = HashMap::default();
@@ -915,18 +907,18 @@ fn select_collapse(
             orbit_ends.insert(r, out);
         }
     }
-    let radius = |v: u32| match circles.get(&v) {
-        Some(Some(c)) => c.radius,
-        _ => cocircular::local_radius(medial, &[], points, v),
+    let radius = |v: u32| match circle(v) {
+        Some(c) => c.radius,
+        None => cocircular::local_radius(medial, &[], points, v),
     };
-    let centre = |v: u32| circles.get(&v).and_then(|c| c.as_ref()).map(|c| c.center);
+    let centre = |v: u32| circle(v).map(|c| c.center);
     let mut zero: Vec<usize> = Vec::new();
     let mut short: Vec<(f64, usize)> = Vec::new();
     for &r in reps.iter().filter(|r| orbit_ends.contains_key(r)) {
         let arc = &medial.arcs[r];
         let [a, b] = arc.ends;
-        let same = match (circles.get(&a), circles.get(&b)) {
-            (Some(Some(x)), Some(Some(y))) => same_circle(&x.exact, &y.exact),
+        let same = match (circle(a), circle(b)) {
+            (Some(x), Some(y)) => same_circle(&x.exact, &y.exact),
             _ => false,
         };
         if a != b && (same || cocircular::is_zero_length(arc, medial, tri, &[])) {
@@ -1669,39 +1661,45 @@ fn exact_input_clusters(
         .enumerate()
         .map(|(i, (k, _))| (k, i))
         .collect();
-    let mut vertices = Vec::with_capacity(orbits.len());
-    for (_, r) in &orbits {
-        let near = contracted
-            .graph
-            .vertices
-            .get(*r)
-            .ok_or_else(|| bad("cluster vertex"))?
-            .position;
-        let mut circles: Vec<(f64, crate::exact_mode::periodic::Tag)> = Vec::new();
-        for &v in members.get(*r).ok_or_else(|| bad("cluster members"))? {
-            for &c in &medial.vertices[v as usize].circles {
-                let tag = t
-                    .key(c)
-                    .ok_or_else(|| bad("a kept vertex on the bounding circle"))?;
-                if circles.iter().all(|x| x.1 != tag) {
-                    let o = t.domain.circle(c).center;
-                    circles.push(((o[1] - near[1]).atan2(o[0] - near[0]), tag));
+    // Vertex and arc orbits each on their own, in parallel; the first error in orbit order is
+    // the one returned (issue 8).
+    let vertices = orbits
+        .par_iter()
+        .map(|(_, r)| -> Result<PeriodicVertex, MeshError> {
+            let near = contracted
+                .graph
+                .vertices
+                .get(*r)
+                .ok_or_else(|| bad("cluster vertex"))?
+                .position;
+            let mut circles: Vec<(f64, crate::exact_mode::periodic::Tag)> = Vec::new();
+            for &v in members.get(*r).ok_or_else(|| bad("cluster members"))? {
+                for &c in &medial.vertices[v as usize].circles {
+                    let tag = t
+                        .key(c)
+                        .ok_or_else(|| bad("a kept vertex on the bounding circle"))?;
+                    if circles.iter().all(|x| x.1 != tag) {
+                        let o = t.domain.circle(c).center;
+                        circles.push(((o[1] - near[1]).atan2(o[0] - near[0]), tag));
+                    }
                 }
             }
-        }
-        circles.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
-        vertices.push(PeriodicVertex {
-            circles: circles.into_iter().map(|x| x.1).collect(),
-            near,
-        });
-    }
+            circles.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+            Ok(PeriodicVertex {
+                circles: circles.into_iter().map(|x| x.1).collect(),
+                near,
+            })
+        })
+        .collect::<Vec<_>>()
+        .into_iter()
+        .collect::<Result<Vec<_>, _>>()?;
     // Kept arcs: their blocks in `aux` are `2k`, `2k + 1` for kept index `k`.
-    let kept_index: HashMap<u32, usize> = contracted
-        .kept
-        .iter()
-        .enumerate()
-        .map(|(k, &e)| (e, k))
-        .collect();
+    let mut kept_index: Vec<Option<usize>> = vec![None; medial.arcs.len()];
+    for (k, &e) in contracted.kept.iter().enumerate() {
+        if let Some(slot) = kept_index.get_mut(e as usize) {
+            *slot = Some(k);
+        }
+    }
     let cluster_end = |v: u32| -> Result<(usize, (i32, i32)), MeshError> {
         let c = *contracted
             .cluster_of
@@ -1715,16 +1713,22 @@ fn exact_input_clusters(
         let (rep, d) = normalise_cluster(&key);
         Ok((*index.get(&rep).ok_or_else(|| bad("arc end orbit"))?, d))
     };
-    let mut arcs = Vec::with_capacity(arc_orbits.len());
-    for key in arc_orbits {
-        let r = *arc_by_key.get(key).ok_or_else(|| bad("arc orbit"))?;
-        let arc = &medial.arcs[r];
-        let k = *kept_index
-            .get(&(r as u32))
-            .ok_or_else(|| bad("a kept arc orbit"))?;
-        let ends = [cluster_end(arc.ends[0])?, cluster_end(arc.ends[1])?];
-        arcs.push(orbit_arc(t, aux, arc, k, ends)?);
-    }
+    let arcs = arc_orbits
+        .par_iter()
+        .map(|key| -> Result<PeriodicArc, MeshError> {
+            let r = *arc_by_key.get(key).ok_or_else(|| bad("arc orbit"))?;
+            let arc = &medial.arcs[r];
+            let k = kept_index
+                .get(r)
+                .copied()
+                .flatten()
+                .ok_or_else(|| bad("a kept arc orbit"))?;
+            let ends = [cluster_end(arc.ends[0])?, cluster_end(arc.ends[1])?];
+            orbit_arc(t, aux, arc, k, ends)
+        })
+        .collect::<Vec<_>>()
+        .into_iter()
+        .collect::<Result<Vec<_>, _>>()?;
     Ok(PeriodicBlocking {
         size: pd.size(),
         holes: pd.holes().to_vec(),
@@ -1755,8 +1759,8 @@ fn periodic_groups(
         // Members with exactly the same empty circle (a cluster that also took short arcs
         // may hold several groups, or none).
         let mut classes: Vec<(&Apollonius, Vec<u32>)> = Vec::new();
-        for &v in ms {
-            let Some(Some(x)) = circles.get(&v) else {
+        for (&v, x) in ms.iter().zip(&circles) {
+            let Some(x) = x else {
                 continue;
             };
             match classes
