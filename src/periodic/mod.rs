@@ -871,7 +871,7 @@ fn select_collapse(
     exclude: &[usize],
 ) -> Selection {
     let rep_of: Vec<Option<usize>> = akeys
-        .iter()
+        .par_iter()
         .map(|k| k.and_then(|k| arc_by_key.get(&normalise_arc(&k).0).copied()))
         .collect();
     let mut reps: Vec<usize> = rep_of.iter().flatten().copied().collect();
@@ -888,15 +888,24 @@ fn select_collapse(
         solved[at].as_ref()
     };
     // Vertex orbits of the representatives' ends, with the ends' shifts.
+    // (The ends' normalised keys in parallel, numbered in representative order.)
+    type Normalised = Option<(VertexKey, (i32, i32))>;
+    let normalised: Vec<[Normalised; 2]> = reps
+        .par_iter()
+        .map(|&r| {
+            medial.arcs[r]
+                .ends
+                .map(|v| vkeys[v as usize].map(|k| normalise_vertex(&k)))
+        })
+        .collect();
     let mut orbit_index: HashMap<VertexKey, usize> = HashMap::default();
     let mut orbit_ends: HashMap<usize, OrbitEnds> = HashMap::default();
-    for &r in &reps {
+    for (&r, ends) in reps.iter().zip(&normalised) {
         let mut out = [(0, (0, 0)); 2];
         let mut ok = true;
-        for (k, &v) in medial.arcs[r].ends.iter().enumerate() {
-            match vkeys[v as usize] {
-                Some(key) => {
-                    let (rep, d) = normalise_vertex(&key);
+        for (k, end) in ends.iter().enumerate() {
+            match *end {
+                Some((rep, d)) => {
                     let n = orbit_index.len();
                     out[k] = (*orbit_index.entry(rep).or_insert(n), d);
                 }
@@ -912,22 +921,37 @@ fn select_collapse(
         None => cocircular::local_radius(medial, &[], points, v),
     };
     let centre = |v: u32| circle(v).map(|c| c.center);
+    // Each representative measured on its own, in parallel: `Some(None)` zero-length,
+    // `Some(Some(rel))` short, in representative order.
+    let measured: Vec<Option<Option<f64>>> = reps
+        .par_iter()
+        .map(|&r| {
+            if !orbit_ends.contains_key(&r) {
+                return None;
+            }
+            let arc = &medial.arcs[r];
+            let [a, b] = arc.ends;
+            let same = match (circle(a), circle(b)) {
+                (Some(x), Some(y)) => same_circle(&x.exact, &y.exact),
+                _ => false,
+            };
+            if a != b && (same || cocircular::is_zero_length(arc, medial, tri, &[])) {
+                Some(None)
+            } else if fraction > 0.0 && !exclude.contains(&r) {
+                let rel = collapse::measured_length(arc, centre, how) / radius(a).min(radius(b));
+                (rel.is_finite() && rel < fraction).then_some(Some(rel))
+            } else {
+                None
+            }
+        })
+        .collect();
     let mut zero: Vec<usize> = Vec::new();
     let mut short: Vec<(f64, usize)> = Vec::new();
-    for &r in reps.iter().filter(|r| orbit_ends.contains_key(r)) {
-        let arc = &medial.arcs[r];
-        let [a, b] = arc.ends;
-        let same = match (circle(a), circle(b)) {
-            (Some(x), Some(y)) => same_circle(&x.exact, &y.exact),
-            _ => false,
-        };
-        if a != b && (same || cocircular::is_zero_length(arc, medial, tri, &[])) {
-            zero.push(r);
-        } else if fraction > 0.0 && !exclude.contains(&r) {
-            let rel = collapse::measured_length(arc, centre, how) / radius(a).min(radius(b));
-            if rel.is_finite() && rel < fraction {
-                short.push((rel, r));
-            }
+    for (&r, m) in reps.iter().zip(measured) {
+        match m {
+            Some(None) => zero.push(r),
+            Some(Some(rel)) => short.push((rel, r)),
+            None => {}
         }
     }
     short.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
@@ -1143,7 +1167,10 @@ fn extract(
         key.dedup();
         Some(key)
     };
-    let ckeys: Vec<Option<ClusterKey>> = (0..graph.vertices.len()).map(cluster_key).collect();
+    let ckeys: Vec<Option<ClusterKey>> = (0..graph.vertices.len())
+        .into_par_iter()
+        .map(cluster_key)
+        .collect();
     let mut cluster_by_key: HashMap<ClusterKey, usize> = HashMap::default();
     for (c, k) in ckeys.iter().enumerate() {
         if let Some(k) = k {
@@ -1263,13 +1290,24 @@ fn extract(
     let mut vertex_orbits: Vec<VertexKey> = Vec::new();
     let mut collapsed_orbits: Vec<ArcKey> = Vec::new();
     let mut cluster_orbits: Vec<usize> = Vec::new();
-    let mut position_of = |c: usize,
-                           vorbits: &mut Vec<VertexKey>,
-                           corbits: &mut Vec<ArcKey>|
-     -> Result<Point, MeshError> {
-        if let Some(p) = vpos[c] {
-            return Ok(p);
-        }
+    let nmv = graph.vertices.len() as u32;
+    // The placement of each contracted vertex at a kept block's corner, worked out in
+    // parallel (issue 8) and taken by the serial numbering below at its first use (so that
+    // the first error met is the one in block order).
+    struct Placed {
+        p: Point,
+        r: usize,
+        vorbits: Vec<VertexKey>,
+        corbits: Vec<ArcKey>,
+    }
+    let mut needed: Vec<u32> = kept
+        .iter()
+        .flat_map(|&b| aux.blocks[b].corners)
+        .filter(|&v| v < nmv)
+        .collect();
+    needed.sort_unstable();
+    needed.dedup();
+    let place = |c: usize| -> Result<Placed, MeshError> {
         let key = ckeys[c]
             .as_ref()
             .ok_or_else(|| inconsistent("a kept vertex on the bounding circle"))?;
@@ -1280,18 +1318,51 @@ fn extract(
         if members[r].len() != members[c].len() {
             return Err(inconsistent("a collapsed vertex unlike its representative"));
         }
-        for &v in &members[c] {
-            let k = vkeys[v as usize].ok_or_else(|| inconsistent("vertex key"))?;
-            vorbits.push(normalise_vertex(&k).0);
+        let vorbits = members[c]
+            .iter()
+            .map(|&v| {
+                let k = vkeys[v as usize].ok_or_else(|| inconsistent("vertex key"))?;
+                Ok(normalise_vertex(&k).0)
+            })
+            .collect::<Result<Vec<_>, MeshError>>()?;
+        let corbits = collapsed_at[c]
+            .iter()
+            .map(|&e| {
+                let k = akeys[e].ok_or_else(|| inconsistent("collapsed arc key"))?;
+                Ok(normalise_arc(&k).0)
+            })
+            .collect::<Result<Vec<_>, MeshError>>()?;
+        Ok(Placed {
+            p: shift_point(graph.vertices[r].position, d),
+            r,
+            vorbits,
+            corbits,
+        })
+    };
+    let mut placed: Vec<Option<Result<Placed, MeshError>>> = needed
+        .par_iter()
+        .map(|&c| Some(place(c as usize)))
+        .collect();
+    let mut position_of = |c: usize,
+                           vorbits: &mut Vec<VertexKey>,
+                           corbits: &mut Vec<ArcKey>|
+     -> Result<Point, MeshError> {
+        if let Some(p) = vpos[c] {
+            return Ok(p);
         }
-        for &e in &collapsed_at[c] {
-            let k = akeys[e].ok_or_else(|| inconsistent("collapsed arc key"))?;
-            corbits.push(normalise_arc(&k).0);
-        }
-        cluster_orbits.push(r);
-        let p = shift_point(graph.vertices[r].position, d);
-        vpos[c] = Some(p);
-        Ok(p)
+        let got = needed
+            .binary_search(&(c as u32))
+            .ok()
+            .and_then(|at| placed[at].take());
+        let x = match got {
+            Some(x) => x?,
+            None => place(c)?,
+        };
+        vorbits.extend(x.vorbits);
+        corbits.extend(x.corbits);
+        cluster_orbits.push(x.r);
+        vpos[c] = Some(x.p);
+        Ok(x.p)
     };
 
     let mut layout = BlockLayout::default();
@@ -1301,7 +1372,41 @@ fn extract(
     // (new edge, original arc, offset of the other circle)
     let mut periodic: Vec<(u32, usize, (i32, i32))> = Vec::new();
     let mut arc_orbits: Vec<ArcKey> = Vec::new();
-    let nmv = graph.vertices.len() as u32;
+    // The medial side of each kept arc, worked out in parallel (as the corners above) and
+    // taken at its first use.
+    struct MedialSide {
+        rep: ArcKey,
+        flip: bool,
+        /// The representative's polyline moved to this instance (its ends are replaced by
+        /// the numbered end vertices).
+        pts: Vec<Point>,
+    }
+    let medial_side = |k: usize| -> Result<MedialSide, MeshError> {
+        let e = contracted.kept[k] as usize;
+        let key = akeys[e].ok_or_else(|| inconsistent("arc key"))?;
+        let (rep, d) = normalise_arc(&key);
+        let r = *arc_by_key
+            .get(&rep)
+            .ok_or_else(|| inconsistent("a medial arc without its representative"))?;
+        // Orient the edge as the representative: its first end is the instance vertex whose
+        // key is the representative's first end moved by d.
+        let rep_first =
+            vkeys[medial.arcs[r].ends[0] as usize].ok_or_else(|| inconsistent("arc end key"))?;
+        let first = shift_vertex(&rep_first, d);
+        let flip = vkeys[medial.arcs[e].ends[0] as usize] != Some(first);
+        let pts = medial.arcs[r]
+            .polyline
+            .iter()
+            .map(|&p| shift_point(p, d))
+            .collect();
+        Ok(MedialSide { rep, flip, pts })
+    };
+    let mut kept_arcs: Vec<usize> = kept.iter().map(|&b| b / 2).collect();
+    kept_arcs.dedup();
+    let mut sides_of: Vec<Option<Result<MedialSide, MeshError>>> = kept_arcs
+        .par_iter()
+        .map(|&k| Some(medial_side(k)))
+        .collect();
     for &b in &kept {
         let block = &aux.blocks[b];
         let mut corners = [0u32; 4];
@@ -1370,25 +1475,17 @@ fn extract(
                 }
                 EdgeKind::Medial => {
                     let e = contracted.kept[b / 2] as usize;
-                    let key = akeys[e].ok_or_else(|| inconsistent("arc key"))?;
-                    let (rep, d) = normalise_arc(&key);
-                    let r = *arc_by_key
-                        .get(&rep)
-                        .ok_or_else(|| inconsistent("a medial arc without its representative"))?;
+                    let got = kept_arcs
+                        .binary_search(&(b / 2))
+                        .ok()
+                        .and_then(|at| sides_of[at].take());
+                    let MedialSide { rep, flip, mut pts } = match got {
+                        Some(x) => x?,
+                        None => medial_side(b / 2)?,
+                    };
                     arc_orbits.push(rep);
-                    // Orient the edge as the representative: its first end is the instance
-                    // vertex whose key is the representative's first end moved by d.
-                    let rep_first = vkeys[medial.arcs[r].ends[0] as usize]
-                        .ok_or_else(|| inconsistent("arc end key"))?;
-                    let first = shift_vertex(&rep_first, d);
                     let arc = &medial.arcs[e];
-                    let flip = vkeys[arc.ends[0] as usize] != Some(first);
                     let ends = if flip { [ends[1], ends[0]] } else { ends };
-                    let mut pts: Vec<Point> = medial.arcs[r]
-                        .polyline
-                        .iter()
-                        .map(|&p| shift_point(p, d))
-                        .collect();
                     if let Some(f) = pts.first_mut() {
                         *f = layout.vertices[ends[0] as usize];
                     }
