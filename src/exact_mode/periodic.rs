@@ -641,22 +641,24 @@ fn block_keys(pb: &PeriodicBlocking, verts: &[Vertex]) -> Vec<BlockKey> {
             .collect();
         vertex_cycle(v.center, &touching)
     };
-    let mut keys = Vec::with_capacity(2 * pb.arcs.len());
-    for arc in &pb.arcs {
-        for side in 0..2 {
-            let c = arc.circles[side];
-            let d = (-c.1, -c.2);
-            let [(w0, e0), (w1, e1)] = arc.ends;
-            let (a, b) = (cycle(w0, add(e0, d)), cycle(w1, add(e1, d)));
-            let wall = (c.0 as i64, 0, 0);
-            keys.push(if side == 0 {
-                (wall, a, b)
-            } else {
-                (wall, b, a)
-            });
-        }
-    }
-    keys
+    // Each arc orbit's two keys on their own, in parallel, in block order (issue 8).
+    pb.arcs
+        .par_iter()
+        .flat_map_iter(|arc| {
+            (0..2).map(move |side| {
+                let c = arc.circles[side];
+                let d = (-c.1, -c.2);
+                let [(w0, e0), (w1, e1)] = arc.ends;
+                let (a, b) = (cycle(w0, add(e0, d)), cycle(w1, add(e1, d)));
+                let wall = (c.0 as i64, 0, 0);
+                if side == 0 {
+                    (wall, a, b)
+                } else {
+                    (wall, b, a)
+                }
+            })
+        })
+        .collect()
 }
 
 /// A vertex instance: orbit and shift.
