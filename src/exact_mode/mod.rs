@@ -590,9 +590,9 @@ fn spoke_nodes(a: Point, m: Point, n: usize, first: Option<f64>, growth: f64) ->
     out
 }
 
-/// [`spoke_nodes`] written into `nodes[i + j * stride]` for `j` in `0..=n` (a grid's column
-/// `i`, without allocating: `d` is the distances' buffer, reused from spoke to spoke). The same
-/// values, bit for bit.
+/// The nodes of one spoke (wall point `a` at `j = 0`, medial point `m` at `j = n`, the ends
+/// exactly `a` and `m`) written into `nodes[i + j * stride]` for `j` in `0..=n` (a grid's column
+/// `i`, without allocating: `d` is the distances' buffer, reused from spoke to spoke).
 #[allow(clippy::too_many_arguments)]
 fn spoke_column(
     a: Point,
