@@ -56,19 +56,28 @@ fn a_disagreeing_periodic_box_is_resampled_and_exact() {
 }
 
 /// 100 random holes whose first layout has a short arc collapsed and arcs running backwards:
-/// the zero-only layout of the same sampling would have them too, so exact mode resamples
-/// around them at once: one exact build per sampling (it was two), and the mesh is exact.
+/// exact mode fixes them on the same sampling (their orbits collapsed in every copy, the
+/// layout extracted again: no second sampling, triangulation or medial graph, and no
+/// zero-only layout), one exact build stopped at the backwards arcs and one whole build; the
+/// mesh is exact, with more collapsed arc orbits than the first layout's one, and the block
+/// count of the torus identity.
 #[test]
-fn backwards_arcs_are_resampled_without_the_zero_only_layout() {
-    let (_, mesh, t) = mesh_recorded(include_str!("data/periodic_backwards_100.json"));
-    // The first sampling (its layout with the short collapse, exact build: arcs backwards),
-    // then the sampling refined around them (layout, exact build: done). Before, the first
-    // sampling's zero-only layout and exact build came in between: three of each.
-    let (tri, exact) = (calls(&t, "triangulation"), calls(&t, "exact_geometry"));
-    assert_eq!((tri, exact), (2, 2), "{:?}", t.calls);
-    assert!(mesh.collapsed_arcs >= 1);
+fn backwards_arcs_are_fixed_on_the_same_sampling() {
+    let (pd, mesh, t) = mesh_recorded(include_str!("data/periodic_backwards_100.json"));
+    let calls3 = (
+        calls(&t, "triangulation"),
+        calls(&t, "blocking"),
+        calls(&t, "exact_geometry"),
+    );
+    assert_eq!(calls3, (1, 2, 2), "{:?}", t.calls);
+    assert!(mesh.collapsed_arcs >= 2, "{}", mesh.collapsed_arcs);
     assert_eq!(mesh.geometry, Geometry::Exact);
     assert_eq!(common::count_inverted_cells(&mesh.grids), 0);
+    let h = pd.hole_count() + mesh.inserted_holes.len();
+    assert_eq!(
+        mesh.layout.blocks.len() - mesh.template_blocks,
+        6 * h - 2 * mesh.collapsed_arcs + 2 * mesh.split_arcs
+    );
 }
 
 /// `layouts::periodic_bubbles`: `n` bubbles, radii in `[0.3, 0.6]`, centres in the box, the

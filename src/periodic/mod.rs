@@ -579,6 +579,29 @@ pub struct PeriodicLayout {
     /// The co-circular groups, one per orbit: canonical hole ids (one entry per tangent
     /// image, sorted), the empty circle's centre wrapped into the box, its radius.
     pub cocircular_groups: Vec<CocircularGroup>,
+    /// The orbit key of each arc orbit of `blocking`, in its order.
+    arc_keys: Vec<ArcKey>,
+    /// What the layout was extracted from, for exact mode's local fix (a re-extraction with
+    /// arcs running backwards collapsed, on the same sampling, [`reextract`]).
+    sampled: Option<std::sync::Arc<Sampled>>,
+    /// The arc orbits collapsed by that fix (sorted orbit keys).
+    forced: Vec<ArcKey>,
+}
+
+/// A sampled, triangulated tiling and its medial graph.
+struct Sampled {
+    t: Tiling,
+    samples: Samples,
+    tri: Triangulation,
+    medial: MedialGraph,
+}
+
+impl std::fmt::Debug for Sampled {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Sampled")
+            .field("medial_vertices", &self.medial.vertices.len())
+            .finish()
+    }
 }
 
 /// The block layout of one period of `pd` (see the module documentation).
@@ -627,29 +650,26 @@ fn layout_from(
         }
         let t = Tiling::with_reach(pd, m, reach)?;
         let (samples, tri, medial) = sample_tiling(&t, &gaps, &opts, options.mode == Mode::Paper)?;
-        let extracted = timings::span("blocking", || {
-            // Exact mode builds on the Apollonius centres: it measures short arcs by them.
-            let how = match options.mode {
-                Mode::Exact => collapse::ArcLength::Chord,
-                Mode::Paper => collapse::ArcLength::Polyline,
-            };
-            extract(
-                pd,
-                &t,
-                &samples,
-                &tri,
-                &medial,
-                options.collapse_fraction,
-                how,
-            )
-        })?;
+        let sampled = Sampled {
+            t,
+            samples,
+            tri,
+            medial,
+        };
+        let extracted = timings::span("blocking", || extract_from(pd, options, &sampled, &[]))?;
         match extracted {
-            Extracted::Layout(p) => return Ok(p),
+            Extracted::Layout(mut p) => {
+                // Paper mode has no use for it.
+                if options.mode == Mode::Exact {
+                    p.sampled = Some(std::sync::Arc::new(sampled));
+                }
+                return Ok(p);
+            }
             Extracted::TooSmall {
                 need,
                 need_reach,
                 blind,
-            } => match next_extent(&t, need, need_reach, blind, cap) {
+            } => match next_extent(&sampled.t, need, need_reach, blind, cap) {
                 Some(next) => (m, reach) = next,
                 None => break,
             },
@@ -661,6 +681,59 @@ fn layout_from(
         2 * m[0] + 1,
         2 * m[1] + 1
     )))
+}
+
+/// [`extract`] from `sampled` with the arc orbits `forced` collapsed, measuring short arcs as
+/// the mode does.
+fn extract_from(
+    pd: &PeriodicDomain,
+    options: &Options,
+    sampled: &Sampled,
+    forced: &[ArcKey],
+) -> Result<Extracted, MeshError> {
+    // Exact mode builds on the Apollonius centres: it measures short arcs by them.
+    let how = match options.mode {
+        Mode::Exact => collapse::ArcLength::Chord,
+        Mode::Paper => collapse::ArcLength::Polyline,
+    };
+    extract(
+        pd,
+        &sampled.t,
+        &sampled.samples,
+        &sampled.tri,
+        &sampled.medial,
+        options.collapse_fraction,
+        how,
+        forced,
+    )
+}
+
+/// Exact mode's local fix (issue 8, as bounded exact mode's degree-4 collapse): the layout of
+/// the same sampling as `sampled` with the arc orbits `force` (orbit keys of arcs running
+/// backwards: nearly co-circular circles whose sampled Delaunay diagonal is not the exact
+/// one) collapsed in every copy, each into one vertex of its four circles, without
+/// sampling, triangulating and finding the medial graph again. `Internal` when the
+/// extraction does not hold (the caller resamples instead).
+fn reextract(
+    pd: &PeriodicDomain,
+    options: &Options,
+    sampled: std::sync::Arc<Sampled>,
+    before: &[ArcKey],
+    force: &[ArcKey],
+) -> Result<PeriodicLayout, MeshError> {
+    let mut forced: Vec<ArcKey> = before.iter().chain(force).copied().collect();
+    forced.sort_unstable();
+    forced.dedup();
+    match timings::span("blocking", || extract_from(pd, options, &sampled, &forced))? {
+        Extracted::Layout(mut p) => {
+            p.sampled = Some(sampled);
+            p.forced = forced;
+            Ok(p)
+        }
+        Extracted::TooSmall { .. } => Err(MeshError::Internal(
+            "the layout with forced collapses needs a wider tiling".into(),
+        )),
+    }
 }
 
 /// The largest half-widths of the array of copies for a period `size`: `(2 m + 1) L <=`
@@ -869,6 +942,7 @@ fn select_collapse(
     fraction: f64,
     how: collapse::ArcLength,
     exclude: &[usize],
+    forced: &[ArcKey],
 ) -> Selection {
     let rep_of: Vec<Option<usize>> = akeys
         .par_iter()
@@ -935,7 +1009,9 @@ fn select_collapse(
                 (Some(x), Some(y)) => same_circle(&x.exact, &y.exact),
                 _ => false,
             };
-            if a != b && (same || cocircular::is_zero_length(arc, medial, tri, &[])) {
+            let force =
+                || akeys[r].is_some_and(|k| forced.binary_search(&normalise_arc(&k).0).is_ok());
+            if a != b && (same || cocircular::is_zero_length(arc, medial, tri, &[]) || force()) {
                 Some(None)
             } else if fraction > 0.0 && !exclude.contains(&r) {
                 let rel = collapse::measured_length(arc, centre, how) / radius(a).min(radius(b));
@@ -1042,7 +1118,9 @@ fn not_translation_consistent(what: &str) -> MeshError {
 /// copy. A contracted vertex is identified up to translation by its
 /// [`ClusterKey`], so its instances are its orbit representative plus the period shift like
 /// any other vertex. A kept block with a non-positive outline area is an
-/// [`MeshError::Internal`].
+/// [`MeshError::Internal`]. The arc orbits `forced` (orbit keys) are collapsed with the
+/// zero-length ones (exact mode's local fix, [`reextract`]).
+#[allow(clippy::too_many_arguments)]
 fn extract(
     pd: &PeriodicDomain,
     t: &Tiling,
@@ -1051,6 +1129,7 @@ fn extract(
     medial: &MedialGraph,
     fraction: f64,
     how: collapse::ArcLength,
+    forced: &[ArcKey],
 ) -> Result<Extracted, MeshError> {
     let size = t.size;
     // Orbit keys of the original medial graph.
@@ -1113,6 +1192,7 @@ fn extract(
             fraction,
             how,
             &exclude,
+            forced,
         );
         let contracted = collapse::contract(medial, &sel.flags)?;
         let (aux, vertex_samples) = blocking::blocks(&t.domain, samples, &contracted.graph)?;
@@ -1625,6 +1705,9 @@ fn extract(
         collapsed_arcs: collapsed_orbits.len(),
         cocircular_groups: groups,
         blocking,
+        arc_keys: arc_orbits,
+        sampled: None,
+        forced: Vec::new(),
     }))
 }
 
@@ -2206,17 +2289,24 @@ fn exact_attempts(
                 // Nothing collapsed (or nothing short): the zero-only layout is this one.
                 same_as_zero_only = Some(p);
             } else {
+                let (sampled, before) = (p.sampled.clone(), p.forced.clone());
                 match exact_frame(pd, p, options, fluid, true)? {
                     Framed::Done(f) => return Ok(Some(f)),
                     // Arcs running backwards come from the sampling, not from the collapse:
                     // the zero-only layout of the same sampling has them too (issue 8: at
                     // 10 000 holes it had the same ones, for a layout and an exact build more
-                    // per attempt). Resample around them at once; the last attempt still
-                    // tries the zero-only layout.
+                    // per attempt). Fix them on this sampling, else resample around them at
+                    // once; the last attempt still tries the zero-only layout.
                     Framed::Failed {
                         holes,
                         backwards: true,
+                        arcs,
                     } if attempt < EXACT_RESAMPLING => {
+                        let fixed =
+                            local_fix(pd, &nearly_zero, options, fluid, sampled, &before, &arcs)?;
+                        if let Some(f) = fixed {
+                            return Ok(Some(f));
+                        }
                         refine_around(&mut sampling, holes);
                         continue;
                     }
@@ -2238,12 +2328,54 @@ fn exact_attempts(
         if p.blocking.is_none() {
             return Ok(None);
         }
+        let (sampled, before) = (p.sampled.clone(), p.forced.clone());
         match exact_frame(pd, p, options, fluid, false)? {
             Framed::Done(f) => return Ok(Some(f)),
-            Framed::Failed { holes, .. } => refine_around(&mut sampling, holes),
+            Framed::Failed { holes, arcs, .. } => {
+                let fixed = local_fix(pd, &zero_only, options, fluid, sampled, &before, &arcs)?;
+                if let Some(f) = fixed {
+                    return Ok(Some(f));
+                }
+                refine_around(&mut sampling, holes)
+            }
         }
     }
     Ok(None)
+}
+
+/// Exact mode's local fix on one sampling (issue 8, as bounded exact mode's degree-4
+/// collapse of a backwards arc): the layout of `sampled` made with `layout_options`, with the
+/// arc orbits `arcs` (running backwards) collapsed in every copy besides those of `before`
+/// ([`reextract`]), built and kept only when no arc runs backwards, no cell is inverted and
+/// no corner is below [`crate::mesher::MERGED_MIN_ANGLE_DEG`]. `Ok(None)` when there is
+/// nothing to fix or the fix did not hold (the caller resamples); errors other than
+/// [`MeshError::Internal`] are returned.
+fn local_fix(
+    pd: &PeriodicDomain,
+    layout_options: &Options,
+    options: &Options,
+    fluid: &[bool],
+    sampled: Option<std::sync::Arc<Sampled>>,
+    before: &[ArcKey],
+    arcs: &[ArcKey],
+) -> Result<Option<PeriodicFrame>, MeshError> {
+    let Some(sampled) = sampled.filter(|_| !arcs.is_empty()) else {
+        return Ok(None);
+    };
+    let mut p = match reextract(pd, layout_options, sampled, before, arcs) {
+        Ok(p) => p,
+        Err(MeshError::Internal(_)) => return Ok(None),
+        Err(e) => return Err(e),
+    };
+    // One fix per sampling: the sampled tiling is not needed by the build.
+    p.sampled = None;
+    if p.blocking.is_none() {
+        return Ok(None);
+    }
+    match exact_frame(pd, p, options, fluid, true)? {
+        Framed::Done(f) => Ok(Some(f)),
+        Framed::Failed { .. } => Ok(None),
+    }
 }
 
 /// Refine `sampling` 4x on the orbits of `holes` (issue 8: as bounded exact mode does; a
@@ -2274,6 +2406,8 @@ enum Framed {
     Failed {
         holes: Vec<u32>,
         backwards: bool,
+        /// The orbit keys of the arcs running backwards (empty unless `backwards`).
+        arcs: Vec<ArcKey>,
     },
 }
 
@@ -2321,6 +2455,7 @@ fn exact_frame(
         return Ok(Framed::Failed {
             holes: Vec::new(),
             backwards: false,
+            arcs: Vec::new(),
         });
     };
     // A build with arcs running backwards stops before its grids (the mesh would not be
@@ -2334,12 +2469,17 @@ fn exact_frame(
             return Ok(Framed::Failed {
                 holes: holes_around(pb, &bad),
                 backwards: true,
+                arcs: arcs
+                    .iter()
+                    .filter_map(|&o| p.arc_keys.get(o).copied())
+                    .collect(),
             });
         }
         Err(MeshError::Internal(_)) => {
             return Ok(Framed::Failed {
                 holes: Vec::new(),
                 backwards: false,
+                arcs: Vec::new(),
             })
         }
         Err(e) => return Err(e),
@@ -2367,6 +2507,7 @@ fn exact_frame(
         return Ok(Framed::Failed {
             holes: holes_around(pb, &bad),
             backwards: false,
+            arcs: Vec::new(),
         });
     }
     let real = pd.hole_count() - fluid.iter().filter(|&&f| f).count();
@@ -2722,6 +2863,70 @@ mod tests {
         }
         // The file's first layout has arcs running backwards (`tests/perf_periodic.rs`).
         assert_eq!(seen, [true, true]);
+    }
+
+    /// Exact mode's local fix (issue 8): the layout extracted again from the same sampling
+    /// with the orbits of the arcs running backwards collapsed keeps none of them (every
+    /// other arc orbit of the first layout is kept or collapsed as before), collapses each
+    /// (blocks: two fewer per orbit), and its exact build has no arc running backwards and
+    /// no inverted cell (orientation recomputed from the nodes).
+    #[test]
+    fn the_local_fix_collapses_the_backwards_arc_orbits_in_every_copy() {
+        use crate::exact_mode::periodic::{build_unless_backwards, Built};
+        let pd = match crate::domain::AnyDomain::from_json_str(include_str!(
+            "../../tests/data/periodic_backwards_100.json"
+        ))
+        .unwrap()
+        {
+            crate::domain::AnyDomain::Periodic(pd) => pd,
+            _ => unreachable!("a periodic file"),
+        };
+        let options = Options {
+            block_cells: Some(4),
+            ..Options::default()
+        };
+        let nearly_zero = Options {
+            collapse_fraction: options.collapse_fraction.min(EXACT_COLLAPSE_FRACTION),
+            ..options.clone()
+        };
+        let p = periodic_layout_with(&pd, &nearly_zero, &crate::mesher::exact_sampling()).unwrap();
+        let pb = p.blocking.as_ref().expect("exact input");
+        let Built::Backwards(arcs) = build_unless_backwards(pb, &options, &[]).unwrap() else {
+            panic!("the first layout has arcs running backwards");
+        };
+        let keys: Vec<ArcKey> = arcs.iter().map(|&o| p.arc_keys[o]).collect();
+        let q = reextract(&pd, &nearly_zero, p.sampled.clone().unwrap(), &[], &keys).unwrap();
+        assert!(keys.iter().all(|k| !q.arc_keys.contains(k)));
+        let kept_before: Vec<&ArcKey> = p.arc_keys.iter().filter(|k| !keys.contains(k)).collect();
+        assert!(kept_before.iter().all(|k| q.arc_keys.contains(k)));
+        assert_eq!(q.collapsed_arcs, p.collapsed_arcs + keys.len());
+        assert_eq!(
+            q.layout.blocks.len(),
+            p.layout.blocks.len() - 2 * keys.len()
+        );
+        let qb = q.blocking.as_ref().expect("exact input after the fix");
+        let Built::Mesh(x) = build_unless_backwards(qb, &options, &[]).unwrap() else {
+            panic!("arcs still run backwards after the fix");
+        };
+        let inverted = x
+            .grids
+            .iter()
+            .flat_map(|g| {
+                (0..g.nj).flat_map(move |j| {
+                    (0..g.ni).map(move |i| {
+                        let n = |di: usize, dj: usize| g.nodes[(i + di) + (j + dj) * (g.ni + 1)];
+                        let (a, b, c, d) = (n(0, 0), n(1, 0), n(1, 1), n(0, 1));
+                        // Twice the signed area of the cell (shoelace).
+                        (a[0] * b[1] - b[0] * a[1])
+                            + (b[0] * c[1] - c[0] * b[1])
+                            + (c[0] * d[1] - d[0] * c[1])
+                            + (d[0] * a[1] - a[0] * d[1])
+                    })
+                })
+            })
+            .filter(|&area| area <= 0.0)
+            .count();
+        assert_eq!(inverted, 0);
     }
 
     #[test]
