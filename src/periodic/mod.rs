@@ -2013,9 +2013,10 @@ pub type Triples = Vec<[CircleKey; 3]>;
 /// Exact mode (the default): [`periodic_layout`], then the exact geometry of every orbit
 /// computed once and translated ([`crate::exact_mode::periodic::build`]). As for bounded
 /// domains ([`crate::mesher::mesh`]), when the exact geometry disagrees with the sampled
-/// combinatorics (an arc running backwards, a missing Apollonius circle, an inverted cell)
-/// the sampling is refined 4x per attempt, up to [`EXACT_RESAMPLING`] times, and then paper
-/// mode is used. Paper mode: node counts and transfinite interpolation ([`build_grids`];
+/// combinatorics, arcs running backwards are first collapsed on the same sampling (their
+/// orbits in every copy, [`reextract`], once per sampling); otherwise (or for a missing
+/// Apollonius circle or an inverted cell) the sampling is refined 4x around the place per
+/// attempt, up to [`EXACT_RESAMPLING`] times, and then paper mode is used. Paper mode: node counts and transfinite interpolation ([`build_grids`];
 /// partners of periodic sides get equal counts and translated nodes).
 pub fn mesh_periodic(pd: &PeriodicDomain, options: &Options) -> Result<Mesh, MeshError> {
     mesh_periodic_frame(pd, options).map(|f| f.mesh)
@@ -2459,7 +2460,7 @@ fn exact_frame(
         });
     };
     // A build with arcs running backwards stops before its grids (the mesh would not be
-    // kept): the holes around those arcs are resampled.
+    // kept): those arcs are collapsed, or the holes around them resampled, by the caller.
     let x = match timings::span("exact_geometry", || {
         exact_mode::periodic::build_unless_backwards(pb, options, fluid)
     }) {
