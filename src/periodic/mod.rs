@@ -2014,7 +2014,7 @@ pub type Triples = Vec<[CircleKey; 3]>;
 /// computed once and translated ([`crate::exact_mode::periodic::build`]). As for bounded
 /// domains ([`crate::mesher::mesh`]), when the exact geometry disagrees with the sampled
 /// combinatorics, arcs running backwards are first collapsed on the same sampling (their
-/// orbits in every copy, [`reextract`], once per sampling); otherwise (or for a missing
+/// orbits in every copy, `reextract`, once per sampling); otherwise (or for a missing
 /// Apollonius circle or an inverted cell) the sampling is refined 4x around the place per
 /// attempt, up to [`EXACT_RESAMPLING`] times, and then paper mode is used. Paper mode: node counts and transfinite interpolation ([`build_grids`];
 /// partners of periodic sides get equal counts and translated nodes).
