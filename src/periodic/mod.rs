@@ -2804,14 +2804,10 @@ mod tests {
         }
     }
 
-    /// Exact mode's local resampling: a boost on slot `k + 1` refines the whole orbit of hole
-    /// `k` (every copy alike) and no other orbit.
-    /// The exact build that stops at backwards arcs (issue 8) reports exactly the arc orbits
-    /// the whole build finds running backwards, and when there are none it is the whole build
-    /// (same layout, same nodes to the bit). The oracle is the whole build itself.
-    #[test]
-    fn a_build_stopped_at_backwards_arcs_names_the_whole_builds_arcs() {
-        use crate::exact_mode::periodic::{build_unless_backwards, build_with_inserted, Built};
+    /// The 100-hole box of `tests/data/periodic_backwards_100.json` (its first layout has
+    /// arcs running backwards), with exact mode's options (4 x 4 cells a block) and its
+    /// layout options with short collapses.
+    fn backwards_box() -> (PeriodicDomain, Options, Options) {
         let pd = match crate::domain::AnyDomain::from_json_str(include_str!(
             "../../tests/data/periodic_backwards_100.json"
         ))
@@ -2828,6 +2824,16 @@ mod tests {
             collapse_fraction: options.collapse_fraction.min(EXACT_COLLAPSE_FRACTION),
             ..options.clone()
         };
+        (pd, options, nearly_zero)
+    }
+
+    /// The exact build that stops at backwards arcs (issue 8) reports exactly the arc orbits
+    /// the whole build finds running backwards, and when there are none it is the whole build
+    /// (same layout, same nodes to the bit). The oracle is the whole build itself.
+    #[test]
+    fn a_build_stopped_at_backwards_arcs_names_the_whole_builds_arcs() {
+        use crate::exact_mode::periodic::{build_unless_backwards, build_with_inserted, Built};
+        let (pd, options, nearly_zero) = backwards_box();
         let zero_only = Options {
             collapse_fraction: 0.0,
             ..options.clone()
@@ -2874,22 +2880,7 @@ mod tests {
     #[test]
     fn the_local_fix_collapses_the_backwards_arc_orbits_in_every_copy() {
         use crate::exact_mode::periodic::{build_unless_backwards, Built};
-        let pd = match crate::domain::AnyDomain::from_json_str(include_str!(
-            "../../tests/data/periodic_backwards_100.json"
-        ))
-        .unwrap()
-        {
-            crate::domain::AnyDomain::Periodic(pd) => pd,
-            _ => unreachable!("a periodic file"),
-        };
-        let options = Options {
-            block_cells: Some(4),
-            ..Options::default()
-        };
-        let nearly_zero = Options {
-            collapse_fraction: options.collapse_fraction.min(EXACT_COLLAPSE_FRACTION),
-            ..options.clone()
-        };
+        let (pd, options, nearly_zero) = backwards_box();
         let p = periodic_layout_with(&pd, &nearly_zero, &crate::mesher::exact_sampling()).unwrap();
         let pb = p.blocking.as_ref().expect("exact input");
         let Built::Backwards(arcs) = build_unless_backwards(pb, &options, &[]).unwrap() else {
@@ -2930,6 +2921,8 @@ mod tests {
         assert_eq!(inverted, 0);
     }
 
+    /// Exact mode's local resampling: a boost on slot `k + 1` refines the whole orbit of hole
+    /// `k` (every copy alike) and no other orbit.
     #[test]
     fn a_boost_refines_its_orbit_only() {
         let pd = PeriodicDomain::new(
