@@ -508,16 +508,19 @@ fn build_checking(
             cluster: &cluster,
             rho: &[],
         };
-        let (mut layout, _, medial_edge) = assemble(&parts, &counts, false)?;
-        let first = layout.blocks.len();
-        fill(&mut layout)?;
-        let classes = crate::grid::edge_classes(&layout);
-        Some((layout, classes, medial_edge, first))
+        // Without the arcs' nodes (its medial polylines are set for the grids at the end:
+        // issue 8, the layout was made twice).
+        let mut a = layout_pass(&parts, None)?;
+        let first = a.layout.blocks.len();
+        let filled = fill(&mut a.layout)?;
+        let classes = crate::grid::edge_classes(&a.layout);
+        let medial_edge: Vec<u32> = a.medial_edges.iter().map(|e| e[0]).collect();
+        Some((a, classes, medial_edge, first, filled))
     } else {
         None
     };
     let tie = |counts: &mut Counts| {
-        if let Some((_, classes, medial_edge, _)) = &templates {
+        if let Some((_, classes, medial_edge, _, _)) = &templates {
             super::inserted::tie_counts(classes, medial_edge, &mut counts.arc);
         }
     };
@@ -542,7 +545,8 @@ fn build_checking(
                 total = total.saturating_add((counts.arc[o] + 1).saturating_mul(nj + 1));
             }
         }
-        if let Some((layout, classes, _, first)) = &templates {
+        if let Some((a, classes, _, first, _)) = &templates {
+            let layout = &a.layout;
             // Medial block `2o + s`: sides 0 and 2 along arc orbit `o`, 1 and 3 along spokes.
             let side_count = |b: usize, k: usize| {
                 let o = b / 2;
@@ -598,18 +602,32 @@ fn build_checking(
         cluster: &cluster,
         rho: &rho,
     };
-    let (mut layout, mut grids, _) = assemble(&parts, &counts, true)?;
+    // With templates, their layout (already filled) gets its medial polylines now.
+    let nodes = arc_nodes(&parts, &counts)?;
+    let (layout, mut grids, templated) = match templates {
+        Some((mut a, classes, _, first, filled)) => {
+            set_medial_nodes(pb, &nodes, &mut a);
+            let grids = grids_pass(&parts, &counts, &nodes, &a)?;
+            (a.layout, grids, Some((classes, first, filled)))
+        }
+        None => {
+            let a = layout_pass(&parts, Some(&nodes))?;
+            let grids = grids_pass(&parts, &counts, &nodes, &a)?;
+            (a.layout, grids, None)
+        }
+    };
+    drop(nodes);
     // Winslow smoothing of the medial blocks (as in bounded exact mode, not the templates;
-    // it keeps every block's boundary, which the templates copy).
+    // it keeps every block's boundary, which the templates copy), each on its own.
     if options.smooth > 0 {
-        for g in grids.iter_mut() {
+        grids.par_iter_mut().for_each(|g| {
             let rows = super::smoothing::boundary_layer_rows(g);
             super::smoothing::winslow(g, options.smooth, rows);
-        }
+        });
     }
     let mut template_blocks = 0;
-    if let Some((_, classes, _, first)) = &templates {
-        template_blocks = fill(&mut layout)?;
+    if let Some((classes, first, filled)) = &templated {
+        template_blocks = *filled;
         let t = super::inserted::template_grids(&layout, classes, &grids, *first, cell)?;
         grids.extend(t);
     }
@@ -737,7 +755,7 @@ fn orbit_params(
 }
 
 /// The end grading's ratios of every arc orbit ([`super::grading::end_ratios`]), from its
-/// natural node parameters for the counts `counts` (those [`assemble`] starts from). A spoke
+/// natural node parameters for the counts `counts` (those [`arc_nodes`] starts from). A spoke
 /// orbit is a slot of a vertex orbit, so the orbits' vertex indices and slots pose the same
 /// per-vertex problems as a bounded domain's vertices.
 fn end_ratios(
@@ -765,7 +783,7 @@ fn end_ratios(
     super::grading::end_ratios(&inputs, verts.len())
 }
 
-/// What [`assemble`] reads: the orbits' geometry, targets and slots, the clustering per hole.
+/// What [`arc_nodes`], [`layout_pass`] and [`grids_pass`] read: the orbits' geometry, targets and slots, the clustering per hole.
 struct Parts<'a> {
     pb: &'a PeriodicBlocking,
     verts: &'a [Vertex],
@@ -777,28 +795,20 @@ struct Parts<'a> {
     rho: &'a [[f64; 2]],
 }
 
-/// The layout and (`with_grids`) grids of one period with the counts `counts`, instance by
-/// instance, and the medial edge of each arc orbit (its side-0 block's). The layout's edges
-/// and blocks do not depend on the counts (only the nodes of its curves do).
-fn assemble(
-    parts: &Parts,
-    counts: &Counts,
-    with_grids: bool,
-) -> Result<(BlockLayout, Vec<BlockGrid>, Vec<u32>), MeshError> {
+/// Per arc orbit: its medial nodes and the nodes of its two walls.
+type ArcNodes = (Vec<Point>, [Vec<Point>; 2]);
+
+/// The nodes of every arc orbit with the counts `counts`, in parallel: node parameters
+/// (graded by `parts.rho`), then the exact geometry's evaluations (most of the build's work).
+fn arc_nodes(parts: &Parts, counts: &Counts) -> Result<Vec<ArcNodes>, MeshError> {
     let Parts {
         pb,
-        verts,
         geoms,
         targets,
-        slots,
-        cluster,
         rho,
+        ..
     } = *parts;
-    let size = pb.size;
-    // 1. Per arc orbit, in parallel: its node parameters (graded) and its medial and wall
-    //    nodes (the exact geometry's evaluations: most of this stage's work).
-    type ArcNodes = (Vec<Point>, [Vec<Point>; 2]);
-    let arc_nodes: Vec<ArcNodes> = (0..pb.arcs.len())
+    (0..pb.arcs.len())
         .into_par_iter()
         .map_init(
             super::grading::Scratch::default,
@@ -823,11 +833,25 @@ fn assemble(
                 Ok((m_nodes, a_nodes))
             },
         )
-        .collect::<Result<_, _>>()?;
-    // 2. The layout, serially (vertices and edges numbered in first-use order), with what each
-    //    block's grid needs; 3. the grids, in parallel.
+        .collect::<Result<_, _>>()
+}
+
+/// The layout of one period (vertices and edges numbered in first-use order, serially),
+/// with what each block's grid needs. Its vertices, edges and blocks do not depend on the
+/// counts; the medial edges' polylines do: from `nodes` ([`arc_nodes`] of the counts), or only
+/// their two ends without (to be set by [`set_medial_nodes`] before the grids).
+fn layout_pass(parts: &Parts, nodes: Option<&[ArcNodes]>) -> Result<Assembled, MeshError> {
+    let Parts {
+        pb,
+        verts,
+        geoms,
+        slots,
+        cluster,
+        ..
+    } = *parts;
+    let size = pb.size;
     let mut jobs: Vec<GridJob> = Vec::with_capacity(2 * pb.arcs.len());
-    let mut medial_edge = Vec::with_capacity(pb.arcs.len());
+    let mut medial_edges_of = Vec::with_capacity(pb.arcs.len());
     let mut b = Builder {
         pb,
         verts,
@@ -838,8 +862,6 @@ fn assemble(
     };
     for (o, arc) in pb.arcs.iter().enumerate() {
         let g = &geoms[o];
-        let n = counts.arc[o];
-        let m_nodes = &arc_nodes[o].0;
         let shifts = arc.circles.map(|c| (-c.1, -c.2));
         let mut medial_edges = [0u32; 2];
         for side in 0..2 {
@@ -849,9 +871,15 @@ fn assemble(
                 continue;
             }
             let v = arc.ends.map(|(w, s)| b.centre_vertex(w, add(s, d)));
-            let mut pts: Vec<Point> = m_nodes.iter().map(|&p| shifted(p, d, size)).collect();
-            pts[0] = b.layout.vertices[v[0] as usize];
-            pts[n] = b.layout.vertices[v[1] as usize];
+            let pts = match nodes {
+                Some(nodes) => medial_polyline(
+                    &nodes[o].0,
+                    d,
+                    size,
+                    v.map(|k| b.layout.vertices[k as usize]),
+                ),
+                None => v.map(|k| b.layout.vertices[k as usize]).to_vec(),
+            };
             b.layout.edges.push(Edge {
                 ends: v,
                 curve: Curve::Polyline(pts),
@@ -859,7 +887,7 @@ fn assemble(
             });
             medial_edges[side] = (b.layout.edges.len() - 1) as u32;
         }
-        medial_edge.push(medial_edges[0]);
+        medial_edges_of.push(medial_edges);
         if shifts[0] != shifts[1] {
             let t = |from: Shift, to: Shift| {
                 Translation([
@@ -880,7 +908,6 @@ fn assemble(
         for side in 0..2 {
             let d = shifts[side];
             let hole = arc.circles[side].0;
-            let nj = counts.circle[hole as usize + 1];
             let cl = cluster(hole as usize);
             let first = cl.first_height(pb.holes[hole as usize].radius);
             let [(w0, e0), (w1, e1)] = arc.ends;
@@ -905,17 +932,14 @@ fn assemble(
                 kind: EdgeKind::Wall(hole as CircleId),
             });
             let wall_edge = (b.layout.edges.len() - 1) as u32;
-            if with_grids {
-                jobs.push(GridJob {
-                    o,
-                    side,
-                    d,
-                    nj,
-                    first,
-                    growth: cl.growth,
-                    ends: [(i0, k0), (i1, k1)],
-                });
-            }
+            jobs.push(GridJob {
+                o,
+                side,
+                d,
+                first,
+                growth: cl.growth,
+                ends: [(i0, k0), (i1, k1)],
+            });
             let (fwd, rev) = (SideRef::along, SideRef::against);
             let me = medial_edges[side];
             b.layout.blocks.push(if side == 0 {
@@ -933,11 +957,60 @@ fn assemble(
             });
         }
     }
+    Ok(Assembled {
+        layout: b.layout,
+        jobs,
+        medial_edges: medial_edges_of,
+        spokes: b.spokes,
+    })
+}
+
+/// The medial polyline of an arc orbit's instance moved by `d`: its nodes `m_nodes`
+/// translated, the two ends exactly the instance's end vertices `ends`.
+fn medial_polyline(m_nodes: &[Point], d: Shift, size: [f64; 2], ends: [Point; 2]) -> Vec<Point> {
+    let mut pts: Vec<Point> = m_nodes.iter().map(|&p| shifted(p, d, size)).collect();
+    if let Some(f) = pts.first_mut() {
+        *f = ends[0];
+    }
+    if let Some(l) = pts.last_mut() {
+        *l = ends[1];
+    }
+    pts
+}
+
+/// Give the medial edges of `a` (made by [`layout_pass`] without nodes) their polylines from
+/// `nodes`: the same curves [`layout_pass`] makes with them.
+fn set_medial_nodes(pb: &PeriodicBlocking, nodes: &[ArcNodes], a: &mut Assembled) {
+    for (o, arc) in pb.arcs.iter().enumerate() {
+        let shifts = arc.circles.map(|c| (-c.1, -c.2));
+        for side in 0..2 {
+            if side == 1 && shifts[1] == shifts[0] {
+                continue;
+            }
+            let e = a.medial_edges[o][side] as usize;
+            let ends = a.layout.edges[e]
+                .ends
+                .map(|k| a.layout.vertices[k as usize]);
+            let pts = medial_polyline(&nodes[o].0, shifts[side], pb.size, ends);
+            a.layout.edges[e].curve = Curve::Polyline(pts);
+        }
+    }
+}
+
+/// The grids of the medial blocks of `a` (whose medial polylines are `nodes`'), in parallel,
+/// in block order.
+fn grids_pass(
+    parts: &Parts,
+    counts: &Counts,
+    nodes: &[ArcNodes],
+    a: &Assembled,
+) -> Result<Vec<BlockGrid>, MeshError> {
     // Column `i` of a block is the spoke from its wall node to its medial node; its end
     // columns are the spokes of its end vertices (the tangent point to the centre), the same
     // nodes in both blocks at a spoke (`GridScratch` gives each column exactly the nodes of
     // `super::spoke_column`, as the spokes' own nodes were computed before, issue 8).
-    let (spokes, layout) = (&b.spokes, &b.layout);
+    let size = parts.pb.size;
+    let (spokes, layout) = (&a.spokes, &a.layout);
     let spoke_ends = |o: usize, end: &(Instance, usize)| -> Result<(Point, Point), MeshError> {
         let e = spokes
             .get(end)
@@ -945,13 +1018,14 @@ fn assemble(
         let [c, t] = layout.edges[*e as usize].ends;
         Ok((layout.vertices[t as usize], layout.vertices[c as usize]))
     };
-    let grids: Vec<BlockGrid> = jobs
+    a.jobs
         .par_iter()
         .map_init(
             super::grid_nodes::GridScratch::default,
             |scratch, job| -> Result<BlockGrid, MeshError> {
                 let n = counts.arc[job.o];
-                let (m_nodes, a_nodes) = &arc_nodes[job.o];
+                let nj = counts.circle[parts.pb.arcs[job.o].circles[job.side].0 as usize + 1];
+                let (m_nodes, a_nodes) = &nodes[job.o];
                 scratch.clear();
                 for i in 0..=n {
                     let k = if job.side == 0 { i } else { n - i };
@@ -965,25 +1039,34 @@ fn assemble(
                     };
                     scratch.push(a, m);
                 }
-                let nodes = scratch.nodes(job.nj, job.first, job.growth);
                 Ok(BlockGrid {
                     ni: n,
-                    nj: job.nj,
-                    nodes,
+                    nj,
+                    nodes: scratch.nodes(nj, job.first, job.growth),
                 })
             },
         )
-        .collect::<Result<_, MeshError>>()?;
-    Ok((b.layout, grids, medial_edge))
+        .collect::<Result<_, MeshError>>()
 }
 
-/// What [`assemble`] needs to make the grid of the block on side `side` of arc orbit `o`
+/// What [`layout_pass`] made.
+struct Assembled {
+    layout: BlockLayout,
+    /// One per medial block, in block order.
+    jobs: Vec<GridJob>,
+    /// The medial edges of each arc orbit: its side-0 block's, its side-1 block's (the same
+    /// edge when both sides are in one instance).
+    medial_edges: Vec<[u32; 2]>,
+    /// Spoke edge (centre to wall) per tangent point instance.
+    spokes: HashMap<(Instance, usize), u32>,
+}
+
+/// What [`grids_pass`] needs to make the grid of the block on side `side` of arc orbit `o`
 /// (instance shifted by `d`), once the layout is made.
 struct GridJob {
     o: usize,
     side: usize,
     d: Shift,
-    nj: usize,
     first: Option<f64>,
     growth: f64,
     /// The spokes at its ends (tangent point instances and slots), end `A` then end `B`.
