@@ -141,3 +141,46 @@ fn the_cli_writes_periodic_bubbles() {
     let o = common::run(&["example", "periodic-bubbles", "--holes", "0"]);
     assert_eq!(o.status.code(), Some(2));
 }
+
+/// The medial polylines of the layout are the medial sides of the block grids, node for
+/// node and bit for bit (side 2, `j = nj`, traversed with `i` decreasing; the polyline in
+/// the side's direction), on a box whose refinement inserts holes (their templates' layout
+/// is made without the arcs' nodes and given them before the grids, issue 8) and on one
+/// without.
+#[test]
+fn medial_polylines_are_the_grids_medial_sides() {
+    use medial_blocks::layout::Curve;
+    let mut checked_templates = false;
+    for (n, seed) in [(60, 3), (40, 5)] {
+        let pd = medial_blocks::layouts::periodic_bubbles(n, seed).unwrap();
+        let options = Options {
+            block_cells: Some(4),
+            refine_ratio: Some(1.0),
+            ..Options::default()
+        };
+        let mesh = mesh_periodic(&pd, &options).unwrap();
+        assert_eq!(mesh.geometry, Geometry::Exact);
+        checked_templates |= mesh.template_blocks > 0;
+        let medial = mesh.layout.blocks.len() - mesh.template_blocks;
+        for (b, block) in mesh.layout.blocks[..medial].iter().enumerate() {
+            let side = block.sides[2];
+            let Curve::Polyline(pts) = &mesh.layout.edges[side.edge as usize].curve else {
+                panic!("block {b}: side 2 is not a polyline");
+            };
+            let mut along: Vec<[f64; 2]> = pts.clone();
+            if side.reversed {
+                along.reverse();
+            }
+            let g = &mesh.grids[b];
+            let top: Vec<[f64; 2]> = (0..=g.ni)
+                .rev()
+                .map(|i| g.nodes[i + g.nj * (g.ni + 1)])
+                .collect();
+            let bits = |v: &[[f64; 2]]| -> Vec<[u64; 2]> {
+                v.iter().map(|p| p.map(f64::to_bits)).collect()
+            };
+            assert_eq!(bits(&along), bits(&top), "block {b}");
+        }
+    }
+    assert!(checked_templates, "no box with inserted holes");
+}
