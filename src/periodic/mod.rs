@@ -618,6 +618,19 @@ pub fn periodic_layout_with(
     options: &Options,
     sampling: &SamplingOptions,
 ) -> Result<PeriodicLayout, MeshError> {
+    // The sampled tiling is for exact mode's local fix only: not held by a caller's layout.
+    let mut p = layout_keeping(pd, options, sampling)?;
+    p.sampled = None;
+    Ok(p)
+}
+
+/// [`periodic_layout_with`] that keeps, in exact mode, the sampled tiling for the local fix
+/// ([`reextract`]).
+fn layout_keeping(
+    pd: &PeriodicDomain,
+    options: &Options,
+    sampling: &SamplingOptions,
+) -> Result<PeriodicLayout, MeshError> {
     layout_from(pd, options, sampling, initial_reach(pd))
 }
 
@@ -2160,7 +2173,7 @@ fn refine_periodic(
     // The layout of `current`, when made.
     let mut last = None;
     for _ in 0..MAX_REFINE_ROUNDS {
-        let p = periodic_layout_with(&current, &nearly_zero, sampling)?;
+        let p = layout_keeping(&current, &nearly_zero, sampling)?;
         let Some(pb) = &p.blocking else {
             break;
         };
@@ -2276,7 +2289,7 @@ fn exact_attempts(
         //    such collapses).
         let made = match first.take() {
             Some(p) => Ok(p),
-            None => periodic_layout_with(pd, &nearly_zero, &sampling),
+            None => layout_keeping(pd, &nearly_zero, &sampling),
         };
         let short = match made {
             Ok(p) => Some(p),
@@ -2318,7 +2331,7 @@ fn exact_attempts(
         // 2. Only zero-length arcs collapsed.
         let p = match same_as_zero_only {
             Some(p) => p,
-            None => match periodic_layout_with(pd, &zero_only, &sampling) {
+            None => match layout_keeping(pd, &zero_only, &sampling) {
                 Ok(p) => p,
                 Err(MeshError::Internal(_)) => return Ok(None),
                 Err(_) if attempt > 0 => return Ok(None),
@@ -2881,7 +2894,7 @@ mod tests {
     fn the_local_fix_collapses_the_backwards_arc_orbits_in_every_copy() {
         use crate::exact_mode::periodic::{build_unless_backwards, Built};
         let (pd, options, nearly_zero) = backwards_box();
-        let p = periodic_layout_with(&pd, &nearly_zero, &crate::mesher::exact_sampling()).unwrap();
+        let p = layout_keeping(&pd, &nearly_zero, &crate::mesher::exact_sampling()).unwrap();
         let pb = p.blocking.as_ref().expect("exact input");
         let Built::Backwards(arcs) = build_unless_backwards(pb, &options, &[]).unwrap() else {
             panic!("the first layout has arcs running backwards");
