@@ -318,7 +318,8 @@ fn lone_hole_seeded(domain: &Domain, options: &Options, ring: Mesh) -> Mesh {
 
 /// [`mesh`], timed: the mesh and the exclusive wall time of each pipeline stage
 /// ([`crate::timings`]; the stage names are [`timings::STAGES`]) with the peak memory. The
-/// mesh is exactly [`mesh`]'s; timing never changes it.
+/// mesh is exactly [`mesh`]'s; timing never changes it. Meshes timed concurrently on one
+/// rayon pool may record some of each other's stages ([`timings::Recording`]).
 pub fn mesh_timed(
     domain: &Domain,
     options: &Options,

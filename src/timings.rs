@@ -478,6 +478,11 @@ thread_local! {
 
 /// Records the stages entered on this thread until [`Recording::finish`].
 ///
+/// The record is the thread's, not the call's: while this thread waits inside a parallel
+/// loop, rayon may have it run a job of another caller of the same pool (work stealing), and
+/// the stages that job enters are recorded here too. Timings of concurrent meshes on one
+/// pool can therefore include each other's stages; the meshes themselves never depend on it.
+///
 /// Recordings nest: starting one while another is active sets the outer one aside; finishing
 /// the inner one returns its timings and hands its stages on to the outer one (as if they had
 /// been entered there), so a timed call inside a timed run is counted once.

@@ -27,6 +27,7 @@ fn calls(t: &timings::Timings, stage: &str) -> u64 {
 /// layouts whose first sampling meets the hard invariants and need no inserted hole.
 #[test]
 fn random_bubbles_are_exact_in_one_triangulation() {
+    let _turn = common::turn();
     let options = Options {
         block_cells: Some(4),
         ..Options::default()
@@ -59,6 +60,7 @@ fn random_bubbles_are_exact_in_one_triangulation() {
 /// the first triangulation where the paper pipeline's sampling resamples.
 #[test]
 fn exact_sampling_skips_the_soft_rounds() {
+    let _turn = common::turn();
     let domain = bubbles(200, 1).unwrap();
     let rec = timings::Recording::start();
     let paper = sample_and_triangulate(&domain, &SamplingOptions::default()).unwrap();
@@ -85,6 +87,7 @@ fn exact_sampling_skips_the_soft_rounds() {
 /// their keys (which survive resampling).
 #[test]
 fn local_uncollapse_keeps_the_collapses_outside_the_cluster() {
+    let _turn = common::turn();
     let options = Options::default();
     let domain = bubbles(300, 1).unwrap();
     let cb = collapsed_blocking_with(&domain, &options, &exact_sampling(), false).unwrap();
@@ -143,6 +146,7 @@ fn local_uncollapse_keeps_the_collapses_outside_the_cluster() {
 /// degree-4 vertex on the same triangulation instead of resampling.
 #[test]
 fn backwards_arc_is_collapsed_without_resampling() {
+    let _turn = common::turn();
     let options = Options {
         collapse_fraction: 0.0,
         block_cells: Some(2),
@@ -170,6 +174,7 @@ fn backwards_arc_is_collapsed_without_resampling() {
 /// circles instead of solving them again: the same vertices, bit for bit, as solving afresh.
 #[test]
 fn exact_vertices_from_the_refinement_are_the_solved_ones() {
+    let _turn = common::turn();
     use medial_blocks::exact_mode::{exact_vertices, exact_vertices_with};
     for (n, seed) in [(60, 3), (150, 2)] {
         let domain = bubbles(n, seed).unwrap();

@@ -52,6 +52,7 @@ fn topology(m: &Mesh) -> Topology {
 
 #[test]
 fn bubbles_keep_their_blocks_and_angles_at_every_resolution() {
+    let _turn = common::turn();
     // Layouts whose blocks changed with the resolution before (see the module docs).
     for (holes, seed) in [(164, 12), (261, 13), (202, 16), (240, 20)] {
         let d = bubbles(holes, seed).unwrap();
@@ -91,6 +92,7 @@ fn bubbles_keep_their_blocks_and_angles_at_every_resolution() {
 /// against 5 892). Every resolution now keeps every collapse, with no local-fix round.
 #[test]
 fn a_thousand_bubbles_keep_their_blocks_from_4_to_16_cells() {
+    let _turn = common::turn();
     let d = bubbles(1000, 1).unwrap();
     let meshes: Vec<(usize, Mesh)> = [4, 8, 16]
         .map(|n| {

@@ -105,6 +105,7 @@ fn assert_conforming(m: &Mesh, what: &str) {
 
 #[test]
 fn block_cells_gives_n_by_n_raised_only_by_long_walls() {
+    let _turn = common::turn();
     let mut exact_layouts = 0;
     for (name, d) in domains() {
         for n in [4usize, 16] {
@@ -148,6 +149,7 @@ fn block_cells_gives_n_by_n_raised_only_by_long_walls() {
 
 #[test]
 fn block_cells_meshes_conform_from_coordinates() {
+    let _turn = common::turn();
     for (name, d) in domains() {
         for n in [3usize, 8] {
             let m = mesh(&d, &block_cells(n)).unwrap();
@@ -160,6 +162,7 @@ fn block_cells_meshes_conform_from_coordinates() {
 
 #[test]
 fn block_cells_is_refused_out_of_range_or_with_other_counts() {
+    let _turn = common::turn();
     let d = layouts::hexagon();
     assert!(matches!(
         mesh(&d, &block_cells(0)),
@@ -189,6 +192,7 @@ fn block_cells_is_refused_out_of_range_or_with_other_counts() {
 
 #[test]
 fn block_cells_in_paper_mode_means_cells() {
+    let _turn = common::turn();
     let d = layouts::hexagon();
     let a = mesh(
         &d,
@@ -219,6 +223,7 @@ fn block_cells_in_paper_mode_means_cells() {
 /// has local-fix rounds, and a small layout.
 #[test]
 fn spans_add_up_and_every_rebuild_follows_a_recollapse() {
+    let _turn = common::turn();
     for (n, seed) in [(1000, 1), (30, 7)] {
         let d = layouts::bubbles(n, seed).unwrap();
         let (_, t) = mesh_timed(&d, &block_cells(16)).unwrap();
@@ -249,6 +254,7 @@ fn spans_add_up_and_every_rebuild_follows_a_recollapse() {
 
 #[test]
 fn mesh_timed_is_mesh_and_times_every_stage() {
+    let _turn = common::turn();
     let d = layouts::bubbles(30, 7).unwrap();
     let opts = block_cells(6);
     let plain = mesh(&d, &opts).unwrap();
@@ -284,6 +290,7 @@ fn mesh_timed_is_mesh_and_times_every_stage() {
 
 #[test]
 fn bubbles_are_separated_inside_and_reproducible() {
+    let _turn = common::turn();
     for (n, seed) in [(1, 3u64), (50, 1), (1500, 42)] {
         let d = layouts::bubbles(n, seed).unwrap();
         assert_eq!(d.hole_count(), n);
@@ -307,6 +314,7 @@ fn bubbles_are_separated_inside_and_reproducible() {
 
 #[test]
 fn timings_flag_writes_timings_json_and_nothing_else_changes() {
+    let _turn = common::turn();
     let tmp = tempfile::tempdir().unwrap();
     let input = tmp.path().join("bubbles.json");
     let formats = "vtk,vtu,plot3d,gmsh,svg,json";
@@ -452,6 +460,7 @@ fn quiet_json_timings(extra: &[&str]) -> (std::process::Output, serde_json::Valu
 /// spans of their own, not rework of the first mesh.
 #[test]
 fn compare_modes_second_mesh_is_not_rework() {
+    let _turn = common::turn();
     let (_, t) = quiet_json_timings(&["--compare-modes"]);
     common::assert_spans_add_up(&t);
     let spans = t["spans"].as_array().unwrap();
@@ -476,6 +485,7 @@ fn compare_modes_second_mesh_is_not_rework() {
 
 #[test]
 fn timings_with_quiet_prints_nothing_but_writes_the_file() {
+    let _turn = common::turn();
     let (o, t) = quiet_json_timings(&[]);
     assert!(o.stdout.is_empty() && o.stderr.is_empty());
     assert_eq!(t["blocks"], 36);
@@ -483,6 +493,7 @@ fn timings_with_quiet_prints_nothing_but_writes_the_file() {
 
 #[test]
 fn block_cells_flag_errors_exit_2() {
+    let _turn = common::turn();
     let tmp = tempfile::tempdir().unwrap();
     let out = tmp.path().join("x");
     let out = out.to_str().unwrap();
@@ -512,6 +523,7 @@ fn block_cells_flag_errors_exit_2() {
 
 #[test]
 fn summary_and_report_json_show_the_same_figures() {
+    let _turn = common::turn();
     // The CLI measures the mesh once for both: the printed summary must match report.json.
     let tmp = tempfile::tempdir().unwrap();
     let out = tmp.path().join("o");

@@ -41,6 +41,7 @@ fn mesh_recorded(json: &str) -> (PeriodicDomain, medial_blocks::Mesh, timings::T
 /// and the mesh is exact with no inverted cell.
 #[test]
 fn a_disagreeing_periodic_box_is_resampled_and_exact() {
+    let _turn = common::turn();
     let (pd, mesh, t) = mesh_recorded(include_str!("data/periodic_resampled_60.json"));
     assert!(calls(&t, "triangulation") >= 2, "{:?}", t.calls);
     assert_eq!(mesh.geometry, Geometry::Exact);
@@ -63,6 +64,7 @@ fn a_disagreeing_periodic_box_is_resampled_and_exact() {
 /// count of the torus identity.
 #[test]
 fn backwards_arcs_are_fixed_on_the_same_sampling() {
+    let _turn = common::turn();
     let (pd, mesh, t) = mesh_recorded(include_str!("data/periodic_backwards_100.json"));
     let calls3 = (
         calls(&t, "triangulation"),
@@ -86,6 +88,7 @@ fn backwards_arcs_are_fixed_on_the_same_sampling() {
 /// same layout, another seed another one.
 #[test]
 fn periodic_bubbles_keep_their_gaps_across_the_box() {
+    let _turn = common::turn();
     use medial_blocks::layouts::periodic_bubbles;
     for (n, seed) in [(1, 1), (2, 5), (7, 2), (300, 3)] {
         let pd = periodic_bubbles(n, seed).unwrap();
@@ -124,6 +127,7 @@ fn periodic_bubbles_keep_their_gaps_across_the_box() {
 /// (read back through the `mesh` input parser, bit for bit), and meshes in exact mode.
 #[test]
 fn the_cli_writes_periodic_bubbles() {
+    let _turn = common::turn();
     let o = common::run(&[
         "example",
         "periodic-bubbles",
@@ -149,6 +153,7 @@ fn the_cli_writes_periodic_bubbles() {
 /// without.
 #[test]
 fn medial_polylines_are_the_grids_medial_sides() {
+    let _turn = common::turn();
     use medial_blocks::layout::Curve;
     let mut checked_templates = false;
     for (n, seed) in [(60, 3), (40, 5)] {

@@ -33,6 +33,7 @@ fn from_everywhere<T: Send>(f: impl Fn() -> T + Sync) -> Vec<T> {
 
 #[test]
 fn bounded_meshes_and_reports_do_not_depend_on_the_calling_thread() {
+    let _turn = common::turn();
     let domain = layouts::bubbles(300, 5).unwrap();
     let options = Options {
         block_cells: Some(8),
@@ -52,6 +53,7 @@ fn bounded_meshes_and_reports_do_not_depend_on_the_calling_thread() {
 
 #[test]
 fn periodic_meshes_do_not_depend_on_the_calling_thread() {
+    let _turn = common::turn();
     let holes = vec![
         Circle::new(0.3, 0.3, 0.12),
         Circle::new(0.75, 0.35, 0.1),
@@ -69,6 +71,7 @@ fn periodic_meshes_do_not_depend_on_the_calling_thread() {
 /// in the same numbers as from inside the pool.
 #[test]
 fn mesh_timed_records_the_stages_that_ran_on_the_worker() {
+    let _turn = common::turn();
     let domain = layouts::lattice().unwrap();
     let calls = |t: &medial_blocks::timings::Timings| {
         let mut c = t.calls.clone();

@@ -422,3 +422,14 @@ pub fn interface_growth(
     }
     (faces, over, worst)
 }
+
+/// One test of the binary at a time, for tests that record stage timings
+/// (`timings::Recording`, `mesh_timed`): a recording is its thread's, so a rayon worker that
+/// steals a job of another test's mesh while it waits records that mesh's stages too (CI saw
+/// a stage count doubled once). Each test binary has its own lock (this module is compiled
+/// into each); hold the guard for the whole test.
+#[allow(dead_code)]
+pub fn turn() -> std::sync::MutexGuard<'static, ()> {
+    static TURN: std::sync::Mutex<()> = std::sync::Mutex::new(());
+    TURN.lock().unwrap_or_else(|e| e.into_inner())
+}
