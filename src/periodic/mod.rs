@@ -584,8 +584,6 @@ pub struct PeriodicLayout {
     /// What the layout was extracted from, for exact mode's local fix (a re-extraction with
     /// arcs running backwards collapsed, on the same sampling, [`reextract`]).
     sampled: Option<std::sync::Arc<Sampled>>,
-    /// The arc orbits collapsed by that fix (sorted orbit keys).
-    forced: Vec<ArcKey>,
 }
 
 /// A sampled, triangulated tiling and its medial graph.
@@ -730,19 +728,14 @@ fn extract_from(
 fn reextract(
     pd: &PeriodicDomain,
     options: &Options,
-    sampled: std::sync::Arc<Sampled>,
-    before: &[ArcKey],
+    sampled: &Sampled,
     force: &[ArcKey],
 ) -> Result<PeriodicLayout, MeshError> {
-    let mut forced: Vec<ArcKey> = before.iter().chain(force).copied().collect();
+    let mut forced = force.to_vec();
     forced.sort_unstable();
     forced.dedup();
-    match timings::span("blocking", || extract_from(pd, options, &sampled, &forced))? {
-        Extracted::Layout(mut p) => {
-            p.sampled = Some(sampled);
-            p.forced = forced;
-            Ok(p)
-        }
+    match timings::span("blocking", || extract_from(pd, options, sampled, &forced))? {
+        Extracted::Layout(p) => Ok(p),
         Extracted::TooSmall { .. } => Err(MeshError::Internal(
             "the layout with forced collapses needs a wider tiling".into(),
         )),
@@ -888,12 +881,6 @@ fn normalise_cluster(key: &[SampleKey]) -> (ClusterKey, (i32, i32)) {
         .unwrap_or_else(|| (key.to_vec(), (0, 0)))
 }
 
-/// The exact Apollonius circles of the medial vertices `vs` of the tiling (see
-/// [`cocircular::vertex_circles`]), in the order of `vs`.
-fn circles_of(domain: &Domain, medial: &MedialGraph, vs: &[u32]) -> Vec<Option<Apollonius>> {
-    cocircular::vertex_circles_of(domain, medial, vs)
-}
-
 /// The arcs of the tiling chosen for collapse (see [`select_collapse`]).
 struct Selection {
     /// One flag per tiling arc.
@@ -967,7 +954,7 @@ fn select_collapse(
     let mut ends: Vec<u32> = reps.iter().flat_map(|&r| medial.arcs[r].ends).collect();
     ends.sort_unstable();
     ends.dedup();
-    let solved = circles_of(domain, medial, &ends);
+    let solved = cocircular::vertex_circles_of(domain, medial, &ends);
     // Vertex `v`'s circle, when `v` is an end of a representative and solved (`ends` is
     // sorted).
     let circle = |v: u32| -> Option<&Apollonius> {
@@ -1720,7 +1707,6 @@ fn extract(
         blocking,
         arc_keys: arc_orbits,
         sampled: None,
-        forced: Vec::new(),
     }))
 }
 
@@ -1948,7 +1934,7 @@ fn periodic_groups(
         if ms.len() < 2 {
             continue;
         }
-        let circles = circles_of(&t.domain, medial, ms);
+        let circles = cocircular::vertex_circles_of(&t.domain, medial, ms);
         // Members with exactly the same empty circle (a cluster that also took short arcs
         // may hold several groups, or none).
         let mut classes: Vec<(&Apollonius, Vec<u32>)> = Vec::new();
@@ -2303,7 +2289,7 @@ fn exact_attempts(
                 // Nothing collapsed (or nothing short): the zero-only layout is this one.
                 same_as_zero_only = Some(p);
             } else {
-                let (sampled, before) = (p.sampled.clone(), p.forced.clone());
+                let sampled = p.sampled.clone();
                 match exact_frame(pd, p, options, fluid, true)? {
                     Framed::Done(f) => return Ok(Some(f)),
                     // Arcs running backwards come from the sampling, not from the collapse:
@@ -2311,13 +2297,10 @@ fn exact_attempts(
                     // 10 000 holes it had the same ones, for a layout and an exact build more
                     // per attempt). Fix them on this sampling, else resample around them at
                     // once; the last attempt still tries the zero-only layout.
-                    Framed::Failed {
-                        holes,
-                        backwards: true,
-                        arcs,
-                    } if attempt < EXACT_RESAMPLING => {
-                        let fixed =
-                            local_fix(pd, &nearly_zero, options, fluid, sampled, &before, &arcs)?;
+                    Framed::Failed { holes, arcs }
+                        if !arcs.is_empty() && attempt < EXACT_RESAMPLING =>
+                    {
+                        let fixed = local_fix(pd, &nearly_zero, options, fluid, sampled, &arcs)?;
                         if let Some(f) = fixed {
                             return Ok(Some(f));
                         }
@@ -2342,11 +2325,11 @@ fn exact_attempts(
         if p.blocking.is_none() {
             return Ok(None);
         }
-        let (sampled, before) = (p.sampled.clone(), p.forced.clone());
+        let sampled = p.sampled.clone();
         match exact_frame(pd, p, options, fluid, false)? {
             Framed::Done(f) => return Ok(Some(f)),
             Framed::Failed { holes, arcs, .. } => {
-                let fixed = local_fix(pd, &zero_only, options, fluid, sampled, &before, &arcs)?;
+                let fixed = local_fix(pd, &zero_only, options, fluid, sampled, &arcs)?;
                 if let Some(f) = fixed {
                     return Ok(Some(f));
                 }
@@ -2370,19 +2353,19 @@ fn local_fix(
     options: &Options,
     fluid: &[bool],
     sampled: Option<std::sync::Arc<Sampled>>,
-    before: &[ArcKey],
     arcs: &[ArcKey],
 ) -> Result<Option<PeriodicFrame>, MeshError> {
     let Some(sampled) = sampled.filter(|_| !arcs.is_empty()) else {
         return Ok(None);
     };
-    let mut p = match reextract(pd, layout_options, sampled, before, arcs) {
+    // One fix per sampling: the sampled tiling is dropped before the build.
+    let made = reextract(pd, layout_options, &sampled, arcs);
+    drop(sampled);
+    let p = match made {
         Ok(p) => p,
         Err(MeshError::Internal(_)) => return Ok(None),
         Err(e) => return Err(e),
     };
-    // One fix per sampling: the sampled tiling is not needed by the build.
-    p.sampled = None;
     if p.blocking.is_none() {
         return Ok(None);
     }
@@ -2416,11 +2399,10 @@ enum Framed {
     /// No valid exact mesh: the canonical holes (indices into the domain's holes, sorted,
     /// distinct) of the arc orbits that disagreed and of their end vertex orbits, or none
     /// when the place is not known (the exact construction failed, a template block);
-    /// `backwards` when arcs ran backwards (the sampled combinatorics were wrong there).
+    /// `arcs`, the orbit keys of the arcs that ran backwards (the sampled combinatorics were
+    /// wrong there), empty when none did.
     Failed {
         holes: Vec<u32>,
-        backwards: bool,
-        /// The orbit keys of the arcs running backwards (empty unless `backwards`).
         arcs: Vec<ArcKey>,
     },
 }
@@ -2468,7 +2450,6 @@ fn exact_frame(
     let Some(pb) = &p.blocking else {
         return Ok(Framed::Failed {
             holes: Vec::new(),
-            backwards: false,
             arcs: Vec::new(),
         });
     };
@@ -2482,7 +2463,6 @@ fn exact_frame(
             let bad: Vec<usize> = arcs.iter().flat_map(|&o| [2 * o, 2 * o + 1]).collect();
             return Ok(Framed::Failed {
                 holes: holes_around(pb, &bad),
-                backwards: true,
                 arcs: arcs
                     .iter()
                     .filter_map(|&o| p.arc_keys.get(o).copied())
@@ -2492,7 +2472,6 @@ fn exact_frame(
         Err(MeshError::Internal(_)) => {
             return Ok(Framed::Failed {
                 holes: Vec::new(),
-                backwards: false,
                 arcs: Vec::new(),
             })
         }
@@ -2520,7 +2499,6 @@ fn exact_frame(
     if !bad.is_empty() {
         return Ok(Framed::Failed {
             holes: holes_around(pb, &bad),
-            backwards: false,
             arcs: Vec::new(),
         });
     }
@@ -2900,7 +2878,7 @@ mod tests {
             panic!("the first layout has arcs running backwards");
         };
         let keys: Vec<ArcKey> = arcs.iter().map(|&o| p.arc_keys[o]).collect();
-        let q = reextract(&pd, &nearly_zero, p.sampled.clone().unwrap(), &[], &keys).unwrap();
+        let q = reextract(&pd, &nearly_zero, p.sampled.as_deref().unwrap(), &keys).unwrap();
         assert!(keys.iter().all(|k| !q.arc_keys.contains(k)));
         let kept_before: Vec<&ArcKey> = p.arc_keys.iter().filter(|k| !keys.contains(k)).collect();
         assert!(kept_before.iter().all(|k| q.arc_keys.contains(k)));
