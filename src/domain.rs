@@ -963,6 +963,46 @@ impl HoleIndex<'_> {
 }
 
 impl HoleIndex<'_> {
+    /// Every hole `k` with `gap(c_k, q) < max_gap` (`q` any circle, not necessarily a hole),
+    /// in increasing order of `k`: the range query of [`HoleIndex::within_gap`] around a
+    /// query circle. Empty for a non-finite `q` or `max_gap`.
+    pub fn within_gap_of(&self, q: &Circle, max_gap: f64) -> Vec<usize> {
+        let mut out = Vec::new();
+        let finite = q.center[0].is_finite()
+            && q.center[1].is_finite()
+            && q.radius.is_finite()
+            && max_gap.is_finite();
+        if !finite || self.nodes.is_empty() {
+            return out;
+        }
+        let mut stack = Pending::root();
+        while let Some(n) = stack.pop() {
+            let node = &self.nodes[n as usize];
+            let lb = box_dist2(node, q.center).sqrt() - q.radius - node.max_r;
+            if lb - (q.radius.abs() + node.max_r.abs() + lb.abs()) * 1e-12 >= max_gap {
+                continue;
+            }
+            match node.children {
+                None => {
+                    let (s, e) = (node.start as usize, node.end as usize);
+                    out.extend(
+                        self.order[s..e]
+                            .iter()
+                            .zip(&self.sorted[s..e])
+                            .filter(|&(_, c)| gap(c, q) < max_gap)
+                            .map(|(&k, _)| k as usize),
+                    );
+                }
+                Some((l, r)) => {
+                    stack.push(l);
+                    stack.push(r);
+                }
+            }
+        }
+        out.sort_unstable();
+        out
+    }
+
     /// True when some hole `c` has `gap(c, q) < max_gap` (`q` any circle, not necessarily a
     /// hole), i.e. exactly `!holes.iter().all(|c| gap(c, q) >= max_gap)` for finite `q` and
     /// `max_gap`: candidates are pruned by the same conservative bound as

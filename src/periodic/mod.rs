@@ -2181,15 +2181,10 @@ fn refine_periodic(
             .nearest_gaps()
             .into_iter()
             .fold(f64::INFINITY, f64::min);
-        // The gap from `c` to the nearest image of `o` (images in the neighbouring tiles hold
-        // the nearest one: centres are in the box).
-        let image_gap = |c: &Circle, o: &Circle| {
-            let mut d = [c.center[0] - o.center[0], c.center[1] - o.center[1]];
-            for k in 0..2 {
-                d[k] -= (d[k] / size[k]).round() * size[k];
-            }
-            d[0].hypot(d[1]) - c.radius - o.radius
-        };
+        // The holes of `current` near each candidate, found through an index of the holes
+        // and their images near the box (no scan of every hole per candidate: issue 8).
+        let near = NearImages::new(current.holes(), size, g, &poor);
+        let index = near.index();
         let mut batch: Vec<Circle> = Vec::new();
         for &(_, centre, rho) in &poor {
             if inserted.len() + batch.len() >= options.max_inserted_holes {
@@ -2211,11 +2206,8 @@ fn refine_periodic(
             let ok = hole.radius.is_finite()
                 && hole.radius > 0.0
                 && size.iter().all(|&l| l - 2.0 * hole.radius >= g)
-                && current
-                    .holes()
-                    .iter()
-                    .chain(&batch)
-                    .all(|o| image_gap(&hole, o) >= g);
+                && near.keeps_gap(index.as_ref(), &hole)
+                && batch.iter().all(|o| image_gap(size, &hole, o) >= g);
             if ok {
                 batch.push(hole);
             }
@@ -2233,6 +2225,8 @@ fn refine_periodic(
                 break;
             }
         }
+        // This round's layout and sampled tiling are freed on the pool, off this thread.
+        rayon::spawn(move || drop(p));
         inserted.extend_from_slice(&batch);
     }
     if inserted.is_empty() {
@@ -2243,6 +2237,114 @@ fn refine_periodic(
         inserted,
         layout: last,
     })
+}
+
+/// The gap from `c` to the nearest image of `o` (centres in the box of `size`: the images in
+/// the neighbouring tiles hold the nearest one), as periodic refinement measures it.
+fn image_gap(size: [f64; 2], c: &Circle, o: &Circle) -> f64 {
+    let mut d = [c.center[0] - o.center[0], c.center[1] - o.center[1]];
+    for k in 0..2 {
+        d[k] -= (d[k] / size[k]).round() * size[k];
+    }
+    d[0].hypot(d[1]) - c.radius - o.radius
+}
+
+/// The holes of a periodic domain and their images near its box, indexed to find which holes
+/// a candidate of periodic refinement could come closer to than the gap `g`
+/// ([`NearImages::keeps_gap`]: exactly the scan `holes.iter().all(|o| image_gap(size, q, o)
+/// >= g)`, in O(log n) per candidate rather than O(n) once there are many candidates).
+struct NearImages<'a> {
+    holes: &'a [Circle],
+    size: [f64; 2],
+    g: f64,
+    /// The holes and the images (of the 3 x 3 tiling) whose centres lie within the reach of
+    /// the candidates, and the hole each one is a copy of; empty when scanning.
+    tiles: Vec<Circle>,
+    of: Vec<usize>,
+    scan: bool,
+}
+
+/// Below this many candidate-hole pairs [`NearImages`] scans (the index costs more).
+const NEAR_IMAGES_SCAN: usize = 1 << 22;
+
+impl<'a> NearImages<'a> {
+    /// The index for the candidates of `poor` (radii at most half its empty-circle radii).
+    fn new(holes: &'a [Circle], size: [f64; 2], g: f64, poor: &[(f64, Point, f64)]) -> Self {
+        let scan = poor.len().saturating_mul(holes.len()) <= NEAR_IMAGES_SCAN;
+        Self::with_scan(holes, size, g, poor, scan)
+    }
+
+    /// [`NearImages::new`], scanning or not as told.
+    fn with_scan(
+        holes: &'a [Circle],
+        size: [f64; 2],
+        g: f64,
+        poor: &[(f64, Point, f64)],
+        scan: bool,
+    ) -> Self {
+        let mut tiles = Vec::new();
+        let mut of = Vec::new();
+        if !scan {
+            let rmax = holes.iter().map(|c| c.radius).fold(0.0, f64::max);
+            let cmax = poor.iter().map(|p| 0.5 * p.2).fold(0.0, f64::max);
+            // A copy `o'` with `|q - o'| - r_q - r_o < g` is within `g + r_q + r_o` of `q` (in
+            // the box); widened for rounding. Not finite: every image.
+            let reach = g + cmax + rmax;
+            let reach = reach + 1e-9 * (reach.abs() + size[0].max(size[1]));
+            let near = |p: Point| {
+                !reach.is_finite() || (0..2).all(|a| p[a] >= -reach && p[a] <= size[a] + reach)
+            };
+            for (a, b) in domain::tile_offsets(1) {
+                for (j, c) in holes.iter().enumerate() {
+                    let center = [
+                        c.center[0] + a as f64 * size[0],
+                        c.center[1] + b as f64 * size[1],
+                    ];
+                    if near(center) {
+                        tiles.push(Circle {
+                            center,
+                            radius: c.radius,
+                        });
+                        of.push(j);
+                    }
+                }
+            }
+        }
+        NearImages {
+            holes,
+            size,
+            g,
+            tiles,
+            of,
+            scan,
+        }
+    }
+
+    /// The k-d tree of the copies (`None` when scanning).
+    fn index(&self) -> Option<crate::domain::HoleIndex<'_>> {
+        (!self.scan).then(|| crate::domain::HoleIndex::new(&self.tiles))
+    }
+
+    /// `holes.iter().all(|o| image_gap(size, q, o) >= g)` for a candidate `q` (centre in the
+    /// box, radius at most the largest half radius of `poor`), `index` from
+    /// [`NearImages::index`]: the holes with a copy within a slightly wider gap are measured
+    /// with [`image_gap`] itself.
+    fn keeps_gap(&self, index: Option<&crate::domain::HoleIndex>, q: &Circle) -> bool {
+        let finite = q.center.iter().all(|x| x.is_finite()) && q.radius.is_finite();
+        match index {
+            Some(index) if finite && self.g.is_finite() => {
+                let slack = 1e-9 * (self.g.abs() + q.radius.abs() + self.size[0].max(self.size[1]));
+                index
+                    .within_gap_of(q, self.g + slack)
+                    .into_iter()
+                    .all(|k| image_gap(self.size, q, &self.holes[self.of[k]]) >= self.g)
+            }
+            _ => self
+                .holes
+                .iter()
+                .all(|o| image_gap(self.size, q, o) >= self.g),
+        }
+    }
 }
 
 /// Exact mode with resampling on `pd` (`fluid[k]`: hole `k` was inserted by refinement);
@@ -2442,7 +2544,22 @@ pub const EXACT_COLLAPSE_FRACTION: f64 = 1e-3;
 /// [`MeshError::Internal`] are returned.
 fn exact_frame(
     pd: &PeriodicDomain,
-    p: PeriodicLayout,
+    mut p: PeriodicLayout,
+    options: &Options,
+    fluid: &[bool],
+    strict: bool,
+) -> Result<Framed, MeshError> {
+    let framed = frame_of(pd, &mut p, options, fluid, strict);
+    // What is left of the layout (its tiling, blocking and arc keys; a rejected mesh's grids)
+    // is freed on the pool, off this thread (issue 8: 0.2 s at 1e5 holes).
+    rayon::spawn(move || drop(p));
+    framed
+}
+
+/// [`exact_frame`], taking from `p` what the frame keeps.
+fn frame_of(
+    pd: &PeriodicDomain,
+    p: &mut PeriodicLayout,
     options: &Options,
     fluid: &[bool],
     strict: bool,
@@ -2497,8 +2614,10 @@ fn exact_frame(
     });
     // (No arc of a whole build runs backwards: `build_unless_backwards`.)
     if !bad.is_empty() {
+        let holes = holes_around(pb, &bad);
+        rayon::spawn(move || drop(x));
         return Ok(Framed::Failed {
-            holes: holes_around(pb, &bad),
+            holes,
             arcs: Vec::new(),
         });
     }
@@ -2510,7 +2629,7 @@ fn exact_frame(
         medial_arcs: p.medial_arcs,
         holes: real,
         collapsed_arcs: p.collapsed_arcs,
-        cocircular_groups: p.cocircular_groups,
+        cocircular_groups: std::mem::take(&mut p.cocircular_groups),
         inserted_holes: pd.holes()[real..].to_vec(),
         split_arcs: x.split_arcs,
         template_blocks: x.template_blocks,
@@ -2521,7 +2640,7 @@ fn exact_frame(
     let keys = (x.template_blocks == 0).then_some(x.keys);
     Ok(Framed::Done(PeriodicFrame {
         mesh,
-        triples: p.triples,
+        triples: std::mem::take(&mut p.triples),
         keys,
     }))
 }
@@ -2683,6 +2802,70 @@ mod tests {
             }
         }
         PeriodicDomain::new([l, l], holes).unwrap()
+    }
+
+    /// Periodic refinement's gap check through the index of near images answers as the scan
+    /// over every hole, on candidates anywhere in the box (near its edges and corners, where
+    /// the nearest copy is an image), of every size up to half the empty radius, with gaps
+    /// `g` from far below to far above the domain's, and on the exact boundary `g =`
+    /// the candidate's gap to its nearest hole.
+    #[test]
+    fn the_near_images_gap_check_equals_the_scan() {
+        for (n, seed) in [(60, 11), (200, 12), (7, 13)] {
+            let pd = random_box(n, seed);
+            let size = pd.size();
+            let holes = pd.holes();
+            let mut rng = crate::layouts::SplitMix64(seed + 100);
+            let mut poor = Vec::new();
+            for _ in 0..400 {
+                let c = [size[0] * rng.next_f64(), size[1] * rng.next_f64()];
+                // Near the edges and corners too.
+                let c = if rng.next_f64() < 0.3 {
+                    [c[0] * 0.02, size[1] - c[1] * 0.02]
+                } else {
+                    c
+                };
+                poor.push((3.0, c, 4.0 * rng.next_f64()));
+            }
+            let (mut kept, mut refused) = (0, 0);
+            for g in [0.001, 0.05, 0.3, 1.0, 3.0] {
+                let scan = NearImages::with_scan(holes, size, g, &poor, true);
+                let tree = NearImages::with_scan(holes, size, g, &poor, false);
+                let index = tree.index();
+                assert!(index.is_some() && scan.index().is_none());
+                for &(_, c, rho) in &poor {
+                    let q = Circle {
+                        center: c,
+                        radius: 0.5 * rho,
+                    };
+                    let by_scan = holes.iter().all(|o| image_gap(size, &q, o) >= g);
+                    assert_eq!(scan.keeps_gap(None, &q), by_scan);
+                    assert_eq!(tree.keeps_gap(index.as_ref(), &q), by_scan, "{q:?} g {g}");
+                    if by_scan {
+                        kept += 1;
+                    } else {
+                        refused += 1;
+                    }
+                    // On the boundary: the gap to the nearest hole, exactly.
+                    let g0 = holes
+                        .iter()
+                        .map(|o| image_gap(size, &q, o))
+                        .fold(f64::INFINITY, f64::min);
+                    if g0.is_finite() && g0 > 0.0 {
+                        let edge = NearImages::with_scan(holes, size, g0, &poor, false);
+                        let i = edge.index();
+                        assert!(edge.keeps_gap(i.as_ref(), &q));
+                        let above = NearImages::with_scan(holes, size, g0.next_up(), &poor, false);
+                        let i = above.index();
+                        assert!(!above.keeps_gap(i.as_ref(), &q));
+                    }
+                }
+            }
+            assert!(
+                kept > 0 && refused > 0,
+                "both outcomes occur ({kept}, {refused})"
+            );
+        }
     }
 
     /// A band of copies holds exactly the copies whose centres are within the reach of the
