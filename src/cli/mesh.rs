@@ -594,6 +594,7 @@ fn report_timings(
             "huge_pages".into(),
             super::allocator::huge_pages_active().into(),
         );
+        obj.insert("pinned_threads".into(), super::affinity::pinned().into());
     }
     let text = serde_json::to_string_pretty(&value)
         .map_err(|e| Failure::output(format!("cannot encode timings.json: {e}")))?;

@@ -4,6 +4,7 @@
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;
 
+mod affinity;
 mod allocator;
 mod example;
 mod mesh;
@@ -39,6 +40,12 @@ pub struct Cli {
     /// host it can be slower. Output does not depend on it.
     #[arg(long, global = true)]
     huge_pages: bool,
+    /// Leave the worker threads where the scheduler puts them. By default, with one worker
+    /// per CPU the process may run on (no --threads, or --threads equal to that count), worker
+    /// i runs on the i-th of those CPUs: on virtual machines an idle worker then starts
+    /// sooner. Output does not depend on it.
+    #[arg(long, global = true)]
+    no_pin: bool,
     #[command(subcommand)]
     command: Command,
 }
@@ -54,6 +61,15 @@ enum Command {
     /// Mesh a sequence of frames (JSON Lines, one domain per line) in parallel, with a
     /// ParaView time series.
     MeshSequence(sequence::Args),
+}
+
+impl Command {
+    /// Whether the global pool's workers may be pinned to CPUs for this command
+    /// ([`affinity`]): not for `mesh-sequence`, which meshes on a pool of its own started from
+    /// a worker, whose threads would inherit that worker's single CPU.
+    fn may_pin(&self) -> bool {
+        !matches!(self, Command::MeshSequence(_))
+    }
 }
 
 /// Options every subcommand sees.
@@ -92,17 +108,19 @@ impl Failure {
 const WORKER_STACK_BYTES: usize = 8 << 20;
 
 /// Start rayon's global pool: `--threads` workers, or one per core (`RAYON_NUM_THREADS` if
-/// set) without the flag.
-fn set_threads(threads: Option<usize>) -> Result<(), Failure> {
+/// set) without the flag; pinned to their CPUs unless `no_pin` ([`affinity`]).
+fn set_threads(threads: Option<usize>, no_pin: bool) -> Result<(), Failure> {
     let max = medial_blocks::ranges::MAX_THREADS;
     if let Some(n) = threads.filter(|&n| n == 0 || n > max) {
         return Err(Failure::input(format!(
             "--threads {n} is out of range: expected 1 <= N <= {max}"
         )));
     }
+    let plan = affinity::plan(affinity::workers(threads), no_pin);
     rayon::ThreadPoolBuilder::new()
         .num_threads(threads.unwrap_or(0))
         .stack_size(WORKER_STACK_BYTES)
+        .start_handler(move |i| affinity::start(&plan, i))
         .build_global()
         .map_err(|e| {
             let n = threads.map_or_else(|| "the".to_string(), |n| n.to_string());
@@ -151,7 +169,8 @@ pub fn run() -> ExitCode {
     // The command runs on a worker of the global pool, this thread asleep until it returns
     // (issue 8): reading, meshing, the report and the writers all drive their parallel
     // loops from inside the pool. Output does not depend on it.
-    let result = set_threads(cli.threads).and_then(|()| {
+    let no_pin = cli.no_pin || !cli.command.may_pin();
+    let result = set_threads(cli.threads, no_pin).and_then(|()| {
         medial_blocks::timings::on_pool_worker(move || match cli.command {
             Command::Triangulate(args) => triangulate::run(args),
             Command::Mesh(args) => mesh::run(*args, global),
@@ -180,5 +199,21 @@ fn restore_sigpipe() {
     // exists; no handler is installed.
     unsafe {
         libc::signal(libc::SIGPIPE, libc::SIG_DFL);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// `mesh-sequence` starts its own pool from a worker (threads inherit their creator's CPU
+    /// mask): the global pool is not pinned for it, and is for the other commands.
+    #[test]
+    fn only_commands_without_a_pool_of_their_own_are_pinned() {
+        let parse = |args: &[&str]| Cli::try_parse_from(args).unwrap().command;
+        assert!(parse(&["medial-blocks", "mesh"]).may_pin());
+        assert!(parse(&["medial-blocks", "triangulate", "p.csv"]).may_pin());
+        assert!(parse(&["medial-blocks", "example", "lattice"]).may_pin());
+        assert!(!parse(&["medial-blocks", "mesh-sequence", "f.jsonl"]).may_pin());
     }
 }
