@@ -331,9 +331,10 @@ fn build_checking(
     let mut verts = solved
         .into_iter()
         .collect::<Result<Vec<Vertex>, MeshError>>()?;
-    // 2. Arc orbits, in parallel (exact sweeps and densities); then in orbit order the
-    //    first error, the density check and the arcs that run backwards.
-    type ArcOrbit = (ArcGeometry, ArcTarget, [[usize; 2]; 2], bool);
+    // 2. Arc orbits, in parallel: their exact geometry and whether they run backwards; the
+    //    first error in orbit order. A build that stops at backwards arcs stops here, before
+    //    the densities (issue 8: they were half of a stopped build at 1e5 holes).
+    type ArcOrbit = (ArcGeometry, [[usize; 2]; 2], bool);
     let made: Vec<Result<ArcOrbit, MeshError>> = pb
         .arcs
         .par_iter()
@@ -362,38 +363,43 @@ fn build_checking(
             let g = ArcGeometry::new(walls, ends_m, ends_a, [arc.hint[0], -arc.hint[1]]);
             let [w0, w1] = g.sweep;
             let wrong = |w: f64| w.abs() > ZERO_SWEEP && w * expected_sign(0) < 0.0;
-            let (sq, ang) = g.densities().ok_or_else(|| {
-                internal(format!(
-                    "arc orbit {o}: the exact medial arc is not defined"
-                ))
-            })?;
-            let target = ArcTarget {
-                circles: arc.circles.map(|c| c.0 as usize + 1),
-                sq,
-                ang,
-                known: None,
-            };
-            Ok((g, target, slot, wrong(w0) || wrong(-w1)))
+            Ok((g, slot, wrong(w0) || wrong(-w1)))
         })
         .collect();
     let mut geoms = Vec::with_capacity(pb.arcs.len());
-    let mut targets = Vec::with_capacity(pb.arcs.len());
     let mut slots = Vec::with_capacity(pb.arcs.len());
     let mut inconsistent_arcs = Vec::new();
     for (o, m) in made.into_iter().enumerate() {
-        let (g, target, slot, backwards) = m?;
+        let (g, slot, backwards) = m?;
         if backwards {
             inconsistent_arcs.push(o);
         }
-        if let Some(d) = check.as_deref_mut() {
-            d.add(&g);
-        }
-        targets.push(target);
         geoms.push(g);
         slots.push(slot);
     }
     if stop && !inconsistent_arcs.is_empty() {
         return Ok(Built::Backwards(inconsistent_arcs));
+    }
+    // The densities of every arc orbit, in parallel; in orbit order the first error and the
+    // density check.
+    let densities: Vec<Option<(Vec<f64>, Vec<f64>)>> =
+        geoms.par_iter().map(ArcGeometry::densities).collect();
+    let mut targets = Vec::with_capacity(pb.arcs.len());
+    for (o, (arc, d)) in pb.arcs.iter().zip(densities).enumerate() {
+        let (sq, ang) = d.ok_or_else(|| {
+            internal(format!(
+                "arc orbit {o}: the exact medial arc is not defined"
+            ))
+        })?;
+        if let Some(d) = check.as_deref_mut() {
+            d.add(&geoms[o]);
+        }
+        targets.push(ArcTarget {
+            circles: arc.circles.map(|c| c.0 as usize + 1),
+            sq,
+            ang,
+            known: None,
+        });
     }
     // 2b. Inserted holes: split arc orbits until each fits its template.
     let split = if fluid.iter().any(|&f| f) {
