@@ -445,7 +445,7 @@ fn sample_tiling(
         .map(|k| opts.boost.get(k + 1).map_or(0, |&b| b.min(16)))
         .collect();
     let all: Vec<usize> = (0..t.h).collect();
-    let mut plans: Vec<(u64, Vec<u64>)> = plan(&density, &all)
+    let mut plans: Vec<(u64, Vec<u64>)> = timings::span("sampling", || plan(&density, &all))
         .into_iter()
         .enumerate()
         .map(|(k, p)| p.map_err(|()| too_many(k)))
