@@ -585,6 +585,9 @@ pub struct PeriodicLayout {
     /// What the layout was extracted from, for exact mode's local fix (a re-extraction with
     /// arcs running backwards collapsed, on the same sampling, [`reextract`]).
     sampled: Option<std::sync::Arc<Sampled>>,
+    /// The refinement ratio for which the extraction found no poor vertex orbit
+    /// ([`extract`]'s `poor_limit`), so that the round need not look again.
+    no_poor: Option<f64>,
 }
 
 /// A sampled, triangulated tiling and its medial graph.
@@ -630,7 +633,33 @@ fn layout_keeping(
     options: &Options,
     sampling: &SamplingOptions,
 ) -> Result<PeriodicLayout, MeshError> {
-    layout_from(pd, options, sampling, initial_reach(pd))
+    match layout_from(pd, options, sampling, initial_reach(pd), None)? {
+        Round::Layout(p) => Ok(p),
+        Round::Poor(_) => Err(MeshError::Internal(
+            "no poor vertices were asked for".into(),
+        )),
+    }
+}
+
+/// What a layout of a refinement round found ([`layout_or_poor`]).
+#[allow(clippy::large_enum_variant)]
+enum Round {
+    /// No poor vertex orbit: the layout ([`layout_keeping`]'s).
+    Layout(PeriodicLayout),
+    /// The poor vertex orbits ([`exact_mode::periodic::poor_vertices`], not empty).
+    Poor(Vec<(f64, Point, f64)>),
+}
+
+/// [`layout_keeping`] for a refinement round with ratio `limit`: the poor vertex orbits of
+/// the layout when there are some, found without numbering the layout (issue 8: the layout
+/// of such a round is not used), else the layout.
+fn layout_or_poor(
+    pd: &PeriodicDomain,
+    options: &Options,
+    sampling: &SamplingOptions,
+    limit: f64,
+) -> Result<Round, MeshError> {
+    layout_from(pd, options, sampling, initial_reach(pd), Some(limit))
 }
 
 /// [`periodic_layout_with`] from a band of copies within `first_reach` of the box (per axis;
@@ -640,7 +669,8 @@ fn layout_from(
     options: &Options,
     sampling: &SamplingOptions,
     first_reach: [f64; 2],
-) -> Result<PeriodicLayout, MeshError> {
+    poor_limit: Option<f64>,
+) -> Result<Round, MeshError> {
     crate::ranges::check_collapse_fraction(options.collapse_fraction)?;
     let gaps = pd.nearest_gaps();
     let opts = sampling.clone();
@@ -668,14 +698,21 @@ fn layout_from(
             tri,
             medial,
         };
-        let extracted = timings::span("blocking", || extract_from(pd, options, &sampled, &[]))?;
+        let extracted = timings::span("blocking", || {
+            extract_from(pd, options, &sampled, &[], poor_limit)
+        })?;
         match extracted {
             Extracted::Layout(mut p) => {
                 // Paper mode has no use for it.
                 if options.mode == Mode::Exact {
                     p.sampled = Some(std::sync::Arc::new(sampled));
                 }
-                return Ok(p);
+                return Ok(Round::Layout(p));
+            }
+            Extracted::Poor(poor) => {
+                // Freed on the pool, off this thread.
+                rayon::spawn(move || drop(sampled));
+                return Ok(Round::Poor(poor));
             }
             Extracted::TooSmall {
                 need,
@@ -696,12 +733,13 @@ fn layout_from(
 }
 
 /// [`extract`] from `sampled` with the arc orbits `forced` collapsed, measuring short arcs as
-/// the mode does.
+/// the mode does (`poor_limit` as there).
 fn extract_from(
     pd: &PeriodicDomain,
     options: &Options,
     sampled: &Sampled,
     forced: &[ArcKey],
+    poor_limit: Option<f64>,
 ) -> Result<Extracted, MeshError> {
     // Exact mode builds on the Apollonius centres: it measures short arcs by them.
     let how = match options.mode {
@@ -717,6 +755,7 @@ fn extract_from(
         options.collapse_fraction,
         how,
         forced,
+        poor_limit,
     )
 }
 
@@ -735,9 +774,11 @@ fn reextract(
     let mut forced = force.to_vec();
     forced.sort_unstable();
     forced.dedup();
-    match timings::span("blocking", || extract_from(pd, options, sampled, &forced))? {
+    match timings::span("blocking", || {
+        extract_from(pd, options, sampled, &forced, None)
+    })? {
         Extracted::Layout(p) => Ok(p),
-        Extracted::TooSmall { .. } => Err(MeshError::Internal(
+        Extracted::TooSmall { .. } | Extracted::Poor(_) => Err(MeshError::Internal(
             "the layout with forced collapses needs a wider tiling".into(),
         )),
     }
@@ -853,6 +894,9 @@ fn below(x: f64, limit: f64) -> bool {
 enum Extracted {
     /// One period's blocks.
     Layout(PeriodicLayout),
+    /// Refinement's question ([`extract`]'s `poor_limit`): the poor vertex orbits of the
+    /// layout ([`exact_mode::periodic::poor_vertices`], not empty), without the layout.
+    Poor(Vec<(f64, Point, f64)>),
     /// The tiling is too small (step 4): `need` are the half-widths whose array holds every
     /// offending circumcircle (at least the current ones), `need_reach` the distances beyond
     /// the box that the circles (widened as step 4 does) reach, per axis; `blind` is set
@@ -862,6 +906,16 @@ enum Extracted {
         need_reach: [f64; 2],
         blind: bool,
     },
+}
+
+/// The orbits of a layout's kept corners and arcs, and its exact input, found before the
+/// numbering ([`extract`] with a `poor_limit`).
+struct Early {
+    vertex_orbits: Vec<VertexKey>,
+    collapsed_orbits: Vec<ArcKey>,
+    cluster_orbits: Vec<usize>,
+    arc_orbits: Vec<ArcKey>,
+    blocking: Result<Option<PeriodicBlocking>, MeshError>,
 }
 
 /// A contracted medial vertex (a cluster of collapsed vertices) up to nothing: the samples of
@@ -1120,7 +1174,10 @@ fn not_translation_consistent(what: &str) -> MeshError {
 /// [`ClusterKey`], so its instances are its orbit representative plus the period shift like
 /// any other vertex. A kept block with a non-positive outline area is an
 /// [`MeshError::Internal`]. The arc orbits `forced` (orbit keys) are collapsed with the
-/// zero-length ones (exact mode's local fix, [`reextract`]).
+/// zero-length ones (exact mode's local fix, [`reextract`]). With `poor_limit` (refinement's
+/// ratio), [`Extracted::Poor`] when the layout has poor vertex orbits
+/// ([`exact_mode::periodic::poor_vertices`] of its exact input, found before the numbering);
+/// else the layout, the same as without it.
 #[allow(clippy::too_many_arguments)]
 fn extract(
     pd: &PeriodicDomain,
@@ -1131,6 +1188,7 @@ fn extract(
     fraction: f64,
     how: collapse::ArcLength,
     forced: &[ArcKey],
+    poor_limit: Option<f64>,
 ) -> Result<Extracted, MeshError> {
     let size = t.size;
     // Orbit keys of the original medial graph.
@@ -1436,27 +1494,6 @@ fn extract(
         .par_iter()
         .map(|&c| Some(place(c as usize)))
         .collect();
-    let mut position_of = |c: usize,
-                           vorbits: &mut Vec<VertexKey>,
-                           corbits: &mut Vec<ArcKey>|
-     -> Result<Point, MeshError> {
-        if let Some(p) = vpos[c] {
-            return Ok(p);
-        }
-        let got = needed
-            .binary_search(&(c as u32))
-            .ok()
-            .and_then(|at| placed[at].take());
-        let x = match got {
-            Some(x) => x?,
-            None => place(c)?,
-        };
-        vorbits.extend(x.vorbits);
-        corbits.extend(x.corbits);
-        cluster_orbits.push(x.r);
-        vpos[c] = Some(x.p);
-        Ok(x.p)
-    };
 
     let mut layout = BlockLayout::default();
     const NONE: u32 = u32::MAX;
@@ -1500,6 +1537,139 @@ fn extract(
         .par_iter()
         .map(|&k| Some(medial_side(k)))
         .collect();
+    // Exact mode's input from the orbits of the kept corners and arcs: `None` when the
+    // orbits are not consistent (paper mode does not need it).
+    let input_of = |vertex_orbits: &[VertexKey],
+                    collapsed_orbits: &[ArcKey],
+                    cluster_orbits: &[usize],
+                    arc_orbits: &[ArcKey]|
+     -> Result<Option<PeriodicBlocking>, MeshError> {
+        Ok(
+            if collapsed_orbits.is_empty() && contracted.kept.len() == medial.arcs.len() {
+                let vertex_by_key: HashMap<VertexKey, usize> = vkeys
+                    .iter()
+                    .enumerate()
+                    .filter_map(|(v, k)| k.map(|k| (k, v)))
+                    .collect();
+                Some(exact_input(
+                    pd,
+                    t,
+                    medial,
+                    &aux,
+                    &vkeys,
+                    vertex_orbits,
+                    arc_orbits,
+                    &vertex_by_key,
+                    &arc_by_key,
+                )?)
+            } else if collapsed_orbits.is_empty() {
+                None
+            } else {
+                // Collapsed (nearly) co-circular groups: exact mode collapses zero-length arcs
+                // and arcs below `EXACT_COLLAPSE_FRACTION` of the local radius, so every
+                // cluster is one empty circle up to that fraction. A failure here only leaves
+                // exact mode without its input (paper mode does not need it).
+                exact_input_clusters(
+                    pd,
+                    t,
+                    medial,
+                    &aux,
+                    &contracted,
+                    &members,
+                    &ckeys,
+                    cluster_orbits,
+                    arc_orbits,
+                    &arc_by_key,
+                )
+                .ok()
+            },
+        )
+    };
+    // Refinement asks only for the poor vertex orbits of this layout while there are some
+    // (issue 8): the exact input is made from the orbits of the kept corners and arcs, known
+    // from the placements above, before the numbering; with poor orbits the numbering (half
+    // of the extraction) is skipped. The numbered layout's own input is this one.
+    let early = poor_limit.and_then(|limit| {
+        let mut early = Early {
+            vertex_orbits: Vec::new(),
+            collapsed_orbits: Vec::new(),
+            cluster_orbits: Vec::new(),
+            arc_orbits: Vec::new(),
+            blocking: Ok(None),
+        };
+        // Any error here is met again by the numbering, in block order: no early input.
+        for x in &placed {
+            let Some(Ok(x)) = x else { return None };
+            early.vertex_orbits.extend_from_slice(&x.vorbits);
+            early.collapsed_orbits.extend_from_slice(&x.corbits);
+            early.cluster_orbits.push(x.r);
+        }
+        for m in &sides_of {
+            let Some(Ok(m)) = m else { return None };
+            early.arc_orbits.push(m.rep);
+        }
+        early.vertex_orbits.sort_unstable();
+        early.vertex_orbits.dedup();
+        for v in [&mut early.collapsed_orbits, &mut early.arc_orbits] {
+            v.sort_unstable();
+            v.dedup();
+        }
+        early.cluster_orbits.sort_unstable();
+        early.cluster_orbits.dedup();
+        if early
+            .arc_orbits
+            .iter()
+            .any(|a| early.collapsed_orbits.binary_search(a).is_ok())
+        {
+            return None;
+        }
+        early.blocking = input_of(
+            &early.vertex_orbits,
+            &early.collapsed_orbits,
+            &early.cluster_orbits,
+            &early.arc_orbits,
+        );
+        if let Ok(Some(pb)) = &early.blocking {
+            let poor = exact_mode::periodic::poor_vertices(pb, limit);
+            if !poor.is_empty() {
+                return Some(Err(poor));
+            }
+        }
+        Some(Ok(early))
+    });
+    let early = match early {
+        Some(Err(poor)) => return Ok(Extracted::Poor(poor)),
+        Some(Ok(early)) => Some(early),
+        None => None,
+    };
+    // Looked for and none found (an input that was not made has no vertex to be poor: the
+    // round looks again, as it did before).
+    let no_poor = poor_limit.filter(|_| {
+        early
+            .as_ref()
+            .is_some_and(|e| matches!(e.blocking, Ok(Some(_))))
+    });
+    let mut position_of = |c: usize,
+                           vorbits: &mut Vec<VertexKey>,
+                           corbits: &mut Vec<ArcKey>|
+     -> Result<Point, MeshError> {
+        if let Some(p) = vpos[c] {
+            return Ok(p);
+        }
+        let got = needed
+            .binary_search(&(c as u32))
+            .ok()
+            .and_then(|at| placed[at].take());
+        let x = match got {
+            Some(x) => x?,
+            None => place(c)?,
+        };
+        vorbits.extend(x.vorbits);
+        corbits.extend(x.corbits);
+        cluster_orbits.push(x.r);
+        vpos[c] = Some(x.p);
+        Ok(x.p)
+    };
     for &b in &kept {
         let block = &aux.blocks[b];
         let mut corners = [0u32; 4];
@@ -1662,43 +1832,23 @@ fn extract(
     cluster_orbits.sort_unstable();
     cluster_orbits.dedup();
     let groups = periodic_groups(t, medial, &members, &cluster_orbits);
-    let blocking = if collapsed_orbits.is_empty() && contracted.kept.len() == medial.arcs.len() {
-        let vertex_by_key: HashMap<VertexKey, usize> = vkeys
-            .iter()
-            .enumerate()
-            .filter_map(|(v, k)| k.map(|k| (k, v)))
-            .collect();
-        Some(exact_input(
-            pd,
-            t,
-            medial,
-            &aux,
-            &vkeys,
+    // The exact input: the one made before the numbering when its orbits are these (always,
+    // when the numbering met no error: the same kept corners and arcs).
+    let blocking = match early {
+        Some(early)
+            if early.vertex_orbits == vertex_orbits
+                && early.arc_orbits == arc_orbits
+                && early.collapsed_orbits == collapsed_orbits
+                && early.cluster_orbits == cluster_orbits =>
+        {
+            early.blocking?
+        }
+        _ => input_of(
             &vertex_orbits,
-            &arc_orbits,
-            &vertex_by_key,
-            &arc_by_key,
-        )?)
-    } else if collapsed_orbits.is_empty() {
-        None
-    } else {
-        // Collapsed (nearly) co-circular groups: exact mode collapses zero-length arcs and
-        // arcs below `EXACT_COLLAPSE_FRACTION` of the local radius, so every cluster is one
-        // empty circle up to that fraction. A failure here only leaves exact mode without
-        // its input (paper mode does not need it).
-        exact_input_clusters(
-            pd,
-            t,
-            medial,
-            &aux,
-            &contracted,
-            &members,
-            &ckeys,
+            &collapsed_orbits,
             &cluster_orbits,
             &arc_orbits,
-            &arc_by_key,
-        )
-        .ok()
+        )?,
     };
     let mut triples: Vec<[CircleKey; 3]> = vertex_orbits
         .iter()
@@ -1720,6 +1870,7 @@ fn extract(
         blocking,
         arc_keys: arc_orbits,
         sampled: None,
+        no_poor,
     }))
 }
 
@@ -2172,16 +2323,26 @@ fn refine_periodic(
     // The layout of `current`, when made.
     let mut last = None;
     for _ in 0..MAX_REFINE_ROUNDS {
-        let p = layout_keeping(&current, &nearly_zero, sampling)?;
-        let Some(pb) = &p.blocking else {
-            break;
+        // The layout only when it has no poor vertex orbit (else only those: issue 8).
+        let (p, mut poor) = match layout_or_poor(&current, &nearly_zero, sampling, limit)? {
+            Round::Poor(poor) => (None, poor),
+            Round::Layout(p) => {
+                let Some(pb) = &p.blocking else {
+                    break;
+                };
+                let poor = if p.no_poor == Some(limit) {
+                    Vec::new()
+                } else {
+                    exact_mode::periodic::poor_vertices(pb, limit)
+                };
+                (Some(p), poor)
+            }
         };
-        let mut poor = exact_mode::periodic::poor_vertices(pb, limit);
         if poor.is_empty() {
             if inserted.is_empty() {
-                return Ok(Refinement::None(Some(p)));
+                return Ok(Refinement::None(p));
             }
-            last = Some(p);
+            last = p;
             break;
         }
         poor.sort_by(|a, b| {
@@ -2225,8 +2386,10 @@ fn refine_periodic(
                 batch.push(hole);
             }
         }
+        // (Without the layout, when only the poor orbits were found, the exact attempts
+        // make it again: the same sampling, the same layout.)
         if batch.is_empty() {
-            last = Some(p);
+            last = p;
             break;
         }
         let mut holes = current.holes().to_vec();
@@ -2234,7 +2397,7 @@ fn refine_periodic(
         match PeriodicDomain::new(size, holes) {
             Ok(d) => current = d,
             Err(_) => {
-                last = Some(p);
+                last = p;
                 break;
             }
         }
@@ -2817,6 +2980,50 @@ mod tests {
         PeriodicDomain::new([l, l], holes).unwrap()
     }
 
+    /// A refinement round's layout ([`layout_or_poor`]) gives the poor vertex orbits of the
+    /// whole layout's exact input when there are some, in the same order, without the
+    /// layout; and otherwise the whole layout itself, its exact input included, marked as
+    /// checked for that ratio.
+    #[test]
+    fn a_refinement_round_finds_the_poor_orbits_of_the_whole_layout() {
+        let options = Options {
+            collapse_fraction: EXACT_COLLAPSE_FRACTION,
+            ..Options::default()
+        };
+        let sampling = crate::mesher::exact_sampling();
+        let (mut poor_rounds, mut layout_rounds) = (0, 0);
+        for (n, seed) in [(60, 1), (120, 2), (40, 5)] {
+            let pd = random_box(n, seed);
+            let whole = layout_keeping(&pd, &options, &sampling).unwrap();
+            let pb = whole.blocking.as_ref().expect("an exact input");
+            for limit in [0.9, 1.2, 2.0, 1e3] {
+                let expected = exact_mode::periodic::poor_vertices(pb, limit);
+                match layout_or_poor(&pd, &options, &sampling, limit).unwrap() {
+                    Round::Poor(poor) => {
+                        assert!(!expected.is_empty(), "{n} holes, ratio {limit}");
+                        assert_eq!(poor, expected, "{n} holes, ratio {limit}");
+                        poor_rounds += 1;
+                    }
+                    Round::Layout(p) => {
+                        assert!(expected.is_empty(), "{n} holes, ratio {limit}");
+                        assert_eq!(p.layout, whole.layout);
+                        assert_eq!(p.blocking, whole.blocking);
+                        assert_eq!(
+                            (p.triples, p.arc_keys),
+                            (whole.triples.clone(), whole.arc_keys.clone())
+                        );
+                        assert_eq!(p.no_poor, Some(limit));
+                        layout_rounds += 1;
+                    }
+                }
+            }
+        }
+        assert!(
+            poor_rounds > 0 && layout_rounds > 0,
+            "{poor_rounds} {layout_rounds}"
+        );
+    }
+
     /// Periodic refinement's gap check through the index of near images answers as the scan
     /// over every hole, on candidates anywhere in the box (near its edges and corners, where
     /// the nearest copy is an image), of every size up to half the empty radius, with gaps
@@ -2942,7 +3149,11 @@ mod tests {
                 random_box(n, seed)
             };
             let band = periodic_layout_with(&pd, &options, &exact).unwrap();
-            let whole = layout_from(&pd, &options, &exact, [f64::INFINITY; 2]).unwrap();
+            let Round::Layout(whole) =
+                layout_from(&pd, &options, &exact, [f64::INFINITY; 2], None).unwrap()
+            else {
+                panic!("a layout was asked for")
+            };
             assert_eq!(band.triples, whole.triples, "{n} holes");
             assert_eq!(
                 (band.medial_vertices, band.medial_arcs, band.collapsed_arcs),
