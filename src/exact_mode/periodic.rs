@@ -264,27 +264,22 @@ pub fn density_deviation(
     Ok(d)
 }
 
-/// [`build`], adding each arc orbit's densities to `check` when given; with `stop`, returns
-/// [`Built::Backwards`] after the arc orbits when one of them runs backwards.
-fn build_checking(
+/// The vertex orbits' exact circles, the arc orbits' exact geometry and tangent slots, and
+/// the arc orbits that run backwards (in orbit order): stages 1 and 2 of [`build`] before
+/// the densities, the first error in orbit order.
+#[allow(clippy::type_complexity)]
+fn orbits_of(
     pb: &PeriodicBlocking,
-    options: &Options,
-    fluid: &[bool],
-    mut check: Option<&mut super::densities::Deviation>,
-    stop: bool,
-) -> Result<Built, MeshError> {
-    validate_options(options)?;
+) -> Result<
+    (
+        Vec<Vertex>,
+        Vec<ArcGeometry>,
+        Vec<[[usize; 2]; 2]>,
+        Vec<usize>,
+    ),
+    MeshError,
+> {
     let size = pb.size;
-    let h = pb.holes.len();
-    let ncirc = h + 1;
-    let is_fluid = |k: usize| fluid.get(k).copied().unwrap_or(false);
-    let cluster = |k: usize| {
-        if is_fluid(k) {
-            super::inserted::FLUID_CLUSTERING
-        } else {
-            clustering_of(options, k as CircleId)
-        }
-    };
     let unknown = || internal("a periodic vertex or arc names an unknown hole".into());
     // 1. Vertex orbits, in parallel (each its own Apollonius solve); the first error in
     //    orbit order is the one returned.
@@ -328,7 +323,7 @@ fn build_checking(
             })
         })
         .collect();
-    let mut verts = solved
+    let verts = solved
         .into_iter()
         .collect::<Result<Vec<Vertex>, MeshError>>()?;
     // 2. Arc orbits, in parallel: their exact geometry and whether they run backwards; the
@@ -377,6 +372,37 @@ fn build_checking(
         geoms.push(g);
         slots.push(slot);
     }
+    Ok((verts, geoms, slots, inconsistent_arcs))
+}
+
+/// The arc orbits of `pb` that run backwards (orbit order): what [`build_unless_backwards`]
+/// stops at, without the options check (the periodic extraction looks before numbering its
+/// layout, issue 8).
+pub(crate) fn backwards_orbits(pb: &PeriodicBlocking) -> Result<Vec<usize>, MeshError> {
+    orbits_of(pb).map(|o| o.3)
+}
+
+/// [`build`], adding each arc orbit's densities to `check` when given; with `stop`, returns
+/// [`Built::Backwards`] after the arc orbits when one of them runs backwards.
+fn build_checking(
+    pb: &PeriodicBlocking,
+    options: &Options,
+    fluid: &[bool],
+    mut check: Option<&mut super::densities::Deviation>,
+    stop: bool,
+) -> Result<Built, MeshError> {
+    validate_options(options)?;
+    let h = pb.holes.len();
+    let ncirc = h + 1;
+    let is_fluid = |k: usize| fluid.get(k).copied().unwrap_or(false);
+    let cluster = |k: usize| {
+        if is_fluid(k) {
+            super::inserted::FLUID_CLUSTERING
+        } else {
+            clustering_of(options, k as CircleId)
+        }
+    };
+    let (mut verts, mut geoms, mut slots, inconsistent_arcs) = orbits_of(pb)?;
     if stop && !inconsistent_arcs.is_empty() {
         return Ok(Built::Backwards(inconsistent_arcs));
     }

@@ -588,6 +588,11 @@ pub struct PeriodicLayout {
     /// The refinement ratio for which the extraction found no poor vertex orbit
     /// ([`extract`]'s `poor_limit`), so that the round need not look again.
     no_poor: Option<f64>,
+    /// The arc orbits of `blocking` that run backwards, when the extraction looked
+    /// ([`extract`]'s `check_backwards`) and found some: the layout was then not numbered
+    /// (`layout`, `triples` and the groups are empty), and its exact build is known to stop
+    /// there ([`exact_frame`] answers as the stopped build, the local fix re-extracts).
+    backwards: Option<Vec<usize>>,
 }
 
 /// A sampled, triangulated tiling and its medial graph.
@@ -633,7 +638,34 @@ fn layout_keeping(
     options: &Options,
     sampling: &SamplingOptions,
 ) -> Result<PeriodicLayout, MeshError> {
-    match layout_from(pd, options, sampling, initial_reach(pd), None)? {
+    layout_checked(pd, options, sampling, false)
+}
+
+/// [`layout_keeping`] for an exact attempt: a layout whose exact build would stop at arc
+/// orbits running backwards is not numbered ([`extract`]'s `check_backwards`).
+fn layout_for_exact(
+    pd: &PeriodicDomain,
+    options: &Options,
+    sampling: &SamplingOptions,
+) -> Result<PeriodicLayout, MeshError> {
+    layout_checked(pd, options, sampling, true)
+}
+
+/// [`layout_keeping`], with [`extract`]'s `check_backwards`.
+fn layout_checked(
+    pd: &PeriodicDomain,
+    options: &Options,
+    sampling: &SamplingOptions,
+    check_backwards: bool,
+) -> Result<PeriodicLayout, MeshError> {
+    match layout_from(
+        pd,
+        options,
+        sampling,
+        initial_reach(pd),
+        None,
+        check_backwards,
+    )? {
         Round::Layout(p) => Ok(p),
         Round::Poor(_) => Err(MeshError::Internal(
             "no poor vertices were asked for".into(),
@@ -659,7 +691,7 @@ fn layout_or_poor(
     sampling: &SamplingOptions,
     limit: f64,
 ) -> Result<Round, MeshError> {
-    layout_from(pd, options, sampling, initial_reach(pd), Some(limit))
+    layout_from(pd, options, sampling, initial_reach(pd), Some(limit), true)
 }
 
 /// [`periodic_layout_with`] from a band of copies within `first_reach` of the box (per axis;
@@ -670,6 +702,7 @@ fn layout_from(
     sampling: &SamplingOptions,
     first_reach: [f64; 2],
     poor_limit: Option<f64>,
+    check_backwards: bool,
 ) -> Result<Round, MeshError> {
     crate::ranges::check_collapse_fraction(options.collapse_fraction)?;
     let gaps = pd.nearest_gaps();
@@ -699,7 +732,7 @@ fn layout_from(
             medial,
         };
         let extracted = timings::span("blocking", || {
-            extract_from(pd, options, &sampled, &[], poor_limit)
+            extract_from(pd, options, &sampled, &[], poor_limit, check_backwards)
         })?;
         match extracted {
             Extracted::Layout(mut p) => {
@@ -733,13 +766,14 @@ fn layout_from(
 }
 
 /// [`extract`] from `sampled` with the arc orbits `forced` collapsed, measuring short arcs as
-/// the mode does (`poor_limit` as there).
+/// the mode does (`poor_limit` and `check_backwards`, exact mode only, as there).
 fn extract_from(
     pd: &PeriodicDomain,
     options: &Options,
     sampled: &Sampled,
     forced: &[ArcKey],
     poor_limit: Option<f64>,
+    check_backwards: bool,
 ) -> Result<Extracted, MeshError> {
     // Exact mode builds on the Apollonius centres: it measures short arcs by them.
     let how = match options.mode {
@@ -756,6 +790,7 @@ fn extract_from(
         how,
         forced,
         poor_limit,
+        check_backwards && options.mode == Mode::Exact,
     )
 }
 
@@ -775,7 +810,7 @@ fn reextract(
     forced.sort_unstable();
     forced.dedup();
     match timings::span("blocking", || {
-        extract_from(pd, options, sampled, &forced, None)
+        extract_from(pd, options, sampled, &forced, None, false)
     })? {
         Extracted::Layout(p) => Ok(p),
         Extracted::TooSmall { .. } | Extracted::Poor(_) => Err(MeshError::Internal(
@@ -1177,7 +1212,9 @@ fn not_translation_consistent(what: &str) -> MeshError {
 /// zero-length ones (exact mode's local fix, [`reextract`]). With `poor_limit` (refinement's
 /// ratio), [`Extracted::Poor`] when the layout has poor vertex orbits
 /// ([`exact_mode::periodic::poor_vertices`] of its exact input, found before the numbering);
-/// else the layout, the same as without it.
+/// else the layout, the same as without it. With `check_backwards` (exact mode's first
+/// extraction of a sampling, `forced` empty), a layout whose exact input has arc orbits running
+/// backwards is returned without its numbering ([`PeriodicLayout`]'s `backwards`).
 #[allow(clippy::too_many_arguments)]
 fn extract(
     pd: &PeriodicDomain,
@@ -1189,6 +1226,7 @@ fn extract(
     how: collapse::ArcLength,
     forced: &[ArcKey],
     poor_limit: Option<f64>,
+    check_backwards: bool,
 ) -> Result<Extracted, MeshError> {
     let size = t.size;
     // Orbit keys of the original medial graph.
@@ -1589,7 +1627,8 @@ fn extract(
     // (issue 8): the exact input is made from the orbits of the kept corners and arcs, known
     // from the placements above, before the numbering; with poor orbits the numbering (half
     // of the extraction) is skipped. The numbered layout's own input is this one.
-    let early = poor_limit.and_then(|limit| {
+    let early_wanted = poor_limit.is_some() || (check_backwards && forced.is_empty());
+    let early = early_wanted.then_some(()).and_then(|()| {
         let mut early = Early {
             vertex_orbits: Vec::new(),
             collapsed_orbits: Vec::new(),
@@ -1629,7 +1668,7 @@ fn extract(
             &early.cluster_orbits,
             &early.arc_orbits,
         );
-        if let Ok(Some(pb)) = &early.blocking {
+        if let (Ok(Some(pb)), Some(limit)) = (&early.blocking, poor_limit) {
             let poor = exact_mode::periodic::poor_vertices(pb, limit);
             if !poor.is_empty() {
                 return Some(Err(poor));
@@ -1649,6 +1688,47 @@ fn extract(
             .as_ref()
             .is_some_and(|e| matches!(e.blocking, Ok(Some(_))))
     });
+    // Exact mode's first extraction of a sampling (issue 8): arc orbits running backwards
+    // stop its exact build before the grids, and the local fix extracts the layout again
+    // with them collapsed ([`reextract`]), so this layout is not numbered: the stopped
+    // build's answer is found here, from the same exact input (an error there is left to
+    // the build).
+    let backwards = match &early {
+        Some(Early {
+            blocking: Ok(Some(pb)),
+            ..
+        }) if check_backwards && forced.is_empty() => exact_mode::periodic::backwards_orbits(pb)
+            .ok()
+            .filter(|arcs| !arcs.is_empty()),
+        _ => None,
+    };
+    let early = match (backwards, early) {
+        (Some(arcs), Some(early)) => {
+            let Early {
+                vertex_orbits,
+                collapsed_orbits,
+                arc_orbits,
+                blocking,
+                ..
+            } = early;
+            let blocking = blocking.ok().flatten();
+            return Ok(Extracted::Layout(PeriodicLayout {
+                layout: BlockLayout::default(),
+                medial_vertices: vertex_orbits.len(),
+                medial_arcs: arc_orbits.len() + collapsed_orbits.len(),
+                tiling: t.m,
+                triples: Vec::new(),
+                collapsed_arcs: collapsed_orbits.len(),
+                cocircular_groups: Vec::new(),
+                blocking,
+                arc_keys: arc_orbits,
+                sampled: None,
+                no_poor,
+                backwards: Some(arcs),
+            }));
+        }
+        (_, early) => early,
+    };
     let mut position_of = |c: usize,
                            vorbits: &mut Vec<VertexKey>,
                            corbits: &mut Vec<ArcKey>|
@@ -1871,6 +1951,7 @@ fn extract(
         arc_keys: arc_orbits,
         sampled: None,
         no_poor,
+        backwards: None,
     }))
 }
 
@@ -2553,7 +2634,7 @@ fn exact_attempts(
         //    such collapses).
         let made = match first.take() {
             Some(p) => Ok(p),
-            None => layout_keeping(pd, &nearly_zero, &sampling),
+            None => layout_for_exact(pd, &nearly_zero, &sampling),
         };
         let short = match made {
             Ok(p) => Some(p),
@@ -2592,7 +2673,7 @@ fn exact_attempts(
         // 2. Only zero-length arcs collapsed.
         let p = match same_as_zero_only {
             Some(p) => p,
-            None => match layout_keeping(pd, &zero_only, &sampling) {
+            None => match layout_for_exact(pd, &zero_only, &sampling) {
                 Ok(p) => p,
                 Err(MeshError::Internal(_)) => return Ok(None),
                 Err(_) if attempt > 0 => return Ok(None),
@@ -2746,22 +2827,35 @@ fn frame_of(
             arcs: Vec::new(),
         });
     };
+    let failed_at = |arcs: &[usize]| {
+        let bad: Vec<usize> = arcs.iter().flat_map(|&o| [2 * o, 2 * o + 1]).collect();
+        Framed::Failed {
+            holes: holes_around(pb, &bad),
+            arcs: arcs
+                .iter()
+                .filter_map(|&o| p.arc_keys.get(o).copied())
+                .collect(),
+        }
+    };
+    // The extraction found the arcs running backwards (the layout is not numbered): the
+    // stopped build's answer, after its options check.
+    if let Some(arcs) = &p.backwards {
+        return match exact_mode::validate_options(options) {
+            Ok(()) => Ok(failed_at(arcs)),
+            Err(MeshError::Internal(_)) => Ok(Framed::Failed {
+                holes: Vec::new(),
+                arcs: Vec::new(),
+            }),
+            Err(e) => Err(e),
+        };
+    }
     // A build with arcs running backwards stops before its grids (the mesh would not be
     // kept): those arcs are collapsed, or the holes around them resampled, by the caller.
     let x = match timings::span("exact_geometry", || {
         exact_mode::periodic::build_unless_backwards(pb, options, fluid)
     }) {
         Ok(exact_mode::periodic::Built::Mesh(x)) => *x,
-        Ok(exact_mode::periodic::Built::Backwards(arcs)) => {
-            let bad: Vec<usize> = arcs.iter().flat_map(|&o| [2 * o, 2 * o + 1]).collect();
-            return Ok(Framed::Failed {
-                holes: holes_around(pb, &bad),
-                arcs: arcs
-                    .iter()
-                    .filter_map(|&o| p.arc_keys.get(o).copied())
-                    .collect(),
-            });
-        }
+        Ok(exact_mode::periodic::Built::Backwards(arcs)) => return Ok(failed_at(&arcs)),
         Err(MeshError::Internal(_)) => {
             return Ok(Framed::Failed {
                 holes: Vec::new(),
@@ -2983,7 +3077,7 @@ mod tests {
     /// A refinement round's layout ([`layout_or_poor`]) gives the poor vertex orbits of the
     /// whole layout's exact input when there are some, in the same order, without the
     /// layout; and otherwise the whole layout itself, its exact input included, marked as
-    /// checked for that ratio.
+    /// checked for that ratio (not numbered when it has arcs running backwards).
     #[test]
     fn a_refinement_round_finds_the_poor_orbits_of_the_whole_layout() {
         let options = Options {
@@ -3006,8 +3100,15 @@ mod tests {
                     }
                     Round::Layout(p) => {
                         assert!(expected.is_empty(), "{n} holes, ratio {limit}");
-                        assert_eq!(p.layout, whole.layout);
                         assert_eq!(p.blocking, whole.blocking);
+                        assert_eq!(p.arc_keys, whole.arc_keys);
+                        if p.backwards.is_some() {
+                            // Not numbered (see the test after this one).
+                            assert!(p.layout.blocks.is_empty());
+                            layout_rounds += 1;
+                            continue;
+                        }
+                        assert_eq!(p.layout, whole.layout);
                         assert_eq!(
                             (p.triples, p.arc_keys),
                             (whole.triples.clone(), whole.arc_keys.clone())
@@ -3150,7 +3251,7 @@ mod tests {
             };
             let band = periodic_layout_with(&pd, &options, &exact).unwrap();
             let Round::Layout(whole) =
-                layout_from(&pd, &options, &exact, [f64::INFINITY; 2], None).unwrap()
+                layout_from(&pd, &options, &exact, [f64::INFINITY; 2], None, false).unwrap()
             else {
                 panic!("a layout was asked for")
             };
@@ -3223,6 +3324,49 @@ mod tests {
             ..options.clone()
         };
         (pd, options, nearly_zero)
+    }
+
+    /// An exact attempt's layout ([`layout_for_exact`]) with arc orbits running backwards is
+    /// not numbered: it names the arc orbits the stopped build of the whole layout names, with
+    /// the same exact input and orbit keys, and [`exact_frame`] answers for it as for the
+    /// whole layout (the same holes to resample, the same arcs for the local fix). Without
+    /// backwards arcs it is the whole layout.
+    #[test]
+    fn an_exact_attempts_layout_stops_where_the_whole_layouts_build_stops() {
+        use crate::exact_mode::periodic::{build_unless_backwards, Built};
+        let (pd, options, nearly_zero) = backwards_box();
+        let sampling = crate::mesher::exact_sampling();
+        let plain = random_box(30, 3);
+        let mut seen = [false; 2];
+        for (pd, opts) in [(&pd, &nearly_zero), (&plain, &nearly_zero)] {
+            let whole = layout_keeping(pd, opts, &sampling).unwrap();
+            let pb = whole.blocking.as_ref().expect("exact input");
+            let mine = layout_for_exact(pd, opts, &sampling).unwrap();
+            assert_eq!(mine.blocking, whole.blocking);
+            assert_eq!(mine.arc_keys, whole.arc_keys);
+            assert_eq!(mine.collapsed_arcs, whole.collapsed_arcs);
+            match build_unless_backwards(pb, &options, &[]).unwrap() {
+                Built::Backwards(arcs) => {
+                    seen[0] = true;
+                    assert_eq!(mine.backwards.as_ref(), Some(&arcs));
+                    assert!(mine.layout.blocks.is_empty(), "not numbered");
+                    let framed = |p: PeriodicLayout| match exact_frame(pd, p, &options, &[], true) {
+                        Ok(Framed::Failed { holes, arcs }) => (holes, arcs),
+                        _ => panic!("a layout with backwards arcs fails"),
+                    };
+                    let (h0, a0) = framed(whole);
+                    assert!(!a0.is_empty());
+                    assert_eq!(framed(mine), (h0, a0));
+                }
+                Built::Mesh(_) => {
+                    seen[1] = true;
+                    assert!(mine.backwards.is_none());
+                    assert_eq!(mine.layout, whole.layout);
+                    assert_eq!(mine.triples, whole.triples);
+                }
+            }
+        }
+        assert_eq!(seen, [true, true]);
     }
 
     /// The exact build that stops at backwards arcs (issue 8) reports exactly the arc orbits
