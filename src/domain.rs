@@ -963,17 +963,17 @@ impl HoleIndex<'_> {
 }
 
 impl HoleIndex<'_> {
-    /// Every hole `k` with `gap(c_k, q) < max_gap` (`q` any circle, not necessarily a hole),
-    /// in increasing order of `k`: the range query of [`HoleIndex::within_gap`] around a
-    /// query circle. Empty for a non-finite `q` or `max_gap`.
-    pub fn within_gap_of(&self, q: &Circle, max_gap: f64) -> Vec<usize> {
-        let mut out = Vec::new();
-        let finite = q.center[0].is_finite()
-            && q.center[1].is_finite()
-            && q.radius.is_finite()
-            && max_gap.is_finite();
-        if !finite || self.nodes.is_empty() {
-            return out;
+    /// Visit the leaves of the tree that may hold a hole `c` with `gap(c, q) < max_gap`
+    /// (the conservative bound of [`HoleIndex::within_gap`]), as (input indices, holes),
+    /// until `visit` returns true; whether it did. `q` and `max_gap` finite.
+    fn visit_near(
+        &self,
+        q: &Circle,
+        max_gap: f64,
+        mut visit: impl FnMut(&[u32], &[Circle]) -> bool,
+    ) -> bool {
+        if self.nodes.is_empty() {
+            return false;
         }
         let mut stack = Pending::root();
         while let Some(n) = stack.pop() {
@@ -985,19 +985,39 @@ impl HoleIndex<'_> {
             match node.children {
                 None => {
                     let (s, e) = (node.start as usize, node.end as usize);
-                    out.extend(
-                        self.order[s..e]
-                            .iter()
-                            .zip(&self.sorted[s..e])
-                            .filter(|&(_, c)| gap(c, q) < max_gap)
-                            .map(|(&k, _)| k as usize),
-                    );
+                    if visit(&self.order[s..e], &self.sorted[s..e]) {
+                        return true;
+                    }
                 }
                 Some((l, r)) => {
                     stack.push(l);
                     stack.push(r);
                 }
             }
+        }
+        false
+    }
+
+    /// Every hole `k` with `gap(c_k, q) < max_gap` (`q` any circle, not necessarily a hole),
+    /// in increasing order of `k`: the range query of [`HoleIndex::within_gap`] around a
+    /// query circle (tested against the scan). Empty for a non-finite `q` or `max_gap`.
+    pub fn within_gap_of(&self, q: &Circle, max_gap: f64) -> Vec<usize> {
+        let mut out = Vec::new();
+        let finite = q.center[0].is_finite()
+            && q.center[1].is_finite()
+            && q.radius.is_finite()
+            && max_gap.is_finite();
+        if finite {
+            self.visit_near(q, max_gap, |order, sorted| {
+                out.extend(
+                    order
+                        .iter()
+                        .zip(sorted)
+                        .filter(|&(_, c)| gap(c, q) < max_gap)
+                        .map(|(&k, _)| k as usize),
+                );
+                false
+            });
         }
         out.sort_unstable();
         out
@@ -1017,36 +1037,15 @@ impl HoleIndex<'_> {
         if !finite {
             return !self.holes.iter().all(|c| gap(c, q) >= max_gap);
         }
-        if self.nodes.is_empty() {
-            return false;
-        }
-        let mut stack = Pending::root();
-        while let Some(n) = stack.pop() {
-            let node = &self.nodes[n as usize];
-            let lb = box_dist2(node, q.center).sqrt() - q.radius - node.max_r;
-            if lb - (q.radius.abs() + node.max_r.abs() + lb.abs()) * 1e-12 >= max_gap {
-                continue;
-            }
-            match node.children {
-                None => {
-                    let leaf = &self.sorted[node.start as usize..node.end as usize];
-                    if leaf.iter().any(|c| {
-                        // `!(gap >= max_gap)`: a NaN gap counts as closer, as in the scan.
-                        matches!(
-                            gap(c, q).partial_cmp(&max_gap),
-                            None | Some(std::cmp::Ordering::Less)
-                        )
-                    }) {
-                        return true;
-                    }
-                }
-                Some((l, r)) => {
-                    stack.push(l);
-                    stack.push(r);
-                }
-            }
-        }
-        false
+        self.visit_near(q, max_gap, |_, leaf| {
+            leaf.iter().any(|c| {
+                // `!(gap >= max_gap)`: a NaN gap counts as closer, as in the scan.
+                matches!(
+                    gap(c, q).partial_cmp(&max_gap),
+                    None | Some(std::cmp::Ordering::Less)
+                )
+            })
+        })
     }
 }
 

@@ -8,7 +8,8 @@
 //!   and smoothing in parallel) on rayon pools of 1, 2 and 3 threads: layout, vertices and
 //!   every grid node bitwise equal, and the error (if any) equal, on random bubbles, the
 //!   co-circular square lattice and a layout with inserted holes (templates);
-//! - `HoleIndex::any_closer` (the refinement's candidate check) against the scan over all
+//! - `HoleIndex::any_closer` (the refinement's candidate check) and `HoleIndex::within_gap_of`
+//!   (periodic refinement's, through the holes' near images) against the scan over all
 //!   holes it replaced, on random holes and queries (near, overlapping, far, degenerate);
 //! - `templates::fill_inserted_holes` (one pass for all inserted holes) against one
 //!   `fill_inserted_hole` call per hole, on random synthetic layouts (arcs of several holes
@@ -229,7 +230,7 @@ fn exact_geometry_is_independent_of_the_thread_count() {
 }
 
 #[test]
-fn any_closer_matches_the_scan() {
+fn any_closer_and_the_range_query_match_the_scan() {
     let mut rng = SplitMix64(88);
     for round in 0..300 {
         let n = (rng.next_u64() % 200) as usize;
@@ -274,6 +275,13 @@ fn any_closer_matches_the_scan() {
             assert_eq!(
                 index.any_closer(&q, g),
                 scan,
+                "round {round}, q {q:?}, g {g}"
+            );
+            // The range query around a circle: exactly the holes the scan finds closer.
+            let within: Vec<usize> = (0..n).filter(|&k| gap(&holes[k], &q) < g).collect();
+            assert_eq!(
+                index.within_gap_of(&q, g),
+                within,
                 "round {round}, q {q:?}, g {g}"
             );
         }
