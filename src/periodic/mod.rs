@@ -1259,7 +1259,10 @@ fn extract(
         .into_par_iter()
         .map(arc_key)
         .collect();
-    let mut arc_by_key: HashMap<ArcKey, usize> = HashMap::default();
+    // Sized once (issue 8: growing it rehashed every key, a millisecond of one thread at 1e3
+    // holes).
+    let mut arc_by_key: HashMap<ArcKey, usize> =
+        HashMap::with_capacity_and_hasher(akeys.len(), Default::default());
     for (e, k) in akeys.iter().enumerate() {
         if let Some(k) = k {
             if arc_by_key.insert(*k, e).is_some() {
@@ -1360,7 +1363,8 @@ fn extract(
         .into_par_iter()
         .map(cluster_key)
         .collect();
-    let mut cluster_by_key: HashMap<ClusterKey, usize> = HashMap::default();
+    let mut cluster_by_key: HashMap<ClusterKey, usize> =
+        HashMap::with_capacity_and_hasher(ckeys.len(), Default::default());
     for (c, k) in ckeys.iter().enumerate() {
         if let Some(k) = k {
             cluster_by_key.insert(k.clone(), c);
@@ -1584,11 +1588,14 @@ fn extract(
      -> Result<Option<PeriodicBlocking>, MeshError> {
         Ok(
             if collapsed_orbits.is_empty() && contracted.kept.len() == medial.arcs.len() {
-                let vertex_by_key: HashMap<VertexKey, usize> = vkeys
-                    .iter()
-                    .enumerate()
-                    .filter_map(|(v, k)| k.map(|k| (k, v)))
-                    .collect();
+                let mut vertex_by_key: HashMap<VertexKey, usize> =
+                    HashMap::with_capacity_and_hasher(vkeys.len(), Default::default());
+                vertex_by_key.extend(
+                    vkeys
+                        .iter()
+                        .enumerate()
+                        .filter_map(|(v, k)| k.map(|k| (k, v))),
+                );
                 Some(exact_input(
                     pd,
                     t,
