@@ -944,7 +944,7 @@ enum Extracted {
 }
 
 /// The orbits of a layout's kept corners and arcs, and its exact input, found before the
-/// numbering ([`extract`] with a `poor_limit`).
+/// numbering ([`extract`] with a `poor_limit` or `check_backwards`).
 struct Early {
     vertex_orbits: Vec<VertexKey>,
     collapsed_orbits: Vec<ArcKey>,
