@@ -283,8 +283,27 @@ fn nearest_images(size: [f64; 2], holes: &[Circle]) -> Vec<Option<(usize, f64)>>
         .map(|(n, c)| n.map_or(f64::INFINITY, |(_, g)| g) + c.radius)
         .fold(0.0, f64::max)
         + rmax;
+    let (tiling, index_of) = images_near(size, holes, reach);
+    let index = HoleIndex::new(&tiling);
+    (0..h)
+        .into_par_iter()
+        .with_min_len(256)
+        .map(|i| index.nearest_gap(i).map(|(k, g)| (index_of[k], g)))
+        .collect()
+}
+
+/// The holes (centres in the box of `size`) and those of their images in the 3 x 3 tiling
+/// whose centres lie within `reach` of the box (widened by a relative 1e-9 for rounding; a
+/// NaN or infinite `reach` keeps every image): the holes first, then the images tile by
+/// tile ([`tile_offsets`]`(1)` without `(0, 0)`), each with its tiling index `t h + j` (hole
+/// `j` moved by the `t`-th shift, `t = 0` the box itself).
+pub(crate) fn images_near(
+    size: [f64; 2],
+    holes: &[Circle],
+    reach: f64,
+) -> (Vec<Circle>, Vec<usize>) {
+    let h = holes.len();
     let m = reach + 1e-9 * (reach.abs() + size[0].max(size[1]));
-    // NaN or infinite reach: every image.
     let near = |p: [f64; 2]| !m.is_finite() || (0..2).all(|a| p[a] >= -m && p[a] <= size[a] + m);
     let mut tiling = Vec::with_capacity(h);
     let mut index_of: Vec<usize> = Vec::with_capacity(h);
@@ -305,12 +324,7 @@ fn nearest_images(size: [f64; 2], holes: &[Circle]) -> Vec<Option<(usize, f64)>>
             }
         }
     }
-    let index = HoleIndex::new(&tiling);
-    (0..h)
-        .into_par_iter()
-        .with_min_len(256)
-        .map(|i| index.nearest_gap(i).map(|(k, g)| (index_of[k], g)))
-        .collect()
+    (tiling, index_of)
 }
 
 /// The tile offsets `(a, b)` with `|a|, |b| <= m`, in lexicographic order.

@@ -2552,27 +2552,10 @@ impl<'a> NearImages<'a> {
             let rmax = holes.iter().map(|c| c.radius).fold(0.0, f64::max);
             let cmax = poor.iter().map(|p| 0.5 * p.2).fold(0.0, f64::max);
             // A copy `o'` with `|q - o'| - r_q - r_o < g` is within `g + r_q + r_o` of `q` (in
-            // the box); widened for rounding. Not finite: every image.
-            let reach = g + cmax + rmax;
-            let reach = reach + 1e-9 * (reach.abs() + size[0].max(size[1]));
-            let near = |p: Point| {
-                !reach.is_finite() || (0..2).all(|a| p[a] >= -reach && p[a] <= size[a] + reach)
-            };
-            for (a, b) in domain::tile_offsets(1) {
-                for (j, c) in holes.iter().enumerate() {
-                    let center = [
-                        c.center[0] + a as f64 * size[0],
-                        c.center[1] + b as f64 * size[1],
-                    ];
-                    if near(center) {
-                        tiles.push(Circle {
-                            center,
-                            radius: c.radius,
-                        });
-                        of.push(j);
-                    }
-                }
-            }
+            // the box).
+            let (t, index_of) = domain::images_near(size, holes, g + cmax + rmax);
+            tiles = t;
+            of = index_of.into_iter().map(|k| k % holes.len()).collect();
         }
         NearImages {
             holes,
