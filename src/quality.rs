@@ -219,6 +219,7 @@ fn block_stats(
     layout: Option<&BlockLayout>,
 ) -> Stats {
     let tables = kernel::Tables::new();
+    let lanes = crate::lanes::Lanes::best();
     let plan = conn.map(|conn| sides::Plan::new(conn, grids));
     let mut spill = Vec::new();
     let chunks = grids.len().div_ceil(CHUNK);
@@ -231,7 +232,7 @@ fn block_stats(
         .zip(slices)
         .enumerate()
         .map_init(
-            || (rows::Rows::default(), sides::Sides::default()),
+            || (rows::Rows::default(), sides::Sides::new(lanes)),
             |(scratch, sd), (c, (chunk, spill))| {
                 let mut acc = rows::Chunk::new();
                 let mut wall = None;
@@ -249,7 +250,7 @@ fn block_stats(
                         }
                         if let Some(l) = layout {
                             let b = &l.blocks[c * CHUNK + k];
-                            wall = sides::max_nan(wall, sides::block_wall_orthogonality(l, b, g));
+                            wall = sides::max_nan(wall, sd.wall(l, b, g));
                         }
                         f
                     })

@@ -12,11 +12,14 @@ use super::{angle_deg, corners, len, ratio, well_formed, MetricSummary, CHUNK};
 use crate::connectivity::BlockConnectivity;
 use crate::connectivity::Connectivity;
 use crate::geometry::Point;
+use crate::lanes::Lanes;
 use crate::layout::{BlockLayout, Curve, EdgeKind};
 use crate::mesh::BlockGrid;
 use rayon::prelude::*;
 /// Side `s` of `grid`: for position `p` along the side (in the side's direction, see
-/// [`crate::layout`]), the node on the side and its neighbour one step into the block.
+/// [`crate::layout`]), the node on the side and its neighbour one step into the block (the
+/// tests' reference of [`side_lines`]).
+#[cfg(test)]
 fn side_node_and_inward(grid: &BlockGrid, s: usize, p: usize) -> (Point, Point) {
     let (ni, nj) = (grid.ni, grid.nj);
     match s {
@@ -51,6 +54,168 @@ fn side_cell_height(grid: &BlockGrid, s: usize, p: usize) -> f64 {
     } else {
         f64::NAN
     }
+}
+
+/// The nodes of side `s` of `grid` in the side's direction and their neighbours one step into
+/// the block: `side_node_and_inward(grid, s, p)` for every `p` in `0..=n` (`n` the side's cell
+/// count), as two lines `(a, b)`. Side 0's lines are the grid's first two node rows (no copy);
+/// the others are copied into `scratch`. Requires a well-formed grid with `ni, nj >= 1`.
+fn side_lines<'g>(
+    grid: &'g BlockGrid,
+    s: usize,
+    scratch: &'g mut (Vec<Point>, Vec<Point>),
+) -> (&'g [Point], &'g [Point]) {
+    let w = grid.ni + 1;
+    if s == 0 {
+        return (&grid.nodes[..w], &grid.nodes[w..2 * w]);
+    }
+    let (ni, nj, nodes) = (grid.ni, grid.nj, &grid.nodes[..]);
+    let (a, b) = scratch;
+    a.clear();
+    b.clear();
+    // The nodes `side_node_and_inward` reads, by index: a column (sides 1 and 3, stride `w`)
+    // or the top rows reversed (side 2).
+    match s {
+        1 => {
+            a.extend((0..=nj).map(|p| nodes[ni + p * w]));
+            b.extend((0..=nj).map(|p| nodes[ni - 1 + p * w]));
+        }
+        2 => {
+            a.extend(nodes[nj * w..(nj + 1) * w].iter().rev());
+            b.extend(nodes[(nj - 1) * w..nj * w].iter().rev());
+        }
+        _ => {
+            a.extend((0..=nj).map(|p| nodes[(nj - p) * w]));
+            b.extend((0..=nj).map(|p| nodes[1 + (nj - p) * w]));
+        }
+    }
+    (&a[..], &b[..])
+}
+
+/// The corners `[q0, q1, q2, q3]` (counter-clockwise, as [`corners`]) of the cell at position
+/// `p` along side `S`, from its side nodes `a0 = a[p]`, `a1 = a[p + 1]` and their inward
+/// neighbours `b0 = b[p]`, `b1 = b[p + 1]` (see [`side_lines`]): the side runs from corner `S`
+/// to corner `S + 1`, so `q[S] = a0`, `q[S + 1] = a1`, `q[S + 2] = b1`, `q[S + 3] = b0`.
+#[inline(always)]
+fn side_corners<const S: usize>(a0: Point, a1: Point, b1: Point, b0: Point) -> [Point; 4] {
+    let mut q = [[0.0; 2]; 4];
+    q[S % 4] = a0;
+    q[(S + 1) % 4] = a1;
+    q[(S + 2) % 4] = b1;
+    q[(S + 3) % 4] = b0;
+    q
+}
+
+/// [`side_cell_height`] of every cell of side `S` into `out` (`n` cells, `a` and `b` the lines
+/// of [`side_lines`], `n + 1` nodes each), with the same expressions in a loop the compiler
+/// vectorises: the area, then the side edge's length as `sqrt(x² + y²)`. False when some
+/// squared length is outside the range where [`crate::geometry::length`] takes that formula
+/// (or not a number): the caller then takes the reference for the side.
+#[inline(always)]
+fn heights_into<const S: usize>(a: &[Point], b: &[Point], out: &mut [f64]) -> bool {
+    let n = out.len();
+    let (a, b) = (&a[..=n], &b[..=n]);
+    let mut fine = true;
+    for p in 0..n {
+        let (a0, a1) = (a[p], a[p + 1]);
+        let q = side_corners::<S>(a0, a1, b[p + 1], b[p]);
+        let area = 0.5
+            * ((q[2][0] - q[0][0]) * (q[3][1] - q[1][1])
+                - (q[2][1] - q[0][1]) * (q[3][0] - q[1][0]));
+        let (dx, dy) = (a1[0] - a0[0], a1[1] - a0[1]);
+        let sq = dx * dx + dy * dy;
+        fine &= (super::kernel::SQ_MIN..=super::kernel::SQ_MAX).contains(&sq);
+        let l = sq.sqrt();
+        out[p] = if l > 0.0 { area.abs() / l } else { f64::NAN };
+    }
+    fine
+}
+
+/// [`heights_into`] for side `s` (0..4).
+#[inline(always)]
+fn heights_any(s: usize, a: &[Point], b: &[Point], out: &mut [f64]) -> bool {
+    match s {
+        0 => heights_into::<0>(a, b, out),
+        1 => heights_into::<1>(a, b, out),
+        2 => heights_into::<2>(a, b, out),
+        _ => heights_into::<3>(a, b, out),
+    }
+}
+
+/// [`heights_any`] compiled for AVX-512 (the same IEEE operations, no fused multiply-add).
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx512f,avx512dq,avx512vl,avx2")]
+fn heights_avx512(s: usize, a: &[Point], b: &[Point], out: &mut [f64]) -> bool {
+    heights_any(s, a, b, out)
+}
+
+/// [`heights_any`] compiled for AVX2.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+fn heights_avx2(s: usize, a: &[Point], b: &[Point], out: &mut [f64]) -> bool {
+    heights_any(s, a, b, out)
+}
+
+/// [`side_cell_height`] of the `out.len()` cells of side `s` of `grid` (well formed, `ni, nj
+/// >= 1`, `out.len()` the side's cell count), bit for bit, in the build `lanes`.
+fn side_heights(
+    grid: &BlockGrid,
+    s: usize,
+    out: &mut [f64],
+    scratch: &mut (Vec<Point>, Vec<Point>),
+    lanes: Lanes,
+) {
+    let (a, b) = side_lines(grid, s, scratch);
+    let fine = match lanes {
+        #[cfg(target_arch = "x86_64")]
+        // SAFETY: `lanes` is only `Avx512` when the CPU has these features (`Lanes::available`).
+        Lanes::Avx512 => unsafe { heights_avx512(s, a, b, out) },
+        #[cfg(target_arch = "x86_64")]
+        // SAFETY: as above, for AVX2.
+        Lanes::Avx2 => unsafe { heights_avx2(s, a, b, out) },
+        _ => heights_any(s, a, b, out),
+    };
+    if !fine {
+        for (p, h) in out.iter_mut().enumerate() {
+            *h = side_cell_height(grid, s, p);
+        }
+    }
+}
+
+/// The wall deviations (degrees) of the nodes `a` of a wall side and their inward neighbours
+/// `b` (same length as `out`), the expressions of the tests' reference
+/// `block_wall_orthogonality` in a loop the compiler vectorises (`bounding`: the wall is the
+/// bounding circle, whose normal into the fluid points to its centre).
+#[inline(always)]
+fn wall_into(a: &[Point], b: &[Point], center: Point, bounding: bool, out: &mut [f64]) {
+    let n = out.len();
+    let (a, b) = (&a[..n], &b[..n]);
+    for p in 0..n {
+        let (w, inner) = (a[p], b[p]);
+        let normal = if bounding {
+            [center[0] - w[0], center[1] - w[1]]
+        } else {
+            [w[0] - center[0], w[1] - center[1]]
+        };
+        let d = [inner[0] - w[0], inner[1] - w[1]];
+        let cross = normal[0] * d[1] - normal[1] * d[0];
+        let dot = normal[0] * d[0] + normal[1] * d[1];
+        out[p] = angle_deg(cross.abs(), dot);
+    }
+}
+
+/// [`wall_into`] compiled for AVX-512.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx512f,avx512dq,avx512vl,avx2")]
+fn wall_avx512(a: &[Point], b: &[Point], center: Point, bounding: bool, out: &mut [f64]) {
+    wall_into(a, b, center, bounding, out)
+}
+
+/// [`wall_into`] compiled for AVX2.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+fn wall_avx2(a: &[Point], b: &[Point], center: Point, bounding: bool, out: &mut [f64]) {
+    wall_into(a, b, center, bounding, out)
 }
 
 /// The growth ratios across every interface of `conn` (each interface once), counted into
@@ -136,7 +301,7 @@ pub(super) fn wall_orthogonality(layout: &BlockLayout, grids: &[BlockGrid]) -> O
 }
 
 /// Ask for the layout edges of `block`'s sides to be brought into the cache (read by
-/// [`block_wall_orthogonality`] after the block's cells: a miss per side otherwise, the edges
+/// [`Sides::wall`] after the block's cells: a miss per side otherwise, the edges
 /// being far apart in memory). A hint only: no effect on any result.
 #[inline(always)]
 pub(super) fn prefetch_edges(layout: &BlockLayout, block: &crate::layout::Block) {
@@ -146,6 +311,7 @@ pub(super) fn prefetch_edges(layout: &BlockLayout, block: &crate::layout::Block)
 }
 
 /// `wall_orthogonality` (the tests' reference) of one block.
+#[cfg(test)]
 pub(super) fn block_wall_orthogonality(
     layout: &BlockLayout,
     block: &crate::layout::Block,
@@ -175,6 +341,49 @@ pub(super) fn block_wall_orthogonality(
             let cross = normal[0] * d[1] - normal[1] * d[0];
             let dot = normal[0] * d[0] + normal[1] * d[1];
             worst = max_nan(worst, Some(angle_deg(cross.abs(), dot)));
+        }
+    }
+    worst
+}
+
+/// The largest deviation (degrees) from the wall normal of the grid lines leaving the wall
+/// nodes of `block`: the tests' reference `block_wall_orthogonality` bit for bit, with the
+/// deviations of each wall side computed in the build `lanes` ([`wall_into`]) and folded in
+/// the same order.
+fn block_wall_orthogonality_with(
+    layout: &BlockLayout,
+    block: &crate::layout::Block,
+    grid: &BlockGrid,
+    scratch: &mut (Vec<Point>, Vec<Point>),
+    out: &mut Vec<f64>,
+    lanes: Lanes,
+) -> Option<f64> {
+    if !well_formed(grid) || grid.ni == 0 || grid.nj == 0 {
+        return None;
+    }
+    let mut worst: Option<f64> = None;
+    for (s, side) in block.sides.iter().enumerate() {
+        let Some(edge) = layout.edges.get(side.edge as usize) else {
+            continue;
+        };
+        let (EdgeKind::Wall(id), Curve::Arc { center, .. }) = (edge.kind, &edge.curve) else {
+            continue;
+        };
+        let (a, b) = side_lines(grid, s, scratch);
+        out.clear();
+        out.resize(a.len(), 0.0);
+        let (center, bounding) = (*center, id < 0);
+        match lanes {
+            #[cfg(target_arch = "x86_64")]
+            // SAFETY: `lanes` is only `Avx512` when the CPU has these features.
+            Lanes::Avx512 => unsafe { wall_avx512(a, b, center, bounding, out) },
+            #[cfg(target_arch = "x86_64")]
+            // SAFETY: as above, for AVX2.
+            Lanes::Avx2 => unsafe { wall_avx2(a, b, center, bounding, out) },
+            _ => wall_into(a, b, center, bounding, out),
+        }
+        for &x in out.iter() {
+            worst = max_nan(worst, Some(x));
         }
     }
     worst
@@ -373,11 +582,49 @@ fn pair(ha: &[f64], hb: &[f64], same_direction: bool, m: &mut MetricSummary) {
 }
 
 /// Scratch of the fused pass for one chunk: the heights of the sides paired within the chunk.
-#[derive(Default)]
 pub(super) struct Sides {
     heights: Vec<f64>,
     /// Per block side of the chunk (`4 k + s`): the offset of its heights in `heights`.
     at: Vec<usize>,
+    /// A side's two node lines ([`side_lines`]) and its wall deviations.
+    lines: (Vec<Point>, Vec<Point>),
+    wall: Vec<f64>,
+    /// The build the side loops run in.
+    lanes: Lanes,
+}
+
+impl Sides {
+    /// Scratch for the side loops, run in the build `lanes` (one the CPU has).
+    pub fn new(lanes: Lanes) -> Sides {
+        Sides {
+            heights: Vec::new(),
+            at: Vec::new(),
+            lines: (Vec::new(), Vec::new()),
+            wall: Vec::new(),
+            lanes: if lanes.available() {
+                lanes
+            } else {
+                Lanes::Base
+            },
+        }
+    }
+
+    /// The wall orthogonality of `block` (grid `grid`, see [`block_wall_orthogonality_with`]).
+    pub fn wall(
+        &mut self,
+        layout: &BlockLayout,
+        block: &crate::layout::Block,
+        grid: &BlockGrid,
+    ) -> Option<f64> {
+        block_wall_orthogonality_with(
+            layout,
+            block,
+            grid,
+            &mut self.lines,
+            &mut self.wall,
+            self.lanes,
+        )
+    }
 }
 
 impl Sides {
@@ -400,9 +647,10 @@ impl Sides {
             }
             let n = side_cells(g, s);
             if bits & LOCAL != 0 {
-                self.at[4 * k + s] = self.heights.len();
-                self.heights
-                    .extend((0..n).map(|p| side_cell_height(g, s, p)));
+                let from = self.heights.len();
+                self.at[4 * k + s] = from;
+                self.heights.resize(from + n, 0.0);
+                side_heights(g, s, &mut self.heights[from..], &mut self.lines, self.lanes);
                 if bits & SPILL != 0 {
                     let from = self.at[4 * k + s];
                     let to = plan.spill_at[4 * b + s] - plan.chunk_spill[c];
@@ -410,9 +658,7 @@ impl Sides {
                 }
             } else {
                 let to = plan.spill_at[4 * b + s] - plan.chunk_spill[c];
-                for (p, h) in spill[to..to + n].iter_mut().enumerate() {
-                    *h = side_cell_height(g, s, p);
-                }
+                side_heights(g, s, &mut spill[to..to + n], &mut self.lines, self.lanes);
             }
         }
     }
@@ -436,5 +682,112 @@ impl Sides {
                 m,
             );
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::layouts::SplitMix64;
+
+    /// A random `ni x nj` grid: a sheared, wavy lattice at a random scale, with some nodes
+    /// repeated (zero-length edges), some far away (squared lengths outside the fast range),
+    /// and some not a number.
+    fn grid(r: &mut SplitMix64, ni: usize, nj: usize) -> BlockGrid {
+        let scale = [1.0, 1e-150, 1e150, 1e-3, 7.0][(r.next_f64() * 5.0) as usize % 5];
+        let mut nodes = Vec::with_capacity((ni + 1) * (nj + 1));
+        for j in 0..=nj {
+            for i in 0..=ni {
+                let (x, y) = (i as f64 + 0.3 * j as f64, j as f64 + 0.2 * (i as f64).sin());
+                let jitter = 0.3 * (r.next_f64() - 0.5);
+                nodes.push([scale * (x + jitter), scale * (y - jitter)]);
+            }
+        }
+        for _ in 0..(r.next_f64() * 3.0) as usize {
+            let k = (r.next_f64() * nodes.len() as f64) as usize % nodes.len();
+            let other = (r.next_f64() * nodes.len() as f64) as usize % nodes.len();
+            nodes[k] = match (r.next_f64() * 4.0) as u32 {
+                0 => nodes[other],
+                1 => [1e200, -3e199],
+                2 => [f64::NAN, 0.0],
+                _ => [nodes[k][0], nodes[(k + 1) % nodes.len()][1]],
+            };
+        }
+        BlockGrid { ni, nj, nodes }
+    }
+
+    /// The side heights of every build the CPU has are [`side_cell_height`]'s bits, on every
+    /// side of random, degenerate and extreme grids (the fast range's fallback included).
+    #[test]
+    fn vectorised_side_heights_equal_the_reference() {
+        let mut r = SplitMix64(36);
+        let mut scratch = (Vec::new(), Vec::new());
+        let mut fallbacks = 0;
+        for round in 0..3000 {
+            let (ni, nj) = (1 + round % 17, 1 + (round / 17) % 9);
+            let g = grid(&mut r, ni, nj);
+            for s in 0..4 {
+                let want: Vec<u64> = (0..side_cells(&g, s))
+                    .map(|p| side_cell_height(&g, s, p).to_bits())
+                    .collect();
+                for lanes in Lanes::ALL.into_iter().filter(|l| l.available()) {
+                    let mut out = vec![0.0; want.len()];
+                    side_heights(&g, s, &mut out, &mut scratch, lanes);
+                    let got: Vec<u64> = out.iter().map(|h| h.to_bits()).collect();
+                    assert_eq!(got, want, "round {round} side {s} {lanes:?}");
+                }
+                let (a, b) = side_lines(&g, s, &mut scratch);
+                let pairs: Vec<_> = (0..=want.len())
+                    .map(|p| side_node_and_inward(&g, s, p))
+                    .collect();
+                let lines: Vec<_> = a.iter().copied().zip(b.iter().copied()).collect();
+                assert_eq!(format!("{lines:?}"), format!("{pairs:?}"));
+                let mut out = vec![0.0; want.len()];
+                fallbacks += usize::from(!heights_any(s, a, b, &mut out));
+            }
+        }
+        // Both paths were taken.
+        assert!(fallbacks > 100 && fallbacks < 6000, "{fallbacks}");
+    }
+
+    /// The wall orthogonality of every build is the reference's, block by block, on real
+    /// meshes (both walls: holes and the bounding circle) whose grids are then moved about.
+    #[test]
+    fn vectorised_wall_orthogonality_equals_the_reference() {
+        let domain = crate::layouts::bubbles(12, 5).expect("layout");
+        let m = crate::mesh(&domain, &crate::Options::default()).expect("mesh");
+        let mut r = SplitMix64(7);
+        let mut grids = m.grids.clone();
+        let mut scratch = (Vec::new(), Vec::new());
+        let mut out = Vec::new();
+        let mut walls = 0;
+        for round in 0..4 {
+            for (b, g) in m.layout.blocks.iter().zip(&grids) {
+                let want = block_wall_orthogonality(&m.layout, b, g);
+                walls += usize::from(want.is_some());
+                for lanes in Lanes::ALL.into_iter().filter(|l| l.available()) {
+                    let got = block_wall_orthogonality_with(
+                        &m.layout,
+                        b,
+                        g,
+                        &mut scratch,
+                        &mut out,
+                        lanes,
+                    );
+                    assert_eq!(got.map(f64::to_bits), want.map(f64::to_bits), "{lanes:?}");
+                }
+            }
+            // Move the nodes (more each round; a NaN node in the last round).
+            for g in &mut grids {
+                for p in &mut g.nodes {
+                    p[0] += 0.01 * round as f64 * (r.next_f64() - 0.5);
+                    p[1] += 0.01 * round as f64 * (r.next_f64() - 0.5);
+                }
+                if round == 2 {
+                    g.nodes[1] = [f64::NAN, 1.0];
+                }
+            }
+        }
+        assert!(walls > 20, "{walls}");
     }
 }
