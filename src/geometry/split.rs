@@ -50,6 +50,12 @@ struct Half {
     dups: Vec<(u32, u32)>,
     ids: Vec<u32>,
     certified: Vec<bool>,
+    /// Global ids of the vertices of its triangles that are not certified (the half's part of
+    /// the seam set; a vertex may come more than once).
+    seam: Vec<u32>,
+    /// Its barriers: `(u, w, t, k)` for the directed edge `(u, w)` (global ids) of certified
+    /// triangle `t` (side `k`) whose neighbour across it is not certified, in triangle order.
+    barriers: Vec<(u32, u32, u32, u8)>,
 }
 
 /// The triangulation of `pts` (in insertion order, every coordinate in the predicates' safe
@@ -90,16 +96,33 @@ fn half(
         return Ok(None);
     };
     let inf = local.len() as u32;
-    let certified =
+    let certified: Vec<bool> =
         b.tv.iter()
             .map(|v| !v.contains(&inf) && disk_clear(&local, *v, split, on_left))
             .collect();
+    // The half's share of the seam side's scans, here on its own thread.
+    let mut seam = Vec::new();
+    let mut barriers = Vec::new();
+    for (t, v) in b.tv.iter().enumerate() {
+        if !certified[t] {
+            seam.extend(v.iter().filter(|&&x| x != inf).map(|&x| ids[x as usize]));
+            continue;
+        }
+        for k in 0..3 {
+            if !certified[(b.adj[t][k] / 3) as usize] {
+                let (u, w) = (ids[v[next(k)] as usize], ids[v[prev(k)] as usize]);
+                barriers.push((u, w, t as u32, k as u8));
+            }
+        }
+    }
     Ok(Some(Half {
         tv: b.tv,
         adj: b.adj,
         dups: b.dups,
         ids,
         certified,
+        seam,
+        barriers,
     }))
 }
 
@@ -334,15 +357,8 @@ fn seam_side(pts: &[Point], halves: &[&Half; 2], new_id: &[Vec<u32>; 2]) -> Resu
     // Seam set: vertices of the uncertified triangles, in global (insertion) order.
     let mut in_seam = vec![false; pts.len()];
     for h in halves {
-        let inf = h.ids.len() as u32;
-        for (t, v) in h.tv.iter().enumerate() {
-            if !h.certified[t] {
-                for &x in v {
-                    if x != inf {
-                        in_seam[h.ids[x as usize] as usize] = true;
-                    }
-                }
-            }
+        for &x in &h.seam {
+            in_seam[x as usize] = true;
         }
     }
     let seam_ids: Vec<u32> = (0..n).filter(|&i| in_seam[i as usize]).collect();
@@ -356,19 +372,12 @@ fn seam_side(pts: &[Point], halves: &[&Half; 2], new_id: &[Vec<u32>; 2]) -> Resu
 
     // Barriers: directed edge (u, w) of a certified triangle (on its left) whose neighbour in
     // its half is not certified -> that triangle's new half-edge.
-    let mut barriers: HashMap<(u32, u32), u32> = HashMap::new();
+    // Looked up, never iterated: a fixed fast hasher (SipHash took a fifth of the seam side).
+    let mut barriers: HashMap<(u32, u32), u32, foldhash::fast::FixedState> =
+        HashMap::with_capacity_and_hasher(seam.tv.len(), foldhash::fast::FixedState::default());
     for (s, h) in halves.iter().enumerate() {
-        for (t, v) in h.tv.iter().enumerate() {
-            if !h.certified[t] {
-                continue;
-            }
-            for k in 0..3 {
-                let m = (h.adj[t][k] / 3) as usize;
-                if !h.certified[m] {
-                    let (u, w) = (h.ids[v[next(k)] as usize], h.ids[v[prev(k)] as usize]);
-                    barriers.insert((u, w), he(new_id[s][t], k));
-                }
-            }
+        for &(u, w, t, k) in &h.barriers {
+            barriers.insert((u, w), he(new_id[s][t as usize], k as usize));
         }
     }
 
