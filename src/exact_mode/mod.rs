@@ -907,6 +907,113 @@ pub fn assemble(sk: Skeleton<'_>, options: &Options) -> Result<ExactMesh, MeshEr
     assemble_cached(sk, options, &mut PieceCache::default())
 }
 
+/// The layout skeleton of the medial blocks: the Apollonius centres and tangent points as
+/// vertices, per piece its medial edge (an empty polyline until the grids give its nodes),
+/// the spokes at its ends (numbered in first-use order) and its two wall arcs, and its two
+/// blocks. Built into `layout` (a rejected mesh's vectors, [`PieceCache::spare_layout`]),
+/// with room for the templates of `fluid_walls` inserted-hole walls. Returns the layout and
+/// each piece's medial edge.
+fn skeleton_layout(
+    mut layout: BlockLayout,
+    vertices: &[ExactVertex],
+    pieces: &[Piece],
+    fluid_walls: usize,
+) -> (BlockLayout, Vec<u32>) {
+    let nv = vertices.len();
+    let tangents: usize = vertices.iter().map(|v| v.tangent.len()).sum();
+    // Room for the templates too, so that filling the inserted holes does not move the
+    // vectors (issue 8: a copy of every block and edge, into fresh pages): a hole with `k`
+    // wall arcs gets `k` vertices, fewer than `3k` edges and `2k` blocks
+    // (`templates::fill_inserted_holes`). Capacity only: nothing else depends on it.
+    layout.vertices.reserve_exact(nv + tangents + fluid_walls);
+    layout.vertices.extend(vertices.iter().map(|v| v.center));
+    layout
+        .edges
+        .reserve_exact(3 * pieces.len() + tangents.max(3 * nv) + 3 * fluid_walls);
+    layout
+        .blocks
+        .reserve_exact(2 * pieces.len() + 2 * fluid_walls);
+    let mut tangent_base = Vec::with_capacity(nv);
+    for v in vertices {
+        tangent_base.push(layout.vertices.len());
+        layout.vertices.extend_from_slice(&v.tangent);
+    }
+    let tangent_vertex = |v: usize, slot: usize| (tangent_base[v] + slot) as u32;
+    let slots = |p: &Piece, side: usize| -> (usize, usize) { (p.slots[side][0], p.slots[side][1]) };
+    // The spoke edge of vertex `v`'s slot `s`, by its tangent vertex (`NO_EDGE` until made): a
+    // lookup, not a hash map (issue 8); edges are numbered in first-use order as before.
+    const NO_EDGE: u32 = u32::MAX;
+    let mut spoke_edge: Vec<u32> = vec![NO_EDGE; layout.vertices.len()];
+    let mut medial_edges = Vec::with_capacity(pieces.len());
+    let (fwd, rev) = (SideRef::along, SideRef::against);
+    for p in pieces {
+        let g = &p.geom;
+        let [v0, v1] = p.ends;
+        let medial_edge = layout.edges.len() as u32;
+        medial_edges.push(medial_edge);
+        // The medial nodes replace the empty polyline once the grids are made (nothing reads
+        // it before: one allocation and one free per piece fewer in this serial loop).
+        layout.edges.push(Edge {
+            ends: [v0 as u32, v1 as u32],
+            curve: Curve::Polyline(Vec::new()),
+            kind: EdgeKind::Medial,
+        });
+        for side in 0..2 {
+            let c = p.circles[side];
+            let (s0, s1) = slots(p, side);
+            for (v, s) in [(v0, s0), (v1, s1)] {
+                let t = tangent_vertex(v, s);
+                if spoke_edge[t as usize] == NO_EDGE {
+                    spoke_edge[t as usize] = layout.edges.len() as u32;
+                    layout.edges.push(Edge {
+                        ends: [v as u32, t],
+                        curve: Curve::Segment,
+                        kind: EdgeKind::Spoke,
+                    });
+                }
+            }
+            // Wall edge, in the block's side-0 direction.
+            let (t_first, t_last) = if side == 0 {
+                (tangent_vertex(v0, s0), tangent_vertex(v1, s1))
+            } else {
+                (tangent_vertex(v1, s1), tangent_vertex(v0, s0))
+            };
+            let (start, sweep) = if side == 0 {
+                (g.start[0], g.sweep[0])
+            } else {
+                (g.start[1] + g.sweep[1], -g.sweep[1])
+            };
+            let wall_edge = layout.edges.len() as u32;
+            layout.edges.push(Edge {
+                ends: [t_first, t_last],
+                curve: Curve::Arc {
+                    center: g.walls[side].c,
+                    radius: g.walls[side].r,
+                    start,
+                    sweep,
+                },
+                kind: EdgeKind::Wall(c),
+            });
+            let sp0 = spoke_edge[tangent_vertex(v0, s0) as usize];
+            let sp1 = spoke_edge[tangent_vertex(v1, s1) as usize];
+            layout.blocks.push(if side == 0 {
+                Block {
+                    corners: [t_first, t_last, v1 as u32, v0 as u32],
+                    sides: [fwd(wall_edge), rev(sp1), rev(medial_edge), fwd(sp0)],
+                    wall: Some(c),
+                }
+            } else {
+                Block {
+                    corners: [t_first, t_last, v0 as u32, v1 as u32],
+                    sides: [fwd(wall_edge), rev(sp0), fwd(medial_edge), fwd(sp1)],
+                    wall: Some(c),
+                }
+            });
+        }
+    }
+    (layout, medial_edges)
+}
+
 /// [`assemble`], taking the densities and arc-node parameters of pieces an earlier build
 /// already computed from `cache` ([`piece_cache`]) and leaving this build's there: the same
 /// mesh as [`assemble`] whatever the cache holds.
@@ -1162,120 +1269,35 @@ pub fn assemble_cached(
 
     // Layout skeleton and grids (stage "grids" until the end).
     let _grids = crate::timings::enter("grids");
-    let nv = vertices.len();
     // Into the rejected mesh's vectors when there is one ([`PieceCache::keep`]).
-    let mut layout = cache.spare_layout();
-    let tangents: usize = vertices.iter().map(|v| v.tangent.len()).sum();
-    // Room for the templates too, so that filling the inserted holes does not move the
-    // vectors (issue 8: a copy of every block and edge, into fresh pages): a hole with `k`
-    // wall arcs gets `k` vertices, fewer than `3k` edges and `2k` blocks
-    // (`templates::fill_inserted_holes`). Capacity only: nothing else depends on it.
+    let mut spare = Some(cache.spare_layout());
     let fluid_walls: usize = pieces
         .iter()
         .map(|p| p.circles.iter().filter(|&&c| fluid(c)).count())
         .sum();
-    layout.vertices.reserve_exact(nv + tangents + fluid_walls);
-    layout.vertices.extend(vertices.iter().map(|v| v.center));
-    layout
-        .edges
-        .reserve_exact(3 * pieces.len() + tangents.max(3 * nv) + 3 * fluid_walls);
-    layout
-        .blocks
-        .reserve_exact(2 * pieces.len() + 2 * fluid_walls);
-    let mut tangent_base = Vec::with_capacity(nv);
-    for v in &vertices {
-        tangent_base.push(layout.vertices.len());
-        layout.vertices.extend_from_slice(&v.tangent);
-    }
-    let tangent_vertex = |v: usize, slot: usize| (tangent_base[v] + slot) as u32;
-    let slots = |p: &Piece, side: usize| -> (usize, usize) { (p.slots[side][0], p.slots[side][1]) };
-    // The spoke edge of vertex `v`'s slot `s`, by its tangent vertex (`NO_EDGE` until made): a
-    // lookup, not a hash map (issue 8); edges are numbered in first-use order as before.
-    const NO_EDGE: u32 = u32::MAX;
-    let mut spoke_edge: Vec<u32> = vec![NO_EDGE; layout.vertices.len()];
-    let mut medial_edges = Vec::with_capacity(pieces.len());
-    let (fwd, rev) = (SideRef::along, SideRef::against);
-    for p in &pieces {
-        let g = &p.geom;
-        let [v0, v1] = p.ends;
-        let medial_edge = layout.edges.len() as u32;
-        medial_edges.push(medial_edge);
-        // The medial nodes replace the empty polyline once the grids are made (nothing reads
-        // it before: one allocation and one free per piece fewer in this serial loop).
-        layout.edges.push(Edge {
-            ends: [v0 as u32, v1 as u32],
-            curve: Curve::Polyline(Vec::new()),
-            kind: EdgeKind::Medial,
-        });
-        for side in 0..2 {
-            let c = p.circles[side];
-            let (s0, s1) = slots(p, side);
-            for (v, s) in [(v0, s0), (v1, s1)] {
-                let t = tangent_vertex(v, s);
-                if spoke_edge[t as usize] == NO_EDGE {
-                    spoke_edge[t as usize] = layout.edges.len() as u32;
-                    layout.edges.push(Edge {
-                        ends: [v as u32, t],
-                        curve: Curve::Segment,
-                        kind: EdgeKind::Spoke,
-                    });
-                }
-            }
-            // Wall edge, in the block's side-0 direction.
-            let (t_first, t_last) = if side == 0 {
-                (tangent_vertex(v0, s0), tangent_vertex(v1, s1))
-            } else {
-                (tangent_vertex(v1, s1), tangent_vertex(v0, s0))
-            };
-            let (start, sweep) = if side == 0 {
-                (g.start[0], g.sweep[0])
-            } else {
-                (g.start[1] + g.sweep[1], -g.sweep[1])
-            };
-            let wall_edge = layout.edges.len() as u32;
-            layout.edges.push(Edge {
-                ends: [t_first, t_last],
-                curve: Curve::Arc {
-                    center: g.walls[side].c,
-                    radius: g.walls[side].r,
-                    start,
-                    sweep,
-                },
-                kind: EdgeKind::Wall(c),
-            });
-            let sp0 = spoke_edge[tangent_vertex(v0, s0) as usize];
-            let sp1 = spoke_edge[tangent_vertex(v1, s1) as usize];
-            layout.blocks.push(if side == 0 {
-                Block {
-                    corners: [t_first, t_last, v1 as u32, v0 as u32],
-                    sides: [fwd(wall_edge), rev(sp1), rev(medial_edge), fwd(sp0)],
-                    wall: Some(c),
-                }
-            } else {
-                Block {
-                    corners: [t_first, t_last, v0 as u32, v1 as u32],
-                    sides: [fwd(wall_edge), rev(sp0), fwd(medial_edge), fwd(sp1)],
-                    wall: Some(c),
-                }
-            });
-        }
-    }
+    // The skeleton is built first where inserted holes need it (their templates change the
+    // counts and the node budget), else beside the grids (below), which do not read it: its
+    // serial loop then overlaps their parallel work (issue 8: 0.8 ms at 1e3 bubbles).
+    let mut built: Option<(BlockLayout, Vec<u32>)> = None;
 
     // Templates in the inserted holes, and the count ties they bring.
-    let first_template = layout.blocks.len();
-    let holes: Vec<(CircleId, crate::domain::Circle)> =
-        sk.fluid.iter().map(|&c| (c, domain.circle(c))).collect();
-    crate::templates::fill_inserted_holes(&mut layout, &holes)
-        .map_err(|(c, m)| internal(format!("inserted hole {c}: {m}")))?;
-    let template_blocks = layout.blocks.len() - first_template;
-    // The conformity classes, once: the edges and blocks do not change from here on.
-    let classes = if template_blocks > 0 {
-        crate::grid::edge_classes(&layout)
-    } else {
-        (Vec::new(), 0)
-    };
-    if template_blocks > 0 {
-        inserted::tie_counts(&classes, &medial_edges, &mut counts.arc);
+    let first_template = 2 * pieces.len();
+    let mut template_blocks = 0;
+    let mut classes = (Vec::new(), 0);
+    if !sk.fluid.is_empty() {
+        let layout = spare.take().unwrap_or_default();
+        let (mut layout, medial_edges) = skeleton_layout(layout, &vertices, &pieces, fluid_walls);
+        let holes: Vec<(CircleId, crate::domain::Circle)> =
+            sk.fluid.iter().map(|&c| (c, domain.circle(c))).collect();
+        crate::templates::fill_inserted_holes(&mut layout, &holes)
+            .map_err(|(c, m)| internal(format!("inserted hole {c}: {m}")))?;
+        template_blocks = layout.blocks.len() - first_template;
+        // The conformity classes, once: the edges and blocks do not change from here on.
+        if template_blocks > 0 {
+            classes = crate::grid::edge_classes(&layout);
+            inserted::tie_counts(&classes, &medial_edges, &mut counts.arc);
+        }
+        built = Some((layout, medial_edges));
     }
 
     // Limits before allocating. The default target size is the median Apollonius radius over
@@ -1299,7 +1321,7 @@ pub fn assemble_cached(
                 total = total.saturating_add((n + 1).saturating_mul(nj + 1));
             }
         }
-        if template_blocks > 0 {
+        if let Some((layout, _)) = built.as_ref().filter(|_| template_blocks > 0) {
             // Block `b` of piece `b / 2` is on `circles[b % 2]`: sides 0 and 2 have the
             // arc's count, sides 1 and 3 the circle's.
             let side_count = |b: usize, k: usize| {
@@ -1311,7 +1333,7 @@ pub fn assemble_cached(
                 }
             };
             total = total.saturating_add(inserted::template_nodes(
-                &layout,
+                layout,
                 &classes,
                 first_template,
                 h,
@@ -1337,8 +1359,8 @@ pub fn assemble_cached(
             // `cells` does not fit (e.g. `--cells 100000`): refused, not coarsened.
             let largest = radii_max / options.cells.max(1) as f64;
             let mut c = solve_counts(largest.max(h), &mut targets)?;
-            if template_blocks > 0 {
-                inserted::tie_counts(&classes, &medial_edges, &mut c.arc);
+            if let Some((_, medial_edges)) = built.as_ref().filter(|_| template_blocks > 0) {
+                inserted::tie_counts(&classes, medial_edges, &mut c.arc);
             }
             refused = total_of(&c, largest.max(h)) > MAX_TOTAL_NODES;
         }
@@ -1351,197 +1373,211 @@ pub fn assemble_cached(
         h *= coarsening_step(total, budget);
         coarsened += 1;
         counts = solve_counts(h, &mut targets)?;
-        if template_blocks > 0 {
-            inserted::tie_counts(&classes, &medial_edges, &mut counts.arc);
+        if let Some((_, medial_edges)) = built.as_ref().filter(|_| template_blocks > 0) {
+            inserted::tie_counts(&classes, medial_edges, &mut counts.arc);
         }
     }
 
-    // Grids of the medial blocks, one piece (two blocks) per task in parallel on the current
-    // rayon pool, collected in piece order (the first error in piece order is returned). A
-    // piece's corner spokes are computed by each piece that uses them, from the same inputs
-    // (vertex `v`'s tangent point `s` determines the circle, hence the count and clustering),
-    // so the blocks sharing a spoke hold bitwise identical nodes whatever the thread count.
-    // A piece whose geometry, counts and clustering the cache holds grids for takes them
-    // (moved); else it takes its node parameters from its summary or the cache when drawn
-    // for its final `nbar` and count; else it computes its densities again (held only by
-    // that task, 2 x ARC_SUBSTEPS f64, freed once turned into parameters).
-    let arc_targets = targets;
-    let uniform = options.block_cells.is_some();
-    let side_inputs = |p: &Piece, side: usize| {
-        let c = p.circles[side];
-        let cl = cluster(c);
-        let first = cl.first_height(domain.circle(c).radius);
-        (counts.circle[cidx(c)], first, cl.growth)
-    };
-    let nbar_of = |p: &Piece| {
-        0.5 * (counts.circle[cidx(p.circles[0])] + counts.circle[cidx(p.circles[1])]) as f64
-    };
-    // End grading ([`grading`]): the natural end widths of every piece for its final `nbar`
-    // and count (known to the memo, or from the parameters of its summary, or computed here
-    // from its densities: those parameters then serve the grids as the summary's), then one
-    // small least-squares problem per vertex for the ratios of the end cells. Only for
-    // size-driven counts: a fixed grid per block (`--block-cells`) keeps its equidistributed
-    // nodes, bit for bit.
-    let graded = options.block_cells.is_none();
-    let mut arc_targets = arc_targets;
-    let mut first_params = first_params;
-    let natural: Vec<Option<[[f64; 2]; 2]>> = if graded {
-        pieces
-            .par_iter()
-            .zip(arc_targets.par_iter_mut())
-            .zip(first_params.par_iter_mut())
-            .enumerate()
-            .map_init(PieceScratch::default, |scratch, (e, ((p, t), first))| {
-                let (n, nbar) = (counts.arc[e], nbar_of(p));
-                if let Some(w) = t.known_ends(nbar, n) {
-                    return Ok(Some(w));
-                }
-                if let Some((nb, m, params)) = first {
-                    if nb.to_bits() == nbar.to_bits() && *m == n {
-                        return Ok(grading::end_widths(&p.geom, params));
-                    }
-                }
-                // The grids then take these parameters as the summary's, and the memo the
-                // target (as when the grids compute them).
-                let (params, target) = natural_params(e, &p.geom, t, nbar, n, scratch)?;
-                let w = grading::end_widths(&p.geom, &params);
-                if !t.holds_densities() {
-                    t.known = Some(Known {
-                        min_cells: t.min_cells(),
-                        target: Some((nbar, target)),
-                        ends: None,
-                    });
-                }
-                *first = Some((nbar, n, params));
-                Ok(w)
-            })
-            .collect::<Result<_, MeshError>>()?
-    } else {
-        Vec::new()
-    };
-    let rho: Vec<[f64; 2]> = if graded {
-        let inputs: Vec<grading::EndInput> = pieces
-            .iter()
-            .zip(&natural)
-            .enumerate()
-            .map(|(e, (p, nat))| grading::EndInput {
-                ends: p.ends,
-                slots: [p.slots[0], p.slots[1]],
-                n: counts.arc[e],
-                widths: *nat,
-            })
-            .collect();
-        grading::end_ratios(&inputs, vertices.len())
-    } else {
-        vec![[1.0; 2]; pieces.len()]
-    };
-    let grid_keys: Vec<GridKey> = pieces
-        .par_iter()
-        .enumerate()
-        .map(|(e, p)| {
-            let sides = [side_inputs(p, 0), side_inputs(p, 1)];
-            GridKey::of(counts.arc[e], sides, options.smooth, rho[e])
-        })
-        .collect();
-    let reuse: Vec<Option<Payload>> = cache.take_grids(&found, &grid_keys);
-    drop(found);
     // Per piece: medial nodes, grids, what the memo keeps and, once known, which of the two grids has
     // an inverted cell (checked here while the grid is in cache; `None` until smoothed).
     type PieceGrids = Result<(Vec<Point>, [BlockGrid; 2], Known, Option<[bool; 2]>), MeshError>;
-    let per_piece: Vec<PieceGrids> = pieces
-        .par_iter()
-        .zip(arc_targets.into_par_iter())
-        .zip(reuse.into_par_iter())
-        .zip(first_params.into_par_iter())
-        .enumerate()
-        .map_init(
-            PieceScratch::default,
-            |scratch, (e, (((p, t), reused), first))| {
-                let g = &p.geom;
-                let n = counts.arc[e];
-                let nbar = nbar_of(p);
-                let mut known = Known {
-                    min_cells: t.min_cells(),
-                    target: None,
-                    ends: natural.get(e).copied().flatten().map(|w| (nbar, n, w)),
-                };
-                if let Some((m_nodes, pair, inverted)) = reused {
-                    if !uniform {
-                        known.target = t.known_target(nbar).map(|x| (nbar, x));
+    let work = || -> Result<(Vec<GridKey>, Vec<PieceGrids>), MeshError> {
+        // Grids of the medial blocks, one piece (two blocks) per task in parallel on the current
+        // rayon pool, collected in piece order (the first error in piece order is returned). A
+        // piece's corner spokes are computed by each piece that uses them, from the same inputs
+        // (vertex `v`'s tangent point `s` determines the circle, hence the count and clustering),
+        // so the blocks sharing a spoke hold bitwise identical nodes whatever the thread count.
+        // A piece whose geometry, counts and clustering the cache holds grids for takes them
+        // (moved); else it takes its node parameters from its summary or the cache when drawn
+        // for its final `nbar` and count; else it computes its densities again (held only by
+        // that task, 2 x ARC_SUBSTEPS f64, freed once turned into parameters).
+        let arc_targets = targets;
+        let uniform = options.block_cells.is_some();
+        let side_inputs = |p: &Piece, side: usize| {
+            let c = p.circles[side];
+            let cl = cluster(c);
+            let first = cl.first_height(domain.circle(c).radius);
+            (counts.circle[cidx(c)], first, cl.growth)
+        };
+        let nbar_of = |p: &Piece| {
+            0.5 * (counts.circle[cidx(p.circles[0])] + counts.circle[cidx(p.circles[1])]) as f64
+        };
+        // End grading ([`grading`]): the natural end widths of every piece for its final `nbar`
+        // and count (known to the memo, or from the parameters of its summary, or computed here
+        // from its densities: those parameters then serve the grids as the summary's), then one
+        // small least-squares problem per vertex for the ratios of the end cells. Only for
+        // size-driven counts: a fixed grid per block (`--block-cells`) keeps its equidistributed
+        // nodes, bit for bit.
+        let graded = options.block_cells.is_none();
+        let mut arc_targets = arc_targets;
+        let mut first_params = first_params;
+        let natural: Vec<Option<[[f64; 2]; 2]>> = if graded {
+            pieces
+                .par_iter()
+                .zip(arc_targets.par_iter_mut())
+                .zip(first_params.par_iter_mut())
+                .enumerate()
+                .map_init(PieceScratch::default, |scratch, (e, ((p, t), first))| {
+                    let (n, nbar) = (counts.arc[e], nbar_of(p));
+                    if let Some(w) = t.known_ends(nbar, n) {
+                        return Ok(Some(w));
                     }
-                    return Ok((m_nodes, pair, known, Some(inverted)));
-                }
-                let cached = match first {
-                    Some((nb, m, params)) if nb.to_bits() == nbar.to_bits() && m == n => {
-                        Some(params)
+                    if let Some((nb, m, params)) = first {
+                        if nb.to_bits() == nbar.to_bits() && *m == n {
+                            return Ok(grading::end_widths(&p.geom, params));
+                        }
                     }
-                    _ => None,
-                };
-                let params = match cached {
-                    Some(params) => {
+                    // The grids then take these parameters as the summary's, and the memo the
+                    // target (as when the grids compute them).
+                    let (params, target) = natural_params(e, &p.geom, t, nbar, n, scratch)?;
+                    let w = grading::end_widths(&p.geom, &params);
+                    if !t.holds_densities() {
+                        t.known = Some(Known {
+                            min_cells: t.min_cells(),
+                            target: Some((nbar, target)),
+                            ends: None,
+                        });
+                    }
+                    *first = Some((nbar, n, params));
+                    Ok(w)
+                })
+                .collect::<Result<_, MeshError>>()?
+        } else {
+            Vec::new()
+        };
+        let rho: Vec<[f64; 2]> = if graded {
+            let inputs: Vec<grading::EndInput> = pieces
+                .iter()
+                .zip(&natural)
+                .enumerate()
+                .map(|(e, (p, nat))| grading::EndInput {
+                    ends: p.ends,
+                    slots: [p.slots[0], p.slots[1]],
+                    n: counts.arc[e],
+                    widths: *nat,
+                })
+                .collect();
+            grading::end_ratios(&inputs, vertices.len())
+        } else {
+            vec![[1.0; 2]; pieces.len()]
+        };
+        let grid_keys: Vec<GridKey> = pieces
+            .par_iter()
+            .enumerate()
+            .map(|(e, p)| {
+                let sides = [side_inputs(p, 0), side_inputs(p, 1)];
+                GridKey::of(counts.arc[e], sides, options.smooth, rho[e])
+            })
+            .collect();
+        let reuse: Vec<Option<Payload>> = cache.take_grids(&found, &grid_keys);
+        drop(found);
+        let per_piece: Vec<PieceGrids> = pieces
+            .par_iter()
+            .zip(arc_targets.into_par_iter())
+            .zip(reuse.into_par_iter())
+            .zip(first_params.into_par_iter())
+            .enumerate()
+            .map_init(
+                PieceScratch::default,
+                |scratch, (e, (((p, t), reused), first))| {
+                    let g = &p.geom;
+                    let n = counts.arc[e];
+                    let nbar = nbar_of(p);
+                    let mut known = Known {
+                        min_cells: t.min_cells(),
+                        target: None,
+                        ends: natural.get(e).copied().flatten().map(|w| (nbar, n, w)),
+                    };
+                    if let Some((m_nodes, pair, inverted)) = reused {
                         if !uniform {
                             known.target = t.known_target(nbar).map(|x| (nbar, x));
                         }
-                        params
+                        return Ok((m_nodes, pair, known, Some(inverted)));
                     }
-                    None => {
-                        let (params, target) = natural_params(e, g, &t, nbar, n, scratch)?;
-                        if !uniform {
-                            known.target = Some((nbar, target));
+                    let cached = match first {
+                        Some((nb, m, params)) if nb.to_bits() == nbar.to_bits() && m == n => {
+                            Some(params)
                         }
-                        drop(t);
-                        params
+                        _ => None,
+                    };
+                    let params = match cached {
+                        Some(params) => {
+                            if !uniform {
+                                known.target = t.known_target(nbar).map(|x| (nbar, x));
+                            }
+                            params
+                        }
+                        None => {
+                            let (params, target) = natural_params(e, g, &t, nbar, n, scratch)?;
+                            if !uniform {
+                                known.target = Some((nbar, target));
+                            }
+                            drop(t);
+                            params
+                        }
+                    };
+                    // End grading (the natural parameters stay what the summaries and the memo
+                    // compare).
+                    let params = grading::grade_piece(g, params, rho[e], &mut scratch.graded);
+                    let mut m_nodes = Vec::with_capacity(n + 1);
+                    let PieceScratch {
+                        a_nodes, grid: gs, ..
+                    } = scratch;
+                    for a in a_nodes.iter_mut() {
+                        a.clear();
                     }
-                };
-                // End grading (the natural parameters stay what the summaries and the memo
-                // compare).
-                let params = grading::grade_piece(g, params, rho[e], &mut scratch.graded);
-                let mut m_nodes = Vec::with_capacity(n + 1);
-                let PieceScratch {
-                    a_nodes, grid: gs, ..
-                } = scratch;
-                for a in a_nodes.iter_mut() {
-                    a.clear();
-                }
-                for &t in &params {
-                    let (m, a, _) = g.at(t).ok_or_else(|| {
-                        internal(format!("arc {e}: a medial node is not defined"))
-                    })?;
-                    m_nodes.push(m);
-                    a_nodes[0].push(a[0]);
-                    a_nodes[1].push(a[1]);
-                }
-                // The parameters go back to the scratch (their buffer serves the next piece).
-                scratch.params = params;
-                let mut grid = |side: usize| {
-                    let (nj, first, growth) = side_inputs(p, side);
-                    // Column i is arc node k = i (side 0) or n - i (side 1). The corner spokes run
-                    // from the piece's exact ends: its end vertices' tangent points on this circle
-                    // and centres (`ends_a`, `ends_m` are taken from them by the same slots), so
-                    // every block at a vertex gets the same nodes and the cache key (the
-                    // geometry) covers them.
-                    gs.clear();
-                    for i in 0..=n {
-                        let k = if side == 0 { i } else { n - i };
-                        let (a, m) = if k == 0 {
-                            (g.ends_a[0][side], g.ends_m[0])
-                        } else if k == n {
-                            (g.ends_a[1][side], g.ends_m[1])
-                        } else {
-                            (a_nodes[side][k], m_nodes[k])
-                        };
-                        gs.push(a, m);
+                    for &t in &params {
+                        let (m, a, _) = g.at(t).ok_or_else(|| {
+                            internal(format!("arc {e}: a medial node is not defined"))
+                        })?;
+                        m_nodes.push(m);
+                        a_nodes[0].push(a[0]);
+                        a_nodes[1].push(a[1]);
                     }
-                    let nodes = gs.nodes(nj, first, growth);
-                    BlockGrid { ni: n, nj, nodes }
-                };
-                let pair = [grid(0), grid(1)];
-                let inverted =
-                    (options.smooth == 0).then(|| pair.each_ref().map(has_inverted_cell));
-                Ok((m_nodes, pair, known, inverted))
-            },
-        )
-        .collect();
+                    // The parameters go back to the scratch (their buffer serves the next piece).
+                    scratch.params = params;
+                    let mut grid = |side: usize| {
+                        let (nj, first, growth) = side_inputs(p, side);
+                        // Column i is arc node k = i (side 0) or n - i (side 1). The corner spokes run
+                        // from the piece's exact ends: its end vertices' tangent points on this circle
+                        // and centres (`ends_a`, `ends_m` are taken from them by the same slots), so
+                        // every block at a vertex gets the same nodes and the cache key (the
+                        // geometry) covers them.
+                        gs.clear();
+                        for i in 0..=n {
+                            let k = if side == 0 { i } else { n - i };
+                            let (a, m) = if k == 0 {
+                                (g.ends_a[0][side], g.ends_m[0])
+                            } else if k == n {
+                                (g.ends_a[1][side], g.ends_m[1])
+                            } else {
+                                (a_nodes[side][k], m_nodes[k])
+                            };
+                            gs.push(a, m);
+                        }
+                        let nodes = gs.nodes(nj, first, growth);
+                        BlockGrid { ni: n, nj, nodes }
+                    };
+                    let pair = [grid(0), grid(1)];
+                    let inverted =
+                        (options.smooth == 0).then(|| pair.each_ref().map(has_inverted_cell));
+                    Ok((m_nodes, pair, known, inverted))
+                },
+            )
+            .collect();
+        Ok((grid_keys, per_piece))
+    };
+    let ((mut layout, medial_edges), work) = match built {
+        Some(built) => (built, work()),
+        None => {
+            let layout = spare.take().unwrap_or_default();
+            let (w, sk) = rayon::join(work, || {
+                skeleton_layout(layout, &vertices, &pieces, fluid_walls)
+            });
+            (sk, w)
+        }
+    };
+    let (grid_keys, per_piece) = work?;
     let mut grids = Vec::with_capacity(layout.blocks.len());
     let mut entries = Vec::with_capacity(per_piece.len());
     let mut checked: Vec<Option<[bool; 2]>> = Vec::with_capacity(per_piece.len());
