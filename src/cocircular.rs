@@ -125,12 +125,13 @@ pub fn vertex_circles_reusing(
 /// For each vertex of `medial`, the vertex of `previous` with the same [`solve_key`] (the
 /// last one when several share it), if any.
 fn matching_vertices(medial: &MedialGraph, previous: &MedialGraph) -> Vec<Option<u32>> {
-    let known: HashMap<([CircleId; 3], [u64; 2]), u32> = previous
-        .vertices
-        .iter()
-        .enumerate()
-        .map(|(i, v)| (solve_key(v), i as u32))
-        .collect();
+    // Looked up, never iterated: a fixed fast hasher (SipHash made this serial build ~15 ms
+    // at 1e5 particles' 200 000 vertices).
+    let mut known: HashMap<([CircleId; 3], [u64; 2]), u32, foldhash::fast::FixedState> =
+        HashMap::with_capacity_and_hasher(previous.vertices.len(), Default::default());
+    for (i, v) in previous.vertices.iter().enumerate() {
+        known.insert(solve_key(v), i as u32);
+    }
     medial
         .vertices
         .par_iter()

@@ -431,7 +431,9 @@ impl Domain {
             }
         }
         // Duplicates first, in O(n) with a hash map on the exact bits (-0.0 folded into 0.0).
-        let mut seen: HashMap<[u64; 3], usize> = HashMap::with_capacity(holes.len());
+        // Looked up, never iterated: a fixed fast hasher (the result does not depend on it).
+        let mut seen: HashMap<[u64; 3], usize, foldhash::fast::FixedState> =
+            HashMap::with_capacity_and_hasher(holes.len(), Default::default());
         for (i, h) in holes.iter().enumerate() {
             let key = [
                 (h.center[0] + 0.0).to_bits(),
