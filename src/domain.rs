@@ -712,10 +712,12 @@ pub fn gap(a: &Circle, b: &Circle) -> f64 {
 const LEAF: usize = 8;
 
 /// Fewest holes whose nearest-gap queries are split between threads
-/// ([`HoleIndex::nearest_gap_each`]; a query takes about a microsecond). 1e3 holes stay on one
-/// thread: their 0.25 ms of queries gain less than a hand-off to a busy second core can cost
-/// (the input stage at 1e3 measured 0.92 ms median, 1.60 mean split, 0.83 and 0.87 serial).
-const PARALLEL_MIN_HOLES: usize = 4096;
+/// ([`HoleIndex::nearest_gap_each`]; a query takes about a microsecond). Until the CLI pinned
+/// its workers to CPUs (thirty-fifth session) 1e3 holes stayed on one thread: a hand-off to a
+/// second core cost more than their 0.25 ms of queries (input stage 0.92 ms median split, 0.83
+/// and 0.87 serial). Pinned, the split gains (thirty-sixth session, 1e3 bubbles, medians of
+/// 10: input 0.79-0.82 -> 0.71-0.78 ms, sampling 2.11-2.47 -> 1.93-2.36 ms).
+const PARALLEL_MIN_HOLES: usize = 512;
 
 /// Fewest queries per task of [`HoleIndex::nearest_gap_each`] on the thread pool.
 const QUERIES_PER_TASK: usize = 64;
