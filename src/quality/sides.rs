@@ -310,6 +310,21 @@ pub(super) fn prefetch_edges(layout: &BlockLayout, block: &crate::layout::Block)
     }
 }
 
+/// The sides of `block` on a wall arc: `(side, the circle's centre, whether the circle is
+/// the bounding circle)` (whose normal into the fluid points to its centre).
+fn wall_arcs<'l>(
+    layout: &'l BlockLayout,
+    block: &'l crate::layout::Block,
+) -> impl Iterator<Item = (usize, Point, bool)> + 'l {
+    block.sides.iter().enumerate().filter_map(|(s, side)| {
+        let edge = layout.edges.get(side.edge as usize)?;
+        match (edge.kind, &edge.curve) {
+            (EdgeKind::Wall(id), Curve::Arc { center, .. }) => Some((s, *center, id < 0)),
+            _ => None,
+        }
+    })
+}
+
 /// `wall_orthogonality` (the tests' reference) of one block.
 #[cfg(test)]
 pub(super) fn block_wall_orthogonality(
@@ -321,18 +336,12 @@ pub(super) fn block_wall_orthogonality(
         return None;
     }
     let mut worst: Option<f64> = None;
-    for (s, side) in block.sides.iter().enumerate() {
-        let Some(edge) = layout.edges.get(side.edge as usize) else {
-            continue;
-        };
-        let (EdgeKind::Wall(id), Curve::Arc { center, .. }) = (edge.kind, &edge.curve) else {
-            continue;
-        };
+    for (s, center, bounding) in wall_arcs(layout, block) {
         let n = if s % 2 == 0 { grid.ni } else { grid.nj };
         for p in 0..=n {
             let (w, inner) = side_node_and_inward(grid, s, p);
             // Into the fluid: away from a hole's center, towards the bounding circle's.
-            let normal = if id < 0 {
+            let normal = if bounding {
                 [center[0] - w[0], center[1] - w[1]]
             } else {
                 [w[0] - center[0], w[1] - center[1]]
@@ -362,17 +371,10 @@ fn block_wall_orthogonality_with(
         return None;
     }
     let mut worst: Option<f64> = None;
-    for (s, side) in block.sides.iter().enumerate() {
-        let Some(edge) = layout.edges.get(side.edge as usize) else {
-            continue;
-        };
-        let (EdgeKind::Wall(id), Curve::Arc { center, .. }) = (edge.kind, &edge.curve) else {
-            continue;
-        };
+    for (s, center, bounding) in wall_arcs(layout, block) {
         let (a, b) = side_lines(grid, s, scratch);
         out.clear();
         out.resize(a.len(), 0.0);
-        let (center, bounding) = (*center, id < 0);
         match lanes {
             #[cfg(target_arch = "x86_64")]
             // SAFETY: `lanes` is only `Avx512` when the CPU has these features.
