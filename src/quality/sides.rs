@@ -182,25 +182,30 @@ fn side_heights(
     }
 }
 
-/// The wall deviations (degrees) of the nodes `a` of a wall side and their inward neighbours
-/// `b` (same length as `out`), the expressions of the tests' reference
-/// `block_wall_orthogonality` in a loop the compiler vectorises (`bounding`: the wall is the
-/// bounding circle, whose normal into the fluid points to its centre).
+/// The angle (degrees, in `[0, 180]`) between the grid line from wall node `w` to its inward
+/// neighbour `inner` and the wall circle's normal into the fluid at `w`: away from the centre
+/// of a hole, towards the centre of the bounding circle (`bounding`).
+#[inline(always)]
+fn wall_deviation(w: Point, inner: Point, center: Point, bounding: bool) -> f64 {
+    let normal = if bounding {
+        [center[0] - w[0], center[1] - w[1]]
+    } else {
+        [w[0] - center[0], w[1] - center[1]]
+    };
+    let d = [inner[0] - w[0], inner[1] - w[1]];
+    let cross = normal[0] * d[1] - normal[1] * d[0];
+    let dot = normal[0] * d[0] + normal[1] * d[1];
+    angle_deg(cross.abs(), dot)
+}
+
+/// [`wall_deviation`] of the nodes `a` of a wall side and their inward neighbours `b` (same
+/// length as `out`), in a loop the compiler vectorises.
 #[inline(always)]
 fn wall_into(a: &[Point], b: &[Point], center: Point, bounding: bool, out: &mut [f64]) {
     let n = out.len();
     let (a, b) = (&a[..n], &b[..n]);
     for p in 0..n {
-        let (w, inner) = (a[p], b[p]);
-        let normal = if bounding {
-            [center[0] - w[0], center[1] - w[1]]
-        } else {
-            [w[0] - center[0], w[1] - center[1]]
-        };
-        let d = [inner[0] - w[0], inner[1] - w[1]];
-        let cross = normal[0] * d[1] - normal[1] * d[0];
-        let dot = normal[0] * d[0] + normal[1] * d[1];
-        out[p] = angle_deg(cross.abs(), dot);
+        out[p] = wall_deviation(a[p], b[p], center, bounding);
     }
 }
 
@@ -340,25 +345,16 @@ pub(super) fn block_wall_orthogonality(
         let n = if s % 2 == 0 { grid.ni } else { grid.nj };
         for p in 0..=n {
             let (w, inner) = side_node_and_inward(grid, s, p);
-            // Into the fluid: away from a hole's center, towards the bounding circle's.
-            let normal = if bounding {
-                [center[0] - w[0], center[1] - w[1]]
-            } else {
-                [w[0] - center[0], w[1] - center[1]]
-            };
-            let d = [inner[0] - w[0], inner[1] - w[1]];
-            let cross = normal[0] * d[1] - normal[1] * d[0];
-            let dot = normal[0] * d[0] + normal[1] * d[1];
-            worst = max_nan(worst, Some(angle_deg(cross.abs(), dot)));
+            worst = max_nan(worst, Some(wall_deviation(w, inner, center, bounding)));
         }
     }
     worst
 }
 
 /// The largest deviation (degrees) from the wall normal of the grid lines leaving the wall
-/// nodes of `block`: the tests' reference `block_wall_orthogonality` bit for bit, with the
-/// deviations of each wall side computed in the build `lanes` ([`wall_into`]) and folded in
-/// the same order.
+/// nodes of `block` ([`wall_deviation`]): the tests' reference `block_wall_orthogonality`
+/// (node by node, scalar) bit for bit, with the deviations of each wall side computed in the
+/// build `lanes` ([`wall_into`]) and folded in the same order.
 fn block_wall_orthogonality_with(
     layout: &BlockLayout,
     block: &crate::layout::Block,
