@@ -399,6 +399,24 @@ impl ArcGeometry {
         Some((m, a, rho, first, second))
     }
 
+    /// [`ArcGeometry::at`] of every parameter of `params`, appended: the medial points to `m`,
+    /// the touching points on the two walls to `a[0]` and `a[1]`. `None` (the vectors then
+    /// partly filled) where a point is not defined.
+    fn nodes_into(
+        &self,
+        params: &[f64],
+        m: &mut Vec<Point>,
+        a: &mut [Vec<Point>; 2],
+    ) -> Option<()> {
+        for &t in params {
+            let (mt, at, _) = self.at(t)?;
+            m.push(mt);
+            a[0].push(at[0]);
+            a[1].push(at[1]);
+        }
+        Some(())
+    }
+
     /// Medial point and both touching points at parameter `t` in `[0, 1]` (exact ends).
     ///
     /// At an end the empty circle's radius is the mean of the distances to both touching
@@ -1270,7 +1288,7 @@ pub fn assemble_cached(
     // Layout skeleton and grids (stage "grids" until the end).
     let _grids = crate::timings::enter("grids");
     // Into the rejected mesh's vectors when there is one ([`PieceCache::keep`]).
-    let mut spare = Some(cache.spare_layout());
+    let mut spare = cache.spare_layout();
     let fluid_walls: usize = pieces
         .iter()
         .map(|p| p.circles.iter().filter(|&&c| fluid(c)).count())
@@ -1285,7 +1303,7 @@ pub fn assemble_cached(
     let mut template_blocks = 0;
     let mut classes = (Vec::new(), 0);
     if !sk.fluid.is_empty() {
-        let layout = spare.take().unwrap_or_default();
+        let layout = std::mem::take(&mut spare);
         let (mut layout, medial_edges) = skeleton_layout(layout, &vertices, &pieces, fluid_walls);
         let holes: Vec<(CircleId, crate::domain::Circle)> =
             sk.fluid.iter().map(|&c| (c, domain.circle(c))).collect();
@@ -1526,14 +1544,10 @@ pub fn assemble_cached(
                     for a in a_nodes.iter_mut() {
                         a.clear();
                     }
-                    for &t in &params {
-                        let (m, a, _) = g.at(t).ok_or_else(|| {
+                    g.nodes_into(&params, &mut m_nodes, a_nodes)
+                        .ok_or_else(|| {
                             internal(format!("arc {e}: a medial node is not defined"))
                         })?;
-                        m_nodes.push(m);
-                        a_nodes[0].push(a[0]);
-                        a_nodes[1].push(a[1]);
-                    }
                     // The parameters go back to the scratch (their buffer serves the next piece).
                     scratch.params = params;
                     let mut grid = |side: usize| {
@@ -1570,9 +1584,8 @@ pub fn assemble_cached(
     let ((mut layout, medial_edges), work) = match built {
         Some(built) => (built, work()),
         None => {
-            let layout = spare.take().unwrap_or_default();
             let (w, sk) = rayon::join(work, || {
-                skeleton_layout(layout, &vertices, &pieces, fluid_walls)
+                skeleton_layout(spare, &vertices, &pieces, fluid_walls)
             });
             (sk, w)
         }

@@ -857,14 +857,10 @@ fn arc_nodes(parts: &Parts, counts: &Counts) -> Result<Vec<ArcNodes>, MeshError>
                 }
                 let mut m_nodes = Vec::with_capacity(n + 1);
                 let mut a_nodes = [Vec::with_capacity(n + 1), Vec::with_capacity(n + 1)];
-                for &t in &params {
-                    let (m, a, _) = g.at(t).ok_or_else(|| {
+                g.nodes_into(&params, &mut m_nodes, &mut a_nodes)
+                    .ok_or_else(|| {
                         internal(format!("arc orbit {o}: a medial node is not defined"))
                     })?;
-                    m_nodes.push(m);
-                    a_nodes[0].push(a[0]);
-                    a_nodes[1].push(a[1]);
-                }
                 Ok((m_nodes, a_nodes))
             },
         )

@@ -638,7 +638,7 @@ fn layout_keeping(
     options: &Options,
     sampling: &SamplingOptions,
 ) -> Result<PeriodicLayout, MeshError> {
-    layout_checked(pd, options, sampling, false)
+    layout_from(pd, options, sampling, initial_reach(pd), None, false)?.layout()
 }
 
 /// [`layout_keeping`] for an exact attempt: a layout whose exact build would stop at arc
@@ -648,38 +648,29 @@ fn layout_for_exact(
     options: &Options,
     sampling: &SamplingOptions,
 ) -> Result<PeriodicLayout, MeshError> {
-    layout_checked(pd, options, sampling, true)
+    layout_from(pd, options, sampling, initial_reach(pd), None, true)?.layout()
 }
 
-/// [`layout_keeping`], with [`extract`]'s `check_backwards`.
-fn layout_checked(
-    pd: &PeriodicDomain,
-    options: &Options,
-    sampling: &SamplingOptions,
-    check_backwards: bool,
-) -> Result<PeriodicLayout, MeshError> {
-    match layout_from(
-        pd,
-        options,
-        sampling,
-        initial_reach(pd),
-        None,
-        check_backwards,
-    )? {
-        Round::Layout(p) => Ok(p),
-        Round::Poor(_) => Err(MeshError::Internal(
-            "no poor vertices were asked for".into(),
-        )),
-    }
-}
-
-/// What a layout of a refinement round found ([`layout_or_poor`]).
+/// What [`layout_from`] found: the layout, or for a refinement round ([`layout_or_poor`])
+/// the poor vertex orbits.
 #[allow(clippy::large_enum_variant)]
 enum Round {
     /// No poor vertex orbit: the layout ([`layout_keeping`]'s).
     Layout(PeriodicLayout),
     /// The poor vertex orbits ([`exact_mode::periodic::poor_vertices`], not empty).
     Poor(Vec<(f64, Point, f64)>),
+}
+
+impl Round {
+    /// The layout of a round that asked for no poor vertex orbit (`poor_limit` `None`).
+    fn layout(self) -> Result<PeriodicLayout, MeshError> {
+        match self {
+            Round::Layout(p) => Ok(p),
+            Round::Poor(_) => Err(MeshError::Internal(
+                "no poor vertices were asked for".into(),
+            )),
+        }
+    }
 }
 
 /// [`layout_keeping`] for a refinement round with ratio `limit`: the poor vertex orbits of
@@ -3240,11 +3231,9 @@ mod tests {
                 random_box(n, seed)
             };
             let band = periodic_layout_with(&pd, &options, &exact).unwrap();
-            let Round::Layout(whole) =
-                layout_from(&pd, &options, &exact, [f64::INFINITY; 2], None, false).unwrap()
-            else {
-                panic!("a layout was asked for")
-            };
+            let whole = layout_from(&pd, &options, &exact, [f64::INFINITY; 2], None, false)
+                .and_then(Round::layout)
+                .unwrap();
             assert_eq!(band.triples, whole.triples, "{n} holes");
             assert_eq!(
                 (band.medial_vertices, band.medial_arcs, band.collapsed_arcs),
