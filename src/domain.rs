@@ -849,28 +849,17 @@ fn build_subtree(
 impl<'a> HoleIndex<'a> {
     /// Build the index over `holes` (finite values assumed; NaN only weakens the pruning).
     pub fn new(holes: &'a [Circle]) -> Self {
-        let mut idx = HoleIndex {
-            holes,
-            order: (0..holes.len() as u32).collect(),
-            sorted: Vec::new(),
-            nodes: Vec::with_capacity(2 * holes.len() / LEAF + 1),
-        };
-        if !holes.is_empty() {
-            build_subtree(holes, &mut idx.order, 0, 0, &mut idx.nodes, PARALLEL_BUILD);
-        }
-        idx.sorted = idx.order.iter().map(|&k| holes[k as usize]).collect();
-        idx
+        Self::new_with(holes, PARALLEL_BUILD)
     }
 
     /// [`HoleIndex::new`] with every subtree of more than `parallel_from` holes built on two
     /// threads (the tests compare the trees built with and without threads).
-    #[cfg(test)]
     fn new_with(holes: &'a [Circle], parallel_from: usize) -> Self {
         let mut idx = HoleIndex {
             holes,
             order: (0..holes.len() as u32).collect(),
             sorted: Vec::new(),
-            nodes: Vec::new(),
+            nodes: Vec::with_capacity(2 * holes.len() / LEAF + 1),
         };
         if !holes.is_empty() {
             build_subtree(holes, &mut idx.order, 0, 0, &mut idx.nodes, parallel_from);
