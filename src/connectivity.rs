@@ -194,6 +194,7 @@ impl<'a> Connectivity<'a> {
         (0..layout.blocks.len())
             .into_par_iter()
             .with_min_len(PARALLEL_BLOCKS)
+            .with_max_len(4 * PARALLEL_BLOCKS)
             .map(|b| {
                 if let Some(ahead) = layout.blocks.get(b + PREFETCH_BLOCKS) {
                     users.prefetch(layout, ahead);
@@ -256,6 +257,7 @@ impl<'a> Connectivity<'a> {
         (0..self.len())
             .into_par_iter()
             .with_min_len(PARALLEL_BLOCKS)
+            .with_max_len(4 * PARALLEL_BLOCKS)
             .map(|b| self.block(b))
             .collect::<Option<Vec<_>>>()
             .unwrap_or_default()

@@ -83,6 +83,7 @@ pub mod ranges;
 pub mod refine;
 pub mod sampling;
 pub mod sequence;
+mod tasks;
 pub mod templates;
 pub mod timings;
 pub mod transition;

@@ -241,6 +241,7 @@ fn medial_vertices(
     let chunks: Vec<Result<Vec<MedialVertex>, MeshError>> = kinds
         .par_chunks(VERTEX_CHUNK)
         .enumerate()
+        .with_max_len(1)
         .map(|(ci, chunk)| {
             let mut out = Vec::new();
             for (k, kind) in chunk.iter().enumerate() {

@@ -231,6 +231,7 @@ fn block_stats(
         .par_chunks(CHUNK)
         .zip(slices)
         .enumerate()
+        .with_max_len(crate::tasks::BLOCKS / CHUNK)
         .map_init(
             || (rows::Rows::default(), sides::Sides::new(lanes)),
             |(scratch, sd), (c, (chunk, spill))| {

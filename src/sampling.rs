@@ -981,6 +981,7 @@ impl<'a> SlotContext<'a> {
         let plans: Vec<Option<SlotSamples<'a>>> = (0..self.slots())
             .into_par_iter()
             .with_min_len(CIRCLES_PER_TASK)
+            .with_max_len(crate::tasks::CIRCLES)
             .map(|slot| {
                 if over.load(Ordering::Relaxed) {
                     return None;

@@ -232,6 +232,7 @@ pub fn exact_vertices_with(
         .vertices
         .par_iter()
         .enumerate()
+        .with_max_len(crate::tasks::PIECES)
         .map(|(k, v)| {
             let c = v.circles;
             if c.iter().any(|&x| x < -1 || x >= nh) || c[0] == c[1] || c[1] == c[2] || c[0] == c[2]
@@ -895,6 +896,7 @@ fn pieces_of(sk: &Skeleton<'_>) -> Result<(Vec<Piece>, Vec<usize>), MeshError> {
     sk.arcs
         .par_iter()
         .enumerate()
+        .with_max_len(crate::tasks::PIECES)
         .map(|(e, arc)| {
             piece(e, arc).unwrap_or_else(|err| {
                 let mut first = first_error.lock().unwrap_or_else(|p| p.into_inner());
@@ -1174,6 +1176,7 @@ pub fn assemble_cached(
     let mut summaries: Vec<Option<Summary>> = pieces
         .par_iter()
         .zip(&found)
+        .with_max_len(crate::tasks::PIECES)
         .map_init(scratch, |scratch, (p, &at)| {
             let circles = p.circles.map(cidx);
             if let Some(known) = cache.known(at) {
@@ -1253,6 +1256,7 @@ pub fn assemble_cached(
                 .collect();
             let filled: Vec<Option<(Vec<f64>, Vec<f64>)>> = need
                 .par_iter()
+                .with_max_len(crate::tasks::PIECES)
                 .map(|&e| pieces[e].geom.densities())
                 .collect();
             for (&e, d) in need.iter().zip(filled) {
@@ -1435,6 +1439,7 @@ pub fn assemble_cached(
                 .zip(arc_targets.par_iter_mut())
                 .zip(first_params.par_iter_mut())
                 .enumerate()
+                .with_max_len(crate::tasks::PIECES)
                 .map_init(PieceScratch::default, |scratch, (e, ((p, t), first))| {
                     let (n, nbar) = (counts.arc[e], nbar_of(p));
                     if let Some(w) = t.known_ends(nbar, n) {
@@ -1495,6 +1500,7 @@ pub fn assemble_cached(
             .zip(reuse.into_par_iter())
             .zip(first_params.into_par_iter())
             .enumerate()
+            .with_max_len(crate::tasks::PIECES)
             .map_init(
                 PieceScratch::default,
                 |scratch, (e, (((p, t), reused), first))| {
