@@ -1403,6 +1403,11 @@ pub fn assemble_cached(
     // Per piece: medial nodes, grids, what the memo keeps and, once known, which of the two grids has
     // an inverted cell (checked here while the grid is in cache; `None` until smoothed).
     type PieceGrids = Result<(Vec<Point>, [BlockGrid; 2], Known, Option<[bool; 2]>), MeshError>;
+    /// The same, moved apart: medial nodes and grids, what the memo keeps and the checks.
+    type PieceParts = (
+        (Vec<Vec<Point>>, Vec<[BlockGrid; 2]>),
+        (Vec<Known>, Vec<Option<[bool; 2]>>),
+    );
     let work = || -> Result<(Vec<GridKey>, Vec<PieceGrids>), MeshError> {
         // Grids of the medial blocks, one piece (two blocks) per task in parallel on the current
         // rayon pool, collected in piece order (the first error in piece order is returned). A
@@ -1596,36 +1601,76 @@ pub fn assemble_cached(
             (sk, w)
         }
     };
-    let (grid_keys, per_piece) = work?;
-    let mut grids = Vec::with_capacity(layout.blocks.len());
-    let mut entries = Vec::with_capacity(per_piece.len());
-    let mut checked: Vec<Option<[bool; 2]>> = Vec::with_capacity(per_piece.len());
-    for (e, r) in per_piece.into_iter().enumerate() {
-        let (m_nodes, pair, entry, inverted) = r?;
-        layout.edges[medial_edges[e] as usize].curve = Curve::Polyline(m_nodes);
-        grids.extend(pair);
-        entries.push(entry);
-        checked.push(inverted);
+    let (grid_keys, mut per_piece) = work?;
+    // The first error in piece order.
+    if let Some(at) = per_piece.iter().position(Result::is_err) {
+        per_piece.swap_remove(at)?;
     }
-    cache.replace(keys, entries, medial_edges.clone(), grid_keys, reused);
-    // Which medial blocks have an inverted cell: known for every piece but those still to
-    // smooth (grids taken from the cache were smoothed and checked by the build that made
-    // them). Each block smooths alone (its sides fixed): in parallel, same result for any pool.
-    let mut inverted: Vec<bool> = vec![false; grids.len()];
-    grids
-        .par_iter_mut()
-        .zip(inverted.par_iter_mut())
-        .enumerate()
-        .for_each(|(b, (g, bad))| {
-            *bad = match checked[b / 2] {
-                Some(pair) => pair[b % 2],
-                None => {
-                    let rows = smoothing::boundary_layer_rows(g);
-                    smoothing::winslow(g, options.smooth, rows);
-                    has_inverted_cell(g)
+    // Moved apart in parallel (issue 8: one loop over the pieces took 42 ms at 1e5 particles
+    // on one thread, mostly the first touch of the vectors it filled). Room for the
+    // templates' grids too (`layout` has their blocks when holes were inserted).
+    let n = per_piece.len();
+    let mut moved: PieceParts = (
+        (
+            Vec::with_capacity(n),
+            Vec::with_capacity(layout.blocks.len().div_ceil(2)),
+        ),
+        (Vec::with_capacity(n), Vec::with_capacity(n)),
+    );
+    moved.par_extend(
+        per_piece
+            .into_par_iter()
+            .with_max_len(crate::tasks::PIECES)
+            .map(|r| match r {
+                Ok((m_nodes, pair, entry, inverted)) => ((m_nodes, pair), (entry, inverted)),
+                // None left (checked above).
+                Err(_) => {
+                    let empty = || BlockGrid {
+                        ni: 0,
+                        nj: 0,
+                        nodes: Vec::new(),
+                    };
+                    let known = Known {
+                        min_cells: 0,
+                        target: None,
+                        ends: None,
+                    };
+                    ((Vec::new(), [empty(), empty()]), (known, None))
                 }
-            };
-        });
+            }),
+    );
+    let ((medial_nodes, pairs), (entries, checked)) = moved;
+    let mut grids = pairs.into_flattened();
+    cache.replace(keys, entries, medial_edges.clone(), grid_keys, reused);
+    // The medial nodes into the layout, beside the check of the grids: which medial blocks
+    // have an inverted cell, known for every piece but those still to smooth (grids taken
+    // from the cache were smoothed and checked by the build that made them). Each block
+    // smooths alone (its sides fixed): in parallel, same result for any pool.
+    let mut inverted: Vec<bool> = vec![false; grids.len()];
+    rayon::join(
+        || {
+            for (e, m_nodes) in medial_nodes.into_iter().enumerate() {
+                layout.edges[medial_edges[e] as usize].curve = Curve::Polyline(m_nodes);
+            }
+        },
+        || {
+            grids
+                .par_iter_mut()
+                .zip(inverted.par_iter_mut())
+                .enumerate()
+                .with_max_len(crate::tasks::BLOCKS)
+                .for_each(|(b, (g, bad))| {
+                    *bad = match checked[b / 2] {
+                        Some(pair) => pair[b % 2],
+                        None => {
+                            let rows = smoothing::boundary_layer_rows(g);
+                            smoothing::winslow(g, options.smooth, rows);
+                            has_inverted_cell(g)
+                        }
+                    };
+                })
+        },
+    );
     drop(checked);
     if template_blocks > 0 {
         let t = inserted::template_grids(&layout, &classes, &grids, first_template, h)?;

@@ -30,6 +30,7 @@ use crate::layout::{BlockLayout, Curve};
 use crate::mesh::BlockGrid;
 use std::collections::HashMap;
 use std::hash::{BuildHasherDefault, Hasher};
+use std::sync::OnceLock;
 
 /// Number of `u64` words in a [`GeomKey`].
 const KEY_WORDS: usize = 25;
@@ -145,8 +146,10 @@ pub struct PieceCache {
     /// Emptied vectors of earlier builds, for the next build to fill ([`Spare`]).
     spare: Spare,
     /// Hash of a geometry key -> the last piece with that hash; lookups compare the full key,
-    /// so a hash collision is a miss, never a wrong entry.
-    index: HashMap<u64, u32, BuildHasherDefault<PassThrough>>,
+    /// so a hash collision is a miss, never a wrong entry. Built from `keys` on the first
+    /// lookup after [`PieceCache::replace`]: the last build of a mesh is never looked up, and
+    /// its index was a serial loop of ~15 ms at 1e5 particles (issue 8).
+    index: OnceLock<Index>,
     /// Pieces of the latest build whose densities were not computed / whose grids were moved
     /// from the memo.
     reused: usize,
@@ -158,6 +161,8 @@ pub struct PieceCache {
 /// A hash of a geometry key's words (multiply-rotate per word, then a final mix; issue 8: SipHash
 /// of 25 words per piece and build was measurable). Not keyed: the memo is private to one run,
 /// and a collision only costs a recomputation (see `PieceCache::index`).
+type Index = HashMap<u64, u32, BuildHasherDefault<PassThrough>>;
+
 fn hash_of(key: &GeomKey) -> u64 {
     const K: u64 = 0x9e37_79b9_7f4a_7c15;
     let mut h: u64 = 0;
@@ -212,14 +217,33 @@ impl PieceCache {
         if self.reference {
             return None;
         }
-        let i = *self.index.get(&hash_of(key))? as usize;
+        let i = *self.index().get(&hash_of(key))? as usize;
         (self.keys.get(i)? == key).then_some(i)
+    }
+
+    /// The index of `keys`, built on first use.
+    fn index(&self) -> &Index {
+        self.index.get_or_init(|| {
+            let mut index = Index::default();
+            index.reserve(self.keys.len());
+            index.extend(
+                self.keys
+                    .iter()
+                    .enumerate()
+                    .map(|(i, k)| (hash_of(k), i as u32)),
+            );
+            index
+        })
     }
 
     /// The latest build's piece with geometry `keys[e]`, for every `e` (in parallel; a key
     /// met twice in that build is found at its last piece).
     pub(crate) fn find_all(&self, keys: &[GeomKey]) -> Vec<Option<u32>> {
         use rayon::prelude::*;
+        if !self.reference {
+            // Built once here, not by whichever lookup comes first.
+            self.index();
+        }
         keys.par_iter()
             .map(|k| self.find(k).map(|i| i as u32))
             .collect()
@@ -247,7 +271,7 @@ impl PieceCache {
         // made (and, below, every grid not taken).
         self.keys = Vec::new();
         self.known = Vec::new();
-        self.index = HashMap::default();
+        self.index = OnceLock::new();
         self.reused_grids = 0;
         let Some(mut kept) = kept else {
             return vec![None; found.len()];
@@ -305,10 +329,7 @@ impl PieceCache {
         reused: usize,
     ) {
         self.grid_keys = grid_keys;
-        self.index.clear();
-        self.index.reserve(keys.len());
-        self.index
-            .extend(keys.iter().enumerate().map(|(i, k)| (hash_of(k), i as u32)));
+        self.index = OnceLock::new();
         self.keys = keys;
         self.known = known;
         self.medial_edges = medial_edges;
