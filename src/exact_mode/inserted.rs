@@ -496,7 +496,7 @@ pub(crate) fn template_grids(
 /// Side `k` of grid `g` has `ni` cells (`k` even) or `nj` (`k` odd), as `g.side(k)` has
 /// nodes - 1.
 fn side_cells(g: &BlockGrid, k: usize) -> usize {
-    if k % 2 == 0 {
+    if k.is_multiple_of(2) {
         g.ni
     } else {
         g.nj
