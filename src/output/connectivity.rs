@@ -124,6 +124,9 @@ fn format_wave(
 ) -> Vec<Vec<u8>> {
     (0..blocks.len().div_ceil(CHUNK))
         .into_par_iter()
+        // One chunk per leaf: the wave's last leaf is what the other thread waits for, 289
+        // times at 1e5 particles ([`crate::tasks`]).
+        .with_max_len(1)
         .map(|ci| {
             let lo = blocks.start + ci * CHUNK;
             let hi = (lo + CHUNK).min(blocks.end);
