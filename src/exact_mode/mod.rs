@@ -934,11 +934,32 @@ pub fn assemble(sk: Skeleton<'_>, options: &Options) -> Result<ExactMesh, MeshEr
 /// with room for the templates of `fluid_walls` inserted-hole walls. Returns the layout and
 /// each piece's medial edge.
 fn skeleton_layout(
-    mut layout: BlockLayout,
+    layout: BlockLayout,
     vertices: &[ExactVertex],
     pieces: &[Piece],
     fluid_walls: usize,
 ) -> (BlockLayout, Vec<u32>) {
+    if pieces.len() >= PARALLEL_SKELETON && rayon::current_num_threads() > 1 {
+        skeleton_layout_par(layout, vertices, pieces, fluid_walls)
+    } else {
+        skeleton_layout_serial(layout, vertices, pieces, fluid_walls)
+    }
+}
+
+/// Pieces from which [`skeleton_layout`] is built in parallel ([`skeleton_layout_par`]);
+/// below, the one loop of [`skeleton_layout_serial`] is as fast. Issue 8: at 1e5 bubbles,
+/// whose refinement inserts holes (so the skeleton comes before the grids, alone), the loop
+/// kept one CPU busy and the other idle for 80 ms.
+const PARALLEL_SKELETON: usize = 16_384;
+
+/// The vertices of [`skeleton_layout`] (the Apollonius centres, then each vertex's tangent
+/// points), with room for the rest; returns where each vertex's tangent points start.
+fn skeleton_vertices(
+    layout: &mut BlockLayout,
+    vertices: &[ExactVertex],
+    pieces: &[Piece],
+    fluid_walls: usize,
+) -> Vec<usize> {
     let nv = vertices.len();
     let tangents: usize = vertices.iter().map(|v| v.tangent.len()).sum();
     // Room for the templates too, so that filling the inserted holes does not move the
@@ -958,80 +979,291 @@ fn skeleton_layout(
         tangent_base.push(layout.vertices.len());
         layout.vertices.extend_from_slice(&v.tangent);
     }
-    let tangent_vertex = |v: usize, slot: usize| (tangent_base[v] + slot) as u32;
-    let slots = |p: &Piece, side: usize| -> (usize, usize) { (p.slots[side][0], p.slots[side][1]) };
-    // The spoke edge of vertex `v`'s slot `s`, by its tangent vertex (`NO_EDGE` until made): a
-    // lookup, not a hash map (issue 8); edges are numbered in first-use order as before.
-    const NO_EDGE: u32 = u32::MAX;
-    let mut spoke_edge: Vec<u32> = vec![NO_EDGE; layout.vertices.len()];
-    let mut medial_edges = Vec::with_capacity(pieces.len());
+    tangent_base
+}
+
+/// The two blocks of piece `p` in the layout: `medial_edge`, its wall edges `walls` (sides 0
+/// and 1) and the spokes `spokes[side][end]` of its tangent vertices `tv[side][end]`.
+fn piece_blocks(
+    p: &Piece,
+    medial_edge: u32,
+    walls: [u32; 2],
+    spokes: [[u32; 2]; 2],
+    tv: [[u32; 2]; 2],
+) -> [Block; 2] {
     let (fwd, rev) = (SideRef::along, SideRef::against);
+    let [v0, v1] = p.ends.map(|v| v as u32);
+    let ([t00, t01], [t10, t11]) = (tv[0], tv[1]);
+    let ([sp00, sp01], [sp10, sp11]) = (spokes[0], spokes[1]);
+    [
+        Block {
+            corners: [t00, t01, v1, v0],
+            sides: [fwd(walls[0]), rev(sp01), rev(medial_edge), fwd(sp00)],
+            wall: Some(p.circles[0]),
+        },
+        Block {
+            corners: [t11, t10, v0, v1],
+            sides: [fwd(walls[1]), rev(sp10), fwd(medial_edge), fwd(sp11)],
+            wall: Some(p.circles[1]),
+        },
+    ]
+}
+
+/// Piece `p`'s medial edge (an empty polyline until the grids give its nodes) and wall edge
+/// on `side` (in the block's side-0 direction), from its tangent vertices `tv`.
+fn piece_medial_edge(p: &Piece) -> Edge {
+    let [v0, v1] = p.ends;
+    Edge {
+        ends: [v0 as u32, v1 as u32],
+        curve: Curve::Polyline(Vec::new()),
+        kind: EdgeKind::Medial,
+    }
+}
+
+/// Piece `p`'s wall edge on `side`, in its block's side-0 direction (`tv` as in
+/// [`piece_blocks`]).
+fn piece_wall_edge(p: &Piece, side: usize, tv: [[u32; 2]; 2]) -> Edge {
+    let g = &p.geom;
+    let (ends, start, sweep) = if side == 0 {
+        ([tv[0][0], tv[0][1]], g.start[0], g.sweep[0])
+    } else {
+        ([tv[1][1], tv[1][0]], g.start[1] + g.sweep[1], -g.sweep[1])
+    };
+    Edge {
+        ends,
+        curve: Curve::Arc {
+            center: g.walls[side].c,
+            radius: g.walls[side].r,
+            start,
+            sweep,
+        },
+        kind: EdgeKind::Wall(p.circles[side]),
+    }
+}
+
+/// The spoke edge from vertex `v` to its tangent vertex `t`.
+fn spoke_edge(v: usize, t: u32) -> Edge {
+    Edge {
+        ends: [v as u32, t],
+        curve: Curve::Segment,
+        kind: EdgeKind::Spoke,
+    }
+}
+
+/// Piece `p`'s tangent vertices: `[side][end]` that of `circles[side]` at `ends[end]`.
+fn piece_tangents(p: &Piece, tangent_base: &[usize]) -> [[u32; 2]; 2] {
+    [0, 1].map(|side| [0, 1].map(|end| (tangent_base[p.ends[end]] + p.slots[side][end]) as u32))
+}
+
+/// [`skeleton_layout`] in one loop over the pieces (the reference of
+/// [`skeleton_layout_par`]).
+pub(crate) fn skeleton_layout_serial(
+    mut layout: BlockLayout,
+    vertices: &[ExactVertex],
+    pieces: &[Piece],
+    fluid_walls: usize,
+) -> (BlockLayout, Vec<u32>) {
+    let tangent_base = skeleton_vertices(&mut layout, vertices, pieces, fluid_walls);
+    // The spoke edge of each tangent vertex (`NO_EDGE` until made): a lookup, not a hash map
+    // (issue 8); edges are numbered in first-use order.
+    let mut spoke: Vec<u32> = vec![NO_EDGE; layout.vertices.len()];
+    let mut medial_edges = Vec::with_capacity(pieces.len());
     for p in pieces {
-        let g = &p.geom;
-        let [v0, v1] = p.ends;
+        let tv = piece_tangents(p, &tangent_base);
         let medial_edge = layout.edges.len() as u32;
         medial_edges.push(medial_edge);
         // The medial nodes replace the empty polyline once the grids are made (nothing reads
         // it before: one allocation and one free per piece fewer in this serial loop).
-        layout.edges.push(Edge {
-            ends: [v0 as u32, v1 as u32],
-            curve: Curve::Polyline(Vec::new()),
-            kind: EdgeKind::Medial,
-        });
+        layout.edges.push(piece_medial_edge(p));
+        let mut walls = [0; 2];
         for side in 0..2 {
-            let c = p.circles[side];
-            let (s0, s1) = slots(p, side);
-            for (v, s) in [(v0, s0), (v1, s1)] {
-                let t = tangent_vertex(v, s);
-                if spoke_edge[t as usize] == NO_EDGE {
-                    spoke_edge[t as usize] = layout.edges.len() as u32;
-                    layout.edges.push(Edge {
-                        ends: [v as u32, t],
-                        curve: Curve::Segment,
-                        kind: EdgeKind::Spoke,
-                    });
+            for end in 0..2 {
+                let t = tv[side][end];
+                if spoke[t as usize] == NO_EDGE {
+                    spoke[t as usize] = layout.edges.len() as u32;
+                    layout.edges.push(spoke_edge(p.ends[end], t));
                 }
             }
-            // Wall edge, in the block's side-0 direction.
-            let (t_first, t_last) = if side == 0 {
-                (tangent_vertex(v0, s0), tangent_vertex(v1, s1))
-            } else {
-                (tangent_vertex(v1, s1), tangent_vertex(v0, s0))
-            };
-            let (start, sweep) = if side == 0 {
-                (g.start[0], g.sweep[0])
-            } else {
-                (g.start[1] + g.sweep[1], -g.sweep[1])
-            };
-            let wall_edge = layout.edges.len() as u32;
-            layout.edges.push(Edge {
-                ends: [t_first, t_last],
-                curve: Curve::Arc {
-                    center: g.walls[side].c,
-                    radius: g.walls[side].r,
-                    start,
-                    sweep,
-                },
-                kind: EdgeKind::Wall(c),
-            });
-            let sp0 = spoke_edge[tangent_vertex(v0, s0) as usize];
-            let sp1 = spoke_edge[tangent_vertex(v1, s1) as usize];
-            layout.blocks.push(if side == 0 {
-                Block {
-                    corners: [t_first, t_last, v1 as u32, v0 as u32],
-                    sides: [fwd(wall_edge), rev(sp1), rev(medial_edge), fwd(sp0)],
-                    wall: Some(c),
-                }
-            } else {
-                Block {
-                    corners: [t_first, t_last, v0 as u32, v1 as u32],
-                    sides: [fwd(wall_edge), rev(sp0), fwd(medial_edge), fwd(sp1)],
-                    wall: Some(c),
-                }
-            });
+            walls[side] = layout.edges.len() as u32;
+            layout.edges.push(piece_wall_edge(p, side, tv));
         }
+        let spokes = tv.map(|ends| ends.map(|t| spoke[t as usize]));
+        layout
+            .blocks
+            .extend(piece_blocks(p, medial_edge, walls, spokes, tv));
     }
     (layout, medial_edges)
+}
+
+/// No edge yet (a tangent vertex whose spoke is not made).
+const NO_EDGE: u32 = u32::MAX;
+
+/// [`skeleton_layout`] in parallel, the layout of [`skeleton_layout_serial`] (tested): the
+/// first use of each tangent vertex (piece `i`, use `2 side + end`, key `4 i + use`, the
+/// loop's order) is found first (one pass over the keys, in order), so that each piece
+/// knows which spokes it makes, hence how many edges; their prefix sums number the edges,
+/// and the pieces then write their edges and blocks in parallel, each into its own part.
+pub(crate) fn skeleton_layout_par(
+    mut layout: BlockLayout,
+    vertices: &[ExactVertex],
+    pieces: &[Piece],
+    fluid_walls: usize,
+) -> (BlockLayout, Vec<u32>) {
+    let tangent_base = skeleton_vertices(&mut layout, vertices, pieces, fluid_walls);
+    let tvs: Vec<[[u32; 2]; 2]> = pieces
+        .par_iter()
+        .with_max_len(crate::tasks::PIECES)
+        .map(|p| piece_tangents(p, &tangent_base))
+        .collect();
+    let mut first: Vec<u32> = vec![NO_EDGE; layout.vertices.len()];
+    for (i, tv) in tvs.iter().enumerate() {
+        for (u, &t) in tv.iter().flatten().enumerate() {
+            let f = &mut first[t as usize];
+            if *f == NO_EDGE {
+                *f = (4 * i + u) as u32;
+            }
+        }
+    }
+    // Which of piece i's uses make their spoke (bit `u`), and its edges' offset.
+    let makes = |i: usize, tv: &[[u32; 2]; 2]| -> u8 {
+        let mut bits = 0;
+        for (u, &t) in tv.iter().flatten().enumerate() {
+            bits |= u8::from(first[t as usize] == (4 * i + u) as u32) << u;
+        }
+        bits
+    };
+    let bits: Vec<u8> = tvs
+        .par_iter()
+        .enumerate()
+        .with_max_len(crate::tasks::PIECES)
+        .map(|(i, tv)| makes(i, tv))
+        .collect();
+    let base = layout.edges.len() as u32;
+    let mut offsets = Vec::with_capacity(pieces.len() + 1);
+    let mut next = base;
+    for b in &bits {
+        offsets.push(next);
+        next += 3 + b.count_ones();
+    }
+    offsets.push(next);
+    // Within a piece: medial, [spoke 0], [spoke 1], wall 0, [spoke 2], [spoke 3], wall 1.
+    let position = |b: u8, u: usize| -> u32 {
+        let made = |k: usize| u32::from(b >> k & 1);
+        match u {
+            0 => 1,
+            1 => 1 + made(0),
+            2 => 2 + made(0) + made(1),
+            _ => 2 + made(0) + made(1) + made(2),
+        }
+    };
+    let spoke_of = |t: u32| -> u32 {
+        let k = first[t as usize] as usize;
+        let (c, u) = (k / 4, k % 4);
+        offsets[c] + position(bits[c], u)
+    };
+    let np = pieces.len();
+    let edge_count = (next - base) as usize;
+    {
+        let edges = &mut layout.edges.spare_capacity_mut()[..edge_count];
+        let blocks = &mut layout.blocks.spare_capacity_mut()[..2 * np];
+        let fill = |range: std::ops::Range<usize>,
+                    edges: &mut [std::mem::MaybeUninit<Edge>],
+                    blocks: &mut [std::mem::MaybeUninit<Block>]| {
+            let at0 = offsets[range.start];
+            for i in range.clone() {
+                let (p, tv, b) = (&pieces[i], tvs[i], bits[i]);
+                let mut at = (offsets[i] - at0) as usize;
+                let mut put = |e: Edge| {
+                    edges[at].write(e);
+                    at += 1;
+                };
+                put(piece_medial_edge(p));
+                for side in 0..2 {
+                    for end in 0..2 {
+                        if b >> (2 * side + end) & 1 == 1 {
+                            put(spoke_edge(p.ends[end], tv[side][end]));
+                        }
+                    }
+                    put(piece_wall_edge(p, side, tv));
+                }
+                // Each wall right after its side's spokes: wall 1 ends the piece's edges.
+                let walls = [offsets[i] + position(b, 2) - 1, offsets[i + 1] - 1];
+                let spokes = tv.map(|ends| ends.map(spoke_of));
+                let pair = piece_blocks(p, offsets[i], walls, spokes, tv);
+                let k = 2 * (i - range.start);
+                let [b0, b1] = pair;
+                blocks[k].write(b0);
+                blocks[k + 1].write(b1);
+            }
+        };
+        split_fill(0..np, edges, blocks, &offsets, &fill);
+    }
+    // SAFETY: `split_fill` gave every piece its own part of the spare capacity (its edges at
+    // `offsets[i] - base..offsets[i + 1] - base`, its blocks at `2 i..2 i + 2`) and each piece
+    // wrote every slot of its part: `3 + bits.count_ones()` edges and two blocks.
+    unsafe {
+        layout.edges.set_len(base as usize + edge_count);
+        layout.blocks.set_len(layout.blocks.len() + 2 * np);
+    }
+    let medial_edges = offsets[..np].to_vec();
+    (layout, medial_edges)
+}
+
+/// The layout skeleton of the exact build of `cb` (its pieces as
+/// [`densities::deviation`] makes them), built by [`skeleton_layout_serial`] and by
+/// [`skeleton_layout_par`] on the current pool: true when the two are equal, layout and
+/// medial edges (test hook).
+#[doc(hidden)]
+pub fn skeletons_agree(cb: &crate::blocking::CollapsedBlocking) -> Result<bool, MeshError> {
+    let single = exact_vertices_with(
+        &cb.refined.domain,
+        &cb.refined.sampled.medial,
+        &cb.refined.circles,
+    )?;
+    let vertices = collapsed::cluster_vertices_on(cb, &single)?;
+    let sk = Skeleton {
+        domain: &cb.refined.domain,
+        arcs: &cb.contracted.graph.arcs,
+        vertices,
+        sampled: &cb.layout,
+        fluid: Vec::new(),
+    };
+    let (pieces, _) = pieces_of(&sk)?;
+    let serial = skeleton_layout_serial(BlockLayout::default(), &sk.vertices, &pieces, 3);
+    let par = skeleton_layout_par(BlockLayout::default(), &sk.vertices, &pieces, 3);
+    Ok(serial == par)
+}
+
+/// Pieces per task of [`split_fill`].
+const FILL_PIECES: usize = 2048;
+
+/// Run `fill` on ranges of pieces in parallel, each with its own part of `edges` (piece
+/// `i`'s edges at `offsets[i]..offsets[i + 1]`, relative to `offsets[range.start]`) and of
+/// `blocks` (two per piece), cut by `split_at_mut`.
+fn split_fill<F>(
+    range: std::ops::Range<usize>,
+    edges: &mut [std::mem::MaybeUninit<Edge>],
+    blocks: &mut [std::mem::MaybeUninit<Block>],
+    offsets: &[u32],
+    fill: &F,
+) where
+    F: Fn(
+            std::ops::Range<usize>,
+            &mut [std::mem::MaybeUninit<Edge>],
+            &mut [std::mem::MaybeUninit<Block>],
+        ) + Sync,
+{
+    if range.len() <= FILL_PIECES {
+        fill(range, edges, blocks);
+        return;
+    }
+    let mid = range.start + range.len() / 2;
+    let (el, er) = edges.split_at_mut((offsets[mid] - offsets[range.start]) as usize);
+    let (bl, br) = blocks.split_at_mut(2 * (mid - range.start));
+    rayon::join(
+        || split_fill(range.start..mid, el, bl, offsets, fill),
+        || split_fill(mid..range.end, er, br, offsets, fill),
+    );
 }
 
 /// [`assemble`], taking the densities and arc-node parameters of pieces an earlier build
