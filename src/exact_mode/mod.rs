@@ -1077,8 +1077,7 @@ pub(crate) fn skeleton_layout_serial(
         layout.edges.push(piece_medial_edge(p));
         let mut walls = [0; 2];
         for side in 0..2 {
-            for end in 0..2 {
-                let t = tv[side][end];
+            for (end, &t) in tv[side].iter().enumerate() {
                 if spoke[t as usize] == NO_EDGE {
                     spoke[t as usize] = layout.edges.len() as u32;
                     layout.edges.push(spoke_edge(p.ends[end], t));
@@ -1179,9 +1178,9 @@ pub(crate) fn skeleton_layout_par(
                 };
                 put(piece_medial_edge(p));
                 for side in 0..2 {
-                    for end in 0..2 {
+                    for (end, &t) in tv[side].iter().enumerate() {
                         if b >> (2 * side + end) & 1 == 1 {
-                            put(spoke_edge(p.ends[end], tv[side][end]));
+                            put(spoke_edge(p.ends[end], t));
                         }
                     }
                     put(piece_wall_edge(p, side, tv));
