@@ -1009,8 +1009,8 @@ fn piece_blocks(
     ]
 }
 
-/// Piece `p`'s medial edge (an empty polyline until the grids give its nodes) and wall edge
-/// on `side` (in the block's side-0 direction), from its tangent vertices `tv`.
+/// Piece `p`'s medial edge: an empty polyline until the grids give its nodes (nothing reads
+/// it before).
 fn piece_medial_edge(p: &Piece) -> Edge {
     let [v0, v1] = p.ends;
     Edge {
