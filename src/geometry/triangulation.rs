@@ -130,17 +130,42 @@ impl Changes {
     }
 }
 
-/// Smallest and largest non-zero coordinate magnitude (`(inf, 0)` when every coordinate is 0).
+/// Smallest and largest non-zero coordinate magnitude (`(inf, 0)` when every coordinate is 0;
+/// NaN coordinates are ignored).
+///
+/// On the bits of `|c|`, which order as the magnitudes do (NaNs above the infinity), so that
+/// the two reductions vectorise, and on the pool for large sets (issue 8: the chain of float
+/// `min`/`max` took 15 ms on one thread for the 2.5 M samples of 1e5 particles).
 fn magnitude_range(points: &[Point]) -> (f64, f64) {
-    let mut lo = f64::INFINITY;
-    let mut hi = 0.0f64;
+    use rayon::prelude::*;
+    const PER_TASK: usize = 1 << 16;
+    let (lo, hi) = if points.len() >= 4 * PER_TASK {
+        points
+            .par_chunks(PER_TASK)
+            .map(magnitude_keys)
+            .reduce(|| (u64::MAX, 0), |a, b| (a.0.min(b.0), a.1.max(b.1)))
+    } else {
+        magnitude_keys(points)
+    };
+    let lo = if lo == u64::MAX {
+        f64::INFINITY
+    } else {
+        f64::from_bits(lo)
+    };
+    (lo, f64::from_bits(hi))
+}
+
+/// [`magnitude_range`] of `points` as the bits of the magnitudes (`u64::MAX` and 0 when none).
+fn magnitude_keys(points: &[Point]) -> (u64, u64) {
+    const SIGN: u64 = 1 << 63;
+    const INF: u64 = 0x7ff0_0000_0000_0000;
+    let (mut lo, mut hi) = (u64::MAX, 0u64);
     for p in points {
         for &c in p {
-            let a = c.abs();
-            if a != 0.0 {
-                lo = lo.min(a);
-                hi = hi.max(a);
-            }
+            let b = c.to_bits() & !SIGN;
+            let counted = b != 0 && b <= INF;
+            lo = lo.min(if counted { b } else { u64::MAX });
+            hi = hi.max(if counted { b } else { 0 });
         }
     }
     (lo, hi)
@@ -911,4 +936,70 @@ fn count_distinct(points: &[Point]) -> usize {
     v.sort_unstable_by(super::predicates::lex_cmp);
     v.dedup();
     v.len()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::{magnitude_range, Point};
+
+    /// The float loop [`magnitude_range`] replaced.
+    fn reference(points: &[Point]) -> (f64, f64) {
+        let mut lo = f64::INFINITY;
+        let mut hi = 0.0f64;
+        for p in points {
+            for &c in p {
+                let a = c.abs();
+                if a != 0.0 {
+                    lo = lo.min(a);
+                    hi = hi.max(a);
+                }
+            }
+        }
+        (lo, hi)
+    }
+
+    /// Bit for bit the float loop's answer: zeros of both signs, subnormals, infinities and
+    /// NaNs among ordinary values, on sets below and above the parallel size.
+    #[test]
+    fn magnitude_range_is_the_float_loop() {
+        let mut r = crate::layouts::SplitMix64(17);
+        let specials = [
+            0.0,
+            -0.0,
+            5e-324,
+            -5e-324,
+            2.2e-308,
+            f64::MAX,
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+            f64::NAN,
+            -f64::NAN,
+            1.0,
+        ];
+        for n in [0usize, 1, 2, 7, 100, 300_000] {
+            for mix in 0..6 {
+                let pts: Vec<Point> = (0..n)
+                    .map(|_| {
+                        [0, 1].map(|_| {
+                            let u = r.next_f64();
+                            if mix > 0 && u < 0.02 * mix as f64 {
+                                specials[(r.next_f64() * specials.len() as f64) as usize]
+                            } else if mix == 5 {
+                                0.0
+                            } else {
+                                (r.next_f64() - 0.5) * (r.next_f64() * 80.0 - 40.0).exp2()
+                            }
+                        })
+                    })
+                    .collect();
+                let (lo, hi) = magnitude_range(&pts);
+                let (wl, wh) = reference(&pts);
+                assert_eq!(
+                    (lo.to_bits(), hi.to_bits()),
+                    (wl.to_bits(), wh.to_bits()),
+                    "n = {n}, mix = {mix}"
+                );
+            }
+        }
+    }
 }
