@@ -70,7 +70,7 @@ use counts::{ArcTarget, CountProblem, Counts, Known};
 use equidistribution::arc_params_into;
 #[cfg(test)]
 use equidistribution::{equidistribute, equidistribute_into};
-use piece_cache::{GeomKey, GridKey, Params, Payload};
+use piece_cache::{GeomKey, GridKey, Params};
 use rayon::prelude::*;
 use std::f64::consts::{PI, TAU};
 
@@ -1728,12 +1728,15 @@ pub fn assemble_cached(
                 GridKey::of(counts.arc[e], sides, options.smooth, rho[e])
             })
             .collect();
-        let reuse: Vec<Option<Payload>> = cache.take_grids(&found, &grid_keys);
+        let reuse = match cache.take_grids(&found, &grid_keys) {
+            Some(taken) => rayon::iter::Either::Left(taken.into_par_iter()),
+            None => rayon::iter::Either::Right(rayon::iter::repeat_n(None, pieces.len())),
+        };
         drop(found);
         let per_piece: Vec<PieceGrids> = pieces
             .par_iter()
             .zip(arc_targets.into_par_iter())
-            .zip(reuse.into_par_iter())
+            .zip(reuse)
             .zip(first_params.into_par_iter())
             .enumerate()
             .with_max_len(crate::tasks::PIECES)

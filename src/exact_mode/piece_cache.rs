@@ -259,11 +259,13 @@ impl PieceCache {
     /// memo (each piece's at most once, to the first new piece that asks); then the memo is
     /// emptied until [`PieceCache::replace`]. Only the grids of a piece whose grid inputs are
     /// unchanged are taken, and only when the mesh handed back has them (counts as recorded).
+    /// `None` when no mesh was handed back (nothing to take): no list of `None`s, which at
+    /// 1e5 particles was 30 MB of fresh pages written on one thread (issue 8).
     pub(crate) fn take_grids(
         &mut self,
         found: &[Option<u32>],
         grid_keys: &[GridKey],
-    ) -> Vec<Option<Payload>> {
+    ) -> Option<Vec<Option<Payload>>> {
         let kept = self.kept.take();
         let old_keys = std::mem::take(&mut self.grid_keys);
         let n = self.keys.len();
@@ -273,11 +275,9 @@ impl PieceCache {
         self.known = Vec::new();
         self.index = OnceLock::new();
         self.reused_grids = 0;
-        let Some(mut kept) = kept else {
-            return vec![None; found.len()];
-        };
+        let mut kept = kept?;
         if kept.grids.len() < 2 * n || kept.nodes.len() != n || old_keys.len() != n {
-            return vec![None; found.len()];
+            return None;
         }
         let mut taken = vec![false; n];
         let empty = || BlockGrid {
@@ -314,7 +314,7 @@ impl PieceCache {
         // for the new list, it would be held while the grids are made, the peak).
         drop(kept);
         self.reused_grids = out.iter().filter(|x| x.is_some()).count();
-        out
+        Some(out)
     }
 
     /// Replace the entries by those of the build that just finished (pieces `keys` with what
