@@ -531,11 +531,9 @@ fn first_clash(
 mod tests {
     use super::*;
 
-    /// Medial grids whose counts disagree within a class (here: one medial block given one
-    /// cell more along its wall, whose class its partner blocks share) are refused with the
-    /// first disagreeing side in block order, whichever thread met a side first.
-    #[test]
-    fn template_grids_refuse_classes_that_disagree() {
+    /// Two tiny holes far inside the bounding circle: refinement inserts holes around them,
+    /// so the mesh has template blocks.
+    fn tiny_holes_mesh() -> crate::mesh::Mesh {
         let d = crate::Domain::from_json_str(
             r#"{"bounding":{"center":[0,0],"radius":10},"holes":[{"center":[0,0],"radius":0.003},{"center":[0.009,0],"radius":0.0018}]}"#,
         )
@@ -544,7 +542,15 @@ mod tests {
             block_cells: Some(3),
             ..crate::Options::default()
         };
-        let m = crate::mesh(&d, &opts).unwrap();
+        crate::mesh(&d, &opts).unwrap()
+    }
+
+    /// Medial grids whose counts disagree within a class (here: one medial block given one
+    /// cell more along its wall, whose class its partner blocks share) are refused with the
+    /// first disagreeing side in block order, whichever thread met a side first.
+    #[test]
+    fn template_grids_refuse_classes_that_disagree() {
+        let m = tiny_holes_mesh();
         let first = m.grids.len() - m.template_blocks;
         let classes = crate::grid::edge_classes(&m.layout);
         assert!(template_grids(&m.layout, &classes, &m.grids, first, 1.0).is_ok());
@@ -587,15 +593,7 @@ mod tests {
     /// node limit of exact mode relies on it).
     #[test]
     fn template_nodes_predicts_the_template_grids() {
-        let d = crate::Domain::from_json_str(
-            r#"{"bounding":{"center":[0,0],"radius":10},"holes":[{"center":[0,0],"radius":0.003},{"center":[0.009,0],"radius":0.0018}]}"#,
-        )
-        .unwrap();
-        let opts = crate::Options {
-            block_cells: Some(3),
-            ..crate::Options::default()
-        };
-        let m = crate::mesh(&d, &opts).unwrap();
+        let m = tiny_holes_mesh();
         assert!(m.template_blocks > 0);
         let first = m.grids.len() - m.template_blocks;
         let classes = crate::grid::edge_classes(&m.layout);
