@@ -1162,6 +1162,9 @@ pub(crate) fn skeleton_layout_par(
     };
     let np = pieces.len();
     let edge_count = (next - base) as usize;
+    // Room reserved by `skeleton_vertices` already (a no-op then), made certain here.
+    layout.edges.reserve(edge_count);
+    layout.blocks.reserve(2 * np);
     {
         let edges = &mut layout.edges.spare_capacity_mut()[..edge_count];
         let blocks = &mut layout.blocks.spare_capacity_mut()[..2 * np];
