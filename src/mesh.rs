@@ -6,8 +6,9 @@ use crate::geometry::Point;
 use crate::layout::BlockLayout;
 
 /// The structured grid of one block: `(ni + 1) x (nj + 1)` nodes, node `(i, j)` at
-/// `nodes[i + j * (ni + 1)]`. Side conventions are those of [`crate::layout`].
-#[derive(Debug, Clone, PartialEq)]
+/// `nodes[i + j * (ni + 1)]`. Side conventions are those of [`crate::layout`]. The default
+/// is the empty grid (no cell, no node).
+#[derive(Debug, Clone, PartialEq, Default)]
 pub struct BlockGrid {
     pub ni: usize,
     pub nj: usize,

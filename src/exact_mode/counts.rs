@@ -48,7 +48,7 @@ pub struct ArcTarget {
 
 /// Results of [`ArcTarget::min_cells`] and of [`ArcTarget::target`] for one `nbar`, computed
 /// from an arc's densities and kept instead of them (bitwise the values they give).
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct Known {
     pub min_cells: usize,
     /// `(nbar, target(nbar))`, if known.

@@ -691,20 +691,7 @@ impl Deviation {
 pub fn deviation(
     cb: &crate::blocking::CollapsedBlocking,
 ) -> Result<Deviation, crate::mesher::MeshError> {
-    let single = super::exact_vertices_with(
-        &cb.refined.domain,
-        &cb.refined.sampled.medial,
-        &cb.refined.circles,
-    )?;
-    let vertices = super::collapsed::cluster_vertices_on(cb, &single)?;
-    let sk = super::Skeleton {
-        domain: &cb.refined.domain,
-        arcs: &cb.contracted.graph.arcs,
-        vertices,
-        sampled: &cb.layout,
-        fluid: Vec::new(),
-    };
-    let (pieces, _) = super::pieces_of(&sk)?;
+    let (_, pieces) = super::build_pieces(cb)?;
     let mut out = Deviation::default();
     for p in &pieces {
         out.add(&p.geom);

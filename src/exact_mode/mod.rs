@@ -1211,12 +1211,12 @@ pub(crate) fn skeleton_layout_par(
     (layout, medial_edges)
 }
 
-/// The layout skeleton of the exact build of `cb` (its pieces as
-/// [`densities::deviation`] makes them), built by [`skeleton_layout_serial`] and by
-/// [`skeleton_layout_par`] on the current pool: true when the two are equal, layout and
-/// medial edges (test hook).
-#[doc(hidden)]
-pub fn skeletons_agree(cb: &crate::blocking::CollapsedBlocking) -> Result<bool, MeshError> {
+/// The exact vertices and pieces of the exact build of `cb`, as
+/// [`collapsed::build_collapsed`] makes them (no inserted hole prepared): what the test hooks
+/// [`densities::deviation`] and [`skeletons_agree`] look at.
+fn build_pieces(
+    cb: &crate::blocking::CollapsedBlocking,
+) -> Result<(Vec<ExactVertex>, Vec<Piece>), MeshError> {
     let single = exact_vertices_with(
         &cb.refined.domain,
         &cb.refined.sampled.medial,
@@ -1231,8 +1231,17 @@ pub fn skeletons_agree(cb: &crate::blocking::CollapsedBlocking) -> Result<bool, 
         fluid: Vec::new(),
     };
     let (pieces, _) = pieces_of(&sk)?;
-    let serial = skeleton_layout_serial(BlockLayout::default(), &sk.vertices, &pieces, 3);
-    let par = skeleton_layout_par(BlockLayout::default(), &sk.vertices, &pieces, 3);
+    Ok((sk.vertices, pieces))
+}
+
+/// The layout skeleton of the exact build of `cb` ([`build_pieces`]), built by
+/// [`skeleton_layout_serial`] and by [`skeleton_layout_par`] on the current pool: true when
+/// the two are equal, layout and medial edges (test hook).
+#[doc(hidden)]
+pub fn skeletons_agree(cb: &crate::blocking::CollapsedBlocking) -> Result<bool, MeshError> {
+    let (vertices, pieces) = build_pieces(cb)?;
+    let serial = skeleton_layout_serial(BlockLayout::default(), &vertices, &pieces, 3);
+    let par = skeleton_layout_par(BlockLayout::default(), &vertices, &pieces, 3);
     Ok(serial == par)
 }
 
@@ -1861,19 +1870,7 @@ pub fn assemble_cached(
             .map(|r| match r {
                 Ok((m_nodes, pair, entry, inverted)) => ((m_nodes, pair), (entry, inverted)),
                 // None left (checked above).
-                Err(_) => {
-                    let empty = || BlockGrid {
-                        ni: 0,
-                        nj: 0,
-                        nodes: Vec::new(),
-                    };
-                    let known = Known {
-                        min_cells: 0,
-                        target: None,
-                        ends: None,
-                    };
-                    ((Vec::new(), [empty(), empty()]), (known, None))
-                }
+                Err(_) => Default::default(),
             }),
     );
     let ((medial_nodes, pairs), (entries, checked)) = moved;

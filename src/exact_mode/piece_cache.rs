@@ -158,11 +158,12 @@ pub struct PieceCache {
     reference: bool,
 }
 
+/// [`PieceCache`]'s index: the [`hash_of`] of a geometry key -> a piece.
+type Index = HashMap<u64, u32, BuildHasherDefault<PassThrough>>;
+
 /// A hash of a geometry key's words (multiply-rotate per word, then a final mix; issue 8: SipHash
 /// of 25 words per piece and build was measurable). Not keyed: the memo is private to one run,
 /// and a collision only costs a recomputation (see `PieceCache::index`).
-type Index = HashMap<u64, u32, BuildHasherDefault<PassThrough>>;
-
 fn hash_of(key: &GeomKey) -> u64 {
     const K: u64 = 0x9e37_79b9_7f4a_7c15;
     let mut h: u64 = 0;
@@ -280,11 +281,6 @@ impl PieceCache {
             return None;
         }
         let mut taken = vec![false; n];
-        let empty = || BlockGrid {
-            ni: 0,
-            nj: 0,
-            nodes: Vec::new(),
-        };
         let out: Vec<Option<Payload>> = found
             .iter()
             .zip(grid_keys)
@@ -303,8 +299,8 @@ impl PieceCache {
                 }
                 let nodes = std::mem::take(&mut kept.nodes[i]);
                 let pair = [
-                    std::mem::replace(&mut kept.grids[2 * i], empty()),
-                    std::mem::replace(&mut kept.grids[2 * i + 1], empty()),
+                    std::mem::take(&mut kept.grids[2 * i]),
+                    std::mem::take(&mut kept.grids[2 * i + 1]),
                 ];
                 let bad = [kept.inverted[2 * i], kept.inverted[2 * i + 1]];
                 Some((nodes, pair, bad))
