@@ -6,7 +6,7 @@
 //!   here, on thousands of random near-tangent cases;
 //! - filter soundness: whenever the float filter decides, it agrees with the exact path.
 
-mod common;
+use crate::common;
 
 use medial_blocks::apollonius::{
     apollonius, apollonius_roots, cocircular, is_tangent, same_circle, tangency, tangency_exact,

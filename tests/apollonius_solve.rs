@@ -1,7 +1,7 @@
 //! The Apollonius solve: residuals in f64, exact residuals in Q(sqrt D) evaluated with formulas
 //! written here (not the library's arithmetic), root selection, and degenerate inputs.
 
-mod common;
+use crate::common;
 
 use medial_blocks::apollonius::{
     apollonius, apollonius_roots, Apollonius, ApolloniusError, Choice, ExactApollonius, QSqrt,

@@ -1,7 +1,7 @@
 //! Back end oracles: templates + grids checked by code that does not trust the crate
 //! (conformity, validity, wall placement recomputed here), TFI exactness, angle measurement.
 
-mod common;
+use crate::common;
 
 use medial_blocks::domain::Circle;
 use medial_blocks::geometry::Point;

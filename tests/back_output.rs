@@ -1,7 +1,7 @@
 //! Back end end-to-end: template -> build_grids -> quality -> writers, read back by small
 //! independent parsers; determinism of every file.
 
-mod common;
+use crate::common;
 
 use common::tree;
 use medial_blocks::domain::Circle;

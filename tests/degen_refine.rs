@@ -2,7 +2,7 @@
 //! counting identities with collapse and insertion, positive block areas, conformity found from
 //! node coordinates, the minimum gap never decreasing (paper Lemma 2), the iteration bound.
 
-mod common;
+use crate::common;
 
 use medial_blocks::blocking::{block_area, build_mesh_layout};
 use medial_blocks::domain::{Circle, Domain};
@@ -248,7 +248,7 @@ fn regression_zero_sweep_arc_on_inserted_hole() {
 }
 
 /// The random-layout property on many more layouts, with every wall arc of positive sweep
-/// checked too; `DEGEN_CASES=2000 cargo test --release --test degen_refine many_` (runs 16
+/// checked too; `DEGEN_CASES=2000 cargo test --release --test suite degen_refine::many_` (runs 16
 /// layouts by default). Layouts come from a fixed seed sequence, so a failure names its seed.
 #[test]
 fn many_random_layouts_have_no_zero_area_block() {

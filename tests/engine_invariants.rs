@@ -4,7 +4,7 @@
 use medial_blocks::geometry::verify::verify_exact;
 use medial_blocks::geometry::{Point, Triangulation, TriangulationError};
 
-mod common;
+use crate::common;
 use common::XorShift as Rng;
 
 /// Deterministic xorshift generator.

@@ -7,7 +7,7 @@ use medial_blocks::geometry::Point;
 use rug::{Integer, Rational};
 use std::cmp::Ordering;
 
-mod common;
+use crate::common;
 use common::XorShift as Rng;
 
 fn q(x: f64) -> Rational {

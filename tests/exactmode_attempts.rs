@@ -5,7 +5,7 @@
 //! nodes (cross products at the four corners of every cell), triangulation counts from
 //! [`timings::Recording`], and collapse sets compared by plain set arithmetic.
 
-mod common;
+use crate::common;
 
 use medial_blocks::blocking::{arc_key, collapsed_blocking_excluding, collapsed_blocking_with};
 use medial_blocks::domain::CircleId;

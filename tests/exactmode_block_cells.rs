@@ -9,7 +9,7 @@
 //! circle's wall to the gap and left one cell sweeping 188 degrees: exact mode saw it
 //! inverted, fell back to paper geometry, and the mesh had 176 inverted cells.
 
-mod common;
+use crate::common;
 
 use medial_blocks::domain::{Circle, Domain};
 use medial_blocks::layouts::SplitMix64;
@@ -117,7 +117,7 @@ fn holes_by_the_bounding_circle_keep_exact_geometry_at_every_block_count() {
 
 /// Random layouts for [`no_wall_cell_sweeps_more_than_15_degrees_near_narrow_gaps`]: 24, or
 /// `BLOCK_CELLS_CASES` (a long run: `BLOCK_CELLS_CASES=2000 cargo test --release --test
-/// exactmode_block_cells`).
+/// suite exactmode_block_cells::`).
 fn cases() -> u64 {
     std::env::var("BLOCK_CELLS_CASES")
         .ok()

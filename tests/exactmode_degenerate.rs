@@ -7,7 +7,7 @@
 //! coordinates ([`check_mesh_with`]), wall orthogonality measured on the grids, inserted holes
 //! checked to be fully covered by template nodes that are bitwise the outer blocks' nodes.
 
-mod common;
+use crate::common;
 
 use medial_blocks::domain::{Circle, Domain};
 use medial_blocks::exact_mode::metrics::max_wall_orthogonality_deviation_deg;

@@ -20,7 +20,7 @@ use medial_blocks::layout::EdgeKind;
 use medial_blocks::layouts::bubbles;
 use medial_blocks::{mesh, Options};
 
-mod common;
+use crate::common;
 
 /// Over the medial sides of `m`: the largest ratio of the two blocks' spoke counts, the faces,
 /// those with a height ratio over 1.5, and the largest height ratio.

@@ -5,7 +5,7 @@
 //! positive cross product at every cell corner. Also: clustering gives the requested first
 //! cell height; smoothing never lowers the smallest scaled Jacobian and keeps all of the above.
 
-mod common;
+use crate::common;
 
 use medial_blocks::domain::{Circle, Domain};
 use medial_blocks::exact_mode::annulus::ANNULUS_ARCS;

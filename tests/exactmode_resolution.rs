@@ -15,7 +15,7 @@
 //!
 //! Every figure is recomputed here from the node coordinates.
 
-mod common;
+use crate::common;
 
 use medial_blocks::layouts::bubbles;
 use medial_blocks::mesh::Geometry;

@@ -15,7 +15,7 @@
 //! collapse, named by their circles (which survive resampling); in periodic boxes, as many
 //! arcs and blocks.
 
-mod common;
+use crate::common;
 
 use medial_blocks::blocking::arc_key;
 use medial_blocks::cocircular::cocircular_groups;

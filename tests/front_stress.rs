@@ -1,6 +1,6 @@
 //! Larger random layouts (hundreds to thousands of holes, tiny gaps, offset and tiny
 //! coordinates): counts must hold and nothing may fail. Slow-ish, so ignored by default:
-//! `cargo test --release --test front_stress -- --ignored --nocapture`.
+//! `cargo test --release --test suite -- --ignored --nocapture front_stress::`.
 
 use medial_blocks::blocking::build_layout;
 use medial_blocks::domain::{Circle, Domain};
@@ -78,7 +78,7 @@ fn stress() {
 }
 
 /// Sample count and time of the sampling + triangulation on `layouts::bubbles(n, 1)`, for the
-/// record (issue 8): `cargo test --release --test front_stress -- --ignored bubbles --nocapture`.
+/// record (issue 8): `cargo test --release --test suite -- --ignored front_stress::bubbles --nocapture`.
 /// Asserts only what must hold: every hard invariant, counts of 6(h - 1) blocks' medial graph.
 #[test]
 #[ignore]

@@ -104,7 +104,7 @@ fn near_touching_bounding_circle_is_meshed() {
 
 /// A cheap stable-toolchain exploration of the `mesh` target (random bytes through the same
 /// decode + mesh + check), for machines without nightly or when libFuzzer with a sanitizer is
-/// too slow: `MESH_FUZZ_SECONDS=60 cargo test --test fuzz_replay_mesh -- --ignored`. A failing
+/// too slow: `MESH_FUZZ_SECONDS=60 cargo test --test suite -- --ignored fuzz_replay_mesh::`. A failing
 /// input is printed as hex: save it under `fuzz/corpus/mesh/` as a regression.
 #[test]
 #[ignore = "exploration, run on demand with MESH_FUZZ_SECONDS"]

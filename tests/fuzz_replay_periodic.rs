@@ -72,7 +72,7 @@ fn generators_cover_edge_crossing_holes() {
 }
 
 /// Random bytes through the `mesh_periodic` target on stable:
-/// `MESH_FUZZ_SECONDS=60 cargo test --test fuzz_replay_periodic -- --ignored`. A failing input
+/// `MESH_FUZZ_SECONDS=60 cargo test --test suite -- --ignored fuzz_replay_periodic::`. A failing input
 /// is printed as hex: save it under `fuzz/corpus/mesh_periodic/` as a regression.
 #[test]
 #[ignore = "exploration, run on demand with MESH_FUZZ_SECONDS"]

@@ -7,7 +7,7 @@
 //! gives the same triangulation, leaves the original unchanged where it gives up, gives it back
 //! by `Changes::undo`, and its changes give the same `Kept` as comparing both triangulations.
 
-mod common;
+use crate::common;
 
 use medial_blocks::geometry::verify::verify_exact;
 use medial_blocks::geometry::{Point, Triangulation};

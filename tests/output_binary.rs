@@ -9,7 +9,7 @@
 //! from PyPI, read the ASCII and binary files of the hexagon, lattice, 300 bubbles and a
 //! periodic layout into identical arrays; issue 8's twelfth-session note.)
 
-mod common;
+use crate::common;
 
 use medial_blocks::domain::Circle;
 use medial_blocks::layouts;

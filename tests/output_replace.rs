@@ -3,7 +3,7 @@
 //! what is not a regular file is treated as `rename` treats it; a second run of
 //! `write_files` into the same directory gives the same files and leaves nothing behind.
 
-mod common;
+use crate::common;
 
 use medial_blocks::output::{replace_file, write_atomic, write_files, Format};
 use std::path::Path;

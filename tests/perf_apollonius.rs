@@ -7,7 +7,7 @@
 //! tangent points (another formula) and orientation sums equal those of the plain `ZSqrt` formulas, and the rational oracle's
 //! tangent points come from that plain formula.
 
-mod common;
+use crate::common;
 
 use medial_blocks::apollonius::exact::ZSqrt;
 use medial_blocks::apollonius::{

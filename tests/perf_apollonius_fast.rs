@@ -7,7 +7,7 @@
 //! at the edges of the fast path's range, and a proptest over exponent spreads. The fast path
 //! must also answer nearly all typical calls (it is not dead code).
 
-mod common;
+use crate::common;
 
 use medial_blocks::apollonius::{
     apollonius, apollonius_exact, apollonius_fast, same_circle, tangency, Apollonius, Choice, Site,

@@ -9,7 +9,7 @@
 //!   from scratch, after chains of rebuilds giving up many short collapses and forcing arcs,
 //!   and the counting identity of the collapse.
 
-mod common;
+use crate::common;
 
 use medial_blocks::blocking::{collapsed_blocking_with, CollapsedBlocking};
 use medial_blocks::cocircular::vertex_circles;

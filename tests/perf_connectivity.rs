@@ -14,7 +14,7 @@
 //!   `connectivity` do (which the checks above hold to the layout and the nodes), and `None`
 //!   out of range.
 
-mod common;
+use crate::common;
 
 use medial_blocks::connectivity::{connectivity, Connectivity, ConnectivityError, SideKind};
 use medial_blocks::layout::EdgeKind;

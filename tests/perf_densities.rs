@@ -7,7 +7,7 @@
 //! (`Deviation::batched_bits`): equal bit for bit, in every compiled build the CPU can run
 //! (baseline, AVX2, AVX-512) as well as the one chosen at run time.
 
-mod common;
+use crate::common;
 
 use medial_blocks::blocking::collapsed_blocking_excluding;
 use medial_blocks::exact_mode::densities::{deviation, deviation_of_arc, Deviation};

@@ -7,10 +7,10 @@
 //!   per-block sums (the documented reduction order);
 //! - the whole pipeline gives identical meshes and files on 1 and 2 threads.
 //!
-//! `PERF_TIMINGS=1 cargo test --release --test perf_equivalence -- --nocapture timings` prints
+//! `PERF_TIMINGS=1 cargo test --release --test suite -- --nocapture perf_equivalence::timings` prints
 //! the triangulation of the pipeline's sample points against spade (no assertion on time).
 
-mod common;
+use crate::common;
 
 use medial_blocks::geometry::Point;
 use medial_blocks::layout::BlockLayout;

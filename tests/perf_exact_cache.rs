@@ -4,7 +4,7 @@
 //! memo every time), and does reuse work; the inverted blocks a build finds as it makes (or
 //! takes) its grids are those of a pass over the finished grids.
 
-mod common;
+use crate::common;
 
 use medial_blocks::blocking::{collapsed_blocking_excluding, CollapsedBlocking};
 use medial_blocks::exact_mode::collapsed::{build_collapsed_cached, build_collapsed_on};

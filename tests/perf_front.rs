@@ -12,7 +12,7 @@
 //! - the extended triangulation (new samples inserted into the previous round's): the triangle
 //!   set of a fresh one, and refined meshes that use it pass `check_mesh`.
 
-mod common;
+use crate::common;
 
 use medial_blocks::blocking::{block_area, blocks, collapsed_blocking_with};
 use medial_blocks::cocircular::{vertex_circles, vertex_circles_reusing, vertex_circles_taking};

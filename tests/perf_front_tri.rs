@@ -11,7 +11,7 @@
 use medial_blocks::geometry::verify::verify_exact;
 use medial_blocks::geometry::{Point, Triangulation};
 
-mod common;
+use crate::common;
 use common::structure_hash;
 use common::XorShift as Rng;
 

@@ -7,7 +7,7 @@
 use medial_blocks::grid::edge_classes;
 use medial_blocks::layout::{Block, BlockLayout, Curve, Edge, EdgeKind, SideRef, Translation};
 
-mod common;
+use crate::common;
 use common::XorShift;
 
 fn reference(layout: &BlockLayout) -> (Vec<usize>, usize) {

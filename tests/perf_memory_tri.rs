@@ -9,7 +9,7 @@
 
 use medial_blocks::geometry::{Point, Triangulation};
 
-mod common;
+use crate::common;
 use common::XorShift;
 
 /// Every public fact of `dt` checked against `points` alone: the points bit for bit, each

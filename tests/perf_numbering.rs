@@ -6,7 +6,7 @@
 //! same point, and the node count is the counting identity
 //! `V + sum over used edges (n_e - 1) + sum over blocks (ni - 1)(nj - 1)`.
 
-mod common;
+use crate::common;
 
 use medial_blocks::geometry::Point;
 use medial_blocks::layout::BlockLayout;

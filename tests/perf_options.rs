@@ -5,7 +5,7 @@
 //! from node coordinates alone, byte comparison of whole output directories, and an O(n^2)
 //! re-check of the bubble generator.
 
-mod common;
+use crate::common;
 
 use common::{run as cli, tree};
 use medial_blocks::grid::{GridError, MAX_CELLS_PER_SIDE};

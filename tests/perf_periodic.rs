@@ -2,7 +2,7 @@
 //! with oracles that do not trust it: cell orientation recomputed from the nodes
 //! (`common::count_inverted_cells`), stage call counts from [`timings::Recording`].
 
-mod common;
+use crate::common;
 
 use medial_blocks::domain::AnyDomain;
 use medial_blocks::mesh::Geometry;

@@ -4,8 +4,8 @@
 //! one-thread and a three-thread pool of the caller's own. `mesh_timed` from a plain thread
 //! still records the stages that ran on the worker.
 
+use crate::common;
 use medial_blocks::mesher::mesh_timed;
-mod common;
 
 use medial_blocks::output::report::Report;
 use medial_blocks::periodic::{mesh_periodic, PeriodicDomain};

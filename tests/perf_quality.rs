@@ -3,7 +3,7 @@
 //! grids with degenerate, inverted, tiny, huge and non-finite cells; and the same report for 1
 //! and 2 threads.
 
-mod common;
+use crate::common;
 
 use medial_blocks::geometry::Point;
 use medial_blocks::layout::BlockLayout;

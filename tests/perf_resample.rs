@@ -7,7 +7,7 @@
 //! check empty exactly when the full one is, the same medial graph (vertices, arcs, numbering,
 //! bit for bit); and the reuse happens (most circles taken over, most arcs kept).
 
-mod common;
+use crate::common;
 
 use medial_blocks::domain::{Circle, Domain};
 use medial_blocks::layouts::SplitMix64;

@@ -10,7 +10,7 @@
 //!
 //! `MEDIAL_BLOCKS_LONG=1` adds larger layouts and more seeds.
 
-mod common;
+use crate::common;
 
 use medial_blocks::domain::{Circle, Domain, HoleIndex};
 use medial_blocks::layouts::{self, SplitMix64};

@@ -11,7 +11,7 @@ use medial_blocks::geometry::{Point, Triangulation};
 use medial_blocks::layouts;
 use medial_blocks::sampling::{sample_and_triangulate, SamplingOptions};
 
-mod common;
+use crate::common;
 use common::structure_hash;
 
 fn samples(holes: usize, seed: u64) -> Vec<Point> {

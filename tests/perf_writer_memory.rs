@@ -11,7 +11,7 @@
 //! the peak of one process is the same from run to run up to allocator noise far below the
 //! bounds.
 
-mod common;
+use crate::common;
 
 use medial_blocks::output::{png, svg};
 use medial_blocks::{layouts, mesh, Options};

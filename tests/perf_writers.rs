@@ -9,7 +9,7 @@
 //!   `write_files_prepared` with the shared connectivity writes the same files as
 //!   `write_files`.
 
-mod common;
+use crate::common;
 
 use medial_blocks::connectivity::{
     connectivity, BlockConnectivity, Cgns1to1, Connectivity, Partner, SideConnectivity, SideKind,

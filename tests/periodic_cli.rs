@@ -1,6 +1,6 @@
 //! `medial-blocks mesh` on periodic input (JSON with "periodic", or CSV with --periodic).
 
-mod common;
+use crate::common;
 use common::{assert_spans_add_up, assert_stages_add_up, bin};
 
 #[test]

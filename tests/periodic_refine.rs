@@ -14,7 +14,7 @@
 //!   least the smallest gap of the input (Lemma 2), lies in the box and misses its own images;
 //! - the smallest cell angle, measured here, improves on the unrefined mesh of the same layout.
 
-mod common;
+use crate::common;
 
 use medial_blocks::fuzzing::{check_periodic_mesh, Checks};
 use medial_blocks::periodic::{mesh_periodic, PeriodicDomain};

@@ -5,7 +5,7 @@
 //! near-touching circles (gaps `1e-6..1e-3 R`) next to larger ones, skinny triangles between
 //! circles of very different sizes, and tiny holes (`1e-4 R`) next to near-touching pairs;
 //! sometimes moved far from the origin. Seeds are fixed, so a failure names its case;
-//! `INSERTED_CASES=2000 cargo test --release --test reliability_inserted` runs more.
+//! `INSERTED_CASES=2000 cargo test --release --test suite reliability_inserted::` runs more.
 
 use medial_blocks::domain::{Circle, Domain};
 use medial_blocks::layouts::SplitMix64;

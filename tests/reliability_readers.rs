@@ -3,7 +3,7 @@
 //! byte-identical files. (Before serde_json's `float_roundtrip` the JSON reader could be an
 //! ulp off the CSV reader, which is Rust's correctly rounded `f64::from_str`.)
 
-mod common;
+use crate::common;
 
 use common::tree;
 use medial_blocks::input::{parse_holes_csv, parse_triple};

@@ -1,6 +1,6 @@
 //! `mesh-sequence`: frames in parallel, per-frame errors, pvd, summary, determinism.
 
-mod common;
+use crate::common;
 
 use common::{bin, tree};
 use medial_blocks::sequence::{mesh_frame, parse_frames};

@@ -1,7 +1,7 @@
 //! Sequences keep block structure and node counts over runs of equal combinatorics (issue 6).
 //! Node counts are read back from the written connectivity.json (`dims` per block).
 
-mod common;
+use crate::common;
 
 use common::tree;
 use medial_blocks::exact_mode::imposed::ImposedCounts;

@@ -5,7 +5,7 @@
 //! which way it ran: pinned by default where there are several CPUs, not with `--no-pin`,
 //! nor with fewer workers than CPUs.
 
-mod common;
+use crate::common;
 
 use common::{bin, tree};
 use std::path::Path;

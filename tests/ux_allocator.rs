@@ -5,7 +5,7 @@
 //! included), exit codes, messages and standard input; that it is off without the flag and
 //! with a user's own malloc settings; and that `timings.json` says which way it ran.
 
-mod common;
+use crate::common;
 
 use common::{bin, tree};
 use std::path::Path;

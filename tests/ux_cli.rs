@@ -1,7 +1,7 @@
 //! The CLI contract, run on the built binary: file names, `example`, exit codes, thread-count
 //! independence, help texts.
 
-mod common;
+use crate::common;
 
 use common::{run, tree};
 use medial_blocks::Domain;

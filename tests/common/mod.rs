@@ -1,6 +1,7 @@
-//! Helpers shared by the integration tests: `mod common;` at the top of a test file.
+//! Helpers shared by the integration tests: `use crate::common;` at the top of a test file
+//! (the test binary, `tests/suite.rs`, declares the module once).
 //!
-//! Each test file is its own crate and uses only some of these, hence `dead_code` allowed.
+//! Not every helper is used by the tests of every configuration, hence `dead_code` allowed.
 #![allow(dead_code)]
 
 use std::path::Path;
