@@ -271,3 +271,31 @@ mod ux_quality;
 
 #[path = "ux_writers.rs"]
 mod ux_writers;
+
+/// Every `tests/*.rs` file is a module of this binary: with `autotests = false` in Cargo.toml,
+/// a file without its two lines above would never be compiled nor run.
+#[test]
+fn every_test_file_is_a_module_of_the_suite() {
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests");
+    let suite = std::fs::read_to_string(dir.join("suite.rs")).unwrap();
+    let mut missing = Vec::new();
+    for entry in std::fs::read_dir(&dir).unwrap() {
+        let path = entry.unwrap().path();
+        let stem = path
+            .file_stem()
+            .and_then(|s| s.to_str())
+            .unwrap_or_default();
+        if path.extension().is_some_and(|e| e == "rs") && stem != "suite" {
+            let line = format!("#[path = \"{stem}.rs\"]\nmod {stem};\n");
+            if !suite.contains(&line) {
+                missing.push(stem.to_string());
+            }
+        }
+    }
+    missing.sort();
+    assert!(
+        missing.is_empty(),
+        "tests/suite.rs declares no module for tests/{{{}}}.rs",
+        missing.join(",")
+    );
+}
