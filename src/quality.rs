@@ -9,10 +9,13 @@
 //! (so the four angles of a simple counter-clockwise cell sum to 360). A cell is *inverted*
 //! when any corner Jacobian is `<= 0` or not a number.
 //!
-//! The reference formulas are [`cell_corners`] and [`cell_metrics`]: corner angles by
-//! [`angle_deg`] (an `atan2` in degrees written here, within a few ulps of libm's, see
-//! [`atan`]), edge lengths `sqrt(x² + y²)` (`hypot` only where the squares could underflow or
-//! overflow). The per-block pass of [`measure_all`] gives their bits exactly.
+//! The reference formulas are [`cell_corners`] and [`cell_metrics`]: corner angles as the
+//! differences of the directions of the corners' edges, each direction [`angle_deg`] of the
+//! edge vector (an `atan2` in degrees written here, within a few ulps of libm's, see
+//! [`atan`]; one per edge, shared by the two cells on either side), within `4e-13` degrees of
+//! the exact angle, and `angle_deg(cross, dot)` of the corner where that difference is within
+//! `1e-9` degrees of flat; edge lengths `sqrt(x² + y²)` (`hypot` only where the squares could
+//! underflow or overflow). The per-block pass of [`measure_all`] gives their bits exactly.
 
 use crate::connectivity::Connectivity;
 use crate::geometry::Point;
@@ -28,7 +31,7 @@ mod rows;
 
 mod sides;
 
-pub use atan::{angle_deg, angle_deg_nonzero};
+pub use atan::angle_deg;
 
 /// Angles (degrees) and Jacobians of the four corners of one quadrilateral `[p0, p1, p2, p3]`
 /// (see the module doc for the conventions).
@@ -39,10 +42,32 @@ pub struct CellCorners {
 }
 
 /// Measure one quadrilateral's corners.
+///
+/// A corner's angle is the difference of the directions of its two edges (each direction
+/// [`angle_deg`] of the edge vector `to - from`, for the edges `p0 -> p1`, `p1 -> p2`,
+/// `p3 -> p2`, `p0 -> p3`: the quality pass finds each edge's direction once for the two
+/// cells on either side), within `4e-13` degrees of the exact angle. Where that difference is
+/// within `1e-9` degrees of 0, 180 or 360, or on the wrong side of 180 for the sign of the
+/// corner's cross product (and where the product is zero or not finite), the angle is
+/// `angle_deg(cross, dot)` of the corner instead, accurate to a few units in the last place
+/// for nearly flat corners too.
 pub fn cell_corners(p: [Point; 4]) -> CellCorners {
     let (jacobian, dots) = kernel::corner_products(&p);
+    let dir = |from: Point, to: Point| angle_deg(to[1] - from[1], to[0] - from[0]);
+    let candidates = kernel::corner_candidates(
+        dir(p[0], p[1]),
+        dir(p[1], p[2]),
+        dir(p[3], p[2]),
+        dir(p[0], p[3]),
+    );
     CellCorners {
-        angle_deg: [0, 1, 2, 3].map(|k| angle_deg(jacobian[k], dots[k])),
+        angle_deg: [0, 1, 2, 3].map(|k| {
+            if kernel::settled(candidates[k], jacobian[k]) {
+                candidates[k]
+            } else {
+                angle_deg(jacobian[k], dots[k])
+            }
+        }),
         jacobian,
     }
 }

@@ -1,7 +1,9 @@
 //! The fast paths of issue #8 against independent slow references:
 //! - cell quality: the one-pass kernel (`quality::measure`, `quality_metrics`, `cell_fields`,
-//!   `inverted_cells`) against the reference formulas written out here (the corner angle by
-//!   `quality::angle_deg` per corner, tested against libm in `perf_quality_atan`; the edge
+//!   `inverted_cells`) against the reference formulas written out here (the corner angle as
+//!   the difference of its edges' directions, each `quality::angle_deg` of the edge vector,
+//!   tested against libm in `perf_quality_atan` and `perf_quality_corners`, or `angle_deg`
+//!   of the corner's cross and dot products within `1e-9` degrees of flat; the edge
 //!   length `sqrt(x² + y²)`, `hypot` near underflow and overflow), on random quads (degenerate, inverted, tiny, huge and non-finite ones
 //!   included) and on perturbed lattices; every figure bit for bit, the means as sums of
 //!   per-block sums (the documented reduction order);
@@ -25,8 +27,22 @@ use proptest::prelude::*;
 // The reference: the quality formulas, written out cell by cell.
 // ----------------------------------------------------------------------------------------------
 
+/// The corner angles and Jacobians of a cell as `quality::cell_corners` defines them: the
+/// difference of the directions of the corner's two edges (the edges taken `p0 -> p1`,
+/// `p1 -> p2`, `p3 -> p2`, `p0 -> p3`, 180 added or taken off where the corner uses one the
+/// other way), brought into `[0, 360)`; where that is within `1e-9` degrees of 0, 180 or 360,
+/// or on the wrong side of 180 for the sign of the cross product, `angle_deg(cross, dot)`.
 fn ref_corners(p: [Point; 4]) -> ([f64; 4], [f64; 4]) {
-    let mut angle_deg = [0.0; 4];
+    use medial_blocks::quality::angle_deg;
+    let dir = |from: Point, to: Point| angle_deg(to[1] - from[1], to[0] - from[0]);
+    let (b, q, t, a) = (
+        dir(p[0], p[1]),
+        dir(p[1], p[2]),
+        dir(p[3], p[2]),
+        dir(p[0], p[3]),
+    );
+    let turns = [a - b, (b - q) + 180.0, q - t, (t - a) - 180.0];
+    let mut angles = [0.0; 4];
     let mut jacobian = [0.0; 4];
     for k in 0..4 {
         let o = p[k];
@@ -36,10 +52,25 @@ fn ref_corners(p: [Point; 4]) -> ([f64; 4], [f64; 4]) {
         let e2 = [b[0] - o[0], b[1] - o[1]];
         let cross = e1[0] * e2[1] - e1[1] * e2[0];
         let dot = e1[0] * e2[0] + e1[1] * e2[1];
-        angle_deg[k] = medial_blocks::quality::angle_deg(cross, dot);
+        let mut turn = turns[k];
+        while turn < 0.0 {
+            turn += 360.0;
+        }
+        if turn >= 360.0 {
+            turn -= 360.0;
+        }
+        let m = 1e-9;
+        let kept = if cross > 0.0 {
+            turn >= m && turn <= 180.0 - m
+        } else if cross < 0.0 {
+            turn >= 180.0 + m && turn <= 360.0 - m
+        } else {
+            false
+        };
+        angles[k] = if kept { turn } else { angle_deg(cross, dot) };
         jacobian[k] = cross;
     }
-    (angle_deg, jacobian)
+    (angles, jacobian)
 }
 
 fn fold(v: [f64; 4], op: fn(f64, f64) -> f64) -> f64 {

@@ -176,6 +176,9 @@ mod perf_quality;
 #[path = "perf_quality_atan.rs"]
 mod perf_quality_atan;
 
+#[path = "perf_quality_corners.rs"]
+mod perf_quality_corners;
+
 #[path = "perf_resample.rs"]
 mod perf_resample;
 

@@ -76,36 +76,9 @@ pub fn angle_deg(y: f64, x: f64) -> f64 {
     placed(atan_reduced(t).to_degrees(), small, large, y, x)
 }
 
-/// [`angle_deg`] of a corner of the quality pass's fast path: `y` not zero and both
-/// arguments finite, at most `1e300` in magnitude. The same bits: the selects that only
-/// matter outside that range are left out (a zero `y`, the scaling of huge arguments, the
-/// `0 / 0` of `(0, 0)`, a `t` of the diagonals that the division gives as `+0` anyway).
-///
-/// Why the same: with `ay > 0`, `ay == 0.0` adds nothing to `small`; `k` is 1 and multiplying
-/// by 1 is exact; the divisor is positive on every branch (`ax > 0` when `small`, `ay > 0`
-/// else), so `t` is never `0 / 0`, and when `ax == ay` the middle branch divides `+0` by
-/// `2 ay`, the `+0` that [`angle_deg`] sets. `ax == 0.0` stays in `large` (`TAN_PI_8 * ay`
-/// may underflow to 0 for a subnormal `ay`).
-#[inline(always)]
-pub fn angle_deg_nonzero(y: f64, x: f64) -> f64 {
-    let (ax, ay) = (x.abs(), y.abs());
-    let small = ay < TAN_PI_8 * ax;
-    let large = !small & ((ax < TAN_PI_8 * ay) | (ax == 0.0));
-    let (n, d) = if small {
-        (ay, ax)
-    } else if large {
-        (ax, ay)
-    } else {
-        (ay - ax, ay + ax)
-    };
-    let t = n / d;
-    placed(atan_reduced(t).to_degrees(), small, large, y, x)
-}
-
 /// The angle of `(x, y)` from the reduced angle `a` (degrees) of the octant branch taken
 /// (`small`: `|y| < tan(π/8) |x|`, `large`: `|x| < tan(π/8) |y|`, else the diagonal one):
 /// first `c + sa * a` in the first quadrant, then mirrored into the quadrant of `(x, y)`.
-/// Shared by [`angle_deg`] and [`angle_deg_nonzero`], which differ only in the reduction.
 #[inline(always)]
 fn placed(a: f64, small: bool, large: bool, y: f64, x: f64) -> f64 {
     // First quadrant: c + sa * a.
@@ -134,66 +107,7 @@ fn placed(a: f64, small: bool, large: bool, y: f64, x: f64) -> f64 {
 
 #[cfg(test)]
 mod tests {
-    use super::{angle_deg, angle_deg_nonzero};
-
-    /// The fast-path angle gives [`angle_deg`]'s bits on its domain: random and hard inputs
-    /// (axes, diagonals, the reduction thresholds, subnormal, tiny and huge magnitudes up to
-    /// `1e300`, every quadrant).
-    #[test]
-    fn nonzero_angle_equals_angle_deg() {
-        let mut r = crate::layouts::SplitMix64(11);
-        let t = super::TAN_PI_8;
-        let specials = [
-            0.0,
-            -0.0,
-            1.0,
-            -1.0,
-            t,
-            -t,
-            1.0 / t,
-            5e-324,
-            -5e-324,
-            1e-310,
-            2.2e-308,
-            1e300,
-            -1e300,
-            1e-300,
-            0.999_999_999_999_999_9,
-        ];
-        let mut count = 0;
-        let mut check = |y: f64, x: f64| {
-            if y == 0.0 || !(y.abs() <= 1e300 && x.abs() <= 1e300) {
-                return;
-            }
-            let (want, got) = (angle_deg(y, x), angle_deg_nonzero(y, x));
-            assert_eq!(got.to_bits(), want.to_bits(), "({y:e}, {x:e})");
-            count += 1;
-        };
-        for &y in &specials {
-            for &x in &specials {
-                check(y, x);
-                check(y, x * 3.0);
-                check(y * t, x);
-                check(y, y * t);
-                check(y, y);
-                check(y, -y);
-            }
-        }
-        for _ in 0..200_000 {
-            let mag = |r: &mut crate::layouts::SplitMix64| {
-                let e = (r.next_f64() * 1200.0 - 600.0).clamp(-1074.0, 996.0);
-                (2.0 * r.next_f64() - 1.0) * e.exp2()
-            };
-            let (y, x) = (mag(&mut r), mag(&mut r));
-            check(y, x);
-            // Near the reduction thresholds and the diagonals.
-            let near = x * t * (1.0 + (r.next_f64() - 0.5) * 1e-15);
-            check(near, x);
-            check(x, near);
-            check(x * (1.0 + (r.next_f64() - 0.5) * 1e-15), x);
-        }
-        assert!(count > 400_000);
-    }
+    use super::angle_deg;
 
     #[test]
     fn axes_and_diagonals_are_exact() {

@@ -6,9 +6,11 @@
 //! loops:
 //! 1. straight-line arithmetic over arrays (the compiler vectorises it), over every cell of
 //!    the band at once (flat node indices, see [`band`]: the reductions and the loop set-up are
-//!    paid once per band, not per row of 16 cells): the edge vectors and
-//!    lengths (each computed once and shared by the two cells on either side), the corner cross
-//!    and dot products, the four corner angles, the extreme angles and every length figure,
+//!    paid once per band, not per row of 16 cells): the edge vectors, lengths and directions
+//!    (each computed once and shared by the two cells on either side: one `atan2` per edge,
+//!    about two per cell, where the corners' own took four), the corner cross
+//!    products, the four corner angles (differences of edge directions,
+//!    [`super::kernel::corner_candidates`]), the extreme angles and every length figure,
 //!    whether the cell takes this path, the histogram bins (by arithmetic and comparisons with
 //!    the edges, [`super::kernel::angle_bin_unsigned`], [`super::kernel::weighted_bin`]; the
 //!    ratio bins from a table in the 8-lane and portable builds, by comparisons in the 4-lane
@@ -17,13 +19,6 @@
 //!    reductions over the band the acceptance, inverted and cell counts and the band's extremes
 //!    (integer keys); per cell it stores only what loop 2 reads (the two extreme angles and the
 //!    eight bins packed in one word: contiguous stores, where a wider record took scatters);
-//!    In the AVX-512 build loop 1 is two loops over the band (`SPLIT`): 1a the four corner
-//!    angles alone (stored per cell), 1b everything else. One loop of about 600 vector
-//!    instructions per 8 cells left the processor's reorder window too small to overlap the
-//!    long dependency chains of one iteration (two divisions and two polynomials per angle)
-//!    with the next (split: 3-4% less time for the whole pass on an AMD EPYC with AVX-512);
-//!    the corner products are formed again in 1b (the same expressions, the same bits). The
-//!    AVX2 and portable builds keep one loop (split, the AVX2 build ran 2% slower);
 //! 2. per cell, in cell order: the angle sums and the histogram counts (one increment per
 //!    pair of values, into a table per pair, see [`Chunk`]), or the reference path.
 //!
@@ -32,25 +27,29 @@
 //! ([`least_scaled_jacobian`]; a cell whose corner pick is uncertain takes the reference path).
 //!
 //! Why this gives the reference's numbers: every figure is computed with the reference's own
-//! functions ([`angle_deg`](super::angle_deg),
+//! functions ([`angle_deg`](super::angle_deg) of the edge vectors,
+//! [`corner_candidates`](super::kernel::corner_candidates) (a corner whose candidate is not
+//! [`settled`](super::kernel::settled) takes the reference path),
 //! [`length_figures`](super::kernel::length_figures), [`skewness`](super::kernel::skewness),
-//! the `sqrt` length of [`crate::geometry::length`]) on the same operands, except that the
-//! reference forms a corner's two edge vectors as differences `a - o` where this pass may use
+//! the `sqrt` length of [`crate::geometry::length`]) on the same operands (the edge
+//! directions of the same differences of two nodes as the reference's), except that the
+//! reference forms a corner's two edge vectors for its cross product as differences `a - o`
+//! where this pass may use
 //! the negated difference `-(o - a)` of the neighbouring corner: the two are equal except
 //! possibly for the sign of a zero component, so products and sums agree except possibly for
 //! the sign of a zero result. A zero cross product sends the cell to the reference path;
 //! [`angle_deg`](super::angle_deg) does not look at the sign of a zero; lengths only use
 //! squares. Cells with an edge whose squared length is outside `[SQ_MIN, SQ_MAX]` (or not a
 //! number) take the reference path too. On this path no figure is NaN or a zero of either sign
-//! (angles are `M + s a` with `M = 0` only for `s a >= +0`), so folding extremes with `min` /
+//! (settled angles are at least `1e-9`), so folding extremes with `min` /
 //! `max` in any grouping gives the reference's bits; sums are taken in cell order.
 
 use super::kernel::{
-    angle_bin_unsigned, cell_products, corner_products, least_scaled_jacobian, packed_bins,
-    weighted_bin, BlockFigures, Tables, PACK, SQ_MAX, SQ_MIN,
+    angle_bin_unsigned, cell_products, corner_candidates, corner_products, least_scaled_jacobian,
+    packed_bins, settled, weighted_bin, BlockFigures, Tables, PACK, SQ_MAX, SQ_MIN,
 };
 use super::JACOBIAN_EDGES;
-use super::{angle_deg_nonzero, cell_metrics, fold, MetricSummary, QualityMetrics};
+use super::{angle_deg, cell_metrics, fold, MetricSummary, QualityMetrics};
 use super::{
     ANGLE_ACCEPTABLE, ASPECT_ACCEPTABLE, EDGE_RATIO_ACCEPTABLE, SCALED_JACOBIAN_ACCEPTABLE,
 };
@@ -68,14 +67,15 @@ pub(super) struct Rows {
     hx: Vec<f64>,
     hy: Vec<f64>,
     hl: Vec<f64>,
+    /// Their directions, [`angle_deg`] of `(hy, hx)` (the reference's edge directions).
+    ht: Vec<f64>,
     /// Edges from node `p` to `p + w`: the left edge of cell `p`, the right one of `p - 1`.
     vx: Vec<f64>,
     vy: Vec<f64>,
     vl: Vec<f64>,
+    vt: Vec<f64>,
     /// Per cell `p` (`i < ni`; the slots `i = ni` and the padding hold no cell): its figures.
     cells: Vec<Figures>,
-    /// Per cell `p`: its four corner angles (loop 1a, read by loop 1b).
-    angles: [Vec<f64>; 4],
 }
 
 /// A band of rows of a block has about this many nodes (its scratch arrays stay in the
@@ -99,31 +99,35 @@ fn checked_len(x: f64, y: f64) -> f64 {
     }
 }
 
-/// The edges along a node line into `e` (x, y, [`checked_len`]; `line.len() - 1` each).
+/// The edges along a node line into `e` (x, y, [`checked_len`], direction; `line.len() - 1`
+/// each).
 #[inline(always)]
-fn line_edges(line: &[Point], e: [&mut [f64]; 3]) {
-    let [x, y, l] = e;
+fn line_edges(line: &[Point], e: [&mut [f64]; 4]) {
+    let [x, y, l, t] = e;
     let n = x.len();
-    let (y, l, line) = (&mut y[..n], &mut l[..n], &line[..=n]);
+    let (y, l, t, line) = (&mut y[..n], &mut l[..n], &mut t[..n], &line[..=n]);
     for i in 0..n {
         let (dx, dy) = (line[i + 1][0] - line[i][0], line[i + 1][1] - line[i][1]);
         x[i] = dx;
         y[i] = dy;
         l[i] = checked_len(dx, dy);
+        t[i] = angle_deg(dy, dx);
     }
 }
 
-/// The edges from node `lo[i]` to `hi[i]` into `e` (x, y, [`checked_len`]; `lo.len()` each).
+/// The edges from node `lo[i]` to `hi[i]` into `e` (x, y, [`checked_len`], direction;
+/// `lo.len()` each).
 #[inline(always)]
-fn cross_edges(lo: &[Point], hi: &[Point], e: [&mut [f64]; 3]) {
-    let [x, y, l] = e;
+fn cross_edges(lo: &[Point], hi: &[Point], e: [&mut [f64]; 4]) {
+    let [x, y, l, t] = e;
     let n = x.len();
-    let (y, l, lo, hi) = (&mut y[..n], &mut l[..n], &lo[..n], &hi[..n]);
+    let (y, l, t, lo, hi) = (&mut y[..n], &mut l[..n], &mut t[..n], &lo[..n], &hi[..n]);
     for i in 0..n {
         let (dx, dy) = (hi[i][0] - lo[i][0], hi[i][1] - lo[i][1]);
         x[i] = dx;
         y[i] = dy;
         l[i] = checked_len(dx, dy);
+        t[i] = angle_deg(dy, dx);
     }
 }
 
@@ -136,33 +140,37 @@ fn cross_edges(lo: &[Point], hi: &[Point], e: [&mut [f64]; 3]) {
 /// reduction of its counts per band, not per row); the slots `i = ni` and the padding get a
 /// NaN edge, so they are not on the fast path and count nowhere.
 #[inline(always)]
-fn band<const SPLIT: bool, const TABLE: bool>(
+fn band<const TABLE: bool>(
     nodes: &[Point],
     w: usize,
     nb: usize,
-    h: [&mut [f64]; 3],
-    v: [&mut [f64]; 3],
+    h: [&mut [f64]; 4],
+    v: [&mut [f64]; 4],
     th: &Tables,
-    out: Out,
+    out: &mut [Figures],
 ) -> RowCounts {
-    let [hx, hy, hl] = h;
-    let [vx, vy, vl] = v;
-    let m = out.cells.len();
+    let [hx, hy, hl, ht] = h;
+    let [vx, vy, vl, vt] = v;
+    let m = out.len();
     let (nh, nv) = ((nb + 1) * w - 1, nb * w);
-    line_edges(&nodes[..=nh], [&mut hx[..nh], &mut hy[..nh], &mut hl[..nh]]);
+    line_edges(
+        &nodes[..=nh],
+        [&mut hx[..nh], &mut hy[..nh], &mut hl[..nh], &mut ht[..nh]],
+    );
     cross_edges(
         &nodes[..nv],
         &nodes[w..w + nv],
-        [&mut vx[..nv], &mut vy[..nv], &mut vl[..nv]],
+        [&mut vx[..nv], &mut vy[..nv], &mut vl[..nv], &mut vt[..nv]],
     );
     hl[nh..m + w].fill(f64::NAN);
     vl[nv..=m].fill(f64::NAN);
     for r in 0..nb {
         hl[r * w + w - 1] = f64::NAN;
     }
-    let b = [&hx[..m], &hy[..m], &hl[..m]];
-    let t = [&hx[w..w + m], &hy[w..w + m], &hl[w..w + m]];
-    row_figures::<SPLIT, TABLE>(b, t, [&vx[..=m], &vy[..=m], &vl[..=m]], th, out)
+    let b = [&hx[..m], &hy[..m], &hl[..m], &ht[..m]];
+    let t = [&hx[w..w + m], &hy[w..w + m], &hl[w..w + m], &ht[w..w + m]];
+    let v = [&vx[..=m], &vy[..=m], &vl[..=m], &vt[..=m]];
+    row_figures::<TABLE>(b, t, v, th, out)
 }
 
 /// [`band`] compiled for AVX-512 (8-lane vectors; the same IEEE operations on the same
@@ -173,12 +181,12 @@ fn band_avx512(
     nodes: &[Point],
     w: usize,
     nb: usize,
-    h: [&mut [f64]; 3],
-    v: [&mut [f64]; 3],
+    h: [&mut [f64]; 4],
+    v: [&mut [f64]; 4],
     th: &Tables,
-    out: Out,
+    out: &mut [Figures],
 ) -> RowCounts {
-    band::<true, true>(nodes, w, nb, h, v, th, out)
+    band::<true>(nodes, w, nb, h, v, th, out)
 }
 
 /// [`band`] compiled for AVX2.
@@ -188,12 +196,12 @@ fn band_avx2(
     nodes: &[Point],
     w: usize,
     nb: usize,
-    h: [&mut [f64]; 3],
-    v: [&mut [f64]; 3],
+    h: [&mut [f64]; 4],
+    v: [&mut [f64]; 4],
     th: &Tables,
-    out: Out,
+    out: &mut [Figures],
 ) -> RowCounts {
-    band::<false, false>(nodes, w, nb, h, v, th, out)
+    band::<false>(nodes, w, nb, h, v, th, out)
 }
 
 /// The figures of one cell from loop 1 (one record per cell, so that loop 1 writes through a
@@ -207,13 +215,6 @@ struct Figures {
     /// bits `5k..5k + 5`), and [`FAST`] when the cell takes the fast path (0: the reference
     /// path).
     bins: u64,
-}
-
-/// What loop 1 writes for the cells of a band (the same length): per cell its [`Figures`],
-/// and its four corner angles (loop 1a's results, which loop 1b reads).
-struct Out<'a> {
-    cells: &'a mut [Figures],
-    angles: [&'a mut [f64]; 4],
 }
 
 /// The bit of [`Figures::bins`] set for a cell of the fast path.
@@ -233,24 +234,26 @@ impl Rows {
     /// the same operands, so the same bits as the 2-lane SSE2 build; no fused multiply-add).
     fn figures(&mut self, nodes: &[Point], w: usize, nb: usize, bins: &Tables) -> RowCounts {
         let m = (nb * w - 1).next_multiple_of(PAD);
-        for v in [&mut self.hx, &mut self.hy, &mut self.hl] {
+        for v in [&mut self.hx, &mut self.hy, &mut self.hl, &mut self.ht] {
             v.resize(m + w, 0.0);
         }
-        for v in [&mut self.vx, &mut self.vy, &mut self.vl] {
+        for v in [&mut self.vx, &mut self.vy, &mut self.vl, &mut self.vt] {
             v.resize(m + 1, 0.0);
         }
         self.cells.resize(m, Figures::default());
-        for a in &mut self.angles {
-            a.resize(m, 0.0);
-        }
-        let h = [&mut self.hx[..], &mut self.hy[..], &mut self.hl[..]];
-        let v = [&mut self.vx[..], &mut self.vy[..], &mut self.vl[..]];
+        let h = [
+            &mut self.hx[..],
+            &mut self.hy[..],
+            &mut self.hl[..],
+            &mut self.ht[..],
+        ];
+        let v = [
+            &mut self.vx[..],
+            &mut self.vy[..],
+            &mut self.vl[..],
+            &mut self.vt[..],
+        ];
         let out = &mut self.cells[..m];
-        let [a0, a1, a2, a3] = &mut self.angles;
-        let out = Out {
-            cells: out,
-            angles: [&mut a0[..m], &mut a1[..m], &mut a2[..m], &mut a3[..m]],
-        };
         #[cfg(target_arch = "x86_64")]
         if bins.wider {
             // SAFETY: `wider` is only set when the CPU has these features (see `Tables::wider`).
@@ -261,7 +264,7 @@ impl Rows {
             // SAFETY: `wide` is only set when the CPU has AVX2 (see `Tables::wide`).
             return unsafe { band_avx2(nodes, w, nb, h, v, bins, out) };
         }
-        band::<false, PORTABLE_TABLE>(nodes, w, nb, h, v, bins, out)
+        band::<PORTABLE_TABLE>(nodes, w, nb, h, v, bins, out)
     }
 }
 
@@ -304,16 +307,17 @@ fn unkey(k: i64) -> f64 {
 #[cfg(all(test, target_arch = "x86_64"))]
 #[target_feature(enable = "avx2")]
 fn row_figures_avx2(
-    b: [&[f64]; 3],
-    t: [&[f64]; 3],
-    v: [&[f64]; 3],
+    b: [&[f64]; 4],
+    t: [&[f64]; 4],
+    v: [&[f64]; 4],
     th: &Tables,
-    out: Out,
+    out: &mut [Figures],
 ) -> RowCounts {
-    row_figures::<false, false>(b, t, v, th, out)
+    row_figures::<false>(b, t, v, th, out)
 }
 
-/// Loop 1: the figures of every cell of a row from its edges (`x`, `y`, length): bottom `b`
+/// Loop 1: the figures of every cell of a row from its edges (`x`, `y`, length, direction):
+/// bottom `b`
 /// and top `t` edges (`out.len()` each), the edges `v` across the row (`out.len() + 1`).
 /// `TABLE`: the ratio bins from [`super::kernel::RatioBins::bin`], else from its comparisons
 /// (the same bits).
@@ -323,82 +327,47 @@ fn row_figures_avx2(
 /// [`least_scaled_jacobian`] picks (a cell whose pick is not certain takes the reference
 /// path).
 #[inline(always)]
-fn row_figures<const SPLIT: bool, const TABLE: bool>(
-    b: [&[f64]; 3],
-    t: [&[f64]; 3],
-    v: [&[f64]; 3],
+fn row_figures<const TABLE: bool>(
+    b: [&[f64]; 4],
+    t: [&[f64]; 4],
+    v: [&[f64]; 4],
     th: &Tables,
-    out: Out,
+    out: &mut [Figures],
 ) -> RowCounts {
-    let Out { cells: out, angles } = out;
     let n = out.len();
     let rb = &th.ratios;
-    let [a0, a1, a2, a3] = angles;
-    let (a0, a1, a2, a3) = (&mut a0[..n], &mut a1[..n], &mut a2[..n], &mut a3[..n]);
-    if SPLIT {
-        let (bx, by) = (&b[0][..n], &b[1][..n]);
-        let (tx, ty) = (&t[0][..n], &t[1][..n]);
-        let (ax, ay) = (&v[0][..n], &v[1][..n]);
-        let (qx, qy) = (&v[0][1..=n], &v[1][1..=n]);
-        // Loop 1a (`SPLIT`): the corner angles alone (the long dependency chains of the
-        // divisions and the polynomial, in a loop small enough for the processor to overlap
-        // iterations).
-        for i in 0..n {
-            let e = [
-                [bx[i], by[i]],
-                [tx[i], ty[i]],
-                [ax[i], ay[i]],
-                [qx[i], qy[i]],
-            ];
-            let (c, d) = cell_products(e);
-            a0[i] = angle_deg_nonzero(c[0], d[0]);
-            a1[i] = angle_deg_nonzero(c[1], d[1]);
-            a2[i] = angle_deg_nonzero(c[2], d[2]);
-            a3[i] = angle_deg_nonzero(c[3], d[3]);
-        }
-    }
     let mut k = RowCounts {
         lo: [i64::MAX; 5],
         hi: [i64::MIN; 5],
         ..RowCounts::default()
     };
-    let (bx, by, bl) = (&b[0][..n], &b[1][..n], &b[2][..n]);
-    let (tx, ty, tl) = (&t[0][..n], &t[1][..n], &t[2][..n]);
-    let (ax, ay, al) = (&v[0][..n], &v[1][..n], &v[2][..n]);
-    let (qx, qy, ql) = (&v[0][1..=n], &v[1][1..=n], &v[2][1..=n]);
+    let (bx, by, bl, bt) = (&b[0][..n], &b[1][..n], &b[2][..n], &b[3][..n]);
+    let (tx, ty, tl, tt) = (&t[0][..n], &t[1][..n], &t[2][..n], &t[3][..n]);
+    let (ax, ay, al, at) = (&v[0][..n], &v[1][..n], &v[2][..n], &v[3][..n]);
+    let (qx, qy, ql, qt) = (&v[0][1..=n], &v[1][1..=n], &v[2][1..=n], &v[3][1..=n]);
     for i in 0..n {
         // p0 -> p1, p3 -> p2, p0 -> p3, p1 -> p2.
         let (hx, hy) = (bx[i], by[i]);
         let (ux, uy) = (tx[i], ty[i]);
         let (vx, vy) = (ax[i], ay[i]);
         let (wx, wy) = (qx[i], qy[i]);
-        let (c, d) = cell_products([[hx, hy], [ux, uy], [vx, vy], [wx, wy]]);
+        let (c, _) = cell_products([[hx, hy], [ux, uy], [vx, vy], [wx, wy]]);
         let edges = [bl[i], ql[i], tl[i], al[i]];
         let (sj, certain) = least_scaled_jacobian(&c, &edges);
+        // The reference's corner angles where they are settled (which needs a non-zero
+        // cross product: a zero one, of either sign, takes the reference path).
+        let a = corner_candidates(bt[i], qt[i], tt[i], at[i]);
         // NaN lengths fail `>= 0`; with every length in range the products are finite.
         let fine = (edges[0] >= 0.0)
             & (edges[1] >= 0.0)
             & (edges[2] >= 0.0)
             & (edges[3] >= 0.0)
-            & (c[0] != 0.0)
-            & (c[1] != 0.0)
-            & (c[2] != 0.0)
-            & (c[3] != 0.0)
+            & settled(a[0], c[0])
+            & settled(a[1], c[1])
+            & settled(a[2], c[2])
+            & settled(a[3], c[3])
             & certain;
         let inverted = (c[0] < 0.0) | (c[1] < 0.0) | (c[2] < 0.0) | (c[3] < 0.0);
-        // On the fast path (`fine`) the cross products are not zero and every product is
-        // finite, below `2e280` (lengths in range): [`angle_deg_nonzero`] is
-        // [`angle_deg`](super::angle_deg).
-        let a = if SPLIT {
-            [a0[i], a1[i], a2[i], a3[i]]
-        } else {
-            [
-                angle_deg_nonzero(c[0], d[0]),
-                angle_deg_nonzero(c[1], d[1]),
-                angle_deg_nonzero(c[2], d[2]),
-                angle_deg_nonzero(c[3], d[3]),
-            ]
-        };
         // No NaN and no `-0.0` on the fast path: the plain compares are `f64::min` / `max`.
         let (amin, amax) = (fold(a, less), fold(a, more));
         let (er, ar) = edge_ratios(&edges);

@@ -376,3 +376,47 @@ fn counted_bins_equal_the_search() {
     check(&JACOBIAN_EDGES);
     check(&RATIO_EDGES);
 }
+
+/// The edge-direction candidates of [`corner_candidates`] are the corner angles (within
+/// `1e-12` degrees of libm's `atan2(cross, dot)`) and [`settled`] keeps every one of them
+/// more than `1e-6` degrees from flat: the reference's `angle_deg(cross, dot)` fallback is
+/// only for nearly flat corners (a wrong candidate would hide behind it otherwise), on random
+/// convex, non-convex and inverted cells.
+#[test]
+fn direction_candidates_are_the_corner_angles() {
+    let mut r = crate::layouts::SplitMix64(17);
+    let mut kept = 0;
+    for _ in 0..100_000 {
+        let jitter = [0.1, 0.45, 2.0][(r.next_u64() % 3) as usize];
+        let p: [Point; 4] = [[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]].map(|q| {
+            [
+                q[0] + jitter * (r.next_f64() - 0.5),
+                q[1] + jitter * (r.next_f64() - 0.5),
+            ]
+        });
+        let (cross, dot) = corner_products(&p);
+        let dir = |a: Point, b: Point| super::super::angle_deg(b[1] - a[1], b[0] - a[0]);
+        let cand = corner_candidates(
+            dir(p[0], p[1]),
+            dir(p[1], p[2]),
+            dir(p[3], p[2]),
+            dir(p[0], p[3]),
+        );
+        for k in 0..4 {
+            let want = cross[k].atan2(dot[k]).to_degrees();
+            let want = if want < 0.0 { want + 360.0 } else { want };
+            let d = (cand[k] - want).abs();
+            assert!(
+                d.min(360.0 - d) <= 1e-12,
+                "{p:?} corner {k}: {} vs {want}",
+                cand[k]
+            );
+            let flat = want.min((want - 180.0).abs()).min(360.0 - want);
+            if flat > 1e-6 {
+                assert!(settled(cand[k], cross[k]), "{p:?} corner {k}: {want}");
+                kept += 1;
+            }
+        }
+    }
+    assert!(kept > 390_000, "{kept}");
+}

@@ -3,16 +3,8 @@
 use super::*;
 use crate::layouts::SplitMix64;
 
-fn refs(a: &[Vec<f64>; 3]) -> [&[f64]; 3] {
-    [&a[0][..], &a[1][..], &a[2][..]]
-}
-
-fn out<'a>(cells: &'a mut [Figures], ang: &'a mut [Vec<f64>; 4]) -> Out<'a> {
-    let [a0, a1, a2, a3] = ang;
-    Out {
-        cells,
-        angles: [&mut a0[..], &mut a1[..], &mut a2[..], &mut a3[..]],
-    }
+fn refs(a: &[Vec<f64>; 4]) -> [&[f64]; 4] {
+    [&a[0][..], &a[1][..], &a[2][..], &a[3][..]]
 }
 
 /// The AVX2 build of loop 1 gives the bits of the portable one (where the CPU has AVX2),
@@ -29,7 +21,7 @@ fn wide_and_portable_rows_agree() {
         for round in 0..200 {
             let scale = [1.0, 1e-150, 1e150, 1e-3][round % 4];
             let mut edge = |len: usize| {
-                let mut v = [Vec::new(), Vec::new(), Vec::new()];
+                let mut v = [Vec::new(), Vec::new(), Vec::new(), Vec::new()];
                 for _ in 0..len {
                     let (x, y) = match (u() * 10.0) as u32 {
                         0 => (0.0, 0.0),
@@ -39,24 +31,16 @@ fn wide_and_portable_rows_agree() {
                     v[0].push(x);
                     v[1].push(y);
                     v[2].push(checked_len(x, y));
+                    v[3].push(angle_deg(y, x));
                 }
                 v
             };
             let (b, tt, v) = (edge(n), edge(n), edge(n + 1));
             let mut one = vec![Figures::default(); n];
             let mut two = vec![Figures::default(); n];
-            let mut ang = [(); 4].map(|_| vec![0.0; n]);
-            let k1 = row_figures::<true, true>(
-                refs(&b),
-                refs(&tt),
-                refs(&v),
-                &t,
-                out(&mut one, &mut ang),
-            );
+            let k1 = row_figures::<true>(refs(&b), refs(&tt), refs(&v), &t, &mut one);
             // SAFETY: `t.wide` says the CPU has AVX2.
-            let k2 = unsafe {
-                row_figures_avx2(refs(&b), refs(&tt), refs(&v), &t, out(&mut two, &mut ang))
-            };
+            let k2 = unsafe { row_figures_avx2(refs(&b), refs(&tt), refs(&v), &t, &mut two) };
             assert_eq!(format!("{k1:?}"), format!("{k2:?}"));
             let bits = |f: &[Figures]| -> Vec<u64> {
                 f.iter()
