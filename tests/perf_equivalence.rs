@@ -61,9 +61,9 @@ fn ref_corners(p: [Point; 4]) -> ([f64; 4], [f64; 4]) {
         }
         let m = 1e-9;
         let kept = if cross > 0.0 {
-            turn >= m && turn <= 180.0 - m
+            (m..=180.0 - m).contains(&turn)
         } else if cross < 0.0 {
-            turn >= 180.0 + m && turn <= 360.0 - m
+            (180.0 + m..=360.0 - m).contains(&turn)
         } else {
             false
         };

@@ -73,8 +73,8 @@ pub(super) fn wrap(x: f64) -> f64 {
 #[inline(always)]
 pub(super) fn settled(a: f64, cross: f64) -> bool {
     const M: f64 = DIRECTION_MARGIN_DEG;
-    ((cross > 0.0) & (a >= M) & (a <= 180.0 - M))
-        | ((cross < 0.0) & (a >= 180.0 + M) & (a <= 360.0 - M))
+    ((cross > 0.0) & (M..=180.0 - M).contains(&a))
+        | ((cross < 0.0) & (180.0 + M..=360.0 - M).contains(&a))
 }
 
 /// Scaled Jacobian, edge ratio and aspect ratio from the corner cross products and the edge
