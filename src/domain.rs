@@ -358,6 +358,12 @@ impl<'de> Deserialize<'de> for LimitedHoles {
 }
 
 impl Domain {
+    /// A domain of circles already validated as a domain (the holes of a valid domain in
+    /// another order, [`crate::spatial_order`]): no check is made again.
+    pub(crate) fn from_valid_parts(bounding: Circle, holes: Vec<Circle>) -> Domain {
+        Domain { bounding, holes }
+    }
+
     /// Default limit on the number of holes.
     pub const MAX_HOLES: usize = 1_000_000;
     /// Relative gap tolerance: two circles closer than `GAP_TOLERANCE * R` (R the bounding

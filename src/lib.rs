@@ -83,6 +83,7 @@ pub mod ranges;
 pub mod refine;
 pub mod sampling;
 pub mod sequence;
+pub mod spatial_order;
 mod tasks;
 pub mod templates;
 pub mod timings;

@@ -204,14 +204,38 @@ pub fn mesh(domain: &Domain, options: &Options) -> Result<Mesh, MeshError> {
     timings::on_pool_worker(|| mesh_here(domain, options))
 }
 
-/// [`mesh`] on this thread.
+/// [`mesh`] on this thread: the options checked, then the holes meshed in a spatial order
+/// when the layout is large ([`crate::spatial_order`]; the mesh and the errors in the input's
+/// hole ids).
 fn mesh_here(domain: &Domain, options: &Options) -> Result<Mesh, MeshError> {
+    validate(domain, options)?;
+    match crate::spatial_order::hole_order(domain, options) {
+        Some(order) => {
+            let sorted = crate::spatial_order::reordered(domain, &order);
+            let renaming = crate::spatial_order::Renaming::new(order);
+            mesh_in_order(&sorted, &renaming.options(options))
+                .map(|m| renaming.mesh(m))
+                .map_err(|e| renaming.error(e))
+        }
+        None => mesh_in_order(domain, options),
+    }
+}
+
+/// The checks of the options against `domain` (their messages name the caller's circle ids).
+fn validate(domain: &Domain, options: &Options) -> Result<(), MeshError> {
     crate::ranges::check_ranges(options)?;
     validate_block_cells(options)?;
-    let holes = domain.hole_count();
-    validate_circle_ids(options, crate::domain::BOUNDING, holes)?;
+    validate_circle_ids(options, crate::domain::BOUNDING, domain.hole_count())?;
     if options.mode == Mode::Exact {
         exact_mode::validate_options(options)?;
+    }
+    Ok(())
+}
+
+/// [`mesh_here`] with the holes in the order given, the options checked.
+fn mesh_in_order(domain: &Domain, options: &Options) -> Result<Mesh, MeshError> {
+    let holes = domain.hole_count();
+    if options.mode == Mode::Exact {
         if holes >= 2 {
             if let Some(m) = mesh_exact(domain, options)? {
                 return Ok(m);

@@ -182,6 +182,9 @@ mod perf_quality_corners;
 #[path = "perf_resample.rs"]
 mod perf_resample;
 
+#[path = "perf_spatial_order.rs"]
+mod perf_spatial_order;
+
 #[path = "perf_rounding.rs"]
 mod perf_rounding;
 

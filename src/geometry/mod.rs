@@ -41,4 +41,5 @@ pub(crate) fn length(x: f64, y: f64) -> f64 {
     }
 }
 
+pub(crate) use order::hilbert_order;
 pub use triangulation::{Changes, Triangulation, TriangulationError, MAX_POINTS};

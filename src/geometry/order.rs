@@ -107,9 +107,24 @@ pub(crate) fn insertion_order(pts: &[Point]) -> Vec<u32> {
     )
 }
 
-/// [`insertion_order`], keyed and sorted on the thread pool when `parallel`: the keys are
-/// distinct (each ends with its index), so both give the same order.
-fn insertion_order_on(pts: &[Point], parallel: bool) -> Vec<u32> {
+/// Point indices along a Hilbert curve over the points' bounding box (ties, points in one
+/// cell of the `2^14 x 2^14` grid, by index): the order alone, without [`insertion_order`]'s
+/// rounds. Points must be finite and fewer than 2^32.
+/// Keyed and sorted on the thread pool (the keys are distinct: any pool gives this order).
+pub(crate) fn hilbert_order(pts: &[Point]) -> Vec<u32> {
+    let cell = hilbert_cells(pts);
+    let mut keys: Vec<u64> = pts
+        .par_iter()
+        .enumerate()
+        .map(|(i, p)| (u64::from(cell(p)) << 32) | i as u64)
+        .collect();
+    keys.par_sort_unstable();
+    keys.into_par_iter().map(|k| k as u32).collect()
+}
+
+/// The Hilbert index (`2 HILBERT_ORDER` bits) of a point's cell on the grid over the bounding
+/// box of `pts`.
+fn hilbert_cells(pts: &[Point]) -> impl Fn(&Point) -> u32 {
     let (mut x0, mut y0, mut x1, mut y1) = (f64::MAX, f64::MAX, f64::MIN, f64::MIN);
     for p in pts {
         x0 = x0.min(p[0]);
@@ -122,7 +137,7 @@ fn insertion_order_on(pts: &[Point], parallel: bool) -> Vec<u32> {
     // Scale each axis separately; halve first so the extent never overflows.
     let sx = cells / ((0.5 * x1 - 0.5 * x0) * 2.0).max(f64::MIN_POSITIVE);
     let sy = cells / ((0.5 * y1 - 0.5 * y0) * 2.0).max(f64::MIN_POSITIVE);
-    let quantize = |v: f64, lo: f64, s: f64| -> u32 {
+    let quantize = move |v: f64, lo: f64, s: f64| -> u32 {
         // `as` truncates, which is `floor` for the positive values kept (no libm call).
         let q = (0.5 * v - 0.5 * lo) * 2.0 * s;
         if q.is_finite() && q > 0.0 {
@@ -131,16 +146,25 @@ fn insertion_order_on(pts: &[Point], parallel: bool) -> Vec<u32> {
             0
         }
     };
+    move |p: &Point| {
+        hilbert_fast(
+            quantize(p[0], x0, sx),
+            quantize(p[1], y0, sy),
+            HILBERT_ORDER,
+        )
+    }
+}
+
+/// [`insertion_order`], keyed and sorted on the thread pool when `parallel`: the keys are
+/// distinct (each ends with its index), so both give the same order.
+fn insertion_order_on(pts: &[Point], parallel: bool) -> Vec<u32> {
+    let cell = hilbert_cells(pts);
     let key = |(i, p): (usize, &Point)| {
         // `+ 0.0` maps -0.0 to 0.0 so that duplicates hash alike.
         let h = splitmix((p[0] + 0.0).to_bits() ^ splitmix((p[1] + 0.0).to_bits()));
         let level = (h.trailing_zeros()).min(MAX_LEVEL);
         let round = u64::from(MAX_LEVEL - level);
-        let hk = u64::from(hilbert_fast(
-            quantize(p[0], x0, sx),
-            quantize(p[1], y0, sy),
-            HILBERT_ORDER,
-        ));
+        let hk = u64::from(cell(p));
         // round (4 bits) | hilbert (28 bits) | index (32 bits)
         (round << 60) | (hk << 32) | i as u64
     };

@@ -27,9 +27,9 @@
 //! ([`least_scaled_jacobian`]; a cell whose corner pick is uncertain takes the reference path).
 //!
 //! Why this gives the reference's numbers: every figure is computed with the reference's own
-//! functions ([`angle_deg`](super::angle_deg) of the edge vectors,
-//! [`corner_candidates`](super::kernel::corner_candidates) (a corner whose candidate is not
-//! [`settled`](super::kernel::settled) takes the reference path),
+//! functions ([`angle_deg`] of the edge vectors,
+//! [`corner_candidates`] (a corner whose candidate is not
+//! [`settled`] takes the reference path),
 //! [`length_figures`](super::kernel::length_figures), [`skewness`](super::kernel::skewness),
 //! the `sqrt` length of [`crate::geometry::length`]) on the same operands (the edge
 //! directions of the same differences of two nodes as the reference's), except that the
@@ -38,7 +38,7 @@
 //! the negated difference `-(o - a)` of the neighbouring corner: the two are equal except
 //! possibly for the sign of a zero component, so products and sums agree except possibly for
 //! the sign of a zero result. A zero cross product sends the cell to the reference path;
-//! [`angle_deg`](super::angle_deg) does not look at the sign of a zero; lengths only use
+//! [`angle_deg`] does not look at the sign of a zero; lengths only use
 //! squares. Cells with an edge whose squared length is outside `[SQ_MIN, SQ_MAX]` (or not a
 //! number) take the reference path too. On this path no figure is NaN or a zero of either sign
 //! (settled angles are at least `1e-9`), so folding extremes with `min` /

@@ -1,0 +1,174 @@
+//! Large layouts are meshed with their holes in a spatial order and given back in the
+//! input's hole ids (`medial_blocks::spatial_order`, issue 8). The oracle: the same holes
+//! in a shuffled order sort into the same order, so the two meshes must have the same nodes
+//! bit for bit, and each block must name, in its own input's ids, the same circle; and
+//! every wall block's wall nodes must lie on the circle it names (the input's geometry, not
+//! the renaming's), every co-circular group's holes on its common circle, and a per-circle
+//! option must reach the circle the caller named.
+
+use crate::common;
+
+use medial_blocks::domain::{Circle, CircleId, Domain};
+use medial_blocks::layout::EdgeKind;
+use medial_blocks::layouts::{self, SplitMix64};
+use medial_blocks::spatial_order::{hole_order, SPATIAL_ORDER_MIN_HOLES};
+use medial_blocks::{mesh, Mesh, Options};
+
+/// `domain`'s holes shuffled: the new domain and `from[j]`, the old id of new hole `j`.
+fn shuffled(domain: &Domain, seed: u64) -> (Domain, Vec<usize>) {
+    let mut r = SplitMix64(seed);
+    let mut from: Vec<usize> = (0..domain.holes().len()).collect();
+    for i in (1..from.len()).rev() {
+        let j = (r.next_u64() % (i as u64 + 1)) as usize;
+        from.swap(i, j);
+    }
+    let holes: Vec<Circle> = from.iter().map(|&i| domain.holes()[i]).collect();
+    let d = Domain::bounded(domain.bounding(), holes).expect("the same circles");
+    (d, from)
+}
+
+/// The circle `c` of `domain` (`-1` the bounding circle).
+fn circle(domain: &Domain, m: &Mesh, c: CircleId) -> Circle {
+    let h = domain.holes().len() as CircleId;
+    if c >= h {
+        m.inserted_holes[(c - h) as usize]
+    } else {
+        domain.circle(c)
+    }
+}
+
+/// Every wall block's nodes on its wall side (`j = 0`) lie on the circle its `wall` names.
+fn walls_on_their_circles(domain: &Domain, m: &Mesh) -> usize {
+    let mut walls = 0;
+    for (b, (block, g)) in m.layout.blocks.iter().zip(&m.grids).enumerate() {
+        let Some(c) = block.wall else { continue };
+        let k = circle(domain, m, c);
+        for i in 0..=g.ni {
+            let p = g.node(i, 0);
+            let d = (p[0] - k.center[0]).hypot(p[1] - k.center[1]);
+            assert!(
+                (d - k.radius).abs() <= 1e-9 * k.radius.max(1.0),
+                "block {b}: wall node {i} at {d} from circle {c} of radius {}",
+                k.radius
+            );
+        }
+        walls += 1;
+    }
+    walls
+}
+
+#[test]
+fn shuffled_holes_give_the_same_mesh_in_their_own_ids() {
+    let n = SPATIAL_ORDER_MIN_HOLES + 200;
+    let domain = layouts::bubbles(n, 11).expect("layout");
+    let options = Options {
+        block_cells: Some(4),
+        ..Options::default()
+    };
+    assert!(hole_order(&domain, &options).is_some());
+    let (other, from) = shuffled(&domain, 5);
+    let (a, b) = (
+        mesh(&domain, &options).expect("mesh"),
+        mesh(&other, &options).expect("mesh"),
+    );
+    assert_eq!(common::node_bits(&a), common::node_bits(&b));
+    assert_eq!(a.layout.blocks.len(), b.layout.blocks.len());
+    let h = n as CircleId;
+    // b's hole j is a's hole from[j]; the bounding circle and inserted holes keep their ids.
+    let to_a = |c: CircleId| {
+        if (0..h).contains(&c) {
+            from[c as usize] as CircleId
+        } else {
+            c
+        }
+    };
+    for (x, y) in a.layout.blocks.iter().zip(&b.layout.blocks) {
+        assert_eq!(x.wall, y.wall.map(to_a));
+        assert_eq!(x.corners, y.corners);
+    }
+    for (x, y) in a.layout.edges.iter().zip(&b.layout.edges) {
+        match (x.kind, y.kind) {
+            (EdgeKind::Wall(p), EdgeKind::Wall(q)) => assert_eq!(p, to_a(q)),
+            (p, q) => assert_eq!(p, q),
+        }
+    }
+    assert_eq!(
+        walls_on_their_circles(&domain, &a),
+        walls_on_their_circles(&other, &b)
+    );
+    assert!(walls_on_their_circles(&domain, &a) >= n);
+}
+
+/// A wall-normal count for one circle, named in the input's ids, reaches that circle.
+#[test]
+fn per_circle_options_name_the_callers_circles() {
+    let domain = layouts::bubbles(SPATIAL_ORDER_MIN_HOLES + 10, 3).expect("layout");
+    let named: CircleId = 17;
+    let options = Options {
+        wall_cells: vec![(named, 7)],
+        ..Options::default()
+    };
+    assert!(hole_order(&domain, &options).is_some());
+    let m = mesh(&domain, &options).expect("mesh");
+    let mut at_named = 0;
+    for (block, g) in m.layout.blocks.iter().zip(&m.grids) {
+        if block.wall == Some(named) {
+            assert_eq!(g.nj, 7, "a block on circle {named}");
+            at_named += 1;
+        }
+    }
+    assert!(at_named >= 3, "{at_named} blocks on circle {named}");
+    walls_on_their_circles(&domain, &m);
+}
+
+/// A square lattice of 64 x 64 holes (every four neighbours co-circular): each group's holes,
+/// in the input's ids, are tangent to the group's circle.
+#[test]
+fn cocircular_groups_name_the_callers_holes() {
+    let domain = layouts::square_lattice(64 * 64).expect("layout");
+    assert_eq!(domain.holes().len(), SPATIAL_ORDER_MIN_HOLES);
+    let options = Options {
+        block_cells: Some(2),
+        ..Options::default()
+    };
+    assert!(hole_order(&domain, &options).is_some());
+    let m = mesh(&domain, &options).expect("mesh");
+    assert!(
+        m.cocircular_groups.len() > 3000,
+        "{}",
+        m.cocircular_groups.len()
+    );
+    for g in &m.cocircular_groups {
+        assert!(g.holes.windows(2).all(|w| w[0] < w[1]), "{:?}", g.holes);
+        for &c in &g.holes {
+            let k = circle(&domain, &m, c);
+            let d = (g.center[0] - k.center[0]).hypot(g.center[1] - k.center[1]);
+            let gap = if c < 0 { k.radius - d } else { d - k.radius };
+            assert!(
+                (gap - g.radius).abs() <= 1e-9,
+                "group {:?}: circle {c}",
+                g.holes
+            );
+        }
+    }
+    walls_on_their_circles(&domain, &m);
+}
+
+/// Small layouts and imposed counts keep the input order.
+#[test]
+fn small_layouts_keep_the_input_order() {
+    let small = layouts::bubbles(SPATIAL_ORDER_MIN_HOLES - 1, 3).expect("layout");
+    assert!(hole_order(&small, &Options::default()).is_none());
+    let large = layouts::bubbles(SPATIAL_ORDER_MIN_HOLES, 3).expect("layout");
+    assert!(hole_order(&large, &Options::default()).is_some());
+    let imposed = Options {
+        imposed_counts: Some(Default::default()),
+        ..Options::default()
+    };
+    assert!(hole_order(&large, &imposed).is_none());
+    // Already in Hilbert order: nothing to do.
+    let order = hole_order(&large, &Options::default()).expect("an order");
+    let holes: Vec<Circle> = order.iter().map(|&i| large.holes()[i as usize]).collect();
+    let sorted = Domain::bounded(large.bounding(), holes).expect("the same circles");
+    assert!(hole_order(&sorted, &Options::default()).is_none());
+}
