@@ -18,6 +18,11 @@
 //! and so are those of the options ([`Options::circle_clustering`],
 //! [`Options::wall_cells`]). Inserted holes (ids from the hole count up) keep their ids.
 //!
+//! Periodic boxes likewise through [`crate::mesh_periodic`] (1e5 periodic bubbles: 16.7 ->
+//! 14.9 s from a sorted input, 2 pairs), but not through
+//! [`crate::periodic::mesh_periodic_frame`], which also gives the medial triples and block
+//! keys in hole ids (normalised per image, for a sequence's comparisons).
+//!
 //! Below [`SPATIAL_ORDER_MIN_HOLES`] holes the working set fits in the caches and the input
 //! order is kept, as it is with imposed counts ([`Options::imposed_counts`], a sequence's
 //! later frames, whose keys and flags belong to the caller's options).
@@ -29,6 +34,7 @@ use crate::domain::{CircleId, Domain};
 use crate::layout::EdgeKind;
 use crate::mesh::Mesh;
 use crate::mesher::{MeshError, Options};
+use crate::periodic::PeriodicDomain;
 use rayon::prelude::*;
 
 /// Layouts with at least this many holes are meshed in Hilbert order (1e5 random bubbles:
@@ -39,7 +45,17 @@ pub const SPATIAL_ORDER_MIN_HOLES: usize = 4096;
 /// hole meshed), or `None` to keep the input order: fewer than [`SPATIAL_ORDER_MIN_HOLES`]
 /// holes, imposed counts, or holes already in that order.
 pub fn hole_order(domain: &Domain, options: &Options) -> Option<Vec<u32>> {
-    let holes = domain.holes();
+    order_of(domain.holes(), options)
+}
+
+/// [`hole_order`] of a periodic box's holes (the order [`crate::mesh_periodic`] meshes them
+/// in; [`crate::periodic::mesh_periodic_frame`], whose medial triples and block keys a
+/// sequence compares in hole ids, keeps the input order).
+pub fn periodic_hole_order(domain: &PeriodicDomain, options: &Options) -> Option<Vec<u32>> {
+    order_of(domain.holes(), options)
+}
+
+fn order_of(holes: &[crate::domain::Circle], options: &Options) -> Option<Vec<u32>> {
     if holes.len() < SPATIAL_ORDER_MIN_HOLES
         || holes.len() > u32::MAX as usize
         || options.imposed_counts.is_some()

@@ -172,3 +172,60 @@ fn small_layouts_keep_the_input_order() {
     let sorted = Domain::bounded(large.bounding(), holes).expect("the same circles");
     assert!(hole_order(&sorted, &Options::default()).is_none());
 }
+
+/// A periodic box through `mesh_periodic`: shuffled holes give the same nodes bit for bit and
+/// the same circle per block and edge in each input's own ids, and the mesh passes the
+/// periodic checker (walls on their circles' images, partners translated) in the caller's
+/// ids; `mesh_periodic_frame` (a sequence's, with medial triples in hole ids) keeps the
+/// input order, so its mesh is the same up to the numbering.
+#[test]
+fn periodic_boxes_are_meshed_in_a_spatial_order_too() {
+    use medial_blocks::fuzzing::{periodic::check_periodic_mesh, Checks};
+    use medial_blocks::periodic::mesh_periodic_frame;
+    use medial_blocks::spatial_order::periodic_hole_order;
+    use medial_blocks::{mesh_periodic, PeriodicDomain};
+    let n = SPATIAL_ORDER_MIN_HOLES + 50;
+    let pd = layouts::periodic_bubbles(n, 4).expect("layout");
+    let options = Options {
+        block_cells: Some(3),
+        ..Options::default()
+    };
+    assert!(periodic_hole_order(&pd, &options).is_some());
+    let mut r = SplitMix64(8);
+    let mut from: Vec<usize> = (0..n).collect();
+    for i in (1..n).rev() {
+        from.swap(i, (r.next_u64() % (i as u64 + 1)) as usize);
+    }
+    let holes: Vec<Circle> = from.iter().map(|&i| pd.holes()[i]).collect();
+    let other = PeriodicDomain::new(pd.size(), holes).expect("the same circles");
+    let (a, b) = (
+        mesh_periodic(&pd, &options).expect("mesh"),
+        mesh_periodic(&other, &options).expect("mesh"),
+    );
+    assert_eq!(common::node_bits(&a), common::node_bits(&b));
+    let to_a = |c: CircleId| {
+        if (0..n as CircleId).contains(&c) {
+            from[c as usize] as CircleId
+        } else {
+            c
+        }
+    };
+    for (x, y) in a.layout.blocks.iter().zip(&b.layout.blocks) {
+        assert_eq!(x.wall, y.wall.map(to_a));
+    }
+    for (x, y) in a.layout.edges.iter().zip(&b.layout.edges) {
+        match (x.kind, y.kind) {
+            (EdgeKind::Wall(p), EdgeKind::Wall(q)) => assert_eq!(p, to_a(q)),
+            (p, q) => assert_eq!(p, q),
+        }
+    }
+    let checks = Checks {
+        no_inverted_cells: true,
+    };
+    check_periodic_mesh(&pd, &a, checks).expect("a valid periodic mesh");
+    check_periodic_mesh(&other, &b, checks).expect("a valid periodic mesh");
+    // The frame keeps the input order: the same counts, its own numbering.
+    let f = mesh_periodic_frame(&pd, &options).expect("frame");
+    assert_eq!(f.mesh.layout.blocks.len(), a.layout.blocks.len());
+    check_periodic_mesh(&pd, &f.mesh, checks).expect("a valid periodic mesh");
+}

@@ -64,6 +64,17 @@ pub fn wrap(x: f64, l: f64) -> f64 {
 }
 
 impl PeriodicDomain {
+    /// The same box with its holes (and their nearest gaps) in `order` (`order[k]` the hole
+    /// that comes `k`-th; a permutation of the hole ids, [`crate::spatial_order`]): no check is
+    /// made again.
+    pub(crate) fn reordered(&self, order: &[u32]) -> PeriodicDomain {
+        PeriodicDomain {
+            size: self.size,
+            holes: order.iter().map(|&i| self.holes[i as usize]).collect(),
+            gaps: order.iter().map(|&i| self.gaps[i as usize]).collect(),
+        }
+    }
+
     /// Relative gap tolerance: two circles (or a circle and an image) closer than
     /// `GAP_TOLERANCE * max(Lx, Ly)` count as touching and are refused. It is larger than
     /// [`Domain::GAP_TOLERANCE`] because the mesher validates an auxiliary bounded domain of

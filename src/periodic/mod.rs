@@ -2260,8 +2260,29 @@ pub type Triples = Vec<[CircleKey; 3]>;
 /// Apollonius circle or an inverted cell) the sampling is refined 4x around the place per
 /// attempt, up to [`EXACT_RESAMPLING`] times, and then paper mode is used. Paper mode: node counts and transfinite interpolation ([`build_grids`];
 /// partners of periodic sides get equal counts and translated nodes).
+///
+/// From [`crate::spatial_order::SPATIAL_ORDER_MIN_HOLES`] holes, the holes are meshed in a
+/// spatial order and the mesh is given back in the input's hole ids
+/// ([`crate::spatial_order`]).
 pub fn mesh_periodic(pd: &PeriodicDomain, options: &Options) -> Result<Mesh, MeshError> {
-    mesh_periodic_frame(pd, options).map(|f| f.mesh)
+    timings::on_pool_worker(|| {
+        // The options are checked against the caller's hole ids before any renaming.
+        crate::ranges::check_ranges(options)?;
+        crate::mesher::validate_circle_ids(options, 0, pd.hole_count())?;
+        if options.mode == Mode::Exact {
+            exact_mode::validate_options(options)?;
+        }
+        match crate::spatial_order::periodic_hole_order(pd, options) {
+            Some(order) => {
+                let sorted = pd.reordered(&order);
+                let renaming = crate::spatial_order::Renaming::new(order);
+                periodic_frame_here(&sorted, &renaming.options(options))
+                    .map(|f| renaming.mesh(f.mesh))
+                    .map_err(|e| renaming.error(e))
+            }
+            None => periodic_frame_here(pd, options).map(|f| f.mesh),
+        }
+    })
 }
 
 /// A periodic mesh with its combinatorics.
