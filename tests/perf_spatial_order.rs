@@ -229,3 +229,67 @@ fn periodic_boxes_are_meshed_in_a_spatial_order_too() {
     assert_eq!(f.mesh.layout.blocks.len(), a.layout.blocks.len());
     check_periodic_mesh(&pd, &f.mesh, checks).expect("a valid periodic mesh");
 }
+
+/// A sequence of a large layout: its first frame is meshed in the spatial order, the later
+/// ones with the first's counts imposed (in the input order, keyed by the input's hole ids);
+/// small motions keep the combinatorics, the blocks and the node counts, frame after frame.
+#[test]
+fn sequences_of_large_layouts_keep_their_node_counts() {
+    use medial_blocks::sequence::{parse_frames, run_sequence};
+    let domain = layouts::bubbles(SPATIAL_ORDER_MIN_HOLES + 100, 9).expect("layout");
+    let frames: Vec<String> = (0..3)
+        .map(|k| {
+            let holes: Vec<Circle> = domain
+                .holes()
+                .iter()
+                .map(|h| Circle {
+                    center: [h.center[0] + 1e-7 * k as f64, h.center[1]],
+                    radius: h.radius,
+                })
+                .collect();
+            let d = Domain::bounded(domain.bounding(), holes).expect("a frame");
+            d.to_json_string()
+        })
+        .collect();
+    let frames = parse_frames(&frames.join("\n"));
+    let options = Options {
+        cells: 4,
+        ..Options::default()
+    };
+    let dir = tempfile::tempdir().expect("a scratch directory");
+    let s = run_sequence(
+        &frames,
+        &options,
+        &[medial_blocks::output::Format::Json],
+        medial_blocks::output::Encoding::Ascii,
+        dir.path(),
+        2,
+        &|| {},
+    )
+    .expect("the sequence");
+    assert_eq!(s.failed, 0);
+    for k in 1..3 {
+        let f = &s.frames[k];
+        assert!(f.same_combinatorics_as_previous, "frame {k}: {f:?}");
+        assert!(f.same_block_structure_as_previous, "frame {k}: {f:?}");
+        assert!(f.same_node_counts_as_previous, "frame {k}: {f:?}");
+        assert_eq!(f.node_counts_from_frame, Some(0), "frame {k}");
+    }
+    // Frame 0's counts, by block key (hole ids: the input's), imposed on frame 2: the build
+    // finds every key and applies them (it would not, were its keys in the sorted ids).
+    use medial_blocks::exact_mode::imposed::ImposedCounts;
+    use medial_blocks::sequence::mesh_frame;
+    let f0 = mesh_frame(frames[0].as_ref().expect("frame 0"), &options).expect("frame 0");
+    let want = f0.structure().expect("exact mode gives block keys");
+    let counts = std::sync::Arc::new(ImposedCounts::new(want.iter().cloned().collect()));
+    let imposed = Options {
+        imposed_counts: Some(counts.clone()),
+        ..options.clone()
+    };
+    let f2 = mesh_frame(frames[2].as_ref().expect("frame 2"), &imposed).expect("frame 2");
+    assert!(
+        counts.applied(),
+        "frame 0's counts were not applied to frame 2"
+    );
+    assert_eq!(f2.structure().expect("keys"), want);
+}
