@@ -14,17 +14,46 @@ use medial_blocks::layouts::{self, SplitMix64};
 use medial_blocks::spatial_order::{hole_order, SPATIAL_ORDER_MIN_HOLES};
 use medial_blocks::{mesh, Mesh, Options};
 
-/// `domain`'s holes shuffled: the new domain and `from[j]`, the old id of new hole `j`.
-fn shuffled(domain: &Domain, seed: u64) -> (Domain, Vec<usize>) {
+/// A random permutation of `0..n` (Fisher-Yates from `seed`).
+fn permutation(n: usize, seed: u64) -> Vec<usize> {
     let mut r = SplitMix64(seed);
-    let mut from: Vec<usize> = (0..domain.holes().len()).collect();
-    for i in (1..from.len()).rev() {
+    let mut from: Vec<usize> = (0..n).collect();
+    for i in (1..n).rev() {
         let j = (r.next_u64() % (i as u64 + 1)) as usize;
         from.swap(i, j);
     }
-    let holes: Vec<Circle> = from.iter().map(|&i| domain.holes()[i]).collect();
-    let d = Domain::bounded(domain.bounding(), holes).expect("the same circles");
-    (d, from)
+    from
+}
+
+/// `holes` in the order `from` (new hole `j` is old hole `from[j]`).
+fn permuted(holes: &[Circle], from: &[usize]) -> Vec<Circle> {
+    from.iter().map(|&i| holes[i]).collect()
+}
+
+/// `a` and `b`, the meshes of the same holes where `b`'s hole `j` is `a`'s hole `from[j]`, are
+/// the same mesh: the same nodes bit for bit, and block by block and edge by edge the same
+/// circle in each one's own ids (the bounding circle and inserted holes keep their ids).
+fn assert_same_but_for_the_ids(a: &Mesh, b: &Mesh, from: &[usize]) {
+    assert_eq!(common::node_bits(a), common::node_bits(b));
+    assert_eq!(a.layout.blocks.len(), b.layout.blocks.len());
+    let h = from.len() as CircleId;
+    let to_a = |c: CircleId| {
+        if (0..h).contains(&c) {
+            from[c as usize] as CircleId
+        } else {
+            c
+        }
+    };
+    for (x, y) in a.layout.blocks.iter().zip(&b.layout.blocks) {
+        assert_eq!(x.wall, y.wall.map(to_a));
+        assert_eq!(x.corners, y.corners);
+    }
+    for (x, y) in a.layout.edges.iter().zip(&b.layout.edges) {
+        match (x.kind, y.kind) {
+            (EdgeKind::Wall(p), EdgeKind::Wall(q)) => assert_eq!(p, to_a(q)),
+            (p, q) => assert_eq!(p, q),
+        }
+    }
 }
 
 /// The circle `c` of `domain` (`-1` the bounding circle).
@@ -66,32 +95,14 @@ fn shuffled_holes_give_the_same_mesh_in_their_own_ids() {
         ..Options::default()
     };
     assert!(hole_order(&domain, &options).is_some());
-    let (other, from) = shuffled(&domain, 5);
+    let from = permutation(n, 5);
+    let other = Domain::bounded(domain.bounding(), permuted(domain.holes(), &from))
+        .expect("the same circles");
     let (a, b) = (
         mesh(&domain, &options).expect("mesh"),
         mesh(&other, &options).expect("mesh"),
     );
-    assert_eq!(common::node_bits(&a), common::node_bits(&b));
-    assert_eq!(a.layout.blocks.len(), b.layout.blocks.len());
-    let h = n as CircleId;
-    // b's hole j is a's hole from[j]; the bounding circle and inserted holes keep their ids.
-    let to_a = |c: CircleId| {
-        if (0..h).contains(&c) {
-            from[c as usize] as CircleId
-        } else {
-            c
-        }
-    };
-    for (x, y) in a.layout.blocks.iter().zip(&b.layout.blocks) {
-        assert_eq!(x.wall, y.wall.map(to_a));
-        assert_eq!(x.corners, y.corners);
-    }
-    for (x, y) in a.layout.edges.iter().zip(&b.layout.edges) {
-        match (x.kind, y.kind) {
-            (EdgeKind::Wall(p), EdgeKind::Wall(q)) => assert_eq!(p, to_a(q)),
-            (p, q) => assert_eq!(p, q),
-        }
-    }
+    assert_same_but_for_the_ids(&a, &b, &from);
     assert_eq!(
         walls_on_their_circles(&domain, &a),
         walls_on_their_circles(&other, &b)
@@ -191,34 +202,14 @@ fn periodic_boxes_are_meshed_in_a_spatial_order_too() {
         ..Options::default()
     };
     assert!(periodic_hole_order(&pd, &options).is_some());
-    let mut r = SplitMix64(8);
-    let mut from: Vec<usize> = (0..n).collect();
-    for i in (1..n).rev() {
-        from.swap(i, (r.next_u64() % (i as u64 + 1)) as usize);
-    }
-    let holes: Vec<Circle> = from.iter().map(|&i| pd.holes()[i]).collect();
-    let other = PeriodicDomain::new(pd.size(), holes).expect("the same circles");
+    let from = permutation(n, 8);
+    let other =
+        PeriodicDomain::new(pd.size(), permuted(pd.holes(), &from)).expect("the same circles");
     let (a, b) = (
         mesh_periodic(&pd, &options).expect("mesh"),
         mesh_periodic(&other, &options).expect("mesh"),
     );
-    assert_eq!(common::node_bits(&a), common::node_bits(&b));
-    let to_a = |c: CircleId| {
-        if (0..n as CircleId).contains(&c) {
-            from[c as usize] as CircleId
-        } else {
-            c
-        }
-    };
-    for (x, y) in a.layout.blocks.iter().zip(&b.layout.blocks) {
-        assert_eq!(x.wall, y.wall.map(to_a));
-    }
-    for (x, y) in a.layout.edges.iter().zip(&b.layout.edges) {
-        match (x.kind, y.kind) {
-            (EdgeKind::Wall(p), EdgeKind::Wall(q)) => assert_eq!(p, to_a(q)),
-            (p, q) => assert_eq!(p, q),
-        }
-    }
+    assert_same_but_for_the_ids(&a, &b, &from);
     let checks = Checks {
         no_inverted_cells: true,
     };
