@@ -358,10 +358,13 @@ impl<'de> Deserialize<'de> for LimitedHoles {
 }
 
 impl Domain {
-    /// A domain of circles already validated as a domain (the holes of a valid domain in
-    /// another order, [`crate::spatial_order`]): no check is made again.
-    pub(crate) fn from_valid_parts(bounding: Circle, holes: Vec<Circle>) -> Domain {
-        Domain { bounding, holes }
+    /// The same domain with its holes in `order` (`order[k]` the hole that comes `k`-th; a
+    /// permutation of the hole ids, [`crate::spatial_order`]): no check is made again.
+    pub(crate) fn reordered(&self, order: &[u32]) -> Domain {
+        Domain {
+            bounding: self.bounding,
+            holes: order.iter().map(|&i| self.holes[i as usize]).collect(),
+        }
     }
 
     /// Default limit on the number of holes.

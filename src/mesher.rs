@@ -209,16 +209,13 @@ pub fn mesh(domain: &Domain, options: &Options) -> Result<Mesh, MeshError> {
 /// hole ids).
 fn mesh_here(domain: &Domain, options: &Options) -> Result<Mesh, MeshError> {
     validate(domain, options)?;
-    match crate::spatial_order::hole_order(domain, options) {
-        Some(order) => {
-            let sorted = crate::spatial_order::reordered(domain, &order);
-            let renaming = crate::spatial_order::Renaming::new(order);
-            mesh_in_order(&sorted, &renaming.options(options))
-                .map(|m| renaming.mesh(m))
-                .map_err(|e| renaming.error(e))
-        }
-        None => mesh_in_order(domain, options),
-    }
+    crate::spatial_order::mesh_in_spatial_order(
+        domain,
+        domain.holes(),
+        options,
+        Domain::reordered,
+        mesh_in_order,
+    )
 }
 
 /// The checks of the options against `domain` (their messages name the caller's circle ids).

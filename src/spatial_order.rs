@@ -18,8 +18,8 @@
 //! and so are those of the options ([`Options::circle_clustering`],
 //! [`Options::wall_cells`]). Inserted holes (ids from the hole count up) keep their ids.
 //!
-//! Periodic boxes likewise through [`crate::mesh_periodic`] (1e5 periodic bubbles: 16.7 ->
-//! 14.9 s from a sorted input, 2 pairs), but not through
+//! Periodic boxes likewise through [`crate::mesh_periodic`] (1e5 periodic bubbles: 15.9 ->
+//! 14.3 s, 2 pairs), but not through
 //! [`crate::periodic::mesh_periodic_frame`], which also gives the medial triples and block
 //! keys in hole ids (normalised per image, for a sequence's comparisons).
 //!
@@ -30,32 +30,20 @@
 //! [`Block::wall`]: crate::layout::Block::wall
 //! [`CocircularGroup::holes`]: crate::cocircular::CocircularGroup::holes
 
-use crate::domain::{CircleId, Domain};
+use crate::domain::{Circle, CircleId};
 use crate::layout::EdgeKind;
 use crate::mesh::Mesh;
 use crate::mesher::{MeshError, Options};
-use crate::periodic::PeriodicDomain;
 use rayon::prelude::*;
 
 /// Layouts with at least this many holes are meshed in Hilbert order (1e5 random bubbles:
 /// 6.60 -> 6.41 s; 1e4: the same time within the noise, 566 against 568 ms).
 pub const SPATIAL_ORDER_MIN_HOLES: usize = 4096;
 
-/// The order in which to mesh the holes of `domain` (`order[k]` the input id of the `k`-th
-/// hole meshed), or `None` to keep the input order: fewer than [`SPATIAL_ORDER_MIN_HOLES`]
-/// holes, imposed counts, or holes already in that order.
-pub fn hole_order(domain: &Domain, options: &Options) -> Option<Vec<u32>> {
-    order_of(domain.holes(), options)
-}
-
-/// [`hole_order`] of a periodic box's holes (the order [`crate::mesh_periodic`] meshes them
-/// in; [`crate::periodic::mesh_periodic_frame`], whose medial triples and block keys a
-/// sequence compares in hole ids, keeps the input order).
-pub fn periodic_hole_order(domain: &PeriodicDomain, options: &Options) -> Option<Vec<u32>> {
-    order_of(domain.holes(), options)
-}
-
-fn order_of(holes: &[crate::domain::Circle], options: &Options) -> Option<Vec<u32>> {
+/// The order in which to mesh `holes` (a domain's, bounded or periodic; `order[k]` the input
+/// id of the `k`-th hole meshed), or `None` to keep the input order: fewer than
+/// [`SPATIAL_ORDER_MIN_HOLES`] holes, imposed counts, or holes already in that order.
+pub fn hole_order(holes: &[Circle], options: &Options) -> Option<Vec<u32>> {
     if holes.len() < SPATIAL_ORDER_MIN_HOLES
         || holes.len() > u32::MAX as usize
         || options.imposed_counts.is_some()
@@ -68,13 +56,27 @@ fn order_of(holes: &[crate::domain::Circle], options: &Options) -> Option<Vec<u3
     (!sorted).then_some(order)
 }
 
-/// The holes of `domain` in `order` (the same bounding circle).
-pub fn reordered(domain: &Domain, order: &[u32]) -> Domain {
-    let holes = domain.holes();
-    Domain::from_valid_parts(
-        domain.bounding(),
-        order.iter().map(|&i| holes[i as usize]).collect(),
-    )
+/// `mesh` of `domain` (whose holes are `holes`) with `options`, options checked: in
+/// [`hole_order`] when there is one (the domain `reordered`, the options renamed to the
+/// meshed ids, the mesh and its errors renamed back, [`Renaming`]), else as given. The one
+/// round trip of [`crate::mesh()`] and [`crate::mesh_periodic`].
+pub(crate) fn mesh_in_spatial_order<D>(
+    domain: &D,
+    holes: &[Circle],
+    options: &Options,
+    reordered: impl FnOnce(&D, &[u32]) -> D,
+    mesh: impl Fn(&D, &Options) -> Result<Mesh, MeshError>,
+) -> Result<Mesh, MeshError> {
+    match hole_order(holes, options) {
+        Some(order) => {
+            let sorted = reordered(domain, &order);
+            let renaming = Renaming::new(order);
+            mesh(&sorted, &renaming.options(options))
+                .map(|m| renaming.mesh(m))
+                .map_err(|e| renaming.error(e))
+        }
+        None => mesh(domain, options),
+    }
 }
 
 /// The input id of each meshed hole id: `input[k] = order[k]`, and the rank of each input id

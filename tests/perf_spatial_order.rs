@@ -94,7 +94,7 @@ fn shuffled_holes_give_the_same_mesh_in_their_own_ids() {
         block_cells: Some(4),
         ..Options::default()
     };
-    assert!(hole_order(&domain, &options).is_some());
+    assert!(hole_order(domain.holes(), &options).is_some());
     let from = permutation(n, 5);
     let other = Domain::bounded(domain.bounding(), permuted(domain.holes(), &from))
         .expect("the same circles");
@@ -119,7 +119,7 @@ fn per_circle_options_name_the_callers_circles() {
         wall_cells: vec![(named, 7)],
         ..Options::default()
     };
-    assert!(hole_order(&domain, &options).is_some());
+    assert!(hole_order(domain.holes(), &options).is_some());
     let m = mesh(&domain, &options).expect("mesh");
     let mut at_named = 0;
     for (block, g) in m.layout.blocks.iter().zip(&m.grids) {
@@ -142,7 +142,7 @@ fn cocircular_groups_name_the_callers_holes() {
         block_cells: Some(2),
         ..Options::default()
     };
-    assert!(hole_order(&domain, &options).is_some());
+    assert!(hole_order(domain.holes(), &options).is_some());
     let m = mesh(&domain, &options).expect("mesh");
     assert!(
         m.cocircular_groups.len() > 3000,
@@ -169,19 +169,19 @@ fn cocircular_groups_name_the_callers_holes() {
 #[test]
 fn small_layouts_keep_the_input_order() {
     let small = layouts::bubbles(SPATIAL_ORDER_MIN_HOLES - 1, 3).expect("layout");
-    assert!(hole_order(&small, &Options::default()).is_none());
+    assert!(hole_order(small.holes(), &Options::default()).is_none());
     let large = layouts::bubbles(SPATIAL_ORDER_MIN_HOLES, 3).expect("layout");
-    assert!(hole_order(&large, &Options::default()).is_some());
+    assert!(hole_order(large.holes(), &Options::default()).is_some());
     let imposed = Options {
         imposed_counts: Some(Default::default()),
         ..Options::default()
     };
-    assert!(hole_order(&large, &imposed).is_none());
+    assert!(hole_order(large.holes(), &imposed).is_none());
     // Already in Hilbert order: nothing to do.
-    let order = hole_order(&large, &Options::default()).expect("an order");
+    let order = hole_order(large.holes(), &Options::default()).expect("an order");
     let holes: Vec<Circle> = order.iter().map(|&i| large.holes()[i as usize]).collect();
     let sorted = Domain::bounded(large.bounding(), holes).expect("the same circles");
-    assert!(hole_order(&sorted, &Options::default()).is_none());
+    assert!(hole_order(sorted.holes(), &Options::default()).is_none());
 }
 
 /// A periodic box through `mesh_periodic`: shuffled holes give the same nodes bit for bit and
@@ -193,7 +193,6 @@ fn small_layouts_keep_the_input_order() {
 fn periodic_boxes_are_meshed_in_a_spatial_order_too() {
     use medial_blocks::fuzzing::{periodic::check_periodic_mesh, Checks};
     use medial_blocks::periodic::mesh_periodic_frame;
-    use medial_blocks::spatial_order::periodic_hole_order;
     use medial_blocks::{mesh_periodic, PeriodicDomain};
     let n = SPATIAL_ORDER_MIN_HOLES + 50;
     let pd = layouts::periodic_bubbles(n, 4).expect("layout");
@@ -201,7 +200,7 @@ fn periodic_boxes_are_meshed_in_a_spatial_order_too() {
         block_cells: Some(3),
         ..Options::default()
     };
-    assert!(periodic_hole_order(&pd, &options).is_some());
+    assert!(hole_order(pd.holes(), &options).is_some());
     let from = permutation(n, 8);
     let other =
         PeriodicDomain::new(pd.size(), permuted(pd.holes(), &from)).expect("the same circles");

@@ -110,6 +110,7 @@ pub(crate) fn insertion_order(pts: &[Point]) -> Vec<u32> {
 /// Point indices along a Hilbert curve over the points' bounding box (ties, points in one
 /// cell of the `2^14 x 2^14` grid, by index): the order alone, without [`insertion_order`]'s
 /// rounds. Points must be finite and fewer than 2^32.
+///
 /// Keyed and sorted on the thread pool (the keys are distinct: any pool gives this order).
 pub(crate) fn hilbert_order(pts: &[Point]) -> Vec<u32> {
     let cell = hilbert_cells(pts);

@@ -2267,21 +2267,14 @@ pub type Triples = Vec<[CircleKey; 3]>;
 pub fn mesh_periodic(pd: &PeriodicDomain, options: &Options) -> Result<Mesh, MeshError> {
     timings::on_pool_worker(|| {
         // The options are checked against the caller's hole ids before any renaming.
-        crate::ranges::check_ranges(options)?;
-        crate::mesher::validate_circle_ids(options, 0, pd.hole_count())?;
-        if options.mode == Mode::Exact {
-            exact_mode::validate_options(options)?;
-        }
-        match crate::spatial_order::periodic_hole_order(pd, options) {
-            Some(order) => {
-                let sorted = pd.reordered(&order);
-                let renaming = crate::spatial_order::Renaming::new(order);
-                periodic_frame_here(&sorted, &renaming.options(options))
-                    .map(|f| renaming.mesh(f.mesh))
-                    .map_err(|e| renaming.error(e))
-            }
-            None => periodic_frame_here(pd, options).map(|f| f.mesh),
-        }
+        validate(pd, options)?;
+        crate::spatial_order::mesh_in_spatial_order(
+            pd,
+            pd.holes(),
+            options,
+            PeriodicDomain::reordered,
+            |d, o| periodic_frame_here(d, o).map(|f| f.mesh),
+        )
     })
 }
 
@@ -2304,15 +2297,25 @@ pub fn mesh_periodic_frame(
     pd: &PeriodicDomain,
     options: &Options,
 ) -> Result<PeriodicFrame, MeshError> {
-    timings::on_pool_worker(|| periodic_frame_here(pd, options))
+    timings::on_pool_worker(|| {
+        validate(pd, options)?;
+        periodic_frame_here(pd, options)
+    })
 }
 
-/// [`mesh_periodic_frame`] on this thread.
-fn periodic_frame_here(pd: &PeriodicDomain, options: &Options) -> Result<PeriodicFrame, MeshError> {
+/// The checks of the options against `pd` (their messages name the caller's circle ids).
+fn validate(pd: &PeriodicDomain, options: &Options) -> Result<(), MeshError> {
     crate::ranges::check_ranges(options)?;
     crate::mesher::validate_circle_ids(options, 0, pd.hole_count())?;
     if options.mode == Mode::Exact {
         exact_mode::validate_options(options)?;
+    }
+    Ok(())
+}
+
+/// [`mesh_periodic_frame`] on this thread, the options checked.
+fn periodic_frame_here(pd: &PeriodicDomain, options: &Options) -> Result<PeriodicFrame, MeshError> {
+    if options.mode == Mode::Exact {
         if let Some(done) = mesh_periodic_exact(pd, options)? {
             return Ok(done);
         }
