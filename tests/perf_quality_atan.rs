@@ -7,8 +7,8 @@
 use medial_blocks::layouts::SplitMix64;
 use medial_blocks::quality::angle_deg;
 
-/// The replaced formula.
-fn libm_deg(y: f64, x: f64) -> f64 {
+/// The replaced formula (libm's `atan2` in degrees, in `[0, 360)`).
+pub(crate) fn libm_deg(y: f64, x: f64) -> f64 {
     let a = y.atan2(x).to_degrees();
     if a < 0.0 {
         a + 360.0

@@ -21,12 +21,7 @@ fn products(p: &[Point; 4], k: usize) -> (f64, f64) {
 /// libm's angle of corner `k`, degrees, in `[0, 360)`.
 fn libm_angle(p: &[Point; 4], k: usize) -> f64 {
     let (c, d) = products(p, k);
-    let a = c.atan2(d).to_degrees();
-    if a < 0.0 {
-        a + 360.0
-    } else {
-        a
-    }
+    crate::perf_quality_atan::libm_deg(c, d)
 }
 
 /// Distance between two angles on the circle, degrees.
