@@ -601,7 +601,15 @@ struct Sampled {
     samples: Samples,
     tri: Triangulation,
     medial: MedialGraph,
+    /// The exact circles of the arc orbit representatives' ends ([`select_collapse`]): the
+    /// ends (sorted) and their circles, solved at the first extraction of this sampling and
+    /// reused by the next ones (its collapse attempts and exact mode's local fix,
+    /// [`reextract`]), which ask for the same vertices (issue 8).
+    end_circles: std::sync::OnceLock<EndCircles>,
 }
+
+/// What [`Sampled::end_circles`] holds: vertex ids and their exact circles, same order.
+type EndCircles = (Vec<u32>, Vec<Option<Apollonius>>);
 
 impl std::fmt::Debug for Sampled {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
@@ -721,6 +729,7 @@ fn layout_from(
             samples,
             tri,
             medial,
+            end_circles: std::sync::OnceLock::new(),
         };
         let extracted = timings::span("blocking", || {
             extract_from(pd, options, &sampled, &[], poor_limit, check_backwards)
@@ -777,6 +786,7 @@ fn extract_from(
         &sampled.samples,
         &sampled.tri,
         &sampled.medial,
+        &sampled.end_circles,
         options.collapse_fraction,
         how,
         forced,
@@ -1017,6 +1027,7 @@ fn select_collapse(
     tri: &Triangulation,
     points: &[Point],
     medial: &MedialGraph,
+    end_circles: &std::sync::OnceLock<EndCircles>,
     vkeys: &[Option<VertexKey>],
     akeys: &[Option<ArcKey>],
     arc_by_key: &HashMap<ArcKey, usize>,
@@ -1032,10 +1043,15 @@ fn select_collapse(
     let mut reps: Vec<usize> = rep_of.iter().flatten().copied().collect();
     reps.sort_unstable();
     reps.dedup();
-    let mut ends: Vec<u32> = reps.iter().flat_map(|&r| medial.arcs[r].ends).collect();
-    ends.sort_unstable();
-    ends.dedup();
-    let solved = cocircular::vertex_circles_of(domain, medial, &ends);
+    // The same for every extraction of one sampling (`reps` depends on the sampling alone):
+    // solved once.
+    let (ends, solved) = end_circles.get_or_init(|| {
+        let mut ends: Vec<u32> = reps.iter().flat_map(|&r| medial.arcs[r].ends).collect();
+        ends.sort_unstable();
+        ends.dedup();
+        let solved = cocircular::vertex_circles_of(domain, medial, &ends);
+        (ends, solved)
+    });
     // Vertex `v`'s circle, when `v` is an end of a representative and solved (`ends` is
     // sorted).
     let circle = |v: u32| -> Option<&Apollonius> {
@@ -1053,8 +1069,11 @@ fn select_collapse(
                 .map(|v| vkeys[v as usize].map(|k| normalise_vertex(&k)))
         })
         .collect();
-    let mut orbit_index: HashMap<VertexKey, usize> = HashMap::default();
-    let mut orbit_ends: HashMap<usize, OrbitEnds> = HashMap::default();
+    let mut orbit_index: HashMap<VertexKey, usize> =
+        HashMap::with_capacity_and_hasher(2 * reps.len(), Default::default());
+    // Per medial arc (a dense table rather than a map keyed by arc id: issue 8), the
+    // vertex orbits of a representative's two ends with their shifts.
+    let mut orbit_ends: Vec<Option<OrbitEnds>> = vec![None; medial.arcs.len()];
     for (&r, ends) in reps.iter().zip(&normalised) {
         let mut out = [(0, (0, 0)); 2];
         let mut ok = true;
@@ -1068,7 +1087,7 @@ fn select_collapse(
             }
         }
         if ok {
-            orbit_ends.insert(r, out);
+            orbit_ends[r] = Some(out);
         }
     }
     let radius = |v: u32| match circle(v) {
@@ -1081,9 +1100,7 @@ fn select_collapse(
     let measured: Vec<Option<Option<f64>>> = reps
         .par_iter()
         .map(|&r| {
-            if !orbit_ends.contains_key(&r) {
-                return None;
-            }
+            orbit_ends[r]?;
             let arc = &medial.arcs[r];
             let [a, b] = arc.ends;
             let same = match (circle(a), circle(b)) {
@@ -1124,7 +1141,8 @@ fn select_collapse(
     };
     // The two plane clusters an arc orbit joins, as (root, shift) pairs.
     let clusters = |forest: &OrbitForest, r: usize| {
-        orbit_ends[&r].map(|(x, s)| {
+        let ends = orbit_ends[r].expect("a representative with both end orbits");
+        ends.map(|(x, s)| {
             let (root, off) = forest.find(x);
             (root, (s.0 + off.0, s.1 + off.1))
         })
@@ -1135,22 +1153,23 @@ fn select_collapse(
     // orbits at that tree's vertex orbits are looked at (issue 8: every arc orbit was, for
     // each arc orbit collapsed, 1.1 s at 100 000 holes).
     let mut incident: Vec<Vec<usize>> = vec![Vec::new(); n];
-    let mut at_ends: Vec<usize> = orbit_ends.keys().copied().collect();
-    at_ends.sort_unstable();
-    for &f in &at_ends {
-        for (x, _) in orbit_ends[&f] {
+    // In increasing arc order, as before.
+    for (f, ends) in orbit_ends.iter().enumerate() {
+        for &(x, _) in ends.iter().flatten() {
             incident[x].push(f);
         }
     }
     let mut tree: Vec<Vec<usize>> = (0..n).map(|x| vec![x]).collect();
-    let mut taken: HashMap<usize, bool> = HashMap::default();
+    // Per medial arc: collapsed as a zero-length arc, as a short one, or not (a dense table
+    // rather than a map: issue 8).
+    let mut taken: Vec<Option<bool>> = vec![None; medial.arcs.len()];
     for &(r, is_zero) in &order {
         let c = clusters(&forest, r);
         if c[0].0 == c[1].0 {
             continue;
         }
         let parallel = tree[c[0].0].iter().flat_map(|&x| &incident[x]).any(|&f| {
-            if f == r || taken.contains_key(&f) {
+            if f == r || taken[f].is_some() {
                 return false;
             }
             let g = clusters(&forest, f);
@@ -1167,15 +1186,15 @@ fn select_collapse(
         forest.link[y] = (c[0].1 .0 - c[1].1 .0, c[0].1 .1 - c[1].1 .1);
         let moved = std::mem::take(&mut tree[y]);
         tree[x].extend(moved);
-        taken.insert(r, is_zero);
+        taken[r] = Some(is_zero);
     }
     let flags: Vec<bool> = rep_of
         .iter()
-        .map(|r| r.is_some_and(|r| taken.contains_key(&r)))
+        .map(|r| r.is_some_and(|r| taken[r].is_some()))
         .collect();
     let short = rep_of
         .iter()
-        .map(|r| r.is_some_and(|r| taken.get(&r) == Some(&false)))
+        .map(|r| r.is_some_and(|r| taken[r] == Some(false)))
         .collect();
     Selection {
         flags,
@@ -1213,6 +1232,7 @@ fn extract(
     samples: &Samples,
     triangulation: &Triangulation,
     medial: &MedialGraph,
+    end_circles: &std::sync::OnceLock<EndCircles>,
     fraction: f64,
     how: collapse::ArcLength,
     forced: &[ArcKey],
@@ -1277,6 +1297,7 @@ fn extract(
             triangulation,
             &samples.points,
             medial,
+            end_circles,
             &vkeys,
             &akeys,
             &arc_by_key,
@@ -3415,6 +3436,43 @@ mod tests {
         }
         // The file's first layout has arcs running backwards (`tests/perf_periodic.rs`).
         assert_eq!(seen, [true, true]);
+    }
+
+    /// The end circles a sampling keeps from its first extraction (issue 8,
+    /// [`Sampled::end_circles`]) are those solved afresh for the same vertices, and the local
+    /// fix's extraction, which finds them kept, gives the layout of one that solves them
+    /// itself (a copy of the sampling with none kept).
+    #[test]
+    fn kept_end_circles_are_the_fresh_ones_and_give_the_same_layout() {
+        use crate::exact_mode::periodic::{build_unless_backwards, Built};
+        let (pd, options, nearly_zero) = backwards_box();
+        let sampling = crate::mesher::exact_sampling();
+        let p = layout_keeping(&pd, &nearly_zero, &sampling).unwrap();
+        let sampled = p.sampled.as_deref().unwrap();
+        let (ends, kept) = sampled.end_circles.get().expect("kept by the extraction");
+        assert!(ends.len() > 10 && ends.windows(2).all(|w| w[0] < w[1]));
+        assert!(ends
+            .iter()
+            .all(|&v| (v as usize) < sampled.medial.vertices.len()));
+        let fresh = cocircular::vertex_circles_of(&sampled.t.domain, &sampled.medial, ends);
+        assert_eq!(kept, &fresh);
+        assert!(kept.iter().filter(|c| c.is_some()).count() > 10);
+        let pb = p.blocking.as_ref().expect("exact input");
+        let Built::Backwards(arcs) = build_unless_backwards(pb, &options, &[]).unwrap() else {
+            panic!("the first layout has arcs running backwards");
+        };
+        let keys: Vec<ArcKey> = arcs.iter().map(|&o| p.arc_keys[o]).collect();
+        let with_kept = reextract(&pd, &nearly_zero, sampled, &keys).unwrap();
+        let again = layout_keeping(&pd, &nearly_zero, &sampling).unwrap();
+        let mut none_kept = std::sync::Arc::into_inner(again.sampled.unwrap()).unwrap();
+        none_kept.end_circles = std::sync::OnceLock::new();
+        let solved = reextract(&pd, &nearly_zero, &none_kept, &keys).unwrap();
+        assert!(none_kept.end_circles.get().is_some());
+        assert_eq!(with_kept.layout, solved.layout);
+        assert_eq!(with_kept.arc_keys, solved.arc_keys);
+        assert_eq!(with_kept.collapsed_arcs, solved.collapsed_arcs);
+        assert_eq!(with_kept.triples, solved.triples);
+        assert!(with_kept.collapsed_arcs > p.collapsed_arcs);
     }
 
     /// Exact mode's local fix (issue 8): the layout extracted again from the same sampling
