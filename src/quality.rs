@@ -735,6 +735,25 @@ mod tests {
             prop_assert_eq!(has_corner_below(&g, deg), corner_below_by_cells(&g, deg));
         }
 
+        /// A block with an inverted cell (as [`inverted_blocks`] finds them) has a corner below
+        /// any angle in `(0, 90)` ([`has_corner_below`]): periodic exact mode's strict check
+        /// takes the second for both.
+        #[test]
+        fn inverted_cells_have_a_corner_below_any_angle(
+            ni in 1usize..5,
+            nj in 1usize..4,
+            deg in prop_oneof![Just(1e-9), Just(5.0), 1e-6..89.9f64],
+            v in proptest::collection::vec(coord(), 60),
+        ) {
+            let nodes = (0..(ni + 1) * (nj + 1)).map(|k| [v[2 * k], v[2 * k + 1]]).collect();
+            let g = BlockGrid { ni, nj, nodes };
+            let inverted = inverted_blocks(std::slice::from_ref(&g)) == [0];
+            prop_assert_eq!(inverted, grid_inverted_cells(&g) > 0);
+            if inverted {
+                prop_assert!(has_corner_below(&g, deg));
+            }
+        }
+
         /// Any split of the values into chunks reduced with `max_nan` in any grouping gives
         /// the sequential fold's result, bit for bit (NaN when any value is NaN).
         #[test]

@@ -2890,23 +2890,24 @@ fn frame_of(
         }
         Err(e) => return Err(e),
     };
+    // The blocks with an inverted cell, and when `strict` those with a corner below
+    // `MERGED_MIN_ANGLE_DEG`, in increasing order. Strict takes one pass over the cells (issue
+    // 8: it took two): a cell with an inverted corner (cross product `<= 0` or NaN) has a
+    // corner below any angle by the same products ([`crate::quality::has_corner_below`],
+    // tested in `quality`'s `inverted_cells_have_a_corner_below_any_angle`).
     let bad: Vec<usize> = timings::span("quality_check", || {
-        let mut bad = crate::quality::inverted_blocks(&x.grids);
         if strict {
-            bad.extend(
-                x.grids
-                    .par_iter()
-                    .enumerate()
-                    .filter(|(_, g)| {
-                        crate::quality::has_corner_below(g, crate::mesher::MERGED_MIN_ANGLE_DEG)
-                    })
-                    .map(|(b, _)| b)
-                    .collect::<Vec<usize>>(),
-            );
+            x.grids
+                .par_iter()
+                .enumerate()
+                .filter(|(_, g)| {
+                    crate::quality::has_corner_below(g, crate::mesher::MERGED_MIN_ANGLE_DEG)
+                })
+                .map(|(b, _)| b)
+                .collect()
+        } else {
+            crate::quality::inverted_blocks(&x.grids)
         }
-        bad.sort_unstable();
-        bad.dedup();
-        bad
     });
     // (No arc of a whole build runs backwards: `build_unless_backwards`.)
     if !bad.is_empty() {
