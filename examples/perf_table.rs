@@ -185,6 +185,24 @@ fn load_average() -> String {
         .unwrap_or_else(|| "n/a".into())
 }
 
+/// Microseconds per 4 KB page to touch `bytes` of memory fresh from the kernel, one write per
+/// page: what the first touch of a large mesh's nodes costs on this machine (on the project's
+/// virtual machines 1.5 to 8, depending on whether the host must supply the page; issue 8,
+/// docs/performance-history.md, fortieth session).
+fn first_touch_us(bytes: usize) -> f64 {
+    // Large enough for malloc to map it on its own: fresh pages, untouched until written.
+    let mut v: Vec<u8> = Vec::with_capacity(bytes);
+    let p = v.as_mut_ptr();
+    let t = std::time::Instant::now();
+    for off in (0..bytes).step_by(4096) {
+        // SAFETY: `off < bytes`, inside the allocation; a byte written, never read back.
+        unsafe { p.add(off).write_volatile(1) };
+    }
+    let e = t.elapsed().as_secs_f64();
+    drop(v);
+    e * 1e6 / bytes.div_ceil(4096) as f64
+}
+
 /// `MemAvailable` of /proc/meminfo in bytes.
 fn mem_available() -> Option<u64> {
     let text = std::fs::read_to_string("/proc/meminfo").ok()?;
@@ -561,6 +579,7 @@ fn main() {
         }
     };
     let load_before = load_average();
+    let touch_before = first_touch_us(256 << 20);
     let dir = tempfile::tempdir().expect("temporary directory");
     let mut rows: Vec<Row> = Vec::new();
     let mut notes: Vec<String> = Vec::new();
@@ -606,7 +625,9 @@ fn main() {
     }
     println!(
         "Exact mode, `--block-cells {}`, `--format {}`{}, {}bubbles seed {}, {} threads ({}); \
-         each row the median of {} runs; load average {load_before} before, {} after the runs.\n",
+         each row the median of {} runs; load average {load_before} before, {} after the runs; \
+         first touch of fresh memory {touch_before:.2} us per 4 KB page before, {:.2} after \
+         (256 MiB, one write per page).\n",
         a.block_cells,
         a.format,
         if a.huge_pages { ", `--huge-pages`" } else { "" },
@@ -617,7 +638,8 @@ fn main() {
         a.runs
             .map_or("5 (1e2, 1e3), 3 (1e4) and 1 (1e5)".to_string(), |r| r
                 .to_string()),
-        load_average()
+        load_average(),
+        first_touch_us(256 << 20)
     );
     print_table(&rows);
     print_cpu_table(&rows);
