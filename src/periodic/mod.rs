@@ -960,16 +960,26 @@ struct Early {
 type ClusterKey = Vec<SampleKey>;
 
 /// The orbit representative of a cluster key and the shift from it: `key = rep + shift`.
+///
+/// The least of the key moved back by the tile shift of each of its samples, each distinct
+/// shift tried once (issue 8: the samples of a vertex are mostly in one tile, and each try
+/// builds and sorts a key; samples with the same shift give the same candidate, so the least
+/// is the same).
 fn normalise_cluster(key: &[SampleKey]) -> (ClusterKey, (i32, i32)) {
-    key.iter()
-        .map(|s| {
-            let d = (s.2, s.3);
-            let mut k: ClusterKey = key.iter().map(|x| shift_sample(*x, (-d.0, -d.1))).collect();
-            k.sort_unstable();
-            (k, d)
-        })
-        .min()
-        .unwrap_or_else(|| (key.to_vec(), (0, 0)))
+    let mut best: Option<(ClusterKey, (i32, i32))> = None;
+    for (i, s) in key.iter().enumerate() {
+        let d = (s.2, s.3);
+        if key[..i].iter().any(|x| (x.2, x.3) == d) {
+            continue;
+        }
+        let mut k: ClusterKey = key.iter().map(|x| shift_sample(*x, (-d.0, -d.1))).collect();
+        k.sort_unstable();
+        let candidate = (k, d);
+        if best.as_ref().is_none_or(|b| candidate < *b) {
+            best = Some(candidate);
+        }
+    }
+    best.unwrap_or_else(|| (key.to_vec(), (0, 0)))
 }
 
 /// The arcs of the tiling chosen for collapse (see [`select_collapse`]).
@@ -2150,10 +2160,9 @@ fn exact_input_clusters(
             .ok_or_else(|| bad("arc end cluster"))?;
         let key = ckeys
             .get(c as usize)
-            .cloned()
-            .flatten()
+            .and_then(Option::as_ref)
             .ok_or_else(|| bad("arc end key"))?;
-        let (rep, d) = normalise_cluster(&key);
+        let (rep, d) = normalise_cluster(key);
         Ok((*index.get(&rep).ok_or_else(|| bad("arc end orbit"))?, d))
     };
     let arcs = arc_orbits
@@ -2962,6 +2971,45 @@ pub fn period_of(layout: &BlockLayout) -> Option<[f64; 2]> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// [`normalise_cluster`] as it was: one candidate per sample, the least taken.
+    fn normalise_cluster_every_sample(key: &[SampleKey]) -> (ClusterKey, (i32, i32)) {
+        key.iter()
+            .map(|s| {
+                let d = (s.2, s.3);
+                let mut k: ClusterKey =
+                    key.iter().map(|x| shift_sample(*x, (-d.0, -d.1))).collect();
+                k.sort_unstable();
+                (k, d)
+            })
+            .min()
+            .unwrap_or_else(|| (key.to_vec(), (0, 0)))
+    }
+
+    proptest::proptest! {
+        /// Trying each distinct tile shift once gives the representative and shift of trying
+        /// every sample's (issue 8), for sorted keys (as the extraction makes them) and any
+        /// other, with samples in one tile, in several and repeated.
+        #[test]
+        fn normalise_cluster_tries_each_shift_once(
+            raw in proptest::collection::vec((0u32..4, 0u32..3, -2i32..3, -2i32..3), 0..12),
+            sorted in proptest::bool::ANY,
+            one_tile in proptest::bool::ANY,
+        ) {
+            let mut key: ClusterKey = raw
+                .iter()
+                .map(|&(c, i, a, b)| if one_tile { (c, i, 1, -1) } else { (c, i, a, b) })
+                .collect();
+            if sorted {
+                key.sort_unstable();
+                key.dedup();
+            }
+            proptest::prop_assert_eq!(
+                normalise_cluster(&key),
+                normalise_cluster_every_sample(&key)
+            );
+        }
+    }
 
     /// The array of copies may reach 7 long periods a side: `7 x 7` for a square box, up to
     /// `7 A` copies along the short side of a box of aspect ratio `A` (odd counts, so at most
