@@ -138,25 +138,35 @@ fn shift_arc(a: &ArcKey, d: (i32, i32)) -> ArcKey {
 }
 
 /// The orbit representative of a vertex key and the shift from it: `key = rep + shift`.
+/// The least of the key moved back by each of its samples' tile shifts, each distinct shift
+/// tried once (as [`normalise_cluster`]).
 fn normalise_vertex(v: &VertexKey) -> (VertexKey, (i32, i32)) {
-    v.iter()
-        .map(|s| {
-            let d = (s.2, s.3);
-            (shift_vertex(v, (-d.0, -d.1)), d)
-        })
-        .min()
-        .unwrap_or((*v, (0, 0)))
+    let mut best: Option<(VertexKey, (i32, i32))> = None;
+    for (i, s) in v.iter().enumerate() {
+        let d = (s.2, s.3);
+        if v[..i].iter().any(|x| (x.2, x.3) == d) {
+            continue;
+        }
+        let candidate = (shift_vertex(v, (-d.0, -d.1)), d);
+        if best.is_none_or(|b| candidate < b) {
+            best = Some(candidate);
+        }
+    }
+    best.unwrap_or((*v, (0, 0)))
 }
 
-/// The orbit representative of an arc key and the shift from it.
+/// The orbit representative of an arc key and the shift from it: the least of the key moved
+/// back by the tile shift of either circle (once when both circles are in one tile).
 fn normalise_arc(a: &ArcKey) -> (ArcKey, (i32, i32)) {
-    a.0.iter()
-        .map(|c| {
-            let d = (c.1, c.2);
-            (shift_arc(a, (-d.0, -d.1)), d)
-        })
-        .min()
-        .unwrap_or((*a, (0, 0)))
+    let [c0, c1] = a.0;
+    let d0 = (c0.1, c0.2);
+    let first = (shift_arc(a, (-d0.0, -d0.1)), d0);
+    let d1 = (c1.1, c1.2);
+    if d1 == d0 {
+        return first;
+    }
+    let second = (shift_arc(a, (-d1.0, -d1.1)), d1);
+    first.min(second)
 }
 
 /// The auxiliary tiled domain of half-widths `m = [mx, my]`: the copies of the holes in the
@@ -2986,7 +2996,55 @@ mod tests {
             .unwrap_or_else(|| (key.to_vec(), (0, 0)))
     }
 
+    /// [`normalise_vertex`] and [`normalise_arc`] as they were: one candidate per sample or
+    /// circle, the least taken.
+    fn normalise_vertex_every_sample(v: &VertexKey) -> (VertexKey, (i32, i32)) {
+        v.iter()
+            .map(|s| {
+                let d = (s.2, s.3);
+                (shift_vertex(v, (-d.0, -d.1)), d)
+            })
+            .min()
+            .unwrap_or((*v, (0, 0)))
+    }
+    fn normalise_arc_every_circle(a: &ArcKey) -> (ArcKey, (i32, i32)) {
+        a.0.iter()
+            .map(|c| {
+                let d = (c.1, c.2);
+                (shift_arc(a, (-d.0, -d.1)), d)
+            })
+            .min()
+            .unwrap_or((*a, (0, 0)))
+    }
+
+    fn sample_key() -> impl proptest::strategy::Strategy<Value = SampleKey> {
+        use proptest::prelude::*;
+        (0u32..3, 0u32..3, -1i32..2, -1i32..2)
+    }
+
     proptest::proptest! {
+        /// The same for vertex and arc keys: each distinct shift tried once gives the
+        /// representative of trying every sample's or circle's, in one tile or several.
+        #[test]
+        fn normalise_vertex_and_arc_try_each_shift_once(
+            v in proptest::array::uniform3(sample_key()),
+            w in proptest::array::uniform3(sample_key()),
+            c in proptest::array::uniform2((0u32..3, -1i32..2, -1i32..2)),
+            one_tile in proptest::bool::ANY,
+        ) {
+            let tile = |k: SampleKey| if one_tile { (k.0, k.1, 0, 1) } else { k };
+            let (mut v, mut w) = (v.map(tile), w.map(tile));
+            v.sort_unstable();
+            w.sort_unstable();
+            proptest::prop_assert_eq!(normalise_vertex(&v), normalise_vertex_every_sample(&v));
+            let mut c = if one_tile { c.map(|x| (x.0, 0, 1)) } else { c };
+            c.sort_unstable();
+            let mut ends = [v, w];
+            ends.sort_unstable();
+            let a: ArcKey = (c, ends);
+            proptest::prop_assert_eq!(normalise_arc(&a), normalise_arc_every_circle(&a));
+        }
+
         /// Trying each distinct tile shift once gives the representative and shift of trying
         /// every sample's (issue 8), for sorted keys (as the extraction makes them) and any
         /// other, with samples in one tile, in several and repeated.
