@@ -3018,7 +3018,6 @@ mod tests {
     }
 
     fn sample_key() -> impl proptest::strategy::Strategy<Value = SampleKey> {
-        use proptest::prelude::*;
         (0u32..3, 0u32..3, -1i32..2, -1i32..2)
     }
 
