@@ -296,10 +296,26 @@ fn nearest_images(size: [f64; 2], holes: &[Circle]) -> Vec<Option<(usize, f64)>>
         + rmax;
     let (tiling, index_of) = images_near(size, holes, reach);
     let index = HoleIndex::new(&tiling);
+    // A hole farther from the box's edges than its nearest canonical gap (plus the two radii
+    // and a margin for rounding) has no image as near: every image's centre is outside the
+    // box. Its answer over the tiling is then the canonical one (the same candidates, the same
+    // gaps, ties to the smaller index either way), so only the holes near the edges are
+    // searched again (issue 8: most holes of a large box are inside).
+    let margin = 1e-9 * (size[0].max(size[1]) + reach.abs());
     (0..h)
         .into_par_iter()
         .with_min_len(256)
-        .map(|i| index.nearest_gap(i).map(|(k, g)| (index_of[k], g)))
+        .map(|i| {
+            let c = &holes[i];
+            let to_edge = c.center[0]
+                .min(size[0] - c.center[0])
+                .min(c.center[1])
+                .min(size[1] - c.center[1]);
+            match canonical[i] {
+                Some((j, g)) if to_edge - c.radius - rmax > g + margin => Some((j, g)),
+                _ => index.nearest_gap(i).map(|(k, g)| (index_of[k], g)),
+            }
+        })
         .collect()
 }
 
