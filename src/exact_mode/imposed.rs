@@ -144,10 +144,14 @@ pub fn vertex_cycle(center: Point, touching: &[(CircleTag, Point)]) -> Vec<Circl
     v.dedup_by(|a, b| a.1 == b.1);
     let tags: Vec<CircleTag> = v.into_iter().map(|x| x.1).collect();
     let n = tags.len();
-    (0..n)
-        .map(|r| (0..n).map(|i| tags[(i + r) % n]).collect::<Vec<_>>())
-        .min()
-        .unwrap_or_default()
+    // The least rotation, compared in place (issue 8: one vector per rotation was built
+    // before; the first least one is the same).
+    let tags = &tags;
+    let rotation = |r: usize| (0..n).map(move |i| tags[(i + r) % n]);
+    let best = (0..n)
+        .min_by(|&a, &b| rotation(a).cmp(rotation(b)))
+        .unwrap_or(0);
+    rotation(best).collect()
 }
 
 impl ImposedCounts {
@@ -250,6 +254,39 @@ pub(super) fn bounded_keys(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    proptest::proptest! {
+        /// The least rotation found in place is the least of the rotations built as vectors
+        /// (the former body), for cycles with repeated tags and symmetric ones.
+        #[test]
+        fn vertex_cycle_takes_the_least_rotation(
+            tags in proptest::collection::vec((0i64..3, -1i64..2, 0i64..2), 0..7),
+            repeat in 1usize..3,
+        ) {
+            // Points on the unit circle in tag order (repeated `repeat` times round it), so
+            // the counter-clockwise cycle is the tags in order.
+            let n = tags.len() * repeat;
+            let touching: Vec<(CircleTag, Point)> = (0..n)
+                .map(|k| {
+                    let a = -3.0 + 6.0 * k as f64 / n.max(1) as f64;
+                    (tags[k % tags.len()], [a.cos(), a.sin()])
+                })
+                .collect();
+            let got = vertex_cycle([0.0, 0.0], &touching);
+            let mut v: Vec<(f64, CircleTag)> = touching
+                .iter()
+                .map(|(t, p)| (p[1].atan2(p[0]), *t))
+                .collect();
+            v.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+            v.dedup_by(|a, b| a.1 == b.1);
+            let cyc: Vec<CircleTag> = v.into_iter().map(|x| x.1).collect();
+            let want = (0..cyc.len())
+                .map(|r| (0..cyc.len()).map(|i| cyc[(i + r) % cyc.len()]).collect::<Vec<_>>())
+                .min()
+                .unwrap_or_default();
+            proptest::prop_assert_eq!(got, want);
+        }
+    }
 
     fn key(wall: i64, c3: &[i64], c2: &[i64]) -> BlockKey {
         let tags = |c: &[i64]| c.iter().map(|&x| (x, 0, 0)).collect::<Vec<_>>();
