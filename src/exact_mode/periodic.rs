@@ -27,7 +27,7 @@
 //! vertex instance are shared by the two blocks on the same circle there, both in the period,
 //! so every interior side is bitwise shared.
 
-use super::counts::{ArcTarget, CountProblem, Counts};
+use super::counts::{ArcTarget, CountProblem, Counts, Known};
 use super::imposed::{vertex_cycle, BlockKey, CircleTag};
 use super::{
     arc_params_into, clustering, clustering_of, expected_sign, internal, median, validate_options,
@@ -37,7 +37,7 @@ use crate::apollonius::{apollonius, Choice};
 use crate::blocking::MAX_TEMPLATE_SWEEP;
 use crate::domain::{Circle, CircleId};
 use crate::geometry::Point;
-use crate::grid::{GridError, MAX_TOTAL_NODES};
+use crate::grid::{GridError, MAX_CELLS_PER_SIDE, MAX_TOTAL_NODES};
 use crate::layout::{Block, BlockLayout, Curve, Edge, EdgeKind, SideRef, Translation};
 use crate::mesh::BlockGrid;
 use crate::mesher::{MeshError, Options};
@@ -407,12 +407,44 @@ fn build_checking(
         return Ok(Built::Backwards(inconsistent_arcs));
     }
     // The densities of every arc orbit, in parallel; in orbit order the first error and the
-    // density check.
-    let densities: Vec<Option<(Vec<f64>, Vec<f64>)>> =
-        geoms.par_iter().map(ArcGeometry::densities).collect();
+    // density check. With a fixed grid per block (`--block-cells`) and no inserted hole, the
+    // counts need only each arc's lower bound and its nodes the parameters for the count it
+    // will have (`uniform_arc_count`, with `nbar` the fixed count): each arc's densities are
+    // reduced to those at once ([`Summary`]) instead of being held for the whole build (issue
+    // 8: 4 KB an arc orbit, 1.2 GB at 1e5 holes). An arc whose count turns out otherwise
+    // (imposed counts, the templates' ties) computes its densities again, and a split arc
+    // holds those of its half ([`orbit_params`]).
+    let uniform = options
+        .block_cells
+        .filter(|_| check.is_none())
+        .map(|n| n.clamp(1, MAX_CELLS_PER_SIDE));
+    let densities: Vec<Option<Densities>> = geoms
+        .par_iter()
+        .map(|g| {
+            let (sq, ang) = g.densities()?;
+            Some(match uniform {
+                None => (sq, ang, None),
+                Some(n) => {
+                    let t = ArcTarget {
+                        circles: [0, 0],
+                        sq,
+                        ang,
+                        known: None,
+                    };
+                    let min_cells = t.min_cells();
+                    let count = super::counts::uniform_arc_count(n, min_cells);
+                    // As `orbit_params` forms it from two circle counts `n`.
+                    let nbar = 0.5 * (n + n) as f64;
+                    let params = params_of(&t.sq, &t.ang, nbar, count);
+                    (Vec::new(), Vec::new(), Some((min_cells, nbar, params)))
+                }
+            })
+        })
+        .collect();
     let mut targets = Vec::with_capacity(pb.arcs.len());
+    let mut summaries: Vec<Option<(f64, Vec<f64>)>> = Vec::new();
     for (o, (arc, d)) in pb.arcs.iter().zip(densities).enumerate() {
-        let (sq, ang) = d.ok_or_else(|| {
+        let (sq, ang, summary) = d.ok_or_else(|| {
             internal(format!(
                 "arc orbit {o}: the exact medial arc is not defined"
             ))
@@ -420,11 +452,20 @@ fn build_checking(
         if let Some(d) = check.as_deref_mut() {
             d.add(&geoms[o]);
         }
+        let known = summary.as_ref().map(|&(min_cells, _, _)| Known {
+            min_cells,
+            target: None,
+            ends: None,
+        });
+        if let Some((_, nbar, params)) = summary {
+            summaries.resize(o, None);
+            summaries.push(Some((nbar, params)));
+        }
         targets.push(ArcTarget {
             circles: arc.circles.map(|c| c.0 as usize + 1),
             sq,
             ang,
-            known: None,
+            known,
         });
     }
     // 2b. Inserted holes: split arc orbits until each fits its template.
@@ -539,6 +580,7 @@ fn build_checking(
             verts: &verts,
             geoms: &geoms,
             targets: &targets,
+            summaries: &summaries,
             slots: &slots,
             cluster: &cluster,
             rho: &[],
@@ -633,6 +675,7 @@ fn build_checking(
         verts: &verts,
         geoms: &geoms,
         targets: &targets,
+        summaries: &summaries,
         slots: &slots,
         cluster: &cluster,
         rho: &rho,
@@ -769,25 +812,64 @@ impl Builder<'_> {
 }
 
 /// The natural node parameters of arc orbit `o` for the counts `counts` into `params`
-/// ([`arc_params_into`] of its weights for its `nbar`).
+/// ([`arc_params_into`] of its weights for its `nbar`): from its held densities, else from
+/// its summary when that is for the same `nbar` and count, else from its densities computed
+/// again (`None` only if they cannot be, which they could the first time). The same
+/// parameters, bit for bit, whichever way.
 fn orbit_params(
     pb: &PeriodicBlocking,
+    geoms: &[ArcGeometry],
     targets: &[ArcTarget],
+    summaries: &[Option<(f64, Vec<f64>)>],
     counts: &Counts,
     o: usize,
     params: &mut Vec<f64>,
-) {
+) -> Option<()> {
     let c = pb.arcs[o].circles;
     let nbar =
         0.5 * (counts.circle[c[0].0 as usize + 1] + counts.circle[c[1].0 as usize + 1]) as f64;
+    let n = counts.arc[o];
     let t = &targets[o];
-    let mut weights: Vec<f64> =
-        t.sq.iter()
-            .zip(&t.ang)
-            .map(|(&s, &a)| super::counts::weight(nbar, s, a))
-            .collect();
-    arc_params_into(&mut weights, &t.ang, counts.arc[o], params, &mut Vec::new());
+    let computed;
+    // Held densities first: a split arc holds its half's, and its summary (if any) is the
+    // whole arc's.
+    let (sq, ang) = if t.holds_densities() {
+        (&t.sq[..], &t.ang[..])
+    } else {
+        if let Some(Some((nb, p))) = summaries.get(o) {
+            if nb.to_bits() == nbar.to_bits() && p.len() == n + 1 {
+                params.clear();
+                params.extend_from_slice(p);
+                return Some(());
+            }
+        }
+        computed = geoms.get(o)?.densities()?;
+        (&computed.0[..], &computed.1[..])
+    };
+    *params = params_of(sq, ang, nbar, n);
+    Some(())
 }
+
+/// The node parameters of an arc of densities `sq`, `ang` with `n` cells for a mean
+/// wall-normal count `nbar` ([`arc_params_into`] of its weights).
+fn params_of(sq: &[f64], ang: &[f64], nbar: f64, n: usize) -> Vec<f64> {
+    let mut weights: Vec<f64> = sq
+        .iter()
+        .zip(ang)
+        .map(|(&s, &a)| super::counts::weight(nbar, s, a))
+        .collect();
+    let mut params = Vec::with_capacity(n + 1);
+    arc_params_into(&mut weights, ang, n, &mut params, &mut Vec::new());
+    params
+}
+
+/// What an arc orbit's densities are reduced to with a fixed grid per block: its lower
+/// bound, and the `nbar` and node parameters of the count it gets.
+type Summary = (usize, f64, Vec<f64>);
+
+/// An arc orbit's densities `sq`, `ang` (empty when reduced), and their [`Summary`] when
+/// reduced.
+type Densities = (Vec<f64>, Vec<f64>, Option<Summary>);
 
 /// The end grading's ratios of every arc orbit ([`super::grading::end_ratios`]), from its
 /// natural node parameters for the counts `counts` (those [`arc_nodes`] starts from). A spoke
@@ -805,7 +887,8 @@ fn end_ratios(
     let mut params = Vec::new();
     for (o, arc) in pb.arcs.iter().enumerate() {
         let n = counts.arc[o];
-        orbit_params(pb, targets, counts, o, &mut params);
+        // The densities are held here (size-driven counts): no summary, no error.
+        let _ = orbit_params(pb, geoms, targets, &[], counts, o, &mut params);
         // `slots[o][end][side]`; the grading reads `[side][end]`.
         let s = slots[o];
         inputs.push(super::grading::EndInput {
@@ -824,6 +907,9 @@ struct Parts<'a> {
     verts: &'a [Vertex],
     geoms: &'a [ArcGeometry],
     targets: &'a [ArcTarget],
+    /// Per arc orbit, the node parameters computed with its densities for `(nbar, count)`
+    /// (the count is their length less one), when the densities were not kept.
+    summaries: &'a [Option<(f64, Vec<f64>)>],
     slots: &'a [[[usize; 2]; 2]],
     cluster: &'a dyn Fn(usize) -> super::Clustering,
     /// The end grading's ratios per arc orbit ([`super::grading`]); empty: not graded.
@@ -840,6 +926,7 @@ fn arc_nodes(parts: &Parts, counts: &Counts) -> Result<Vec<ArcNodes>, MeshError>
         pb,
         geoms,
         targets,
+        summaries,
         rho,
         ..
     } = *parts;
@@ -851,7 +938,13 @@ fn arc_nodes(parts: &Parts, counts: &Counts) -> Result<Vec<ArcNodes>, MeshError>
                 let g = &geoms[o];
                 let n = counts.arc[o];
                 let mut params = Vec::with_capacity(n + 1);
-                orbit_params(pb, targets, counts, o, &mut params);
+                orbit_params(pb, geoms, targets, summaries, counts, o, &mut params).ok_or_else(
+                    || {
+                        internal(format!(
+                            "arc orbit {o}: the exact medial arc is not defined"
+                        ))
+                    },
+                )?;
                 if let Some(&r) = rho.get(o) {
                     params = super::grading::grade_piece(g, params, r, graded);
                 }
@@ -1327,4 +1420,54 @@ fn split_for_templates(
         },
         splits,
     ))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn bits(grids: &[crate::mesh::BlockGrid]) -> Vec<u64> {
+        grids
+            .iter()
+            .flat_map(|g| g.nodes.iter().flat_map(|p| p.map(f64::to_bits)))
+            .collect()
+    }
+
+    /// With a fixed grid per block the arcs' densities are reduced to summaries (lower bound
+    /// and node parameters) as they are computed; the density check keeps them held. Both
+    /// give the same mesh, bit for bit: plain boxes, and boxes with a hole taken as inserted
+    /// (its arcs split and their counts tied by the template, so that some parameters are
+    /// computed again from the geometry).
+    #[test]
+    fn summarised_densities_give_the_mesh_of_held_ones() {
+        let mut templated = 0;
+        for seed in 1..4 {
+            let pd = crate::layouts::periodic_bubbles(40, seed).expect("layout");
+            for n in [3, 6] {
+                let options = Options {
+                    block_cells: Some(n),
+                    ..Options::default()
+                };
+                let p = crate::periodic::periodic_layout(&pd, &options).expect("layout");
+                let Some(pb) = &p.blocking else { continue };
+                for fluid in [vec![], vec![true], vec![false, true, true]] {
+                    let summarised = build_checking(pb, &options, &fluid, None, false);
+                    let mut d = super::super::densities::Deviation::default();
+                    let held = build_checking(pb, &options, &fluid, Some(&mut d), false);
+                    match (summarised, held) {
+                        (Ok(Built::Mesh(a)), Ok(Built::Mesh(b))) => {
+                            assert_eq!(a.layout, b.layout, "seed {seed}, n {n}, {fluid:?}");
+                            assert_eq!(a.counts, b.counts);
+                            assert_eq!(bits(&a.grids), bits(&b.grids));
+                            templated += usize::from(a.template_blocks > 0);
+                        }
+                        (Ok(Built::Backwards(a)), Ok(Built::Backwards(b))) => assert_eq!(a, b),
+                        (Err(a), Err(b)) => assert_eq!(a.to_string(), b.to_string()),
+                        (a, b) => panic!("seed {seed}, n {n}: {a:?} against {b:?}"),
+                    }
+                }
+            }
+        }
+        assert!(templated >= 2, "{templated}");
+    }
 }
