@@ -407,44 +407,49 @@ fn build_checking(
         return Ok(Built::Backwards(inconsistent_arcs));
     }
     // The densities of every arc orbit, in parallel; in orbit order the first error and the
-    // density check. With a fixed grid per block (`--block-cells`) and no inserted hole, the
-    // counts need only each arc's lower bound and its nodes the parameters for the count it
-    // will have (`uniform_arc_count`, with `nbar` the fixed count): each arc's densities are
-    // reduced to those at once ([`Summary`]) instead of being held for the whole build (issue
-    // 8: 4 KB an arc orbit, 1.2 GB at 1e5 holes). An arc whose count turns out otherwise
-    // (imposed counts, the templates' ties) computes its densities again, and a split arc
-    // holds those of its half ([`orbit_params`]).
+    // density check. With a fixed grid per block (`--block-cells`), the counts need only each
+    // arc's lower bound and its nodes the parameters for the count it will have
+    // (`uniform_arc_count`, with `nbar` the fixed count): each arc's densities are reduced to
+    // those at once (its summary) instead of being held for the whole build (issue 8: 4 KB an
+    // arc orbit, 1.2 GB at 1e5 holes). An arc whose count turns out otherwise (imposed counts,
+    // the templates' ties) computes its densities again, and a split arc holds those of its
+    // half ([`orbit_params`]).
     let uniform = options
         .block_cells
         .filter(|_| check.is_none())
         .map(|n| n.clamp(1, MAX_CELLS_PER_SIDE));
-    let densities: Vec<Option<Densities>> = geoms
+    let made: Vec<Option<(ArcTarget, Option<Summary>)>> = geoms
         .par_iter()
-        .map(|g| {
+        .zip(&pb.arcs)
+        .map(|(g, arc)| {
             let (sq, ang) = g.densities()?;
-            Some(match uniform {
-                None => (sq, ang, None),
-                Some(n) => {
-                    let t = ArcTarget {
-                        circles: [0, 0],
-                        sq,
-                        ang,
-                        known: None,
-                    };
-                    let min_cells = t.min_cells();
-                    let count = super::counts::uniform_arc_count(n, min_cells);
-                    // As `orbit_params` forms it from two circle counts `n`.
-                    let nbar = 0.5 * (n + n) as f64;
-                    let params = params_of(&t.sq, &t.ang, nbar, count);
-                    (Vec::new(), Vec::new(), Some((min_cells, nbar, params)))
-                }
-            })
+            let mut t = ArcTarget {
+                circles: arc.circles.map(|c| c.0 as usize + 1),
+                sq,
+                ang,
+                known: None,
+            };
+            let summary = uniform.map(|n| {
+                let min_cells = t.min_cells();
+                let count = super::counts::uniform_arc_count(n, min_cells);
+                // As `orbit_params` forms it from two circle counts `n`.
+                let nbar = 0.5 * (n + n) as f64;
+                let params = params_of(&t.sq, &t.ang, nbar, count);
+                (t.sq, t.ang) = (Vec::new(), Vec::new());
+                t.known = Some(Known {
+                    min_cells,
+                    target: None,
+                    ends: None,
+                });
+                (nbar, params)
+            });
+            Some((t, summary))
         })
         .collect();
     let mut targets = Vec::with_capacity(pb.arcs.len());
-    let mut summaries: Vec<Option<(f64, Vec<f64>)>> = Vec::new();
-    for (o, (arc, d)) in pb.arcs.iter().zip(densities).enumerate() {
-        let (sq, ang, summary) = d.ok_or_else(|| {
+    let mut summaries = Vec::with_capacity(pb.arcs.len());
+    for (o, m) in made.into_iter().enumerate() {
+        let (t, summary) = m.ok_or_else(|| {
             internal(format!(
                 "arc orbit {o}: the exact medial arc is not defined"
             ))
@@ -452,21 +457,8 @@ fn build_checking(
         if let Some(d) = check.as_deref_mut() {
             d.add(&geoms[o]);
         }
-        let known = summary.as_ref().map(|&(min_cells, _, _)| Known {
-            min_cells,
-            target: None,
-            ends: None,
-        });
-        if let Some((_, nbar, params)) = summary {
-            summaries.resize(o, None);
-            summaries.push(Some((nbar, params)));
-        }
-        targets.push(ArcTarget {
-            circles: arc.circles.map(|c| c.0 as usize + 1),
-            sq,
-            ang,
-            known,
-        });
+        targets.push(t);
+        summaries.push(summary);
     }
     // 2b. Inserted holes: split arc orbits until each fits its template.
     let split = if fluid.iter().any(|&f| f) {
@@ -820,7 +812,7 @@ fn orbit_params(
     pb: &PeriodicBlocking,
     geoms: &[ArcGeometry],
     targets: &[ArcTarget],
-    summaries: &[Option<(f64, Vec<f64>)>],
+    summaries: &[Option<Summary>],
     counts: &Counts,
     o: usize,
     params: &mut Vec<f64>,
@@ -850,6 +842,11 @@ fn orbit_params(
     Some(())
 }
 
+/// What an arc orbit's densities are reduced to with a fixed grid per block: the `nbar` and
+/// the node parameters of the count it gets (its lower bound goes to its target's
+/// [`Known`]).
+type Summary = (f64, Vec<f64>);
+
 /// The node parameters of an arc of densities `sq`, `ang` with `n` cells for a mean
 /// wall-normal count `nbar` ([`arc_params_into`] of its weights).
 fn params_of(sq: &[f64], ang: &[f64], nbar: f64, n: usize) -> Vec<f64> {
@@ -862,14 +859,6 @@ fn params_of(sq: &[f64], ang: &[f64], nbar: f64, n: usize) -> Vec<f64> {
     arc_params_into(&mut weights, ang, n, &mut params, &mut Vec::new());
     params
 }
-
-/// What an arc orbit's densities are reduced to with a fixed grid per block: its lower
-/// bound, and the `nbar` and node parameters of the count it gets.
-type Summary = (usize, f64, Vec<f64>);
-
-/// An arc orbit's densities `sq`, `ang` (empty when reduced), and their [`Summary`] when
-/// reduced.
-type Densities = (Vec<f64>, Vec<f64>, Option<Summary>);
 
 /// The end grading's ratios of every arc orbit ([`super::grading::end_ratios`]), from its
 /// natural node parameters for the counts `counts` (those [`arc_nodes`] starts from). A spoke
@@ -909,7 +898,7 @@ struct Parts<'a> {
     targets: &'a [ArcTarget],
     /// Per arc orbit, the node parameters computed with its densities for `(nbar, count)`
     /// (the count is their length less one), when the densities were not kept.
-    summaries: &'a [Option<(f64, Vec<f64>)>],
+    summaries: &'a [Option<Summary>],
     slots: &'a [[[usize; 2]; 2]],
     cluster: &'a dyn Fn(usize) -> super::Clustering,
     /// The end grading's ratios per arc orbit ([`super::grading`]); empty: not graded.
