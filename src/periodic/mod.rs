@@ -137,36 +137,39 @@ fn shift_arc(a: &ArcKey, d: (i32, i32)) -> ArcKey {
     (c, v)
 }
 
-/// The orbit representative of a vertex key and the shift from it: `key = rep + shift`.
-/// The least of the key moved back by each of its samples' tile shifts, each distinct shift
-/// tried once (as [`normalise_cluster`]).
-fn normalise_vertex(v: &VertexKey) -> (VertexKey, (i32, i32)) {
-    let mut best: Option<(VertexKey, (i32, i32))> = None;
-    for (i, s) in v.iter().enumerate() {
-        let d = (s.2, s.3);
-        if v[..i].iter().any(|x| (x.2, x.3) == d) {
+/// The least of `shifted(d)` over the distinct tile shifts `d = shift(item)` of `items`, with
+/// its shift; `None` without items. Each shift is tried once (issue 8: the samples of a vertex
+/// are mostly in one tile, and a try can build and sort a key); items with the same shift
+/// give the same candidate, so the least is that of trying every item (ties keep the first).
+fn least_over_shifts<T, K: Ord>(
+    items: &[T],
+    shift: impl Fn(&T) -> (i32, i32),
+    shifted: impl Fn((i32, i32)) -> K,
+) -> Option<(K, (i32, i32))> {
+    let mut best: Option<(K, (i32, i32))> = None;
+    for (i, item) in items.iter().enumerate() {
+        let d = shift(item);
+        if items[..i].iter().any(|x| shift(x) == d) {
             continue;
         }
-        let candidate = (shift_vertex(v, (-d.0, -d.1)), d);
-        if best.is_none_or(|b| candidate < b) {
+        let candidate = (shifted(d), d);
+        if best.as_ref().is_none_or(|b| candidate < *b) {
             best = Some(candidate);
         }
     }
-    best.unwrap_or((*v, (0, 0)))
+    best
+}
+
+/// The orbit representative of a vertex key and the shift from it: `key = rep + shift`,
+/// the least of the key moved back by each of its samples' tile shifts.
+fn normalise_vertex(v: &VertexKey) -> (VertexKey, (i32, i32)) {
+    least_over_shifts(v, |s| (s.2, s.3), |d| shift_vertex(v, (-d.0, -d.1))).unwrap_or((*v, (0, 0)))
 }
 
 /// The orbit representative of an arc key and the shift from it: the least of the key moved
-/// back by the tile shift of either circle (once when both circles are in one tile).
+/// back by the tile shift of either circle.
 fn normalise_arc(a: &ArcKey) -> (ArcKey, (i32, i32)) {
-    let [c0, c1] = a.0;
-    let d0 = (c0.1, c0.2);
-    let first = (shift_arc(a, (-d0.0, -d0.1)), d0);
-    let d1 = (c1.1, c1.2);
-    if d1 == d0 {
-        return first;
-    }
-    let second = (shift_arc(a, (-d1.0, -d1.1)), d1);
-    first.min(second)
+    least_over_shifts(&a.0, |c| (c.1, c.2), |d| shift_arc(a, (-d.0, -d.1))).unwrap_or((*a, (0, 0)))
 }
 
 /// The auxiliary tiled domain of half-widths `m = [mx, my]`: the copies of the holes in the
@@ -969,27 +972,19 @@ struct Early {
 /// that was not collapsed).
 type ClusterKey = Vec<SampleKey>;
 
-/// The orbit representative of a cluster key and the shift from it: `key = rep + shift`.
-///
-/// The least of the key moved back by the tile shift of each of its samples, each distinct
-/// shift tried once (issue 8: the samples of a vertex are mostly in one tile, and each try
-/// builds and sorts a key; samples with the same shift give the same candidate, so the least
-/// is the same).
+/// The orbit representative of a cluster key and the shift from it: `key = rep + shift`,
+/// the least of the key moved back by each of its samples' tile shifts.
 fn normalise_cluster(key: &[SampleKey]) -> (ClusterKey, (i32, i32)) {
-    let mut best: Option<(ClusterKey, (i32, i32))> = None;
-    for (i, s) in key.iter().enumerate() {
-        let d = (s.2, s.3);
-        if key[..i].iter().any(|x| (x.2, x.3) == d) {
-            continue;
-        }
-        let mut k: ClusterKey = key.iter().map(|x| shift_sample(*x, (-d.0, -d.1))).collect();
-        k.sort_unstable();
-        let candidate = (k, d);
-        if best.as_ref().is_none_or(|b| candidate < *b) {
-            best = Some(candidate);
-        }
-    }
-    best.unwrap_or_else(|| (key.to_vec(), (0, 0)))
+    least_over_shifts(
+        key,
+        |s| (s.2, s.3),
+        |d| {
+            let mut k: ClusterKey = key.iter().map(|x| shift_sample(*x, (-d.0, -d.1))).collect();
+            k.sort_unstable();
+            k
+        },
+    )
+    .unwrap_or_else(|| (key.to_vec(), (0, 0)))
 }
 
 /// The arcs of the tiling chosen for collapse (see [`select_collapse`]).
