@@ -208,7 +208,7 @@ pub fn mesh(domain: &Domain, options: &Options) -> Result<Mesh, MeshError> {
 /// when the layout is large ([`crate::spatial_order`]; the mesh and the errors in the input's
 /// hole ids).
 fn mesh_here(domain: &Domain, options: &Options) -> Result<Mesh, MeshError> {
-    validate(domain, options)?;
+    validate_for(options, crate::domain::BOUNDING, domain.hole_count())?;
     crate::spatial_order::mesh_in_spatial_order(
         domain,
         domain.holes(),
@@ -218,11 +218,19 @@ fn mesh_here(domain: &Domain, options: &Options) -> Result<Mesh, MeshError> {
     )
 }
 
-/// The checks of the options against `domain` (their messages name the caller's circle ids).
-fn validate(domain: &Domain, options: &Options) -> Result<(), MeshError> {
+/// The checks of `options` against a domain whose circles are `first..holes` (see
+/// [`validate_circle_ids`]): the ranges, [`Options::block_cells`], the circle ids and exact
+/// mode's options. The one set of checks of both entry points, [`mesh`] and
+/// [`crate::mesh_periodic`], made before any renaming (their messages name the caller's
+/// circle ids).
+pub(crate) fn validate_for(
+    options: &Options,
+    first: CircleId,
+    holes: usize,
+) -> Result<(), MeshError> {
     crate::ranges::check_ranges(options)?;
     validate_block_cells(options)?;
-    validate_circle_ids(options, crate::domain::BOUNDING, domain.hole_count())?;
+    validate_circle_ids(options, first, holes)?;
     if options.mode == Mode::Exact {
         exact_mode::validate_options(options)?;
     }

@@ -2302,7 +2302,7 @@ pub type Triples = Vec<[CircleKey; 3]>;
 pub fn mesh_periodic(pd: &PeriodicDomain, options: &Options) -> Result<Mesh, MeshError> {
     timings::on_pool_worker(|| {
         // The options are checked against the caller's hole ids before any renaming.
-        validate(pd, options)?;
+        crate::mesher::validate_for(options, 0, pd.hole_count())?;
         crate::spatial_order::mesh_in_spatial_order(
             pd,
             pd.holes(),
@@ -2333,19 +2333,9 @@ pub fn mesh_periodic_frame(
     options: &Options,
 ) -> Result<PeriodicFrame, MeshError> {
     timings::on_pool_worker(|| {
-        validate(pd, options)?;
+        crate::mesher::validate_for(options, 0, pd.hole_count())?;
         periodic_frame_here(pd, options)
     })
-}
-
-/// The checks of the options against `pd` (their messages name the caller's circle ids).
-fn validate(pd: &PeriodicDomain, options: &Options) -> Result<(), MeshError> {
-    crate::ranges::check_ranges(options)?;
-    crate::mesher::validate_circle_ids(options, 0, pd.hole_count())?;
-    if options.mode == Mode::Exact {
-        exact_mode::validate_options(options)?;
-    }
-    Ok(())
 }
 
 /// [`mesh_periodic_frame`] on this thread, the options checked.
@@ -2976,6 +2966,51 @@ pub fn period_of(layout: &BlockLayout) -> Option<[f64; 2]> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Both periodic entry points check `Options::block_cells` as the bounded one does (they
+    /// did not: a fixed grid then won over `cell_size` or `wall_cells` without a word, and 0
+    /// cells became 1): the same errors, for the paper pipeline too.
+    #[test]
+    fn periodic_entry_points_check_block_cells_as_the_bounded_one() {
+        let pd = crate::layouts::periodic_bubbles(20, 1).expect("layout");
+        let bounded = crate::layouts::bubbles(20, 1).expect("layout");
+        let fixed = |n: usize| Options {
+            block_cells: Some(n),
+            ..Options::default()
+        };
+        let bad = [
+            fixed(0),
+            fixed(crate::grid::MAX_CELLS_PER_SIDE + 1),
+            Options {
+                cell_size: Some(0.1),
+                ..fixed(4)
+            },
+            Options {
+                wall_cells: vec![(0, 3)],
+                ..fixed(4)
+            },
+            Options {
+                wall_cells: vec![(0, 3)],
+                ..Options {
+                    mode: Mode::Paper,
+                    ..fixed(4)
+                }
+            },
+        ];
+        for options in bad {
+            let want = crate::mesh(&bounded, &options)
+                .expect_err("refused")
+                .to_string();
+            assert!(
+                want.contains("block-cells") || want.contains("cells"),
+                "{want}"
+            );
+            let got = mesh_periodic(&pd, &options).expect_err("refused");
+            assert_eq!(got.to_string(), want);
+            let got = mesh_periodic_frame(&pd, &options).expect_err("refused");
+            assert_eq!(got.to_string(), want);
+        }
+    }
 
     /// [`normalise_cluster`] as it was: one candidate per sample, the least taken.
     fn normalise_cluster_every_sample(key: &[SampleKey]) -> (ClusterKey, (i32, i32)) {
