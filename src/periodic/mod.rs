@@ -92,6 +92,7 @@ use crate::sampling::{
 };
 use crate::timings;
 use rayon::prelude::*;
+use std::borrow::Cow;
 /// Hash maps with a fast hasher (issue 8: SipHash of the orbit keys was 4% of a periodic
 /// mesh); nothing reads them in iteration order.
 type HashMap<K, V> = std::collections::HashMap<K, V, foldhash::fast::RandomState>;
@@ -619,10 +620,116 @@ struct Sampled {
     /// reused by the next ones (its collapse attempts and exact mode's local fix,
     /// [`reextract`]), which ask for the same vertices (issue 8).
     end_circles: std::sync::OnceLock<EndCircles>,
+    /// The orbit keys of the medial graph and collapse selection's part that depends on the
+    /// sampling alone ([`Orbits`]), made at the first extraction and reused by the next ones
+    /// of this sampling (its collapse attempts and exact mode's local fix, [`reextract`]).
+    /// Dropped once the layout is made when no local fix is expected (the layout has no arc
+    /// orbit running backwards), so that the exact build does not hold it.
+    orbits: std::sync::OnceLock<Orbits>,
 }
 
 /// What [`Sampled::end_circles`] holds: vertex ids and their exact circles, same order.
 type EndCircles = (Vec<u32>, Vec<Option<Apollonius>>);
+
+/// The orbit keys of a sampling's medial graph ([`Sampled::orbits`]; issue 8: at 1e5 holes
+/// 0.3 s of every extraction, made again by exact mode's local fix for the same sampling).
+struct Orbits {
+    /// Per medial vertex, its orbit key (`None` outside the tiling's keyed region).
+    vkeys: Vec<Option<VertexKey>>,
+    /// Per medial arc, its orbit key.
+    akeys: Vec<Option<ArcKey>>,
+    /// The medial arc of each key.
+    arc_by_key: HashMap<ArcKey, usize>,
+    /// Collapse selection's part that depends on the sampling alone, for short arcs measured
+    /// as [`SelectionBase::how`] ([`select_collapse`]).
+    selection: std::sync::OnceLock<SelectionBase>,
+}
+
+/// What [`select_collapse`] finds from the sampling alone, before the collapse fraction, the
+/// excluded and the forced arcs come in.
+#[derive(Clone)]
+struct SelectionBase {
+    /// How short arcs were measured.
+    how: collapse::ArcLength,
+    /// The orbit representative (a tiling arc) of each tiling arc, when in the tiling.
+    rep_of: Vec<Option<usize>>,
+    /// The representatives, increasing.
+    reps: Vec<usize>,
+    /// Per medial arc, the vertex orbits of a representative's two ends with their shifts.
+    orbit_ends: Vec<Option<OrbitEnds>>,
+    /// The arc representatives at each vertex orbit, increasing.
+    incident: Vec<Vec<usize>>,
+    /// Per representative (same order as `reps`), its measure.
+    measured: Vec<Measure>,
+}
+
+impl Orbits {
+    /// The orbit keys of the medial graph of a sampling (an error when two arcs of the tiling
+    /// have the same key).
+    fn new(t: &Tiling, samples: &Samples, medial: &MedialGraph) -> Result<Orbits, MeshError> {
+        let sample_key = |s: u32| -> Option<SampleKey> {
+            let (k, a, b) = t.key(samples.circle_of[s as usize])?;
+            Some((k, samples.index_of[s as usize], a, b))
+        };
+        let vertex_key = |v: usize| -> Option<VertexKey> {
+            let mut key = [
+                sample_key(medial.vertices[v].samples[0])?,
+                sample_key(medial.vertices[v].samples[1])?,
+                sample_key(medial.vertices[v].samples[2])?,
+            ];
+            key.sort_unstable();
+            Some(key)
+        };
+        let vkeys: Vec<Option<VertexKey>> = (0..medial.vertices.len())
+            .into_par_iter()
+            .map(vertex_key)
+            .collect();
+        let arc_key = |e: usize| -> Option<ArcKey> {
+            let a = &medial.arcs[e];
+            let mut c = [t.key(a.circles[0])?, t.key(a.circles[1])?];
+            c.sort_unstable();
+            let mut v = [vkeys[a.ends[0] as usize]?, vkeys[a.ends[1] as usize]?];
+            v.sort_unstable();
+            Some((c, v))
+        };
+        let akeys: Vec<Option<ArcKey>> = (0..medial.arcs.len())
+            .into_par_iter()
+            .map(arc_key)
+            .collect();
+        // Sized once (issue 8: growing it rehashed every key, a millisecond of one thread at 1e3
+        // holes).
+        let mut arc_by_key: HashMap<ArcKey, usize> =
+            HashMap::with_capacity_and_hasher(akeys.len(), Default::default());
+        for (e, k) in akeys.iter().enumerate() {
+            if let Some(k) = k {
+                if arc_by_key.insert(*k, e).is_some() {
+                    return Err(MeshError::Internal(
+                        "two medial arcs of the periodic tiling have the same key".into(),
+                    ));
+                }
+            }
+        }
+        Ok(Orbits {
+            vkeys,
+            akeys,
+            arc_by_key,
+            selection: std::sync::OnceLock::new(),
+        })
+    }
+}
+
+/// A representative arc as the sampling alone tells ([`SelectionBase::measured`]).
+#[derive(Debug, Clone, Copy)]
+enum Measure {
+    /// An end without a vertex orbit: never collapsed.
+    NoEnds,
+    /// Zero-length (its ends' exact circles are the same, or it is zero-length in the
+    /// triangulation), ends distinct: always collapsed.
+    Zero,
+    /// Its length relative to the local radius (possibly not finite), and whether it is a
+    /// loop (both ends the same vertex: never collapsed as a zero-length arc).
+    Length { rel: f64, is_loop: bool },
+}
 
 impl std::fmt::Debug for Sampled {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
@@ -737,18 +844,24 @@ fn layout_from(
         }
         let t = Tiling::with_reach(pd, m, reach)?;
         let (samples, tri, medial) = sample_tiling(&t, &gaps, &opts, options.mode == Mode::Paper)?;
-        let sampled = Sampled {
+        let mut sampled = Sampled {
             t,
             samples,
             tri,
             medial,
             end_circles: std::sync::OnceLock::new(),
+            orbits: std::sync::OnceLock::new(),
         };
         let extracted = timings::span("blocking", || {
             extract_from(pd, options, &sampled, &[], poor_limit, check_backwards)
         })?;
         match extracted {
             Extracted::Layout(mut p) => {
+                // Only a local fix reads the orbits again ([`reextract`]).
+                if p.backwards.is_none() {
+                    let orbits = sampled.orbits.take();
+                    rayon::spawn(move || drop(orbits));
+                }
                 // Paper mode has no use for it.
                 if options.mode == Mode::Exact {
                     p.sampled = Some(std::sync::Arc::new(sampled));
@@ -795,11 +908,7 @@ fn extract_from(
     };
     extract(
         pd,
-        &sampled.t,
-        &sampled.samples,
-        &sampled.tri,
-        &sampled.medial,
-        &sampled.end_circles,
+        sampled,
         options.collapse_fraction,
         how,
         forced,
@@ -988,13 +1097,13 @@ fn normalise_cluster(key: &[SampleKey]) -> (ClusterKey, (i32, i32)) {
 }
 
 /// The arcs of the tiling chosen for collapse (see [`select_collapse`]).
-struct Selection {
+struct Selection<'a> {
     /// One flag per tiling arc.
     flags: Vec<bool>,
     /// One flag per tiling arc: collapsed as a short (not zero-length) arc.
     short: Vec<bool>,
     /// The orbit representative (a tiling arc) of each tiling arc, when in the tiling.
-    rep_of: Vec<Option<usize>>,
+    rep_of: Cow<'a, [Option<usize>]>,
 }
 
 /// Union-find over vertex orbits with translations: the instance of orbit `x` at shift `s`
@@ -1036,101 +1145,69 @@ impl OrbitForest {
 /// cycle of the torus (contractible or not) is never taken and every cluster of the plane is
 /// a finite tree. Arcs without a representative in the tiling (near its bounding circle) are
 /// never collapsed.
+///
+/// What depends on the sampling alone (the representatives, their end orbits, which are
+/// zero-length and the others' relative lengths: [`SelectionBase`]) is made at the first
+/// selection and kept in `orbits` for the next ones (issue 8: the collapse attempts and exact
+/// mode's local fix select again on the same sampling); `fraction`, `exclude` and `forced`
+/// are applied to it at each selection.
 #[allow(clippy::too_many_arguments)]
-fn select_collapse(
+fn select_collapse<'o>(
     domain: &Domain,
     tri: &Triangulation,
     points: &[Point],
     medial: &MedialGraph,
     end_circles: &std::sync::OnceLock<EndCircles>,
-    vkeys: &[Option<VertexKey>],
-    akeys: &[Option<ArcKey>],
-    arc_by_key: &HashMap<ArcKey, usize>,
+    orbits: &'o Orbits,
     fraction: f64,
     how: collapse::ArcLength,
     exclude: &[usize],
     forced: &[ArcKey],
-) -> Selection {
-    let rep_of: Vec<Option<usize>> = akeys
-        .par_iter()
-        .map(|k| k.and_then(|k| arc_by_key.get(&normalise_arc(&k).0).copied()))
-        .collect();
-    let mut reps: Vec<usize> = rep_of.iter().flatten().copied().collect();
-    reps.sort_unstable();
-    reps.dedup();
-    // The same for every extraction of one sampling (`reps` depends on the sampling alone):
-    // solved once.
-    let (ends, solved) = end_circles.get_or_init(|| {
-        let mut ends: Vec<u32> = reps.iter().flat_map(|&r| medial.arcs[r].ends).collect();
-        ends.sort_unstable();
-        ends.dedup();
-        let solved = cocircular::vertex_circles_of(domain, medial, &ends);
-        (ends, solved)
-    });
-    // Vertex `v`'s circle, when `v` is an end of a representative and solved (`ends` is
-    // sorted).
-    let circle = |v: u32| -> Option<&Apollonius> {
-        let at = ends.binary_search(&v).ok()?;
-        solved[at].as_ref()
+) -> Selection<'o> {
+    // The sampling's part, made at its first selection (and for another way of measuring,
+    // which no caller asks for, made afresh).
+    let kept = match orbits.selection.get() {
+        Some(b) if b.how == how => Cow::Borrowed(b),
+        Some(_) => Cow::Owned(SelectionBase::new(
+            domain,
+            tri,
+            points,
+            medial,
+            end_circles,
+            orbits,
+            how,
+        )),
+        None => Cow::Borrowed(orbits.selection.get_or_init(|| {
+            SelectionBase::new(domain, tri, points, medial, end_circles, orbits, how)
+        })),
     };
-    // Vertex orbits of the representatives' ends, with the ends' shifts.
-    // (The ends' normalised keys in parallel, numbered in representative order.)
-    type Normalised = Option<(VertexKey, (i32, i32))>;
-    let normalised: Vec<[Normalised; 2]> = reps
-        .par_iter()
-        .map(|&r| {
-            medial.arcs[r]
-                .ends
-                .map(|v| vkeys[v as usize].map(|k| normalise_vertex(&k)))
-        })
-        .collect();
-    let mut orbit_index: HashMap<VertexKey, usize> =
-        HashMap::with_capacity_and_hasher(2 * reps.len(), Default::default());
-    // Per medial arc (a dense table rather than a map keyed by arc id: issue 8), the
-    // vertex orbits of a representative's two ends with their shifts.
-    let mut orbit_ends: Vec<Option<OrbitEnds>> = vec![None; medial.arcs.len()];
-    for (&r, ends) in reps.iter().zip(&normalised) {
-        let mut out = [(0, (0, 0)); 2];
-        let mut ok = true;
-        for (k, end) in ends.iter().enumerate() {
-            match *end {
-                Some((rep, d)) => {
-                    let n = orbit_index.len();
-                    out[k] = (*orbit_index.entry(rep).or_insert(n), d);
-                }
-                None => ok = false,
-            }
-        }
-        if ok {
-            orbit_ends[r] = Some(out);
-        }
-    }
-    let radius = |v: u32| match circle(v) {
-        Some(c) => c.radius,
-        None => cocircular::local_radius(medial, &[], points, v),
-    };
-    let centre = |v: u32| circle(v).map(|c| c.center);
-    // Each representative measured on its own, in parallel: `Some(None)` zero-length,
-    // `Some(Some(rel))` short, in representative order.
+    let base: &SelectionBase = &kept;
+    let SelectionBase {
+        rep_of,
+        reps,
+        orbit_ends,
+        incident,
+        ..
+    } = base;
+    let akeys = &orbits.akeys;
+    // Each representative as the options say: `Some(None)` zero-length, `Some(Some(rel))`
+    // short, in representative order.
     let measured: Vec<Option<Option<f64>>> = reps
         .par_iter()
-        .map(|&r| {
-            orbit_ends[r]?;
-            let arc = &medial.arcs[r];
-            let [a, b] = arc.ends;
-            let same = match (circle(a), circle(b)) {
-                (Some(x), Some(y)) => same_circle(&x.exact, &y.exact),
-                _ => false,
-            };
-            let force =
-                || akeys[r].is_some_and(|k| forced.binary_search(&normalise_arc(&k).0).is_ok());
-            if a != b && (same || cocircular::is_zero_length(arc, medial, tri, &[]) || force()) {
-                Some(None)
-            } else if fraction > 0.0 && !exclude.contains(&r) {
-                let rel = collapse::measured_length(arc, centre, how) / radius(a).min(radius(b));
-                (rel.is_finite() && rel < fraction).then_some(Some(rel))
-            } else {
-                None
+        .zip(&base.measured)
+        .map(|(&r, &m)| match m {
+            Measure::NoEnds => None,
+            Measure::Zero => Some(None),
+            Measure::Length { rel, is_loop } => {
+                let force =
+                    || akeys[r].is_some_and(|k| forced.binary_search(&normalise_arc(&k).0).is_ok());
+                if !is_loop && !forced.is_empty() && force() {
+                    Some(None)
+                } else if fraction > 0.0 && !exclude.contains(&r) {
+                    (rel.is_finite() && rel < fraction).then_some(Some(rel))
+                } else {
+                    None
+                }
             }
         })
         .collect();
@@ -1149,7 +1226,7 @@ fn select_collapse(
         .map(|r| (r, true))
         .chain(short.into_iter().map(|(_, r)| (r, false)))
         .collect();
-    let n = orbit_index.len();
+    let n = incident.len();
     let mut forest = OrbitForest {
         parent: (0..n).collect(),
         link: vec![(0, 0); n],
@@ -1163,17 +1240,10 @@ fn select_collapse(
         })
     };
     let rel = |c: OrbitEnds| (c[1].1 .0 - c[0].1 .0, c[1].1 .1 - c[0].1 .1);
-    // The arc orbits at each vertex orbit, and the vertex orbits of each root's tree: an arc
-    // orbit parallel to `r` has an end in the tree of `r`'s first root, so only the arc
-    // orbits at that tree's vertex orbits are looked at (issue 8: every arc orbit was, for
-    // each arc orbit collapsed, 1.1 s at 100 000 holes).
-    let mut incident: Vec<Vec<usize>> = vec![Vec::new(); n];
-    // In increasing arc order, as before.
-    for (f, ends) in orbit_ends.iter().enumerate() {
-        for &(x, _) in ends.iter().flatten() {
-            incident[x].push(f);
-        }
-    }
+    // The vertex orbits of each root's tree: an arc orbit parallel to `r` has an end in the
+    // tree of `r`'s first root, so only the arc orbits at that tree's vertex orbits
+    // ([`SelectionBase::incident`]) are looked at (issue 8: every arc orbit was, for each arc
+    // orbit collapsed, 1.1 s at 100 000 holes).
     let mut tree: Vec<Vec<usize>> = (0..n).map(|x| vec![x]).collect();
     // Per medial arc: collapsed as a zero-length arc, as a short one, or not (a dense table
     // rather than a map: issue 8).
@@ -1214,7 +1284,125 @@ fn select_collapse(
     Selection {
         flags,
         short,
-        rep_of,
+        rep_of: match kept {
+            Cow::Borrowed(b) => Cow::Borrowed(&b.rep_of),
+            Cow::Owned(b) => Cow::Owned(b.rep_of),
+        },
+    }
+}
+
+impl SelectionBase {
+    /// [`select_collapse`]'s part that depends on the sampling alone, short arcs measured as
+    /// `how`.
+    fn new(
+        domain: &Domain,
+        tri: &Triangulation,
+        points: &[Point],
+        medial: &MedialGraph,
+        end_circles: &std::sync::OnceLock<EndCircles>,
+        orbits: &Orbits,
+        how: collapse::ArcLength,
+    ) -> SelectionBase {
+        let (akeys, vkeys, arc_by_key) = (&orbits.akeys, &orbits.vkeys, &orbits.arc_by_key);
+        let rep_of: Vec<Option<usize>> = akeys
+            .par_iter()
+            .map(|k| k.and_then(|k| arc_by_key.get(&normalise_arc(&k).0).copied()))
+            .collect();
+        let mut reps: Vec<usize> = rep_of.iter().flatten().copied().collect();
+        reps.sort_unstable();
+        reps.dedup();
+        // The same for every extraction of one sampling (`reps` depends on the sampling
+        // alone): solved once.
+        let (ends, solved) = end_circles.get_or_init(|| {
+            let mut ends: Vec<u32> = reps.iter().flat_map(|&r| medial.arcs[r].ends).collect();
+            ends.sort_unstable();
+            ends.dedup();
+            let solved = cocircular::vertex_circles_of(domain, medial, &ends);
+            (ends, solved)
+        });
+        // Vertex `v`'s circle, when `v` is an end of a representative and solved (`ends` is
+        // sorted).
+        let circle = |v: u32| -> Option<&Apollonius> {
+            let at = ends.binary_search(&v).ok()?;
+            solved[at].as_ref()
+        };
+        // Vertex orbits of the representatives' ends, with the ends' shifts.
+        // (The ends' normalised keys in parallel, numbered in representative order.)
+        type Normalised = Option<(VertexKey, (i32, i32))>;
+        let normalised: Vec<[Normalised; 2]> = reps
+            .par_iter()
+            .map(|&r| {
+                medial.arcs[r]
+                    .ends
+                    .map(|v| vkeys[v as usize].map(|k| normalise_vertex(&k)))
+            })
+            .collect();
+        let mut orbit_index: HashMap<VertexKey, usize> =
+            HashMap::with_capacity_and_hasher(2 * reps.len(), Default::default());
+        // Per medial arc (a dense table rather than a map keyed by arc id: issue 8), the
+        // vertex orbits of a representative's two ends with their shifts.
+        let mut orbit_ends: Vec<Option<OrbitEnds>> = vec![None; medial.arcs.len()];
+        for (&r, ends) in reps.iter().zip(&normalised) {
+            let mut out = [(0, (0, 0)); 2];
+            let mut ok = true;
+            for (k, end) in ends.iter().enumerate() {
+                match *end {
+                    Some((rep, d)) => {
+                        let n = orbit_index.len();
+                        out[k] = (*orbit_index.entry(rep).or_insert(n), d);
+                    }
+                    None => ok = false,
+                }
+            }
+            if ok {
+                orbit_ends[r] = Some(out);
+            }
+        }
+        let radius = |v: u32| match circle(v) {
+            Some(c) => c.radius,
+            None => cocircular::local_radius(medial, &[], points, v),
+        };
+        let centre = |v: u32| circle(v).map(|c| c.center);
+        // Each representative measured on its own, in parallel, in representative order.
+        let measured: Vec<Measure> = reps
+            .par_iter()
+            .map(|&r| {
+                if orbit_ends[r].is_none() {
+                    return Measure::NoEnds;
+                }
+                let arc = &medial.arcs[r];
+                let [a, b] = arc.ends;
+                let same = match (circle(a), circle(b)) {
+                    (Some(x), Some(y)) => same_circle(&x.exact, &y.exact),
+                    _ => false,
+                };
+                if a != b && (same || cocircular::is_zero_length(arc, medial, tri, &[])) {
+                    Measure::Zero
+                } else {
+                    let rel =
+                        collapse::measured_length(arc, centre, how) / radius(a).min(radius(b));
+                    Measure::Length {
+                        rel,
+                        is_loop: a == b,
+                    }
+                }
+            })
+            .collect();
+        // The arc representatives at each vertex orbit, in increasing arc order.
+        let mut incident: Vec<Vec<usize>> = vec![Vec::new(); orbit_index.len()];
+        for (f, ends) in orbit_ends.iter().enumerate() {
+            for &(x, _) in ends.iter().flatten() {
+                incident[x].push(f);
+            }
+        }
+        SelectionBase {
+            how,
+            rep_of,
+            reps,
+            orbit_ends,
+            incident,
+            measured,
+        }
     }
 }
 
@@ -1243,61 +1431,38 @@ fn not_translation_consistent(what: &str) -> MeshError {
 #[allow(clippy::too_many_arguments)]
 fn extract(
     pd: &PeriodicDomain,
-    t: &Tiling,
-    samples: &Samples,
-    triangulation: &Triangulation,
-    medial: &MedialGraph,
-    end_circles: &std::sync::OnceLock<EndCircles>,
+    sampled: &Sampled,
     fraction: f64,
     how: collapse::ArcLength,
     forced: &[ArcKey],
     poor_limit: Option<f64>,
     check_backwards: bool,
 ) -> Result<Extracted, MeshError> {
+    let Sampled {
+        t,
+        samples,
+        tri: triangulation,
+        medial,
+        end_circles,
+        ..
+    } = sampled;
     let size = t.size;
-    // Orbit keys of the original medial graph.
-    let sample_key = |s: u32| -> Option<SampleKey> {
-        let (k, a, b) = t.key(samples.circle_of[s as usize])?;
-        Some((k, samples.index_of[s as usize], a, b))
-    };
-    let vertex_key = |v: usize| -> Option<VertexKey> {
-        let mut key = [
-            sample_key(medial.vertices[v].samples[0])?,
-            sample_key(medial.vertices[v].samples[1])?,
-            sample_key(medial.vertices[v].samples[2])?,
-        ];
-        key.sort_unstable();
-        Some(key)
-    };
-    let vkeys: Vec<Option<VertexKey>> = (0..medial.vertices.len())
-        .into_par_iter()
-        .map(vertex_key)
-        .collect();
-    let arc_key = |e: usize| -> Option<ArcKey> {
-        let a = &medial.arcs[e];
-        let mut c = [t.key(a.circles[0])?, t.key(a.circles[1])?];
-        c.sort_unstable();
-        let mut v = [vkeys[a.ends[0] as usize]?, vkeys[a.ends[1] as usize]?];
-        v.sort_unstable();
-        Some((c, v))
-    };
-    let akeys: Vec<Option<ArcKey>> = (0..medial.arcs.len())
-        .into_par_iter()
-        .map(arc_key)
-        .collect();
-    // Sized once (issue 8: growing it rehashed every key, a millisecond of one thread at 1e3
-    // holes).
-    let mut arc_by_key: HashMap<ArcKey, usize> =
-        HashMap::with_capacity_and_hasher(akeys.len(), Default::default());
-    for (e, k) in akeys.iter().enumerate() {
-        if let Some(k) = k {
-            if arc_by_key.insert(*k, e).is_some() {
-                return Err(MeshError::Internal(
-                    "two medial arcs of the periodic tiling have the same key".into(),
-                ));
+    // Orbit keys of the original medial graph, made at this sampling's first extraction.
+    let fresh;
+    let orbits = match sampled.orbits.get() {
+        Some(o) => o,
+        None => match sampled.orbits.set(Orbits::new(t, samples, medial)?) {
+            Ok(()) => sampled
+                .orbits
+                .get()
+                .ok_or_else(|| MeshError::Internal("the orbit keys were not kept".into()))?,
+            Err(o) => {
+                fresh = o;
+                &fresh
             }
-        }
-    }
+        },
+    };
+    let (vkeys, akeys, arc_by_key) = (&orbits.vkeys, &orbits.akeys, &orbits.arc_by_key);
     let inconsistent = not_translation_consistent;
 
     // Collapse zero-length (always) and short arcs, identically in every copy. As in the
@@ -1313,9 +1478,7 @@ fn extract(
             &samples.points,
             medial,
             end_circles,
-            &vkeys,
-            &akeys,
-            &arc_by_key,
+            orbits,
             fraction,
             how,
             &exclude,
@@ -1628,11 +1791,11 @@ fn extract(
                     t,
                     medial,
                     &aux,
-                    &vkeys,
+                    vkeys,
                     vertex_orbits,
                     arc_orbits,
                     &vertex_by_key,
-                    &arc_by_key,
+                    arc_by_key,
                 )?)
             } else if collapsed_orbits.is_empty() {
                 None
@@ -1651,7 +1814,7 @@ fn extract(
                     &ckeys,
                     cluster_orbits,
                     arc_orbits,
-                    &arc_by_key,
+                    arc_by_key,
                 )
                 .ok()
             },
@@ -3602,6 +3765,8 @@ mod tests {
         let again = layout_keeping(&pd, &nearly_zero, &sampling).unwrap();
         let mut none_kept = std::sync::Arc::into_inner(again.sampled.unwrap()).unwrap();
         none_kept.end_circles = std::sync::OnceLock::new();
+        // A layout without a check for backwards arcs drops its orbit keys.
+        assert!(none_kept.orbits.get().is_none());
         let solved = reextract(&pd, &nearly_zero, &none_kept, &keys).unwrap();
         assert!(none_kept.end_circles.get().is_some());
         assert_eq!(with_kept.layout, solved.layout);
@@ -3609,6 +3774,69 @@ mod tests {
         assert_eq!(with_kept.collapsed_arcs, solved.collapsed_arcs);
         assert_eq!(with_kept.triples, solved.triples);
         assert!(with_kept.collapsed_arcs > p.collapsed_arcs);
+    }
+
+    /// An exact attempt's layout with arcs running backwards keeps its sampling's orbit keys
+    /// and collapse selection's part ([`Sampled::orbits`], issue 8): they are those made
+    /// afresh, and the local fix's extraction that finds them kept gives the layout of one
+    /// that makes them itself. A layout without such arcs drops them.
+    #[test]
+    fn kept_orbits_are_the_fresh_ones_and_give_the_same_layout() {
+        let (pd, _, nearly_zero) = backwards_box();
+        let sampling = crate::mesher::exact_sampling();
+        let p = layout_for_exact(&pd, &nearly_zero, &sampling).unwrap();
+        let arcs = p
+            .backwards
+            .clone()
+            .expect("the first layout has arcs running backwards");
+        let keys: Vec<ArcKey> = arcs.iter().map(|&o| p.arc_keys[o]).collect();
+        let sampled = p.sampled.as_deref().unwrap();
+        let kept = sampled.orbits.get().expect("kept for the local fix");
+        let fresh = Orbits::new(&sampled.t, &sampled.samples, &sampled.medial).unwrap();
+        assert_eq!(kept.vkeys, fresh.vkeys);
+        assert_eq!(kept.akeys, fresh.akeys);
+        assert_eq!(kept.arc_by_key, fresh.arc_by_key);
+        let base = kept.selection.get().expect("made by the extraction");
+        let again = SelectionBase::new(
+            &sampled.t.domain,
+            &sampled.tri,
+            &sampled.samples.points,
+            &sampled.medial,
+            &sampled.end_circles,
+            &fresh,
+            base.how,
+        );
+        assert_eq!(base.rep_of, again.rep_of);
+        assert_eq!(base.reps, again.reps);
+        assert_eq!(base.orbit_ends, again.orbit_ends);
+        assert_eq!(base.incident, again.incident);
+        let bits = |m: &[Measure]| -> Vec<(u8, u64)> {
+            m.iter()
+                .map(|m| match *m {
+                    Measure::NoEnds => (0, 0),
+                    Measure::Zero => (1, 0),
+                    Measure::Length { rel, is_loop } => (2 + u8::from(is_loop), rel.to_bits()),
+                })
+                .collect()
+        };
+        assert_eq!(bits(&base.measured), bits(&again.measured));
+        assert!(base
+            .measured
+            .iter()
+            .any(|m| matches!(m, Measure::Length { rel, .. } if rel.is_finite())));
+        let with_kept = reextract(&pd, &nearly_zero, sampled, &keys).unwrap();
+        let again = layout_for_exact(&pd, &nearly_zero, &sampling).unwrap();
+        let mut none_kept = std::sync::Arc::into_inner(again.sampled.unwrap()).unwrap();
+        none_kept.orbits = std::sync::OnceLock::new();
+        let made = reextract(&pd, &nearly_zero, &none_kept, &keys).unwrap();
+        assert_eq!(with_kept.layout, made.layout);
+        assert_eq!(with_kept.arc_keys, made.arc_keys);
+        assert_eq!(with_kept.collapsed_arcs, made.collapsed_arcs);
+        assert_eq!(with_kept.triples, made.triples);
+        assert!(with_kept.collapsed_arcs > p.collapsed_arcs);
+        // Without arcs running backwards (the local fix's layout), nothing is kept.
+        let whole = layout_keeping(&pd, &nearly_zero, &sampling).unwrap();
+        assert!(whole.sampled.as_deref().unwrap().orbits.get().is_none());
     }
 
     /// Exact mode's local fix (issue 8): the layout extracted again from the same sampling
