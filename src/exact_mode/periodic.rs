@@ -655,10 +655,19 @@ fn build_checking(
             limit: MAX_TOTAL_NODES,
         }));
     }
+    // The counts are final: every arc orbit that still holds its densities (size-driven
+    // counts; a split arc's half) is reduced to the node parameters of its count, in
+    // parallel, and its densities are freed before the grids are made (issue 8: 4 KB an arc
+    // orbit, 1.2 GB at 1e5 holes, held through the grids). The end grading and the nodes
+    // then read those parameters ([`orbit_params`]: the same bits). The density check
+    // (`check`) keeps them.
+    if check.is_none() {
+        summarise_held(pb, &mut targets, &mut summaries, &counts);
+    }
     // 4. Layout and grids, instance by instance; then the templates of the inserted holes.
     // The arcs' end grading first, for size-driven counts (as in bounded domains).
     let rho = if options.block_cells.is_none() {
-        end_ratios(pb, &verts, &geoms, &targets, &slots, &counts)
+        end_ratios(pb, &verts, &geoms, &targets, &summaries, &slots, &counts)
     } else {
         Vec::new()
     };
@@ -817,9 +826,7 @@ fn orbit_params(
     o: usize,
     params: &mut Vec<f64>,
 ) -> Option<()> {
-    let c = pb.arcs[o].circles;
-    let nbar =
-        0.5 * (counts.circle[c[0].0 as usize + 1] + counts.circle[c[1].0 as usize + 1]) as f64;
+    let nbar = orbit_nbar(pb, counts, o);
     let n = counts.arc[o];
     let t = &targets[o];
     let computed;
@@ -842,9 +849,37 @@ fn orbit_params(
     Some(())
 }
 
+/// The mean wall-normal count `nbar` of arc orbit `o` for the counts `counts`: that of its
+/// two holes.
+fn orbit_nbar(pb: &PeriodicBlocking, counts: &Counts, o: usize) -> f64 {
+    let c = pb.arcs[o].circles;
+    0.5 * (counts.circle[c[0].0 as usize + 1] + counts.circle[c[1].0 as usize + 1]) as f64
+}
+
+/// Every arc orbit of `targets` that holds its densities gets the summary of its final count
+/// (its `nbar` and the node parameters [`orbit_params`] would compute from them) and lets
+/// them go, in parallel; the others are left as they are.
+fn summarise_held(
+    pb: &PeriodicBlocking,
+    targets: &mut [ArcTarget],
+    summaries: &mut [Option<Summary>],
+    counts: &Counts,
+) {
+    targets
+        .par_iter_mut()
+        .zip(summaries.par_iter_mut())
+        .enumerate()
+        .filter(|(_, (t, _))| t.holds_densities())
+        .for_each(|(o, (t, summary))| {
+            let nbar = orbit_nbar(pb, counts, o);
+            *summary = Some((nbar, params_of(&t.sq, &t.ang, nbar, counts.arc[o])));
+            (t.sq, t.ang) = (Vec::new(), Vec::new());
+        });
+}
+
 /// What an arc orbit's densities are reduced to with a fixed grid per block: the `nbar` and
 /// the node parameters of the count it gets (its lower bound goes to its target's
-/// [`Known`]).
+/// [`Known`]); for size-driven counts, once the counts are final ([`summarise_held`]).
 type Summary = (f64, Vec<f64>);
 
 /// The node parameters of an arc of densities `sq`, `ang` with `n` cells for a mean
@@ -869,6 +904,7 @@ fn end_ratios(
     verts: &[Vertex],
     geoms: &[ArcGeometry],
     targets: &[ArcTarget],
+    summaries: &[Option<Summary>],
     slots: &[[[usize; 2]; 2]],
     counts: &Counts,
 ) -> Vec<[f64; 2]> {
@@ -876,8 +912,8 @@ fn end_ratios(
     let mut params = Vec::new();
     for (o, arc) in pb.arcs.iter().enumerate() {
         let n = counts.arc[o];
-        // The densities are held here (size-driven counts): no summary, no error.
-        let _ = orbit_params(pb, geoms, targets, &[], counts, o, &mut params);
+        // From the held densities or the summary of the final count: no error.
+        let _ = orbit_params(pb, geoms, targets, summaries, counts, o, &mut params);
         // `slots[o][end][side]`; the grading reads `[side][end]`.
         let s = slots[o];
         inputs.push(super::grading::EndInput {
@@ -1423,20 +1459,26 @@ mod tests {
     }
 
     /// With a fixed grid per block the arcs' densities are reduced to summaries (lower bound
-    /// and node parameters) as they are computed; the density check keeps them held. Both
-    /// give the same mesh, bit for bit: plain boxes, and boxes with a hole taken as inserted
-    /// (its arcs split and their counts tied by the template, so that some parameters are
-    /// computed again from the geometry).
+    /// and node parameters) as they are computed, with size-driven counts once the counts are
+    /// final ([`summarise_held`]); the density check keeps them held. Both give the same
+    /// mesh, bit for bit: plain boxes, and boxes with a hole taken as inserted (its arcs split
+    /// and their counts tied by the template, so that some parameters are computed again from
+    /// the geometry, or summarised from a half's densities).
     #[test]
     fn summarised_densities_give_the_mesh_of_held_ones() {
         let mut templated = 0;
+        let sized = |cells: usize| Options {
+            cells,
+            ..Options::default()
+        };
+        let fixed = |n: usize| Options {
+            block_cells: Some(n),
+            ..Options::default()
+        };
         for seed in 1..4 {
             let pd = crate::layouts::periodic_bubbles(40, seed).expect("layout");
-            for n in [3, 6] {
-                let options = Options {
-                    block_cells: Some(n),
-                    ..Options::default()
-                };
+            for options in [fixed(3), fixed(6), sized(3), sized(6)] {
+                let n = options.block_cells.unwrap_or(options.cells);
                 let p = crate::periodic::periodic_layout(&pd, &options).expect("layout");
                 let Some(pb) = &p.blocking else { continue };
                 for fluid in [vec![], vec![true], vec![false, true, true]] {
