@@ -553,41 +553,48 @@ fn build_checking(
         *arcs = problem.arcs;
         solved
     };
-    let mut counts = solve(cell, &mut targets)?;
-    let keys = block_keys(pb, &verts);
-    // Inserted holes: the layout with its templates (its edges and blocks do not depend on
-    // the counts), whose conformity classes tie arc counts in pairs around every hole.
+    // The layout with the inserted holes' templates (its edges and blocks do not depend on
+    // the counts) is made beside the counts and the keys: a serial pass, which would
+    // otherwise leave a core idle (issue 8: 0.5 s at 1e5 holes).
     let has_fluid = fluid.iter().any(|&f| f);
-    let fill = |layout: &mut BlockLayout| -> Result<usize, MeshError> {
-        let holes: Vec<(CircleId, crate::domain::Circle)> = (0..h)
-            .filter(|&k| is_fluid(k))
-            .map(|k| (k as CircleId, pb.holes[k]))
-            .collect();
-        crate::templates::fill_inserted_holes(layout, &holes)
-            .map_err(|(c, m)| internal(format!("inserted hole {c}: {m}")))
-    };
-    let templates = if has_fluid {
-        let parts = Parts {
-            pb,
-            verts: &verts,
-            geoms: &geoms,
-            targets: &targets,
-            summaries: &summaries,
-            slots: &slots,
-            cluster: &cluster,
-            rho: &[],
-        };
-        // Without the arcs' nodes (its medial polylines are set for the grids at the end:
-        // issue 8, the layout was made twice).
-        let mut a = layout_pass(&parts, None)?;
-        let first = a.layout.blocks.len();
-        let filled = fill(&mut a.layout)?;
-        let classes = crate::grid::edge_classes(&a.layout);
-        let medial_edge: Vec<u32> = a.medial_edges.iter().map(|e| e[0]).collect();
-        Some((a, classes, medial_edge, first, filled))
-    } else {
-        None
-    };
+    let (made, templates) = rayon::join(
+        || -> Result<(Counts, Vec<BlockKey>), MeshError> {
+            let counts = solve(cell, &mut targets)?;
+            Ok((counts, block_keys(pb, &verts)))
+        },
+        || -> Result<Option<Templated>, MeshError> {
+            if !has_fluid {
+                return Ok(None);
+            }
+            let parts = Parts {
+                pb,
+                verts: &verts,
+                geoms: &geoms,
+                targets: &[],
+                summaries: &[],
+                slots: &slots,
+                cluster: &cluster,
+                rho: &[],
+            };
+            // Without the arcs' nodes (its medial polylines are set for the grids at the
+            // end: issue 8, the layout was made twice).
+            let mut a = layout_pass(&parts, None)?;
+            let first = a.layout.blocks.len();
+            let holes: Vec<(CircleId, crate::domain::Circle)> = (0..h)
+                .filter(|&k| is_fluid(k))
+                .map(|k| (k as CircleId, pb.holes[k]))
+                .collect();
+            let filled = crate::templates::fill_inserted_holes(&mut a.layout, &holes)
+                .map_err(|(c, m)| internal(format!("inserted hole {c}: {m}")))?;
+            let classes = crate::grid::edge_classes(&a.layout);
+            let medial_edge: Vec<u32> = a.medial_edges.iter().map(|e| e[0]).collect();
+            Ok(Some((a, classes, medial_edge, first, filled)))
+        },
+    );
+    let (mut counts, keys) = made?;
+    let templates = templates?;
+    // Inserted holes: the template layout's conformity classes tie arc counts in pairs
+    // around every hole.
     let tie = |counts: &mut Counts| {
         if let Some((_, classes, medial_edge, _, _)) = &templates {
             super::inserted::tie_counts(classes, medial_edge, &mut counts.arc);
@@ -681,20 +688,22 @@ fn build_checking(
         cluster: &cluster,
         rho: &rho,
     };
-    // With templates, their layout (already filled) gets its medial polylines now.
-    let nodes = arc_nodes(&parts, &counts)?;
-    let (layout, mut grids, templated) = match templates {
-        Some((mut a, classes, _, first, filled)) => {
-            set_medial_nodes(pb, &nodes, &mut a);
-            let grids = grids_pass(&parts, &counts, &nodes, &a)?;
-            (a.layout, grids, Some((classes, first, filled)))
-        }
+    // The nodes of the arcs, and without templates the layout beside them (a serial pass:
+    // issue 8, it left a core idle); the layout's medial polylines are set from the nodes.
+    let (nodes, (mut a, templated)) = match templates {
+        Some((a, classes, _, first, filled)) => (
+            arc_nodes(&parts, &counts)?,
+            (a, Some((classes, first, filled))),
+        ),
         None => {
-            let a = layout_pass(&parts, Some(&nodes))?;
-            let grids = grids_pass(&parts, &counts, &nodes, &a)?;
-            (a.layout, grids, None)
+            let (nodes, a) =
+                rayon::join(|| arc_nodes(&parts, &counts), || layout_pass(&parts, None));
+            (nodes?, (a?, None))
         }
     };
+    set_medial_nodes(pb, &nodes, &mut a);
+    let grids = grids_pass(&parts, &counts, &nodes, &a);
+    let (layout, mut grids) = (a.layout, grids?);
     drop(nodes);
     // Winslow smoothing of the medial blocks (as in bounded exact mode, not the templates;
     // it keeps every block's boundary, which the templates copy), each on its own.
@@ -761,15 +770,83 @@ fn block_keys(pb: &PeriodicBlocking, verts: &[Vertex]) -> Vec<BlockKey> {
 /// A vertex instance: orbit and shift.
 type Instance = (usize, Shift);
 
+/// Ids per vertex instance `(orbit, shift)` and slot `k < slots(orbit)`: those of each
+/// orbit's first instance (the first one given an id) in dense arrays, the others (the copies
+/// by the box's edges) in a map (issue 8: a map for all, 0.3 s of cache misses in the serial
+/// [`layout_pass`] at 1e5 holes). What a lookup gives does not depend on where it is kept.
+struct InstanceIds {
+    /// Per orbit, its first instance's shift.
+    first: Vec<Option<Shift>>,
+    /// Per orbit, where its slots start in `ids` (one more entry: the end).
+    offset: Vec<usize>,
+    /// Per slot of a first instance, its id ([`InstanceIds::NONE`] until given).
+    ids: Vec<u32>,
+    others: HashMap<(Instance, usize), u32>,
+}
+
+impl InstanceIds {
+    const NONE: u32 = u32::MAX;
+
+    /// For orbits with `slots` slots each.
+    fn new(slots: impl Iterator<Item = usize>) -> InstanceIds {
+        let mut offset = vec![0];
+        for n in slots {
+            offset.push(offset[offset.len() - 1] + n);
+        }
+        let orbits = offset.len() - 1;
+        InstanceIds {
+            first: vec![None; orbits],
+            ids: vec![Self::NONE; offset[orbits]],
+            offset,
+            others: HashMap::default(),
+        }
+    }
+
+    /// The dense slot of `(i, k)`, when `i` is its orbit's first instance (or the orbit has
+    /// none yet and `claim`, which makes `i` its first).
+    fn slot(&mut self, (w, s): Instance, k: usize, claim: bool) -> Option<usize> {
+        let (lo, hi) = (*self.offset.get(w)?, *self.offset.get(w + 1)?);
+        if k >= hi - lo {
+            return None;
+        }
+        match self.first[w] {
+            Some(f) if f == s => Some(lo + k),
+            None if claim => {
+                self.first[w] = Some(s);
+                Some(lo + k)
+            }
+            _ => None,
+        }
+    }
+
+    fn get(&mut self, i: Instance, k: usize) -> Option<u32> {
+        match self.slot(i, k, false) {
+            Some(x) => Some(self.ids[x]).filter(|&id| id != Self::NONE),
+            None => self.others.get(&(i, k)).copied(),
+        }
+    }
+
+    fn insert(&mut self, i: Instance, k: usize, id: u32) {
+        match self.slot(i, k, true) {
+            Some(x) => self.ids[x] = id,
+            None => {
+                self.others.insert((i, k), id);
+            }
+        }
+    }
+}
+
 /// The layout under construction: every vertex instance, tangent point and spoke once.
 struct Builder<'a> {
     pb: &'a PeriodicBlocking,
     verts: &'a [Vertex],
     layout: BlockLayout,
-    centre: HashMap<Instance, u32>,
-    tangent: HashMap<(Instance, usize), u32>,
+    /// Centre vertex per vertex instance (one slot).
+    centre: InstanceIds,
+    /// Tangent point vertex per vertex instance and slot.
+    tangent: InstanceIds,
     /// Spoke edge (centre to wall) per tangent point instance.
-    spokes: HashMap<(Instance, usize), u32>,
+    spokes: InstanceIds,
 }
 
 impl Builder<'_> {
@@ -778,25 +855,25 @@ impl Builder<'_> {
         (self.layout.vertices.len() - 1) as u32
     }
     fn centre_vertex(&mut self, w: usize, s: Shift) -> u32 {
-        if let Some(&v) = self.centre.get(&(w, s)) {
+        if let Some(v) = self.centre.get((w, s), 0) {
             return v;
         }
         let v = self.push(shifted(self.verts[w].center, s, self.pb.size));
-        self.centre.insert((w, s), v);
+        self.centre.insert((w, s), 0, v);
         v
     }
     fn tangent_vertex(&mut self, i: Instance, k: usize) -> u32 {
-        if let Some(&v) = self.tangent.get(&(i, k)) {
+        if let Some(v) = self.tangent.get(i, k) {
             return v;
         }
         let v = self.push(shifted(self.verts[i.0].tangent[k], i.1, self.pb.size));
-        self.tangent.insert((i, k), v);
+        self.tangent.insert(i, k, v);
         v
     }
     /// The spoke edge of tangent point `k` of instance `i` (its nodes are its blocks' end
     /// columns, made with the grids from the positions of its two ends).
     fn spoke(&mut self, i: Instance, k: usize) -> u32 {
-        if let Some(&e) = self.spokes.get(&(i, k)) {
+        if let Some(e) = self.spokes.get(i, k) {
             return e;
         }
         let c = self.centre_vertex(i.0, i.1);
@@ -807,7 +884,7 @@ impl Builder<'_> {
             kind: EdgeKind::Spoke,
         });
         let e = (self.layout.edges.len() - 1) as u32;
-        self.spokes.insert((i, k), e);
+        self.spokes.insert(i, k, e);
         e
     }
 }
@@ -936,10 +1013,15 @@ struct Parts<'a> {
     /// (the count is their length less one), when the densities were not kept.
     summaries: &'a [Option<Summary>],
     slots: &'a [[[usize; 2]; 2]],
-    cluster: &'a dyn Fn(usize) -> super::Clustering,
+    cluster: &'a (dyn Fn(usize) -> super::Clustering + Sync),
     /// The end grading's ratios per arc orbit ([`super::grading`]); empty: not graded.
     rho: &'a [[f64; 2]],
 }
+
+/// The layout with the inserted holes' templates, before the counts: the assembled layout,
+/// its conformity classes, each arc orbit's first medial edge, the number of medial blocks
+/// and the number of template blocks.
+type Templated = (Assembled, (Vec<usize>, usize), Vec<u32>, usize, usize);
 
 /// Per arc orbit: its medial nodes and the nodes of its two walls.
 type ArcNodes = (Vec<Point>, [Vec<Point>; 2]);
@@ -1001,13 +1083,24 @@ fn layout_pass(parts: &Parts, nodes: Option<&[ArcNodes]>) -> Result<Assembled, M
     let size = pb.size;
     let mut jobs: Vec<GridJob> = Vec::with_capacity(2 * pb.arcs.len());
     let mut medial_edges_of = Vec::with_capacity(pb.arcs.len());
+    // Sized once (issue 8: growing them copied them): a vertex orbit has one instance per
+    // copy it is used in, mostly one, and a tangent point and a spoke per circle; an eighth
+    // more for the copies by the box's edges.
+    let centres = verts.len() + verts.len() / 8;
+    let tangents: usize = verts.iter().map(|v| v.circles.len()).sum();
+    let tangents = tangents + tangents / 8;
+    let mut layout = BlockLayout::default();
+    layout.vertices.reserve(centres + tangents);
+    layout.edges.reserve(4 * pb.arcs.len() + tangents);
+    layout.blocks.reserve(2 * pb.arcs.len());
+    let degrees = || verts.iter().map(|v| v.circles.len());
     let mut b = Builder {
         pb,
         verts,
-        layout: BlockLayout::default(),
-        centre: HashMap::default(),
-        tangent: HashMap::default(),
-        spokes: HashMap::default(),
+        layout,
+        centre: InstanceIds::new(verts.iter().map(|_| 1)),
+        tangent: InstanceIds::new(degrees()),
+        spokes: InstanceIds::new(degrees()),
     };
     for (o, arc) in pb.arcs.iter().enumerate() {
         let g = &geoms[o];
@@ -1087,7 +1180,7 @@ fn layout_pass(parts: &Parts, nodes: Option<&[ArcNodes]>) -> Result<Assembled, M
                 d,
                 first,
                 growth: cl.growth,
-                ends: [(i0, k0), (i1, k1)],
+                spokes: [sp0, sp1],
             });
             let (fwd, rev) = (SideRef::along, SideRef::against);
             let me = medial_edges[side];
@@ -1110,7 +1203,6 @@ fn layout_pass(parts: &Parts, nodes: Option<&[ArcNodes]>) -> Result<Assembled, M
         layout: b.layout,
         jobs,
         medial_edges: medial_edges_of,
-        spokes: b.spokes,
     })
 }
 
@@ -1130,19 +1222,25 @@ fn medial_polyline(m_nodes: &[Point], d: Shift, size: [f64; 2], ends: [Point; 2]
 /// Give the medial edges of `a` (made by [`layout_pass`] without nodes) their polylines from
 /// `nodes`: the same curves [`layout_pass`] makes with them.
 fn set_medial_nodes(pb: &PeriodicBlocking, nodes: &[ArcNodes], a: &mut Assembled) {
-    for (o, arc) in pb.arcs.iter().enumerate() {
-        let shifts = arc.circles.map(|c| (-c.1, -c.2));
-        for side in 0..2 {
-            if side == 1 && shifts[1] == shifts[0] {
-                continue;
-            }
-            let e = a.medial_edges[o][side] as usize;
-            let ends = a.layout.edges[e]
-                .ends
-                .map(|k| a.layout.vertices[k as usize]);
-            let pts = medial_polyline(&nodes[o].0, shifts[side], pb.size, ends);
-            a.layout.edges[e].curve = Curve::Polyline(pts);
-        }
+    // The polylines in parallel, then moved into their edges.
+    let layout = &a.layout;
+    let lines: Vec<(usize, Vec<Point>)> = pb
+        .arcs
+        .par_iter()
+        .zip(&a.medial_edges)
+        .zip(nodes)
+        .flat_map_iter(|((arc, medial_edges), node)| {
+            let shifts = arc.circles.map(|c| (-c.1, -c.2));
+            let sides = if shifts[1] == shifts[0] { 1 } else { 2 };
+            (0..sides).map(move |side| {
+                let e = medial_edges[side] as usize;
+                let ends = layout.edges[e].ends.map(|k| layout.vertices[k as usize]);
+                (e, medial_polyline(&node.0, shifts[side], pb.size, ends))
+            })
+        })
+        .collect();
+    for (e, pts) in lines {
+        a.layout.edges[e].curve = Curve::Polyline(pts);
     }
 }
 
@@ -1159,12 +1257,14 @@ fn grids_pass(
     // nodes in both blocks at a spoke (`GridScratch` gives each column exactly the nodes of
     // `super::spoke_column`, as the spokes' own nodes were computed before, issue 8).
     let size = parts.pb.size;
-    let (spokes, layout) = (&a.spokes, &a.layout);
-    let spoke_ends = |o: usize, end: &(Instance, usize)| -> Result<(Point, Point), MeshError> {
-        let e = spokes
-            .get(end)
+    let layout = &a.layout;
+    let spoke_ends = |o: usize, e: u32| -> Result<(Point, Point), MeshError> {
+        let edge = layout
+            .edges
+            .get(e as usize)
+            .filter(|edge| edge.kind == EdgeKind::Spoke)
             .ok_or_else(|| internal(format!("arc orbit {o}: a spoke not made")))?;
-        let [c, t] = layout.edges[*e as usize].ends;
+        let [c, t] = edge.ends;
         Ok((layout.vertices[t as usize], layout.vertices[c as usize]))
     };
     a.jobs
@@ -1179,7 +1279,7 @@ fn grids_pass(
                 for i in 0..=n {
                     let k = if job.side == 0 { i } else { n - i };
                     let (a, m) = if k == 0 || k == n {
-                        spoke_ends(job.o, &job.ends[if k == 0 { 0 } else { 1 }])?
+                        spoke_ends(job.o, job.spokes[if k == 0 { 0 } else { 1 }])?
                     } else {
                         (
                             shifted(a_nodes[job.side][k], job.d, size),
@@ -1206,8 +1306,6 @@ struct Assembled {
     /// The medial edges of each arc orbit: its side-0 block's, its side-1 block's (the same
     /// edge when both sides are in one instance).
     medial_edges: Vec<[u32; 2]>,
-    /// Spoke edge (centre to wall) per tangent point instance.
-    spokes: HashMap<(Instance, usize), u32>,
 }
 
 /// What [`grids_pass`] needs to make the grid of the block on side `side` of arc orbit `o`
@@ -1218,8 +1316,8 @@ struct GridJob {
     d: Shift,
     first: Option<f64>,
     growth: f64,
-    /// The spokes at its ends (tangent point instances and slots), end `A` then end `B`.
-    ends: [(Instance, usize); 2],
+    /// The spoke edges at its ends, end `A` then end `B`.
+    spokes: [u32; 2],
 }
 
 /// The orbits being split for the templates ([`split_for_templates`]).
@@ -1456,6 +1554,35 @@ mod tests {
             .iter()
             .flat_map(|g| g.nodes.iter().flat_map(|p| p.map(f64::to_bits)))
             .collect()
+    }
+
+    proptest::proptest! {
+        /// [`InstanceIds`] answers as one map of every `(instance, slot)` would, whatever the
+        /// order of the instances (first ones dense, the others in its map), slots out of
+        /// range and unknown orbits included.
+        #[test]
+        fn instance_ids_answer_as_a_map(
+            degrees in proptest::collection::vec(1usize..5, 1..6),
+            ops in proptest::collection::vec(
+                (0usize..7, -1i32..2, -1i32..2, 0usize..6, proptest::bool::ANY),
+                0..80,
+            ),
+        ) {
+            let mut ids = InstanceIds::new(degrees.iter().copied());
+            let mut model: std::collections::HashMap<(Instance, usize), u32> = Default::default();
+            for (n, &(w, a, b, k, insert)) in ops.iter().enumerate() {
+                let i = (w, (a, b));
+                if insert {
+                    ids.insert(i, k, n as u32);
+                    model.insert((i, k), n as u32);
+                } else {
+                    proptest::prop_assert_eq!(ids.get(i, k), model.get(&(i, k)).copied());
+                }
+            }
+            for (&(i, k), &id) in &model {
+                proptest::prop_assert_eq!(ids.get(i, k), Some(id));
+            }
+        }
     }
 
     /// With a fixed grid per block the arcs' densities are reduced to summaries (lower bound
