@@ -1844,10 +1844,10 @@ fn extract(
             let Some(Ok(m)) = m else { return None };
             early.arc_orbits.push(m.rep);
         }
-        early.vertex_orbits.sort_unstable();
+        early.vertex_orbits.par_sort_unstable();
         early.vertex_orbits.dedup();
         for v in [&mut early.collapsed_orbits, &mut early.arc_orbits] {
-            v.sort_unstable();
+            v.par_sort_unstable();
             v.dedup();
         }
         early.cluster_orbits.sort_unstable();
@@ -2094,11 +2094,13 @@ fn extract(
             crate::numfmt::Num(a)
         )));
     }
-    vertex_orbits.sort_unstable();
+    // (Parallel sorts of keys of 48 bytes and more: equal keys are equal, so the order is
+    // that of a serial sort.)
+    vertex_orbits.par_sort_unstable();
     vertex_orbits.dedup();
-    arc_orbits.sort_unstable();
+    arc_orbits.par_sort_unstable();
     arc_orbits.dedup();
-    collapsed_orbits.sort_unstable();
+    collapsed_orbits.par_sort_unstable();
     collapsed_orbits.dedup();
     if arc_orbits
         .iter()
@@ -2181,11 +2183,9 @@ fn exact_input(
         t.key(c)
             .ok_or_else(|| bad("a kept orbit on the bounding circle"))
     };
-    let index: HashMap<&VertexKey, usize> = vertex_orbits
-        .iter()
-        .enumerate()
-        .map(|(i, k)| (k, i))
-        .collect();
+    // `vertex_orbits` is sorted: an orbit's index is found by a search (issue 8: a map of
+    // every key was built for it).
+    let index = |rep: &VertexKey| vertex_orbits.binary_search(rep).ok();
     let mut vertices = Vec::with_capacity(vertex_orbits.len());
     for key in vertex_orbits {
         let v = &medial.vertices[*vertex_by_key.get(key).ok_or_else(|| bad("vertex orbit"))?];
@@ -2206,7 +2206,7 @@ fn exact_input(
                 .flatten()
                 .ok_or_else(|| bad("arc end key"))?;
             let (rep, d) = normalise_vertex(&k);
-            ends[j] = (*index.get(&rep).ok_or_else(|| bad("arc end orbit"))?, d);
+            ends[j] = (index(&rep).ok_or_else(|| bad("arc end orbit"))?, d);
         }
         arcs.push(orbit_arc(t, aux, arc, r, ends)?);
     }
@@ -2263,25 +2263,26 @@ fn exact_input_clusters(
     arc_by_key: &HashMap<ArcKey, usize>,
 ) -> Result<PeriodicBlocking, MeshError> {
     let bad = not_translation_consistent;
-    // The orbits by their representative's key, in key order.
-    let mut orbits: Vec<(ClusterKey, usize)> = cluster_orbits
-        .iter()
+    // The orbits by their representative's key, in key order (the first representative of
+    // equal keys kept: the pairs are distinct, so the parallel sort orders them as a serial
+    // one; issue 8), found by a search rather than a map of every key.
+    let mut orbits: Vec<(&ClusterKey, usize)> = cluster_orbits
+        .par_iter()
         .map(|&r| {
             ckeys
                 .get(r)
-                .cloned()
-                .flatten()
+                .and_then(Option::as_ref)
                 .map(|k| (k, r))
                 .ok_or_else(|| bad("cluster key"))
         })
         .collect::<Result<_, _>>()?;
-    orbits.sort();
+    orbits.par_sort_unstable();
     orbits.dedup_by(|a, b| a.0 == b.0);
-    let index: HashMap<&ClusterKey, usize> = orbits
-        .iter()
-        .enumerate()
-        .map(|(i, (k, _))| (k, i))
-        .collect();
+    let index = |rep: &ClusterKey| {
+        orbits
+            .binary_search_by(|(k, _)| k.as_slice().cmp(rep.as_slice()))
+            .ok()
+    };
     // Vertex and arc orbits each on their own, in parallel; the first error in orbit order is
     // the one returned (issue 8).
     let vertices = orbits
@@ -2331,7 +2332,7 @@ fn exact_input_clusters(
             .and_then(Option::as_ref)
             .ok_or_else(|| bad("arc end key"))?;
         let (rep, d) = normalise_cluster(key);
-        Ok((*index.get(&rep).ok_or_else(|| bad("arc end orbit"))?, d))
+        Ok((index(&rep).ok_or_else(|| bad("arc end orbit"))?, d))
     };
     let arcs = arc_orbits
         .par_iter()
