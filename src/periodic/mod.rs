@@ -345,7 +345,11 @@ impl Tiling {
         let bgrid: Vec<u64> = (0..bpts.len() as u64).collect();
         let bgap = gaps.first().copied().unwrap_or(f64::NAN);
         push_circle(&mut s, -1, bpts, &bgrid, bounding_count as u64, bgap);
+        // The canonical copies' samples, then every copy's, in parallel (issue 8: 0.15-0.18 s
+        // on one thread at 1e5 holes): each copy's slice of the arrays starts at the sum of
+        // the counts before it.
         let canon: Vec<Vec<Point>> = (0..self.h)
+            .into_par_iter()
             .map(|k| {
                 let c = self.domain.holes()[self.id(k, 0, 0) as usize];
                 let (n, ks) = &plans[k];
@@ -360,14 +364,59 @@ impl Tiling {
                     .collect()
             })
             .collect();
-        for (id, &(k, a, bb)) in self.keys.iter().enumerate() {
-            let k = k as usize;
-            let (n, ks) = &plans[k];
-            let (dx, dy) = (a as f64 * self.lq[0], bb as f64 * self.lq[1]);
-            let moved = canon[k].iter().map(|p| [p[0] + dx, p[1] + dy]).collect();
-            let gap = gaps.get(k + 1).copied().unwrap_or(f64::NAN);
-            push_circle(&mut s, id as CircleId, moved, ks, *n, gap);
+        let base = s.points.len();
+        let mut first = Vec::with_capacity(self.keys.len());
+        let mut total = base;
+        for &(k, _, _) in &self.keys {
+            first.push(total);
+            total += plans[k as usize].1.len();
         }
+        for (id, &(k, _, _)) in self.keys.iter().enumerate() {
+            let k = k as usize;
+            s.circles.push(CircleSamples {
+                circle: id as CircleId,
+                first: first[id] as u32,
+                count: plans[k].1.len() as u32,
+                gap: gaps.get(k + 1).copied().unwrap_or(f64::NAN),
+            });
+            s.grid_counts.push(plans[k].0);
+        }
+        s.points.resize(total, [0.0; 2]);
+        s.circle_of.resize(total, 0);
+        s.index_of.resize(total, 0);
+        s.grid.resize(total, 0);
+        // Split the arrays after the bounding circle into one slice per copy.
+        fn split<T>(mut rest: &mut [T], lens: impl Iterator<Item = usize>) -> Vec<&mut [T]> {
+            let mut out = Vec::new();
+            for n in lens {
+                let (head, tail) = std::mem::take(&mut rest).split_at_mut(n);
+                out.push(head);
+                rest = tail;
+            }
+            out
+        }
+        let lens = || self.keys.iter().map(|&(k, _, _)| plans[k as usize].1.len());
+        let points = split(&mut s.points[base..], lens());
+        let circle_of = split(&mut s.circle_of[base..], lens());
+        let index_of = split(&mut s.index_of[base..], lens());
+        let grid = split(&mut s.grid[base..], lens());
+        points
+            .into_par_iter()
+            .zip(circle_of)
+            .zip(index_of)
+            .zip(grid)
+            .enumerate()
+            .for_each(|(id, (((pts, of), idx), grid))| {
+                let (k, a, bb) = self.keys[id];
+                let k = k as usize;
+                let (dx, dy) = (a as f64 * self.lq[0], bb as f64 * self.lq[1]);
+                for (i, p) in canon[k].iter().enumerate() {
+                    pts[i] = [p[0] + dx, p[1] + dy];
+                    of[i] = id as CircleId;
+                    idx[i] = i as u32;
+                }
+                grid.copy_from_slice(&plans[k].1);
+            });
         s
     }
 }
