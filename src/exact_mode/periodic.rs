@@ -103,7 +103,8 @@ pub struct PeriodicExact {
     /// [`super::ExactMesh::inconsistent_arcs`]).
     pub inconsistent_arcs: Vec<usize>,
     /// The key of each block ([`super::imposed`]), in block order (the medial blocks only:
-    /// template blocks, after them, have none).
+    /// template blocks, after them, have none); empty when not asked for
+    /// ([`build_unless_backwards_with`]).
     pub keys: Vec<BlockKey>,
     /// Arc orbits split in two so that every inserted hole fits its template.
     pub split_arcs: usize,
@@ -224,7 +225,7 @@ pub fn build_with_inserted(
     options: &Options,
     fluid: &[bool],
 ) -> Result<PeriodicExact, MeshError> {
-    match build_checking(pb, options, fluid, None, false)? {
+    match build_checking(pb, options, fluid, None, false, true)? {
         Built::Mesh(x) => Ok(*x),
         Built::Backwards(_) => Err(internal("stopped at backwards arcs".into())),
     }
@@ -243,13 +244,26 @@ pub(crate) enum Built {
 /// [`build_with_inserted`] that stops as soon as an arc orbit runs backwards (issue 8): such
 /// a mesh is never kept (the periodic mesher resamples around those arcs), and the counts,
 /// nodes and grids of the whole period were most of the build's time (0.39 s of a failed
-/// attempt at 10 000 holes).
+/// attempt at 10 000 holes). With the block keys (the tests' entry point;
+/// [`build_unless_backwards_with`] chooses).
+#[cfg(test)]
 pub(crate) fn build_unless_backwards(
     pb: &PeriodicBlocking,
     options: &Options,
     fluid: &[bool],
 ) -> Result<Built, MeshError> {
-    build_checking(pb, options, fluid, None, true)
+    build_unless_backwards_with(pb, options, fluid, true)
+}
+
+/// [`build_unless_backwards`]; with `keys` false the mesh has no block keys
+/// ([`PeriodicExact::keys`] empty; they are still made for imposed counts, which read them).
+pub(crate) fn build_unless_backwards_with(
+    pb: &PeriodicBlocking,
+    options: &Options,
+    fluid: &[bool],
+    keys: bool,
+) -> Result<Built, MeshError> {
+    build_checking(pb, options, fluid, None, true, keys)
 }
 
 /// How far the fast densities of every arc orbit of `pb` are from the plain formula
@@ -260,7 +274,7 @@ pub fn density_deviation(
     options: &Options,
 ) -> Result<super::densities::Deviation, MeshError> {
     let mut d = super::densities::Deviation::default();
-    build_checking(pb, options, &[], Some(&mut d), false)?;
+    build_checking(pb, options, &[], Some(&mut d), false, true)?;
     Ok(d)
 }
 
@@ -390,6 +404,7 @@ fn build_checking(
     fluid: &[bool],
     mut check: Option<&mut super::densities::Deviation>,
     stop: bool,
+    want_keys: bool,
 ) -> Result<Built, MeshError> {
     validate_options(options)?;
     let h = pb.holes.len();
@@ -560,7 +575,13 @@ fn build_checking(
     let (made, templates) = rayon::join(
         || -> Result<(Counts, Vec<BlockKey>), MeshError> {
             let counts = solve(cell, &mut targets)?;
-            Ok((counts, block_keys(pb, &verts)))
+            // Imposed counts read the keys (on layouts without templates).
+            let keys = if want_keys || (options.imposed_counts.is_some() && !has_fluid) {
+                block_keys(pb, &verts)
+            } else {
+                Vec::new()
+            };
+            Ok((counts, keys))
         },
         || -> Result<Option<Templated>, MeshError> {
             if !has_fluid {
@@ -1556,6 +1577,54 @@ mod tests {
             .collect()
     }
 
+    /// A build without block keys (`mesh_periodic`'s) is the build with them, less the keys;
+    /// with imposed counts it still reads them (the same counts as the keyed build's).
+    #[test]
+    fn a_build_without_keys_is_the_keyed_build() {
+        let pd = crate::layouts::periodic_bubbles(40, 2).expect("layout");
+        let options = Options {
+            block_cells: Some(4),
+            ..Options::default()
+        };
+        let p = crate::periodic::periodic_layout(&pd, &options).expect("layout");
+        let pb = p.blocking.as_ref().expect("exact input");
+        let (Built::Mesh(a), Built::Mesh(b)) = (
+            build_unless_backwards_with(pb, &options, &[], true).unwrap(),
+            build_unless_backwards_with(pb, &options, &[], false).unwrap(),
+        ) else {
+            panic!("no arc runs backwards here");
+        };
+        assert_eq!(a.keys.len(), a.layout.blocks.len());
+        assert!(b.keys.is_empty());
+        assert_eq!(a.layout, b.layout);
+        assert_eq!(bits(&a.grids), bits(&b.grids));
+        // Imposed counts: the keyed build's counts, one more cell on every arc.
+        let arcs: Vec<[usize; 2]> = pb
+            .arcs
+            .iter()
+            .map(|arc| arc.circles.map(|c| c.0 as usize + 1))
+            .collect();
+        let mut arc = a.counts.arc.clone();
+        arc.iter_mut().for_each(|n| *n += 1);
+        let counts = a
+            .keys
+            .iter()
+            .enumerate()
+            .map(|(b, k)| (k.clone(), [arc[b / 2], a.counts.circle[arcs[b / 2][b % 2]]]))
+            .collect();
+        let imposed = crate::exact_mode::imposed::ImposedCounts::new(counts);
+        let with = Options {
+            block_cells: None,
+            imposed_counts: Some(std::sync::Arc::new(imposed)),
+            ..options.clone()
+        };
+        let Built::Mesh(c) = build_unless_backwards_with(pb, &with, &[], false).unwrap() else {
+            panic!("no arc runs backwards here");
+        };
+        assert_eq!(c.counts.arc, arc);
+        assert!(!c.keys.is_empty());
+    }
+
     proptest::proptest! {
         /// [`InstanceIds`] answers as one map of every `(instance, slot)` would, whatever the
         /// order of the instances (first ones dense, the others in its map), slots out of
@@ -1609,9 +1678,9 @@ mod tests {
                 let p = crate::periodic::periodic_layout(&pd, &options).expect("layout");
                 let Some(pb) = &p.blocking else { continue };
                 for fluid in [vec![], vec![true], vec![false, true, true]] {
-                    let summarised = build_checking(pb, &options, &fluid, None, false);
+                    let summarised = build_checking(pb, &options, &fluid, None, false, true);
                     let mut d = super::super::densities::Deviation::default();
-                    let held = build_checking(pb, &options, &fluid, Some(&mut d), false);
+                    let held = build_checking(pb, &options, &fluid, Some(&mut d), false, true);
                     match (summarised, held) {
                         (Ok(Built::Mesh(a)), Ok(Built::Mesh(b))) => {
                             assert_eq!(a.layout, b.layout, "seed {seed}, n {n}, {fluid:?}");

@@ -2521,7 +2521,8 @@ pub fn mesh_periodic(pd: &PeriodicDomain, options: &Options) -> Result<Mesh, Mes
             pd.holes(),
             options,
             PeriodicDomain::reordered,
-            |d, o| periodic_frame_here(d, o).map(|f| f.mesh),
+            // (The block keys are only for sequences: not made.)
+            |d, o| periodic_frame_here(d, o, false).map(|f| f.mesh),
         )
     })
 }
@@ -2547,14 +2548,20 @@ pub fn mesh_periodic_frame(
 ) -> Result<PeriodicFrame, MeshError> {
     timings::on_pool_worker(|| {
         crate::mesher::validate_for(options, 0, pd.hole_count())?;
-        periodic_frame_here(pd, options)
+        periodic_frame_here(pd, options, true)
     })
 }
 
 /// [`mesh_periodic_frame`] on this thread, the options checked.
-fn periodic_frame_here(pd: &PeriodicDomain, options: &Options) -> Result<PeriodicFrame, MeshError> {
+/// With `keys`, exact mode's frame has its block keys ([`PeriodicFrame::keys`]); without, it
+/// has none (issue 8: 0.13-0.16 s at 1e5 holes that `mesh_periodic` dropped).
+fn periodic_frame_here(
+    pd: &PeriodicDomain,
+    options: &Options,
+    keys: bool,
+) -> Result<PeriodicFrame, MeshError> {
     if options.mode == Mode::Exact {
-        if let Some(done) = mesh_periodic_exact(pd, options)? {
+        if let Some(done) = mesh_periodic_exact(pd, options, keys)? {
             return Ok(done);
         }
     }
@@ -2590,6 +2597,7 @@ fn periodic_frame_here(pd: &PeriodicDomain, options: &Options) -> Result<Periodi
 fn mesh_periodic_exact(
     pd: &PeriodicDomain,
     options: &Options,
+    keys: bool,
 ) -> Result<Option<PeriodicFrame>, MeshError> {
     // Bounded exact mode's sampling: exact walls do not follow the samples, so a wall with a
     // single sample (the soft invariant (d)) costs nothing, and only the combinatorics come
@@ -2605,7 +2613,7 @@ fn mesh_periodic_exact(
             }) => {
                 let mut fluid = vec![false; domain.hole_count()];
                 fluid[domain.hole_count() - inserted.len()..].fill(true);
-                if let Ok(Some(f)) = exact_attempts(&domain, options, &fluid, layout) {
+                if let Ok(Some(f)) = exact_attempts(&domain, options, &fluid, layout, keys) {
                     return Ok(Some(f));
                 }
             }
@@ -2613,7 +2621,7 @@ fn mesh_periodic_exact(
             Err(_) => {}
         }
     }
-    exact_attempts(pd, options, &[], first)
+    exact_attempts(pd, options, &[], first, keys)
 }
 
 /// What [`refine_periodic`] did.
@@ -2855,6 +2863,7 @@ fn exact_attempts(
     options: &Options,
     fluid: &[bool],
     mut first: Option<PeriodicLayout>,
+    keys: bool,
 ) -> Result<Option<PeriodicFrame>, MeshError> {
     let mut sampling = crate::mesher::exact_sampling();
     // The fallback layout: only zero-length arcs collapsed (exact co-circular groups, one
@@ -2892,7 +2901,7 @@ fn exact_attempts(
                 same_as_zero_only = Some(p);
             } else {
                 let sampled = p.sampled.clone();
-                match exact_frame(pd, p, options, fluid, true)? {
+                match exact_frame(pd, p, options, fluid, true, keys)? {
                     Framed::Done(f) => return Ok(Some(f)),
                     // Arcs running backwards come from the sampling, not from the collapse:
                     // the zero-only layout of the same sampling has them too (issue 8: at
@@ -2902,7 +2911,8 @@ fn exact_attempts(
                     Framed::Failed { holes, arcs }
                         if !arcs.is_empty() && attempt < EXACT_RESAMPLING =>
                     {
-                        let fixed = local_fix(pd, &nearly_zero, options, fluid, sampled, &arcs)?;
+                        let fixed =
+                            local_fix(pd, &nearly_zero, options, fluid, sampled, &arcs, keys)?;
                         if let Some(f) = fixed {
                             return Ok(Some(f));
                         }
@@ -2928,10 +2938,10 @@ fn exact_attempts(
             return Ok(None);
         }
         let sampled = p.sampled.clone();
-        match exact_frame(pd, p, options, fluid, false)? {
+        match exact_frame(pd, p, options, fluid, false, keys)? {
             Framed::Done(f) => return Ok(Some(f)),
             Framed::Failed { holes, arcs, .. } => {
-                let fixed = local_fix(pd, &zero_only, options, fluid, sampled, &arcs)?;
+                let fixed = local_fix(pd, &zero_only, options, fluid, sampled, &arcs, keys)?;
                 if let Some(f) = fixed {
                     return Ok(Some(f));
                 }
@@ -2956,6 +2966,7 @@ fn local_fix(
     fluid: &[bool],
     sampled: Option<std::sync::Arc<Sampled>>,
     arcs: &[ArcKey],
+    keys: bool,
 ) -> Result<Option<PeriodicFrame>, MeshError> {
     let Some(sampled) = sampled.filter(|_| !arcs.is_empty()) else {
         return Ok(None);
@@ -2971,7 +2982,7 @@ fn local_fix(
     if p.blocking.is_none() {
         return Ok(None);
     }
-    match exact_frame(pd, p, options, fluid, true)? {
+    match exact_frame(pd, p, options, fluid, true, keys)? {
         Framed::Done(f) => Ok(Some(f)),
         Framed::Failed { .. } => Ok(None),
     }
@@ -3048,8 +3059,9 @@ fn exact_frame(
     options: &Options,
     fluid: &[bool],
     strict: bool,
+    keys: bool,
 ) -> Result<Framed, MeshError> {
-    let framed = frame_of(pd, &mut p, options, fluid, strict);
+    let framed = frame_of(pd, &mut p, options, fluid, strict, keys);
     // What is left of the layout (its tiling, blocking and arc keys; a rejected mesh's grids)
     // is freed on the pool, off this thread (issue 8: 0.2 s at 1e5 holes).
     rayon::spawn(move || drop(p));
@@ -3063,6 +3075,7 @@ fn frame_of(
     options: &Options,
     fluid: &[bool],
     strict: bool,
+    keys: bool,
 ) -> Result<Framed, MeshError> {
     let Some(pb) = &p.blocking else {
         return Ok(Framed::Failed {
@@ -3095,7 +3108,7 @@ fn frame_of(
     // A build with arcs running backwards stops before its grids (the mesh would not be
     // kept): those arcs are collapsed, or the holes around them resampled, by the caller.
     let x = match timings::span("exact_geometry", || {
-        exact_mode::periodic::build_unless_backwards(pb, options, fluid)
+        exact_mode::periodic::build_unless_backwards_with(pb, options, fluid, keys)
     }) {
         Ok(exact_mode::periodic::Built::Mesh(x)) => *x,
         Ok(exact_mode::periodic::Built::Backwards(arcs)) => return Ok(failed_at(&arcs)),
@@ -3151,7 +3164,7 @@ fn frame_of(
         coarsened_cell_size: x.coarsened_from.map(|from| [from, x.cell_size]),
     };
     // Template blocks have no key: node counts are imposed on layouts without them only.
-    let keys = (x.template_blocks == 0).then_some(x.keys);
+    let keys = (keys && x.template_blocks == 0).then_some(x.keys);
     Ok(Framed::Done(PeriodicFrame {
         mesh,
         triples: std::mem::take(&mut p.triples),
@@ -3723,10 +3736,11 @@ mod tests {
                     seen[0] = true;
                     assert_eq!(mine.backwards.as_ref(), Some(&arcs));
                     assert!(mine.layout.blocks.is_empty(), "not numbered");
-                    let framed = |p: PeriodicLayout| match exact_frame(pd, p, &options, &[], true) {
-                        Ok(Framed::Failed { holes, arcs }) => (holes, arcs),
-                        _ => panic!("a layout with backwards arcs fails"),
-                    };
+                    let framed =
+                        |p: PeriodicLayout| match exact_frame(pd, p, &options, &[], true, true) {
+                            Ok(Framed::Failed { holes, arcs }) => (holes, arcs),
+                            _ => panic!("a layout with backwards arcs fails"),
+                        };
                     let (h0, a0) = framed(whole);
                     assert!(!a0.is_empty());
                     assert_eq!(framed(mine), (h0, a0));
