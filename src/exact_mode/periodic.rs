@@ -103,8 +103,8 @@ pub struct PeriodicExact {
     /// [`super::ExactMesh::inconsistent_arcs`]).
     pub inconsistent_arcs: Vec<usize>,
     /// The key of each block ([`super::imposed`]), in block order (the medial blocks only:
-    /// template blocks, after them, have none); empty when not asked for
-    /// ([`build_unless_backwards_with`]).
+    /// template blocks, after them, have none); empty when the build was not asked for them
+    /// (the periodic mesher asks only for a sequence's frames and for imposed counts).
     pub keys: Vec<BlockKey>,
     /// Arc orbits split in two so that every inserted hole fits its template.
     pub split_arcs: usize,
@@ -231,7 +231,7 @@ pub fn build_with_inserted(
     }
 }
 
-/// What [`build_unless_backwards`] made.
+/// What [`build_unless_backwards_with`] made.
 #[derive(Debug)]
 pub(crate) enum Built {
     /// The whole build, as [`build_with_inserted`] makes it (no arc runs backwards).
@@ -241,11 +241,7 @@ pub(crate) enum Built {
     Backwards(Vec<usize>),
 }
 
-/// [`build_with_inserted`] that stops as soon as an arc orbit runs backwards (issue 8): such
-/// a mesh is never kept (the periodic mesher resamples around those arcs), and the counts,
-/// nodes and grids of the whole period were most of the build's time (0.39 s of a failed
-/// attempt at 10 000 holes). With the block keys (the tests' entry point;
-/// [`build_unless_backwards_with`] chooses).
+/// [`build_unless_backwards_with`] with the block keys (the tests' entry point).
 #[cfg(test)]
 pub(crate) fn build_unless_backwards(
     pb: &PeriodicBlocking,
@@ -255,7 +251,10 @@ pub(crate) fn build_unless_backwards(
     build_unless_backwards_with(pb, options, fluid, true)
 }
 
-/// [`build_unless_backwards`]; with `keys` false the mesh has no block keys
+/// [`build_with_inserted`] that stops as soon as an arc orbit runs backwards (issue 8): such
+/// a mesh is never kept (the periodic mesher resamples around those arcs), and the counts,
+/// nodes and grids of the whole period were most of the build's time (0.39 s of a failed
+/// attempt at 10 000 holes). With `keys` false the mesh has no block keys
 /// ([`PeriodicExact::keys`] empty; they are still made for imposed counts, which read them).
 pub(crate) fn build_unless_backwards_with(
     pb: &PeriodicBlocking,
@@ -389,7 +388,7 @@ fn orbits_of(
     Ok((verts, geoms, slots, inconsistent_arcs))
 }
 
-/// The arc orbits of `pb` that run backwards (orbit order): what [`build_unless_backwards`]
+/// The arc orbits of `pb` that run backwards (orbit order): what [`build_unless_backwards_with`]
 /// stops at, without the options check (the periodic extraction looks before numbering its
 /// layout, issue 8).
 pub(crate) fn backwards_orbits(pb: &PeriodicBlocking) -> Result<Vec<usize>, MeshError> {
