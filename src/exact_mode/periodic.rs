@@ -448,14 +448,13 @@ fn build_checking(
                 let count = super::counts::uniform_arc_count(n, min_cells);
                 // As `orbit_params` forms it from two circle counts `n`.
                 let nbar = 0.5 * (n + n) as f64;
-                let params = params_of(&t.sq, &t.ang, nbar, count);
-                (t.sq, t.ang) = (Vec::new(), Vec::new());
+                let summary = summarise(&mut t, nbar, count);
                 t.known = Some(Known {
                     min_cells,
                     target: None,
                     ends: None,
                 });
-                (nbar, params)
+                summary
             });
             Some((t, summary))
         })
@@ -463,11 +462,7 @@ fn build_checking(
     let mut targets = Vec::with_capacity(pb.arcs.len());
     let mut summaries = Vec::with_capacity(pb.arcs.len());
     for (o, m) in made.into_iter().enumerate() {
-        let (t, summary) = m.ok_or_else(|| {
-            internal(format!(
-                "arc orbit {o}: the exact medial arc is not defined"
-            ))
-        })?;
+        let (t, summary) = m.ok_or_else(|| undefined_arc(o))?;
         if let Some(d) = check.as_deref_mut() {
             d.add(&geoms[o]);
         }
@@ -598,7 +593,7 @@ fn build_checking(
             };
             // Without the arcs' nodes (its medial polylines are set for the grids at the
             // end: issue 8, the layout was made twice).
-            let mut a = layout_pass(&parts, None)?;
+            let mut a = layout_pass(&parts)?;
             let first = a.layout.blocks.len();
             let holes: Vec<(CircleId, crate::domain::Circle)> = (0..h)
                 .filter(|&k| is_fluid(k))
@@ -694,7 +689,7 @@ fn build_checking(
     // 4. Layout and grids, instance by instance; then the templates of the inserted holes.
     // The arcs' end grading first, for size-driven counts (as in bounded domains).
     let rho = if options.block_cells.is_none() {
-        end_ratios(pb, &verts, &geoms, &targets, &summaries, &slots, &counts)
+        end_ratios(pb, &verts, &geoms, &targets, &summaries, &slots, &counts)?
     } else {
         Vec::new()
     };
@@ -716,8 +711,7 @@ fn build_checking(
             (a, Some((classes, first, filled))),
         ),
         None => {
-            let (nodes, a) =
-                rayon::join(|| arc_nodes(&parts, &counts), || layout_pass(&parts, None));
+            let (nodes, a) = rayon::join(|| arc_nodes(&parts, &counts), || layout_pass(&parts));
             (nodes?, (a?, None))
         }
     };
@@ -822,34 +816,29 @@ impl InstanceIds {
         }
     }
 
-    /// The dense slot of `(i, k)`, when `i` is its orbit's first instance (or the orbit has
-    /// none yet and `claim`, which makes `i` its first).
-    fn slot(&mut self, (w, s): Instance, k: usize, claim: bool) -> Option<usize> {
+    /// The dense slot of `(i, k)` and whether `i` is its orbit's first instance (`Some(None)`:
+    /// the orbit has no first instance yet); `None` when `(i, k)` has no dense slot.
+    fn slot(&self, (w, s): Instance, k: usize) -> Option<(usize, Option<bool>)> {
         let (lo, hi) = (*self.offset.get(w)?, *self.offset.get(w + 1)?);
-        if k >= hi - lo {
-            return None;
-        }
-        match self.first[w] {
-            Some(f) if f == s => Some(lo + k),
-            None if claim => {
-                self.first[w] = Some(s);
-                Some(lo + k)
-            }
-            _ => None,
+        (k < hi - lo).then(|| (lo + k, self.first[w].map(|f| f == s)))
+    }
+
+    fn get(&self, i: Instance, k: usize) -> Option<u32> {
+        match self.slot(i, k) {
+            Some((x, Some(true))) => Some(self.ids[x]).filter(|&id| id != Self::NONE),
+            _ => self.others.get(&(i, k)).copied(),
         }
     }
 
-    fn get(&mut self, i: Instance, k: usize) -> Option<u32> {
-        match self.slot(i, k, false) {
-            Some(x) => Some(self.ids[x]).filter(|&id| id != Self::NONE),
-            None => self.others.get(&(i, k)).copied(),
-        }
-    }
-
+    /// Gives `(i, k)` its id; `i` becomes its orbit's first instance when the orbit has none.
     fn insert(&mut self, i: Instance, k: usize, id: u32) {
-        match self.slot(i, k, true) {
-            Some(x) => self.ids[x] = id,
-            None => {
+        match self.slot(i, k) {
+            Some((x, Some(true))) => self.ids[x] = id,
+            Some((x, None)) => {
+                self.first[i.0] = Some(i.1);
+                self.ids[x] = id;
+            }
+            _ => {
                 self.others.insert((i, k), id);
             }
         }
@@ -946,6 +935,13 @@ fn orbit_params(
     Some(())
 }
 
+/// The error of an arc orbit `o` whose exact medial arc is not defined.
+fn undefined_arc(o: usize) -> MeshError {
+    internal(format!(
+        "arc orbit {o}: the exact medial arc is not defined"
+    ))
+}
+
 /// The mean wall-normal count `nbar` of arc orbit `o` for the counts `counts`: that of its
 /// two holes.
 fn orbit_nbar(pb: &PeriodicBlocking, counts: &Counts, o: usize) -> f64 {
@@ -968,10 +964,16 @@ fn summarise_held(
         .enumerate()
         .filter(|(_, (t, _))| t.holds_densities())
         .for_each(|(o, (t, summary))| {
-            let nbar = orbit_nbar(pb, counts, o);
-            *summary = Some((nbar, params_of(&t.sq, &t.ang, nbar, counts.arc[o])));
-            (t.sq, t.ang) = (Vec::new(), Vec::new());
+            *summary = Some(summarise(t, orbit_nbar(pb, counts, o), counts.arc[o]));
         });
+}
+
+/// The summary of `t` (which holds its densities) for `nbar` and `n` cells, its densities let
+/// go.
+fn summarise(t: &mut ArcTarget, nbar: f64, n: usize) -> Summary {
+    let params = params_of(&t.sq, &t.ang, nbar, n);
+    (t.sq, t.ang) = (Vec::new(), Vec::new());
+    (nbar, params)
 }
 
 /// What an arc orbit's densities are reduced to with a fixed grid per block: the `nbar` and
@@ -1004,13 +1006,13 @@ fn end_ratios(
     summaries: &[Option<Summary>],
     slots: &[[[usize; 2]; 2]],
     counts: &Counts,
-) -> Vec<[f64; 2]> {
+) -> Result<Vec<[f64; 2]>, MeshError> {
     let mut inputs = Vec::with_capacity(pb.arcs.len());
     let mut params = Vec::new();
     for (o, arc) in pb.arcs.iter().enumerate() {
         let n = counts.arc[o];
-        // From the held densities or the summary of the final count: no error.
-        let _ = orbit_params(pb, geoms, targets, summaries, counts, o, &mut params);
+        orbit_params(pb, geoms, targets, summaries, counts, o, &mut params)
+            .ok_or_else(|| undefined_arc(o))?;
         // `slots[o][end][side]`; the grading reads `[side][end]`.
         let s = slots[o];
         inputs.push(super::grading::EndInput {
@@ -1020,7 +1022,7 @@ fn end_ratios(
             widths: super::grading::end_widths(&geoms[o], &params),
         });
     }
-    super::grading::end_ratios(&inputs, verts.len())
+    Ok(super::grading::end_ratios(&inputs, verts.len()))
 }
 
 /// What [`arc_nodes`], [`layout_pass`] and [`grids_pass`] read: the orbits' geometry, targets and slots, the clustering per hole.
@@ -1065,13 +1067,8 @@ fn arc_nodes(parts: &Parts, counts: &Counts) -> Result<Vec<ArcNodes>, MeshError>
                 let g = &geoms[o];
                 let n = counts.arc[o];
                 let mut params = Vec::with_capacity(n + 1);
-                orbit_params(pb, geoms, targets, summaries, counts, o, &mut params).ok_or_else(
-                    || {
-                        internal(format!(
-                            "arc orbit {o}: the exact medial arc is not defined"
-                        ))
-                    },
-                )?;
+                orbit_params(pb, geoms, targets, summaries, counts, o, &mut params)
+                    .ok_or_else(|| undefined_arc(o))?;
                 if let Some(&r) = rho.get(o) {
                     params = super::grading::grade_piece(g, params, r, graded);
                 }
@@ -1089,9 +1086,9 @@ fn arc_nodes(parts: &Parts, counts: &Counts) -> Result<Vec<ArcNodes>, MeshError>
 
 /// The layout of one period (vertices and edges numbered in first-use order, serially),
 /// with what each block's grid needs. Its vertices, edges and blocks do not depend on the
-/// counts; the medial edges' polylines do: from `nodes` ([`arc_nodes`] of the counts), or only
-/// their two ends without (to be set by [`set_medial_nodes`] before the grids).
-fn layout_pass(parts: &Parts, nodes: Option<&[ArcNodes]>) -> Result<Assembled, MeshError> {
+/// counts; the medial edges' polylines do: each is made with its two ends only, and given its
+/// nodes by [`set_medial_nodes`] before the grids.
+fn layout_pass(parts: &Parts) -> Result<Assembled, MeshError> {
     let Parts {
         pb,
         verts,
@@ -1133,15 +1130,7 @@ fn layout_pass(parts: &Parts, nodes: Option<&[ArcNodes]>) -> Result<Assembled, M
                 continue;
             }
             let v = arc.ends.map(|(w, s)| b.centre_vertex(w, add(s, d)));
-            let pts = match nodes {
-                Some(nodes) => medial_polyline(
-                    &nodes[o].0,
-                    d,
-                    size,
-                    v.map(|k| b.layout.vertices[k as usize]),
-                ),
-                None => v.map(|k| b.layout.vertices[k as usize]).to_vec(),
-            };
+            let pts = v.map(|k| b.layout.vertices[k as usize]).to_vec();
             b.layout.edges.push(Edge {
                 ends: v,
                 curve: Curve::Polyline(pts),
@@ -1239,8 +1228,8 @@ fn medial_polyline(m_nodes: &[Point], d: Shift, size: [f64; 2], ends: [Point; 2]
     pts
 }
 
-/// Give the medial edges of `a` (made by [`layout_pass`] without nodes) their polylines from
-/// `nodes`: the same curves [`layout_pass`] makes with them.
+/// Give the medial edges of `a` (made by [`layout_pass`] with their ends only) their
+/// polylines from `nodes`.
 fn set_medial_nodes(pb: &PeriodicBlocking, nodes: &[ArcNodes], a: &mut Assembled) {
     // The polylines in parallel, then moved into their edges.
     let layout = &a.layout;

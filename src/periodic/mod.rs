@@ -92,7 +92,6 @@ use crate::sampling::{
 };
 use crate::timings;
 use rayon::prelude::*;
-use std::borrow::Cow;
 /// Hash maps with a fast hasher (issue 8: SipHash of the orbit keys was 4% of a periodic
 /// mesh); nothing reads them in iteration order.
 type HashMap<K, V> = std::collections::HashMap<K, V, foldhash::fast::RandomState>;
@@ -365,41 +364,41 @@ impl Tiling {
             })
             .collect();
         let base = s.points.len();
-        let mut first = Vec::with_capacity(self.keys.len());
+        let lens: Vec<usize> = self
+            .keys
+            .iter()
+            .map(|&(k, _, _)| plans[k as usize].1.len())
+            .collect();
         let mut total = base;
-        for &(k, _, _) in &self.keys {
-            first.push(total);
-            total += plans[k as usize].1.len();
-        }
         for (id, &(k, _, _)) in self.keys.iter().enumerate() {
             let k = k as usize;
             s.circles.push(CircleSamples {
                 circle: id as CircleId,
-                first: first[id] as u32,
-                count: plans[k].1.len() as u32,
+                first: total as u32,
+                count: lens[id] as u32,
                 gap: gaps.get(k + 1).copied().unwrap_or(f64::NAN),
             });
             s.grid_counts.push(plans[k].0);
+            total += lens[id];
         }
         s.points.resize(total, [0.0; 2]);
         s.circle_of.resize(total, 0);
         s.index_of.resize(total, 0);
         s.grid.resize(total, 0);
         // Split the arrays after the bounding circle into one slice per copy.
-        fn split<T>(mut rest: &mut [T], lens: impl Iterator<Item = usize>) -> Vec<&mut [T]> {
-            let mut out = Vec::new();
-            for n in lens {
+        fn split<'a, T>(mut rest: &'a mut [T], lens: &[usize]) -> Vec<&'a mut [T]> {
+            let mut out = Vec::with_capacity(lens.len());
+            for &n in lens {
                 let (head, tail) = std::mem::take(&mut rest).split_at_mut(n);
                 out.push(head);
                 rest = tail;
             }
             out
         }
-        let lens = || self.keys.iter().map(|&(k, _, _)| plans[k as usize].1.len());
-        let points = split(&mut s.points[base..], lens());
-        let circle_of = split(&mut s.circle_of[base..], lens());
-        let index_of = split(&mut s.index_of[base..], lens());
-        let grid = split(&mut s.grid[base..], lens());
+        let points = split(&mut s.points[base..], &lens);
+        let circle_of = split(&mut s.circle_of[base..], &lens);
+        let index_of = split(&mut s.index_of[base..], &lens);
+        let grid = split(&mut s.grid[base..], &lens);
         points
             .into_par_iter()
             .zip(circle_of)
@@ -675,6 +674,9 @@ struct Sampled {
     /// Dropped once the layout is made when no local fix is expected (the layout has no arc
     /// orbit running backwards), so that the exact build does not hold it.
     orbits: std::sync::OnceLock<Orbits>,
+    /// How its extractions measure short arcs: by the mode it was sampled for (a sampling is
+    /// kept and extracted again in exact mode only), so its [`SelectionBase`] is for this.
+    how: collapse::ArcLength,
 }
 
 /// What [`Sampled::end_circles`] holds: vertex ids and their exact circles, same order.
@@ -689,17 +691,14 @@ struct Orbits {
     akeys: Vec<Option<ArcKey>>,
     /// The medial arc of each key.
     arc_by_key: HashMap<ArcKey, usize>,
-    /// Collapse selection's part that depends on the sampling alone, for short arcs measured
-    /// as [`SelectionBase::how`] ([`select_collapse`]).
+    /// Collapse selection's part that depends on the sampling alone, short arcs measured as
+    /// [`Sampled::how`] ([`select_collapse`]).
     selection: std::sync::OnceLock<SelectionBase>,
 }
 
 /// What [`select_collapse`] finds from the sampling alone, before the collapse fraction, the
 /// excluded and the forced arcs come in.
-#[derive(Clone)]
 struct SelectionBase {
-    /// How short arcs were measured.
-    how: collapse::ArcLength,
     /// The orbit representative (a tiling arc) of each tiling arc, when in the tiling.
     rep_of: Vec<Option<usize>>,
     /// The representatives, increasing.
@@ -900,6 +899,11 @@ fn layout_from(
             medial,
             end_circles: std::sync::OnceLock::new(),
             orbits: std::sync::OnceLock::new(),
+            // Exact mode builds on the Apollonius centres: it measures short arcs by them.
+            how: match options.mode {
+                Mode::Exact => collapse::ArcLength::Chord,
+                Mode::Paper => collapse::ArcLength::Polyline,
+            },
         };
         let extracted = timings::span("blocking", || {
             extract_from(pd, options, &sampled, &[], poor_limit, check_backwards)
@@ -950,16 +954,10 @@ fn extract_from(
     poor_limit: Option<f64>,
     check_backwards: bool,
 ) -> Result<Extracted, MeshError> {
-    // Exact mode builds on the Apollonius centres: it measures short arcs by them.
-    let how = match options.mode {
-        Mode::Exact => collapse::ArcLength::Chord,
-        Mode::Paper => collapse::ArcLength::Polyline,
-    };
     extract(
         pd,
         sampled,
         options.collapse_fraction,
-        how,
         forced,
         poor_limit,
         check_backwards && options.mode == Mode::Exact,
@@ -1152,7 +1150,7 @@ struct Selection<'a> {
     /// One flag per tiling arc: collapsed as a short (not zero-length) arc.
     short: Vec<bool>,
     /// The orbit representative (a tiling arc) of each tiling arc, when in the tiling.
-    rep_of: Cow<'a, [Option<usize>]>,
+    rep_of: &'a [Option<usize>],
 }
 
 /// Union-find over vertex orbits with translations: the instance of orbit `x` at shift `s`
@@ -1213,24 +1211,10 @@ fn select_collapse<'o>(
     exclude: &[usize],
     forced: &[ArcKey],
 ) -> Selection<'o> {
-    // The sampling's part, made at its first selection (and for another way of measuring,
-    // which no caller asks for, made afresh).
-    let kept = match orbits.selection.get() {
-        Some(b) if b.how == how => Cow::Borrowed(b),
-        Some(_) => Cow::Owned(SelectionBase::new(
-            domain,
-            tri,
-            points,
-            medial,
-            end_circles,
-            orbits,
-            how,
-        )),
-        None => Cow::Borrowed(orbits.selection.get_or_init(|| {
-            SelectionBase::new(domain, tri, points, medial, end_circles, orbits, how)
-        })),
-    };
-    let base: &SelectionBase = &kept;
+    // The sampling's part, made at its first selection (`how` is the sampling's own).
+    let base = orbits
+        .selection
+        .get_or_init(|| SelectionBase::new(domain, tri, points, medial, end_circles, orbits, how));
     let SelectionBase {
         rep_of,
         reps,
@@ -1333,10 +1317,7 @@ fn select_collapse<'o>(
     Selection {
         flags,
         short,
-        rep_of: match kept {
-            Cow::Borrowed(b) => Cow::Borrowed(&b.rep_of),
-            Cow::Owned(b) => Cow::Owned(b.rep_of),
-        },
+        rep_of,
     }
 }
 
@@ -1445,7 +1426,6 @@ impl SelectionBase {
             }
         }
         SelectionBase {
-            how,
             rep_of,
             reps,
             orbit_ends,
@@ -1465,9 +1445,9 @@ fn not_translation_consistent(what: &str) -> MeshError {
 /// Keep the canonical cells; [`Extracted::TooSmall`] when the tiling is too small (step 4).
 ///
 /// Zero-length medial arcs (co-circular hole groups, e.g. every corner of a square lattice)
-/// and arcs shorter than `fraction` of the local radius (measured as `how` says) are collapsed
-/// ([`select_collapse`], [`collapse::contract`]) before Blocking2D, the same arcs in every
-/// copy. A contracted vertex is identified up to translation by its
+/// and arcs shorter than `fraction` of the local radius (measured as [`Sampled::how`] says)
+/// are collapsed ([`select_collapse`], [`collapse::contract`]) before Blocking2D, the same
+/// arcs in every copy. A contracted vertex is identified up to translation by its
 /// [`ClusterKey`], so its instances are its orbit representative plus the period shift like
 /// any other vertex. A kept block with a non-positive outline area is an
 /// [`MeshError::Internal`]. The arc orbits `forced` (orbit keys) are collapsed with the
@@ -1482,7 +1462,6 @@ fn extract(
     pd: &PeriodicDomain,
     sampled: &Sampled,
     fraction: f64,
-    how: collapse::ArcLength,
     forced: &[ArcKey],
     poor_limit: Option<f64>,
     check_backwards: bool,
@@ -1493,23 +1472,18 @@ fn extract(
         tri: triangulation,
         medial,
         end_circles,
+        how,
         ..
     } = sampled;
+    let how = *how;
     let size = t.size;
     // Orbit keys of the original medial graph, made at this sampling's first extraction.
-    let fresh;
     let orbits = match sampled.orbits.get() {
         Some(o) => o,
-        None => match sampled.orbits.set(Orbits::new(t, samples, medial)?) {
-            Ok(()) => sampled
-                .orbits
-                .get()
-                .ok_or_else(|| MeshError::Internal("the orbit keys were not kept".into()))?,
-            Err(o) => {
-                fresh = o;
-                &fresh
-            }
-        },
+        None => {
+            let made = Orbits::new(t, samples, medial)?;
+            sampled.orbits.get_or_init(|| made)
+        }
     };
     let (vkeys, akeys, arc_by_key) = (&orbits.vkeys, &orbits.akeys, &orbits.arc_by_key);
     let inconsistent = not_translation_consistent;
@@ -3868,7 +3842,7 @@ mod tests {
             &sampled.medial,
             &sampled.end_circles,
             &fresh,
-            base.how,
+            sampled.how,
         );
         assert_eq!(base.rep_of, again.rep_of);
         assert_eq!(base.reps, again.reps);
