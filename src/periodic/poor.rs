@@ -1,0 +1,113 @@
+//! Periodic refinement's first question, asked of the sampled medial graph (issue 8): which
+//! vertex orbits are poor, before any layout is extracted.
+//!
+//! A refinement round that finds poor vertices throws its layout away (the holes it inserts
+//! change the domain), so the round asks the medial graph of the sampled tiling, as bounded
+//! refinement does ([`crate::refine`]): each vertex orbit once, at its canonical instance
+//! (the vertex whose orbit key is its own representative, [`super::normalise_vertex`]), with
+//! its exact empty circle ([`cocircular::vertex_circles_of`]) and the ratio of
+//! [`refine::vertex_ratio`] (circumradius over shortest edge of the triangle of its touching
+//! points). Only vertices that are vertices of the infinite periodic tiling are asked: the
+//! circumcircle of the sample triangle, widened by the largest radius, lies where every copy
+//! of every hole is in the tiling (the test of the extraction's step 4), and the three
+//! circles are holes (not the tiling's auxiliary bounding circle).
+//!
+//! When this finds none, the round extracts the layout and asks its exact input as before
+//! ([`crate::exact_mode::periodic::poor_vertices`]: vertex orbits of collapsed clusters can
+//! still be poor), so a round that ends the refinement keeps its layout.
+
+use super::{below, normalise_vertex, PeriodicDomain, SampleKey, Sampled, Tiling, VertexKey};
+use crate::cocircular;
+use crate::geometry::Point;
+use crate::refine;
+use rayon::prelude::*;
+
+/// The poor vertex orbits of `sampled` (a sampling of `pd`) for the ratio `limit`:
+/// `(ratio, empty circle centre, radius)` in vertex order, as
+/// [`crate::exact_mode::periodic::poor_vertices`] gives them (see the module doc).
+pub(super) fn medial_poor(
+    pd: &PeriodicDomain,
+    sampled: &Sampled,
+    limit: f64,
+) -> Vec<(f64, Point, f64)> {
+    let (t, medial, points) = (&sampled.t, &sampled.medial, &sampled.samples.points);
+    let rmax = pd.holes().iter().map(|c| c.radius).fold(0.0, f64::max);
+    let reach = rmax + 1e-6 * t.size[0].max(t.size[1]);
+    let asked: Vec<u32> = (0..medial.vertices.len() as u32)
+        .into_par_iter()
+        .filter(|&v| {
+            let mv = &medial.vertices[v as usize];
+            if mv.circles.iter().any(|&c| c < 0) {
+                return false;
+            }
+            let Some(key) = vertex_key(sampled, v) else {
+                return false;
+            };
+            if normalise_vertex(&key).1 != (0, 0) {
+                return false;
+            }
+            let p = points[mv.samples[0] as usize];
+            let r = (mv.position[0] - p[0]).hypot(mv.position[1] - p[1]);
+            in_tiling(t, mv.position, r + reach)
+        })
+        .collect();
+    let circles = cocircular::vertex_circles_of(&t.domain, medial, &asked);
+    asked
+        .par_iter()
+        .zip(circles.par_iter())
+        .filter_map(|(&v, circle)| {
+            let ratio = refine::vertex_ratio(medial, v as usize, circle.as_ref(), points);
+            if !(ratio > limit) {
+                return None;
+            }
+            let (centre, rho) = match circle {
+                Some(c) => (c.center, c.radius),
+                None => {
+                    let mv = &medial.vertices[v as usize];
+                    let p = points[mv.samples[0] as usize];
+                    (
+                        mv.position,
+                        (mv.position[0] - p[0]).hypot(mv.position[1] - p[1]),
+                    )
+                }
+            };
+            Some((ratio, centre, rho))
+        })
+        .collect()
+}
+
+/// The orbit key of medial vertex `v` (its samples' keys, sorted), `None` when a sample is
+/// outside the keyed tiling (as [`super::Orbits`] keys it).
+fn vertex_key(sampled: &Sampled, v: u32) -> Option<VertexKey> {
+    let s = &sampled.samples;
+    let sample_key = |i: u32| -> Option<SampleKey> {
+        let (k, a, b) = sampled.t.key(s.circle_of[i as usize])?;
+        Some((k, s.index_of[i as usize], a, b))
+    };
+    let mv = &sampled.medial.vertices[v as usize];
+    let mut key = [
+        sample_key(mv.samples[0])?,
+        sample_key(mv.samples[1])?,
+        sample_key(mv.samples[2])?,
+    ];
+    key.sort_unstable();
+    Some(key)
+}
+
+/// True when the disc of centre `c` and radius `r` lies where every copy of every hole is in
+/// the tiling `t` (per axis: inside the band's reach, or inside the array of copies), as the
+/// extraction's step 4 measures a triangle's circle widened by the largest radius.
+fn in_tiling(t: &Tiling, c: Point, r: f64) -> bool {
+    if !(c[0].is_finite() && c[1].is_finite() && r.is_finite()) {
+        return false;
+    }
+    (0..2).all(|a| {
+        let l = t.size[a];
+        if t.band[a] {
+            below((r - c[a]).max(c[a] + r - l), t.reach[a])
+        } else {
+            let need = ((r - c[a]) / l).max((c[a] + r) / l - 1.0).floor() + 1.0;
+            need.is_finite() && need <= t.m[a] as f64
+        }
+    })
+}
