@@ -1681,7 +1681,7 @@ fn sample_and_triangulate_impl(
 /// `map[s]` is the index in `after` of earlier sample `s`. `None` when a circle lost a sample
 /// or moved, or the circles differ. Samples of a circle run counter-clockwise from angle 0 in
 /// both, so one merge per circle finds them (points compared bit for bit).
-fn kept_samples(before: &Samples, after: &Samples) -> Option<Vec<u32>> {
+pub(crate) fn kept_samples(before: &Samples, after: &Samples) -> Option<Vec<u32>> {
     if before.circles.len() > after.circles.len() {
         return None;
     }

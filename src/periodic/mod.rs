@@ -438,6 +438,7 @@ fn sample_tiling(
     gaps_canonical: &[f64],
     opts: &SamplingOptions,
     uniform: bool,
+    previous: Option<(&Samples, &Triangulation)>,
 ) -> Result<(Samples, Triangulation, MedialGraph), MeshError> {
     let b = t.domain.bounding();
     let bgap = t
@@ -532,7 +533,10 @@ fn sample_tiling(
             });
         }
         let samples = timings::span("sampling", || t.samples(&plans, bcount, &gaps));
-        let tri = timings::span("triangulation", || Triangulation::new(&samples.points))?;
+        let tri = timings::span("triangulation", || match previous.filter(|_| round == 0) {
+            Some(p) => extended_or_new(p, &samples).map(|(t, _)| t),
+            None => Triangulation::new(&samples.points),
+        })?;
         // The classes and the hard invariants in one parallel pass (the same classes and
         // violations as `classify` then `check_invariants`; issue 8: 0.33 s on one thread
         // per sampling at 1e5 holes).
@@ -613,6 +617,43 @@ fn sample_tiling(
             opts.max_rounds, opts.max_per_circle
         ),
     })
+}
+
+/// The triangulation of `samples`, by inserting the new samples into the triangulation of
+/// the earlier sampling `previous` when every earlier sample is still there, bit for bit
+/// (issue 8: a refinement round's tiling is the earlier one with the inserted holes' copies
+/// appended, and only the circles near them may be sampled more densely): as a prefix
+/// ([`Triangulation::extended`]), else renumbered ([`Triangulation::extended_renumbered`],
+/// through [`crate::sampling::kept_samples`]); otherwise from scratch. The same triangle
+/// set either way (the Delaunay triangulation of the points under the simulation of
+/// simplicity); only the numbering differs.
+fn extended_or_new(
+    previous: (&Samples, &Triangulation),
+    samples: &Samples,
+) -> Result<(Triangulation, Made), crate::geometry::TriangulationError> {
+    let (before, tri) = previous;
+    if !tri.is_empty() {
+        if let Some(t) = tri.extended(&samples.points)? {
+            return Ok((t, Made::Extended));
+        }
+        if let Some(map) = crate::sampling::kept_samples(before, samples) {
+            if let Some(t) = tri.extended_renumbered(&samples.points, &map)? {
+                return Ok((t, Made::Renumbered));
+            }
+        }
+    }
+    Triangulation::new(&samples.points).map(|t| (t, Made::Fresh))
+}
+
+/// How [`extended_or_new`] made a triangulation.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Made {
+    /// The earlier samples are a prefix of the new ones: [`Triangulation::extended`].
+    Extended,
+    /// The earlier samples are all among the new ones: [`Triangulation::extended_renumbered`].
+    Renumbered,
+    /// From scratch.
+    Fresh,
 }
 
 fn is_canonical(t: &Tiling, c: CircleId) -> bool {
@@ -834,8 +875,10 @@ fn layout_for_exact(
 enum Round {
     /// No poor vertex orbit: the layout ([`layout_keeping`]'s).
     Layout(PeriodicLayout),
-    /// The poor vertex orbits ([`exact_mode::periodic::poor_vertices`], not empty).
-    Poor(Vec<(f64, Point, f64)>),
+    /// The poor vertex orbits ([`poor::medial_poor`] or
+    /// [`exact_mode::periodic::poor_vertices`], not empty), and the sampling that has them
+    /// (the next round's triangulation extends its own, [`extended_or_new`]).
+    Poor(Vec<(f64, Point, f64)>, Box<Sampled>),
 }
 
 impl Round {
@@ -843,7 +886,7 @@ impl Round {
     fn layout(self) -> Result<PeriodicLayout, MeshError> {
         match self {
             Round::Layout(p) => Ok(p),
-            Round::Poor(_) => Err(MeshError::Internal(
+            Round::Poor(..) => Err(MeshError::Internal(
                 "no poor vertices were asked for".into(),
             )),
         }
@@ -852,14 +895,26 @@ impl Round {
 
 /// [`layout_keeping`] for a refinement round with ratio `limit`: the poor vertex orbits of
 /// the layout when there are some, found without numbering the layout (issue 8: the layout
-/// of such a round is not used), else the layout.
+/// of such a round is not used), else the layout. The first tiling is the band within
+/// `first_reach` of the box; its triangulation extends that of `previous` (the round
+/// before's sampling) where it can ([`extended_or_new`]).
 fn layout_or_poor(
     pd: &PeriodicDomain,
     options: &Options,
     sampling: &SamplingOptions,
     limit: f64,
+    first_reach: [f64; 2],
+    previous: Option<&Sampled>,
 ) -> Result<Round, MeshError> {
-    layout_from(pd, options, sampling, initial_reach(pd), Some(limit), true)
+    layout_from_after(
+        pd,
+        options,
+        sampling,
+        first_reach,
+        Some(limit),
+        true,
+        previous,
+    )
 }
 
 /// [`periodic_layout_with`] from a band of copies within `first_reach` of the box (per axis;
@@ -871,6 +926,28 @@ fn layout_from(
     first_reach: [f64; 2],
     poor_limit: Option<f64>,
     check_backwards: bool,
+) -> Result<Round, MeshError> {
+    layout_from_after(
+        pd,
+        options,
+        sampling,
+        first_reach,
+        poor_limit,
+        check_backwards,
+        None,
+    )
+}
+
+/// [`layout_from`] whose first tiling's triangulation extends that of the sampling
+/// `previous` where it can ([`extended_or_new`]).
+fn layout_from_after(
+    pd: &PeriodicDomain,
+    options: &Options,
+    sampling: &SamplingOptions,
+    first_reach: [f64; 2],
+    poor_limit: Option<f64>,
+    check_backwards: bool,
+    mut previous: Option<&Sampled>,
 ) -> Result<Round, MeshError> {
     crate::ranges::check_collapse_fraction(options.collapse_fraction)?;
     let gaps = pd.nearest_gaps();
@@ -892,7 +969,13 @@ fn layout_from(
             )));
         }
         let t = Tiling::with_reach(pd, m, reach)?;
-        let (samples, tri, medial) = sample_tiling(&t, &gaps, &opts, options.mode == Mode::Paper)?;
+        let (samples, tri, medial) = sample_tiling(
+            &t,
+            &gaps,
+            &opts,
+            options.mode == Mode::Paper,
+            previous.take().map(|p| (&p.samples, &p.tri)),
+        )?;
         let mut sampled = Sampled {
             t,
             samples,
@@ -931,11 +1014,7 @@ fn layout_from(
                 }
                 return Ok(Round::Layout(p));
             }
-            Extracted::Poor(poor) => {
-                // Freed on the pool, off this thread.
-                rayon::spawn(move || drop(sampled));
-                return Ok(Round::Poor(poor));
-            }
+            Extracted::Poor(poor) => return Ok(Round::Poor(poor, Box::new(sampled))),
             Extracted::TooSmall {
                 need,
                 need_reach,
@@ -2655,10 +2734,32 @@ fn refine_periodic(
     let mut inserted: Vec<Circle> = Vec::new();
     // The layout of `current`, when made.
     let mut last = None;
+    // Every round's first tiling is the first round's band (inserted holes change the
+    // reach `initial_reach` would give, and with it the copies): the next round's tiling is
+    // then this one with the inserted holes' copies appended, and its triangulation extends
+    // this round's (issue 8).
+    let reach = initial_reach(pd);
+    // The sampling of the round before, when it found poor vertex orbits.
+    let mut previous: Option<Box<Sampled>> = None;
     for _ in 0..MAX_REFINE_ROUNDS {
         // The layout only when it has no poor vertex orbit (else only those: issue 8).
-        let (p, mut poor) = match layout_or_poor(&current, &nearly_zero, sampling, limit)? {
-            Round::Poor(poor) => (None, poor),
+        let round = layout_or_poor(
+            &current,
+            &nearly_zero,
+            sampling,
+            limit,
+            reach,
+            previous.as_deref(),
+        )?;
+        // Freed on the pool, off this thread.
+        if let Some(before) = previous.take() {
+            rayon::spawn(move || drop(before));
+        }
+        let (p, mut poor) = match round {
+            Round::Poor(poor, sampled) => {
+                previous = Some(sampled);
+                (None, poor)
+            }
             Round::Layout(p) => {
                 let Some(pb) = &p.blocking else {
                     break;
@@ -2737,6 +2838,9 @@ fn refine_periodic(
         // This round's layout and sampled tiling are freed on the pool, off this thread.
         rayon::spawn(move || drop(p));
         inserted.extend_from_slice(&batch);
+    }
+    if let Some(before) = previous {
+        rayon::spawn(move || drop(before));
     }
     if inserted.is_empty() {
         return Ok(Refinement::None(last));
@@ -3351,6 +3455,78 @@ mod tests {
         assert_eq!(next_tiling([2, 4], [1, 9], false, cap), Some([2, 9]));
     }
 
+    /// The triangle set of a triangulation, as sorted triples of sorted points (bits): what
+    /// does not depend on the numbering of points or triangles.
+    fn triangle_set(points: &[Point], tri: &Triangulation) -> Vec<[[u64; 2]; 3]> {
+        let mut set: Vec<[[u64; 2]; 3]> = tri
+            .triangles()
+            .map(|t| {
+                let mut p = t.map(|v| points[v as usize].map(f64::to_bits));
+                p.sort_unstable();
+                p
+            })
+            .collect();
+        set.sort_unstable();
+        set
+    }
+
+    /// A refinement round's tiling is the round before's with the inserted holes' copies
+    /// appended (the same reach): its triangulation extends the earlier one (as a prefix, or
+    /// renumbered where circles near the new holes were sampled more densely) and is the
+    /// triangle set of a triangulation from scratch; a tiling that does not hold the earlier
+    /// samples (a different reach) is triangulated from scratch.
+    #[test]
+    fn a_refinement_round_extends_the_earlier_triangulation() {
+        let options = Options {
+            collapse_fraction: EXACT_COLLAPSE_FRACTION,
+            ..Options::default()
+        };
+        let sampling = crate::mesher::exact_sampling();
+        let mut extended = 0;
+        for (n, seed) in [(60, 1), (120, 2), (40, 5)] {
+            let pd = random_box(n, seed);
+            let reach = initial_reach(&pd);
+            let Round::Poor(poor, before) =
+                layout_or_poor(&pd, &options, &sampling, 0.9, reach, None).unwrap()
+            else {
+                panic!("{n} holes: no poor vertex orbit at ratio 0.9");
+            };
+            // The poorest candidate, inserted as refinement would (half the empty radius).
+            let (_, c, rho) = poor
+                .iter()
+                .copied()
+                .max_by(|a, b| a.0.total_cmp(&b.0))
+                .unwrap();
+            let size = pd.size();
+            let mut holes = pd.holes().to_vec();
+            holes.push(Circle::new(
+                wrap(c[0], size[0]),
+                wrap(c[1], size[1]),
+                0.5 * rho,
+            ));
+            let next = PeriodicDomain::new(size, holes).unwrap();
+            let gaps = next.nearest_gaps();
+            for (r, same_reach) in [(reach, true), ([0.75 * reach[0]; 2], false)] {
+                let t = Tiling::with_reach(&next, before.t.m, r).unwrap();
+                let (samples, fresh, _) = sample_tiling(&t, &gaps, &sampling, false, None).unwrap();
+                let (tri, made) =
+                    extended_or_new((&before.samples, &before.tri), &samples).unwrap();
+                assert_eq!(
+                    triangle_set(&samples.points, &tri),
+                    triangle_set(&samples.points, &fresh),
+                    "{n} holes"
+                );
+                if same_reach {
+                    assert_ne!(made, Made::Fresh, "{n} holes");
+                    extended += 1;
+                } else {
+                    assert_eq!(made, Made::Fresh, "{n} holes");
+                }
+            }
+        }
+        assert_eq!(extended, 3);
+    }
+
     /// A pair of holes 1e-5 of their radius apart across the box's edge: the canonical
     /// copies are sampled adaptively (densely only facing the contact: far fewer samples than
     /// the `2 pi r / gap` a uniform sampling needs, and the samples on the far half of each
@@ -3370,7 +3546,7 @@ mod tests {
         .unwrap();
         let t = Tiling::new(&pd, [1, 1]).unwrap();
         let opts = SamplingOptions::default();
-        let (samples, _, _) = sample_tiling(&t, &pd.nearest_gaps(), &opts, false).unwrap();
+        let (samples, _, _) = sample_tiling(&t, &pd.nearest_gaps(), &opts, false, None).unwrap();
         let uniform = std::f64::consts::TAU * r / (opts.spacing_per_gap * g);
         for k in 0..2 {
             let canon = samples.of_circle(t.id(k, 0, 0));
@@ -3503,8 +3679,10 @@ mod tests {
                         assert!(d[0].hypot(d[1]) > 1e-9, "{n} holes: one orbit twice");
                     }
                 }
-                match layout_or_poor(&pd, &options, &sampling, limit).unwrap() {
-                    Round::Poor(poor) => {
+                match layout_or_poor(&pd, &options, &sampling, limit, initial_reach(&pd), None)
+                    .unwrap()
+                {
+                    Round::Poor(poor, _) => {
                         if medial.is_empty() {
                             assert_eq!(poor, expected, "{n} holes, ratio {limit}");
                         } else {
@@ -4000,7 +4178,7 @@ mod tests {
             ..plain.clone()
         };
         let counts = |opts: &SamplingOptions| -> Vec<Vec<u32>> {
-            let (samples, _, _) = sample_tiling(&t, &pd.nearest_gaps(), opts, false).unwrap();
+            let (samples, _, _) = sample_tiling(&t, &pd.nearest_gaps(), opts, false, None).unwrap();
             (0..3)
                 .map(|k| {
                     tile_array(t.m)
