@@ -57,7 +57,7 @@ pub(super) fn medial_poor(
         .zip(circles.par_iter())
         .filter_map(|(&v, circle)| {
             let ratio = refine::vertex_ratio(medial, v as usize, circle.as_ref(), points);
-            if !(ratio > limit) {
+            if ratio.is_nan() || ratio <= limit {
                 return None;
             }
             let (centre, rho) = match circle {
