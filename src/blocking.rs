@@ -233,7 +233,7 @@ pub fn block_area(layout: &BlockLayout, b: usize) -> f64 {
 }
 
 /// [`block_area`] with caller-owned buffers (a loop over every block allocates nothing).
-fn block_area_with(
+pub(crate) fn block_area_with(
     layout: &BlockLayout,
     b: usize,
     pts: &mut Vec<Point>,
