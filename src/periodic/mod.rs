@@ -46,7 +46,11 @@
 //! Macro Delaunay refinement runs on the torus too (`refine_periodic`): poor vertex orbits
 //! get fluid holes at their empty circles' centres, appended to the domain's holes and
 //! filled by templates ([`exact_mode::periodic::build_with_inserted`]); when the refined
-//! layout gives no valid exact mesh, the unrefined one is meshed.
+//! layout gives no valid exact mesh, the unrefined one is meshed. A round asks the sampled
+//! medial graph first (`poor::medial_poor`, as bounded refinement does) and extracts the
+//! layout only when the graph has no poor vertex orbit; every round's first tiling is the
+//! first round's band of copies, so that a round's triangulation extends the round before's
+//! (`extended_or_new`).
 //!
 //! Wall corners are placed on the true circles; only the medial geometry comes from the
 //! quantised samples (an error of the order of `1e-14` of the period). That is paper mode
