@@ -140,7 +140,6 @@ impl PeriodicBlocking {
 /// of degree `n > 3` is measured on its `n` touching points (shortest distance between two).
 pub(crate) fn poor_vertices(pb: &PeriodicBlocking, limit: f64) -> Vec<(f64, Point, f64)> {
     use rayon::prelude::*;
-    let dist = |a: Point, b: Point| (a[0] - b[0]).hypot(a[1] - b[1]);
     // In parallel (issue 8: one exact solve per vertex orbit, 0.3 s a round at 1e5 holes when
     // serial); collected in orbit order.
     pb.vertices
@@ -168,21 +167,46 @@ pub(crate) fn poor_vertices(pb: &PeriodicBlocking, limit: f64) -> Vec<(f64, Poin
                     .map(|&c| pb.wall(c).map(|w| w.project(ap.center)))
                     .collect::<Option<_>>()?
             };
-            let mut l = f64::INFINITY;
-            for i in 0..n {
-                for j in i + 1..n {
-                    l = l.min(dist(t[i], t[j]));
-                }
-            }
-            let ratio = if l > 0.0 {
-                ap.radius / l
-            } else {
-                f64::INFINITY
-            };
-            let ok = ap.radius.is_finite() && ap.center.iter().all(|x| x.is_finite());
-            (ok && ratio > limit).then_some((ratio, ap.center, ap.radius))
+            poor_at(ap.center, ap.radius, &t, limit)
         })
         .collect()
+}
+
+/// The refinement candidate of a vertex orbit whose empty circle (`center`, `radius`)
+/// touches its walls at `t`, when it is poor: `(radius / shortest distance between two
+/// touching points, center, radius)` with the ratio above `limit`.
+fn poor_at(center: Point, radius: f64, t: &[Point], limit: f64) -> Option<(f64, Point, f64)> {
+    let dist = |a: Point, b: Point| (a[0] - b[0]).hypot(a[1] - b[1]);
+    let mut l = f64::INFINITY;
+    for i in 0..t.len() {
+        for j in i + 1..t.len() {
+            l = l.min(dist(t[i], t[j]));
+        }
+    }
+    let ratio = if l > 0.0 { radius / l } else { f64::INFINITY };
+    let ok = radius.is_finite() && center.iter().all(|x| x.is_finite());
+    (ok && ratio > limit).then_some((ratio, center, radius))
+}
+
+/// [`poor_vertices`] and [`backwards_orbits`] of `pb` with one exact solve per vertex orbit
+/// (issue 8: a refinement round's extraction asked both, and solved every vertex orbit
+/// twice): the same answers. When some vertex orbit cannot be solved, [`poor_vertices`] skips
+/// it and [`backwards_orbits`] fails; so here.
+pub(crate) fn poor_and_backwards(
+    pb: &PeriodicBlocking,
+    limit: f64,
+) -> (Vec<(f64, Point, f64)>, Result<Vec<usize>, MeshError>) {
+    use rayon::prelude::*;
+    match orbits_of(pb) {
+        Ok((verts, _, _, backwards)) => {
+            let poor = verts
+                .par_iter()
+                .filter_map(|v| poor_at(v.center, v.radius, &v.tangent, limit))
+                .collect();
+            (poor, Ok(backwards))
+        }
+        Err(e) => (poor_vertices(pb, limit), Err(e)),
+    }
 }
 
 /// The exact geometry of a vertex orbit (representative frame).
@@ -1640,6 +1664,54 @@ mod tests {
                 proptest::prop_assert_eq!(ids.get(i, k), Some(id));
             }
         }
+    }
+
+    /// [`poor_and_backwards`] (one solve per vertex orbit) answers as [`poor_vertices`] and
+    /// [`backwards_orbits`] separately, bit for bit: random boxes at several ratios, and a box
+    /// whose first layout has arcs running backwards.
+    #[test]
+    fn poor_and_backwards_from_one_solve_are_the_separate_answers() {
+        let backwards_box = match crate::domain::AnyDomain::from_json_str(include_str!(
+            "../../tests/data/periodic_backwards_100.json"
+        ))
+        .unwrap()
+        {
+            crate::domain::AnyDomain::Periodic(pd) => pd,
+            _ => panic!("not a periodic domain"),
+        };
+        let mut boxes = vec![backwards_box];
+        for seed in 1..4 {
+            boxes.push(crate::layouts::periodic_bubbles(60, seed).expect("layout"));
+        }
+        let options = Options {
+            collapse_fraction: crate::periodic::EXACT_COLLAPSE_FRACTION,
+            ..Options::default()
+        };
+        let (mut poor_seen, mut backwards_seen) = (0, 0);
+        for pd in &boxes {
+            let p = crate::periodic::periodic_layout(pd, &options).expect("layout");
+            let Some(pb) = &p.blocking else { continue };
+            for limit in [0.8, 1.0, 1.5, 2.0] {
+                let (poor, backwards) = poor_and_backwards(pb, limit);
+                let expected = poor_vertices(pb, limit);
+                assert_eq!(
+                    poor.iter()
+                        .map(|x| (x.0.to_bits(), x.1.map(f64::to_bits), x.2.to_bits()))
+                        .collect::<Vec<_>>(),
+                    expected
+                        .iter()
+                        .map(|x| (x.0.to_bits(), x.1.map(f64::to_bits), x.2.to_bits()))
+                        .collect::<Vec<_>>()
+                );
+                assert_eq!(backwards.ok(), backwards_orbits(pb).ok());
+                poor_seen += poor.len();
+                backwards_seen += backwards_orbits(pb).map_or(0, |b| b.len());
+            }
+        }
+        assert!(
+            poor_seen > 0 && backwards_seen > 0,
+            "{poor_seen} {backwards_seen}"
+        );
     }
 
     /// With a fixed grid per block the arcs' densities are reduced to summaries (lower bound

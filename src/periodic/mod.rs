@@ -1214,6 +1214,9 @@ struct Early {
     cluster_orbits: Vec<usize>,
     arc_orbits: Vec<ArcKey>,
     blocking: Result<Option<PeriodicBlocking>, MeshError>,
+    /// [`exact_mode::periodic::backwards_orbits`] of `blocking`, when the poor check found it
+    /// from the same solves ([`exact_mode::periodic::poor_and_backwards`]).
+    backwards: Option<Result<Vec<usize>, MeshError>>,
 }
 
 /// A contracted medial vertex (a cluster of collapsed vertices) up to nothing: the samples of
@@ -1949,6 +1952,7 @@ fn extract(
             cluster_orbits: Vec::new(),
             arc_orbits: Vec::new(),
             blocking: Ok(None),
+            backwards: None,
         };
         // Any error here is met again by the numbering, in block order: no early input.
         for x in &placed {
@@ -1983,14 +1987,21 @@ fn extract(
             &early.arc_orbits,
         );
         if let (Ok(Some(pb)), Some(limit)) = (&early.blocking, poor_limit) {
-            let poor = exact_mode::periodic::poor_vertices(pb, limit);
+            // With the backwards check to follow, both from one solve per vertex orbit.
+            let poor = if check_backwards && forced.is_empty() {
+                let (poor, backwards) = exact_mode::periodic::poor_and_backwards(pb, limit);
+                early.backwards = Some(backwards);
+                poor
+            } else {
+                exact_mode::periodic::poor_vertices(pb, limit)
+            };
             if !poor.is_empty() {
                 return Some(Err(poor));
             }
         }
         Some(Ok(early))
     });
-    let early = match early {
+    let mut early = match early {
         Some(Err(poor)) => return Ok(Extracted::Poor(poor)),
         Some(Ok(early)) => Some(early),
         None => None,
@@ -2007,11 +2018,14 @@ fn extract(
     // with them collapsed ([`reextract`]), so this layout is not numbered: the stopped
     // build's answer is found here, from the same exact input (an error there is left to
     // the build).
-    let backwards = match &early {
+    let backwards = match &mut early {
         Some(Early {
             blocking: Ok(Some(pb)),
+            backwards: known,
             ..
-        }) if check_backwards && forced.is_empty() => exact_mode::periodic::backwards_orbits(pb)
+        }) if check_backwards && forced.is_empty() => known
+            .take()
+            .unwrap_or_else(|| exact_mode::periodic::backwards_orbits(pb))
             .ok()
             .filter(|arcs| !arcs.is_empty()),
         _ => None,
