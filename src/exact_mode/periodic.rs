@@ -132,13 +132,16 @@ impl PeriodicBlocking {
     }
 }
 
+/// A refinement candidate: `(ratio, empty circle centre, radius)`.
+pub(crate) type Candidate = (f64, Point, f64);
+
 /// The vertex orbits of three circles whose exact empty circle is *poor* for macro Delaunay
 /// refinement (see [`crate::refine`]): the triangle of its three touching points has
 /// circumradius over shortest edge above `limit` (its angles are the block corners there,
 /// paper Lemma 1). Per poor orbit: the ratio, the empty circle's centre (representative
 /// frame) and radius. Orbits whose circle has no exact solve are skipped. A collapsed vertex
 /// of degree `n > 3` is measured on its `n` touching points (shortest distance between two).
-pub(crate) fn poor_vertices(pb: &PeriodicBlocking, limit: f64) -> Vec<(f64, Point, f64)> {
+pub(crate) fn poor_vertices(pb: &PeriodicBlocking, limit: f64) -> Vec<Candidate> {
     use rayon::prelude::*;
     // In parallel (issue 8: one exact solve per vertex orbit, 0.3 s a round at 1e5 holes when
     // serial); collected in orbit order.
@@ -175,7 +178,7 @@ pub(crate) fn poor_vertices(pb: &PeriodicBlocking, limit: f64) -> Vec<(f64, Poin
 /// The refinement candidate of a vertex orbit whose empty circle (`center`, `radius`)
 /// touches its walls at `t`, when it is poor: `(radius / shortest distance between two
 /// touching points, center, radius)` with the ratio above `limit`.
-fn poor_at(center: Point, radius: f64, t: &[Point], limit: f64) -> Option<(f64, Point, f64)> {
+fn poor_at(center: Point, radius: f64, t: &[Point], limit: f64) -> Option<Candidate> {
     let dist = |a: Point, b: Point| (a[0] - b[0]).hypot(a[1] - b[1]);
     let mut l = f64::INFINITY;
     for i in 0..t.len() {
@@ -195,7 +198,7 @@ fn poor_at(center: Point, radius: f64, t: &[Point], limit: f64) -> Option<(f64, 
 pub(crate) fn poor_and_backwards(
     pb: &PeriodicBlocking,
     limit: f64,
-) -> (Vec<(f64, Point, f64)>, Result<Vec<usize>, MeshError>) {
+) -> (Vec<Candidate>, Result<Vec<usize>, MeshError>) {
     use rayon::prelude::*;
     match orbits_of(pb) {
         Ok((verts, _, _, backwards)) => {
