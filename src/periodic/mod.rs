@@ -3478,6 +3478,23 @@ mod tests {
         assert_eq!(next_tiling([2, 4], [1, 9], false, cap), Some([2, 9]));
     }
 
+    /// The options and sampling of a periodic refinement round (exact mode).
+    fn refinement_round() -> (Options, SamplingOptions) {
+        let options = Options {
+            collapse_fraction: EXACT_COLLAPSE_FRACTION,
+            ..Options::default()
+        };
+        (options, crate::mesher::exact_sampling())
+    }
+
+    /// Random boxes with poor vertex orbits at low ratios: `(holes, seed, box)`.
+    fn refinement_boxes() -> Vec<(usize, u64, PeriodicDomain)> {
+        [(60, 1), (120, 2), (40, 5)]
+            .into_iter()
+            .map(|(n, seed)| (n, seed, random_box(n, seed)))
+            .collect()
+    }
+
     /// The triangle set of a triangulation, as sorted triples of sorted points (bits): what
     /// does not depend on the numbering of points or triangles.
     fn triangle_set(points: &[Point], tri: &Triangulation) -> Vec<[[u64; 2]; 3]> {
@@ -3500,14 +3517,9 @@ mod tests {
     /// samples (a different reach) is triangulated from scratch.
     #[test]
     fn a_refinement_round_extends_the_earlier_triangulation() {
-        let options = Options {
-            collapse_fraction: EXACT_COLLAPSE_FRACTION,
-            ..Options::default()
-        };
-        let sampling = crate::mesher::exact_sampling();
+        let (options, sampling) = refinement_round();
         let mut extended = 0;
-        for (n, seed) in [(60, 1), (120, 2), (40, 5)] {
-            let pd = random_box(n, seed);
+        for (n, _, pd) in refinement_boxes() {
             let reach = initial_reach(&pd);
             let Round::Poor(poor, before) =
                 layout_or_poor(&pd, &options, &sampling, 0.9, reach, None).unwrap()
@@ -3656,14 +3668,9 @@ mod tests {
     /// backwards).
     #[test]
     fn a_refinement_round_finds_the_poor_orbits_of_the_whole_layout() {
-        let options = Options {
-            collapse_fraction: EXACT_COLLAPSE_FRACTION,
-            ..Options::default()
-        };
-        let sampling = crate::mesher::exact_sampling();
+        let (options, sampling) = refinement_round();
         let (mut poor_rounds, mut layout_rounds, mut compared) = (0, 0, 0);
-        for (n, seed) in [(60, 1), (120, 2), (40, 5)] {
-            let pd = random_box(n, seed);
+        for (n, _, pd) in refinement_boxes() {
             let size = pd.size();
             let whole = layout_keeping(&pd, &options, &sampling).unwrap();
             let pb = whole.blocking.as_ref().expect("an exact input");
