@@ -141,6 +141,18 @@ pub fn invariants_hold_after(
     before: &SampledDomain,
     kept: &Kept,
 ) -> bool {
+    invariants_hold_after_samples(samples, tri, kinds, before.samples.len(), kept)
+}
+
+/// [`invariants_hold_after`] for an earlier sampling of `before_samples` samples (all that
+/// is read of it besides `kept`).
+pub fn invariants_hold_after_samples(
+    samples: &Samples,
+    tri: &Triangulation,
+    kinds: &[TriangleKind],
+    before_samples: usize,
+    kept: &Kept,
+) -> bool {
     if !tri.duplicates().is_empty() || kept.before_duplicates {
         return false;
     }
@@ -167,7 +179,7 @@ pub fn invariants_hold_after(
             }
         }
     }
-    let n0 = before.samples.len() as u32;
+    let n0 = before_samples as u32;
     // Earlier boundary edges of earlier triangles that were replaced.
     for &(v, nb) in &kept.before {
         for k in 0..3 {
@@ -194,6 +206,25 @@ pub fn medial_graph_after(
     kept: &Kept,
 ) -> Option<MedialGraph> {
     let old = &before.medial;
+    reusing(
+        samples,
+        tri,
+        kinds,
+        &old.vertices,
+        Arcs::Cloned(&old.arcs),
+        kept,
+    )
+}
+
+/// [`medial_graph_after`] from the earlier medial graph `old` itself (the periodic tiling's
+/// refinement rounds keep theirs apart from a [`SampledDomain`]).
+pub fn medial_graph_after_graph(
+    samples: &Samples,
+    tri: &Triangulation,
+    kinds: &[TriangleKind],
+    old: &MedialGraph,
+    kept: &Kept,
+) -> Option<MedialGraph> {
     reusing(
         samples,
         tri,

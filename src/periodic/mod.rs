@@ -88,7 +88,7 @@ use crate::exact_mode::periodic::{PeriodicArc, PeriodicBlocking, PeriodicVertex}
 use crate::geometry::{Point, Triangulation};
 use crate::grid::build_grids;
 use crate::layout::{Block, BlockLayout, Curve, Edge, EdgeKind, SideRef, Translation};
-use crate::medial::{circumcenter, medial_graph, MedialGraph};
+use crate::medial::{circumcenter, medial_graph, reuse, MedialGraph, TriangleKind};
 use crate::mesh::Mesh;
 use crate::mesher::{MeshError, Mode, Options, EXACT_RESAMPLING};
 use crate::sampling::{
@@ -442,8 +442,8 @@ fn sample_tiling(
     gaps_canonical: &[f64],
     opts: &SamplingOptions,
     uniform: bool,
-    previous: Option<(&Samples, &Triangulation)>,
-) -> Result<(Samples, Triangulation, MedialGraph), MeshError> {
+    previous: Option<&Sampled>,
+) -> Result<(Samples, Triangulation, Vec<TriangleKind>, MedialGraph), MeshError> {
     let b = t.domain.bounding();
     let bgap = t
         .domain
@@ -537,15 +537,38 @@ fn sample_tiling(
             });
         }
         let samples = timings::span("sampling", || t.samples(&plans, bcount, &gaps));
-        let tri = timings::span("triangulation", || match previous.filter(|_| round == 0) {
-            Some(p) => extended_or_new(p, &samples).map(|(t, _)| t),
-            None => Triangulation::new(&samples.points),
+        let earlier = previous.filter(|_| round == 0);
+        let (tri, made) = timings::span("triangulation", || match earlier {
+            Some(p) => extended_or_new((&p.samples, &p.tri), &samples),
+            None => Triangulation::new(&samples.points).map(|t| (t, Made::Fresh)),
         })?;
+        // The round before, when the new triangulation extends its own and every earlier
+        // circle is sampled as before: its classes, checks and medial arcs are reused where
+        // the insertion kept the triangles (issue 8, as bounded refinement does:
+        // [`crate::medial::reuse`]).
+        let reuse = earlier
+            .filter(|p| {
+                made == Made::Extended
+                    && p.kinds.len() == p.tri.len()
+                    && reuse::same_earlier_circles(&p.samples, &samples)
+            })
+            .map(|p| (p, reuse::Kept::new(&p.tri, &tri)));
         // The classes and the hard invariants in one parallel pass (the same classes and
         // violations as `classify` then `check_invariants`; issue 8: 0.33 s on one thread
         // per sampling at 1e5 holes).
-        let (kinds, hard) = timings::span("sampling", || {
-            crate::sampling::classify_and_check(&samples, &tri)
+        let (kinds, hard) = timings::span("sampling", || match &reuse {
+            Some((p, kept)) => {
+                let kinds = reuse::classify_after(&samples, &tri, &p.kinds, kept);
+                let n0 = p.samples.len();
+                let hard = if reuse::invariants_hold_after_samples(&samples, &tri, &kinds, n0, kept)
+                {
+                    Vec::new()
+                } else {
+                    crate::sampling::check_invariants(&samples, &tri, &kinds)
+                };
+                (kinds, hard)
+            }
+            None => crate::sampling::classify_and_check(&samples, &tri),
         });
         let mut grow_b = false;
         let mut grow: Vec<bool> = vec![false; t.h];
@@ -553,7 +576,15 @@ fn sample_tiling(
         // refined any more (all at the cap): thin walls are then accepted, as in the bounded
         // sampler (`crate::sampling::sample_and_triangulate`).
         let (violations, soft_done) = if hard.is_empty() {
-            let medial = timings::span("medial_graph", || medial_graph(&samples, &tri, &kinds))?;
+            let medial = timings::span("medial_graph", || {
+                let reused = reuse.as_ref().and_then(|(p, kept)| {
+                    reuse::medial_graph_after_graph(&samples, &tri, &kinds, &p.medial, kept)
+                });
+                match reused {
+                    Some(m) => Ok(m),
+                    None => medial_graph(&samples, &tri, &kinds),
+                }
+            })?;
             let soft: Vec<_> = thin_walls(&tri, &medial)
                 .into_iter()
                 .filter(|v| match v.kind {
@@ -565,9 +596,9 @@ fn sample_tiling(
                 })
                 .collect();
             if soft.is_empty() || round == opts.max_rounds || !opts.soft_rounds {
-                return Ok((samples, tri, medial));
+                return Ok((samples, tri, kinds, medial));
             }
-            (soft, Some((samples, tri, medial)))
+            (soft, Some((samples, tri, kinds, medial)))
         } else {
             if let Some(v) = hard
                 .iter()
@@ -708,6 +739,9 @@ struct Sampled {
     t: Tiling,
     samples: Samples,
     tri: Triangulation,
+    /// The classes of `tri`'s triangles, for a refinement round's next sampling
+    /// ([`sample_tiling`] reuses them); emptied once the sampling gives a layout.
+    kinds: Vec<TriangleKind>,
     medial: MedialGraph,
     /// The exact circles of the arc orbit representatives' ends ([`select_collapse`]): the
     /// ends (sorted) and their circles, solved at the first extraction of this sampling and
@@ -973,17 +1007,18 @@ fn layout_from_after(
             )));
         }
         let t = Tiling::with_reach(pd, m, reach)?;
-        let (samples, tri, medial) = sample_tiling(
+        let (samples, tri, kinds, medial) = sample_tiling(
             &t,
             &gaps,
             &opts,
             options.mode == Mode::Paper,
-            previous.take().map(|p| (&p.samples, &p.tri)),
+            previous.take(),
         )?;
         let mut sampled = Sampled {
             t,
             samples,
             tri,
+            kinds,
             medial,
             end_circles: std::sync::OnceLock::new(),
             orbits: std::sync::OnceLock::new(),
@@ -1007,6 +1042,9 @@ fn layout_from_after(
         })?;
         match extracted {
             Extracted::Layout(mut p) => {
+                // Only a next refinement round reads the classes (this one ends here).
+                let kinds = std::mem::take(&mut sampled.kinds);
+                rayon::spawn(move || drop(kinds));
                 // Only a local fix reads the orbits again ([`reextract`]).
                 if p.backwards.is_none() {
                     let orbits = sampled.orbits.take();
@@ -3513,12 +3551,13 @@ mod tests {
     /// A refinement round's tiling is the round before's with the inserted holes' copies
     /// appended (the same reach): its triangulation extends the earlier one (as a prefix, or
     /// renumbered where circles near the new holes were sampled more densely) and is the
-    /// triangle set of a triangulation from scratch; a tiling that does not hold the earlier
-    /// samples (a different reach) is triangulated from scratch.
+    /// triangle set of a triangulation from scratch, and the sampling's classes and medial
+    /// graph (reused from the round before) are those of that triangulation; a tiling that
+    /// does not hold the earlier samples (a different reach) is triangulated from scratch.
     #[test]
     fn a_refinement_round_extends_the_earlier_triangulation() {
         let (options, sampling) = refinement_round();
-        let mut extended = 0;
+        let (mut extended, mut reused) = (0, 0);
         for (n, _, pd) in refinement_boxes() {
             let reach = initial_reach(&pd);
             let Round::Poor(poor, before) =
@@ -3543,7 +3582,8 @@ mod tests {
             let gaps = next.nearest_gaps();
             for (r, same_reach) in [(reach, true), ([0.75 * reach[0]; 2], false)] {
                 let t = Tiling::with_reach(&next, before.t.m, r).unwrap();
-                let (samples, fresh, _) = sample_tiling(&t, &gaps, &sampling, false, None).unwrap();
+                let (samples, fresh, _, _) =
+                    sample_tiling(&t, &gaps, &sampling, false, None).unwrap();
                 let (tri, made) =
                     extended_or_new((&before.samples, &before.tri), &samples).unwrap();
                 assert_eq!(
@@ -3554,12 +3594,28 @@ mod tests {
                 if same_reach {
                     assert_ne!(made, Made::Fresh, "{n} holes");
                     extended += 1;
+                    // The sampling itself: its classes and medial graph, reused from the
+                    // round before where the triangles were kept, are those of its
+                    // triangulation computed afresh.
+                    let (samples, tri, kinds, medial) =
+                        sample_tiling(&t, &gaps, &sampling, false, Some(&before)).unwrap();
+                    assert_eq!(kinds, crate::medial::classify(&samples, &tri), "{n} holes");
+                    assert_eq!(
+                        medial,
+                        medial_graph(&samples, &tri, &kinds).unwrap(),
+                        "{n} holes"
+                    );
+                    reused += usize::from(made == Made::Extended);
                 } else {
                     assert_eq!(made, Made::Fresh, "{n} holes");
                 }
             }
         }
         assert_eq!(extended, 3);
+        assert!(
+            reused > 0,
+            "no round extended the earlier samples as a prefix"
+        );
     }
 
     /// A pair of holes 1e-5 of their radius apart across the box's edge: the canonical
@@ -3581,7 +3637,7 @@ mod tests {
         .unwrap();
         let t = Tiling::new(&pd, [1, 1]).unwrap();
         let opts = SamplingOptions::default();
-        let (samples, _, _) = sample_tiling(&t, &pd.nearest_gaps(), &opts, false, None).unwrap();
+        let (samples, ..) = sample_tiling(&t, &pd.nearest_gaps(), &opts, false, None).unwrap();
         let uniform = std::f64::consts::TAU * r / (opts.spacing_per_gap * g);
         for k in 0..2 {
             let canon = samples.of_circle(t.id(k, 0, 0));
@@ -4208,7 +4264,7 @@ mod tests {
             ..plain.clone()
         };
         let counts = |opts: &SamplingOptions| -> Vec<Vec<u32>> {
-            let (samples, _, _) = sample_tiling(&t, &pd.nearest_gaps(), opts, false, None).unwrap();
+            let (samples, ..) = sample_tiling(&t, &pd.nearest_gaps(), opts, false, None).unwrap();
             (0..3)
                 .map(|k| {
                     tile_array(t.m)
