@@ -754,6 +754,9 @@ struct Sampled {
     /// Dropped once the layout is made when no local fix is expected (the layout has no arc
     /// orbit running backwards), so that the exact build does not hold it.
     orbits: std::sync::OnceLock<Orbits>,
+    /// A refinement round's solved medial vertices ([`poor::medial_poor`]) with their answers,
+    /// for the next round's sampling to reuse.
+    solved: std::sync::OnceLock<Vec<(poor::SolveKey, poor::Answer)>>,
     /// How its extractions measure short arcs: by the mode it was sampled for (a sampling is
     /// kept and extracted again in exact mode only), so its [`SelectionBase`] is for this.
     how: collapse::ArcLength,
@@ -1007,13 +1010,10 @@ fn layout_from_after(
             )));
         }
         let t = Tiling::with_reach(pd, m, reach)?;
-        let (samples, tri, kinds, medial) = sample_tiling(
-            &t,
-            &gaps,
-            &opts,
-            options.mode == Mode::Paper,
-            previous.take(),
-        )?;
+        // The round before's sampling serves the first tiling only.
+        let earlier = previous.take();
+        let (samples, tri, kinds, medial) =
+            sample_tiling(&t, &gaps, &opts, options.mode == Mode::Paper, earlier)?;
         let mut sampled = Sampled {
             t,
             samples,
@@ -1022,6 +1022,7 @@ fn layout_from_after(
             medial,
             end_circles: std::sync::OnceLock::new(),
             orbits: std::sync::OnceLock::new(),
+            solved: std::sync::OnceLock::new(),
             // Exact mode builds on the Apollonius centres: it measures short arcs by them.
             how: match options.mode {
                 Mode::Exact => collapse::ArcLength::Chord,
@@ -1033,7 +1034,7 @@ fn layout_from_after(
         // run); the layout's exact input is asked only when the graph has none.
         let extracted = timings::span("blocking", || {
             if let Some(limit) = poor_limit {
-                let poor = poor::medial_poor(pd, &sampled, limit);
+                let poor = poor::medial_poor(pd, &sampled, limit, earlier);
                 if !poor.is_empty() {
                     return Ok(Extracted::Poor(poor));
                 }
@@ -1042,9 +1043,11 @@ fn layout_from_after(
         })?;
         match extracted {
             Extracted::Layout(mut p) => {
-                // Only a next refinement round reads the classes (this one ends here).
+                // Only a next refinement round reads the classes and the solved vertices
+                // (this one ends here).
                 let kinds = std::mem::take(&mut sampled.kinds);
-                rayon::spawn(move || drop(kinds));
+                let solved = sampled.solved.take();
+                rayon::spawn(move || drop((kinds, solved)));
                 // Only a local fix reads the orbits again ([`reextract`]).
                 if p.backwards.is_none() {
                     let orbits = sampled.orbits.take();
@@ -3606,6 +3609,28 @@ mod tests {
                         "{n} holes"
                     );
                     reused += usize::from(made == Made::Extended);
+                    // The round on that domain answers as one without the round before
+                    // (its vertex solves reused, its triangulation extended): the same
+                    // candidates, bit for bit (in another vertex order).
+                    let sorted = |round: Round| {
+                        let Round::Poor(poor, _) = round else {
+                            panic!("{n} holes: no poor vertex orbit at ratio 0.9 after one hole");
+                        };
+                        let mut bits: Vec<[u64; 4]> = poor
+                            .iter()
+                            .map(|c| [c.0, c.1[0], c.1[1], c.2].map(f64::to_bits))
+                            .collect();
+                        bits.sort_unstable();
+                        bits
+                    };
+                    let round = |previous| {
+                        layout_or_poor(&next, &options, &sampling, 0.9, reach, previous).unwrap()
+                    };
+                    assert_eq!(
+                        sorted(round(Some(&before))),
+                        sorted(round(None)),
+                        "{n} holes"
+                    );
                 } else {
                     assert_eq!(made, Made::Fresh, "{n} holes");
                 }
@@ -3736,7 +3761,7 @@ mod tests {
                 .expect("exact mode keeps its sampling");
             for limit in [0.9, 1.2, 2.0, 1e3] {
                 let expected = exact_mode::periodic::poor_vertices(pb, limit);
-                let medial = poor::medial_poor(&pd, sampled, limit);
+                let medial = poor::medial_poor(&pd, sampled, limit, None);
                 if whole.collapsed_arcs == 0 {
                     // The same orbits and circles; the solves may round differently (the
                     // circles in another order), so within a relative 1e-12.

@@ -18,17 +18,33 @@
 
 use super::{below, normalise_vertex, PeriodicDomain, SampleKey, Sampled, Tiling, VertexKey};
 use crate::cocircular;
+use crate::domain::CircleId;
 use crate::geometry::Point;
 use crate::refine;
 use rayon::prelude::*;
+use std::collections::HashMap;
+
+/// What a vertex's answer depends on besides the circles its ids name: its circle ids in
+/// order and its position's bits (as `cocircular`'s solves).
+pub(super) type SolveKey = ([CircleId; 3], [u64; 2]);
+
+/// A solved vertex's answer: `(ratio, empty circle centre, radius)`.
+pub(super) type Answer = (f64, Point, f64);
 
 /// The poor vertex orbits of `sampled` (a sampling of `pd`) for the ratio `limit`:
 /// `(ratio, empty circle centre, radius)` in vertex order, as
 /// [`crate::exact_mode::periodic::poor_vertices`] gives them (see the module doc).
+///
+/// With `previous`, the sampling of the round before (a tiling whose circles are the first
+/// ones of this one, bit for bit), a vertex with the same circle ids and position as a vertex
+/// solved there takes that answer (the same solve: issue 8, as bounded refinement's
+/// `cocircular::vertex_circles_reusing`); the answers solved here are kept in `sampled` for
+/// the next round.
 pub(super) fn medial_poor(
     pd: &PeriodicDomain,
     sampled: &Sampled,
     limit: f64,
+    previous: Option<&Sampled>,
 ) -> Vec<(f64, Point, f64)> {
     let (t, medial, points) = (&sampled.t, &sampled.medial, &sampled.samples.points);
     let rmax = pd.holes().iter().map(|c| c.radius).fold(0.0, f64::max);
@@ -51,29 +67,71 @@ pub(super) fn medial_poor(
             in_tiling(t, mv.position, r + reach)
         })
         .collect();
-    let circles = cocircular::vertex_circles_of(&t.domain, medial, &asked);
-    asked
-        .par_iter()
-        .zip(circles.par_iter())
-        .filter_map(|(&v, circle)| {
-            let ratio = refine::vertex_ratio(medial, v as usize, circle.as_ref(), points);
-            if ratio.is_nan() || ratio <= limit {
-                return None;
+    let key = |v: u32| -> SolveKey {
+        let mv = &medial.vertices[v as usize];
+        (mv.circles, mv.position.map(f64::to_bits))
+    };
+    // The round before's answers, when its circles are this tiling's first ones.
+    let known: Option<HashMap<SolveKey, Answer>> = previous
+        .filter(|p| same_first_circles(&p.t, t))
+        .and_then(|p| p.solved.get())
+        .map(|solved| solved.iter().copied().collect());
+    let reused = |v: u32| known.as_ref().and_then(|k| k.get(&key(v)).copied());
+    let fresh: Vec<u32> = asked
+        .iter()
+        .copied()
+        .filter(|&v| reused(v).is_none())
+        .collect();
+    let circles = cocircular::vertex_circles_of(&t.domain, medial, &fresh);
+    // Every asked vertex's answer, in vertex order: reused, or from its solve (`None`
+    // without one: the sample triangle's, not kept).
+    let mut solved_here = fresh.iter().zip(&circles);
+    let answers: Vec<(u32, Answer, bool)> = asked
+        .iter()
+        .map(|&v| match reused(v) {
+            Some(a) => (v, a, true),
+            None => {
+                let (_, circle) = solved_here.next().expect("one solve per fresh vertex");
+                let ratio = refine::vertex_ratio(medial, v as usize, circle.as_ref(), points);
+                let (centre, rho) = match circle {
+                    Some(c) => (c.center, c.radius),
+                    None => {
+                        let mv = &medial.vertices[v as usize];
+                        let p = points[mv.samples[0] as usize];
+                        (
+                            mv.position,
+                            (mv.position[0] - p[0]).hypot(mv.position[1] - p[1]),
+                        )
+                    }
+                };
+                (v, (ratio, centre, rho), circle.is_some())
             }
-            let (centre, rho) = match circle {
-                Some(c) => (c.center, c.radius),
-                None => {
-                    let mv = &medial.vertices[v as usize];
-                    let p = points[mv.samples[0] as usize];
-                    (
-                        mv.position,
-                        (mv.position[0] - p[0]).hypot(mv.position[1] - p[1]),
-                    )
-                }
-            };
-            Some((ratio, centre, rho))
         })
+        .collect();
+    let _ = sampled.solved.set(
+        answers
+            .iter()
+            .filter(|a| a.2)
+            .map(|&(v, a, _)| (key(v), a))
+            .collect(),
+    );
+    answers
+        .into_iter()
+        .map(|(_, a, _)| a)
+        .filter(|a| !a.0.is_nan() && a.0 > limit)
         .collect()
+}
+
+/// True when the circles of `before`'s auxiliary domain are the first circles of `after`'s,
+/// bit for bit (the bounding circle too): then a circle id names the same circle in both.
+fn same_first_circles(before: &Tiling, after: &Tiling) -> bool {
+    let bits = |c: &crate::domain::Circle| [c.center[0], c.center[1], c.radius].map(f64::to_bits);
+    let (b, a) = (before.domain.holes(), after.domain.holes());
+    b.len() <= a.len()
+        && bits(&before.domain.bounding()) == bits(&after.domain.bounding())
+        && b.par_iter()
+            .zip(&a[..b.len()])
+            .all(|(x, y)| bits(x) == bits(y))
 }
 
 /// The orbit key of medial vertex `v` (its samples' keys, sorted), `None` when a sample is
