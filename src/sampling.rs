@@ -1562,16 +1562,13 @@ fn sample_and_triangulate_impl(
                 (p, kept)
             });
         let (kinds, hard) = match &reuse {
-            Some((p, kept)) => {
-                let kinds = reuse::classify_after(&samples, &triangulation, &p.kinds, kept);
-                let hard =
-                    if reuse::invariants_hold_after(&samples, &triangulation, &kinds, p, kept) {
-                        Vec::new()
-                    } else {
-                        check_invariants(&samples, &triangulation, &kinds)
-                    };
-                (kinds, hard)
-            }
+            Some((p, kept)) => reuse::classify_and_check_after(
+                &samples,
+                &triangulation,
+                &p.kinds,
+                p.samples.len(),
+                kept,
+            ),
             None => classify_and_check(&samples, &triangulation),
         };
         let (violations, soft_result, spare) = if hard.is_empty() {

@@ -18,7 +18,7 @@
 use super::{circumcenter, classify_one, MedialArc, MedialGraph, MedialVertex};
 use super::{TriangleKind, Walk};
 use crate::geometry::{Changes, Triangulation};
-use crate::sampling::{SampledDomain, Samples};
+use crate::sampling::{SampledDomain, Samples, Violation};
 use std::collections::HashSet;
 
 /// The triangles of `after` that are those of `before` (same id, same vertices in the same
@@ -123,6 +123,26 @@ pub fn classify_after(
         .collect()
 }
 
+/// [`crate::sampling::classify_and_check`] of `tri`, reusing the classes `before_kinds` of
+/// the earlier triangulation of `before_samples` samples where `kept` says the triangles were
+/// kept ([`classify_after`]; the full check only when [`invariants_hold_after_samples`]
+/// cannot decide): the same classes and violations.
+pub fn classify_and_check_after(
+    samples: &Samples,
+    tri: &Triangulation,
+    before_kinds: &[TriangleKind],
+    before_samples: usize,
+    kept: &Kept,
+) -> (Vec<TriangleKind>, Vec<Violation>) {
+    let kinds = classify_after(samples, tri, before_kinds, kept);
+    let hard = if invariants_hold_after_samples(samples, tri, &kinds, before_samples, kept) {
+        Vec::new()
+    } else {
+        crate::sampling::check_invariants(samples, tri, &kinds)
+    };
+    (kinds, hard)
+}
+
 /// True when [`crate::sampling::check_invariants`] of `tri` (classified by `kinds`) finds
 /// nothing, decided from the changed triangles; `false` when it may find something (the
 /// caller then runs it). `before` is a result of the sampling (its triangulation met every
@@ -205,15 +225,7 @@ pub fn medial_graph_after(
     before: &SampledDomain,
     kept: &Kept,
 ) -> Option<MedialGraph> {
-    let old = &before.medial;
-    reusing(
-        samples,
-        tri,
-        kinds,
-        &old.vertices,
-        Arcs::Cloned(&old.arcs),
-        kept,
-    )
+    medial_graph_after_graph(samples, tri, kinds, &before.medial, kept)
 }
 
 /// [`medial_graph_after`] from the earlier medial graph `old` itself (the periodic tiling's

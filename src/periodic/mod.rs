@@ -558,15 +558,7 @@ fn sample_tiling(
         // per sampling at 1e5 holes).
         let (kinds, hard) = timings::span("sampling", || match &reuse {
             Some((p, kept)) => {
-                let kinds = reuse::classify_after(&samples, &tri, &p.kinds, kept);
-                let n0 = p.samples.len();
-                let hard = if reuse::invariants_hold_after_samples(&samples, &tri, &kinds, n0, kept)
-                {
-                    Vec::new()
-                } else {
-                    crate::sampling::check_invariants(&samples, &tri, &kinds)
-                };
-                (kinds, hard)
+                reuse::classify_and_check_after(&samples, &tri, &p.kinds, p.samples.len(), kept)
             }
             None => crate::sampling::classify_and_check(&samples, &tri),
         });
@@ -798,22 +790,9 @@ impl Orbits {
     /// The orbit keys of the medial graph of a sampling (an error when two arcs of the tiling
     /// have the same key).
     fn new(t: &Tiling, samples: &Samples, medial: &MedialGraph) -> Result<Orbits, MeshError> {
-        let sample_key = |s: u32| -> Option<SampleKey> {
-            let (k, a, b) = t.key(samples.circle_of[s as usize])?;
-            Some((k, samples.index_of[s as usize], a, b))
-        };
-        let vertex_key = |v: usize| -> Option<VertexKey> {
-            let mut key = [
-                sample_key(medial.vertices[v].samples[0])?,
-                sample_key(medial.vertices[v].samples[1])?,
-                sample_key(medial.vertices[v].samples[2])?,
-            ];
-            key.sort_unstable();
-            Some(key)
-        };
         let vkeys: Vec<Option<VertexKey>> = (0..medial.vertices.len())
             .into_par_iter()
-            .map(vertex_key)
+            .map(|v| vertex_key(t, samples, medial, v))
             .collect();
         let arc_key = |e: usize| -> Option<ArcKey> {
             let a = &medial.arcs[e];
@@ -847,6 +826,33 @@ impl Orbits {
             selection: std::sync::OnceLock::new(),
         })
     }
+}
+
+/// The orbit key of medial vertex `v` of a sampling of the tiling `t`: its samples' keys,
+/// sorted; `None` when a sample is outside the keyed tiling.
+fn vertex_key(t: &Tiling, samples: &Samples, medial: &MedialGraph, v: usize) -> Option<VertexKey> {
+    let sample_key = |s: u32| -> Option<SampleKey> {
+        let (k, a, b) = t.key(samples.circle_of[s as usize])?;
+        Some((k, samples.index_of[s as usize], a, b))
+    };
+    let s = medial.vertices[v].samples;
+    let mut key = [sample_key(s[0])?, sample_key(s[1])?, sample_key(s[2])?];
+    key.sort_unstable();
+    Some(key)
+}
+
+/// Per axis, what a tiling of the box `size` must hold for the disc of centre `c` and radius
+/// `r` widened by `reach` to lie where every copy of every hole is in it (the extraction's
+/// step 4): the half-width `m` of a whole array of copies (below, `-m L + reach < c - r`;
+/// above, `(m + 1) L - reach > c + r`), and how far beyond the box a band must reach.
+fn disc_needs(size: [f64; 2], c: Point, r: f64, reach: f64) -> [(f64, f64); 2] {
+    [0, 1].map(|a| {
+        let below = (r + reach - c[a]) / size[a];
+        let above = (c[a] + r + reach) / size[a] - 1.0;
+        let m = below.max(above).floor() + 1.0;
+        let beyond = (r + reach - c[a]).max(c[a] + r + reach - size[a]);
+        (m, beyond)
+    })
 }
 
 /// A representative arc as the sampling alone tells ([`SelectionBase::measured`]).
@@ -897,7 +903,7 @@ fn layout_keeping(
     options: &Options,
     sampling: &SamplingOptions,
 ) -> Result<PeriodicLayout, MeshError> {
-    layout_from(pd, options, sampling, initial_reach(pd), None, false)?.layout()
+    layout_from(pd, options, sampling, initial_reach(pd), None, false, None)?.layout()
 }
 
 /// [`layout_keeping`] for an exact attempt: a layout whose exact build would stop at arc
@@ -907,7 +913,7 @@ fn layout_for_exact(
     options: &Options,
     sampling: &SamplingOptions,
 ) -> Result<PeriodicLayout, MeshError> {
-    layout_from(pd, options, sampling, initial_reach(pd), None, true)?.layout()
+    layout_from(pd, options, sampling, initial_reach(pd), None, true, None)?.layout()
 }
 
 /// What [`layout_from`] found: the layout, or for a refinement round ([`layout_or_poor`])
@@ -947,7 +953,7 @@ fn layout_or_poor(
     first_reach: [f64; 2],
     previous: Option<&Sampled>,
 ) -> Result<Round, MeshError> {
-    layout_from_after(
+    layout_from(
         pd,
         options,
         sampling,
@@ -959,29 +965,9 @@ fn layout_or_poor(
 }
 
 /// [`periodic_layout_with`] from a band of copies within `first_reach` of the box (per axis;
-/// from a period on, the whole 3 x 3 array).
+/// from a period on, the whole 3 x 3 array); the first tiling's triangulation extends that of
+/// the sampling `previous` (a refinement round's before) where it can ([`extended_or_new`]).
 fn layout_from(
-    pd: &PeriodicDomain,
-    options: &Options,
-    sampling: &SamplingOptions,
-    first_reach: [f64; 2],
-    poor_limit: Option<f64>,
-    check_backwards: bool,
-) -> Result<Round, MeshError> {
-    layout_from_after(
-        pd,
-        options,
-        sampling,
-        first_reach,
-        poor_limit,
-        check_backwards,
-        None,
-    )
-}
-
-/// [`layout_from`] whose first tiling's triangulation extends that of the sampling
-/// `previous` where it can ([`extended_or_new`]).
-fn layout_from_after(
     pd: &PeriodicDomain,
     options: &Options,
     sampling: &SamplingOptions,
@@ -1743,18 +1729,13 @@ fn extract(
         let Some((c, r)) = circle else {
             return false;
         };
-        for a in 0..2 {
-            // Below: -m L + reach < c - r; above: (m + 1) L - reach > c + r.
-            let below = (r + reach - c[a]) / size[a];
-            let above = (c[a] + r + reach) / size[a] - 1.0;
-            let m = below.max(above).floor() + 1.0;
+        for (a, (m, beyond)) in disc_needs(size, c, r, reach).into_iter().enumerate() {
             if !m.is_finite() {
                 return false;
             }
             if m > need[a] as f64 {
                 need[a] = m.min((i32::MAX / 4) as f64) as i32;
             }
-            let beyond = (r + reach - c[a]).max(c[a] + r + reach - size[a]);
             need_reach[a] = need_reach[a].max(beyond);
         }
         true
@@ -3955,7 +3936,7 @@ mod tests {
                 random_box(n, seed)
             };
             let band = periodic_layout_with(&pd, &options, &exact).unwrap();
-            let whole = layout_from(&pd, &options, &exact, [f64::INFINITY; 2], None, false)
+            let whole = layout_from(&pd, &options, &exact, [f64::INFINITY; 2], None, false, None)
                 .and_then(Round::layout)
                 .unwrap();
             assert_eq!(band.triples, whole.triples, "{n} holes");

@@ -16,7 +16,7 @@
 //! ([`crate::exact_mode::periodic::poor_vertices`]: vertex orbits of collapsed clusters can
 //! still be poor), so a round that ends the refinement keeps its layout.
 
-use super::{below, normalise_vertex, PeriodicDomain, SampleKey, Sampled, Tiling, VertexKey};
+use super::{below, disc_needs, normalise_vertex, vertex_key, PeriodicDomain, Sampled, Tiling};
 use crate::cocircular;
 use crate::domain::CircleId;
 use crate::geometry::Point;
@@ -56,7 +56,7 @@ pub(super) fn medial_poor(
             if mv.circles.iter().any(|&c| c < 0) {
                 return false;
             }
-            let Some(key) = vertex_key(sampled, v) else {
+            let Some(key) = vertex_key(t, &sampled.samples, medial, v as usize) else {
                 return false;
             };
             if normalise_vertex(&key).1 != (0, 0) {
@@ -64,7 +64,7 @@ pub(super) fn medial_poor(
             }
             let p = points[mv.samples[0] as usize];
             let r = (mv.position[0] - p[0]).hypot(mv.position[1] - p[1]);
-            in_tiling(t, mv.position, r + reach)
+            in_tiling(t, mv.position, r, reach)
         })
         .collect();
     let key = |v: u32| -> SolveKey {
@@ -76,11 +76,15 @@ pub(super) fn medial_poor(
         .filter(|p| same_first_circles(&p.t, t))
         .and_then(|p| p.solved.get())
         .map(|solved| solved.iter().copied().collect());
-    let reused = |v: u32| known.as_ref().and_then(|k| k.get(&key(v)).copied());
+    let reused: Vec<Option<Answer>> = asked
+        .par_iter()
+        .map(|&v| known.as_ref().and_then(|k| k.get(&key(v)).copied()))
+        .collect();
     let fresh: Vec<u32> = asked
         .iter()
-        .copied()
-        .filter(|&v| reused(v).is_none())
+        .zip(&reused)
+        .filter(|(_, r)| r.is_none())
+        .map(|(&v, _)| v)
         .collect();
     let circles = cocircular::vertex_circles_of(&t.domain, medial, &fresh);
     // Every asked vertex's answer, in vertex order: reused, or from its solve (`None`
@@ -88,7 +92,8 @@ pub(super) fn medial_poor(
     let mut solved_here = fresh.iter().zip(&circles);
     let answers: Vec<(u32, Answer, bool)> = asked
         .iter()
-        .map(|&v| match reused(v) {
+        .zip(reused)
+        .map(|(&v, reused)| match reused {
             Some(a) => (v, a, true),
             None => {
                 let (_, circle) = solved_here.next().expect("one solve per fresh vertex");
@@ -134,38 +139,21 @@ fn same_first_circles(before: &Tiling, after: &Tiling) -> bool {
             .all(|(x, y)| bits(x) == bits(y))
 }
 
-/// The orbit key of medial vertex `v` (its samples' keys, sorted), `None` when a sample is
-/// outside the keyed tiling (as [`super::Orbits`] keys it).
-fn vertex_key(sampled: &Sampled, v: u32) -> Option<VertexKey> {
-    let s = &sampled.samples;
-    let sample_key = |i: u32| -> Option<SampleKey> {
-        let (k, a, b) = sampled.t.key(s.circle_of[i as usize])?;
-        Some((k, s.index_of[i as usize], a, b))
-    };
-    let mv = &sampled.medial.vertices[v as usize];
-    let mut key = [
-        sample_key(mv.samples[0])?,
-        sample_key(mv.samples[1])?,
-        sample_key(mv.samples[2])?,
-    ];
-    key.sort_unstable();
-    Some(key)
-}
-
-/// True when the disc of centre `c` and radius `r` lies where every copy of every hole is in
-/// the tiling `t` (per axis: inside the band's reach, or inside the array of copies), as the
-/// extraction's step 4 measures a triangle's circle widened by the largest radius.
-fn in_tiling(t: &Tiling, c: Point, r: f64) -> bool {
+/// True when the disc of centre `c` and radius `r`, widened by `reach`, lies where every copy
+/// of every hole is in the tiling `t` (per axis: inside the band's reach, or inside the array
+/// of copies), as the extraction's step 4 measures a triangle's circle ([`disc_needs`]).
+fn in_tiling(t: &Tiling, c: Point, r: f64, reach: f64) -> bool {
     if !(c[0].is_finite() && c[1].is_finite() && r.is_finite()) {
         return false;
     }
-    (0..2).all(|a| {
-        let l = t.size[a];
-        if t.band[a] {
-            below((r - c[a]).max(c[a] + r - l), t.reach[a])
-        } else {
-            let need = ((r - c[a]) / l).max((c[a] + r) / l - 1.0).floor() + 1.0;
-            need.is_finite() && need <= t.m[a] as f64
-        }
-    })
+    disc_needs(t.size, c, r, reach)
+        .into_iter()
+        .enumerate()
+        .all(|(a, (m, beyond))| {
+            if t.band[a] {
+                below(beyond, t.reach[a])
+            } else {
+                m.is_finite() && m <= t.m[a] as f64
+            }
+        })
 }
