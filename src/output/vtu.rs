@@ -151,21 +151,39 @@ fn write_binary<W: Write + Seek>(w: &mut W, mesh: &Mesh) -> io::Result<()> {
             }
         })
     })?;
-    let chunked = |w: &mut W, size: usize, value: &(dyn Fn(usize, &mut Vec<u8>) + Sync)| {
+    /// An array of `size` bytes per cell, its chunks of cells formed in parallel by `fill`.
+    fn chunked<W: Write>(
+        w: &mut W,
+        cells: usize,
+        size: usize,
+        fill: impl Fn(std::ops::Range<usize>, &mut Vec<u8>) + Sync,
+    ) -> io::Result<()> {
         w.write_all(&binary::array_header(size * cells))?;
         write_chunked(w, cells, 1 << 16, |r, out| {
             out.reserve(size * r.len());
-            for k in r {
-                value(k, out);
-            }
+            fill(r, out);
         })
-    };
-    chunked(w, 8, &|k, out| {
-        out.extend_from_slice(&(4 * (k as i64 + 1)).to_le_bytes())
+    }
+    chunked(w, cells, 8, |r, out| {
+        for k in r {
+            out.extend_from_slice(&(4 * (k as i64 + 1)).to_le_bytes());
+        }
     })?;
-    chunked(w, 1, &|_, out| out.push(9))?;
-    chunked(w, 4, &|k, out| {
-        out.extend_from_slice(&(block_of(&first_cell, k) as i32).to_le_bytes())
+    chunked(w, cells, 1, |r, out| out.resize(out.len() + r.len(), 9))?;
+    chunked(w, cells, 4, |r, out| {
+        if r.is_empty() {
+            return;
+        }
+        // The blocks the range meets, each for its run of cells.
+        let mut b = block_of(&first_cell, r.start);
+        let mut k = r.start;
+        while k < r.end {
+            let to = first_cell[b + 1].min(r.end);
+            for _ in k..to {
+                out.extend_from_slice(&(b as i32).to_le_bytes());
+            }
+            (k, b) = (to, b + 1);
+        }
     })?;
     fields_binary(w, mesh, &first_cell)?;
     w.write_all(binary::APPENDED_CLOSE)

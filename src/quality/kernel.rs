@@ -387,12 +387,12 @@ impl Tables {
 }
 
 /// True when the CPU has AVX-512 F, DQ and VL (x86-64 only).
-fn wider() -> bool {
+pub(super) fn wider() -> bool {
     Lanes::Avx512.available()
 }
 
 /// True when the CPU has AVX2 (x86-64 only).
-fn wide() -> bool {
+pub(super) fn wide() -> bool {
     Lanes::Avx2.available()
 }
 

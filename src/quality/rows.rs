@@ -56,10 +56,10 @@ use super::{
 use crate::geometry::Point;
 use crate::mesh::BlockGrid;
 
-/// Scratch arrays of one band of rows of cells (reused from band to band and block to block),
+/// The edge arrays of one band of rows of cells (reused from band to band and block to block),
 /// indexed by the flat node index `p = r w + i` of the band's nodes (`w = ni + 1` per line).
 #[derive(Default)]
-pub(super) struct Rows {
+pub(super) struct EdgeArrays {
     /// Edges from node `p` to `p + 1` (x, y and the `sqrt` length, NaN when the squared length
     /// is outside `[SQ_MIN, SQ_MAX]` or not a number: the cell takes the reference path): the
     /// bottom edge of cell `p` and the top edge of cell `p - w`. At the end of a node line
@@ -74,13 +74,19 @@ pub(super) struct Rows {
     vy: Vec<f64>,
     vl: Vec<f64>,
     vt: Vec<f64>,
+}
+
+/// Scratch space of the per-block pass: the band's edges and its cells' figures.
+#[derive(Default)]
+pub(super) struct Rows {
+    edges: EdgeArrays,
     /// Per cell `p` (`i < ni`; the slots `i = ni` and the padding hold no cell): its figures.
     cells: Vec<Figures>,
 }
 
 /// A band of rows of a block has about this many nodes (its scratch arrays stay in the
 /// first-level cache; a 16 x 16 block is one band).
-const BAND_NODES: usize = 512;
+pub(super) const BAND_NODES: usize = 512;
 
 /// Loop 1 runs over a multiple of this many cells (the vector loops then end without a
 /// scalar remainder: the padding cells have NaN edges and count nowhere).
@@ -132,7 +138,7 @@ fn cross_edges(lo: &[Point], hi: &[Point], e: [&mut [f64]; 4]) {
 }
 
 /// The edges and loop 1 of a band of `nb` rows of cells: `nodes` the band's `nb + 1` node
-/// lines of `w` nodes, `h` and `v` as [`Rows::hx`] and [`Rows::vx`] (at least `m + w` and
+/// lines of `w` nodes, `h` and `v` as [`EdgeArrays::hx`] and [`EdgeArrays::vx`] (at least `m + w` and
 /// `m + 1` long), `out` the `m` cells of loop 1 (`m >= nb w - 1`, a multiple of [`PAD`]).
 ///
 /// Cell `p = r w + i` has the bottom edge `h[p]`, the top edge `h[p + w]`, the left edge
@@ -149,9 +155,30 @@ fn band<const TABLE: bool>(
     th: &Tables,
     out: &mut [Figures],
 ) -> RowCounts {
+    let (b, t, v) = band_edges(nodes, w, nb, h, v, out.len());
+    row_figures::<TABLE>(b, t, v, th, out)
+}
+
+/// The bottom, top and across edges of a band's cells, see [`band_edges`].
+pub(super) type BandEdges<'a> = ([&'a [f64]; 4], [&'a [f64]; 4], [&'a [f64]; 4]);
+
+/// The edges of a band of `nb` rows of cells for a loop over `m` cells (`m >= nb w - 1`, a
+/// multiple of [`PAD`]): `nodes` the band's `nb + 1` node lines of `w` nodes, `h` and `v` as
+/// [`EdgeArrays::hx`] and [`EdgeArrays::vx`] (at least `m + w` and `m + 1` long). Returns, for cell
+/// `p = r w + i`, its bottom edges `b[p]` (`h[p]`), top edges `t[p]` (`h[p + w]`) and the
+/// edges across `v` (left `v[p]`, right `v[p + 1]`), each as x, y, length and direction; the
+/// slots `i = ni` and the padding get a NaN length, so they are never on a fast path.
+#[inline(always)]
+pub(super) fn band_edges<'a>(
+    nodes: &[Point],
+    w: usize,
+    nb: usize,
+    h: [&'a mut [f64]; 4],
+    v: [&'a mut [f64]; 4],
+    m: usize,
+) -> BandEdges<'a> {
     let [hx, hy, hl, ht] = h;
     let [vx, vy, vl, vt] = v;
-    let m = out.len();
     let (nh, nv) = ((nb + 1) * w - 1, nb * w);
     line_edges(
         &nodes[..=nh],
@@ -167,10 +194,13 @@ fn band<const TABLE: bool>(
     for r in 0..nb {
         hl[r * w + w - 1] = f64::NAN;
     }
-    let b = [&hx[..m], &hy[..m], &hl[..m], &ht[..m]];
-    let t = [&hx[w..w + m], &hy[w..w + m], &hl[w..w + m], &ht[w..w + m]];
-    let v = [&vx[..=m], &vy[..=m], &vl[..=m], &vt[..=m]];
-    row_figures::<TABLE>(b, t, v, th, out)
+    let (hx, hy, hl, ht) = (&*hx, &*hy, &*hl, &*ht);
+    let (vx, vy, vl, vt) = (&*vx, &*vy, &*vl, &*vt);
+    (
+        [&hx[..m], &hy[..m], &hl[..m], &ht[..m]],
+        [&hx[w..w + m], &hy[w..w + m], &hl[w..w + m], &ht[w..w + m]],
+        [&vx[..=m], &vy[..=m], &vl[..=m], &vt[..=m]],
+    )
 }
 
 /// [`band`] compiled for AVX-512 (8-lane vectors; the same IEEE operations on the same
@@ -225,6 +255,39 @@ const FAST: u64 = 1 << 40;
 /// [`super::kernel::RatioBins::bin_by_compares`]). The bits are the same either way.
 const PORTABLE_TABLE: bool = true;
 
+impl EdgeArrays {
+    /// The number of cells a loop over a band of `nb` rows of `w - 1` cells runs over: the
+    /// band's flat cell indices `r w + i`, padded to a multiple of [`PAD`].
+    pub(super) fn cells_of_band(w: usize, nb: usize) -> usize {
+        (nb * w - 1).next_multiple_of(PAD)
+    }
+
+    /// The edge arrays, sized for a loop over `m` cells of lines of `w` nodes (see
+    /// [`band_edges`]).
+    pub(super) fn arrays(&mut self, w: usize, m: usize) -> ([&mut [f64]; 4], [&mut [f64]; 4]) {
+        for v in [&mut self.hx, &mut self.hy, &mut self.hl, &mut self.ht] {
+            v.resize(m + w, 0.0);
+        }
+        for v in [&mut self.vx, &mut self.vy, &mut self.vl, &mut self.vt] {
+            v.resize(m + 1, 0.0);
+        }
+        (
+            [
+                &mut self.hx[..],
+                &mut self.hy[..],
+                &mut self.hl[..],
+                &mut self.ht[..],
+            ],
+            [
+                &mut self.vx[..],
+                &mut self.vy[..],
+                &mut self.vl[..],
+                &mut self.vt[..],
+            ],
+        )
+    }
+}
+
 impl Rows {
     /// The `nb` rows of cells between the `nb + 1` node lines `nodes` (`w` nodes each) into
     /// `self.cells` (cell `(i, r)` at `r w + i`), see [`band`].
@@ -233,26 +296,9 @@ impl Rows {
     /// (the CPU has AVX2) in 4-lane vectors (the same IEEE operations on
     /// the same operands, so the same bits as the 2-lane SSE2 build; no fused multiply-add).
     fn figures(&mut self, nodes: &[Point], w: usize, nb: usize, bins: &Tables) -> RowCounts {
-        let m = (nb * w - 1).next_multiple_of(PAD);
-        for v in [&mut self.hx, &mut self.hy, &mut self.hl, &mut self.ht] {
-            v.resize(m + w, 0.0);
-        }
-        for v in [&mut self.vx, &mut self.vy, &mut self.vl, &mut self.vt] {
-            v.resize(m + 1, 0.0);
-        }
+        let m = EdgeArrays::cells_of_band(w, nb);
         self.cells.resize(m, Figures::default());
-        let h = [
-            &mut self.hx[..],
-            &mut self.hy[..],
-            &mut self.hl[..],
-            &mut self.ht[..],
-        ];
-        let v = [
-            &mut self.vx[..],
-            &mut self.vy[..],
-            &mut self.vl[..],
-            &mut self.vt[..],
-        ];
+        let (h, v) = self.edges.arrays(w, m);
         let out = &mut self.cells[..m];
         #[cfg(target_arch = "x86_64")]
         if bins.wider {
@@ -432,7 +478,7 @@ fn row_figures<const TABLE: bool>(
 /// lengths (elsewhere the results are not used): no NaN, no zero, so the plain compares are
 /// `f64::min` / `max` and [`super::ratio`] is the division.
 #[inline(always)]
-fn edge_ratios(edges: &[f64; 4]) -> (f64, f64) {
+pub(super) fn edge_ratios(edges: &[f64; 4]) -> (f64, f64) {
     let (lo, hi) = (fold(*edges, less), fold(*edges, more));
     let li = 0.5 * (edges[0] + edges[2]);
     let lj = 0.5 * (edges[1] + edges[3]);
@@ -686,7 +732,7 @@ impl Chunk {
 /// `min(x, e)` for the fast path's figures (never NaN nor zero, so this equals `f64::min` in
 /// either order, and is one instruction).
 #[inline(always)]
-fn less(x: f64, e: f64) -> f64 {
+pub(super) fn less(x: f64, e: f64) -> f64 {
     if x < e {
         x
     } else {
@@ -696,7 +742,7 @@ fn less(x: f64, e: f64) -> f64 {
 
 /// `max(x, e)`, as [`less`].
 #[inline(always)]
-fn more(x: f64, e: f64) -> f64 {
+pub(super) fn more(x: f64, e: f64) -> f64 {
     if x > e {
         x
     } else {
