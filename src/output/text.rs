@@ -33,15 +33,27 @@ pub fn write_chunked<W: Write + ?Sized>(
     chunk: usize,
     f: impl Fn(Range<usize>, &mut Vec<u8>) + Sync,
 ) -> io::Result<()> {
+    // The chunks' buffers go back to a pool once written: the next waves format into memory
+    // already touched and grown, not fresh pages grown by doubling (on a virtual machine
+    // every fresh page costs a fault the host serves).
+    let pool: std::sync::Mutex<Vec<Vec<u8>>> = std::sync::Mutex::new(Vec::new());
+    let spare = || pool.lock().map(|mut p| p.pop()).ok().flatten();
     in_waves(
         n,
         chunk,
         |r| {
-            let mut out = Vec::new();
+            let mut out = spare().unwrap_or_default();
+            out.clear();
             f(r, &mut out);
             out
         },
-        |_, text| w.write_all(&text),
+        |_, text| {
+            w.write_all(&text)?;
+            if let Ok(mut p) = pool.lock() {
+                p.push(text);
+            }
+            Ok(())
+        },
     )
 }
 
