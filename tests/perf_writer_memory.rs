@@ -147,3 +147,37 @@ fn png_in_parts_is_the_whole_picture() {
         }
     }
 }
+
+/// The picture is formed on the rayon pool by a caller that waits for its drawing thread:
+/// from inside a pool of one worker (where a drawer that needed the pool, or a caller that
+/// drew while the text needed the pool, would wait forever) and of three, with parts small
+/// enough to fill the channel, the file is the whole picture's. A hang fails after a minute
+/// instead of stalling the suite.
+#[test]
+fn png_from_a_pool_worker_is_the_whole_picture() {
+    let opts = Options {
+        block_cells: Some(6),
+        ..Options::default()
+    };
+    let m = std::sync::Arc::new(mesh(&layouts::bubbles(60, 5).unwrap(), &opts).unwrap());
+    let want = reference_png(&m, 320);
+    for threads in [1, 3] {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("m.png");
+        let (tx, rx) = std::sync::mpsc::channel();
+        let (m2, p2) = (m.clone(), path.clone());
+        std::thread::spawn(move || {
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap();
+            let r = pool.install(|| png::write_in_parts(&m2, &p2, 320, 2000));
+            let _ = tx.send(r.map_err(|e| e.to_string()));
+        });
+        let r = rx
+            .recv_timeout(std::time::Duration::from_secs(60))
+            .unwrap_or_else(|_| panic!("{threads} worker(s): no picture after a minute"));
+        r.unwrap();
+        assert!(std::fs::read(&path).unwrap() == want, "{threads} worker(s)");
+    }
+}

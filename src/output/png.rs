@@ -8,6 +8,13 @@
 //! in document order and the picture's groups only pass attributes down
 //! (`svg::write_checked` lists what this relies on), so the pixels are those of
 //! drawing the whole document at once (`tests/perf_writer_memory.rs` compares the files).
+//!
+//! Speed: forming the text and parsing each part take longer than drawing it, so the calling
+//! thread forms and parses the parts while a second thread draws them, in order, a few parts
+//! behind at most (a channel of [`AHEAD`] parsed parts): the same pixels, drawn in the same
+//! order. The drawing thread uses no thread pool, so the caller may be a pool worker that
+//! waits for it (the text is formed on the rayon pool) without a deadlock, whatever the
+//! number of workers. 1 000 bubbles (`--block-cells 16`): 0.79 -> 0.54 s.
 
 use super::write_atomic;
 use crate::mesh::Mesh;
@@ -30,35 +37,108 @@ pub fn write_with_width(mesh: &Mesh, path: &Path, width: u32) -> io::Result<()> 
     write_in_parts(mesh, path, width, PART_BYTES)
 }
 
+/// Parsed parts that may wait for the drawing thread (see the module doc).
+const AHEAD: usize = 2;
+
 /// [`write_with_width`] drawing the SVG in parts of about `part_bytes` (at least one element
 /// a part): the same file for every `part_bytes`.
 pub fn write_in_parts(mesh: &Mesh, path: &Path, width: u32, part_bytes: usize) -> io::Result<()> {
-    let mut parts = Parts {
-        width: width.max(1),
-        part_bytes,
-        head: Vec::new(),
-        group: None,
-        doc: Vec::new(),
-        line: Vec::new(),
-        canvas: None,
-        ended: false,
-    };
-    super::svg::write_checked(&mut parts, mesh)?;
-    if !parts.ended {
-        return Err(io::Error::other("the SVG picture did not end with </svg>"));
-    }
-    let (pixmap, _) = parts
-        .canvas
-        .ok_or_else(|| io::Error::other("the SVG picture was empty"))?;
+    let width = width.max(1);
+    let (tx, rx) = std::sync::mpsc::sync_channel::<resvg::usvg::Tree>(AHEAD);
+    let pixmap = std::thread::scope(|scope| {
+        // Draws the parsed parts in order. Drawing needs no thread pool, so this thread
+        // always makes progress while the caller, which forms the text on the rayon pool
+        // (`svg::write_checked`), waits for room in the channel.
+        let drawer = scope.spawn(move || {
+            run_anywhere();
+            let mut canvas: Option<(resvg::tiny_skia::Pixmap, f32)> = None;
+            for tree in &rx {
+                // An error drops the receiver: the caller's next part fails and it stops.
+                draw(&mut canvas, &tree, width)?;
+            }
+            canvas
+                .map(|(pixmap, _)| pixmap)
+                .ok_or_else(|| io::Error::other("the SVG picture was empty"))
+        });
+        let mut parts = Parts {
+            part_bytes,
+            head: Vec::new(),
+            group: None,
+            doc: Vec::new(),
+            line: Vec::new(),
+            parsed: Some(tx),
+            ended: false,
+        };
+        let formed = super::svg::write_checked(&mut parts, mesh).and_then(|()| {
+            if parts.ended {
+                Ok(())
+            } else {
+                Err(io::Error::other("the SVG picture did not end with </svg>"))
+            }
+        });
+        // No more parts: the drawer finishes what it has.
+        parts.parsed = None;
+        let drawn = drawer
+            .join()
+            .unwrap_or_else(|_| Err(io::Error::other("the PNG's drawing thread panicked")));
+        // A drawing error stopped the forming: report the drawing's.
+        match (formed, drawn) {
+            (_, Err(e)) => Err(e),
+            (Err(e), _) => Err(e),
+            (Ok(()), Ok(pixmap)) => Ok(pixmap),
+        }
+    })?;
     let bytes = pixmap
         .encode_png()
         .map_err(|e| io::Error::other(format!("PNG encoding failed: {e}")))?;
     write_atomic(path, |w| w.write_all(&bytes))
 }
 
-/// The sink that cuts the SVG text into parts and draws each (see the module doc).
-struct Parts {
+/// Let the calling thread run on every CPU the process's main thread may: a spawned thread
+/// inherits its parent's CPU set, and the command line pins each pool worker to one CPU
+/// (`cli::affinity`), where the two threads of the picture would take turns. Best effort (a
+/// refusal leaves the set as it was; Linux only).
+fn run_anywhere() {
+    #[cfg(target_os = "linux")]
+    // SAFETY: `cpu_set_t` is plain data (all zero is the empty set); both calls only read
+    // and write the set given with its size.
+    unsafe {
+        let mut set: libc::cpu_set_t = std::mem::zeroed();
+        let size = std::mem::size_of::<libc::cpu_set_t>();
+        if libc::sched_getaffinity(libc::getpid(), size, &mut set) == 0 {
+            libc::sched_setaffinity(0, size, &set);
+        }
+    }
+}
+
+/// Draw one parsed part onto the canvas, made `width` pixels wide from the first part's
+/// size (white).
+fn draw(
+    canvas: &mut Option<(resvg::tiny_skia::Pixmap, f32)>,
+    tree: &resvg::usvg::Tree,
     width: u32,
+) -> io::Result<()> {
+    if canvas.is_none() {
+        let size = tree.size();
+        let scale = width as f32 / size.width();
+        let height = (size.height() * scale).ceil().max(1.0) as u32;
+        let mut pixmap = resvg::tiny_skia::Pixmap::new(width, height)
+            .ok_or_else(|| io::Error::other("PNG size out of range"))?;
+        pixmap.fill(resvg::tiny_skia::Color::WHITE);
+        *canvas = Some((pixmap, scale));
+    }
+    if let Some((pixmap, scale)) = canvas {
+        resvg::render(
+            tree,
+            resvg::tiny_skia::Transform::from_scale(*scale, *scale),
+            &mut pixmap.as_mut(),
+        );
+    }
+    Ok(())
+}
+
+/// The sink that cuts the SVG text into parts and parses each (see the module doc).
+struct Parts {
     part_bytes: usize,
     /// The document's first line (the `<svg>` opening).
     head: Vec<u8>,
@@ -68,9 +148,9 @@ struct Parts {
     doc: Vec<u8>,
     /// The line being received.
     line: Vec<u8>,
-    /// The pixmap and the scale, made from the first part's size.
-    canvas: Option<(resvg::tiny_skia::Pixmap, f32)>,
-    /// `</svg>` was received and the last part drawn.
+    /// Where the parsed parts go, in order, to be drawn (`None` once the text is done).
+    parsed: Option<std::sync::mpsc::SyncSender<resvg::usvg::Tree>>,
+    /// `</svg>` was received and the last part parsed.
     ended: bool,
 }
 
@@ -83,7 +163,7 @@ impl Parts {
             self.head = line.clone();
         } else if text == b"</svg>" {
             self.doc.extend_from_slice(&line);
-            self.draw()?;
+            self.parse()?;
             self.ended = true;
             return Ok(());
         } else if text.starts_with(b"  <g") {
@@ -96,7 +176,7 @@ impl Parts {
                 self.doc.extend_from_slice(b"  </g>\n");
             }
             self.doc.extend_from_slice(b"</svg>\n");
-            self.draw()?;
+            self.parse()?;
             self.doc.extend_from_slice(&self.head);
             if let Some(g) = &self.group {
                 self.doc.extend_from_slice(g);
@@ -106,28 +186,17 @@ impl Parts {
         Ok(())
     }
 
-    /// Draw the part gathered (a whole SVG document) and empty it.
-    fn draw(&mut self) -> io::Result<()> {
+    /// Parse the part gathered (a whole SVG document), hand it to the drawing thread and
+    /// empty it.
+    fn parse(&mut self) -> io::Result<()> {
         let tree = resvg::usvg::Tree::from_data(&self.doc, &resvg::usvg::Options::default())
             .map_err(|e| io::Error::other(format!("SVG not readable for rasterising: {e}")))?;
         self.doc.clear();
-        if self.canvas.is_none() {
-            let size = tree.size();
-            let scale = self.width as f32 / size.width();
-            let height = (size.height() * scale).ceil().max(1.0) as u32;
-            let mut pixmap = resvg::tiny_skia::Pixmap::new(self.width, height)
-                .ok_or_else(|| io::Error::other("PNG size out of range"))?;
-            pixmap.fill(resvg::tiny_skia::Color::WHITE);
-            self.canvas = Some((pixmap, scale));
-        }
-        if let Some((pixmap, scale)) = &mut self.canvas {
-            resvg::render(
-                &tree,
-                resvg::tiny_skia::Transform::from_scale(*scale, *scale),
-                &mut pixmap.as_mut(),
-            );
-        }
-        Ok(())
+        self.parsed
+            .as_ref()
+            .ok_or_else(|| io::Error::other("a part of the SVG picture after its end"))?
+            .send(tree)
+            .map_err(|_| io::Error::other("the PNG's drawing stopped"))
     }
 }
 
