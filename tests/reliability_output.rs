@@ -162,3 +162,36 @@ fn a_closed_stdout_pipe_ends_the_run_without_a_panic() {
     let v: serde_json::Value = serde_json::from_str(&report).unwrap();
     assert!(v["cells"].as_u64().unwrap() > 0);
 }
+
+/// A first run into a directory moves the staged `mesh/` of block files in with one rename;
+/// a later run replaces the block files one by one, so whatever else `mesh/` holds stays
+/// (a user's file, a block file of an earlier, larger mesh), and the block files are the
+/// same bytes either way.
+#[test]
+fn a_new_block_directory_moves_in_whole_and_an_existing_one_keeps_its_other_files() {
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("out");
+    let m = hexagon_mesh();
+    let vtk = Format::parse_list("vtk").unwrap();
+    write_files(&m, &out, &vtk).unwrap();
+    assert_no_leftovers(&out);
+    let blocks: Vec<Vec<u8>> = (0..m.layout.blocks.len())
+        .map(|b| std::fs::read(out.join(format!("mesh/block_{b:04}.vts"))).unwrap())
+        .collect();
+    let files = |dir: &Path| std::fs::read_dir(dir.join("mesh")).unwrap().count();
+    assert_eq!(files(&out), blocks.len(), "exactly the block files");
+    std::fs::write(out.join("mesh/notes.txt"), b"mine").unwrap();
+    std::fs::write(out.join("mesh/block_9999.vts"), b"old").unwrap();
+    write_files(&m, &out, &vtk).unwrap();
+    assert_no_leftovers(&out);
+    assert_eq!(std::fs::read(out.join("mesh/notes.txt")).unwrap(), b"mine");
+    assert_eq!(
+        std::fs::read(out.join("mesh/block_9999.vts")).unwrap(),
+        b"old"
+    );
+    assert_eq!(files(&out), blocks.len() + 2);
+    for (b, want) in blocks.iter().enumerate() {
+        let got = std::fs::read(out.join(format!("mesh/block_{b:04}.vts"))).unwrap();
+        assert!(&got == want, "block {b} differs between the two runs");
+    }
+}

@@ -288,8 +288,9 @@ pub fn staging_dir(dir: &Path) -> std::path::PathBuf {
 /// [`Format`]'s variants.
 ///
 /// All or nothing, as far as the file system allows: every file is first written into a
-/// staging directory inside `dir` ([`staging_dir`]), then renamed into place, index files
-/// last: the VTK `mesh.vtm` after its block files and `report.json` after everything. So the
+/// staging directory inside `dir` ([`staging_dir`]), then renamed into place (a
+/// subdirectory `dir` does not have yet, as `mesh/` on the first run, in one rename), index
+/// files last: the VTK `mesh.vtm` after its block files and `report.json` after everything. So the
 /// presence of `report.json` marks a complete mesh: when `json` is among the formats an older
 /// `report.json` is removed before the first rename, and a run that fails at any point leaves
 /// no `report.json` (and no staging directory; earlier files may have been replaced).
@@ -403,8 +404,26 @@ fn staged_files(root: &Path) -> io::Result<Vec<std::path::PathBuf>> {
     Ok(out)
 }
 
-/// Rename every staged file into `dir`, creating subdirectories as needed.
+/// Rename every staged file into `dir`, creating subdirectories as needed. A staged
+/// directory that `dir` does not have yet (the first run into `dir`: `mesh/` of the VTK
+/// block files) moves in with one rename instead of one per file (5 896 block files for
+/// 1 000 bubbles: 80 ms); one that `dir` has keeps the file-by-file replacement, which
+/// leaves whatever else that directory holds alone.
 fn publish(staging: &Path, dir: &Path) -> io::Result<()> {
+    for entry in std::fs::read_dir(staging)? {
+        let entry = entry?;
+        if !entry.file_type()?.is_dir() {
+            continue;
+        }
+        let target = dir.join(entry.file_name());
+        let absent = matches!(std::fs::symlink_metadata(&target),
+            Err(e) if e.kind() == io::ErrorKind::NotFound);
+        // Made meanwhile by someone else: the rename fails or finds it empty; either way the
+        // files that are still staged go one by one below.
+        if absent {
+            let _ = std::fs::rename(entry.path(), &target);
+        }
+    }
     // The files come sorted, so a directory's files are together: each directory is made
     // once, not once per file (60 000 block files at 1e4 particles).
     let mut made: Option<std::path::PathBuf> = None;
