@@ -87,6 +87,21 @@ pub struct CellFields {
     pub aspect_ratio: Vec<f64>,
 }
 
+impl CellFields {
+    /// The arrays in the order of the writers' cell arrays (`output::vtk::CELL_ARRAYS`).
+    pub(crate) fn arrays_mut(&mut self) -> [&mut Vec<f64>; 7] {
+        [
+            &mut self.min_angle_deg,
+            &mut self.max_angle_deg,
+            &mut self.min_jacobian,
+            &mut self.equiangle_skewness,
+            &mut self.edge_ratio,
+            &mut self.scaled_jacobian,
+            &mut self.aspect_ratio,
+        ]
+    }
+}
+
 /// True when `grid.nodes` has exactly `(ni + 1) * (nj + 1)` nodes.
 pub fn well_formed(grid: &BlockGrid) -> bool {
     grid.ni
@@ -115,15 +130,7 @@ pub fn cell_fields(grid: &BlockGrid) -> CellFields {
         return f;
     }
     let n = grid.ni * grid.nj;
-    for v in [
-        &mut f.min_angle_deg,
-        &mut f.max_angle_deg,
-        &mut f.min_jacobian,
-        &mut f.equiangle_skewness,
-        &mut f.edge_ratio,
-        &mut f.scaled_jacobian,
-        &mut f.aspect_ratio,
-    ] {
+    for v in f.arrays_mut() {
         v.reserve_exact(n);
     }
     fields::cell_fields_into(grid, &mut f);

@@ -38,7 +38,7 @@ pub fn write_with_width(mesh: &Mesh, path: &Path, width: u32) -> io::Result<()> 
 }
 
 /// Parsed parts that may wait for the drawing thread (see the module doc).
-const AHEAD: usize = 2;
+pub const AHEAD: usize = 2;
 
 /// [`write_with_width`] drawing the SVG in parts of about `part_bytes` (at least one element
 /// a part): the same file for every `part_bytes`.

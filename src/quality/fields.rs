@@ -10,18 +10,17 @@
 //! cell order and measures the marked ones with the reference ([`cell_field_values`]).
 //!
 //! Why the fast path's figures are the reference's: the argument of [`super::rows`]'s module
-//! doc (the same functions on the same operands, [`settled`] corner candidates, the scaled
-//! Jacobian from [`least_scaled_jacobian`] only when its pick is certain, lengths in range);
+//! doc (the same functions on the same operands, [`settled`](super::kernel::settled) corner candidates, the scaled
+//! Jacobian from [`least_scaled_jacobian`](super::kernel::least_scaled_jacobian) only when its pick is certain, lengths in range);
 //! besides, the smallest corner Jacobian is the least of four non-zero, non-NaN cross
-//! products (a zero or NaN one is not [`settled`]), which any order of comparisons gives, and
+//! products (a zero or NaN one is not [`settled`](super::kernel::settled)), which any order of comparisons gives, and
 //! the skewness is `max(θmax - 90, 90 - θmin) / 90`, [`super::kernel::skewness`]'s expression.
 //! The reference path costs four `atan2`, four square roots and up to four divisions more per
 //! cell: writing the `.vtu` of 1 000 bubbles spent two fifths of its time there.
 
-use super::kernel::{
-    cell_field_values, cell_products, corner_candidates, least_scaled_jacobian, settled,
-};
-use super::rows::{band_edges, edge_ratios, less, more, EdgeArrays, BAND_NODES};
+use super::kernel::cell_field_values;
+use super::rows::BAND_NODES;
+use super::rows::{band_edges, cell_core, edge_ratios, less, more, CellCore, EdgeArrays};
 use super::{fold, CellFields};
 use crate::geometry::Point;
 use crate::mesh::BlockGrid;
@@ -67,26 +66,18 @@ fn field_loop(
     let (ax, ay, al, at) = (&v[0][..n], &v[1][..n], &v[2][..n], &v[3][..n]);
     let (qx, qy, ql, qt) = (&v[0][1..=n], &v[1][1..=n], &v[2][1..=n], &v[3][1..=n]);
     for i in 0..n {
-        // p0 -> p1, p3 -> p2, p0 -> p3, p1 -> p2.
-        let (c, _) = cell_products([
-            [bx[i], by[i]],
-            [tx[i], ty[i]],
-            [ax[i], ay[i]],
-            [qx[i], qy[i]],
-        ]);
-        let edges = [bl[i], ql[i], tl[i], al[i]];
-        let (s, certain) = least_scaled_jacobian(&c, &edges);
-        let a = corner_candidates(bt[i], qt[i], tt[i], at[i]);
-        // NaN lengths fail `>= 0`; with every length in range the products are finite.
-        let fine = (edges[0] >= 0.0)
-            & (edges[1] >= 0.0)
-            & (edges[2] >= 0.0)
-            & (edges[3] >= 0.0)
-            & settled(a[0], c[0])
-            & settled(a[1], c[1])
-            & settled(a[2], c[2])
-            & settled(a[3], c[3])
-            & certain;
+        let CellCore {
+            c,
+            edges,
+            sj: s,
+            a,
+            fine,
+        } = cell_core(
+            [bx[i], by[i], bl[i], bt[i]],
+            [tx[i], ty[i], tl[i], tt[i]],
+            [ax[i], ay[i], al[i], at[i]],
+            [qx[i], qy[i], ql[i], qt[i]],
+        );
         let (amin, amax) = (fold(a, less), fold(a, more));
         let (e, r) = edge_ratios(&edges);
         lo[i] = if fine { amin } else { f64::NAN };
@@ -164,7 +155,7 @@ fn fields_with(grid: &BlockGrid, f: &mut CellFields, wide: bool, wider: bool) {
             for r in 0..nb {
                 let row = r * w..r * w + ni;
                 if !out[0][row.clone()].iter().any(|x| x.is_nan()) {
-                    for (dst, src) in fields_mut(f).into_iter().zip(out.iter()) {
+                    for (dst, src) in f.arrays_mut().into_iter().zip(out.iter()) {
                         dst.extend_from_slice(&src[row.clone()]);
                     }
                     continue;
@@ -176,26 +167,13 @@ fn fields_with(grid: &BlockGrid, f: &mut CellFields, wide: bool, wider: bool) {
                     } else {
                         std::array::from_fn(|k| out[k][p])
                     };
-                    for (dst, x) in fields_mut(f).into_iter().zip(v) {
+                    for (dst, x) in f.arrays_mut().into_iter().zip(v) {
                         dst.push(x);
                     }
                 }
             }
         }
     });
-}
-
-/// The arrays of `f` in the order of [`cell_field_values`]'s figures.
-fn fields_mut(f: &mut CellFields) -> [&mut Vec<f64>; 7] {
-    [
-        &mut f.min_angle_deg,
-        &mut f.max_angle_deg,
-        &mut f.min_jacobian,
-        &mut f.equiangle_skewness,
-        &mut f.edge_ratio,
-        &mut f.scaled_jacobian,
-        &mut f.aspect_ratio,
-    ]
 }
 
 #[cfg(test)]
@@ -214,7 +192,7 @@ mod tests {
         let same = |a: &CellFields, b: &CellFields| {
             let bits = |f: &CellFields| -> Vec<Vec<u64>> {
                 let mut g = f.clone();
-                fields_mut(&mut g)
+                g.arrays_mut()
                     .iter()
                     .map(|v| {
                         v.iter()

@@ -392,27 +392,18 @@ fn row_figures<const TABLE: bool>(
     let (ax, ay, al, at) = (&v[0][..n], &v[1][..n], &v[2][..n], &v[3][..n]);
     let (qx, qy, ql, qt) = (&v[0][1..=n], &v[1][1..=n], &v[2][1..=n], &v[3][1..=n]);
     for i in 0..n {
-        // p0 -> p1, p3 -> p2, p0 -> p3, p1 -> p2.
-        let (hx, hy) = (bx[i], by[i]);
-        let (ux, uy) = (tx[i], ty[i]);
-        let (vx, vy) = (ax[i], ay[i]);
-        let (wx, wy) = (qx[i], qy[i]);
-        let (c, _) = cell_products([[hx, hy], [ux, uy], [vx, vy], [wx, wy]]);
-        let edges = [bl[i], ql[i], tl[i], al[i]];
-        let (sj, certain) = least_scaled_jacobian(&c, &edges);
-        // The reference's corner angles where they are settled (which needs a non-zero
-        // cross product: a zero one, of either sign, takes the reference path).
-        let a = corner_candidates(bt[i], qt[i], tt[i], at[i]);
-        // NaN lengths fail `>= 0`; with every length in range the products are finite.
-        let fine = (edges[0] >= 0.0)
-            & (edges[1] >= 0.0)
-            & (edges[2] >= 0.0)
-            & (edges[3] >= 0.0)
-            & settled(a[0], c[0])
-            & settled(a[1], c[1])
-            & settled(a[2], c[2])
-            & settled(a[3], c[3])
-            & certain;
+        let CellCore {
+            c,
+            edges,
+            sj,
+            a,
+            fine,
+        } = cell_core(
+            [bx[i], by[i], bl[i], bt[i]],
+            [tx[i], ty[i], tl[i], tt[i]],
+            [ax[i], ay[i], al[i], at[i]],
+            [qx[i], qy[i], ql[i], qt[i]],
+        );
         let inverted = (c[0] < 0.0) | (c[1] < 0.0) | (c[2] < 0.0) | (c[3] < 0.0);
         // No NaN and no `-0.0` on the fast path: the plain compares are `f64::min` / `max`.
         let (amin, amax) = (fold(a, less), fold(a, more));
@@ -471,6 +462,50 @@ fn row_figures<const TABLE: bool>(
         k.hi[SKEW] = key(unkey(k.hi[SKEW]) / 90.0);
     }
     k
+}
+
+/// What the row loops take from one cell's four edges (each x, y, length, direction:
+/// bottom `p0 -> p1`, top `p3 -> p2`, left `p0 -> p3`, right `p1 -> p2`).
+pub(super) struct CellCore {
+    /// Corner cross products ([`cell_products`]).
+    pub c: [f64; 4],
+    /// Edge lengths from `p[k]` to `p[k + 1]`.
+    pub edges: [f64; 4],
+    /// The scaled Jacobian ([`least_scaled_jacobian`]; the reference's when `fine`).
+    pub sj: f64,
+    /// The corner angle candidates ([`corner_candidates`]; the reference's when `fine`).
+    pub a: [f64; 4],
+    /// The cell takes the fast path: every length in range, every corner [`settled`], the
+    /// scaled Jacobian's pick certain.
+    pub fine: bool,
+}
+
+/// [`CellCore`] of a cell from its edges `b`, `t`, `l`, `r` (bottom, top, left, right).
+#[inline(always)]
+pub(super) fn cell_core(b: [f64; 4], t: [f64; 4], l: [f64; 4], r: [f64; 4]) -> CellCore {
+    let (c, _) = cell_products([[b[0], b[1]], [t[0], t[1]], [l[0], l[1]], [r[0], r[1]]]);
+    let edges = [b[2], r[2], t[2], l[2]];
+    let (sj, certain) = least_scaled_jacobian(&c, &edges);
+    // The reference's corner angles where they are settled (which needs a non-zero cross
+    // product: a zero one, of either sign, takes the reference path).
+    let a = corner_candidates(b[3], r[3], t[3], l[3]);
+    // NaN lengths fail `>= 0`; with every length in range the products are finite.
+    let fine = (edges[0] >= 0.0)
+        & (edges[1] >= 0.0)
+        & (edges[2] >= 0.0)
+        & (edges[3] >= 0.0)
+        & settled(a[0], c[0])
+        & settled(a[1], c[1])
+        & settled(a[2], c[2])
+        & settled(a[3], c[3])
+        & certain;
+    CellCore {
+        c,
+        edges,
+        sj,
+        a,
+        fine,
+    }
 }
 
 /// Edge ratio and aspect ratio from the edge lengths, the expressions of
