@@ -481,6 +481,11 @@ pub(super) struct CellCore {
 }
 
 /// [`CellCore`] of a cell from its edges `b`, `t`, `l`, `r` (bottom, top, left, right).
+///
+/// The loops cut their edge arrays to the loop's length themselves, in the loop's own
+/// function, and index them there: behind a struct of slices or a method taking the index
+/// the compiler no longer vectorised the loop (the quality pass took 60 ms instead of 18 at
+/// 1e3 bubbles).
 #[inline(always)]
 pub(super) fn cell_core(b: [f64; 4], t: [f64; 4], l: [f64; 4], r: [f64; 4]) -> CellCore {
     let (c, _) = cell_products([[b[0], b[1]], [t[0], t[1]], [l[0], l[1]], [r[0], r[1]]]);
