@@ -164,9 +164,10 @@ fn a_closed_stdout_pipe_ends_the_run_without_a_panic() {
 }
 
 /// A first run into a directory moves the staged `mesh/` of block files in with one rename;
-/// a later run replaces the block files one by one, so whatever else `mesh/` holds stays
-/// (a user's file, a block file of an earlier, larger mesh), and the block files are the
-/// same bytes either way.
+/// a later run replaces a `mesh/` of nothing but block files whole (on Linux: a stale block
+/// file of an earlier, larger mesh goes), and one that holds anything else file by file, so
+/// the rest stays (a user's file, and then the stale block file too); the block files are
+/// the same bytes every time.
 #[test]
 fn a_new_block_directory_moves_in_whole_and_an_existing_one_keeps_its_other_files() {
     let tmp = tempfile::tempdir().unwrap();
@@ -180,6 +181,20 @@ fn a_new_block_directory_moves_in_whole_and_an_existing_one_keeps_its_other_file
         .collect();
     let files = |dir: &Path| std::fs::read_dir(dir.join("mesh")).unwrap().count();
     assert_eq!(files(&out), blocks.len(), "exactly the block files");
+    // Only block files, one of them stale: replaced whole on Linux, file by file elsewhere.
+    std::fs::write(out.join("mesh/block_9999.vts"), b"old").unwrap();
+    write_files(&m, &out, &vtk).unwrap();
+    assert_no_leftovers(&out);
+    let stale_stays = !cfg!(target_os = "linux");
+    assert_eq!(out.join("mesh/block_9999.vts").exists(), stale_stays);
+    assert_eq!(files(&out), blocks.len() + usize::from(stale_stays));
+    for (b, want) in blocks.iter().enumerate() {
+        let got = std::fs::read(out.join(format!("mesh/block_{b:04}.vts"))).unwrap();
+        assert!(
+            &got == want,
+            "block {b} differs after the whole replacement"
+        );
+    }
     std::fs::write(out.join("mesh/notes.txt"), b"mine").unwrap();
     std::fs::write(out.join("mesh/block_9999.vts"), b"old").unwrap();
     write_files(&m, &out, &vtk).unwrap();

@@ -407,8 +407,9 @@ fn staged_files(root: &Path) -> io::Result<Vec<std::path::PathBuf>> {
 /// Rename every staged file into `dir`, creating subdirectories as needed. A staged
 /// directory that `dir` does not have yet (the first run into `dir`: `mesh/` of the VTK
 /// block files) moves in with one rename instead of one per file (5 896 block files for
-/// 1 000 bubbles: 80 ms); one that `dir` has keeps the file-by-file replacement, which
-/// leaves whatever else that directory holds alone.
+/// 1 000 bubbles: 80 ms); one that `dir` has with nothing but block files in it (an earlier
+/// run's) is exchanged with it in one step (Linux), the old one then removed; one that holds
+/// anything else keeps the file-by-file replacement, which leaves the rest alone.
 fn publish(staging: &Path, dir: &Path) -> io::Result<()> {
     for entry in std::fs::read_dir(staging)? {
         let entry = entry?;
@@ -416,12 +417,24 @@ fn publish(staging: &Path, dir: &Path) -> io::Result<()> {
             continue;
         }
         let target = dir.join(entry.file_name());
-        let absent = matches!(std::fs::symlink_metadata(&target),
-            Err(e) if e.kind() == io::ErrorKind::NotFound);
-        // Made meanwhile by someone else: the rename fails or finds it empty; either way the
-        // files that are still staged go one by one below.
-        if absent {
-            let _ = std::fs::rename(entry.path(), &target);
+        match std::fs::symlink_metadata(&target) {
+            // Made meanwhile by someone else: the rename fails or finds it empty; either way
+            // the files that are still staged go one by one below.
+            Err(e) if e.kind() == io::ErrorKind::NotFound => {
+                let _ = std::fs::rename(entry.path(), &target);
+            }
+            // The block files of an earlier run and nothing else: the two directories swap
+            // in one step, and the old one, now staged, is removed before anything else is
+            // published (its block files, stale ones included, go with it).
+            #[cfg(target_os = "linux")]
+            Ok(m)
+                if m.is_dir()
+                    && only_block_files(&target)
+                    && exchange(&entry.path(), &target).is_ok() =>
+            {
+                std::fs::remove_dir_all(entry.path())?;
+            }
+            _ => {}
         }
     }
     // The files come sorted, so a directory's files are together: each directory is made
@@ -438,6 +451,26 @@ fn publish(staging: &Path, dir: &Path) -> io::Result<()> {
         replace_file(&staging.join(&rel), &target)?;
     }
     Ok(())
+}
+
+/// Whether `dir` holds regular files named `block_<digits>.vts` and nothing else (the VTK
+/// block files of an earlier run; false when it cannot be read).
+#[cfg(target_os = "linux")]
+fn only_block_files(dir: &Path) -> bool {
+    let Ok(entries) = std::fs::read_dir(dir) else {
+        return false;
+    };
+    entries.into_iter().all(|e| {
+        e.is_ok_and(|e| {
+            let name = e.file_name();
+            let digits = name
+                .to_str()
+                .and_then(|n| n.strip_prefix("block_"))
+                .and_then(|n| n.strip_suffix(".vts"));
+            e.file_type().is_ok_and(|t| t.is_file())
+                && digits.is_some_and(|d| !d.is_empty() && d.bytes().all(|b| b.is_ascii_digit()))
+        })
+    })
 }
 
 /// What the caller of [`write_files_prepared`] already computed.
