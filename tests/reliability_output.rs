@@ -164,10 +164,10 @@ fn a_closed_stdout_pipe_ends_the_run_without_a_panic() {
 }
 
 /// A first run into a directory moves the staged `mesh/` of block files in with one rename;
-/// a later run replaces a `mesh/` of nothing but block files whole (on Linux: a stale block
-/// file of an earlier, larger mesh goes), and one that holds anything else file by file, so
-/// the rest stays (a user's file, and then the stale block file too); the block files are
-/// the same bytes every time.
+/// a later run exchanges a `mesh/` holding only files it replaces in one step (on Linux: the
+/// directory itself is then the new one), and one that holds anything more (a stale block
+/// file of an earlier, larger mesh, a user's file) file by file, so the rest stays; the block
+/// files are the same bytes every time.
 #[test]
 fn a_new_block_directory_moves_in_whole_and_an_existing_one_keeps_its_other_files() {
     let tmp = tempfile::tempdir().unwrap();
@@ -180,33 +180,46 @@ fn a_new_block_directory_moves_in_whole_and_an_existing_one_keeps_its_other_file
         .map(|b| std::fs::read(out.join(format!("mesh/block_{b:04}.vts"))).unwrap())
         .collect();
     let files = |dir: &Path| std::fs::read_dir(dir.join("mesh")).unwrap().count();
+    let same_blocks = |when: &str| {
+        for (b, want) in blocks.iter().enumerate() {
+            let got = std::fs::read(out.join(format!("mesh/block_{b:04}.vts"))).unwrap();
+            assert!(&got == want, "block {b} differs {when}");
+        }
+    };
     assert_eq!(files(&out), blocks.len(), "exactly the block files");
-    // Only block files, one of them stale: replaced whole on Linux, file by file elsewhere.
-    std::fs::write(out.join("mesh/block_9999.vts"), b"old").unwrap();
+    // The directory's identity tells the whole exchange from the file-by-file replacement.
+    #[cfg(target_os = "linux")]
+    let dir_id = || {
+        use std::os::unix::fs::MetadataExt;
+        std::fs::metadata(out.join("mesh")).unwrap().ino()
+    };
+    // Only the files the run replaces: exchanged whole on Linux.
+    #[cfg(target_os = "linux")]
+    let before = dir_id();
     write_files(&m, &out, &vtk).unwrap();
     assert_no_leftovers(&out);
-    let stale_stays = !cfg!(target_os = "linux");
-    assert_eq!(out.join("mesh/block_9999.vts").exists(), stale_stays);
-    assert_eq!(files(&out), blocks.len() + usize::from(stale_stays));
-    for (b, want) in blocks.iter().enumerate() {
-        let got = std::fs::read(out.join(format!("mesh/block_{b:04}.vts"))).unwrap();
-        assert!(
-            &got == want,
-            "block {b} differs after the whole replacement"
-        );
-    }
+    #[cfg(target_os = "linux")]
+    assert_ne!(dir_id(), before, "mesh/ was not exchanged whole");
+    assert_eq!(files(&out), blocks.len());
+    same_blocks("after the whole exchange");
+    // A stale block file and a user's file: replaced file by file, both stay.
     std::fs::write(out.join("mesh/notes.txt"), b"mine").unwrap();
     std::fs::write(out.join("mesh/block_9999.vts"), b"old").unwrap();
+    #[cfg(target_os = "linux")]
+    let before = dir_id();
     write_files(&m, &out, &vtk).unwrap();
     assert_no_leftovers(&out);
+    #[cfg(target_os = "linux")]
+    assert_eq!(
+        dir_id(),
+        before,
+        "mesh/ with other files was replaced whole"
+    );
     assert_eq!(std::fs::read(out.join("mesh/notes.txt")).unwrap(), b"mine");
     assert_eq!(
         std::fs::read(out.join("mesh/block_9999.vts")).unwrap(),
         b"old"
     );
     assert_eq!(files(&out), blocks.len() + 2);
-    for (b, want) in blocks.iter().enumerate() {
-        let got = std::fs::read(out.join(format!("mesh/block_{b:04}.vts"))).unwrap();
-        assert!(&got == want, "block {b} differs between the two runs");
-    }
+    same_blocks("between the two runs");
 }

@@ -407,9 +407,10 @@ fn staged_files(root: &Path) -> io::Result<Vec<std::path::PathBuf>> {
 /// Rename every staged file into `dir`, creating subdirectories as needed. A staged
 /// directory that `dir` does not have yet (the first run into `dir`: `mesh/` of the VTK
 /// block files) moves in with one rename instead of one per file (5 896 block files for
-/// 1 000 bubbles: 80 ms); one that `dir` has with nothing but block files in it (an earlier
-/// run's) is exchanged with it in one step (Linux), the old one then removed; one that holds
-/// anything else keeps the file-by-file replacement, which leaves the rest alone.
+/// 1 000 bubbles: 80 ms); one whose counterpart in `dir` holds only regular files that the
+/// staged one replaces (an earlier run's block files, no more of them) is exchanged with it
+/// in one step (Linux), the old one then removed: the end state of replacing its files one
+/// by one, which is what happens otherwise (leaving the counterpart's other files alone).
 fn publish(staging: &Path, dir: &Path) -> io::Result<()> {
     for entry in std::fs::read_dir(staging)? {
         let entry = entry?;
@@ -423,13 +424,13 @@ fn publish(staging: &Path, dir: &Path) -> io::Result<()> {
             Err(e) if e.kind() == io::ErrorKind::NotFound => {
                 let _ = std::fs::rename(entry.path(), &target);
             }
-            // The block files of an earlier run and nothing else: the two directories swap
-            // in one step, and the old one, now staged, is removed before anything else is
-            // published (its block files, stale ones included, go with it).
+            // Nothing there that the staged files would not replace: the two directories
+            // swap in one step, and the old one, now staged, is removed before anything else
+            // is published.
             #[cfg(target_os = "linux")]
             Ok(m)
                 if m.is_dir()
-                    && only_block_files(&target)
+                    && all_replaced(&target, &entry.path())
                     && exchange(&entry.path(), &target).is_ok() =>
             {
                 std::fs::remove_dir_all(entry.path())?;
@@ -453,24 +454,25 @@ fn publish(staging: &Path, dir: &Path) -> io::Result<()> {
     Ok(())
 }
 
-/// Whether `dir` holds regular files named `block_<digits>.vts` and nothing else (the VTK
-/// block files of an earlier run; false when it cannot be read).
+/// Whether `old` holds only regular files, each with a regular file of the same name in
+/// `new` (so replacing `old`'s files by `new`'s one by one would leave exactly `new`'s;
+/// false when either cannot be read).
 #[cfg(target_os = "linux")]
-fn only_block_files(dir: &Path) -> bool {
-    let Ok(entries) = std::fs::read_dir(dir) else {
+fn all_replaced(old: &Path, new: &Path) -> bool {
+    let files = |dir: &Path| -> Option<Vec<std::ffi::OsString>> {
+        std::fs::read_dir(dir)
+            .ok()?
+            .map(|e| {
+                let e = e.ok()?;
+                e.file_type().ok()?.is_file().then(|| e.file_name())
+            })
+            .collect()
+    };
+    let (Some(old), Some(mut new)) = (files(old), files(new)) else {
         return false;
     };
-    entries.into_iter().all(|e| {
-        e.is_ok_and(|e| {
-            let name = e.file_name();
-            let digits = name
-                .to_str()
-                .and_then(|n| n.strip_prefix("block_"))
-                .and_then(|n| n.strip_suffix(".vts"));
-            e.file_type().is_ok_and(|t| t.is_file())
-                && digits.is_some_and(|d| !d.is_empty() && d.bytes().all(|b| b.is_ascii_digit()))
-        })
-    })
+    new.sort_unstable();
+    old.iter().all(|name| new.binary_search(name).is_ok())
 }
 
 /// What the caller of [`write_files_prepared`] already computed.

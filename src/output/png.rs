@@ -66,7 +66,7 @@ pub fn write_in_parts(mesh: &Mesh, path: &Path, width: u32, part_bytes: usize) -
             group: None,
             doc: Vec::new(),
             line: Vec::new(),
-            parsed: Some(tx),
+            parsed: tx,
             ended: false,
         };
         let formed = super::svg::write_checked(&mut parts, mesh).and_then(|()| {
@@ -76,8 +76,8 @@ pub fn write_in_parts(mesh: &Mesh, path: &Path, width: u32, part_bytes: usize) -
                 Err(io::Error::other("the SVG picture did not end with </svg>"))
             }
         });
-        // No more parts: the drawer finishes what it has.
-        parts.parsed = None;
+        // No more parts (the sender goes with them): the drawer finishes what it has.
+        drop(parts);
         let drawn = drawer
             .join()
             .unwrap_or_else(|_| Err(io::Error::other("the PNG's drawing thread panicked")));
@@ -148,8 +148,8 @@ struct Parts {
     doc: Vec<u8>,
     /// The line being received.
     line: Vec<u8>,
-    /// Where the parsed parts go, in order, to be drawn (`None` once the text is done).
-    parsed: Option<std::sync::mpsc::SyncSender<resvg::usvg::Tree>>,
+    /// Where the parsed parts go, in order, to be drawn.
+    parsed: std::sync::mpsc::SyncSender<resvg::usvg::Tree>,
     /// `</svg>` was received and the last part parsed.
     ended: bool,
 }
@@ -193,8 +193,6 @@ impl Parts {
             .map_err(|e| io::Error::other(format!("SVG not readable for rasterising: {e}")))?;
         self.doc.clear();
         self.parsed
-            .as_ref()
-            .ok_or_else(|| io::Error::other("a part of the SVG picture after its end"))?
             .send(tree)
             .map_err(|_| io::Error::other("the PNG's drawing stopped"))
     }

@@ -10,10 +10,8 @@
 //! same values' little-endian bytes ([`super::binary`]).
 //!
 //! The block files are written first and `mesh.vtm` last, each atomically (see
-//! [`crate::output`]). Through [`crate::output::write_files`] a `mesh/` that holds only an
-//! earlier run's block files is replaced whole (on Linux), so block files of an earlier run
-//! with more blocks go; otherwise they are left (the `.vtm` does not reference them), as is
-//! anything else in `mesh/`.
+//! [`crate::output`]). Block files left over from an earlier run with more blocks are not
+//! removed (the `.vtm` does not reference them).
 
 use super::binary::{self, Appended, Encoding};
 use super::vtu::{float_lines, int_lines, point_lines, POINTS_HEADER};
