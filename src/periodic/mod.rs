@@ -746,6 +746,11 @@ struct Sampled {
     /// Dropped once the layout is made when no local fix is expected (the layout has no arc
     /// orbit running backwards), so that the exact build does not hold it.
     orbits: std::sync::OnceLock<Orbits>,
+    /// The triangles whose circles an extraction of this sampling measured inside the tiling
+    /// ([`extract`]'s step 4), set by the first extraction that found none outside: a later
+    /// one (exact mode's local fix, [`reextract`]) measures only the triangles it uses beyond
+    /// these (issue 8: 0.15 s at 1e5 holes), with the same outcome.
+    measured: std::sync::OnceLock<Vec<bool>>,
     /// A refinement round's solved medial vertices ([`poor::medial_poor`]) with their answers,
     /// for the next round's sampling to reuse.
     solved: std::sync::OnceLock<Vec<(poor::SolveKey, poor::Answer)>>,
@@ -1007,6 +1012,7 @@ fn layout_from(
             kinds,
             medial,
             end_circles: std::sync::OnceLock::new(),
+            measured: std::sync::OnceLock::new(),
             orbits: std::sync::OnceLock::new(),
             solved: std::sync::OnceLock::new(),
             // Exact mode builds on the Apollonius centres: it measures short arcs by them.
@@ -1767,37 +1773,58 @@ fn extract(
             }
         }
     }
-    let (need, need_reach, unmeasured) = used
-        .par_iter()
-        .enumerate()
-        .filter(|(_, &u)| u)
-        .fold(
-            || (t.m, [0.0f64; 2], false),
-            |(mut need, mut need_reach, blind), (tri, _)| {
-                let ok = measure(tri as u32, &mut need, &mut need_reach);
-                (need, need_reach, blind || !ok)
-            },
-        )
-        .reduce(
-            || (t.m, [0.0f64; 2], false),
-            |a, b| {
-                (
-                    [a.0[0].max(b.0[0]), a.0[1].max(b.0[1])],
-                    [a.1[0].max(b.1[0]), a.1[1].max(b.1[1])],
-                    a.2 || b.2,
-                )
-            },
-        );
-    drop(used);
-    let blind = blind || unmeasured;
+    // The circles of the triangles `take` accepts among the used ones: the largest
+    // half-widths and reaches they need, and whether one could not be measured.
+    let measure_all = |take: &(dyn Fn(usize) -> bool + Sync)| {
+        used.par_iter()
+            .enumerate()
+            .filter(|&(tri, &u)| u && take(tri))
+            .fold(
+                || (t.m, [0.0f64; 2], false),
+                |(mut need, mut need_reach, blind), (tri, _)| {
+                    let ok = measure(tri as u32, &mut need, &mut need_reach);
+                    (need, need_reach, blind || !ok)
+                },
+            )
+            .reduce(
+                || (t.m, [0.0f64; 2], false),
+                |a, b| {
+                    (
+                        [a.0[0].max(b.0[0]), a.0[1].max(b.0[1])],
+                        [a.1[0].max(b.1[0]), a.1[1].max(b.1[1])],
+                        a.2 || b.2,
+                    )
+                },
+            )
+    };
     // A full axis holds the circles when the array does; a band when they end inside it.
-    let short = (0..2).any(|a| {
-        if t.band[a] {
-            !below(need_reach[a], t.reach[a])
-        } else {
-            need[a] != t.m[a]
-        }
-    });
+    let short_of = |need: [i32; 2], need_reach: [f64; 2]| {
+        (0..2).any(|a| {
+            if t.band[a] {
+                !below(need_reach[a], t.reach[a])
+            } else {
+                need[a] != t.m[a]
+            }
+        })
+    };
+    // Every triangle an earlier extraction of this sampling measured was held by the tiling
+    // (its circle needs no more than `t.m` and reaches below `t.reach`, all measurable), and
+    // each test is a maximum compared with a bound or a disjunction: the used triangles pass
+    // exactly when those not measured before do. Only a failure needs the figures of every
+    // used triangle (what `TooSmall` reports).
+    let before = sampled.measured.get();
+    let (mut need, mut need_reach, mut unmeasured) =
+        measure_all(&|tri| before.is_none_or(|m| !m[tri]));
+    if before.is_some() && (blind || unmeasured || short_of(need, need_reach)) {
+        (need, need_reach, unmeasured) = measure_all(&|_| true);
+    }
+    let blind = blind || unmeasured;
+    let short = short_of(need, need_reach);
+    if !(blind || short) && before.is_none() {
+        let _ = sampled.measured.set(used);
+    } else {
+        drop(used);
+    }
     if blind || short {
         return Ok(Extracted::TooSmall {
             need,
@@ -1812,8 +1839,6 @@ fn extract(
     // their members and collapsed arcs are recorded for the torus counts.
     // (Dense tables indexed by vertex, cluster and edge ids rather than hash maps: issue 8.)
     let mut vpos: Vec<Option<Point>> = vec![None; graph.vertices.len()];
-    let mut vertex_orbits: Vec<VertexKey> = Vec::new();
-    let mut collapsed_orbits: Vec<ArcKey> = Vec::new();
     let mut cluster_orbits: Vec<usize> = Vec::new();
     let nmv = graph.vertices.len() as u32;
     // The placement of each contracted vertex at a kept block's corner, worked out in
@@ -1825,13 +1850,24 @@ fn extract(
         vorbits: Vec<VertexKey>,
         corbits: Vec<ArcKey>,
     }
-    let mut needed: Vec<u32> = kept
-        .iter()
-        .flat_map(|&b| aux.blocks[b].corners)
-        .filter(|&v| v < nmv)
-        .collect();
-    needed.sort_unstable();
-    needed.dedup();
+    // The kept corners that are medial vertices, increasing, and each one's index there
+    // (`NONE` for the others): a table rather than a sort and a binary search per corner
+    // (issue 8: the numbering below, serial, looks up every corner of 6 blocks per hole).
+    let mut needed_at: Vec<u32> = vec![NONE; nmv as usize];
+    for &b in &kept {
+        for &v in &aux.blocks[b].corners {
+            if v < nmv {
+                needed_at[v as usize] = 0;
+            }
+        }
+    }
+    let mut needed: Vec<u32> = Vec::new();
+    for (v, at) in needed_at.iter_mut().enumerate() {
+        if *at != NONE {
+            *at = needed.len() as u32;
+            needed.push(v as u32);
+        }
+    }
     let place = |c: usize| -> Result<Placed, MeshError> {
         let key = ckeys[c]
             .as_ref()
@@ -1869,7 +1905,15 @@ fn extract(
         .map(|&c| Some(place(c as usize)))
         .collect();
 
-    let mut layout = BlockLayout::default();
+    // Reserved (issue 8: growing them by doubling moved their contents a fifth of the
+    // numbering's time at 1e5 holes): a block has two wall corners, each shared by two
+    // blocks, and two medial ones, shared by about six; a wall side, two spokes (each of two
+    // blocks) and a medial side (of the arc's two blocks). An estimate: more grows as usual.
+    let mut layout = BlockLayout {
+        vertices: Vec::with_capacity(kept.len() * 3 / 2),
+        edges: Vec::with_capacity(kept.len() * 5 / 2),
+        blocks: Vec::with_capacity(kept.len()),
+    };
     const NONE: u32 = u32::MAX;
     let mut new_vertex: Vec<u32> = vec![NONE; aux.vertices.len()];
     let mut new_edge: Vec<(u32, bool)> = vec![(NONE, false); aux.edges.len()];
@@ -1907,6 +1951,11 @@ fn extract(
     };
     let mut kept_arcs: Vec<usize> = kept.iter().map(|&b| b / 2).collect();
     kept_arcs.dedup();
+    // Each kept arc's index in `kept_arcs` (`NONE` for the others), as `needed_at`.
+    let mut kept_arc_at: Vec<u32> = vec![NONE; aux.blocks.len().div_ceil(2)];
+    for (at, &k) in kept_arcs.iter().enumerate() {
+        kept_arc_at[k] = at as u32;
+    }
     let mut sides_of: Vec<Option<Result<MedialSide, MeshError>>> = kept_arcs
         .par_iter()
         .map(|&k| Some(medial_side(k)))
@@ -2079,26 +2128,27 @@ fn extract(
         }
         (_, early) => early,
     };
-    let mut position_of = |c: usize,
-                           vorbits: &mut Vec<VertexKey>,
-                           corbits: &mut Vec<ArcKey>|
-     -> Result<Point, MeshError> {
+    // The placements taken, in the order of their first use: their orbits are gathered after
+    // the numbering, in parallel, and their vectors freed off this thread (issue 8: copied and
+    // freed here one by one, they were a quarter of the serial numbering at 1e5 holes).
+    let mut used: Vec<Placed> = Vec::with_capacity(needed.len());
+    let mut position_of = |c: usize| -> Result<Point, MeshError> {
         if let Some(p) = vpos[c] {
             return Ok(p);
         }
-        let got = needed
-            .binary_search(&(c as u32))
-            .ok()
-            .and_then(|at| placed[at].take());
+        let got = needed_at
+            .get(c)
+            .filter(|&&at| at != NONE)
+            .and_then(|&at| placed[at as usize].take());
         let x = match got {
             Some(x) => x?,
             None => place(c)?,
         };
-        vorbits.extend(x.vorbits);
-        corbits.extend(x.corbits);
         cluster_orbits.push(x.r);
         vpos[c] = Some(x.p);
-        Ok(x.p)
+        let p = x.p;
+        used.push(x);
+        Ok(p)
     };
     for &b in &kept {
         let block = &aux.blocks[b];
@@ -2112,7 +2162,7 @@ fn extract(
                 continue;
             }
             let p = if v < nmv {
-                position_of(v as usize, &mut vertex_orbits, &mut collapsed_orbits)?
+                position_of(v as usize)?
             } else {
                 let s = vertex_samples
                     .get(v as usize)
@@ -2168,10 +2218,10 @@ fn extract(
                 }
                 EdgeKind::Medial => {
                     let e = contracted.kept[b / 2] as usize;
-                    let got = kept_arcs
-                        .binary_search(&(b / 2))
-                        .ok()
-                        .and_then(|at| sides_of[at].take());
+                    let got = kept_arc_at
+                        .get(b / 2)
+                        .filter(|&&at| at != NONE)
+                        .and_then(|&at| sides_of[at as usize].take());
                     let MedialSide { rep, flip, mut pts } = match got {
                         Some(x) => x?,
                         None => medial_side(b / 2)?,
@@ -2217,6 +2267,16 @@ fn extract(
             wall,
         });
     }
+    // The orbits of the placed corners' members and collapsed arcs, in the order of first use.
+    let mut vertex_orbits: Vec<VertexKey> = used
+        .par_iter()
+        .flat_map_iter(|x| x.vorbits.iter().cloned())
+        .collect();
+    let mut collapsed_orbits: Vec<ArcKey> = used
+        .par_iter()
+        .flat_map_iter(|x| x.corbits.iter().cloned())
+        .collect();
+    rayon::spawn(move || drop(used));
     // Pair the zig-zag sides.
     let by_arc: HashMap<usize, u32> = periodic.iter().map(|&(ne, e, _)| (e, ne)).collect();
     for &(ne, e, o) in &periodic {
@@ -4136,6 +4196,55 @@ mod tests {
         assert_eq!(with_kept.collapsed_arcs, solved.collapsed_arcs);
         assert_eq!(with_kept.triples, solved.triples);
         assert!(with_kept.collapsed_arcs > p.collapsed_arcs);
+    }
+
+    /// The triangles the first extraction of a sampling measured inside its tiling are kept
+    /// ([`Sampled::measured`], issue 8): every one is a triangle of the sampling whose circle
+    /// the tiling holds (measured again here, one by one, with the extraction's own test), and
+    /// the local fix's extraction that measures only the others gives the layout of one that
+    /// measures them all.
+    #[test]
+    fn kept_measured_triangles_give_the_same_layout() {
+        let (pd, _, nearly_zero) = backwards_box();
+        let sampling = crate::mesher::exact_sampling();
+        let p = layout_for_exact(&pd, &nearly_zero, &sampling).unwrap();
+        let arcs = p.backwards.clone().expect("arcs running backwards");
+        let keys: Vec<ArcKey> = arcs.iter().map(|&o| p.arc_keys[o]).collect();
+        let sampled = p.sampled.as_deref().unwrap();
+        let measured = sampled.measured.get().expect("set by the first extraction");
+        assert_eq!(measured.len(), sampled.tri.len());
+        let t = &sampled.t;
+        let rmax = pd.holes().iter().map(|c| c.radius).fold(0.0, f64::max);
+        let reach = rmax + 1e-6 * t.size[0].max(t.size[1]);
+        let mut count = 0;
+        for (tri, _) in measured.iter().enumerate().filter(|(_, &m)| m) {
+            count += 1;
+            let q = sampled
+                .tri
+                .triangle(tri)
+                .map(|s| sampled.samples.points[s as usize]);
+            let c = circumcenter(q[0], q[1], q[2]).expect("a measured triangle has a circle");
+            let r = (c[0] - q[0][0]).hypot(c[1] - q[0][1]);
+            for (a, (m, beyond)) in disc_needs(t.size, c, r, reach).into_iter().enumerate() {
+                if t.band[a] {
+                    assert!(below(beyond, t.reach[a]), "triangle {tri} axis {a}");
+                } else {
+                    assert!(m <= t.m[a] as f64, "triangle {tri} axis {a}");
+                }
+            }
+        }
+        assert!(count > 100, "{count}");
+        let with_kept = reextract(&pd, &nearly_zero, sampled, &keys).unwrap();
+        let again = layout_for_exact(&pd, &nearly_zero, &sampling).unwrap();
+        let mut none_kept = std::sync::Arc::into_inner(again.sampled.unwrap()).unwrap();
+        none_kept.measured = std::sync::OnceLock::new();
+        let made = reextract(&pd, &nearly_zero, &none_kept, &keys).unwrap();
+        assert!(none_kept.measured.get().is_some(), "set by the fix's extraction");
+        assert_eq!(with_kept.layout, made.layout);
+        assert_eq!(with_kept.arc_keys, made.arc_keys);
+        assert_eq!(with_kept.collapsed_arcs, made.collapsed_arcs);
+        assert_eq!(with_kept.triples, made.triples);
+        assert_eq!(with_kept.tiling, made.tiling);
     }
 
     /// An exact attempt's layout with arcs running backwards keeps its sampling's orbit keys
