@@ -4239,7 +4239,10 @@ mod tests {
         let mut none_kept = std::sync::Arc::into_inner(again.sampled.unwrap()).unwrap();
         none_kept.measured = std::sync::OnceLock::new();
         let made = reextract(&pd, &nearly_zero, &none_kept, &keys).unwrap();
-        assert!(none_kept.measured.get().is_some(), "set by the fix's extraction");
+        assert!(
+            none_kept.measured.get().is_some(),
+            "set by the fix's extraction"
+        );
         assert_eq!(with_kept.layout, made.layout);
         assert_eq!(with_kept.arc_keys, made.arc_keys);
         assert_eq!(with_kept.collapsed_arcs, made.collapsed_arcs);
