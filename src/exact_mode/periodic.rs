@@ -198,21 +198,73 @@ fn poor_at(center: Point, radius: f64, t: &[Point], limit: f64) -> Option<Candid
 pub(crate) fn poor_and_backwards(
     pb: &PeriodicBlocking,
     limit: f64,
-) -> (Vec<Candidate>, Result<Vec<usize>, MeshError>) {
+) -> (
+    Vec<Candidate>,
+    Result<(Vec<usize>, SolvedOrbits), MeshError>,
+) {
     use rayon::prelude::*;
-    match orbits_of(pb) {
+    match orbits_of(pb, None) {
         Ok((verts, _, _, backwards)) => {
             let poor = verts
                 .par_iter()
                 .filter_map(|v| poor_at(v.center, v.radius, &v.tangent, limit))
                 .collect();
-            (poor, Ok(backwards))
+            (poor, Ok((backwards, SolvedOrbits::new(pb, verts))))
         }
         Err(e) => (poor_vertices(pb, limit), Err(e)),
     }
 }
 
+/// The vertex orbits of a [`PeriodicBlocking`] with their exact circles, as a build solved
+/// them, for a later build of another blocking of the same period ([`build_unless_backwards_with`]):
+/// a vertex orbit's solve is a function of its circles (tags), its hint and the period's
+/// holes and size, so an orbit with the same circles and the same hint, bit for bit, takes
+/// the earlier answer (issue 8: exact mode's local fix builds a layout whose vertex orbits are
+/// nearly all those of the layout it fixes, 0.19 s of solves at 1e5 holes).
+pub(crate) struct SolvedOrbits {
+    size: [f64; 2],
+    holes: Vec<Circle>,
+    /// Per solved vertex, the hint's bits.
+    near: Vec<[u64; 2]>,
+    verts: Vec<Vertex>,
+}
+
+impl std::fmt::Debug for SolvedOrbits {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("SolvedOrbits")
+            .field("vertices", &self.verts.len())
+            .finish()
+    }
+}
+
+impl SolvedOrbits {
+    fn new(pb: &PeriodicBlocking, verts: Vec<Vertex>) -> SolvedOrbits {
+        SolvedOrbits {
+            size: pb.size,
+            holes: pb.holes.clone(),
+            near: pb
+                .vertices
+                .iter()
+                .map(|v| v.near.map(f64::to_bits))
+                .collect(),
+            verts,
+        }
+    }
+
+    /// The solved orbits by their inputs, when they are of `pb`'s period (its holes and size).
+    fn table(&self, pb: &PeriodicBlocking) -> Option<HashMap<(&[Tag], [u64; 2]), &Vertex>> {
+        (self.size == pb.size && self.holes == pb.holes).then(|| {
+            self.verts
+                .iter()
+                .zip(&self.near)
+                .map(|(v, n)| ((v.circles.as_slice(), *n), v))
+                .collect()
+        })
+    }
+}
+
 /// The exact geometry of a vertex orbit (representative frame).
+#[derive(Clone)]
 struct Vertex {
     center: Point,
     radius: f64,
@@ -252,7 +304,7 @@ pub fn build_with_inserted(
     options: &Options,
     fluid: &[bool],
 ) -> Result<PeriodicExact, MeshError> {
-    match build_checking(pb, options, fluid, None, false, true)? {
+    match build_checking(pb, options, fluid, None, false, true, None)? {
         Built::Mesh(x) => Ok(*x),
         Built::Backwards(_) => Err(internal("stopped at backwards arcs".into())),
     }
@@ -275,7 +327,7 @@ pub(crate) fn build_unless_backwards(
     options: &Options,
     fluid: &[bool],
 ) -> Result<Built, MeshError> {
-    build_unless_backwards_with(pb, options, fluid, true)
+    build_unless_backwards_with(pb, options, fluid, true, None)
 }
 
 /// [`build_with_inserted`] that stops as soon as an arc orbit runs backwards (issue 8): such
@@ -283,13 +335,16 @@ pub(crate) fn build_unless_backwards(
 /// nodes and grids of the whole period were most of the build's time (0.39 s of a failed
 /// attempt at 10 000 holes). With `keys` false the mesh has no block keys
 /// ([`PeriodicExact::keys`] empty; they are still made for imposed counts, which read them).
+/// The vertex orbits `known` solved (those of an earlier blocking of the same period,
+/// [`SolvedOrbits`]) are taken from it, the same build; it is freed once they are.
 pub(crate) fn build_unless_backwards_with(
     pb: &PeriodicBlocking,
     options: &Options,
     fluid: &[bool],
     keys: bool,
+    known: Option<SolvedOrbits>,
 ) -> Result<Built, MeshError> {
-    build_checking(pb, options, fluid, None, true, keys)
+    build_checking(pb, options, fluid, None, true, keys, known)
 }
 
 /// How far the fast densities of every arc orbit of `pb` are from the plain formula
@@ -300,7 +355,7 @@ pub fn density_deviation(
     options: &Options,
 ) -> Result<super::densities::Deviation, MeshError> {
     let mut d = super::densities::Deviation::default();
-    build_checking(pb, options, &[], Some(&mut d), false, true)?;
+    build_checking(pb, options, &[], Some(&mut d), false, true, None)?;
     Ok(d)
 }
 
@@ -310,6 +365,7 @@ pub fn density_deviation(
 #[allow(clippy::type_complexity)]
 fn orbits_of(
     pb: &PeriodicBlocking,
+    known: Option<&SolvedOrbits>,
 ) -> Result<
     (
         Vec<Vertex>,
@@ -321,13 +377,21 @@ fn orbits_of(
 > {
     let size = pb.size;
     let unknown = || internal("a periodic vertex or arc names an unknown hole".into());
-    // 1. Vertex orbits, in parallel (each its own Apollonius solve); the first error in
-    //    orbit order is the one returned.
+    // 1. Vertex orbits, in parallel (each its own Apollonius solve, or the answer `known`
+    //    has for the same inputs); the first error in orbit order is the one returned.
+    let table = known.and_then(|k| k.table(pb));
     let solved: Vec<Result<Vertex, MeshError>> = pb
         .vertices
         .par_iter()
         .enumerate()
         .map(|(k, v)| -> Result<Vertex, MeshError> {
+            let near = v.near.map(f64::to_bits);
+            if let Some(&x) = table
+                .as_ref()
+                .and_then(|t| t.get(&(v.circles.as_slice(), near)))
+            {
+                return Ok(x.clone());
+            }
             let n = v.circles.len();
             if n < 3 {
                 return Err(internal(format!("vertex orbit {k} has {n} circles")));
@@ -418,8 +482,10 @@ fn orbits_of(
 /// The arc orbits of `pb` that run backwards (orbit order): what [`build_unless_backwards_with`]
 /// stops at, without the options check (the periodic extraction looks before numbering its
 /// layout, issue 8).
-pub(crate) fn backwards_orbits(pb: &PeriodicBlocking) -> Result<Vec<usize>, MeshError> {
-    orbits_of(pb).map(|o| o.3)
+pub(crate) fn backwards_orbits(
+    pb: &PeriodicBlocking,
+) -> Result<(Vec<usize>, SolvedOrbits), MeshError> {
+    orbits_of(pb, None).map(|(verts, _, _, backwards)| (backwards, SolvedOrbits::new(pb, verts)))
 }
 
 /// [`build`], adding each arc orbit's densities to `check` when given; with `stop`, returns
@@ -431,6 +497,7 @@ fn build_checking(
     mut check: Option<&mut super::densities::Deviation>,
     stop: bool,
     want_keys: bool,
+    known: Option<SolvedOrbits>,
 ) -> Result<Built, MeshError> {
     validate_options(options)?;
     let h = pb.holes.len();
@@ -443,7 +510,11 @@ fn build_checking(
             clustering_of(options, k as CircleId)
         }
     };
-    let (mut verts, mut geoms, mut slots, inconsistent_arcs) = orbits_of(pb)?;
+    let (mut verts, mut geoms, mut slots, inconsistent_arcs) = orbits_of(pb, known.as_ref())?;
+    // Not held through the grids (many small vectors: freed on the pool).
+    if let Some(k) = known {
+        rayon::spawn(move || drop(k));
+    }
     if stop && !inconsistent_arcs.is_empty() {
         return Ok(Built::Backwards(inconsistent_arcs));
     }
@@ -1604,8 +1675,8 @@ mod tests {
         let p = crate::periodic::periodic_layout(&pd, &options).expect("layout");
         let pb = p.blocking.as_ref().expect("exact input");
         let (Built::Mesh(a), Built::Mesh(b)) = (
-            build_unless_backwards_with(pb, &options, &[], true).unwrap(),
-            build_unless_backwards_with(pb, &options, &[], false).unwrap(),
+            build_unless_backwards_with(pb, &options, &[], true, None).unwrap(),
+            build_unless_backwards_with(pb, &options, &[], false, None).unwrap(),
         ) else {
             panic!("no arc runs backwards here");
         };
@@ -1633,7 +1704,8 @@ mod tests {
             imposed_counts: Some(std::sync::Arc::new(imposed)),
             ..options.clone()
         };
-        let Built::Mesh(c) = build_unless_backwards_with(pb, &with, &[], false).unwrap() else {
+        let Built::Mesh(c) = build_unless_backwards_with(pb, &with, &[], false, None).unwrap()
+        else {
             panic!("no arc runs backwards here");
         };
         assert_eq!(c.counts.arc, arc);
@@ -1667,6 +1739,75 @@ mod tests {
                 proptest::prop_assert_eq!(ids.get(i, k), Some(id));
             }
         }
+    }
+
+    /// A build that takes the vertex orbits solved for a blocking of the same period
+    /// ([`SolvedOrbits`]) finds every orbit there and is the build that solves them: the same
+    /// circles bit for bit, the same grids and layout (random boxes and the box whose first
+    /// layout has arcs running backwards); orbits solved for another period are not taken.
+    #[test]
+    fn known_vertex_orbits_give_the_same_build() {
+        let backwards_box = match crate::domain::AnyDomain::from_json_str(include_str!(
+            "../../tests/data/periodic_backwards_100.json"
+        ))
+        .unwrap()
+        {
+            crate::domain::AnyDomain::Periodic(pd) => pd,
+            _ => panic!("not a periodic domain"),
+        };
+        let mut boxes = vec![backwards_box];
+        for seed in 1..3 {
+            boxes.push(crate::layouts::periodic_bubbles(60, seed).expect("layout"));
+        }
+        let options = Options {
+            collapse_fraction: crate::periodic::EXACT_COLLAPSE_FRACTION,
+            block_cells: Some(4),
+            ..Options::default()
+        };
+        let bits = |v: &Vertex| {
+            (
+                v.center.map(f64::to_bits),
+                v.radius.to_bits(),
+                v.tangent
+                    .iter()
+                    .map(|p| p.map(f64::to_bits))
+                    .collect::<Vec<_>>(),
+                v.circles.clone(),
+            )
+        };
+        let mut built = 0;
+        for pd in &boxes {
+            let p = crate::periodic::periodic_layout(pd, &options).expect("layout");
+            let Some(pb) = &p.blocking else { continue };
+            let (_, solved) = backwards_orbits(pb).expect("solved");
+            let table = solved.table(pb).expect("the same period");
+            assert!(pb
+                .vertices
+                .iter()
+                .all(|v| table.contains_key(&(v.circles.as_slice(), v.near.map(f64::to_bits)))));
+            let (fresh, ..) = orbits_of(pb, None).unwrap();
+            let (taken, ..) = orbits_of(pb, Some(&solved)).unwrap();
+            assert_eq!(
+                fresh.iter().map(bits).collect::<Vec<_>>(),
+                taken.iter().map(bits).collect::<Vec<_>>()
+            );
+            let mut other = pb.clone();
+            other.size[0] *= 1.5;
+            assert!(solved.table(&other).is_none());
+            match (
+                build_unless_backwards_with(pb, &options, &[], true, None).unwrap(),
+                build_unless_backwards_with(pb, &options, &[], true, Some(solved)).unwrap(),
+            ) {
+                (Built::Mesh(a), Built::Mesh(b)) => {
+                    assert_eq!(a.grids, b.grids);
+                    assert_eq!(a.layout, b.layout);
+                    built += 1;
+                }
+                (Built::Backwards(a), Built::Backwards(b)) => assert_eq!(a, b),
+                _ => panic!("one build stopped, the other did not"),
+            }
+        }
+        assert!(built > 0);
     }
 
     /// [`poor_and_backwards`] (one solve per vertex orbit) answers as [`poor_vertices`] and
@@ -1706,9 +1847,10 @@ mod tests {
                         .map(|x| (x.0.to_bits(), x.1.map(f64::to_bits), x.2.to_bits()))
                         .collect::<Vec<_>>()
                 );
-                assert_eq!(backwards.ok(), backwards_orbits(pb).ok());
+                let separate = backwards_orbits(pb).map(|b| b.0);
+                assert_eq!(backwards.map(|b| b.0).ok(), separate.clone().ok());
                 poor_seen += poor.len();
-                backwards_seen += backwards_orbits(pb).map_or(0, |b| b.len());
+                backwards_seen += separate.map_or(0, |b| b.len());
             }
         }
         assert!(
@@ -1741,9 +1883,10 @@ mod tests {
                 let p = crate::periodic::periodic_layout(&pd, &options).expect("layout");
                 let Some(pb) = &p.blocking else { continue };
                 for fluid in [vec![], vec![true], vec![false, true, true]] {
-                    let summarised = build_checking(pb, &options, &fluid, None, false, true);
+                    let summarised = build_checking(pb, &options, &fluid, None, false, true, None);
                     let mut d = super::super::densities::Deviation::default();
-                    let held = build_checking(pb, &options, &fluid, Some(&mut d), false, true);
+                    let held =
+                        build_checking(pb, &options, &fluid, Some(&mut d), false, true, None);
                     match (summarised, held) {
                         (Ok(Built::Mesh(a)), Ok(Built::Mesh(b))) => {
                             assert_eq!(a.layout, b.layout, "seed {seed}, n {n}, {fluid:?}");

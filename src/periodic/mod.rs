@@ -724,6 +724,9 @@ pub struct PeriodicLayout {
     /// (`layout`, `triples` and the groups are empty), and its exact build is known to stop
     /// there ([`exact_frame`] answers as the stopped build, the local fix re-extracts).
     backwards: Option<Vec<usize>>,
+    /// The vertex orbits solved for the layout this one fixes, for its build to take
+    /// ([`Sampled::solved_orbits`]; only the local fix's layout has them).
+    solved_orbits: Option<std::sync::Arc<exact_mode::periodic::SolvedOrbits>>,
 }
 
 /// A sampled, triangulated tiling and its medial graph.
@@ -746,6 +749,10 @@ struct Sampled {
     /// Dropped once the layout is made when no local fix is expected (the layout has no arc
     /// orbit running backwards), so that the exact build does not hold it.
     orbits: std::sync::OnceLock<Orbits>,
+    /// The vertex orbits the extraction that found arc orbits running backwards solved, for
+    /// the build of the local fix's layout ([`local_fix`]), which takes them: its vertex
+    /// orbits are nearly all those ([`exact_mode::periodic::SolvedOrbits`], issue 8).
+    solved_orbits: std::sync::Mutex<Option<exact_mode::periodic::SolvedOrbits>>,
     /// The triangles whose circles an extraction of this sampling measured inside the tiling
     /// ([`extract`]'s step 4), set by the first extraction that found none outside: a later
     /// one (exact mode's local fix, [`reextract`]) measures only the triangles it uses beyond
@@ -1013,6 +1020,7 @@ fn layout_from(
             medial,
             end_circles: std::sync::OnceLock::new(),
             measured: std::sync::OnceLock::new(),
+            solved_orbits: std::sync::Mutex::new(None),
             orbits: std::sync::OnceLock::new(),
             solved: std::sync::OnceLock::new(),
             // Exact mode builds on the Apollonius centres: it measures short arcs by them.
@@ -1247,9 +1255,10 @@ struct Early {
     cluster_orbits: Vec<usize>,
     arc_orbits: Vec<ArcKey>,
     blocking: Result<Option<PeriodicBlocking>, MeshError>,
-    /// [`exact_mode::periodic::backwards_orbits`] of `blocking`, when the poor check found it
-    /// from the same solves ([`exact_mode::periodic::poor_and_backwards`]).
-    backwards: Option<Result<Vec<usize>, MeshError>>,
+    /// [`exact_mode::periodic::backwards_orbits`] of `blocking` with its solved vertex
+    /// orbits, when the poor check found it from the same solves
+    /// ([`exact_mode::periodic::poor_and_backwards`]).
+    backwards: Option<Result<(Vec<usize>, exact_mode::periodic::SolvedOrbits), MeshError>>,
 }
 
 /// A contracted medial vertex (a cluster of collapsed vertices) up to nothing: the samples of
@@ -2098,11 +2107,14 @@ fn extract(
             .take()
             .unwrap_or_else(|| exact_mode::periodic::backwards_orbits(pb))
             .ok()
-            .filter(|arcs| !arcs.is_empty()),
+            .filter(|(arcs, _)| !arcs.is_empty()),
         _ => None,
     };
     let early = match (backwards, early) {
-        (Some(arcs), Some(early)) => {
+        (Some((arcs, solved)), Some(early)) => {
+            if let Ok(mut s) = sampled.solved_orbits.lock() {
+                *s = Some(solved);
+            }
             let Early {
                 vertex_orbits,
                 collapsed_orbits,
@@ -2124,6 +2136,7 @@ fn extract(
                 sampled: None,
                 no_poor,
                 backwards: Some(arcs),
+                solved_orbits: None,
             }));
         }
         (_, early) => early,
@@ -2368,6 +2381,7 @@ fn extract(
         sampled: None,
         no_poor,
         backwards: None,
+        solved_orbits: None,
     }))
 }
 
@@ -3164,10 +3178,12 @@ fn local_fix(
     let Some(sampled) = sampled.filter(|_| !arcs.is_empty()) else {
         return Ok(None);
     };
-    // One fix per sampling: the sampled tiling is dropped before the build.
+    // One fix per sampling: the sampled tiling is dropped before the build, which takes the
+    // vertex orbits solved for the layout being fixed.
     let made = reextract(pd, layout_options, &sampled, arcs);
+    let solved = sampled.solved_orbits.lock().ok().and_then(|mut s| s.take());
     drop(sampled);
-    let p = match made {
+    let mut p = match made {
         Ok(p) => p,
         Err(MeshError::Internal(_)) => return Ok(None),
         Err(e) => return Err(e),
@@ -3175,6 +3191,7 @@ fn local_fix(
     if p.blocking.is_none() {
         return Ok(None);
     }
+    p.solved_orbits = solved.map(std::sync::Arc::new);
     match exact_frame(pd, p, options, fluid, true, keys)? {
         Framed::Done(f) => Ok(Some(f)),
         Framed::Failed { .. } => Ok(None),
@@ -3300,8 +3317,13 @@ fn frame_of(
     }
     // A build with arcs running backwards stops before its grids (the mesh would not be
     // kept): those arcs are collapsed, or the holes around them resampled, by the caller.
+    // It takes the vertex orbits solved for the layout this one fixes, if any.
+    let known = p
+        .solved_orbits
+        .take()
+        .and_then(|k| std::sync::Arc::try_unwrap(k).ok());
     let x = match timings::span("exact_geometry", || {
-        exact_mode::periodic::build_unless_backwards_with(pb, options, fluid, keys)
+        exact_mode::periodic::build_unless_backwards_with(pb, options, fluid, keys, known)
     }) {
         Ok(exact_mode::periodic::Built::Mesh(x)) => *x,
         Ok(exact_mode::periodic::Built::Backwards(arcs)) => return Ok(failed_at(&arcs)),
