@@ -198,10 +198,7 @@ fn poor_at(center: Point, radius: f64, t: &[Point], limit: f64) -> Option<Candid
 pub(crate) fn poor_and_backwards(
     pb: &PeriodicBlocking,
     limit: f64,
-) -> (
-    Vec<Candidate>,
-    Result<(Vec<usize>, SolvedOrbits), MeshError>,
-) {
+) -> (Vec<Candidate>, Result<Backwards, MeshError>) {
     use rayon::prelude::*;
     match orbits_of(pb, None) {
         Ok((verts, _, _, backwards)) => {
@@ -214,6 +211,12 @@ pub(crate) fn poor_and_backwards(
         Err(e) => (poor_vertices(pb, limit), Err(e)),
     }
 }
+
+/// The arc orbits running backwards (orbit order) and the vertex orbits solved to find them.
+pub(crate) type Backwards = (Vec<usize>, SolvedOrbits);
+
+/// A solved vertex orbit's inputs besides the period: its circles and its hint's bits.
+type OrbitInput<'a> = (&'a [Tag], [u64; 2]);
 
 /// The vertex orbits of a [`PeriodicBlocking`] with their exact circles, as a build solved
 /// them, for a later build of another blocking of the same period ([`build_unless_backwards_with`]):
@@ -252,7 +255,7 @@ impl SolvedOrbits {
     }
 
     /// The solved orbits by their inputs, when they are of `pb`'s period (its holes and size).
-    fn table(&self, pb: &PeriodicBlocking) -> Option<HashMap<(&[Tag], [u64; 2]), &Vertex>> {
+    fn table(&self, pb: &PeriodicBlocking) -> Option<HashMap<OrbitInput<'_>, &Vertex>> {
         (self.size == pb.size && self.holes == pb.holes).then(|| {
             self.verts
                 .iter()
@@ -482,9 +485,7 @@ fn orbits_of(
 /// The arc orbits of `pb` that run backwards (orbit order): what [`build_unless_backwards_with`]
 /// stops at, without the options check (the periodic extraction looks before numbering its
 /// layout, issue 8).
-pub(crate) fn backwards_orbits(
-    pb: &PeriodicBlocking,
-) -> Result<(Vec<usize>, SolvedOrbits), MeshError> {
+pub(crate) fn backwards_orbits(pb: &PeriodicBlocking) -> Result<Backwards, MeshError> {
     orbits_of(pb, None).map(|(verts, _, _, backwards)| (backwards, SolvedOrbits::new(pb, verts)))
 }
 

@@ -1258,7 +1258,7 @@ struct Early {
     /// [`exact_mode::periodic::backwards_orbits`] of `blocking` with its solved vertex
     /// orbits, when the poor check found it from the same solves
     /// ([`exact_mode::periodic::poor_and_backwards`]).
-    backwards: Option<Result<(Vec<usize>, exact_mode::periodic::SolvedOrbits), MeshError>>,
+    backwards: Option<Result<exact_mode::periodic::Backwards, MeshError>>,
 }
 
 /// A contracted medial vertex (a cluster of collapsed vertices) up to nothing: the samples of
