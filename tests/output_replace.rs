@@ -100,10 +100,13 @@ fn readers_always_see_a_whole_file() {
     let version = |k: u32| format!("version {k} ").repeat(2000).into_bytes();
     std::fs::write(&target, version(0)).unwrap();
     let stop = std::sync::atomic::AtomicBool::new(false);
+    // Reads so far: the writer starts after the first one (on a loaded machine the reader
+    // thread could otherwise start only after the last replacement, and read nothing).
+    let started = std::sync::atomic::AtomicUsize::new(0);
     std::thread::scope(|s| {
         let reader = s.spawn(|| {
             let mut reads = 0;
-            while !stop.load(std::sync::atomic::Ordering::Relaxed) {
+            while reads == 0 || !stop.load(std::sync::atomic::Ordering::Relaxed) {
                 let got = std::fs::read(&target).expect("the name always exists");
                 let k: u32 = std::str::from_utf8(&got[8..])
                     .unwrap()
@@ -114,9 +117,13 @@ fn readers_always_see_a_whole_file() {
                     .unwrap();
                 assert_eq!(got, version(k), "a whole version");
                 reads += 1;
+                started.store(reads, std::sync::atomic::Ordering::Relaxed);
             }
             reads
         });
+        while started.load(std::sync::atomic::Ordering::Relaxed) == 0 && !reader.is_finished() {
+            std::thread::yield_now();
+        }
         for k in 1..=300 {
             write_atomic(&target, |w| {
                 use std::io::Write;
