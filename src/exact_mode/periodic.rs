@@ -1742,12 +1742,10 @@ mod tests {
         }
     }
 
-    /// A build that takes the vertex orbits solved for a blocking of the same period
-    /// ([`SolvedOrbits`]) finds every orbit there and is the build that solves them: the same
-    /// circles bit for bit, the same grids and layout (random boxes and the box whose first
-    /// layout has arcs running backwards); orbits solved for another period are not taken.
-    #[test]
-    fn known_vertex_orbits_give_the_same_build() {
+    /// The box whose first layout has arcs running backwards
+    /// (`tests/data/periodic_backwards_100.json`), then random boxes of 60 holes from the
+    /// seeds `1..seeds`.
+    fn test_boxes(seeds: u64) -> Vec<crate::periodic::PeriodicDomain> {
         let backwards_box = match crate::domain::AnyDomain::from_json_str(include_str!(
             "../../tests/data/periodic_backwards_100.json"
         ))
@@ -1757,9 +1755,19 @@ mod tests {
             _ => panic!("not a periodic domain"),
         };
         let mut boxes = vec![backwards_box];
-        for seed in 1..3 {
+        for seed in 1..seeds {
             boxes.push(crate::layouts::periodic_bubbles(60, seed).expect("layout"));
         }
+        boxes
+    }
+
+    /// A build that takes the vertex orbits solved for a blocking of the same period
+    /// ([`SolvedOrbits`]) finds every orbit there and is the build that solves them: the same
+    /// circles bit for bit, the same grids and layout (random boxes and the box whose first
+    /// layout has arcs running backwards); orbits solved for another period are not taken.
+    #[test]
+    fn known_vertex_orbits_give_the_same_build() {
+        let boxes = test_boxes(3);
         let options = Options {
             collapse_fraction: crate::periodic::EXACT_COLLAPSE_FRACTION,
             block_cells: Some(4),
@@ -1816,18 +1824,7 @@ mod tests {
     /// whose first layout has arcs running backwards.
     #[test]
     fn poor_and_backwards_from_one_solve_are_the_separate_answers() {
-        let backwards_box = match crate::domain::AnyDomain::from_json_str(include_str!(
-            "../../tests/data/periodic_backwards_100.json"
-        ))
-        .unwrap()
-        {
-            crate::domain::AnyDomain::Periodic(pd) => pd,
-            _ => panic!("not a periodic domain"),
-        };
-        let mut boxes = vec![backwards_box];
-        for seed in 1..4 {
-            boxes.push(crate::layouts::periodic_bubbles(60, seed).expect("layout"));
-        }
+        let boxes = test_boxes(4);
         let options = Options {
             collapse_fraction: crate::periodic::EXACT_COLLAPSE_FRACTION,
             ..Options::default()
