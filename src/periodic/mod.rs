@@ -1914,15 +1914,7 @@ fn extract(
         .map(|&c| Some(place(c as usize)))
         .collect();
 
-    // Reserved (issue 8: growing them by doubling moved their contents a fifth of the
-    // numbering's time at 1e5 holes): a block has two wall corners, each shared by two
-    // blocks, and two medial ones, shared by about six; a wall side, two spokes (each of two
-    // blocks) and a medial side (of the arc's two blocks). An estimate: more grows as usual.
-    let mut layout = BlockLayout {
-        vertices: Vec::with_capacity(kept.len() * 3 / 2),
-        edges: Vec::with_capacity(kept.len() * 5 / 2),
-        blocks: Vec::with_capacity(kept.len()),
-    };
+    let mut layout = BlockLayout::default();
     const NONE: u32 = u32::MAX;
     let mut new_vertex: Vec<u32> = vec![NONE; aux.vertices.len()];
     let mut new_edge: Vec<(u32, bool)> = vec![(NONE, false); aux.edges.len()];
