@@ -2418,8 +2418,8 @@ fn exact_input(
     let index = |rep: &VertexKey| vertex_orbits.binary_search(rep).ok();
     // The medial vertex of each orbit's key: the vertices whose key is an orbit's, found by a
     // search in parallel, then in vertex order, the last of equal keys (as a map of every
-    // vertex's key, filled in vertex order, answered; issue 8: that map of 2 M keys was
-    // built serially, 0.15 s of an extraction at 1e5 holes).
+    // vertex's key, filled in vertex order, answered; issue 8: that map held every vertex key
+    // of the tiling and was filled on one thread).
     const NONE: usize = usize::MAX;
     let found: Vec<(usize, usize)> = vkeys
         .par_iter()
