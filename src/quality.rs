@@ -166,7 +166,7 @@ pub fn inverted_cells(grids: &[BlockGrid]) -> usize {
 }
 
 /// [`inverted_cells`] of one grid.
-pub(crate) fn grid_inverted_cells(g: &BlockGrid) -> usize {
+fn grid_inverted_cells(g: &BlockGrid) -> usize {
     if !well_formed(g) {
         return 0;
     }

@@ -42,8 +42,6 @@ use crate::layout::{Block, BlockLayout, Curve, Edge, EdgeKind, SideRef, Translat
 use crate::mesh::BlockGrid;
 use crate::mesher::{MeshError, Options};
 use rayon::prelude::*;
-use std::sync::atomic::{AtomicBool, Ordering};
-
 /// Hash maps with a fast hasher (issue 8: SipHash of the orbit keys was 4% of a periodic
 /// mesh); nothing reads them in iteration order.
 type HashMap<K, V> = std::collections::HashMap<K, V, foldhash::fast::RandomState>;
@@ -121,7 +119,8 @@ pub struct PeriodicExact {
 /// grid after the build: 0.23 s at 1e5 holes).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub(crate) enum Flag {
-    /// The blocks with an inverted cell ([`crate::quality::inverted_blocks`]).
+    /// The blocks with an inverted cell ([`crate::quality::inverted_blocks`], found as
+    /// bounded exact mode finds them, [`super::inverted::has_inverted_cell`]).
     Inverted,
     /// The blocks with a corner below this many degrees, or an inverted cell
     /// ([`crate::quality::has_corner_below`]).
@@ -132,7 +131,7 @@ impl Flag {
     /// Whether `g` is flagged.
     fn flags(self, g: &BlockGrid) -> bool {
         match self {
-            Flag::Inverted => crate::quality::grid_inverted_cells(g) > 0,
+            Flag::Inverted => super::inverted::has_inverted_cell(g),
             Flag::CornerBelow(deg) => crate::quality::has_corner_below(g, deg),
         }
     }
@@ -1416,17 +1415,14 @@ fn grids_pass(
         let [c, t] = edge.ends;
         Ok((layout.vertices[t as usize], layout.vertices[c as usize]))
     };
-    let flags: Vec<AtomicBool> = match flag {
-        Some(_) => a.jobs.iter().map(|_| AtomicBool::new(false)).collect(),
-        None => Vec::new(),
-    };
+    let mut flags = vec![false; a.jobs.len()];
     let grids = a
         .jobs
         .par_iter()
-        .enumerate()
+        .zip(flags.par_iter_mut())
         .map_init(
             super::grid_nodes::GridScratch::default,
-            |scratch, (b, job)| -> Result<BlockGrid, MeshError> {
+            |scratch, (job, flagged)| -> Result<BlockGrid, MeshError> {
                 let n = counts.arc[job.o];
                 let nj = counts.circle[parts.pb.arcs[job.o].circles[job.side].0 as usize + 1];
                 let (m_nodes, a_nodes) = &nodes[job.o];
@@ -1452,20 +1448,12 @@ fn grids_pass(
                     let rows = super::smoothing::boundary_layer_rows(&g);
                     super::smoothing::winslow(&mut g, smooth, rows);
                 }
-                if flag.is_some_and(|f| f.flags(&g)) {
-                    flags[b].store(true, Ordering::Relaxed);
-                }
+                *flagged = flag.is_some_and(|f| f.flags(&g));
                 Ok(g)
             },
         )
         .collect::<Result<Vec<_>, MeshError>>()?;
-    // (The pool's join orders every store before these loads.)
-    let flagged = flags
-        .iter()
-        .enumerate()
-        .filter(|(_, f)| f.load(Ordering::Relaxed))
-        .map(|(b, _)| b)
-        .collect();
+    let flagged = (0..flags.len()).filter(|&b| flags[b]).collect();
     Ok((grids, flagged))
 }
 
