@@ -9,6 +9,8 @@
 //! differs from `w.iter().sum()` at most in the sign of a zero (both sums add the same weights
 //! in the same order from a zero), which takes the same equal-steps branch.
 
+use crate::lanes::Lanes;
+
 /// `n + 1` parameters in `[0, 1]` equidistributing the sub-step weights `w` (`t_0 = 0`,
 /// `t_n = 1` exactly; equal steps when the weights vanish).
 #[cfg(test)]
@@ -20,7 +22,8 @@ pub(crate) fn equidistribute(w: &[f64], n: usize) -> Vec<f64> {
 
 /// `equidistribute` (the allocating form, kept for the tests) written into `t` (cleared
 /// first), with `prefix` the running sums' buffer: the same values, in buffers reused from
-/// piece to piece.
+/// piece to piece. Inlined, so that [`arc_params_into`]'s builds compile it in.
+#[inline(always)]
 pub(crate) fn equidistribute_into(w: &[f64], n: usize, t: &mut Vec<f64>, prefix: &mut Vec<f64>) {
     t.clear();
     prefix.clear();
@@ -35,6 +38,7 @@ pub(crate) fn equidistribute_into(w: &[f64], n: usize, t: &mut Vec<f64>, prefix:
 }
 
 /// The parameters of the weights `w` from their running sums `p` (see the module docs).
+#[inline(always)]
 fn fill(w: &[f64], p: &[f64], n: usize, t: &mut Vec<f64>) {
     let k = w.len();
     let total = p[k];
@@ -87,6 +91,12 @@ const ANG_SLACK: f64 = 1e-6;
 ///
 /// Arcs whose cells all stay within the limit keep the plain parameters, bit for bit. `w` is
 /// left holding the weights used; `prefix` is scratch.
+///
+/// Compiled for each vector build ([`Lanes`], chosen once per call, as the densities are):
+/// the baseline (SSE2) has no 64-bit unsigned maximum, no blend for `max` and `clamp`, and
+/// 2-lane vectors, and the piece loop of exact mode spent twice as long here as the AVX-512
+/// build does (issue 8). The same IEEE operations in the same order (no fused multiply-add,
+/// sums in order), so every build gives the same bits (tested).
 pub(crate) fn arc_params_into(
     w: &mut [f64],
     ang: &[f64],
@@ -94,6 +104,57 @@ pub(crate) fn arc_params_into(
     t: &mut Vec<f64>,
     prefix: &mut Vec<f64>,
 ) {
+    arc_params_with(Lanes::best(), w, ang, n, t, prefix)
+}
+
+/// [`arc_params_into`] in the build `lanes` (the baseline when the CPU lacks it): the test
+/// hook that compares the builds.
+pub(crate) fn arc_params_with(
+    lanes: Lanes,
+    w: &mut [f64],
+    ang: &[f64],
+    n: usize,
+    t: &mut Vec<f64>,
+    prefix: &mut Vec<f64>,
+) {
+    #[cfg(target_arch = "x86_64")]
+    match lanes {
+        // SAFETY: `Lanes::available` checked the CPU's features.
+        Lanes::Avx512 if lanes.available() => {
+            return unsafe { arc_params_avx512(w, ang, n, t, prefix) }
+        }
+        // SAFETY: as above.
+        Lanes::Avx2 if lanes.available() => {
+            return unsafe { arc_params_avx2(w, ang, n, t, prefix) }
+        }
+        _ => {}
+    }
+    arc_params_body(w, ang, n, t, prefix)
+}
+
+/// [`arc_params_body`] compiled for AVX-512 (8-lane vectors).
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx512f,avx512dq,avx512vl,avx2")]
+fn arc_params_avx512(
+    w: &mut [f64],
+    ang: &[f64],
+    n: usize,
+    t: &mut Vec<f64>,
+    prefix: &mut Vec<f64>,
+) {
+    arc_params_body(w, ang, n, t, prefix)
+}
+
+/// [`arc_params_body`] compiled for AVX2 (4-lane vectors).
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+fn arc_params_avx2(w: &mut [f64], ang: &[f64], n: usize, t: &mut Vec<f64>, prefix: &mut Vec<f64>) {
+    arc_params_body(w, ang, n, t, prefix)
+}
+
+/// The body of [`arc_params_into`], inlined into each build.
+#[inline(always)]
+fn arc_params_body(w: &mut [f64], ang: &[f64], n: usize, t: &mut Vec<f64>, prefix: &mut Vec<f64>) {
     equidistribute_into(w, n, t, prefix);
     if ang.len() != w.len()
         || within_ang_limit(ang, t)
@@ -129,6 +190,7 @@ pub(crate) fn arc_params_into(
 /// hundred ulps of their total `<= G k` (the `1e-12 G k` term, with a margin of
 /// `ANG_SLACK / 2` besides). False when a density is negative (`-0.0` too) or a density or a
 /// parameter is not finite (the full computation decides those).
+#[inline(always)]
 fn within_ang_limit(ang: &[f64], t: &[f64]) -> bool {
     // Non-negative finite floats order as their bits; every other bit pattern (negative,
     // `-0.0` included, infinite, NaN) is at least that of `+inf`: one unsigned maximum (a
@@ -153,6 +215,7 @@ fn within_ang_limit(ang: &[f64], t: &[f64]) -> bool {
 /// The most wall-angle density (`ang`, per sub-step, taken as spread evenly over its
 /// sub-step) that one cell between consecutive parameters `t` (in `[0, 1]`, nondecreasing)
 /// sweeps.
+#[inline(always)]
 fn largest_cell_ang(ang: &[f64], t: &[f64]) -> f64 {
     let k = ang.len();
     let Some((&first, rest)) = t.split_first() else {
@@ -371,6 +434,66 @@ mod tests {
         }
         // The plain parameters were over the limit on most of these arcs.
         assert!(over > 200, "{over}");
+    }
+
+    /// Every vector build of [`arc_params_into`] gives the baseline's bits (parameters and the
+    /// weights left in `w`) on arcs within the limit, narrow-gap arcs that are rescaled, counts
+    /// below the lower bound, and degenerate densities (zeros of both signs, negative,
+    /// infinite and NaN entries, empty arcs), on buffers left over from other calls; and the
+    /// builds do run here (the AVX-512 one on this project's machines).
+    #[test]
+    fn every_build_gives_the_baselines_bits() {
+        let mut rng = SplitMix64(41);
+        let builds: Vec<Lanes> = Lanes::ALL.into_iter().filter(|l| l.available()).collect();
+        let odd = [0.0, -0.0, -1.0, f64::INFINITY, f64::NAN, 1e-300, 1e300];
+        let mut rescaled = 0;
+        for case in 0..3000 {
+            let k = [0, 1, 2, 7, 64, 256][case % 6];
+            let (mut w, mut ang) = if case % 3 == 0 && k > 0 {
+                gap_arc(&mut rng, k, 0.1)
+            } else {
+                let ang: Vec<f64> = (0..k).map(|_| 0.05 * rng.next_f64()).collect();
+                let w = ang.iter().map(|&g| g + rng.next_f64()).collect();
+                (w, ang)
+            };
+            if case % 5 == 0 && k > 0 {
+                for _ in 0..2 {
+                    let at = (rng.next_f64() * k as f64) as usize;
+                    let x = odd[(rng.next_f64() * odd.len() as f64) as usize];
+                    if rng.next_f64() < 0.5 {
+                        w[at] = x;
+                    } else {
+                        ang[at] = x;
+                    }
+                }
+            }
+            // (At most 64 cells: an entry of 1e300 would ask for more than memory holds.)
+            let lower = ang
+                .iter()
+                .filter(|g| g.is_finite())
+                .sum::<f64>()
+                .ceil()
+                .min(60.0) as usize;
+            let n = 1 + (lower + (rng.next_f64() * 8.0) as usize).saturating_sub(case % 4);
+            let run = |lanes: Lanes| {
+                let mut w = w.clone();
+                let (mut t, mut prefix) = (vec![f64::NAN; case % 9], vec![7.0; case % 5]);
+                arc_params_with(lanes, &mut w, &ang, n, &mut t, &mut prefix);
+                let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<u64>>();
+                (bits(&t), bits(&w))
+            };
+            let base = run(Lanes::Base);
+            rescaled += usize::from(base.1 != run_bits(&w));
+            for &lanes in &builds {
+                assert_eq!(run(lanes), base, "{lanes:?}, case {case}: k {k}, n {n}");
+            }
+        }
+        // Many arcs took the rescaling branch, whose loops differ most between builds.
+        assert!(rescaled > 200, "{rescaled}");
+    }
+
+    fn run_bits(v: &[f64]) -> Vec<u64> {
+        v.iter().map(|x| x.to_bits()).collect()
     }
 
     /// Below the lower bound (`n < sum ang`) the cells share the wall angle equally.
