@@ -169,7 +169,12 @@ mod itoa_like {
             at -= 1;
             buf[at] = b'0' + x as u8;
         }
-        out.extend_from_slice(&buf[at..]);
+        // Pushed one by one: `extend_from_slice` of a length known only here called `memcpy`
+        // for every number (some 300 000 numbers at 1e3 bubbles, most of a millisecond).
+        out.reserve(buf.len() - at);
+        for &d in &buf[at..] {
+            out.push(d);
+        }
     }
 
     pub fn signed(x: i32, out: &mut Vec<u8>) {
