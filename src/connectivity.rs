@@ -252,6 +252,22 @@ impl<'a> Connectivity<'a> {
         })
     }
 
+    /// The node counts `[ni + 1, nj + 1]` of block `b` ([`BlockConnectivity::dims`]; `None`
+    /// when `b` is out of range).
+    pub fn dims(&self, b: usize) -> Option<[usize; 2]> {
+        self.partners.get(b)?;
+        let g = self.grids.get(b)?;
+        Some([g.ni + 1, g.nj + 1])
+    }
+
+    /// The record of side `s` of block `b` (`self.block(b)?.sides[s]`), formed alone: a
+    /// writer that takes the sides one at a time does not move whole block records (about 700
+    /// bytes, copied by `memcpy` calls: issue 8).
+    pub fn side(&self, b: usize, s: usize) -> Option<SideConnectivity> {
+        let packed = *self.partners.get(b)?.get(s)?;
+        Some(side_record(self.layout, self.grids, b, s, packed))
+    }
+
     /// Every block's record, in block order (blocks in parallel on the current rayon pool).
     pub fn to_vec(&self) -> Vec<BlockConnectivity> {
         (0..self.len())

@@ -20,7 +20,7 @@
 //! this side's nodes onto the partner's). CGNS ranges are 1-based.
 
 use super::write_atomic;
-use crate::connectivity::{BlockConnectivity, Connectivity, SideKind};
+use crate::connectivity::{BlockConnectivity, Connectivity, SideConnectivity, SideKind};
 use rayon::prelude::*;
 use serde::Serialize;
 use std::io::{self, Write};
@@ -72,8 +72,9 @@ pub fn write_json_from(conn: &Connectivity, path: &Path) -> io::Result<()> {
     write_blocks(
         conn.len(),
         |out, b| {
-            if let Some(bc) = conn.block(b) {
-                write_block(out, &bc);
+            // Side by side (`Connectivity::side`), not through a whole block record.
+            if let Some(dims) = conn.dims(b) {
+                write_block_with(out, b, dims, |s| conn.side(b, s));
             }
         },
         path,
@@ -214,13 +215,25 @@ fn pair(out: &mut Vec<u8>, v: [usize; 2]) {
 /// every fixed run of keys and punctuation copied as one piece (issue 8: an entry at a time
 /// was 7.8 k instructions per block).
 pub fn write_block(out: &mut Vec<u8>, b: &BlockConnectivity) {
+    write_block_with(out, b.block, b.dims, |k| b.sides.get(k).copied());
+}
+
+/// [`write_block`] of the block numbered `block` with node counts `dims` and the sides
+/// `side(0)` to `side(3)` (a side that is `None` is left out; a block's record has all four).
+#[inline]
+fn write_block_with(
+    out: &mut Vec<u8>,
+    block: usize,
+    dims: [usize; 2],
+    side: impl Fn(usize) -> Option<SideConnectivity>,
+) {
     out.reserve(1024);
     out.extend_from_slice(b"{\"block\":");
-    unsigned(b.block as u64, out);
+    unsigned(block as u64, out);
     out.extend_from_slice(b",\"dims\":");
-    pair(out, b.dims);
+    pair(out, dims);
     out.extend_from_slice(b",\"sides\":[");
-    for (k, s) in b.sides.iter().enumerate() {
+    for (k, s) in (0..4).filter_map(side).enumerate() {
         out.extend_from_slice(if k == 0 {
             b"{\"side\":"
         } else {
