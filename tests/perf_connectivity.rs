@@ -90,15 +90,20 @@ fn compact_form_answers_as_the_records() {
         let mut partners = 0;
         for (b, bc) in records.iter().enumerate() {
             assert_eq!(conn.block(b).as_ref(), Some(bc));
+            assert_eq!(conn.dims(b), Some(bc.dims));
             for (s, sc) in bc.sides.iter().enumerate() {
                 assert_eq!(conn.partner(b, s), sc.partner, "block {b} side {s}");
+                // The side formed alone is the record's (what the writer takes).
+                assert_eq!(conn.side(b, s).as_ref(), Some(sc), "block {b} side {s}");
                 partners += usize::from(sc.partner.is_some());
             }
             assert_eq!(conn.partner(b, 4), None);
+            assert_eq!(conn.side(b, 4), None);
         }
         assert!(partners > 0);
         assert_eq!(conn.block(n), None);
         assert_eq!(conn.partner(n, 0), None);
+        assert_eq!((conn.dims(n), conn.side(n, 0)), (None, None));
         assert_eq!(conn.to_vec(), records);
     }
 }
