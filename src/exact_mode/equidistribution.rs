@@ -467,7 +467,7 @@ mod tests {
                     }
                 }
             }
-            // (At most 64 cells: an entry of 1e300 would ask for more than memory holds.)
+            // (At most 68 cells: an entry of 1e300 would ask for more than memory holds.)
             let lower = ang
                 .iter()
                 .filter(|g| g.is_finite())
@@ -479,8 +479,7 @@ mod tests {
                 let mut w = w.clone();
                 let (mut t, mut prefix) = (vec![f64::NAN; case % 9], vec![7.0; case % 5]);
                 arc_params_with(lanes, &mut w, &ang, n, &mut t, &mut prefix);
-                let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<u64>>();
-                (bits(&t), bits(&w))
+                (run_bits(&t), run_bits(&w))
             };
             let base = run(Lanes::Base);
             rescaled += usize::from(base.1 != run_bits(&w));
@@ -492,6 +491,7 @@ mod tests {
         assert!(rescaled > 200, "{rescaled}");
     }
 
+    /// The bits of `v`.
     fn run_bits(v: &[f64]) -> Vec<u64> {
         v.iter().map(|x| x.to_bits()).collect()
     }
