@@ -244,10 +244,9 @@ impl<'a> Connectivity<'a> {
     /// The record of block `b`, as [`connectivity`] gives it (`None` when `b` is out of range).
     pub fn block(&self, b: usize) -> Option<BlockConnectivity> {
         let packed = self.partners.get(b)?;
-        let g = &self.grids[b];
         Some(BlockConnectivity {
             block: b,
-            dims: [g.ni + 1, g.nj + 1],
+            dims: self.dims(b)?,
             sides: [0, 1, 2, 3].map(|s| side_record(self.layout, self.grids, b, s, packed[s])),
         })
     }
