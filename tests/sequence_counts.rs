@@ -545,3 +545,120 @@ fn changing_layouts_settle_as_the_sequential_rule() {
     );
     settle_as_the_rule(&text, &want);
 }
+
+/// The three holes of [`periodic_frames`] (the first two moving by `step` per frame), the
+/// whole layout also drifting by `(0.15, -0.12)` per frame from `(3.2, 2.6)`, with every
+/// centre wrapped into the 4 x 3 box, as a particle code writes them: holes cross the box's
+/// edges from one frame to the next.
+fn periodic_crossing_frames(n: usize, step: f64) -> String {
+    let size = [4.0, 3.0];
+    let holes = |k: usize| {
+        let (x, d) = (
+            step * k as f64,
+            [3.2 + 0.15 * k as f64, 2.6 - 0.12 * k as f64],
+        );
+        [
+            ([0.5 + x, 0.5], 0.6),
+            ([2.2, 1.9 - x], 0.8),
+            ([3.4, 0.2], 0.3),
+        ]
+        .map(|(c, r)| ([0, 1].map(|a| (c[a] + d[a]).rem_euclid(size[a])), r))
+    };
+    (0..n)
+        .map(|k| {
+            let hs: Vec<String> = holes(k)
+                .iter()
+                .map(|(c, r)| format!(r#"{{"center": [{}, {}], "radius": {r}}}"#, c[0], c[1]))
+                .collect();
+            format!(
+                r#"{{"periodic": {{"size": [4, 3]}}, "holes": [{}]}}"#,
+                hs.join(", ")
+            )
+        })
+        .collect::<Vec<_>>()
+        .join("\n")
+}
+
+/// A hole crossing the box's edge is the same hole on the torus: the run goes on (tags are
+/// counted from nearest copies, `exact_mode::imposed::nearest_copy`). Before, every crossing
+/// ended the run and the frame got its own node counts.
+#[test]
+fn periodic_holes_crossing_the_box_edges_keep_blocks_and_node_counts() {
+    let n = 6;
+    let text = periodic_crossing_frames(n, 0.01);
+    // The frames really wrap: some centre jumps by more than half the box between frames.
+    let frames = parse_frames(&text);
+    let centres = |k: usize| match frames[k].as_ref().unwrap() {
+        AnyDomain::Periodic(p) => p.holes().iter().map(|c| c.center).collect::<Vec<_>>(),
+        AnyDomain::Bounded(_) => unreachable!(),
+    };
+    let jumps = (1..n)
+        .filter(|&k| {
+            centres(k)
+                .iter()
+                .zip(centres(k - 1))
+                .any(|(a, b)| (a[0] - b[0]).abs() > 2.0 || (a[1] - b[1]).abs() > 1.5)
+        })
+        .count();
+    assert!(jumps >= 2, "{jumps} frames with a hole across an edge");
+    check_run(&text, n);
+}
+
+/// The combinatorics and block keys of a periodic frame do not depend on which copy of each
+/// hole the box holds: the same layout moved by whole and partial periods (centres wrapped
+/// into the box, so holes cross its edges) has the same triples and keys. The moves are
+/// exact in floating point (multiples of 1/8 in a box of 8 x 6), so the torus is the same.
+#[test]
+fn periodic_combinatorics_do_not_depend_on_the_copies_in_the_box() {
+    let base = medial_blocks::layouts::periodic_bubbles(12, 5).unwrap();
+    // Rescaled to an 8 x 6 box with centres on a 1/64 grid, so every move below is exact.
+    let [lx, ly] = base.size();
+    let snap = |v: f64| (v * 64.0).round() / 64.0;
+    let holes: Vec<_> = base
+        .holes()
+        .iter()
+        .map(|c| {
+            (
+                [snap(c.center[0] * 8.0 / lx), snap(c.center[1] * 6.0 / ly)],
+                c.radius * 0.6,
+            )
+        })
+        .collect();
+    let frame = |d: [f64; 2]| {
+        let hs: Vec<String> = holes
+            .iter()
+            .map(|(c, r)| {
+                let x = (c[0] + d[0]).rem_euclid(8.0);
+                let y = (c[1] + d[1]).rem_euclid(6.0);
+                format!(r#"{{"center": [{x}, {y}], "radius": {r}}}"#)
+            })
+            .collect();
+        format!(
+            r#"{{"periodic": {{"size": [8, 6]}}, "holes": [{}]}}"#,
+            hs.join(", ")
+        )
+    };
+    let opts = Options {
+        cells: 6,
+        ..Options::default()
+    };
+    let meshed = |d: [f64; 2]| {
+        let f = parse_frames(&frame(d));
+        mesh_frame(f[0].as_ref().unwrap(), &opts).unwrap()
+    };
+    let first = meshed([0.0, 0.0]);
+    let keys = first.keys.clone().expect("exact mode keys");
+    assert!(!first.combinatorics.is_empty());
+    for d in [
+        [4.0, 0.0],
+        [0.0, 3.0],
+        [2.5, 1.125],
+        [-3.75, 5.5],
+        [7.875, -0.25],
+    ] {
+        let m = meshed(d);
+        assert_eq!(m.combinatorics, first.combinatorics, "moved by {d:?}");
+        assert_eq!(m.keys.as_ref(), Some(&keys), "moved by {d:?}");
+        assert_eq!(m.mesh.grids.len(), first.mesh.grids.len());
+    }
+}

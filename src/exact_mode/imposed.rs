@@ -7,8 +7,12 @@
 //! counter-clockwise order of their touching points, rotated to start at the smallest (so the
 //! two vertices of three circles, mirror images, have different keys). Circles are
 //! [`CircleTag`]s `(id, a, b)`: a bounded domain's circle id with `a = b = 0`, or a periodic
-//! domain's hole moved by `(a Lx, b Ly)` in the frame where the block's wall is the canonical
-//! copy.
+//! domain's hole `id` counted from its copy nearest to the canonical copy of the block's wall
+//! ([`nearest_copy`]): `(a, b)` names the copy `(a Lx, b Ly)` away from that one. Counted so,
+//! a tag does not depend on which copy of a hole lies in the box, so a hole that crosses the
+//! box's edge between two frames (its centre wrapped to the other side) keeps the tags of
+//! its blocks and of the blocks around it, and a sequence keeps its run (issue 6's "the same
+//! circle triples"); counted from the canonical copies, every crossing ended the run.
 
 use crate::geometry::Point;
 use std::collections::BTreeMap;
@@ -18,6 +22,24 @@ use std::sync::Mutex;
 
 /// A circle: `(id, a, b)` (see the module documentation).
 pub type CircleTag = (i64, i64, i64);
+
+/// The copy `(i, j)` (centre `to + (i Lx, j Ly)`) of a periodic hole centred at `to` that is
+/// nearest to the point `from`, per axis `round((from - to) / L)` (halves away from zero), in
+/// a box of `size`; `0` on an axis where that is not a finite number (clamped to `i32`).
+/// The same for every copy of `from` and `to` that a box holds up to the difference of their
+/// wraps: moving `to` by `-L` adds one, moving `from` by `-L` takes one away (up to the
+/// rounding of the quotient, and ties at exactly half a period).
+pub fn nearest_copy(size: [f64; 2], from: Point, to: Point) -> (i32, i32) {
+    let axis = |a: usize| {
+        let q = ((from[a] - to[a]) / size[a]).round();
+        if q.is_finite() {
+            q.clamp(i32::MIN as f64, i32::MAX as f64) as i32
+        } else {
+            0
+        }
+    };
+    (axis(0), axis(1))
+}
 
 /// `(wall, circles around corner 3, circles around corner 2)`.
 pub type BlockKey = (CircleTag, Vec<CircleTag>, Vec<CircleTag>);
@@ -254,6 +276,24 @@ pub(super) fn bounded_keys(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The nearest copy per axis, and the identities that make tags independent of the box's
+    /// copies: moving the target hole by `-L` adds one, moving the origin by `-L` takes one.
+    #[test]
+    fn nearest_copy_counts_the_wraps() {
+        let size = [4.0, 3.0];
+        assert_eq!(nearest_copy(size, [3.9, 0.1], [0.1, 2.9]), (1, -1));
+        assert_eq!(nearest_copy(size, [2.0, 1.0], [2.5, 1.2]), (0, 0));
+        for (from, to) in [([3.9, 0.1], [0.1, 2.9]), ([0.3, 2.2], [3.7, 0.4])] {
+            let n = nearest_copy(size, from, to);
+            let moved_to = [to[0] - size[0], to[1] - size[1]];
+            assert_eq!(nearest_copy(size, from, moved_to), (n.0 + 1, n.1 + 1));
+            let moved_from = [from[0] - size[0], from[1]];
+            assert_eq!(nearest_copy(size, moved_from, to), (n.0 - 1, n.1));
+        }
+        assert_eq!(nearest_copy(size, [f64::NAN, 0.0], [0.0, 0.0]), (0, 0));
+        assert_eq!(nearest_copy([0.0, 3.0], [1.0, 0.0], [0.0, 0.0]), (0, 0));
+    }
 
     proptest::proptest! {
         /// The least rotation found in place is the least of the rotations built as vectors

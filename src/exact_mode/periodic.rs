@@ -878,10 +878,13 @@ fn build_checking(
     })))
 }
 
-/// The key ([`BlockKey`]) of block `2o + s` (side `s` of arc orbit `o`), in the frame where
-/// its wall is the canonical copy.
+/// The key ([`BlockKey`]) of block `2o + s` (side `s` of arc orbit `o`): in the frame where
+/// its wall is the canonical copy, each circle counted from its copy nearest to the wall's
+/// ([`super::imposed::nearest_copy`], so that the key does not depend on the box's choice of
+/// copies).
 fn block_keys(pb: &PeriodicBlocking, verts: &[Vertex]) -> Vec<BlockKey> {
-    let cycle = |w: usize, s: Shift| -> Vec<CircleTag> {
+    let centre = |h: u32| pb.holes.get(h as usize).map(|c| c.center);
+    let cycle = |w: usize, s: Shift, wall: u32| -> Vec<CircleTag> {
         let Some(v) = verts.get(w) else {
             return Vec::new();
         };
@@ -889,7 +892,18 @@ fn block_keys(pb: &PeriodicBlocking, verts: &[Vertex]) -> Vec<BlockKey> {
             .circles
             .iter()
             .zip(&v.tangent)
-            .map(|(c, &p)| ((c.0 as i64, (c.1 + s.0) as i64, (c.2 + s.1) as i64), p))
+            .map(|(c, &p)| {
+                let near = match (centre(wall), centre(c.0)) {
+                    (Some(from), Some(to)) => super::imposed::nearest_copy(pb.size, from, to),
+                    _ => (0, 0),
+                };
+                let tag = (
+                    c.0 as i64,
+                    i64::from(c.1 + s.0) - i64::from(near.0),
+                    i64::from(c.2 + s.1) - i64::from(near.1),
+                );
+                (tag, p)
+            })
             .collect();
         vertex_cycle(v.center, &touching)
     };
@@ -901,7 +915,7 @@ fn block_keys(pb: &PeriodicBlocking, verts: &[Vertex]) -> Vec<BlockKey> {
                 let c = arc.circles[side];
                 let d = (-c.1, -c.2);
                 let [(w0, e0), (w1, e1)] = arc.ends;
-                let (a, b) = (cycle(w0, add(e0, d)), cycle(w1, add(e1, d)));
+                let (a, b) = (cycle(w0, add(e0, d), c.0), cycle(w1, add(e1, d), c.0));
                 let wall = (c.0 as i64, 0, 0);
                 if side == 0 {
                     (wall, a, b)

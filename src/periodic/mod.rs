@@ -699,7 +699,8 @@ pub struct PeriodicLayout {
     /// The half-widths `[mx, my]` of the tiling used (`(2 mx + 1) x (2 my + 1)` tiles).
     pub tiling: [i32; 2],
     /// The circle triples of the medial vertex orbits, each as `(hole, tile a, tile b)`
-    /// normalised up to translation, sorted: the medial combinatorics of the period.
+    /// normalised up to translation and counted from nearest copies (`normalise_triple`),
+    /// sorted: the medial combinatorics of the period.
     pub triples: Vec<[CircleKey; 3]>,
     /// The same blocks as orbits, for exact mode ([`crate::exact_mode::periodic::build`]);
     /// vertex orbits are the contracted vertices (a co-circular group of `n` circles is one
@@ -2369,7 +2370,7 @@ fn extract(
         .map(|v| {
             let mut c = v.map(|s| (s.0, s.2, s.3));
             c.sort_unstable();
-            normalise_triple(c)
+            normalise_triple(c, pd.holes(), size)
         })
         .collect();
     triples.sort_unstable();
@@ -2715,10 +2716,29 @@ fn group_of_members(
     }
 }
 
-fn normalise_triple(c: [CircleKey; 3]) -> [CircleKey; 3] {
+/// A vertex orbit's circle triple `c` (copies of the holes `holes` of a box of `size`) as
+/// [`PeriodicLayout::triples`] lists it: for each circle `x` taken as the origin, the others
+/// counted from their copy nearest to `x`'s ([`crate::exact_mode::imposed::nearest_copy`]),
+/// sorted; the least of the three. It does not depend on which copy of each hole lies in the
+/// box (a hole that crossed the box's edge between two frames of a sequence gives the same
+/// triples), nor on the shift of the whole triple.
+fn normalise_triple(c: [CircleKey; 3], holes: &[Circle], size: [f64; 2]) -> [CircleKey; 3] {
+    let centre = |h: u32| holes.get(h as usize).map(|c| c.center);
     c.iter()
         .map(|x| {
-            let mut s = c.map(|y| (y.0, y.1 - x.1, y.2 - x.2));
+            let mut s = c.map(|y| {
+                let near = match (centre(x.0), centre(y.0)) {
+                    (Some(from), Some(to)) => {
+                        crate::exact_mode::imposed::nearest_copy(size, from, to)
+                    }
+                    _ => (0, 0),
+                };
+                (
+                    y.0,
+                    y.1.wrapping_sub(x.1).wrapping_sub(near.0),
+                    y.2.wrapping_sub(x.2).wrapping_sub(near.1),
+                )
+            });
             s.sort_unstable();
             s
         })
