@@ -11,8 +11,10 @@
 //! # Same combinatorics, same blocks, same node counts
 //! The medial combinatorics of a frame is the sorted list of circle triples of its medial
 //! vertices (for a periodic frame: the orbits of the triples, each circle as `(hole, tile)`
-//! normalised up to a period shift). When a frame's list equals the previous frame's, the
-//! summary says so (`same_combinatorics_as_previous`). The blocks of every frame are numbered
+//! normalised up to a period shift, tiles counted from nearest copies, so that a hole crossing
+//! the box's edge changes nothing: [`crate::exact_mode::imposed::nearest_copy`]). When a
+//! frame's list equals the previous frame's, the summary says so
+//! (`same_combinatorics_as_previous`). The blocks of every frame are numbered
 //! canonically by a key that depends on the combinatorics only
 //! ([`crate::exact_mode::imposed::BlockKey`]: the wall circle and the counter-clockwise cycles
 //! of circles at the two medial corners), so frames with the same combinatorics list the same
