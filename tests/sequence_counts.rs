@@ -604,49 +604,45 @@ fn periodic_holes_crossing_the_box_edges_keep_blocks_and_node_counts() {
     check_run(&text, n);
 }
 
-/// The combinatorics and block keys of a periodic frame do not depend on which copy of each
-/// hole the box holds: the same layout moved by whole and partial periods (centres wrapped
-/// into the box, so holes cross its edges) has the same triples and keys. The moves are
-/// exact in floating point (multiples of 1/8 in a box of 8 x 6), so the torus is the same.
-#[test]
-fn periodic_combinatorics_do_not_depend_on_the_copies_in_the_box() {
-    let base = medial_blocks::layouts::periodic_bubbles(12, 5).unwrap();
-    // Rescaled to an 8 x 6 box with centres on a 1/64 grid, so every move below is exact.
+/// `n` bubbles of `layouts::periodic_bubbles(n, seed)` rescaled into an 8 x 6 box with
+/// centres on a 1/64 grid (radii 0.6 of theirs, so no two meet), moved by `d` and wrapped
+/// into the box: as JSON. Moves by multiples of 1/8 are exact in floating point, so every
+/// such move is the same layout on the torus.
+fn moved_bubbles(n: usize, seed: u64, d: [f64; 2]) -> String {
+    let base = medial_blocks::layouts::periodic_bubbles(n, seed).unwrap();
     let [lx, ly] = base.size();
     let snap = |v: f64| (v * 64.0).round() / 64.0;
-    let holes: Vec<_> = base
+    let hs: Vec<String> = base
         .holes()
         .iter()
         .map(|c| {
-            (
-                [snap(c.center[0] * 8.0 / lx), snap(c.center[1] * 6.0 / ly)],
-                c.radius * 0.6,
-            )
+            let x = (snap(c.center[0] * 8.0 / lx) + d[0]).rem_euclid(8.0);
+            let y = (snap(c.center[1] * 6.0 / ly) + d[1]).rem_euclid(6.0);
+            format!(r#"{{"center": [{x}, {y}], "radius": {}}}"#, c.radius * 0.6)
         })
         .collect();
-    let frame = |d: [f64; 2]| {
-        let hs: Vec<String> = holes
-            .iter()
-            .map(|(c, r)| {
-                let x = (c[0] + d[0]).rem_euclid(8.0);
-                let y = (c[1] + d[1]).rem_euclid(6.0);
-                format!(r#"{{"center": [{x}, {y}], "radius": {r}}}"#)
-            })
-            .collect();
-        format!(
-            r#"{{"periodic": {{"size": [8, 6]}}, "holes": [{}]}}"#,
-            hs.join(", ")
-        )
-    };
+    format!(
+        r#"{{"periodic": {{"size": [8, 6]}}, "holes": [{}]}}"#,
+        hs.join(", ")
+    )
+}
+
+/// The frame of `text` (one domain) meshed as a sequence frame, with 6 cells.
+fn frame_of(text: &str) -> medial_blocks::sequence::FrameMesh {
     let opts = Options {
         cells: 6,
         ..Options::default()
     };
-    let meshed = |d: [f64; 2]| {
-        let f = parse_frames(&frame(d));
-        mesh_frame(f[0].as_ref().unwrap(), &opts).unwrap()
-    };
-    let first = meshed([0.0, 0.0]);
+    let f = parse_frames(text);
+    mesh_frame(f[0].as_ref().unwrap(), &opts).unwrap()
+}
+
+/// The combinatorics and block keys of a periodic frame do not depend on which copy of each
+/// hole the box holds: the same layout moved by whole and partial periods (centres wrapped
+/// into the box, so holes cross its edges) has the same triples and keys.
+#[test]
+fn periodic_combinatorics_do_not_depend_on_the_copies_in_the_box() {
+    let first = frame_of(&moved_bubbles(12, 5, [0.0, 0.0]));
     let keys = first.keys.clone().expect("exact mode keys");
     assert!(!first.combinatorics.is_empty());
     for d in [
@@ -656,9 +652,27 @@ fn periodic_combinatorics_do_not_depend_on_the_copies_in_the_box() {
         [-3.75, 5.5],
         [7.875, -0.25],
     ] {
-        let m = meshed(d);
+        let m = frame_of(&moved_bubbles(12, 5, d));
         assert_eq!(m.combinatorics, first.combinatorics, "moved by {d:?}");
         assert_eq!(m.keys.as_ref(), Some(&keys), "moved by {d:?}");
         assert_eq!(m.mesh.grids.len(), first.mesh.grids.len());
+    }
+}
+
+proptest::proptest! {
+    #![proptest_config(proptest::prelude::ProptestConfig { cases: 16, ..Default::default() })]
+    /// As above, on other layouts and moves (in eighths of a unit, so exact).
+    #[test]
+    fn periodic_keys_are_the_same_for_every_move_of_the_box(
+        n in 3usize..14,
+        seed in 0u64..1000,
+        dx in -64i32..64,
+        dy in -48i32..48,
+    ) {
+        let d = [dx as f64 / 8.0, dy as f64 / 8.0];
+        let first = frame_of(&moved_bubbles(n, seed, [0.0, 0.0]));
+        let m = frame_of(&moved_bubbles(n, seed, d));
+        proptest::prop_assert_eq!(&m.combinatorics, &first.combinatorics);
+        proptest::prop_assert_eq!(&m.keys, &first.keys);
     }
 }

@@ -24,14 +24,15 @@ use std::sync::Mutex;
 pub type CircleTag = (i64, i64, i64);
 
 /// The copy `(i, j)` (centre `to + (i Lx, j Ly)`) of a periodic hole centred at `to` that is
-/// nearest to the point `from`, per axis `round((from - to) / L)` (halves away from zero), in
-/// a box of `size`; `0` on an axis where that is not a finite number (clamped to `i32`).
-/// The same for every copy of `from` and `to` that a box holds up to the difference of their
-/// wraps: moving `to` by `-L` adds one, moving `from` by `-L` takes one away (up to the
-/// rounding of the quotient, and ties at exactly half a period).
+/// nearest to the point `from`, per axis `floor((from - to) / L + 1/2)` (a copy exactly half a
+/// period away on either side: the one below), in a box of `size`; `0` on an axis where that
+/// is not a finite number (clamped to `i32`). The same for every copy of `from` and `to` that
+/// a box holds up to the difference of their wraps: moving `to` by `-L` adds one, moving
+/// `from` by `-L` takes one away (halves rounded up on both sides of zero, so that this holds
+/// at exact ties too; up to the rounding of the quotient within an ulp of a tie).
 pub fn nearest_copy(size: [f64; 2], from: Point, to: Point) -> (i32, i32) {
     let axis = |a: usize| {
-        let q = ((from[a] - to[a]) / size[a]).round();
+        let q = ((from[a] - to[a]) / size[a] + 0.5).floor();
         if q.is_finite() {
             q.clamp(i32::MIN as f64, i32::MAX as f64) as i32
         } else {
@@ -291,6 +292,10 @@ mod tests {
             let moved_from = [from[0] - size[0], from[1]];
             assert_eq!(nearest_copy(size, moved_from, to), (n.0 - 1, n.1));
         }
+        // Exactly half a period apart: the copy below, on either side, so a wrap adds one.
+        assert_eq!(nearest_copy(size, [3.0, 1.5], [1.0, 0.0]), (1, 1));
+        assert_eq!(nearest_copy(size, [3.0, 1.5], [-3.0, -3.0]), (2, 2));
+        assert_eq!(nearest_copy(size, [1.0, 0.0], [3.0, 1.5]), (0, 0));
         assert_eq!(nearest_copy(size, [f64::NAN, 0.0], [0.0, 0.0]), (0, 0));
         assert_eq!(nearest_copy([0.0, 3.0], [1.0, 0.0], [0.0, 0.0]), (0, 0));
     }
