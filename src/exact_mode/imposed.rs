@@ -42,6 +42,20 @@ pub fn nearest_copy(size: [f64; 2], from: Point, to: Point) -> (i32, i32) {
     (axis(0), axis(1))
 }
 
+/// [`nearest_copy`] of hole `to` from hole `from` of `holes` (canonical centres, a box of
+/// `size`); `(0, 0)` when either id is not a hole.
+pub fn nearest_copy_of(
+    holes: &[crate::domain::Circle],
+    size: [f64; 2],
+    from: u32,
+    to: u32,
+) -> (i32, i32) {
+    match (holes.get(from as usize), holes.get(to as usize)) {
+        (Some(f), Some(t)) => nearest_copy(size, f.center, t.center),
+        _ => (0, 0),
+    }
+}
+
 /// `(wall, circles around corner 3, circles around corner 2)`.
 pub type BlockKey = (CircleTag, Vec<CircleTag>, Vec<CircleTag>);
 

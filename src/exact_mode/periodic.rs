@@ -883,7 +883,6 @@ fn build_checking(
 /// ([`super::imposed::nearest_copy`], so that the key does not depend on the box's choice of
 /// copies).
 fn block_keys(pb: &PeriodicBlocking, verts: &[Vertex]) -> Vec<BlockKey> {
-    let centre = |h: u32| pb.holes.get(h as usize).map(|c| c.center);
     let cycle = |w: usize, s: Shift, wall: u32| -> Vec<CircleTag> {
         let Some(v) = verts.get(w) else {
             return Vec::new();
@@ -893,10 +892,7 @@ fn block_keys(pb: &PeriodicBlocking, verts: &[Vertex]) -> Vec<BlockKey> {
             .iter()
             .zip(&v.tangent)
             .map(|(c, &p)| {
-                let near = match (centre(wall), centre(c.0)) {
-                    (Some(from), Some(to)) => super::imposed::nearest_copy(pb.size, from, to),
-                    _ => (0, 0),
-                };
+                let near = super::imposed::nearest_copy_of(&pb.holes, pb.size, wall, c.0);
                 let tag = (
                     c.0 as i64,
                     i64::from(c.1 + s.0) - i64::from(near.0),

@@ -2723,16 +2723,10 @@ fn group_of_members(
 /// box (a hole that crossed the box's edge between two frames of a sequence gives the same
 /// triples), nor on the shift of the whole triple.
 fn normalise_triple(c: [CircleKey; 3], holes: &[Circle], size: [f64; 2]) -> [CircleKey; 3] {
-    let centre = |h: u32| holes.get(h as usize).map(|c| c.center);
     c.iter()
         .map(|x| {
             let mut s = c.map(|y| {
-                let near = match (centre(x.0), centre(y.0)) {
-                    (Some(from), Some(to)) => {
-                        crate::exact_mode::imposed::nearest_copy(size, from, to)
-                    }
-                    _ => (0, 0),
-                };
+                let near = crate::exact_mode::imposed::nearest_copy_of(holes, size, x.0, y.0);
                 (
                     y.0,
                     y.1.wrapping_sub(x.1).wrapping_sub(near.0),
