@@ -72,6 +72,7 @@ fn field_loop(
             sj: s,
             a,
             fine,
+            ..
         } = cell_core(
             [bx[i], by[i], bl[i], bt[i]],
             [tx[i], ty[i], tl[i], tt[i]],

@@ -250,6 +250,18 @@ struct Figures {
 /// The bit of [`Figures::bins`] set for a cell of the fast path.
 const FAST: u64 = 1 << 40;
 
+/// The bit of [`Figures::bins`] set for a cell of the fast path whose scaled Jacobian pick
+/// was not certain (two corners' products compared equal: an isosceles trapezoid, as every
+/// cell of a block around a centred hole is, has four equal quotients in exact arithmetic):
+/// loop 1 counted every other figure, and loop 2 takes the scaled Jacobian with the reference
+/// expression (`length_figures` of the corner products and the `len` edges), its bin (field
+/// 5, [`PACK`]), its acceptance and extremes. Before, such a cell took the whole reference
+/// path: a quality pass 7x slower per cell around a centred hole.
+const REDO: u64 = 1 << 41;
+
+/// The 5-bit field of the scaled Jacobian's bin in [`Figures::bins`].
+const SJ_FIELD: u64 = 31 << 25;
+
 /// The portable (2-lane SSE2) build takes the ratio bins from the table: 7% faster there than
 /// the comparisons (Zen 3; the AVX2 build is the other way round, see
 /// [`super::kernel::RatioBins::bin_by_compares`]). The bits are the same either way.
@@ -397,7 +409,8 @@ fn row_figures<const TABLE: bool>(
             edges,
             sj,
             a,
-            fine,
+            fine: exact,
+            geom: fine,
         } = cell_core(
             [bx[i], by[i], bl[i], bt[i]],
             [tx[i], ty[i], tl[i], tt[i]],
@@ -415,7 +428,10 @@ fn row_figures<const TABLE: bool>(
         k.outside[ANGLE] +=
             u64::from(fine & (outside(amin, ANGLE_ACCEPTABLE) | outside(amax, ANGLE_ACCEPTABLE)));
         k.outside[SKEW] += u64::from(fine & !((sd >= th.skew.lo) & (sd < th.skew.above)));
-        k.outside[SJ] += u64::from(fine & outside(sj, SCALED_JACOBIAN_ACCEPTABLE));
+        // A cell whose scaled Jacobian pick is not certain ([`REDO`]) counts it in loop 2;
+        // its keys below are the extremes' neutral values (a float select: an integer one
+        // kept the compiler from vectorising the loop).
+        k.outside[SJ] += u64::from(exact & outside(sj, SCALED_JACOBIAN_ACCEPTABLE));
         k.outside[ER] += u64::from(fine & outside(er, EDGE_RATIO_ACCEPTABLE));
         k.outside[AR] += u64::from(fine & outside(ar, ASPECT_ACCEPTABLE));
         // Angles, edge and aspect ratios are `>= +0` (see the module doc): their keys are
@@ -423,7 +439,10 @@ fn row_figures<const TABLE: bool>(
         let keys = [
             (key_unsigned(amin), key_unsigned(amax)),
             (key(sd), key(sd)),
-            (key(sj), key(sj)),
+            (
+                key(if exact { sj } else { f64::INFINITY }),
+                key(if exact { sj } else { f64::NEG_INFINITY }),
+            ),
             (key_unsigned(er), key_unsigned(er)),
             (key_unsigned(ar), key_unsigned(ar)),
         ];
@@ -450,7 +469,9 @@ fn row_figures<const TABLE: bool>(
         } else {
             rb[0].bin_by_compares(er) + rb[1].bin_by_compares(ar)
         };
-        let bins = packed_bins((angles + skew) + (sj_bin + ratios)) | if fine { FAST } else { 0 };
+        let bins = packed_bins((angles + skew) + (sj_bin + ratios))
+            | if fine { FAST } else { 0 }
+            | if fine & !exact { REDO } else { 0 };
         out[i] = Figures {
             fig: [amin, amax],
             bins,
@@ -478,6 +499,9 @@ pub(super) struct CellCore {
     /// The cell takes the fast path: every length in range, every corner [`settled`], the
     /// scaled Jacobian's pick certain.
     pub fine: bool,
+    /// Every length in range and every corner settled (`fine` but for the pick): the cell
+    /// pass takes every figure but the scaled Jacobian from loop 1 ([`REDO`]).
+    pub geom: bool,
 }
 
 /// [`CellCore`] of a cell from its edges `b`, `t`, `l`, `r` (bottom, top, left, right).
@@ -502,14 +526,14 @@ pub(super) fn cell_core(b: [f64; 4], t: [f64; 4], l: [f64; 4], r: [f64; 4]) -> C
         & settled(a[0], c[0])
         & settled(a[1], c[1])
         & settled(a[2], c[2])
-        & settled(a[3], c[3])
-        & certain;
+        & settled(a[3], c[3]);
     CellCore {
         c,
         edges,
         sj,
         a,
-        fine,
+        fine: fine & certain,
+        geom: fine,
     }
 }
 
@@ -732,7 +756,12 @@ impl Chunk {
                     }
                     f.sum_min += cell.fig[0];
                     f.sum_max += cell.fig[1];
-                    let (c, s) = (&mut *self.pairs, cell.bins);
+                    let mut s = cell.bins;
+                    if s & REDO != 0 {
+                        let p = [line[i], line[i + 1], next[i + 1], next[i]];
+                        s = (s & !SJ_FIELD) | self.redo_scaled_jacobian(&mut f, &p);
+                    }
+                    let c = &mut *self.pairs;
                     for (t, c) in c.iter_mut().enumerate() {
                         c[(s >> (10 * t)) as usize & 1023] += 1;
                     }
@@ -740,6 +769,25 @@ impl Chunk {
             }
         }
         f
+    }
+
+    /// The scaled Jacobian of a [`REDO`] cell with corners `p`, by the reference expression,
+    /// counted in its acceptance, extremes and the block's least; returns its bin as field 5
+    /// of a packed word. On the fast path it is finite and not zero (every corner settled:
+    /// `|sin|` at least that of `1e-9` degrees), so folding it here gives the same bits.
+    fn redo_scaled_jacobian(&mut self, f: &mut BlockFigures, p: &[Point; 4]) -> u64 {
+        let (cross, _) = corner_products(p);
+        let edges = [
+            super::len(p[0], p[1]),
+            super::len(p[1], p[2]),
+            super::len(p[2], p[3]),
+            super::len(p[3], p[0]),
+        ];
+        let (sj, _, _) = super::kernel::length_figures(&cross, &edges);
+        self.outside[SJ] += u64::from(outside(sj, SCALED_JACOBIAN_ACCEPTABLE));
+        self.extremes(SJ, sj, sj);
+        min_sj(f, sj);
+        (weighted_bin(sj, &JACOBIAN_EDGES, 1.0) as u64) << 25
     }
 
     /// Everything the reference computes from one cell, with the reference formulas.
