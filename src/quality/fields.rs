@@ -72,7 +72,7 @@ fn field_loop(
             sj: s,
             a,
             fine,
-            ..
+            geom,
         } = cell_core(
             [bx[i], by[i], bl[i], bt[i]],
             [tx[i], ty[i], tl[i], tt[i]],
@@ -81,12 +81,14 @@ fn field_loop(
         );
         let (amin, amax) = (fold(a, less), fold(a, more));
         let (e, r) = edge_ratios(&edges);
-        lo[i] = if fine { amin } else { f64::NAN };
+        // NaN `lo`: the cell takes the reference path; NaN `sj` alone (its pick undecided,
+        // `rows::REDO`): loop 2 takes the scaled Jacobian by the reference expression.
+        lo[i] = if geom { amin } else { f64::NAN };
         hi[i] = amax;
         mj[i] = fold(c, less);
         sk[i] = more(amax - 90.0, 90.0 - amin) / 90.0;
         er[i] = e;
-        sj[i] = s;
+        sj[i] = if fine { s } else { f64::NAN };
         ar[i] = r;
     }
 }
@@ -155,7 +157,9 @@ fn fields_with(grid: &BlockGrid, f: &mut CellFields, wide: bool, wider: bool) {
             // Loop 2, in cell order: whole rows where every cell took the fast path.
             for r in 0..nb {
                 let row = r * w..r * w + ni;
-                if !out[0][row.clone()].iter().any(|x| x.is_nan()) {
+                if !out[0][row.clone()].iter().any(|x| x.is_nan())
+                    && !out[5][row.clone()].iter().any(|x| x.is_nan())
+                {
                     for (dst, src) in f.arrays_mut().into_iter().zip(out.iter()) {
                         dst.extend_from_slice(&src[row.clone()]);
                     }
@@ -163,10 +167,15 @@ fn fields_with(grid: &BlockGrid, f: &mut CellFields, wide: bool, wider: bool) {
                 }
                 let (line, next) = (&nodes[r * w..(r + 1) * w], &nodes[(r + 1) * w..(r + 2) * w]);
                 for (i, p) in row.enumerate() {
+                    let q = [line[i], line[i + 1], next[i + 1], next[i]];
                     let v = if out[0][p].is_nan() {
-                        cell_field_values(&[line[i], line[i + 1], next[i + 1], next[i]])
+                        cell_field_values(&q)
                     } else {
-                        std::array::from_fn(|k| out[k][p])
+                        let mut v: [f64; 7] = std::array::from_fn(|k| out[k][p]);
+                        if v[5].is_nan() {
+                            v[5] = super::rows::reference_scaled_jacobian(&q);
+                        }
+                        v
                     };
                     for (dst, x) in f.arrays_mut().into_iter().zip(v) {
                         dst.push(x);
@@ -265,6 +274,50 @@ mod tests {
                         });
                     }
                 }
+            }
+        }
+    }
+
+    /// Annular sectors (isosceles trapezoids, whose scaled-Jacobian pick is often undecided:
+    /// loop 2 then takes that figure alone by the reference expression): every lane width
+    /// gives the reference's figures bit for bit.
+    #[test]
+    fn annular_sectors_give_the_reference_figures() {
+        let (wide, wider) = (super::super::kernel::wide(), super::super::kernel::wider());
+        for (r0, r1, ni, nj) in [
+            (1.0, 1.0001, 300, 4),
+            (1.0, 2.0, 40, 40),
+            (0.5, 0.75, 16, 16),
+        ] {
+            let nodes: Vec<Point> = (0..=nj)
+                .flat_map(|j| {
+                    (0..=ni).map(move |i| {
+                        let rad = r0 + (r1 - r0) * j as f64 / nj as f64;
+                        let t = 0.3 + 1.1 * i as f64 / ni as f64;
+                        [2.0 + rad * t.cos(), -1.0 + rad * t.sin()]
+                    })
+                })
+                .collect();
+            let grid = BlockGrid { ni, nj, nodes };
+            let want = super::super::cell_fields_reference(&grid);
+            let bits = |f: &CellFields| -> Vec<Vec<u64>> {
+                let mut g = f.clone();
+                g.arrays_mut()
+                    .iter()
+                    .map(|v| v.iter().map(|x| x.to_bits()).collect())
+                    .collect()
+            };
+            let mut widths = vec![(false, false)];
+            if wide {
+                widths.push((true, false));
+            }
+            if wider {
+                widths.push((true, true));
+            }
+            for (a, b) in widths {
+                let mut got = CellFields::default();
+                fields_with(&grid, &mut got, a, b);
+                assert_eq!(bits(&got), bits(&want), "{ni} x {nj}, lanes {a} {b}");
             }
         }
     }

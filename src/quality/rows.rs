@@ -776,14 +776,7 @@ impl Chunk {
     /// of a packed word. On the fast path it is finite and not zero (every corner settled:
     /// `|sin|` at least that of `1e-9` degrees), so folding it here gives the same bits.
     fn redo_scaled_jacobian(&mut self, f: &mut BlockFigures, p: &[Point; 4]) -> u64 {
-        let (cross, _) = corner_products(p);
-        let edges = [
-            super::len(p[0], p[1]),
-            super::len(p[1], p[2]),
-            super::len(p[2], p[3]),
-            super::len(p[3], p[0]),
-        ];
-        let (sj, _, _) = super::kernel::length_figures(&cross, &edges);
+        let sj = reference_scaled_jacobian(p);
         self.outside[SJ] += u64::from(outside(sj, SCALED_JACOBIAN_ACCEPTABLE));
         self.extremes(SJ, sj, sj);
         min_sj(f, sj);
@@ -815,6 +808,19 @@ impl Chunk {
         self.add(SJ, c.scaled_jacobian);
         self.add(AR, c.aspect_ratio);
     }
+}
+
+/// The scaled Jacobian of the cell with corners `p` by the reference expression
+/// ([`super::cell_metrics`]'s: `length_figures` of the corner products and the `len` edges).
+pub(super) fn reference_scaled_jacobian(p: &[Point; 4]) -> f64 {
+    let (cross, _) = corner_products(p);
+    let edges = [
+        super::len(p[0], p[1]),
+        super::len(p[1], p[2]),
+        super::len(p[2], p[3]),
+        super::len(p[3], p[0]),
+    ];
+    super::kernel::length_figures(&cross, &edges).0
 }
 
 /// `min(x, e)` for the fast path's figures (never NaN nor zero, so this equals `f64::min` in
