@@ -416,17 +416,23 @@ fn ratio(a: f64, b: f64) -> f64 {
     }
 }
 
+/// The reference lengths of a quadrilateral's edges, `edges[k]` from `p[k]` to `p[k + 1]`
+/// ([`len`]).
+fn edge_lengths(p: &[Point; 4]) -> [f64; 4] {
+    [
+        len(p[0], p[1]),
+        len(p[1], p[2]),
+        len(p[2], p[3]),
+        len(p[3], p[0]),
+    ]
+}
+
 /// Measure one quadrilateral (see [`CellMetrics`]).
 pub fn cell_metrics(p: [Point; 4]) -> CellMetrics {
     let c = cell_corners(p);
     let min_angle_deg = fold(c.angle_deg, f64::min);
     let max_angle_deg = fold(c.angle_deg, f64::max);
-    let edges = [
-        len(p[0], p[1]),
-        len(p[1], p[2]),
-        len(p[2], p[3]),
-        len(p[3], p[0]),
-    ];
+    let edges = edge_lengths(&p);
     let (scaled_jacobian, edge_ratio, aspect_ratio) = kernel::length_figures(&c.jacobian, &edges);
     CellMetrics {
         angle_deg: c.angle_deg,

@@ -191,12 +191,25 @@ mod tests {
     use super::*;
     use crate::layouts::SplitMix64;
 
+    /// The `(wide, wider)` builds of [`fields_with`] this CPU runs: the portable one, then
+    /// AVX2 and AVX-512 where it has them.
+    fn lane_widths() -> Vec<(bool, bool)> {
+        let (wide, wider) = (super::super::kernel::wide(), super::super::kernel::wider());
+        let mut widths = vec![(false, false)];
+        if wide {
+            widths.push((true, false));
+        }
+        if wider {
+            widths.push((true, true));
+        }
+        widths
+    }
+
     /// Every lane width gives the reference's figures bit for bit (NaN for NaN), on smooth
     /// grids (where every cell must take the fast path), on grids with folded, flat,
     /// repeated, tiny, huge and non-finite nodes, and on band sizes with padding.
     #[test]
     fn every_lane_width_gives_the_reference_figures() {
-        let (wide, wider) = (super::super::kernel::wide(), super::super::kernel::wider());
         let mut r = SplitMix64(11);
         let mut u = || r.next_f64();
         let same = |a: &CellFields, b: &CellFields| {
@@ -246,14 +259,7 @@ mod tests {
                     .collect();
                 let grid = BlockGrid { ni, nj, nodes };
                 let want = super::super::cell_fields_reference(&grid);
-                let mut widths = vec![(false, false)];
-                if wide {
-                    widths.push((true, false));
-                }
-                if wider {
-                    widths.push((true, true));
-                }
-                for (a, b) in widths {
+                for (a, b) in lane_widths() {
                     let mut got = CellFields::default();
                     fields_with(&grid, &mut got, a, b);
                     assert!(
@@ -283,7 +289,6 @@ mod tests {
     /// gives the reference's figures bit for bit.
     #[test]
     fn annular_sectors_give_the_reference_figures() {
-        let (wide, wider) = (super::super::kernel::wide(), super::super::kernel::wider());
         for (r0, r1, ni, nj) in [
             (1.0, 1.0001, 300, 4),
             (1.0, 2.0, 40, 40),
@@ -307,14 +312,7 @@ mod tests {
                     .map(|v| v.iter().map(|x| x.to_bits()).collect())
                     .collect()
             };
-            let mut widths = vec![(false, false)];
-            if wide {
-                widths.push((true, false));
-            }
-            if wider {
-                widths.push((true, true));
-            }
-            for (a, b) in widths {
+            for (a, b) in lane_widths() {
                 let mut got = CellFields::default();
                 fields_with(&grid, &mut got, a, b);
                 assert_eq!(bits(&got), bits(&want), "{ni} x {nj}, lanes {a} {b}");

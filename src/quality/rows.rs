@@ -811,16 +811,11 @@ impl Chunk {
 }
 
 /// The scaled Jacobian of the cell with corners `p` by the reference expression
-/// ([`super::cell_metrics`]'s: `length_figures` of the corner products and the `len` edges).
+/// ([`super::cell_metrics`]'s: `length_figures` of the corner products and
+/// [`super::edge_lengths`]).
 pub(super) fn reference_scaled_jacobian(p: &[Point; 4]) -> f64 {
     let (cross, _) = corner_products(p);
-    let edges = [
-        super::len(p[0], p[1]),
-        super::len(p[1], p[2]),
-        super::len(p[2], p[3]),
-        super::len(p[3], p[0]),
-    ];
-    super::kernel::length_figures(&cross, &edges).0
+    super::kernel::length_figures(&cross, &super::edge_lengths(p)).0
 }
 
 /// `min(x, e)` for the fast path's figures (never NaN nor zero, so this equals `f64::min` in
