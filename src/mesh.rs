@@ -98,6 +98,12 @@ pub struct Mesh {
     /// [`crate::exact_mode::node_budget`] and was coarsened to `used`; `None` otherwise (also
     /// whenever the size was chosen: `cell_size`, `block_cells`, imposed counts).
     pub coarsened_cell_size: Option<[f64; 2]>,
+    /// The report's figures of every block, measured as its grid was made, when the grids
+    /// were made without keeping their nodes ([`crate::Options::keep_nodes`] false): then
+    /// every grid has its `ni` and `nj` and no node, and
+    /// [`crate::output::report::Report`] reads the figures from here. `None` whenever the
+    /// grids hold their nodes.
+    pub measured: Option<std::sync::Arc<crate::quality::Measured>>,
 }
 
 impl Mesh {

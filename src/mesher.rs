@@ -104,6 +104,15 @@ pub struct Options {
     /// frame of a run with the same combinatorics, [`crate::sequence`]); used only when every
     /// block's key is known and the counts are consistent. Default `None`.
     pub imposed_counts: Option<std::sync::Arc<exact_mode::imposed::ImposedCounts>>,
+    /// Keep every block's nodes (default `true`). `false` is for a caller that needs only
+    /// the report and the block connectivity (the CLI with `--format json`, issue 8): exact
+    /// mode's medial blocks are then measured as their grids are made and their nodes
+    /// dropped, so that the grids never take memory all at once ([`Mesh::measured`] holds
+    /// the figures; each grid keeps its `ni` and `nj`). Only [`mesh`] of a domain of two or
+    /// more holes in exact mode, without smoothing or inserted holes, drops nodes; every
+    /// other mesh keeps them (and has no [`Mesh::measured`]). A mesh without nodes cannot be
+    /// written by the writers of grids.
+    pub keep_nodes: bool,
 }
 
 /// Default of [`Options::collapse_fraction`].
@@ -128,11 +137,25 @@ impl Default for Options {
             smooth: 0,
             block_cells: None,
             imposed_counts: None,
+            keep_nodes: true,
         }
     }
 }
 
 impl Options {
+    /// These options with [`Options::keep_nodes`] set: for the meshes that keep every node
+    /// whatever the caller asked (a lone hole, transition rings, sequences).
+    pub(crate) fn keeping_nodes(&self) -> std::borrow::Cow<'_, Options> {
+        if self.keep_nodes {
+            std::borrow::Cow::Borrowed(self)
+        } else {
+            std::borrow::Cow::Owned(Options {
+                keep_nodes: true,
+                ..self.clone()
+            })
+        }
+    }
+
     /// The default options in paper mode.
     pub fn paper() -> Options {
         Options {
@@ -247,6 +270,8 @@ fn mesh_in_order(domain: &Domain, options: &Options) -> Result<Mesh, MeshError> 
             }
         }
         if holes == 1 {
+            // The ring is measured (and may be seeded) below: its nodes are kept.
+            let options = &*options.keeping_nodes();
             let built = timings::span("exact_geometry", || {
                 exact_mode::annulus::build_annulus(domain, options)
             })?;
@@ -589,11 +614,13 @@ pub(crate) fn short_collapses(
 pub const MERGED_MIN_ANGLE_DEG: f64 = 5.0;
 
 /// The blocks (sorted) with a corner at a vertex merged by short-arc collapse and a cell
-/// angle below [`MERGED_MIN_ANGLE_DEG`].
+/// angle below [`MERGED_MIN_ANGLE_DEG`] (found as the grids were made when their nodes were
+/// not kept: `measured`).
 fn poor_merged_blocks(
     cb: &blocking::CollapsedBlocking,
     layout: &crate::layout::BlockLayout,
     grids: &[crate::mesh::BlockGrid],
+    measured: Option<&crate::quality::Measured>,
 ) -> Vec<usize> {
     let medial = &cb.refined.sampled.medial;
     let merged: Vec<u32> = cb
@@ -627,10 +654,11 @@ fn poor_merged_blocks(
                 .iter()
                 .any(|&v| is_merged.get(v as usize).copied().unwrap_or(false))
         })
-        .filter(|&(b, _)| {
-            grids
+        .filter(|&(b, _)| match measured {
+            Some(m) => m.corner_below(b),
+            None => grids
                 .get(b)
-                .is_some_and(|g| crate::quality::has_corner_below(g, MERGED_MIN_ANGLE_DEG))
+                .is_some_and(|g| crate::quality::has_corner_below(g, MERGED_MIN_ANGLE_DEG)),
         })
         .map(|(b, _)| b)
         .collect()
@@ -712,10 +740,12 @@ fn exact_on_sampling(
         // Found while the grids were made (`ExactMesh::inverted_blocks`): the same list as
         // `quality::inverted_blocks`, which the debug builds check.
         let inverted = m.inverted_blocks.clone();
-        debug_assert_eq!(inverted, crate::quality::inverted_blocks(&m.grids));
+        debug_assert!(
+            m.measured.is_some() || inverted == crate::quality::inverted_blocks(&m.grids)
+        );
         // Nearly flat cells at a vertex merged by short-arc collapse: fixed like inverted ones.
         let poor = timings::span("quality_check", || {
-            poor_merged_blocks(cb, &m.layout, &m.grids)
+            poor_merged_blocks(cb, &m.layout, &m.grids, m.measured.as_deref())
         });
         if m.inconsistent_arcs.is_empty()
             && inverted.is_empty()
@@ -810,6 +840,7 @@ fn done(cb: &blocking::CollapsedBlocking, m: exact_mode::ExactMesh, holes: usize
         template_blocks: m.template_blocks,
         geometry: Geometry::Exact,
         coarsened_cell_size: m.coarsened_from.map(|from| [from, m.cell_size]),
+        measured: m.measured,
     }))
 }
 

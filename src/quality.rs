@@ -28,11 +28,14 @@ pub mod atan;
 mod kernel;
 pub(crate) use kernel::row_inverted_portable;
 mod fields;
+mod measured;
 mod rows;
 
 mod sides;
 
 pub use atan::angle_deg;
+pub use measured::{measured_all, Measured};
+pub(crate) use measured::{ChunkFigures, Measurer};
 
 /// Angles (degrees) and Jacobians of the four corners of one quadrilateral `[p0, p1, p2, p3]`
 /// (see the module doc for the conventions).
@@ -243,7 +246,7 @@ pub fn measure(grids: &[BlockGrid]) -> Quality {
 
 /// Blocks per chunk of [`block_stats`]: a fixed number, so that nothing depends on the
 /// thread count.
-const CHUNK: usize = 64;
+pub(crate) const CHUNK: usize = 64;
 
 /// The per-chunk results of [`block_stats`], and what it measured besides the cells.
 struct Stats {

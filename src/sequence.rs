@@ -89,6 +89,8 @@ impl FrameMesh {
 /// Mesh one frame (bounded or periodic), with canonically numbered blocks (see the module
 /// documentation).
 pub fn mesh_frame(domain: &AnyDomain, options: &Options) -> Result<FrameMesh, MeshError> {
+    // Frames are written with their nodes.
+    let options = &*options.keeping_nodes();
     let (mut m, combinatorics, keys) = match domain {
         AnyDomain::Bounded(d) => {
             let m = mesh(d, options)?;

@@ -823,6 +823,8 @@ pub fn mesh_with_transition_rect(
     options: &Options,
     rect: Rect,
 ) -> Result<Mesh, MeshError> {
+    // The ring joins the blocks' nodes: they are kept.
+    let options = &*options.keeping_nodes();
     let mut base = mesh(domain, options)?;
     if options.mode == Mode::Exact && domain.hole_count() >= 1 {
         if base.geometry == Geometry::Exact {

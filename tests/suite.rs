@@ -152,6 +152,9 @@ mod perf_grid_nodes;
 #[path = "perf_medial_parallel.rs"]
 mod perf_medial_parallel;
 
+#[path = "perf_measured.rs"]
+mod perf_measured;
+
 #[path = "perf_memory_classes.rs"]
 mod perf_memory_classes;
 

@@ -616,7 +616,14 @@ pub fn run(args: Args, global: Global) -> Result<(), Failure> {
     let formats =
         Format::parse_list(&args.format).map_err(|e| Failure::input(format!("--format: {e}")))?;
     let domain = timings::span("input", || read_domain(&args))?;
-    let options = exact_options(&args)?;
+    let mut options = exact_options(&args)?;
+    // Only report.json and connectivity.json to write: no writer reads a node, so the grids
+    // are measured as they are made and their nodes dropped (issue 8: a tenth of a run's CPU
+    // time went into the fresh pages of nodes nobody wrote). The same files.
+    options.keep_nodes = !(formats.iter().all(|f| *f == Format::Json)
+        && matches!(domain, AnyDomain::Bounded(_))
+        && args.transition.is_none()
+        && !args.compare_modes);
     let bar = progress(global);
     let holes = match &domain {
         AnyDomain::Bounded(d) => d.hole_count(),

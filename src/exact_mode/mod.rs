@@ -65,12 +65,12 @@ use crate::geometry::{length, Point};
 use crate::grid::{GridError, MAX_CELLS_PER_SIDE, MAX_TOTAL_NODES};
 use crate::layout::{Block, BlockLayout, Curve, Edge, EdgeKind, SideRef};
 use crate::mesh::BlockGrid;
-use crate::mesher::{MeshError, Options};
+use crate::mesher::{MeshError, Options, MERGED_MIN_ANGLE_DEG};
 use counts::{ArcTarget, CountProblem, Counts, Known};
 use equidistribution::arc_params_into;
 #[cfg(test)]
 use equidistribution::{equidistribute, equidistribute_into};
-use piece_cache::{GeomKey, GridKey, Params};
+use piece_cache::{GeomKey, GridKey, Params, Payload};
 use rayon::prelude::*;
 use std::f64::consts::{PI, TAU};
 
@@ -749,6 +749,10 @@ pub struct ExactMesh {
     /// of `grids`, found as each grid is made (a grid taken from the memo keeps the finding
     /// of the build that made it), so the mesher's check needs no pass over every grid.
     pub inverted_blocks: Vec<usize>,
+    /// The report's figures of every block when its nodes were not kept
+    /// ([`Options::keep_nodes`]; [`crate::Mesh::measured`]); `None` when the grids hold
+    /// their nodes.
+    pub measured: Option<std::sync::Arc<crate::quality::Measured>>,
 }
 
 /// Sweeps at most this small (radians) count as zero when checking orientations (a
@@ -1651,7 +1655,17 @@ pub fn assemble_cached(
         (Vec<Vec<Point>>, Vec<[BlockGrid; 2]>),
         (Vec<Known>, Vec<Option<[bool; 2]>>),
     );
-    let work = || -> Result<(Vec<GridKey>, Vec<PieceGrids>), MeshError> {
+    // Nodes not kept ([`Options::keep_nodes`]): every grid is measured as it is made. Not
+    // with smoothing (which moves the nodes after) nor inserted holes (whose template
+    // grids read the medial blocks' nodes).
+    let measurer = (!options.keep_nodes && options.smooth == 0 && template_blocks == 0)
+        .then(crate::quality::Measurer::new);
+    type Made = (
+        Vec<GridKey>,
+        Vec<PieceGrids>,
+        Vec<crate::quality::ChunkFigures>,
+    );
+    let work = || -> Result<Made, MeshError> {
         // Grids of the medial blocks, one piece (two blocks) per task in parallel on the current
         // rayon pool, collected in piece order (the first error in piece order is returned). A
         // piece's corner spokes are computed by each piece that uses them, from the same inputs
@@ -1745,98 +1759,136 @@ pub fn assemble_cached(
             None => rayon::iter::Either::Right(rayon::iter::repeat_n(None, pieces.len())),
         };
         drop(found);
-        let per_piece: Vec<PieceGrids> = pieces
+        type Item<'p> = (
+            usize,
+            (((&'p Piece, ArcTarget), Option<Payload>), Option<Params>),
+        );
+        let make = |scratch: &mut PieceScratch, (e, (((p, t), reused), first)): Item<'_>| {
+            let g = &p.geom;
+            let n = counts.arc[e];
+            let nbar = nbar_of(p);
+            let mut known = Known {
+                min_cells: t.min_cells(),
+                target: None,
+                ends: natural.get(e).copied().flatten().map(|w| (nbar, n, w)),
+            };
+            if let Some((m_nodes, pair, inverted)) = reused {
+                if !uniform {
+                    known.target = t.known_target(nbar).map(|x| (nbar, x));
+                }
+                return Ok((m_nodes, pair, known, Some(inverted)));
+            }
+            let cached = match first {
+                Some((nb, m, params)) if nb.to_bits() == nbar.to_bits() && m == n => Some(params),
+                _ => None,
+            };
+            let params = match cached {
+                Some(params) => {
+                    if !uniform {
+                        known.target = t.known_target(nbar).map(|x| (nbar, x));
+                    }
+                    params
+                }
+                None => {
+                    let (params, target) = natural_params(e, g, &t, nbar, n, scratch)?;
+                    if !uniform {
+                        known.target = Some((nbar, target));
+                    }
+                    drop(t);
+                    params
+                }
+            };
+            // End grading (the natural parameters stay what the summaries and the memo
+            // compare).
+            let params = grading::grade_piece(g, params, rho[e], &mut scratch.graded);
+            let mut m_nodes = Vec::with_capacity(n + 1);
+            let PieceScratch {
+                a_nodes, grid: gs, ..
+            } = scratch;
+            for a in a_nodes.iter_mut() {
+                a.clear();
+            }
+            g.nodes_into(&params, &mut m_nodes, a_nodes)
+                .ok_or_else(|| internal(format!("arc {e}: a medial node is not defined")))?;
+            // The parameters go back to the scratch (their buffer serves the next piece).
+            scratch.params = params;
+            let mut grid = |side: usize| {
+                let (nj, first, growth) = side_inputs(p, side);
+                // Column i is arc node k = i (side 0) or n - i (side 1). The corner spokes run
+                // from the piece's exact ends: its end vertices' tangent points on this circle
+                // and centres (`ends_a`, `ends_m` are taken from them by the same slots), so
+                // every block at a vertex gets the same nodes and the cache key (the
+                // geometry) covers them.
+                gs.clear();
+                for i in 0..=n {
+                    let k = if side == 0 { i } else { n - i };
+                    let (a, m) = if k == 0 {
+                        (g.ends_a[0][side], g.ends_m[0])
+                    } else if k == n {
+                        (g.ends_a[1][side], g.ends_m[1])
+                    } else {
+                        (a_nodes[side][k], m_nodes[k])
+                    };
+                    gs.push(a, m);
+                }
+                let nodes = gs.nodes(nj, first, growth);
+                BlockGrid { ni: n, nj, nodes }
+            };
+            let pair = [grid(0), grid(1)];
+            // Measured grids learn it from their measurement (below).
+            let check = options.smooth == 0 && measurer.is_none();
+            let inverted = check.then(|| pair.each_ref().map(has_inverted_cell));
+            Ok((m_nodes, pair, known, inverted))
+        };
+        let items = pieces
             .par_iter()
             .zip(arc_targets.into_par_iter())
             .zip(reuse)
             .zip(first_params.into_par_iter())
-            .enumerate()
-            .with_max_len(crate::tasks::PIECES)
-            .map_init(
-                PieceScratch::default,
-                |scratch, (e, (((p, t), reused), first))| {
-                    let g = &p.geom;
-                    let n = counts.arc[e];
-                    let nbar = nbar_of(p);
-                    let mut known = Known {
-                        min_cells: t.min_cells(),
-                        target: None,
-                        ends: natural.get(e).copied().flatten().map(|w| (nbar, n, w)),
-                    };
-                    if let Some((m_nodes, pair, inverted)) = reused {
-                        if !uniform {
-                            known.target = t.known_target(nbar).map(|x| (nbar, x));
-                        }
-                        return Ok((m_nodes, pair, known, Some(inverted)));
-                    }
-                    let cached = match first {
-                        Some((nb, m, params)) if nb.to_bits() == nbar.to_bits() && m == n => {
-                            Some(params)
-                        }
-                        _ => None,
-                    };
-                    let params = match cached {
-                        Some(params) => {
-                            if !uniform {
-                                known.target = t.known_target(nbar).map(|x| (nbar, x));
+            .enumerate();
+        let Some(measurer) = measurer.as_ref() else {
+            let per_piece: Vec<PieceGrids> = items
+                .with_max_len(crate::tasks::PIECES)
+                .map_init(PieceScratch::default, make)
+                .collect();
+            return Ok((grid_keys, per_piece, Vec::new()));
+        };
+        // Nodes not kept: the pieces in chunks of the quality pass's blocks, each block
+        // measured right after its grid is made and its nodes dropped (their memory then
+        // serves the next block's: no fresh pages, issue 8).
+        const CHUNK_PIECES: usize = crate::quality::CHUNK / 2;
+        let (per_chunk, figures): (Vec<Vec<PieceGrids>>, Vec<crate::quality::ChunkFigures>) = items
+            .chunks(CHUNK_PIECES)
+            .with_max_len(crate::tasks::PIECES.div_ceil(CHUNK_PIECES))
+            .map_init(PieceScratch::default, |scratch, chunk| {
+                let mut m = measurer.chunk();
+                let out: Vec<PieceGrids> = chunk
+                    .into_iter()
+                    .map(|item| {
+                        let p = &pieces[item.0];
+                        let mut made = make(scratch, item);
+                        if let Ok((_, pair, _, inverted)) = &mut made {
+                            let mut bad = [false; 2];
+                            for (side, g) in pair.iter_mut().enumerate() {
+                                let c = p.circles[side];
+                                let wall = [(0, p.geom.walls[side].c, c < 0)];
+                                bad[side] = m.block(g, &wall, MERGED_MIN_ANGLE_DEG);
+                                g.nodes = Vec::new();
                             }
-                            params
+                            // The cell pass counts the cells `has_inverted_cell` finds.
+                            *inverted = Some(bad);
                         }
-                        None => {
-                            let (params, target) = natural_params(e, g, &t, nbar, n, scratch)?;
-                            if !uniform {
-                                known.target = Some((nbar, target));
-                            }
-                            drop(t);
-                            params
-                        }
-                    };
-                    // End grading (the natural parameters stay what the summaries and the memo
-                    // compare).
-                    let params = grading::grade_piece(g, params, rho[e], &mut scratch.graded);
-                    let mut m_nodes = Vec::with_capacity(n + 1);
-                    let PieceScratch {
-                        a_nodes, grid: gs, ..
-                    } = scratch;
-                    for a in a_nodes.iter_mut() {
-                        a.clear();
-                    }
-                    g.nodes_into(&params, &mut m_nodes, a_nodes)
-                        .ok_or_else(|| {
-                            internal(format!("arc {e}: a medial node is not defined"))
-                        })?;
-                    // The parameters go back to the scratch (their buffer serves the next piece).
-                    scratch.params = params;
-                    let mut grid = |side: usize| {
-                        let (nj, first, growth) = side_inputs(p, side);
-                        // Column i is arc node k = i (side 0) or n - i (side 1). The corner spokes run
-                        // from the piece's exact ends: its end vertices' tangent points on this circle
-                        // and centres (`ends_a`, `ends_m` are taken from them by the same slots), so
-                        // every block at a vertex gets the same nodes and the cache key (the
-                        // geometry) covers them.
-                        gs.clear();
-                        for i in 0..=n {
-                            let k = if side == 0 { i } else { n - i };
-                            let (a, m) = if k == 0 {
-                                (g.ends_a[0][side], g.ends_m[0])
-                            } else if k == n {
-                                (g.ends_a[1][side], g.ends_m[1])
-                            } else {
-                                (a_nodes[side][k], m_nodes[k])
-                            };
-                            gs.push(a, m);
-                        }
-                        let nodes = gs.nodes(nj, first, growth);
-                        BlockGrid { ni: n, nj, nodes }
-                    };
-                    let pair = [grid(0), grid(1)];
-                    let inverted =
-                        (options.smooth == 0).then(|| pair.each_ref().map(has_inverted_cell));
-                    Ok((m_nodes, pair, known, inverted))
-                },
-            )
-            .collect();
-        Ok((grid_keys, per_piece))
+                        made
+                    })
+                    .collect();
+                (out, m.finish())
+            })
+            .unzip();
+        Ok((
+            grid_keys,
+            per_chunk.into_iter().flatten().collect(),
+            figures,
+        ))
     };
     let ((mut layout, medial_edges), work) = match built {
         Some(built) => (built, work()),
@@ -1847,7 +1899,8 @@ pub fn assemble_cached(
             (sk, w)
         }
     };
-    let (grid_keys, mut per_piece) = work?;
+    let (grid_keys, mut per_piece, figures) = work?;
+    let measured = measurer.map(|_| std::sync::Arc::new(crate::quality::Measured::new(figures)));
     // The first error in piece order.
     if let Some(at) = per_piece.iter().position(Result::is_err) {
         per_piece.swap_remove(at)?;
@@ -1923,6 +1976,7 @@ pub fn assemble_cached(
         split_arcs,
         template_blocks,
         inverted_blocks,
+        measured,
     })
 }
 

@@ -294,7 +294,9 @@ impl PieceCache {
                 let (g0, g1) = (&kept.grids[2 * i], &kept.grids[2 * i + 1]);
                 let fits = (g0.ni, g0.nj, g1.ni, g1.nj)
                     == (w[0] as usize, w[1] as usize, w[0] as usize, w[5] as usize);
-                if !(fits && kept.nodes[i].len() == g0.ni + 1) {
+                // A mesh made without keeping its nodes (`Options::keep_nodes`) has none to give.
+                let whole = crate::quality::well_formed(g0) && crate::quality::well_formed(g1);
+                if !(fits && whole && kept.nodes[i].len() == g0.ni + 1) {
                     return None;
                 }
                 let nodes = std::mem::take(&mut kept.nodes[i]);

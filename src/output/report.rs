@@ -87,12 +87,20 @@ impl Report {
     }
 
     fn build(mesh: &Mesh, conn: Option<&Connectivity>) -> Report {
-        let (q, quality) = measure_all_with(&mesh.layout, &mesh.grids, conn);
+        let (q, quality) = match &mesh.measured {
+            // Measured as the grids were made (their nodes not kept).
+            Some(m) => crate::quality::measured_all(&mesh.layout, &mesh.grids, conn, m),
+            None => measure_all_with(&mesh.layout, &mesh.grids, conn),
+        };
+        let nodes = match mesh.measured {
+            Some(_) => mesh.grids.iter().map(|g| (g.ni + 1) * (g.nj + 1)).sum(),
+            None => mesh.grids.iter().map(|g| g.nodes.len()).sum(),
+        };
         Report {
             holes: mesh.holes,
             blocks: mesh.layout.blocks.len(),
             cells: q.cells,
-            nodes: mesh.grids.iter().map(|g| g.nodes.len()).sum(),
+            nodes,
             min_angle_deg: q.min_angle_deg,
             max_angle_deg: q.max_angle_deg,
             mean_min_angle_deg: q.mean_min_angle_deg,

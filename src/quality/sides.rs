@@ -34,7 +34,7 @@ fn side_node_and_inward(grid: &BlockGrid, s: usize, p: usize) -> (Point, Point) 
 /// its height normal to the side (area over its edge length on the side). Inlined into the
 /// loops over a side, so that the choice of side is made once per side.
 #[inline(always)]
-fn side_cell_height(grid: &BlockGrid, s: usize, p: usize) -> f64 {
+pub(super) fn side_cell_height(grid: &BlockGrid, s: usize, p: usize) -> f64 {
     let (ni, nj) = (grid.ni, grid.nj);
     let (i, j) = match s {
         0 => (p, 0),
@@ -158,7 +158,7 @@ fn heights_avx2(s: usize, a: &[Point], b: &[Point], out: &mut [f64]) -> bool {
 
 /// [`side_cell_height`] of the `out.len()` cells of side `s` of `grid` (well formed, `ni, nj
 /// >= 1`, `out.len()` the side's cell count), bit for bit, in the build `lanes`.
-fn side_heights(
+pub(super) fn side_heights(
     grid: &BlockGrid,
     s: usize,
     out: &mut [f64],
@@ -363,11 +363,24 @@ fn block_wall_orthogonality_with(
     out: &mut Vec<f64>,
     lanes: Lanes,
 ) -> Option<f64> {
+    walls_orthogonality(grid, wall_arcs(layout, block), scratch, out, lanes)
+}
+
+/// [`block_wall_orthogonality_with`] of the wall sides `walls` (`(side, the circle's centre,
+/// whether it is the bounding circle)`, in side order) of `grid`: the measurement of a block
+/// whose layout is not built yet ([`super::measured`]).
+pub(super) fn walls_orthogonality(
+    grid: &BlockGrid,
+    walls: impl Iterator<Item = (usize, Point, bool)>,
+    scratch: &mut (Vec<Point>, Vec<Point>),
+    out: &mut Vec<f64>,
+    lanes: Lanes,
+) -> Option<f64> {
     if !well_formed(grid) || grid.ni == 0 || grid.nj == 0 {
         return None;
     }
     let mut worst: Option<f64> = None;
-    for (s, center, bounding) in wall_arcs(layout, block) {
+    for (s, center, bounding) in walls {
         let (a, b) = side_lines(grid, s, scratch);
         out.clear();
         out.resize(a.len(), 0.0);
@@ -392,7 +405,16 @@ fn block_wall_orthogonality_with(
 /// well formed, the same non-zero count on both sides, no empty grid), else `None`.
 fn interface_cells(grids: &[BlockGrid], a: usize, sa: usize, b: usize, sb: usize) -> Option<usize> {
     let (ga, gb) = (grids.get(a)?, grids.get(b)?);
-    if sa >= 4 || sb >= 4 || !well_formed(ga) || !well_formed(gb) {
+    if !well_formed(ga) || !well_formed(gb) {
+        return None;
+    }
+    interface_dims(ga, sa, gb, sb)
+}
+
+/// [`interface_cells`] of two grids known to be well formed (measured as they were made, their
+/// nodes since dropped: [`super::measured`]), from their dimensions alone.
+fn interface_dims(ga: &BlockGrid, sa: usize, gb: &BlockGrid, sb: usize) -> Option<usize> {
+    if sa >= 4 || sb >= 4 {
         return None;
     }
     let n = if sa.is_multiple_of(2) { ga.ni } else { ga.nj };
@@ -536,8 +558,46 @@ impl<'a> Plan<'a> {
     }
 }
 
+/// The growth ratios of every interface of `conn` (the connectivity of `grids`, whose nodes
+/// were measured as they were made and dropped) from the side-cell heights `heights(block,
+/// side)` ([`super::measured`]): the interfaces the fused pass pairs, with the same
+/// expression; chunks of owners in parallel, merged (counts and extremes: in any order the
+/// same figures).
+pub(super) fn pair_measured<'h>(
+    conn: &Connectivity,
+    grids: &[BlockGrid],
+    heights: &(dyn Fn(usize, usize) -> &'h [f64] + Sync),
+) -> MetricSummary {
+    let empty = MetricSummary::new(&super::GROWTH_EDGES, super::GROWTH_ACCEPTABLE);
+    let n = conn.len();
+    let parts: Vec<MetricSummary> = (0..n.div_ceil(CHUNK))
+        .into_par_iter()
+        .map(|c| {
+            let mut part = empty.clone();
+            for (b, s, p) in owned(conn, c * CHUNK..((c + 1) * CHUNK).min(n)) {
+                let (Some(ga), Some(gb)) = (grids.get(b), grids.get(p.block)) else {
+                    continue;
+                };
+                let Some(cells) = interface_dims(ga, s, gb, p.side) else {
+                    continue;
+                };
+                let (ha, hb) = (heights(b, s), heights(p.block, p.side));
+                if ha.len() == cells && hb.len() == cells {
+                    pair(ha, hb, p.same_direction, &mut part);
+                }
+            }
+            part
+        })
+        .collect();
+    let mut m = empty;
+    for part in &parts {
+        m.merge(part);
+    }
+    m
+}
+
 /// Cells along side `s` of `grid`.
-fn side_cells(grid: &BlockGrid, s: usize) -> usize {
+pub(super) fn side_cells(grid: &BlockGrid, s: usize) -> usize {
     if s.is_multiple_of(2) {
         grid.ni
     } else {

@@ -1,0 +1,340 @@
+//! The report's figures of a mesh whose nodes are not kept ([`crate::Options::keep_nodes`]
+//! false, issue 8): each block is measured right after its grid is made, while its nodes
+//! are in cache, and the nodes are then dropped, so that the grids never take memory all at
+//! once (a 1e3-particle mesh with 16 x 16 cells per block holds 27 MB of nodes: 7 400 fresh
+//! pages, a tenth of the run's CPU time on the machines measured; 2.7 GB at 1e5).
+//!
+//! The figures are those of [`super::measure_all_with`], bit for bit: the maker measures its
+//! blocks in chunks of [`CHUNK`] blocks in block order with the cell pass of
+//! [`super::block_stats`] ([`super::rows::Chunk`]), so every chunk's metrics and every
+//! block's figures are the same values reduced in the same order ([`super::reduce`]); each
+//! block's side-cell heights and wall deviations are taken as the fused pass takes them
+//! ([`super::sides`]) and the heights paired once the connectivity is known
+//! ([`super::sides::pair_measured`]; counts and extremes, the same in any order). Tested
+//! against the pass over kept nodes in `tests/perf_measured.rs`.
+
+use super::kernel::{BlockFigures, Tables};
+use super::rows::{Chunk, Rows};
+use super::sides::{self, max_nan};
+use super::{reduce, Quality, QualityMetrics, CHUNK};
+use crate::connectivity::Connectivity;
+use crate::geometry::Point;
+use crate::lanes::Lanes;
+use crate::layout::BlockLayout;
+use crate::mesh::BlockGrid;
+
+/// What every chunk measurement shares: the cell pass's tables and the build the side loops
+/// run in.
+pub(crate) struct Measurer {
+    tables: Tables,
+    lanes: Lanes,
+}
+
+impl Measurer {
+    pub(crate) fn new() -> Measurer {
+        let lanes = Lanes::best();
+        Measurer {
+            tables: Tables::new(),
+            lanes: if lanes.available() {
+                lanes
+            } else {
+                Lanes::Base
+            },
+        }
+    }
+
+    /// Start measuring the chunk of blocks `c * CHUNK ..` (its blocks are then given in
+    /// block order, each once).
+    pub(crate) fn chunk(&self) -> ChunkMeasure<'_> {
+        ChunkMeasure {
+            m: self,
+            acc: Chunk::new(),
+            rows: Rows::default(),
+            lines: (Vec::new(), Vec::new()),
+            wall_scratch: Vec::new(),
+            figs: Vec::with_capacity(CHUNK),
+            heights: Vec::new(),
+            start: Vec::with_capacity(CHUNK + 1),
+            mask: Vec::with_capacity(CHUNK),
+            below: Vec::with_capacity(CHUNK),
+            wall: None,
+        }
+    }
+}
+
+/// The measurement of one chunk of blocks in progress ([`Measurer::chunk`]).
+pub(crate) struct ChunkMeasure<'m> {
+    m: &'m Measurer,
+    acc: Chunk,
+    rows: Rows,
+    lines: (Vec<Point>, Vec<Point>),
+    wall_scratch: Vec<f64>,
+    figs: Vec<BlockFigures>,
+    heights: Vec<f64>,
+    start: Vec<usize>,
+    mask: Vec<u8>,
+    below: Vec<bool>,
+    wall: Option<f64>,
+}
+
+impl ChunkMeasure<'_> {
+    /// Measure the chunk's next block, grid `g`, whose wall sides are `walls` (`(side, the
+    /// circle's centre, whether it is the bounding circle)` in side order, as the layout will
+    /// give them), and note whether it has a corner angle below `below_deg` degrees
+    /// ([`super::has_corner_below`]; `0 < below_deg < 90`). The side-cell heights are kept
+    /// for its other sides (a wall side is no interface). True when the block has an
+    /// inverted cell (one of [`super::inverted_blocks`]: the cell pass counts the same cells).
+    pub(crate) fn block(
+        &mut self,
+        g: &BlockGrid,
+        walls: &[(usize, Point, bool)],
+        below_deg: f64,
+    ) -> bool {
+        let lanes = self.m.lanes;
+        let f = self.acc.block(g, &self.m.tables, &mut self.rows);
+        self.start.push(self.heights.len());
+        let mut mask = 0u8;
+        if super::well_formed(g) && g.ni > 0 && g.nj > 0 {
+            for s in (0..4).filter(|&s| walls.iter().all(|w| w.0 != s)) {
+                mask |= 1 << s;
+                let from = self.heights.len();
+                self.heights.resize(from + sides::side_cells(g, s), 0.0);
+                sides::side_heights(g, s, &mut self.heights[from..], &mut self.lines, lanes);
+            }
+        }
+        self.mask.push(mask);
+        let w = sides::walls_orthogonality(
+            g,
+            walls.iter().copied(),
+            &mut self.lines,
+            &mut self.wall_scratch,
+            lanes,
+        );
+        self.wall = max_nan(self.wall, w);
+        // The cell pass's least angle is within 4e-13 degrees of the exact one, and
+        // `has_corner_below` within rounding of the exact test: a block whose least angle is
+        // well above the threshold (and with no inverted cell) has no corner below it.
+        let clear = f.min_angle_deg >= below_deg + 1e-6;
+        let maybe = f.inverted > 0 || !clear;
+        self.below
+            .push(maybe && super::has_corner_below(g, below_deg));
+        self.figs.push(f);
+        f.inverted > 0
+    }
+
+    /// The chunk's figures.
+    pub(crate) fn finish(mut self) -> ChunkFigures {
+        self.start.push(self.heights.len());
+        ChunkFigures {
+            cells: (self.figs, self.acc.finish()),
+            heights: self.heights,
+            start: self.start,
+            mask: self.mask,
+            below: self.below,
+            wall: self.wall,
+        }
+    }
+}
+
+/// The figures of one chunk of blocks ([`ChunkMeasure::finish`]).
+#[derive(Debug)]
+pub(crate) struct ChunkFigures {
+    cells: (Vec<BlockFigures>, QualityMetrics),
+    /// The side-cell heights of every block, its sides in `mask[k]` in turn (none for a
+    /// block without cells), block `k`'s from `start[k]`.
+    heights: Vec<f64>,
+    start: Vec<usize>,
+    mask: Vec<u8>,
+    below: Vec<bool>,
+    wall: Option<f64>,
+}
+
+/// The report's figures of every block of a mesh whose nodes were not kept, in block order
+/// ([`crate::Mesh::measured`]): read by [`crate::output::report::Report`] through
+/// [`measured_all`].
+#[derive(Debug, Default)]
+pub struct Measured {
+    cells: Vec<(Vec<BlockFigures>, QualityMetrics)>,
+    sides: Vec<ChunkSides>,
+    wall: Option<f64>,
+}
+
+#[derive(Debug)]
+struct ChunkSides {
+    heights: Vec<f64>,
+    start: Vec<usize>,
+    mask: Vec<u8>,
+    below: Vec<bool>,
+}
+
+impl Measured {
+    /// The figures of the chunks of [`CHUNK`] blocks, in block order (every chunk full but
+    /// the last).
+    pub(crate) fn new(chunks: Vec<ChunkFigures>) -> Measured {
+        let mut out = Measured {
+            cells: Vec::with_capacity(chunks.len()),
+            sides: Vec::with_capacity(chunks.len()),
+            wall: None,
+        };
+        for c in chunks {
+            out.wall = max_nan(out.wall, c.wall);
+            out.cells.push(c.cells);
+            out.sides.push(ChunkSides {
+                heights: c.heights,
+                start: c.start,
+                mask: c.mask,
+                below: c.below,
+            });
+        }
+        out
+    }
+
+    /// Blocks measured.
+    pub fn blocks(&self) -> usize {
+        self.cells.iter().map(|c| c.0.len()).sum()
+    }
+
+    /// True when block `b` has a corner angle below the threshold it was measured with
+    /// ([`ChunkMeasure::block`]); false for a block not measured.
+    pub(crate) fn corner_below(&self, b: usize) -> bool {
+        self.sides
+            .get(b / CHUNK)
+            .and_then(|c| c.below.get(b % CHUNK))
+            .copied()
+            .unwrap_or(false)
+    }
+
+    /// The side-cell heights of side `s` of block `b` (grid dimensions `g`), empty when not
+    /// measured (a wall side, a block without cells).
+    fn heights(&self, b: usize, s: usize, g: &BlockGrid) -> &[f64] {
+        let Some(c) = self.sides.get(b / CHUNK) else {
+            return &[];
+        };
+        let k = b % CHUNK;
+        let (Some(&from), Some(&to), Some(&mask)) =
+            (c.start.get(k), c.start.get(k + 1), c.mask.get(k))
+        else {
+            return &[];
+        };
+        let kept = |q: usize| mask >> q & 1 == 1;
+        let cells = |q: usize| if kept(q) { sides::side_cells(g, q) } else { 0 };
+        if s >= 4 || !kept(s) || to - from != (0..4).map(cells).sum::<usize>() {
+            return &[];
+        }
+        let before: usize = (0..s).map(cells).sum();
+        &c.heights[from + before..from + before + cells(s)]
+    }
+}
+
+/// [`super::measure_all_with`] of a mesh whose grids were measured as they were made
+/// (`measured`, one entry per grid; the grids may have dropped their nodes): the same
+/// figures, bit for bit, from what the maker measured.
+pub fn measured_all(
+    layout: &BlockLayout,
+    grids: &[BlockGrid],
+    conn: Option<&Connectivity>,
+    measured: &Measured,
+) -> (Quality, QualityMetrics) {
+    let same = layout.blocks.len() == grids.len() && measured.blocks() == grids.len();
+    let conn = conn.filter(|c| same && c.len() == grids.len());
+    let (q, mut m) = reduce(&measured.cells);
+    if let Some(conn) = conn {
+        let heights = |b: usize, s: usize| -> &[f64] {
+            match grids.get(b) {
+                Some(g) => measured.heights(b, s, g),
+                None => &[],
+            }
+        };
+        m.interface_growth_ratio
+            .merge(&sides::pair_measured(conn, grids, &heights));
+    }
+    if same {
+        m.max_wall_orthogonality_deviation_deg = measured.wall;
+    }
+    (q, m)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::layouts::SplitMix64;
+
+    /// An `ni x nj` grid of parallelograms whose acute angle is `deg` degrees, at a random
+    /// scale and rotation, with one node moved at random (sometimes far enough to invert a
+    /// cell, sometimes to a non-finite value).
+    fn sheared(r: &mut SplitMix64, ni: usize, nj: usize, deg: f64) -> BlockGrid {
+        let (s, c) = deg.to_radians().sin_cos();
+        let scale = 10f64.powf(6.0 * r.next_f64() - 3.0);
+        let (rs, rc) = (6.3 * r.next_f64()).sin_cos();
+        let mut nodes = Vec::with_capacity((ni + 1) * (nj + 1));
+        for j in 0..=nj {
+            for i in 0..=ni {
+                let (x, y) = (i as f64 + j as f64 * c, j as f64 * s);
+                nodes.push([scale * (rc * x - rs * y), scale * (rs * x + rc * y)]);
+            }
+        }
+        let k = (r.next_u64() % nodes.len() as u64) as usize;
+        match r.next_u64() % 4 {
+            0 => nodes[k][1] += scale * (r.next_f64() - 0.5),
+            1 => nodes[k][0] = f64::NAN,
+            _ => {}
+        }
+        BlockGrid { ni, nj, nodes }
+    }
+
+    /// The flags a measured block gets are `has_corner_below`'s and the inverted-cell
+    /// count's, for least angles on either side of the threshold (within 1e-9 degrees too),
+    /// inverted and non-finite cells; and a chunk's heights are found where
+    /// [`Measured::heights`] looks for them.
+    #[test]
+    fn corner_below_flags_and_heights_are_those_of_the_grids() {
+        let m = Measurer::new();
+        let mut r = SplitMix64(17);
+        let mut seen = [0usize; 2];
+        let mut bad = [0usize; 2];
+        for _ in 0..20 {
+            let mut chunk = m.chunk();
+            let mut grids = Vec::new();
+            for _ in 0..CHUNK {
+                let deg = match r.next_u64() % 3 {
+                    0 => 5.0 + 1e-9 * (r.next_f64() - 0.5),
+                    1 => 3.0 + 4.0 * r.next_f64(),
+                    _ => 5.0 + 80.0 * r.next_f64(),
+                };
+                let ni = 1 + (r.next_u64() % 5) as usize;
+                let nj = 1 + (r.next_u64() % 5) as usize;
+                let g = sheared(&mut r, ni, nj, deg);
+                // Side 1 of every other block a wall (its heights not kept).
+                let walls: &[(usize, Point, bool)] = match grids.len() % 2 {
+                    0 => &[],
+                    _ => &[(1, [0.0, 0.0], false)],
+                };
+                let inverted = chunk.block(&g, walls, 5.0);
+                assert_eq!(inverted, super::super::grid_inverted_cells(&g) > 0);
+                bad[usize::from(inverted)] += 1;
+                grids.push(g);
+            }
+            let measured = Measured::new(vec![chunk.finish()]);
+            assert_eq!(measured.blocks(), CHUNK);
+            for (b, g) in grids.iter().enumerate() {
+                let want = super::super::has_corner_below(g, 5.0);
+                assert_eq!(measured.corner_below(b), want, "block {b}");
+                seen[usize::from(want)] += 1;
+                for s in 0..4 {
+                    let h = measured.heights(b, s, g);
+                    if s == 1 && b % 2 == 1 {
+                        assert!(h.is_empty(), "a wall side has no heights");
+                        continue;
+                    }
+                    assert_eq!(h.len(), sides::side_cells(g, s));
+                    for (p, &x) in h.iter().enumerate() {
+                        let y = sides::side_cell_height(g, s, p);
+                        assert!(x.to_bits() == y.to_bits() || (x.is_nan() && y.is_nan()));
+                    }
+                }
+            }
+        }
+        assert!(seen[0] > 100 && seen[1] > 100, "{seen:?}");
+        assert!(bad[0] > 100 && bad[1] > 100, "{bad:?}");
+    }
+}

@@ -1,0 +1,236 @@
+//! Meshes made without keeping their nodes (`Options::keep_nodes` false, issue 8: the grids
+//! measured as they are made, their nodes dropped) against the same meshes with their nodes:
+//! the same layout, block dimensions and report, bit for bit, on layouts of every kind the
+//! exact mesher meets (size-driven and fixed counts, clustering, collapses, co-circular
+//! lattices) and on those that must keep their nodes (smoothing, inserted holes, one hole,
+//! paper mode, periodic boxes, transitions); the CLI's `--format json` (which asks for no
+//! nodes) against `--format json,svg` (which keeps them).
+
+use crate::common;
+
+use medial_blocks::connectivity::connectivity;
+use medial_blocks::exact_mode::Clustering;
+use medial_blocks::output::report::Report;
+use medial_blocks::{layouts, mesh, Domain, Mesh, Options};
+use proptest::prelude::*;
+
+fn dropping(options: &Options) -> Options {
+    Options {
+        keep_nodes: false,
+        ..options.clone()
+    }
+}
+
+fn report_json(m: &Mesh) -> String {
+    serde_json::to_string(&Report::from_mesh(m)).expect("report serialises")
+}
+
+/// Mesh `domain` with and without the nodes; the measured mesh must have dropped them
+/// exactly when `drops` (and then hold one measurement per block). Returns whether the
+/// meshes had a block.
+fn check(domain: &Domain, options: &Options, drops: bool) -> bool {
+    let kept = mesh(domain, options).expect("mesh with nodes");
+    let measured = mesh(domain, &dropping(options)).expect("mesh without nodes");
+    assert!(
+        kept.measured.is_none(),
+        "a mesh with its nodes has no measurement"
+    );
+    assert_eq!(measured.layout, kept.layout, "the same layout");
+    let dims = |m: &Mesh| m.grids.iter().map(|g| (g.ni, g.nj)).collect::<Vec<_>>();
+    assert_eq!(dims(&measured), dims(&kept), "the same block dimensions");
+    assert_eq!(measured.geometry, kept.geometry);
+    assert_eq!(measured.collapsed_arcs, kept.collapsed_arcs);
+    assert_eq!(measured.inserted_holes, kept.inserted_holes);
+    match &measured.measured {
+        Some(m) => {
+            assert!(drops, "nodes dropped where they must be kept");
+            assert_eq!(m.blocks(), kept.grids.len());
+            assert!(measured.grids.iter().all(|g| g.nodes.is_empty()));
+        }
+        None => {
+            assert!(!drops, "nodes kept where they could be dropped");
+            assert_eq!(common::node_bits(&measured), common::node_bits(&kept));
+        }
+    }
+    // The report (every figure, the growth ratios across interfaces and the wall
+    // orthogonality among them) and the block connectivity, from the dimensions alone.
+    assert_eq!(report_json(&measured), report_json(&kept));
+    assert_eq!(
+        connectivity(&measured.layout, &measured.grids),
+        connectivity(&kept.layout, &kept.grids)
+    );
+    !kept.grids.is_empty()
+}
+
+#[test]
+fn measured_meshes_report_what_their_nodes_would() {
+    let fixed = |n| Options {
+        block_cells: Some(n),
+        ..Options::default()
+    };
+    let clustered = Options {
+        clustering: Clustering {
+            first: Some(medial_blocks::exact_mode::FirstCell::Relative(1e-3)),
+            growth: 1.05,
+        },
+        ..Options::default()
+    };
+    let collapsing = Options {
+        collapse_fraction: 0.5,
+        ..Options::default()
+    };
+    let unrefined = Options {
+        refine_ratio: None,
+        ..Options::default()
+    };
+    for (n, seed) in [(2, 1), (3, 2), (10, 3), (40, 4), (150, 5), (400, 6)] {
+        let d = layouts::bubbles(n, seed).expect("layout");
+        for o in [
+            &Options::default(),
+            &fixed(16),
+            &fixed(4),
+            &clustered,
+            &collapsing,
+        ] {
+            // Bubbles this sparse need no inserted hole with the default ratio.
+            let m = mesh(&d, o).expect("mesh");
+            let drops =
+                m.template_blocks == 0 && m.geometry == medial_blocks::mesh::Geometry::Exact;
+            assert!(check(&d, o, drops));
+        }
+        assert!(check(&d, &unrefined, true));
+    }
+    // Co-circular lattices (collapsed zero-length arcs) and the built-in examples.
+    for d in [
+        layouts::square_lattice(4).expect("lattice"),
+        layouts::lattice().expect("lattice"),
+        layouts::hexagon(),
+        Domain::hexagon_example(),
+    ] {
+        let m = mesh(&d, &Options::default()).expect("mesh");
+        let drops = m.template_blocks == 0 && m.geometry == medial_blocks::mesh::Geometry::Exact;
+        assert!(check(&d, &Options::default(), drops));
+        assert!(check(&d, &fixed(8), {
+            let m = mesh(&d, &fixed(8)).expect("mesh");
+            m.template_blocks == 0 && m.geometry == medial_blocks::mesh::Geometry::Exact
+        }));
+    }
+}
+
+#[test]
+fn meshes_that_need_their_nodes_keep_them() {
+    let d = layouts::bubbles(60, 7).expect("layout");
+    // Smoothing moves the nodes after they are made; paper mode has no measured pass.
+    check(
+        &d,
+        &Options {
+            smooth: 3,
+            ..Options::default()
+        },
+        false,
+    );
+    check(&d, &Options::paper(), false);
+    // Inserted holes: their template grids read the medial blocks' nodes.
+    let refined = Options {
+        refine_ratio: Some(0.6),
+        ..Options::default()
+    };
+    let m = mesh(&d, &refined).expect("mesh");
+    assert!(m.template_blocks > 0, "the ratio inserts holes");
+    check(&d, &refined, false);
+    // One hole (the ring is measured against a seeded mesh), none.
+    let one = Domain::bounded(
+        medial_blocks::Circle::new(0.0, 0.0, 1.0),
+        vec![medial_blocks::Circle::new(0.3, 0.1, 0.2)],
+    )
+    .expect("domain");
+    check(&one, &Options::default(), false);
+    let none = Domain::bounded(medial_blocks::Circle::new(0.0, 0.0, 1.0), vec![]).expect("domain");
+    check(&none, &Options::default(), false);
+    // Transition rings and periodic boxes join nodes: kept whatever was asked.
+    let t =
+        medial_blocks::transition::mesh_with_transition(&d, &dropping(&Options::default()), 0.05)
+            .expect("transition");
+    assert!(t.measured.is_none() && t.grids.iter().all(|g| !g.nodes.is_empty()));
+    let pd = medial_blocks::PeriodicDomain::new(
+        [2.0, 1.0],
+        vec![
+            medial_blocks::Circle::new(0.1, 0.1, 0.2),
+            medial_blocks::Circle::new(1.2, 0.6, 0.25),
+        ],
+    )
+    .expect("periodic");
+    let p = medial_blocks::mesh_periodic(&pd, &dropping(&Options::default())).expect("periodic");
+    assert!(p.measured.is_none() && p.grids.iter().all(|g| !g.nodes.is_empty()));
+}
+
+/// The measured report does not depend on the thread count either.
+#[test]
+fn measured_reports_are_the_same_for_every_thread_count() {
+    let d = layouts::bubbles(300, 11).expect("layout");
+    let o = dropping(&Options {
+        block_cells: Some(16),
+        ..Options::default()
+    });
+    let on = |threads| {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .expect("pool");
+        pool.install(|| report_json(&mesh(&d, &o).expect("mesh")))
+    };
+    let one = on(1);
+    assert_eq!(on(2), one);
+    assert_eq!(on(3), one);
+}
+
+/// `--format json` (no writer reads a node: the CLI asks for none) writes the same
+/// report.json and connectivity.json as `--format json,svg` (the SVG writer reads them).
+#[test]
+fn cli_json_alone_writes_what_it_writes_beside_a_node_writer() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let input = dir.path().join("bubbles.json");
+    let input = input.to_str().expect("utf-8");
+    let out = common::run(&[
+        "example", "bubbles", "--holes", "200", "--seed", "5", "-o", input,
+    ]);
+    assert!(out.status.success());
+    for extra in [
+        &[][..],
+        &["--block-cells", "16"][..],
+        &["--first-height-rel", "1e-3"][..],
+    ] {
+        let alone = dir.path().join("alone");
+        let beside = dir.path().join("beside");
+        for (o, format) in [(&alone, "json"), (&beside, "json,svg")] {
+            let mut args = vec!["--quiet", "mesh", input, "-o", o.to_str().expect("utf-8")];
+            args.extend_from_slice(&["--format", format]);
+            args.extend_from_slice(extra);
+            let run = common::run(&args);
+            assert!(
+                run.status.success(),
+                "{}",
+                String::from_utf8_lossy(&run.stderr)
+            );
+        }
+        for f in ["report.json", "connectivity.json"] {
+            let a = std::fs::read(alone.join(f)).expect("written");
+            let b = std::fs::read(beside.join(f)).expect("written");
+            assert!(a == b, "{f} differs with {extra:?}");
+        }
+    }
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 12, ..ProptestConfig::default() })]
+
+    /// Random bubble layouts, fixed and size-driven counts.
+    #[test]
+    fn measured_reports_equal_on_random_layouts(n in 2usize..120, seed in 0u64..1_000_000, cells in prop_oneof![Just(None), Just(Some(3usize)), Just(Some(16))]) {
+        let d = layouts::bubbles(n, seed).expect("layout");
+        let o = Options { block_cells: cells, ..Options::default() };
+        let m = mesh(&d, &o).expect("mesh");
+        let drops = m.template_blocks == 0 && m.geometry == medial_blocks::mesh::Geometry::Exact;
+        check(&d, &o, drops);
+    }
+}
