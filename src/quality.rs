@@ -34,8 +34,8 @@ mod rows;
 mod sides;
 
 pub use atan::angle_deg;
+pub(crate) use measured::{measure_blocks, ChunkFigures, Measurer};
 pub use measured::{measured_all, Measured};
-pub(crate) use measured::{ChunkFigures, Measurer};
 
 /// Angles (degrees) and Jacobians of the four corners of one quadrilateral `[p0, p1, p2, p3]`
 /// (see the module doc for the conventions).

@@ -1655,11 +1655,10 @@ pub fn assemble_cached(
         (Vec<Vec<Point>>, Vec<[BlockGrid; 2]>),
         (Vec<Known>, Vec<Option<[bool; 2]>>),
     );
-    // Nodes not kept ([`Options::keep_nodes`]): every grid is measured as it is made. Not
-    // with smoothing (which moves the nodes after) nor inserted holes (whose template
-    // grids read the medial blocks' nodes).
-    let measurer = (!options.keep_nodes && options.smooth == 0 && template_blocks == 0)
-        .then(crate::quality::Measurer::new);
+    // Nodes not kept ([`Options::keep_nodes`]): every grid is measured as it is made (not
+    // with smoothing, which moves the nodes after). The medial blocks on an inserted hole
+    // keep theirs until its template's grids, made from them, are measured.
+    let measurer = (!options.keep_nodes && options.smooth == 0).then(crate::quality::Measurer::new);
     type Made = (
         Vec<GridKey>,
         Vec<PieceGrids>,
@@ -1871,6 +1870,12 @@ pub fn assemble_cached(
                             let mut bad = [false; 2];
                             for (side, g) in pair.iter_mut().enumerate() {
                                 let c = p.circles[side];
+                                // An inserted hole's arcs are interfaces with its template's
+                                // blocks, which are made from these nodes (kept until then).
+                                if fluid(c) {
+                                    bad[side] = m.block(g, &[], MERGED_MIN_ANGLE_DEG);
+                                    continue;
+                                }
                                 let wall = [(0, p.geom.walls[side].c, c < 0)];
                                 bad[side] = m.block(g, &wall, MERGED_MIN_ANGLE_DEG);
                                 g.nodes = Vec::new();
@@ -1900,7 +1905,6 @@ pub fn assemble_cached(
         }
     };
     let (grid_keys, mut per_piece, figures) = work?;
-    let measured = measurer.map(|_| std::sync::Arc::new(crate::quality::Measured::new(figures)));
     // The first error in piece order.
     if let Some(at) = per_piece.iter().position(Result::is_err) {
         per_piece.swap_remove(at)?;
@@ -1959,11 +1963,27 @@ pub fn assemble_cached(
         },
     );
     drop(checked);
+    let split = grids.len();
+    let mut more = Vec::new();
     if template_blocks > 0 {
-        let t = inserted::template_grids(&layout, &classes, &grids, first_template, h)?;
-        inverted.extend(t.iter().map(has_inverted_cell));
+        let mut t = inserted::template_grids(&layout, &classes, &grids, first_template, h)?;
+        match &measurer {
+            Some(m) => {
+                // Measured (the inverted cells among the figures), then every node dropped.
+                let (figures, bad) =
+                    crate::quality::measure_blocks(m, &layout, &t, split, MERGED_MIN_ANGLE_DEG);
+                more = figures;
+                inverted.extend(bad);
+                t.par_iter_mut()
+                    .chain(grids.par_iter_mut())
+                    .for_each(|g| g.nodes = Vec::new());
+            }
+            None => inverted.extend(t.iter().map(has_inverted_cell)),
+        }
         grids.extend(t);
     }
+    let measured =
+        measurer.map(|_| std::sync::Arc::new(crate::quality::Measured::new(figures, split, more)));
     let inverted_blocks = (0..inverted.len()).filter(|&b| inverted[b]).collect();
     Ok(ExactMesh {
         layout,

@@ -157,6 +157,10 @@ pub struct Measured {
     cells: Vec<(Vec<BlockFigures>, QualityMetrics)>,
     sides: Vec<ChunkSides>,
     wall: Option<f64>,
+    /// The first block of the second run of chunks (the templates' blocks, measured after
+    /// the medial blocks: [`Measured::new`]), and its first chunk.
+    split: usize,
+    split_chunk: usize,
 }
 
 #[derive(Debug)]
@@ -168,15 +172,24 @@ struct ChunkSides {
 }
 
 impl Measured {
-    /// The figures of the chunks of [`CHUNK`] blocks, in block order (every chunk full but
-    /// the last).
-    pub(crate) fn new(chunks: Vec<ChunkFigures>) -> Measured {
+    /// The figures of two runs of chunks of [`CHUNK`] blocks, in block order, every chunk of
+    /// a run full but its last: the medial blocks' `chunks`, then the blocks from `split` on
+    /// (`more`; none when `split` is the block count). The way blocks are grouped into
+    /// chunks changes no figure (per-block figures are reduced in block order, chunk metrics
+    /// are counts and extremes).
+    pub(crate) fn new(
+        chunks: Vec<ChunkFigures>,
+        split: usize,
+        more: Vec<ChunkFigures>,
+    ) -> Measured {
         let mut out = Measured {
-            cells: Vec::with_capacity(chunks.len()),
-            sides: Vec::with_capacity(chunks.len()),
+            cells: Vec::with_capacity(chunks.len() + more.len()),
+            sides: Vec::with_capacity(chunks.len() + more.len()),
             wall: None,
+            split,
+            split_chunk: chunks.len(),
         };
-        for c in chunks {
+        for c in chunks.into_iter().chain(more) {
             out.wall = max_nan(out.wall, c.wall);
             out.cells.push(c.cells);
             out.sides.push(ChunkSides {
@@ -197,20 +210,31 @@ impl Measured {
     /// True when block `b` has a corner angle below the threshold it was measured with
     /// ([`ChunkMeasure::block`]); false for a block not measured.
     pub(crate) fn corner_below(&self, b: usize) -> bool {
+        let (c, k) = self.chunk_of(b);
         self.sides
-            .get(b / CHUNK)
-            .and_then(|c| c.below.get(b % CHUNK))
+            .get(c)
+            .and_then(|c| c.below.get(k))
             .copied()
             .unwrap_or(false)
+    }
+
+    /// The chunk holding block `b`, and the block's place in it.
+    fn chunk_of(&self, b: usize) -> (usize, usize) {
+        if b < self.split {
+            (b / CHUNK, b % CHUNK)
+        } else {
+            let r = b - self.split;
+            (self.split_chunk + r / CHUNK, r % CHUNK)
+        }
     }
 
     /// The side-cell heights of side `s` of block `b` (grid dimensions `g`), empty when not
     /// measured (a wall side, a block without cells).
     fn heights(&self, b: usize, s: usize, g: &BlockGrid) -> &[f64] {
-        let Some(c) = self.sides.get(b / CHUNK) else {
+        let (c, k) = self.chunk_of(b);
+        let Some(c) = self.sides.get(c) else {
             return &[];
         };
-        let k = b % CHUNK;
         let (Some(&from), Some(&to), Some(&mask)) =
             (c.start.get(k), c.start.get(k + 1), c.mask.get(k))
         else {
@@ -224,6 +248,46 @@ impl Measured {
         let before: usize = (0..s).map(cells).sum();
         &c.heights[from + before..from + before + cells(s)]
     }
+}
+
+/// Measure `grids`, blocks `first..` of `layout` (their wall sides from it), in chunks of
+/// [`CHUNK`] blocks in parallel, each block's corner-angle flag against `below_deg`: the
+/// second run of [`Measured::new`] (the templates' blocks, made after the medial ones).
+/// Also returns which blocks have an inverted cell.
+pub(crate) fn measure_blocks(
+    m: &Measurer,
+    layout: &BlockLayout,
+    grids: &[BlockGrid],
+    first: usize,
+    below_deg: f64,
+) -> (Vec<ChunkFigures>, Vec<bool>) {
+    use rayon::prelude::*;
+    let parts: Vec<(ChunkFigures, Vec<bool>)> = grids
+        .par_chunks(CHUNK)
+        .enumerate()
+        .map(|(c, chunk)| {
+            let mut cm = m.chunk();
+            let mut bad = Vec::with_capacity(chunk.len());
+            for (k, g) in chunk.iter().enumerate() {
+                let walls: Vec<(usize, Point, bool)> =
+                    match layout.blocks.get(first + c * CHUNK + k) {
+                        Some(b) => sides::wall_arcs(layout, b).collect(),
+                        None => Vec::new(),
+                    };
+                bad.push(cm.block(g, &walls, below_deg));
+            }
+            (cm.finish(), bad)
+        })
+        .collect();
+    let mut bad = Vec::with_capacity(grids.len());
+    let figures = parts
+        .into_iter()
+        .map(|(f, b)| {
+            bad.extend(b);
+            f
+        })
+        .collect();
+    (figures, bad)
 }
 
 /// [`super::measure_all_with`] of a mesh whose grids were measured as they were made
@@ -314,7 +378,7 @@ mod tests {
                 bad[usize::from(inverted)] += 1;
                 grids.push(g);
             }
-            let measured = Measured::new(vec![chunk.finish()]);
+            let measured = Measured::new(vec![chunk.finish()], CHUNK, Vec::new());
             assert_eq!(measured.blocks(), CHUNK);
             for (b, g) in grids.iter().enumerate() {
                 let want = super::super::has_corner_below(g, 5.0);

@@ -317,7 +317,7 @@ pub(super) fn prefetch_edges(layout: &BlockLayout, block: &crate::layout::Block)
 
 /// The sides of `block` on a wall arc: `(side, the circle's centre, whether the circle is
 /// the bounding circle)` (whose normal into the fluid points to its centre).
-fn wall_arcs<'l>(
+pub(super) fn wall_arcs<'l>(
     layout: &'l BlockLayout,
     block: &'l crate::layout::Block,
 ) -> impl Iterator<Item = (usize, Point, bool)> + 'l {
