@@ -99,7 +99,8 @@ fn enclose(holes: &[Circle], c: Point, margin: f64) -> Circle {
 ///
 /// Byte 0 picks the generator, byte 1 the cells, byte 2 the post-processing (bit 0: nudge
 /// every coordinate by a few ulps; bit 1: reverse the hole order; bit 2: swap x and y; bit 3:
-/// move the layout far from the origin), byte 3 the scale; the rest are generator parameters.
+/// move the layout far from the origin; bit 4, read by [`check_layout_bytes`]: mesh it
+/// without keeping the nodes too), byte 3 the scale; the rest are generator parameters.
 pub fn decode_case(data: &[u8]) -> Option<(Domain, Options)> {
     let mut b = Bytes { data, pos: 0 };
     let generator = b.u8();
@@ -738,15 +739,46 @@ pub fn check_layout_bytes(data: &[u8]) -> Result<Option<CheckReport>, String> {
         return Ok(None);
     };
     match mesh(&domain, &options) {
-        Ok(m) => check_mesh_with(&domain, &m, Checks::default())
-            .map(Some)
-            .map_err(|e| format!("{e}\nlayout: {}", domain.to_json_string())),
+        Ok(m) => {
+            // Byte 2's bit 4: also without keeping the nodes (the grids measured as they are
+            // made, `Options::keep_nodes`), which must give the same layout and report.
+            if data.get(2).is_some_and(|p| p & 16 != 0) {
+                same_without_nodes(&domain, &options, &m)
+                    .map_err(|e| format!("{e}\nlayout: {}", domain.to_json_string()))?;
+            }
+            check_mesh_with(&domain, &m, Checks::default())
+                .map(Some)
+                .map_err(|e| format!("{e}\nlayout: {}", domain.to_json_string()))
+        }
         Err(e) if accepted_refusal(&domain, &e) => Ok(None),
         Err(e) => Err(format!(
             "mesher failed on a valid domain: {e}\nlayout: {}",
             domain.to_json_string()
         )),
     }
+}
+
+/// `domain` meshed with `options` but without keeping the nodes has the layout, block
+/// dimensions and report of `kept` (meshed with them).
+fn same_without_nodes(domain: &Domain, options: &Options, kept: &Mesh) -> Result<(), String> {
+    use crate::output::report::Report;
+    let o = Options {
+        keep_nodes: false,
+        ..options.clone()
+    };
+    let m = mesh(domain, &o).map_err(|e| format!("meshed with its nodes, not without: {e}"))?;
+    let dims = |m: &Mesh| m.grids.iter().map(|g| (g.ni, g.nj)).collect::<Vec<_>>();
+    if m.layout != kept.layout || dims(&m) != dims(kept) {
+        return Err("without its nodes: another layout or other block dimensions".into());
+    }
+    let json = |m: &Mesh| serde_json::to_string(&Report::from_mesh(m)).unwrap_or_default();
+    let (a, b) = (json(&m), json(kept));
+    if a != b {
+        return Err(format!(
+            "without its nodes another report:\n{a}\nagainst\n{b}"
+        ));
+    }
+    Ok(())
 }
 
 /// The `parse_json` fuzz target: [`Domain::from_json_str`] on the bytes (as UTF-8, lossily)

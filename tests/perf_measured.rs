@@ -165,6 +165,43 @@ fn meshes_that_need_their_nodes_keep_them() {
     assert!(p.measured.is_none() && p.grids.iter().all(|g| !g.nodes.is_empty()));
 }
 
+/// A mesh without nodes writes its json files (the same as with its nodes) and refuses every
+/// writer of grids with an error that says why, rather than writing empty or wrong files.
+#[test]
+fn writers_of_grids_refuse_a_mesh_without_nodes() {
+    use medial_blocks::output::{plot3d, vtk, write_files, Format};
+    let d = layouts::bubbles(30, 2).expect("layout");
+    let kept = mesh(&d, &Options::default()).expect("mesh");
+    let measured = mesh(&d, &dropping(&Options::default())).expect("mesh");
+    assert!(measured.measured.is_some());
+    let dir = tempfile::tempdir().expect("temp dir");
+    let (a, b) = (dir.path().join("a"), dir.path().join("b"));
+    write_files(&kept, &a, &[Format::Json]).expect("json with nodes");
+    write_files(&measured, &b, &[Format::Json]).expect("json without nodes");
+    assert_eq!(common::tree(&a), common::tree(&b));
+    let says = |e: std::io::Error| {
+        assert!(e.to_string().contains("keep_nodes"), "{e}");
+        assert_eq!(e.kind(), std::io::ErrorKind::InvalidInput, "{e}");
+    };
+    for f in [
+        Format::Vtk,
+        Format::Vtu,
+        Format::Plot3d,
+        Format::Gmsh,
+        Format::Svg,
+        Format::Png,
+    ] {
+        let out = dir.path().join(f.name());
+        says(write_files(&measured, &out, &[f]).expect_err("refused"));
+        assert!(!out.join("report.json").exists());
+    }
+    let xyz = dir.path().join("mesh.xyz");
+    says(plot3d::write_binary(&measured.grids, &xyz).expect_err("refused"));
+    says(plot3d::write_ascii(&measured.grids, &xyz).expect_err("refused"));
+    let mut sink = Vec::new();
+    says(vtk::write_vts(&mut sink, 0, &measured.grids[0]).expect_err("refused"));
+}
+
 /// The measured report does not depend on the thread count either.
 #[test]
 fn measured_reports_are_the_same_for_every_thread_count() {

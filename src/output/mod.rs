@@ -128,6 +128,27 @@ fn exchange(from: &Path, to: &Path) -> io::Result<()> {
     }
 }
 
+/// The error of a writer of grids given a mesh made without its nodes.
+fn no_nodes() -> io::Error {
+    io::Error::new(
+        io::ErrorKind::InvalidInput,
+        "the mesh was made without its nodes (Options::keep_nodes false): only the json \
+         format (report.json, connectivity.json) can be written from it",
+    )
+}
+
+/// Check that every grid is well formed (its node count matches its `ni`, `nj`).
+pub(crate) fn check_grids(grids: &[crate::mesh::BlockGrid]) -> io::Result<()> {
+    match grids.iter().position(|g| !well_formed(g)) {
+        Some(b) if grids[b].nodes.is_empty() && grids[b].cells() > 0 => Err(no_nodes()),
+        Some(b) => Err(io::Error::new(
+            io::ErrorKind::InvalidInput,
+            format!("grid {b}: node count does not match its ni, nj"),
+        )),
+        None => Ok(()),
+    }
+}
+
 /// Check that the mesh has one well-formed grid per block, as every writer needs.
 pub(crate) fn check_mesh(mesh: &Mesh) -> io::Result<()> {
     if mesh.grids.len() != mesh.layout.blocks.len() {
@@ -140,12 +161,10 @@ pub(crate) fn check_mesh(mesh: &Mesh) -> io::Result<()> {
             ),
         ));
     }
-    if let Some(b) = mesh.grids.iter().position(|g| !well_formed(g)) {
-        return Err(io::Error::new(
-            io::ErrorKind::InvalidInput,
-            format!("grid {b}: node count does not match its ni, nj"),
-        ));
+    if mesh.measured.is_some() {
+        return Err(no_nodes());
     }
+    check_grids(&mesh.grids)?;
     let (vertices, edges) = (mesh.layout.vertices.len(), mesh.layout.edges.len());
     let dangling = |block: &crate::layout::Block| {
         block.corners.iter().any(|&v| v as usize >= vertices)

@@ -30,6 +30,7 @@ fn dim(n: usize) -> io::Result<i32> {
 
 /// Write the Fortran-unformatted binary form.
 pub fn write_binary(grids: &[BlockGrid], path: &Path) -> io::Result<()> {
+    super::check_grids(grids)?;
     write_atomic(path, |w| {
         let nblocks = i32::try_from(grids.len())
             .map_err(|_| io::Error::new(io::ErrorKind::InvalidInput, "too many blocks"))?;
@@ -57,6 +58,7 @@ pub fn write_binary(grids: &[BlockGrid], path: &Path) -> io::Result<()> {
 /// Write the formatted ASCII form (`{:e}` shortest round-trip values, one per line per block
 /// and coordinate, wrapped at 4 values per line).
 pub fn write_ascii(grids: &[BlockGrid], path: &Path) -> io::Result<()> {
+    super::check_grids(grids)?;
     write_atomic(path, |w| {
         writeln!(w, "{}", grids.len())?;
         for g in grids {

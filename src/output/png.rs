@@ -43,6 +43,7 @@ pub const AHEAD: usize = 2;
 /// [`write_with_width`] drawing the SVG in parts of about `part_bytes` (at least one element
 /// a part): the same file for every `part_bytes`.
 pub fn write_in_parts(mesh: &Mesh, path: &Path, width: u32, part_bytes: usize) -> io::Result<()> {
+    super::check_mesh(mesh)?;
     let width = width.max(1);
     let (tx, rx) = std::sync::mpsc::sync_channel::<resvg::usvg::Tree>(AHEAD);
     let pixmap = std::thread::scope(|scope| {

@@ -125,6 +125,7 @@ pub fn write_vts_encoded<W: Write>(
     grid: &BlockGrid,
     encoding: Encoding,
 ) -> io::Result<()> {
+    super::check_grids(std::slice::from_ref(grid))?;
     let (ni, nj) = (grid.ni, grid.nj);
     let fields = cell_fields(grid);
     let id = i32::try_from(block_id).map_err(|_| {
