@@ -3,7 +3,7 @@
 //! the same layout, block dimensions and report, bit for bit, on layouts of every kind the
 //! exact mesher meets (size-driven and fixed counts, clustering, collapses, co-circular
 //! lattices, inserted holes and their templates) and on those that must keep their nodes
-//! (smoothing, one hole, paper mode, periodic boxes, transitions); the CLI's `--format json` (which asks for no
+//! (smoothing, one hole, paper mode, transitions), periodic boxes likewise; the CLI's `--format json` (which asks for no
 //! nodes) against `--format json,svg` (which keeps them).
 
 use crate::common;
@@ -153,7 +153,14 @@ fn meshes_that_need_their_nodes_keep_them() {
         medial_blocks::transition::mesh_with_transition(&d, &dropping(&Options::default()), 0.05)
             .expect("transition");
     assert!(t.measured.is_none() && t.grids.iter().all(|g| !g.nodes.is_empty()));
-    let pd = medial_blocks::PeriodicDomain::new(
+}
+
+/// Periodic boxes measured as their grids are made: the same layout, dimensions and report
+/// (interfaces across the box's edges among the growth ratios), with inserted holes too.
+#[test]
+fn periodic_boxes_measured_report_what_their_nodes_would() {
+    use medial_blocks::{mesh_periodic, PeriodicDomain};
+    let two = PeriodicDomain::new(
         [2.0, 1.0],
         vec![
             medial_blocks::Circle::new(0.1, 0.1, 0.2),
@@ -161,8 +168,42 @@ fn meshes_that_need_their_nodes_keep_them() {
         ],
     )
     .expect("periodic");
-    let p = medial_blocks::mesh_periodic(&pd, &dropping(&Options::default())).expect("periodic");
-    assert!(p.measured.is_none() && p.grids.iter().all(|g| !g.nodes.is_empty()));
+    let mut boxes = vec![two];
+    for (n, seed) in [(30, 1), (120, 2), (300, 3)] {
+        boxes.push(layouts::periodic_bubbles(n, seed).expect("periodic layout"));
+    }
+    let mut templates = 0;
+    for pd in &boxes {
+        for o in [
+            Options::default(),
+            Options {
+                block_cells: Some(16),
+                ..Options::default()
+            },
+            Options {
+                refine_ratio: Some(0.7),
+                ..Options::default()
+            },
+            Options {
+                smooth: 2,
+                ..Options::default()
+            },
+        ] {
+            let kept = mesh_periodic(pd, &o).expect("periodic mesh");
+            let measured = mesh_periodic(pd, &dropping(&o)).expect("periodic mesh");
+            templates += kept.template_blocks;
+            let drops = o.smooth == 0 && kept.geometry == medial_blocks::mesh::Geometry::Exact;
+            assert_eq!(measured.measured.is_some(), drops);
+            assert_eq!(measured.layout, kept.layout);
+            let dims = |m: &Mesh| m.grids.iter().map(|g| (g.ni, g.nj)).collect::<Vec<_>>();
+            assert_eq!(dims(&measured), dims(&kept));
+            if drops {
+                assert!(measured.grids.iter().all(|g| g.nodes.is_empty()));
+            }
+            assert_eq!(report_json(&measured), report_json(&kept));
+        }
+    }
+    assert!(templates > 0, "no inserted hole: too few to tell");
 }
 
 /// A mesh without nodes writes its json files (the same as with its nodes) and refuses every
@@ -216,21 +257,29 @@ fn measured_reports_are_the_same_for_every_thread_count() {
 }
 
 /// `--format json` (no writer reads a node: the CLI asks for none) writes the same
-/// report.json and connectivity.json as `--format json,svg` (the SVG writer reads them).
+/// report.json and connectivity.json as `--format json,svg` (the SVG writer reads them), for
+/// bounded and periodic layouts.
 #[test]
 fn cli_json_alone_writes_what_it_writes_beside_a_node_writer() {
     let dir = tempfile::tempdir().expect("temp dir");
-    let input = dir.path().join("bubbles.json");
-    let input = input.to_str().expect("utf-8");
-    let out = common::run(&[
-        "example", "bubbles", "--holes", "200", "--seed", "5", "-o", input,
-    ]);
-    assert!(out.status.success());
-    for extra in [
-        &[][..],
-        &["--block-cells", "16"][..],
-        &["--first-height-rel", "1e-3"][..],
-    ] {
+    let mut runs = Vec::new();
+    for kind in ["bubbles", "periodic-bubbles"] {
+        let input = dir.path().join(format!("{kind}.json"));
+        let input = input.to_str().expect("utf-8").to_string();
+        let out = common::run(&[
+            "example", kind, "--holes", "200", "--seed", "5", "-o", &input,
+        ]);
+        assert!(out.status.success());
+        for extra in [
+            &[][..],
+            &["--block-cells", "16"][..],
+            &["--first-height-rel", "1e-3"][..],
+        ] {
+            runs.push((input.clone(), extra));
+        }
+    }
+    for (input, extra) in runs {
+        let input = input.as_str();
         let alone = dir.path().join("alone");
         let beside = dir.path().join("beside");
         for (o, format) in [(&alone, "json"), (&beside, "json,svg")] {
@@ -247,7 +296,7 @@ fn cli_json_alone_writes_what_it_writes_beside_a_node_writer() {
         for f in ["report.json", "connectivity.json"] {
             let a = std::fs::read(alone.join(f)).expect("written");
             let b = std::fs::read(beside.join(f)).expect("written");
-            assert!(a == b, "{f} differs with {extra:?}");
+            assert!(a == b, "{f} differs for {input} with {extra:?}");
         }
     }
 }

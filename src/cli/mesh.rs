@@ -621,7 +621,6 @@ pub fn run(args: Args, global: Global) -> Result<(), Failure> {
     // are measured as they are made and their nodes dropped (issue 8: a tenth of a run's CPU
     // time went into the fresh pages of nodes nobody wrote). The same files.
     options.keep_nodes = !(formats.iter().all(|f| *f == Format::Json)
-        && matches!(domain, AnyDomain::Bounded(_))
         && args.transition.is_none()
         && !args.compare_modes);
     let bar = progress(global);

@@ -40,7 +40,7 @@ use crate::geometry::Point;
 use crate::grid::{GridError, MAX_CELLS_PER_SIDE, MAX_TOTAL_NODES};
 use crate::layout::{Block, BlockLayout, Curve, Edge, EdgeKind, SideRef, Translation};
 use crate::mesh::BlockGrid;
-use crate::mesher::{MeshError, Options};
+use crate::mesher::{MeshError, Options, MERGED_MIN_ANGLE_DEG};
 use rayon::prelude::*;
 /// Hash maps with a fast hasher (issue 8: SipHash of the orbit keys was 4% of a periodic
 /// mesh); nothing reads them in iteration order.
@@ -112,6 +112,9 @@ pub struct PeriodicExact {
     pub template_blocks: usize,
     /// The blocks the build was asked to flag ([`Flag`]), increasing; empty when it was not.
     pub(crate) flagged: Vec<usize>,
+    /// The report's figures of every block when the nodes were not kept
+    /// ([`Options::keep_nodes`], [`crate::Mesh::measured`]); `None` when the grids hold them.
+    pub measured: Option<std::sync::Arc<crate::quality::Measured>>,
 }
 
 /// Which blocks a build flags as it makes their grids (issue 8: each block's cells are
@@ -845,14 +848,27 @@ fn build_checking(
         }
     };
     set_medial_nodes(pb, &nodes, &mut a);
+    // Nodes not kept ([`Options::keep_nodes`]): every grid measured as it is made (not with
+    // smoothing, which moves the nodes after), as bounded exact mode does.
+    let measurer = (!options.keep_nodes && options.smooth == 0).then(crate::quality::Measurer::new);
     // The medial blocks' grids, smoothed and flagged each on its own (see `grids_pass`).
-    let grids = grids_pass(&parts, &counts, &nodes, &a, options.smooth, flag);
-    let (layout, (mut grids, mut flagged)) = (a.layout, grids?);
+    let grids = grids_pass(
+        &parts,
+        &counts,
+        &nodes,
+        &a,
+        options.smooth,
+        flag,
+        measurer.as_ref(),
+    );
+    let (layout, (mut grids, mut flagged, figures)) = (a.layout, grids?);
     drop(nodes);
     let mut template_blocks = 0;
+    let split = grids.len();
+    let mut more = Vec::new();
     if let Some((classes, first, filled)) = &templated {
         template_blocks = *filled;
-        let t = super::inserted::template_grids(&layout, classes, &grids, *first, cell)?;
+        let mut t = super::inserted::template_grids(&layout, classes, &grids, *first, cell)?;
         if let Some(f) = flag {
             let first = grids.len();
             flagged.extend(
@@ -862,8 +878,18 @@ fn build_checking(
                     .map(|(k, _)| first + k),
             );
         }
+        if let Some(m) = &measurer {
+            // Measured, then every node dropped (the medial blocks on the inserted holes kept
+            // theirs for the templates).
+            more = crate::quality::measure_blocks(m, &layout, &t, split, MERGED_MIN_ANGLE_DEG).0;
+            t.par_iter_mut()
+                .chain(grids.par_iter_mut())
+                .for_each(|g| g.nodes = Vec::new());
+        }
         grids.extend(t);
     }
+    let measured =
+        measurer.map(|_| std::sync::Arc::new(crate::quality::Measured::new(figures, split, more)));
     Ok(Built::Mesh(Box::new(PeriodicExact {
         layout,
         grids,
@@ -875,6 +901,7 @@ fn build_checking(
         split_arcs,
         template_blocks,
         flagged,
+        measured,
     })))
 }
 
@@ -1402,6 +1429,11 @@ fn set_medial_nodes(pb: &PeriodicBlocking, nodes: &[ArcNodes], a: &mut Assembled
 /// it keeps the block's boundary, which the templates copy), and with `flag` the blocks
 /// flagged ([`Flag`], increasing) are listed, each measured right after it is made (and
 /// smoothed), while its nodes are in cache.
+///
+/// With `measurer` (and no smoothing), each block is also measured for the report right
+/// after it is made ([`crate::quality::Measured`]), in chunks of the quality pass's blocks,
+/// its wall sides from the layout, and its nodes dropped unless a template block lies on one
+/// of its sides (the templates are made from them): the chunks' figures are returned.
 fn grids_pass(
     parts: &Parts,
     counts: &Counts,
@@ -1409,7 +1441,8 @@ fn grids_pass(
     a: &Assembled,
     smooth: usize,
     flag: Option<Flag>,
-) -> Result<(Vec<BlockGrid>, Vec<usize>), MeshError> {
+    measurer: Option<&crate::quality::Measurer>,
+) -> Result<GridsMade, MeshError> {
     // Column `i` of a block is the spoke from its wall node to its medial node; its end
     // columns are the spokes of its end vertices (the tangent point to the centre), the same
     // nodes in both blocks at a spoke (`GridScratch` gives each column exactly the nodes of
@@ -1426,46 +1459,106 @@ fn grids_pass(
         Ok((layout.vertices[t as usize], layout.vertices[c as usize]))
     };
     let mut flags = vec![false; a.jobs.len()];
-    let grids = a
-        .jobs
-        .par_iter()
-        .zip(flags.par_iter_mut())
-        .map_init(
-            super::grid_nodes::GridScratch::default,
-            |scratch, (job, flagged)| -> Result<BlockGrid, MeshError> {
-                let n = counts.arc[job.o];
-                let nj = counts.circle[parts.pb.arcs[job.o].circles[job.side].0 as usize + 1];
-                let (m_nodes, a_nodes) = &nodes[job.o];
-                scratch.clear();
-                for i in 0..=n {
-                    let k = if job.side == 0 { i } else { n - i };
-                    let (a, m) = if k == 0 || k == n {
-                        spoke_ends(job.o, job.spokes[if k == 0 { 0 } else { 1 }])?
-                    } else {
-                        (
-                            shifted(a_nodes[job.side][k], job.d, size),
-                            shifted(m_nodes[k], job.d, size),
-                        )
-                    };
-                    scratch.push(a, m);
+    let make = |scratch: &mut super::grid_nodes::GridScratch,
+                (job, flagged): (&GridJob, &mut bool)|
+     -> Result<BlockGrid, MeshError> {
+        let n = counts.arc[job.o];
+        let nj = counts.circle[parts.pb.arcs[job.o].circles[job.side].0 as usize + 1];
+        let (m_nodes, a_nodes) = &nodes[job.o];
+        scratch.clear();
+        for i in 0..=n {
+            let k = if job.side == 0 { i } else { n - i };
+            let (a, m) = if k == 0 || k == n {
+                spoke_ends(job.o, job.spokes[if k == 0 { 0 } else { 1 }])?
+            } else {
+                (
+                    shifted(a_nodes[job.side][k], job.d, size),
+                    shifted(m_nodes[k], job.d, size),
+                )
+            };
+            scratch.push(a, m);
+        }
+        let mut g = BlockGrid {
+            ni: n,
+            nj,
+            nodes: scratch.nodes(nj, job.first, job.growth),
+        };
+        if smooth > 0 {
+            let rows = super::smoothing::boundary_layer_rows(&g);
+            super::smoothing::winslow(&mut g, smooth, rows);
+        }
+        *flagged = flag.is_some_and(|f| f.flags(&g));
+        Ok(g)
+    };
+    let (grids, figures) = match measurer.filter(|_| smooth == 0) {
+        None => (
+            a.jobs
+                .par_iter()
+                .zip(flags.par_iter_mut())
+                .map_init(super::grid_nodes::GridScratch::default, make)
+                .collect::<Result<Vec<_>, MeshError>>()?,
+            Vec::new(),
+        ),
+        Some(m) => {
+            // The edges template blocks lie on (after the medial blocks, when holes were
+            // inserted): the medial blocks on them keep their nodes.
+            let medial = a.jobs.len();
+            let mut on_template = vec![false; layout.edges.len()];
+            for block in layout.blocks.iter().skip(medial) {
+                for side in block.sides {
+                    if let Some(t) = on_template.get_mut(side.edge as usize) {
+                        *t = true;
+                    }
                 }
-                let mut g = BlockGrid {
-                    ni: n,
-                    nj,
-                    nodes: scratch.nodes(nj, job.first, job.growth),
-                };
-                if smooth > 0 {
-                    let rows = super::smoothing::boundary_layer_rows(&g);
-                    super::smoothing::winslow(&mut g, smooth, rows);
-                }
-                *flagged = flag.is_some_and(|f| f.flags(&g));
-                Ok(g)
-            },
-        )
-        .collect::<Result<Vec<_>, MeshError>>()?;
+            }
+            let chunk = crate::quality::CHUNK;
+            let parts: Vec<(Vec<BlockGrid>, crate::quality::ChunkFigures)> = a
+                .jobs
+                .par_chunks(chunk)
+                .zip(flags.par_chunks_mut(chunk))
+                .enumerate()
+                .map_init(
+                    super::grid_nodes::GridScratch::default,
+                    |scratch, (c, (jobs, fl))| {
+                        let mut cm = m.chunk();
+                        let mut out = Vec::with_capacity(jobs.len());
+                        for (k, item) in jobs.iter().zip(fl.iter_mut()).enumerate() {
+                            let mut g = make(scratch, item)?;
+                            let block = &layout.blocks[c * chunk + k];
+                            let walls = crate::quality::wall_sides(layout, block);
+                            cm.block(&g, &walls, MERGED_MIN_ANGLE_DEG);
+                            let keep = block.sides.iter().any(|s| {
+                                on_template.get(s.edge as usize).copied().unwrap_or(false)
+                            });
+                            if !keep {
+                                g.nodes = Vec::new();
+                            }
+                            out.push(g);
+                        }
+                        Ok((out, cm.finish()))
+                    },
+                )
+                .collect::<Result<_, MeshError>>()?;
+            let mut grids = Vec::with_capacity(medial);
+            let mut figures = Vec::with_capacity(parts.len());
+            for (g, f) in parts {
+                grids.extend(g);
+                figures.push(f);
+            }
+            (grids, figures)
+        }
+    };
     let flagged = (0..flags.len()).filter(|&b| flags[b]).collect();
-    Ok((grids, flagged))
+    Ok((grids, flagged, figures))
 }
+
+/// What [`grids_pass`] made: the medial blocks' grids, the blocks flagged, and when measured
+/// the chunks' figures.
+type GridsMade = (
+    Vec<BlockGrid>,
+    Vec<usize>,
+    Vec<crate::quality::ChunkFigures>,
+);
 
 /// What [`layout_pass`] made.
 struct Assembled {

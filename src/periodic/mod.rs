@@ -3443,7 +3443,7 @@ fn frame_of(
         template_blocks: x.template_blocks,
         geometry: crate::mesh::Geometry::Exact,
         coarsened_cell_size: x.coarsened_from.map(|from| [from, x.cell_size]),
-        measured: None,
+        measured: x.measured,
     };
     // Template blocks have no key: node counts are imposed on layouts without them only.
     let keys = (keys && x.template_blocks == 0).then_some(x.keys);

@@ -250,6 +250,14 @@ impl Measured {
     }
 }
 
+/// The wall sides of `block` in `layout` as [`ChunkMeasure::block`] takes them.
+pub(crate) fn wall_sides(
+    layout: &BlockLayout,
+    block: &crate::layout::Block,
+) -> Vec<(usize, Point, bool)> {
+    sides::wall_arcs(layout, block).collect()
+}
+
 /// Measure `grids`, blocks `first..` of `layout` (their wall sides from it), in chunks of
 /// [`CHUNK`] blocks in parallel, each block's corner-angle flag against `below_deg`: the
 /// second run of [`Measured::new`] (the templates' blocks, made after the medial ones).
@@ -269,11 +277,10 @@ pub(crate) fn measure_blocks(
             let mut cm = m.chunk();
             let mut bad = Vec::with_capacity(chunk.len());
             for (k, g) in chunk.iter().enumerate() {
-                let walls: Vec<(usize, Point, bool)> =
-                    match layout.blocks.get(first + c * CHUNK + k) {
-                        Some(b) => sides::wall_arcs(layout, b).collect(),
-                        None => Vec::new(),
-                    };
+                let walls = match layout.blocks.get(first + c * CHUNK + k) {
+                    Some(b) => wall_sides(layout, b),
+                    None => Vec::new(),
+                };
                 bad.push(cm.block(g, &walls, below_deg));
             }
             (cm.finish(), bad)
