@@ -109,10 +109,10 @@ pub struct Options {
     /// mode's medial blocks are then measured as their grids are made and their nodes
     /// dropped, so that the grids never take memory all at once ([`Mesh::measured`] holds
     /// the figures; each grid keeps its `ni` and `nj`). Only [`mesh`] of a domain of two or
-    /// more holes in exact mode without smoothing drops nodes (inserted holes' template
-    /// blocks too, measured once made); every other mesh keeps them (and has no
-    /// [`Mesh::measured`]). A mesh without nodes cannot be
-    /// written by the writers of grids.
+    /// more holes and [`crate::mesh_periodic`], in exact mode without smoothing, drop nodes
+    /// (inserted holes' template blocks too, measured once made); every other mesh keeps
+    /// them (and has no [`Mesh::measured`]): one hole, paper mode, transitions, sequences.
+    /// The writers of grids refuse a mesh without nodes.
     pub keep_nodes: bool,
 }
 
