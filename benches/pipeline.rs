@@ -61,6 +61,22 @@ fn bench(c: &mut Criterion) {
         g.bench_function(id("whole"), |b| {
             b.iter(|| mesh(black_box(&domain), &opts).map(|m| m.grids.len()))
         });
+        // The CLI's `--format json` job: the mesh and its report, with the nodes held until
+        // the report has read them, and measured as the grids are made without holding them
+        // (`Options::keep_nodes`; in a loop the allocator hands back warm memory, so the
+        // fresh pages a single CLI run saves do not show here).
+        let measured = Options {
+            keep_nodes: false,
+            ..opts.clone()
+        };
+        for (name, o) in [
+            ("whole_report", &opts),
+            ("whole_report_measured", &measured),
+        ] {
+            g.bench_function(id(name), |b| {
+                b.iter(|| mesh(black_box(&domain), o).map(|m| Report::from_mesh(&m).cells))
+            });
+        }
         g.bench_function(id("generate"), |b| {
             b.iter(|| layouts::bubbles(black_box(n), SEED).map(|d| d.hole_count()))
         });
