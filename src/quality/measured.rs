@@ -12,6 +12,11 @@
 //! ([`super::sides`]) and the heights paired once the connectivity is known
 //! ([`super::sides::pair_measured`]; counts and extremes, the same in any order). Tested
 //! against the pass over kept nodes in `tests/perf_measured.rs`.
+//!
+//! The makers: bounded exact mode (`exact_mode::assemble_cached`: the medial blocks piece by
+//! piece, their wall the piece's circle, an inserted hole's neighbours kept until its
+//! template is made, then the templates' blocks by [`measure_blocks`]) and periodic boxes
+//! (`exact_mode::periodic`'s grid pass: one block after another, the walls from the layout).
 
 use super::kernel::{BlockFigures, Tables};
 use super::rows::{Chunk, Rows};
