@@ -743,7 +743,7 @@ pub fn check_layout_bytes(data: &[u8]) -> Result<Option<CheckReport>, String> {
             // Byte 2's bit 4: also without keeping the nodes (the grids measured as they are
             // made, `Options::keep_nodes`), which must give the same layout and report.
             if data.get(2).is_some_and(|p| p & 16 != 0) {
-                same_without_nodes(&domain, &options, &m)
+                same_without_nodes(&m, |o| mesh(&domain, o), &options)
                     .map_err(|e| format!("{e}\nlayout: {}", domain.to_json_string()))?;
             }
             check_mesh_with(&domain, &m, Checks::default())
@@ -758,15 +758,19 @@ pub fn check_layout_bytes(data: &[u8]) -> Result<Option<CheckReport>, String> {
     }
 }
 
-/// `domain` meshed with `options` but without keeping the nodes has the layout, block
-/// dimensions and report of `kept` (meshed with them).
-fn same_without_nodes(domain: &Domain, options: &Options, kept: &Mesh) -> Result<(), String> {
+/// The layout meshed by `remesh` with `options` but without keeping the nodes has the
+/// layout, block dimensions and report of `kept` (meshed with them).
+pub(crate) fn same_without_nodes(
+    kept: &Mesh,
+    remesh: impl FnOnce(&Options) -> Result<Mesh, MeshError>,
+    options: &Options,
+) -> Result<(), String> {
     use crate::output::report::Report;
     let o = Options {
         keep_nodes: false,
         ..options.clone()
     };
-    let m = mesh(domain, &o).map_err(|e| format!("meshed with its nodes, not without: {e}"))?;
+    let m = remesh(&o).map_err(|e| format!("meshed with its nodes, not without: {e}"))?;
     let dims = |m: &Mesh| m.grids.iter().map(|g| (g.ni, g.nj)).collect::<Vec<_>>();
     if m.layout != kept.layout || dims(&m) != dims(kept) {
         return Err("without its nodes: another layout or other block dimensions".into());

@@ -23,7 +23,8 @@ pub const MAX_PERIODIC_FUZZ_HOLES: usize = 24;
 /// Byte 0 picks the generator, byte 1 the cells and the mode (bit 7), byte 2 the
 /// post-processing (bit 0: nudge coordinates by a few ulps; bit 1: reverse the hole order;
 /// bit 2: swap x and y; bit 3: shift every centre by whole periods and a fraction, so the
-/// domain must wrap them), byte 3 the scale; the rest are generator parameters.
+/// domain must wrap them; bit 4, read by [`check_periodic_bytes`]: mesh it without keeping
+/// the nodes too), byte 3 the scale; the rest are generator parameters.
 pub fn decode_periodic_case(data: &[u8]) -> Option<(PeriodicDomain, Options)> {
     let mut b = Bytes { data, pos: 0 };
     let generator = b.u8();
@@ -387,9 +388,17 @@ pub fn check_periodic_bytes(data: &[u8]) -> Result<Option<CheckReport>, String> 
         return Ok(None);
     };
     match mesh_periodic(&pd, &options) {
-        Ok(m) => check_periodic_mesh(&pd, &m, Checks::default())
-            .map(Some)
-            .map_err(|e| format!("{e}\nlayout: {}", pd.to_json_string())),
+        Ok(m) => {
+            // Byte 2's bit 4: also without keeping the nodes, which must give the same layout
+            // and report (`Options::keep_nodes`).
+            if data.get(2).is_some_and(|p| p & 16 != 0) {
+                super::same_without_nodes(&m, |o| mesh_periodic(&pd, o), &options)
+                    .map_err(|e| format!("{e}\nlayout: {}", pd.to_json_string()))?;
+            }
+            check_periodic_mesh(&pd, &m, Checks::default())
+                .map(Some)
+                .map_err(|e| format!("{e}\nlayout: {}", pd.to_json_string()))
+        }
         Err(e) if accepted_periodic_refusal(&pd, &e) => Ok(None),
         Err(e) => Err(format!(
             "mesher failed on a valid periodic domain: {e}\nlayout: {}",
