@@ -111,7 +111,8 @@ pub struct Args {
     #[arg(long)]
     pub compare_modes: bool,
     /// Writers, comma separated: vtk, vtu, plot3d, gmsh, svg, png, json, cgns (with the
-    /// cgns feature), or all.
+    /// cgns feature), or all. With json alone (report.json, connectivity.json) no node is
+    /// held: each block is measured as it is made (less memory, faster; the same files).
     #[arg(long, default_value = DEFAULT_FORMATS)]
     pub format: String,
     /// Write the VTK files (.vts, .vtu) with raw appended binary data and the Gmsh .msh as
