@@ -381,6 +381,19 @@ pub(crate) fn template_nodes(
         .fold(0usize, usize::saturating_add)
 }
 
+/// Per edge of `layout`: true when a template block (block `first` on) lies on it.
+pub(crate) fn template_edges(layout: &BlockLayout, first: usize) -> Vec<bool> {
+    let mut on_template = vec![false; layout.edges.len()];
+    for block in layout.blocks.iter().skip(first) {
+        for side in block.sides {
+            if let Some(t) = on_template.get_mut(side.edge as usize) {
+                *t = true;
+            }
+        }
+    }
+    on_template
+}
+
 /// The grids of the template blocks `layout.blocks[first..]`: sides already gridded by the
 /// medial blocks (`grids[b]` for `b < first`) are copied bit for bit, the straight template
 /// edges get equally spaced nodes with their class's count (the gridded member's, else the
@@ -398,14 +411,7 @@ pub(crate) fn template_grids(
     let (class, ncls) = (&classes.0, classes.1);
     // The edges the template blocks lie on: only their gridded nodes are copied (copying
     // every gridded side of a large layout cost more than the templates themselves).
-    let mut on_template = vec![false; layout.edges.len()];
-    for block in layout.blocks.iter().skip(first) {
-        for side in block.sides {
-            if let Some(t) = on_template.get_mut(side.edge as usize) {
-                *t = true;
-            }
-        }
-    }
+    let on_template = template_edges(layout, first);
     // Every class's count from the medial blocks' grids, and their sides on template edges,
     // in parallel (2.4 M sides at 1e5 particles: 10 ms on one thread, issue 8). The counts
     // of a class agree (else an internal error, the one the block-order loop meets first), so

@@ -1503,14 +1503,7 @@ fn grids_pass(
             // The edges template blocks lie on (after the medial blocks, when holes were
             // inserted): the medial blocks on them keep their nodes.
             let medial = a.jobs.len();
-            let mut on_template = vec![false; layout.edges.len()];
-            for block in layout.blocks.iter().skip(medial) {
-                for side in block.sides {
-                    if let Some(t) = on_template.get_mut(side.edge as usize) {
-                        *t = true;
-                    }
-                }
-            }
+            let on_template = super::inserted::template_edges(layout, medial);
             let chunk = crate::quality::CHUNK;
             let parts: Vec<(Vec<BlockGrid>, crate::quality::ChunkFigures)> = a
                 .jobs
@@ -1525,8 +1518,7 @@ fn grids_pass(
                         for (k, item) in jobs.iter().zip(fl.iter_mut()).enumerate() {
                             let mut g = make(scratch, item)?;
                             let block = &layout.blocks[c * chunk + k];
-                            let walls = crate::quality::wall_sides(layout, block);
-                            cm.block(&g, &walls, MERGED_MIN_ANGLE_DEG);
+                            cm.block_in(layout, block, &g, MERGED_MIN_ANGLE_DEG);
                             let keep = block.sides.iter().any(|s| {
                                 on_template.get(s.edge as usize).copied().unwrap_or(false)
                             });

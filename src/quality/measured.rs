@@ -37,14 +37,9 @@ pub(crate) struct Measurer {
 
 impl Measurer {
     pub(crate) fn new() -> Measurer {
-        let lanes = Lanes::best();
         Measurer {
             tables: Tables::new(),
-            lanes: if lanes.available() {
-                lanes
-            } else {
-                Lanes::Base
-            },
+            lanes: Lanes::best(),
         }
     }
 
@@ -57,11 +52,14 @@ impl Measurer {
             rows: Rows::default(),
             lines: (Vec::new(), Vec::new()),
             wall_scratch: Vec::new(),
+            walls: Vec::new(),
             figs: Vec::with_capacity(CHUNK),
-            heights: Vec::new(),
-            start: Vec::with_capacity(CHUNK + 1),
-            mask: Vec::with_capacity(CHUNK),
-            below: Vec::with_capacity(CHUNK),
+            sides: ChunkSides {
+                heights: Vec::new(),
+                start: Vec::with_capacity(CHUNK + 1),
+                mask: Vec::with_capacity(CHUNK),
+                below: Vec::with_capacity(CHUNK),
+            },
             wall: None,
         }
     }
@@ -74,11 +72,10 @@ pub(crate) struct ChunkMeasure<'m> {
     rows: Rows,
     lines: (Vec<Point>, Vec<Point>),
     wall_scratch: Vec<f64>,
+    /// A block's wall sides ([`ChunkMeasure::block_in`]).
+    walls: Vec<(usize, Point, bool)>,
     figs: Vec<BlockFigures>,
-    heights: Vec<f64>,
-    start: Vec<usize>,
-    mask: Vec<u8>,
-    below: Vec<bool>,
+    sides: ChunkSides,
     wall: Option<f64>,
 }
 
@@ -97,17 +94,18 @@ impl ChunkMeasure<'_> {
     ) -> bool {
         let lanes = self.m.lanes;
         let f = self.acc.block(g, &self.m.tables, &mut self.rows);
-        self.start.push(self.heights.len());
+        let sd = &mut self.sides;
+        sd.start.push(sd.heights.len());
         let mut mask = 0u8;
         if super::well_formed(g) && g.ni > 0 && g.nj > 0 {
             for s in (0..4).filter(|&s| walls.iter().all(|w| w.0 != s)) {
                 mask |= 1 << s;
-                let from = self.heights.len();
-                self.heights.resize(from + sides::side_cells(g, s), 0.0);
-                sides::side_heights(g, s, &mut self.heights[from..], &mut self.lines, lanes);
+                let from = sd.heights.len();
+                sd.heights.resize(from + sides::side_cells(g, s), 0.0);
+                sides::side_heights(g, s, &mut sd.heights[from..], &mut self.lines, lanes);
             }
         }
-        self.mask.push(mask);
+        sd.mask.push(mask);
         let w = sides::walls_orthogonality(
             g,
             walls.iter().copied(),
@@ -121,21 +119,36 @@ impl ChunkMeasure<'_> {
         // well above the threshold (and with no inverted cell) has no corner below it.
         let clear = f.min_angle_deg >= below_deg + 1e-6;
         let maybe = f.inverted > 0 || !clear;
-        self.below
+        self.sides
+            .below
             .push(maybe && super::has_corner_below(g, below_deg));
         self.figs.push(f);
         f.inverted > 0
     }
 
+    /// [`ChunkMeasure::block`] of `block` of `layout`, grid `g`, its wall sides from the
+    /// layout.
+    pub(crate) fn block_in(
+        &mut self,
+        layout: &BlockLayout,
+        block: &crate::layout::Block,
+        g: &BlockGrid,
+        below_deg: f64,
+    ) -> bool {
+        let mut walls = std::mem::take(&mut self.walls);
+        walls.clear();
+        walls.extend(sides::wall_arcs(layout, block));
+        let bad = self.block(g, &walls, below_deg);
+        self.walls = walls;
+        bad
+    }
+
     /// The chunk's figures.
     pub(crate) fn finish(mut self) -> ChunkFigures {
-        self.start.push(self.heights.len());
+        self.sides.start.push(self.sides.heights.len());
         ChunkFigures {
             cells: (self.figs, self.acc.finish()),
-            heights: self.heights,
-            start: self.start,
-            mask: self.mask,
-            below: self.below,
+            sides: self.sides,
             wall: self.wall,
         }
     }
@@ -145,12 +158,7 @@ impl ChunkMeasure<'_> {
 #[derive(Debug)]
 pub(crate) struct ChunkFigures {
     cells: (Vec<BlockFigures>, QualityMetrics),
-    /// The side-cell heights of every block, its sides in `mask[k]` in turn (none for a
-    /// block without cells), block `k`'s from `start[k]`.
-    heights: Vec<f64>,
-    start: Vec<usize>,
-    mask: Vec<u8>,
-    below: Vec<bool>,
+    sides: ChunkSides,
     wall: Option<f64>,
 }
 
@@ -168,11 +176,15 @@ pub struct Measured {
     split_chunk: usize,
 }
 
+/// What a chunk keeps of its blocks' sides and corners.
 #[derive(Debug)]
 struct ChunkSides {
+    /// The side-cell heights of every block, its sides in `mask[k]` in turn (none for a
+    /// block without cells), block `k`'s from `start[k]` (one more entry at the end).
     heights: Vec<f64>,
     start: Vec<usize>,
     mask: Vec<u8>,
+    /// Per block: a corner angle below the threshold ([`ChunkMeasure::block`]).
     below: Vec<bool>,
 }
 
@@ -197,12 +209,7 @@ impl Measured {
         for c in chunks.into_iter().chain(more) {
             out.wall = max_nan(out.wall, c.wall);
             out.cells.push(c.cells);
-            out.sides.push(ChunkSides {
-                heights: c.heights,
-                start: c.start,
-                mask: c.mask,
-                below: c.below,
-            });
+            out.sides.push(c.sides);
         }
         out
     }
@@ -255,14 +262,6 @@ impl Measured {
     }
 }
 
-/// The wall sides of `block` in `layout` as [`ChunkMeasure::block`] takes them.
-pub(crate) fn wall_sides(
-    layout: &BlockLayout,
-    block: &crate::layout::Block,
-) -> Vec<(usize, Point, bool)> {
-    sides::wall_arcs(layout, block).collect()
-}
-
 /// Measure `grids`, blocks `first..` of `layout` (their wall sides from it), in chunks of
 /// [`CHUNK`] blocks in parallel, each block's corner-angle flag against `below_deg`: the
 /// second run of [`Measured::new`] (the templates' blocks, made after the medial ones).
@@ -282,11 +281,10 @@ pub(crate) fn measure_blocks(
             let mut cm = m.chunk();
             let mut bad = Vec::with_capacity(chunk.len());
             for (k, g) in chunk.iter().enumerate() {
-                let walls = match layout.blocks.get(first + c * CHUNK + k) {
-                    Some(b) => wall_sides(layout, b),
-                    None => Vec::new(),
-                };
-                bad.push(cm.block(g, &walls, below_deg));
+                bad.push(match layout.blocks.get(first + c * CHUNK + k) {
+                    Some(b) => cm.block_in(layout, b, g, below_deg),
+                    None => cm.block(g, &[], below_deg),
+                });
             }
             (cm.finish(), bad)
         })
