@@ -20,8 +20,10 @@ use crate::geometry::Point;
 use rayon::prelude::*;
 use serde::de::{IgnoredAny, SeqAccess, Visitor};
 use serde::{Deserialize, Deserializer, Serialize};
+use std::borrow::Cow;
 use std::collections::HashMap;
 use std::fmt;
+use std::sync::{Arc, OnceLock};
 
 use crate::numfmt::Num;
 
@@ -295,10 +297,63 @@ fn across_period(second: usize, shift: [i32; 2]) -> String {
 
 /// A validated domain: a bounding circle and holes strictly inside it, pairwise apart
 /// (see the module documentation for the exact invariants).
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Clone)]
 pub struct Domain {
     bounding: Circle,
     holes: Vec<Circle>,
+    /// The k-d tree over the holes and every hole's gap to its nearest other hole, each made
+    /// once per domain ([`Domain::hole_index`], [`Domain::nearest_hole_gaps`]): the
+    /// validation needs both, and so do the sampling and the refinement of the same domain
+    /// (issue 8: at 1e5 holes the tree took 10-15 ms to build and the queries 25-35 ms, each
+    /// made up to three times per domain). Shared by clones; a function of the holes, so not
+    /// part of equality.
+    index: Arc<DomainIndex>,
+}
+
+/// What [`Domain`] keeps of its [`HoleIndex`] and of its nearest-gap queries, made when first
+/// needed (or by the validation, which needs both).
+#[derive(Default)]
+struct DomainIndex {
+    tree: OnceLock<Tree>,
+    /// Per hole, the gap of [`HoleIndex::nearest_gap`] (`None` for a lone hole).
+    gaps: OnceLock<Vec<Option<f64>>>,
+}
+
+/// The parts of a [`HoleIndex`] it owns.
+struct Tree {
+    order: Vec<u32>,
+    sorted: Vec<Circle>,
+    nodes: Vec<Node>,
+}
+
+impl Tree {
+    fn new(index: HoleIndex<'_>) -> Tree {
+        Tree {
+            order: index.order.into_owned(),
+            sorted: index.sorted.into_owned(),
+            nodes: index.nodes.into_owned(),
+        }
+    }
+}
+
+/// The gaps of [`HoleIndex::nearest_gap_each`]'s answers.
+fn gaps_of(nearest: &[Option<(usize, f64)>]) -> Vec<Option<f64>> {
+    nearest.iter().map(|n| n.map(|(_, g)| g)).collect()
+}
+
+impl PartialEq for Domain {
+    fn eq(&self, other: &Domain) -> bool {
+        self.bounding == other.bounding && self.holes == other.holes
+    }
+}
+
+impl fmt::Debug for Domain {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.debug_struct("Domain")
+            .field("bounding", &self.bounding)
+            .field("holes", &self.holes)
+            .finish()
+    }
 }
 
 /// The JSON shape of a domain.
@@ -361,10 +416,54 @@ impl Domain {
     /// The same domain with its holes in `order` (`order[k]` the hole that comes `k`-th; a
     /// permutation of the hole ids, [`crate::spatial_order`]): no check is made again.
     pub(crate) fn reordered(&self, order: &[u32]) -> Domain {
-        Domain {
-            bounding: self.bounding,
-            holes: order.iter().map(|&i| self.holes[i as usize]).collect(),
+        let mut d = Domain::unchecked(
+            self.bounding,
+            order.iter().map(|&i| self.holes[i as usize]).collect(),
+        );
+        // A hole's nearest gap is the same value in any order of the holes (the minimum over
+        // the others); the tree is built again for the new order when asked for.
+        if let Some(g) = self.index.gaps.get() {
+            let moved: Vec<Option<f64>> = order.iter().map(|&i| g[i as usize]).collect();
+            d.index = Arc::new(DomainIndex {
+                tree: OnceLock::new(),
+                gaps: OnceLock::from(moved),
+            });
         }
+        d
+    }
+
+    /// A domain of these circles, not checked (the caller knows them valid); its index is
+    /// built when first asked for.
+    fn unchecked(bounding: Circle, holes: Vec<Circle>) -> Domain {
+        Domain {
+            bounding,
+            holes,
+            index: Arc::default(),
+        }
+    }
+
+    /// The k-d tree over the holes ([`HoleIndex::new`] of [`Domain::holes`]), built once per
+    /// domain (by the validation, or on the first call) and borrowed from it.
+    pub fn hole_index(&self) -> HoleIndex<'_> {
+        let t = self
+            .index
+            .tree
+            .get_or_init(|| Tree::new(HoleIndex::new(&self.holes)));
+        HoleIndex {
+            holes: &self.holes,
+            order: Cow::Borrowed(&t.order),
+            sorted: Cow::Borrowed(&t.sorted),
+            nodes: Cow::Borrowed(&t.nodes),
+        }
+    }
+
+    /// Every hole's gap to its nearest other hole (the gaps of
+    /// [`HoleIndex::nearest_gap_each`] of [`Domain::hole_index`]; `None` for a lone hole),
+    /// computed once per domain.
+    pub fn nearest_hole_gaps(&self) -> &[Option<f64>] {
+        self.index
+            .gaps
+            .get_or_init(|| gaps_of(&self.hole_index().nearest_gap_each()))
     }
 
     /// Default limit on the number of holes.
@@ -457,7 +556,9 @@ impl Domain {
         drop(seen);
         // Overlaps: for each hole in input order, its nearest neighbour by gap (the queries
         // answered together, on the thread pool for many holes: the same answers).
-        let nearest = HoleIndex::new(&holes).nearest_gap_each();
+        let index = HoleIndex::new(&holes);
+        let nearest = index.nearest_gap_each();
+        let tree = Tree::new(index);
         for (i, &found) in nearest.iter().enumerate() {
             if let Some((j, gap)) = found {
                 if gap <= tol {
@@ -472,7 +573,14 @@ impl Domain {
             }
         }
         check_precision(&bounding, &holes, &nearest)?;
-        Ok(Domain { bounding, holes })
+        Ok(Domain {
+            bounding,
+            holes,
+            index: Arc::new(DomainIndex {
+                tree: OnceLock::from(tree),
+                gaps: OnceLock::from(gaps_of(&nearest)),
+            }),
+        })
     }
 
     /// The magnitude of the coordinates of a domain with this bounding circle:
@@ -552,10 +660,7 @@ impl Domain {
             Circle::new(-h, -s, r),
             Circle::new(h, -s, r),
         ];
-        Domain {
-            bounding: Circle::new(0.0, 0.0, 3.0_f64.sqrt() * d - r),
-            holes,
-        }
+        Domain::unchecked(Circle::new(0.0, 0.0, 3.0_f64.sqrt() * d - r), holes)
     }
 
     /// The absolute gap tolerance for a bounding radius `r`: `GAP_TOLERANCE * r`.
@@ -738,11 +843,13 @@ const QUERIES_PER_TASK: usize = 64;
 #[derive(Debug, Clone)]
 pub struct HoleIndex<'a> {
     holes: &'a [Circle],
-    order: Vec<u32>,
+    /// Owned when built ([`HoleIndex::new`]), borrowed from a [`Domain`]'s
+    /// ([`Domain::hole_index`]).
+    order: Cow<'a, [u32]>,
     /// `holes[order[k]]` at `k`: a leaf's circles side by side (bitwise copies, so every gap
     /// is the one computed from `holes`), instead of one scattered cache line each.
-    sorted: Vec<Circle>,
-    nodes: Vec<Node>,
+    sorted: Cow<'a, [Circle]>,
+    nodes: Cow<'a, [Node]>,
 }
 
 /// Most nodes pending in a query: the tree is at most 65 levels deep and a visit pushes two
@@ -864,17 +971,18 @@ impl<'a> HoleIndex<'a> {
     /// [`HoleIndex::new`] with every subtree of more than `parallel_from` holes built on two
     /// threads (the tests compare the trees built with and without threads).
     fn new_with(holes: &'a [Circle], parallel_from: usize) -> Self {
-        let mut idx = HoleIndex {
-            holes,
-            order: (0..holes.len() as u32).collect(),
-            sorted: Vec::new(),
-            nodes: Vec::with_capacity(2 * holes.len() / LEAF + 1),
-        };
+        let mut order: Vec<u32> = (0..holes.len() as u32).collect();
+        let mut nodes = Vec::with_capacity(2 * holes.len() / LEAF + 1);
         if !holes.is_empty() {
-            build_subtree(holes, &mut idx.order, 0, 0, &mut idx.nodes, parallel_from);
+            build_subtree(holes, &mut order, 0, 0, &mut nodes, parallel_from);
         }
-        idx.sorted = idx.order.iter().map(|&k| holes[k as usize]).collect();
-        idx
+        let sorted = order.iter().map(|&k| holes[k as usize]).collect();
+        HoleIndex {
+            holes,
+            order: Cow::Owned(order),
+            sorted: Cow::Owned(sorted),
+            nodes: Cow::Owned(nodes),
+        }
     }
 
     /// The hole nearest to hole `i` by gap (`|c_i - c_j| - r_i - r_j`, negative when they
@@ -969,7 +1077,7 @@ impl HoleIndex<'_> {
                 out[k as usize] = f;
             }
         } else {
-            for &k in &self.order {
+            for &k in self.order.iter() {
                 out[k as usize] = self.nearest_gap(k as usize);
             }
         }
@@ -1181,6 +1289,55 @@ mod tests {
             );
             assert!(serial.nodes.len() >= n / LEAF);
         }
+    }
+
+    #[test]
+    fn domain_index_and_gaps_equal_fresh_ones() {
+        // The validated domain's (made by the validation), a reordered copy's (gaps carried
+        // over, tree built on demand), a clone's (shared) and an unchecked domain's (both on
+        // demand): the index answers and the nearest gaps of a fresh index, bit for bit,
+        // brute force included.
+        let d = crate::layouts::bubbles(700, 4).expect("bubbles");
+        let n = d.holes().len();
+        let order: Vec<u32> = (0..n as u32)
+            .rev()
+            .step_by(2)
+            .chain((0..n as u32).rev().skip(1).step_by(2))
+            .collect();
+        let r = d.reordered(&order);
+        let domains = [
+            d.clone(),
+            r.clone(),
+            Domain::unchecked(r.bounding(), r.holes().to_vec()),
+            Domain::hexagon_example(),
+        ];
+        for (k, d) in domains.iter().enumerate() {
+            let fresh = HoleIndex::new(d.holes());
+            let want = fresh.nearest_gap_each();
+            assert_eq!(d.nearest_hole_gaps(), &gaps_of(&want)[..], "domain {k}");
+            for (i, w) in want.iter().enumerate() {
+                let brute = (0..d.holes().len())
+                    .filter(|&j| j != i)
+                    .map(|j| gap(&d.holes()[i], &d.holes()[j]))
+                    .fold(None, |m: Option<f64>, g| Some(m.map_or(g, |m| m.min(g))));
+                assert_eq!(
+                    brute.map(f64::to_bits),
+                    w.map(|w| w.1.to_bits()),
+                    "domain {k} hole {i}"
+                );
+            }
+            let idx = d.hole_index();
+            assert_eq!(idx.nearest_gap_each(), want, "domain {k}");
+            for i in (0..d.holes().len()).step_by(37) {
+                assert_eq!(idx.within_gap(i, 0.5), fresh.within_gap(i, 0.5));
+            }
+        }
+        // The reordered copy carried its gaps over, and a clone shares the built index.
+        assert!(r.index.gaps.get().is_some() && r.index.tree.get().is_some());
+        let c = d.clone();
+        assert!(Arc::ptr_eq(&c.index, &d.index));
+        assert_eq!(c, d);
+        assert!(!format!("{c:?}").contains("index"));
     }
 
     #[test]

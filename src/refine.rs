@@ -27,7 +27,7 @@
 
 use crate::apollonius::Apollonius;
 use crate::cocircular::vertex_circles_taking;
-use crate::domain::{dist, gap, Circle, Domain, HoleIndex};
+use crate::domain::{dist, gap, Circle, Domain};
 use crate::geometry::Point;
 use crate::medial::{circumcenter, MedialGraph};
 use crate::mesher::MeshError;
@@ -209,7 +209,7 @@ pub fn refine_seeded(
         let mut batch: Vec<Circle> = Vec::new();
         // The holes of this round, indexed: a candidate is checked against its neighbours,
         // not against every hole (O(log n) per candidate instead of O(n)).
-        let index = HoleIndex::new(current.holes());
+        let index = current.hole_index();
         for &(_, _, (center, rho)) in &poor {
             if key(center).is_some_and(|k| refused.contains(&k)) {
                 continue;

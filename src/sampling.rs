@@ -232,25 +232,20 @@ pub fn unit_offsets(n: usize) -> Vec<Point> {
 }
 
 /// Each circle's gap to its nearest neighbour, in slot order (slot 0 the bounding circle,
-/// slot `i + 1` hole `i`). Hole-hole gaps come from the k-d tree, so this is `O(h log h)`.
-/// With no hole the bounding circle's "gap" is its radius.
+/// slot `i + 1` hole `i`). Hole-hole gaps come from the k-d tree, so this is `O(h log h)`
+/// (once per domain: [`Domain::nearest_hole_gaps`]). With no hole the bounding circle's "gap" is
+/// its radius.
 pub fn nearest_gaps(domain: &Domain) -> Vec<f64> {
-    nearest_gaps_in(domain, &HoleIndex::new(domain.holes()))
-}
-
-/// [`nearest_gaps`] with the index of the domain's holes.
-fn nearest_gaps_in(domain: &Domain, index: &HoleIndex) -> Vec<f64> {
     let holes = domain.holes();
     let b = domain.bounding();
     let mut gaps = Vec::with_capacity(holes.len() + 1);
     gaps.push(b.radius);
     let mut bmin = f64::INFINITY;
-    let nearest = index.nearest_gap_each();
-    for (h, nearest) in holes.iter().zip(nearest) {
+    for (h, nearest) in holes.iter().zip(domain.nearest_hole_gaps()) {
         let to_bounding = b.radius - dist(h.center, b.center) - h.radius;
         bmin = bmin.min(to_bounding);
         let g = match nearest {
-            Some((_, g)) => g.min(to_bounding),
+            Some(g) => g.min(to_bounding),
             None => to_bounding,
         };
         gaps.push(g);
@@ -639,7 +634,7 @@ pub fn sample_adaptive_after(
     density: &[u32],
     previous: Option<&SampledDomain>,
 ) -> Result<(Samples, usize), TooManySamples> {
-    let index = HoleIndex::new(domain.holes());
+    let index = domain.hole_index();
     let ctx = SlotContext::new(domain, &index, opts, gaps, density, previous);
     sample_adaptive_with(&ctx, ctx.parallel())
 }
@@ -667,7 +662,7 @@ pub fn sample_adaptive_on(
     previous: Option<&SampledDomain>,
     parallel: bool,
 ) -> Result<(Samples, usize), TooManySamples> {
-    let index = HoleIndex::new(domain.holes());
+    let index = domain.hole_index();
     let ctx = SlotContext::new(domain, &index, opts, gaps, density, previous);
     sample_adaptive_with(&ctx, parallel)
 }
@@ -698,7 +693,7 @@ pub(crate) fn adaptive_grids(
     density: &[u32],
     slots: &[usize],
 ) -> Vec<Result<(u64, Vec<u64>), ()>> {
-    let index = HoleIndex::new(domain.holes());
+    let index = domain.hole_index();
     let ctx = SlotContext::new(domain, &index, opts, gaps, density, None);
     slots
         .par_iter()
@@ -1446,8 +1441,8 @@ fn sample_and_triangulate_impl(
     mut owned: Option<Triangulation>,
 ) -> Result<SampledDomain, MeshError> {
     let _stage = crate::timings::enter("sampling");
-    let index = HoleIndex::new(domain.holes());
-    let gaps = nearest_gaps_in(domain, &index);
+    let index = domain.hole_index();
+    let gaps = nearest_gaps(domain);
     let radii: Vec<f64> = domain
         .circle_ids()
         .map(|c| domain.circle(c).radius)
