@@ -33,6 +33,7 @@
 use super::build::{first_triangle, next, prev, Broken, Builder, Parts};
 use super::Point;
 use std::collections::HashMap;
+use std::mem::MaybeUninit;
 
 /// Fewest points split in halves (below, one builder; a pipeline's 1e3 particles give some
 /// 33 000 sample points, 250 particles some 8 300). 2^13 rather than the 2^15 it was: the
@@ -228,14 +229,22 @@ fn stitch(pts: &[Point], l: &Half, r: &Half) -> Result<Parts, Broken> {
             "{kept} certified triangles, more than the {total} of {distinct} points"
         )));
     }
-    // Zeroed memory (no fill): every entry of the halves' ranges is written by its half's
-    // thread, the seam's range below.
-    let mut tv = vec![[0u32; 3]; total];
-    let mut adj = vec![[0u32; 3]; total];
+    // Not initialised (issue 8: zeroing them first took 0.6 ms of one thread at 1e3
+    // particles, their fresh pages; now each half's thread touches its own range): every
+    // entry is written exactly once below, the halves' ranges by their threads, the seam's
+    // range after them, and only then are the lengths set.
+    let mut tv: Vec<[u32; 3]> = Vec::with_capacity(total);
+    let mut adj: Vec<[u32; 3]> = Vec::with_capacity(total);
+    let (tv_u, adj_u) = (
+        &mut tv.spare_capacity_mut()[..total],
+        &mut adj.spare_capacity_mut()[..total],
+    );
+    let (tv_k, tv_s) = tv_u.split_at_mut(kept);
+    let (adj_k, adj_s) = adj_u.split_at_mut(kept);
     let seam = {
-        let (tv_l, tv_r) = tv[..kept].split_at_mut(left_kept);
-        let (adj_l, adj_r) = adj[..kept].split_at_mut(left_kept);
-        let (seam, ((), ())) = rayon::join(
+        let (tv_l, tv_r) = tv_k.split_at_mut(left_kept);
+        let (adj_l, adj_r) = adj_k.split_at_mut(left_kept);
+        let (seam, (wl, wr)) = rayon::join(
             || seam_side(pts, &halves, &new_id),
             || {
                 rayon::join(
@@ -244,6 +253,9 @@ fn stitch(pts: &[Point], l: &Half, r: &Half) -> Result<Parts, Broken> {
                 )
             },
         );
+        if wl != left_kept || wr != kept - left_kept {
+            return Err(Broken("certified triangles not all copied".into()));
+        }
         seam?
     };
     let Seam {
@@ -261,20 +273,26 @@ fn stitch(pts: &[Point], l: &Half, r: &Half) -> Result<Parts, Broken> {
     }
     let gs = |x: u32| global_id(&seam_ids, n, x);
 
-    // The seam's triangles inside the region, after the halves'.
+    // The seam's triangles inside the region, after the halves' (new ids `kept, kept + 1,
+    // ...` in seam order); the barriers' half-edges in the halves' range are set after.
+    let mut written = 0;
+    let mut barrier_links = Vec::new();
     for (t, v) in seam.tv.iter().enumerate() {
         if !inside[t] {
             continue;
         }
         let me = seam_new[t];
-        tv[me as usize] = v.map(gs);
+        if me as usize != kept + written {
+            return Err(Broken("seam triangles numbered out of order".into()));
+        }
+        tv_s[written].write(v.map(gs));
         let mut links = [u32::MAX; 3];
         for (k, link) in links.iter_mut().enumerate() {
             let b = across[3 * t + k];
             if b != u32::MAX {
                 *link = b;
                 // The barrier's half-edge, in a half's range.
-                adj.as_flattened_mut()[b as usize] = he(me, k);
+                barrier_links.push((b, he(me, k)));
             } else {
                 let o = seam.adj[t][k];
                 let m = seam_new[(o / 3) as usize];
@@ -284,7 +302,22 @@ fn stitch(pts: &[Point], l: &Half, r: &Half) -> Result<Parts, Broken> {
                 *link = he(m, (o % 3) as usize);
             }
         }
-        adj[me as usize] = links;
+        adj_s[written].write(links);
+        written += 1;
+    }
+    if written != total - kept {
+        return Err(Broken("seam triangles not all placed".into()));
+    }
+    // SAFETY: entries `0..kept` were written by `copy_certified` (each writes its slice's
+    // entries in order, every one of them: checked by its count above) and `kept..total` by
+    // the loop above (in order, `total - kept` of them: checked), so all `total` entries of
+    // both vectors are initialised; `total` is their capacity.
+    unsafe {
+        tv.set_len(total);
+        adj.set_len(total);
+    }
+    for (b, h) in barrier_links {
+        adj.as_flattened_mut()[b as usize] = h;
     }
     if adj.as_flattened().contains(&u32::MAX) {
         return Err(Broken(
@@ -312,23 +345,31 @@ fn stitch(pts: &[Point], l: &Half, r: &Half) -> Result<Parts, Broken> {
 /// The certified triangles of half `h` (new ids `new_id`, the first of them `base`) into
 /// `tv` and `adj` (one entry per certified triangle, in order): global vertex ids, and the
 /// half-edge across each side when the neighbour is certified too, else `u32::MAX` (a
-/// barrier, linked by the seam).
+/// barrier, linked by the seam). Returns how many it copied: `tv.len()` when it wrote every
+/// entry (more than `tv.len()` when there were more certified triangles than entries).
 fn copy_certified(
     n: u32,
     h: &Half,
     new_id: &[u32],
     base: u32,
-    tv: &mut [[u32; 3]],
-    adj: &mut [[u32; 3]],
-) {
+    tv: &mut [MaybeUninit<[u32; 3]>],
+    adj: &mut [MaybeUninit<[u32; 3]>],
+) -> usize {
     let inf = h.ids.len() as u32;
     let g = |x: u32| if x == inf { n } else { h.ids[x as usize] };
+    // The certified triangles' new ids follow their order from `base` on ([`number`]): entry
+    // `at` is the `at`-th triangle copied.
+    let mut at = 0;
     for (t, v) in h.tv.iter().enumerate() {
         if !h.certified[t] {
             continue;
         }
-        let at = (new_id[t] - base) as usize;
-        tv[at] = v.map(g);
+        debug_assert_eq!(new_id[t] - base, at as u32);
+        if at == tv.len() {
+            // More certified triangles than ids: the caller sees the count.
+            return at + 1;
+        }
+        tv[at].write(v.map(g));
         let mut links = [u32::MAX; 3];
         for (k, link) in links.iter_mut().enumerate() {
             let o = h.adj[t][k];
@@ -337,8 +378,10 @@ fn copy_certified(
                 *link = he(new_id[m], (o % 3) as usize);
             }
         }
-        adj[at] = links;
+        adj[at].write(links);
+        at += 1;
     }
+    at
 }
 
 /// The seam side of [`stitch`]: the seam set's global ids, `DT(S)`, per seam half-edge the
