@@ -58,18 +58,36 @@ fn atan_reduced(t: f64) -> f64 {
 /// directions, in `[0, 180]`, is `angle_deg(|cross|, dot)`.
 #[inline(always)]
 pub fn angle_deg(y: f64, x: f64) -> f64 {
+    angle_deg_with::<true>(y, x)
+}
+
+/// [`angle_deg`] for arguments of magnitude at most `1e300` (bit for bit its result there),
+/// without its guard for larger ones: the cell pass's edges, whose squared lengths are at
+/// most [`super::kernel::SQ_MAX`] where they are used (issue 8: six of the edge loop's
+/// operations per edge).
+#[inline(always)]
+pub(super) fn angle_deg_bounded(y: f64, x: f64) -> f64 {
+    angle_deg_with::<false>(y, x)
+}
+
+/// [`angle_deg`], with (`GUARD`) or without the scaling of arguments above `1e300`.
+#[inline(always)]
+fn angle_deg_with<const GUARD: bool>(y: f64, x: f64) -> f64 {
     let (ax, ay) = (x.abs(), y.abs());
     let small = (ay < TAN_PI_8 * ax) | (ay == 0.0);
     let large = !small & ((ax < TAN_PI_8 * ay) | (ax == 0.0));
     // The middle branch's sum could overflow: scale huge arguments by 1/4 (exact there; both
-    // are within a factor 2.5 of each other, so neither is subnormal).
-    let k = if ay > 1e300 { 0.25 } else { 1.0 };
+    // are within a factor 2.5 of each other, so neither is subnormal). At most `1e300`, `k`
+    // is 1 and the products are the arguments themselves.
     let (n, d) = if small {
         (ay, ax)
     } else if large {
         (ax, ay)
-    } else {
+    } else if GUARD {
+        let k = if ay > 1e300 { 0.25 } else { 1.0 };
         (ay * k - ax * k, ay * k + ax * k)
+    } else {
+        (ay - ax, ay + ax)
     };
     // ax == ay: (0, 0), the diagonals and (inf, inf); t = 0 without a 0/0 or inf/inf.
     let t = if ax == ay { 0.0 } else { n / d };
@@ -108,6 +126,49 @@ fn placed(a: f64, small: bool, large: bool, y: f64, x: f64) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::angle_deg;
+
+    /// The cell pass's form gives `angle_deg`'s bits wherever both arguments are at most
+    /// `1e300` in magnitude: random directions over many scales, the axes and diagonals,
+    /// zeros of both signs and the octant boundaries.
+    #[test]
+    fn bounded_form_equals_angle_deg() {
+        let mut r = 0x2545_f491_9e37_79b9u64;
+        let mut next = || {
+            r ^= r << 13;
+            r ^= r >> 7;
+            r ^= r << 17;
+            r
+        };
+        let t8 = super::TAN_PI_8;
+        let mut cases: Vec<(f64, f64)> = vec![
+            (0.0, 0.0),
+            (-0.0, 0.0),
+            (0.0, -0.0),
+            (1.0, 1.0),
+            (-1.0, 1.0),
+            (1e300, 1e300),
+            (-1e300, 1e299),
+            (t8, 1.0),
+            (1.0, t8),
+            (-t8, -1.0),
+            (5e-324, 1.0),
+            (1.0, -5e-324),
+        ];
+        for _ in 0..200_000 {
+            let (a, b) = (next(), next());
+            let scale = 10f64.powi((a % 601) as i32 - 300);
+            let unit = |v: u64| (v >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0;
+            cases.push((unit(a) * scale, unit(b) * scale));
+            cases.push((unit(a) * scale, unit(a) * scale * t8));
+        }
+        for (y, x) in cases {
+            assert_eq!(
+                super::angle_deg_bounded(y, x).to_bits(),
+                angle_deg(y, x).to_bits(),
+                "({y}, {x})"
+            );
+        }
+    }
 
     #[test]
     fn axes_and_diagonals_are_exact() {

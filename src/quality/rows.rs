@@ -27,7 +27,8 @@
 //! ([`least_scaled_jacobian`]; a cell whose corner pick is uncertain takes the reference path).
 //!
 //! Why this gives the reference's numbers: every figure is computed with the reference's own
-//! functions ([`angle_deg`] of the edge vectors,
+//! functions ([`angle_deg`] of the edge vectors (as [`angle_deg_bounded`], its bits for
+//! edges in range),
 //! [`corner_candidates`] (a corner whose candidate is not
 //! [`settled`] takes the reference path),
 //! [`length_figures`](super::kernel::length_figures), [`skewness`](super::kernel::skewness),
@@ -44,12 +45,15 @@
 //! (settled angles are at least `1e-9`), so folding extremes with `min` /
 //! `max` in any grouping gives the reference's bits; sums are taken in cell order.
 
+use super::atan::angle_deg_bounded;
 use super::kernel::{
     angle_bin_unsigned, cell_products, corner_candidates, corner_products, least_scaled_jacobian,
     packed_bins, settled, weighted_bin, BlockFigures, Tables, PACK, SQ_MAX, SQ_MIN,
 };
 use super::JACOBIAN_EDGES;
-use super::{angle_deg, cell_metrics, fold, MetricSummary, QualityMetrics};
+#[cfg(any(test, doc))]
+use super::angle_deg;
+use super::{cell_metrics, fold, MetricSummary, QualityMetrics};
 use super::{
     ANGLE_ACCEPTABLE, ASPECT_ACCEPTABLE, EDGE_RATIO_ACCEPTABLE, SCALED_JACOBIAN_ACCEPTABLE,
 };
@@ -117,7 +121,7 @@ fn line_edges(line: &[Point], e: [&mut [f64]; 4]) {
         x[i] = dx;
         y[i] = dy;
         l[i] = checked_len(dx, dy);
-        t[i] = angle_deg(dy, dx);
+        t[i] = angle_deg_bounded(dy, dx);
     }
 }
 
@@ -133,7 +137,7 @@ fn cross_edges(lo: &[Point], hi: &[Point], e: [&mut [f64]; 4]) {
         x[i] = dx;
         y[i] = dy;
         l[i] = checked_len(dx, dy);
-        t[i] = angle_deg(dy, dx);
+        t[i] = angle_deg_bounded(dy, dx);
     }
 }
 
