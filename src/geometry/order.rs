@@ -337,13 +337,8 @@ mod tests {
     /// in one cell, and the smallest inputs.
     #[test]
     fn radix_order_equals_the_sorted_keys() {
-        let mut r = 0x9e37_79b9u32;
-        let mut unit = || {
-            r ^= r << 13;
-            r ^= r >> 17;
-            r ^= r << 5;
-            f64::from(r) / f64::from(u32::MAX)
-        };
+        let mut rng = crate::layouts::SplitMix64(0x9e37_79b9);
+        let mut unit = || rng.next_f64();
         let mut pts: Vec<Point> = (0..30_000).map(|_| [unit() * 1e3, unit() - 0.5]).collect();
         pts.extend_from_within(..700);
         pts.extend((0..3_000).map(|i| [f64::from(i % 11) * -0.0, f64::from(i / 11)]));
@@ -374,13 +369,8 @@ mod tests {
     /// buckets of each digit.
     #[test]
     fn stable_order_is_a_stable_sort() {
-        let mut r = 0x2545_f491u32;
-        let mut next = || {
-            r ^= r << 13;
-            r ^= r >> 17;
-            r ^= r << 5;
-            r
-        };
+        let mut rng = crate::layouts::SplitMix64(0x2545_f491);
+        let mut next = || rng.next_u64() as u32;
         for mask in [
             0u32,
             0x7,

@@ -132,13 +132,8 @@ mod tests {
     /// zeros of both signs and the octant boundaries.
     #[test]
     fn bounded_form_equals_angle_deg() {
-        let mut r = 0x2545_f491_9e37_79b9u64;
-        let mut next = || {
-            r ^= r << 13;
-            r ^= r >> 7;
-            r ^= r << 17;
-            r
-        };
+        let mut rng = crate::layouts::SplitMix64(0x2545_f491_9e37_79b9);
+        let mut next = || rng.next_u64();
         let t8 = super::TAN_PI_8;
         let mut cases: Vec<(f64, f64)> = vec![
             (0.0, 0.0),

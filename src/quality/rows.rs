@@ -45,14 +45,14 @@
 //! (settled angles are at least `1e-9`), so folding extremes with `min` /
 //! `max` in any grouping gives the reference's bits; sums are taken in cell order.
 
+#[cfg(any(test, doc))]
+use super::angle_deg;
 use super::atan::angle_deg_bounded;
 use super::kernel::{
     angle_bin_unsigned, cell_products, corner_candidates, corner_products, least_scaled_jacobian,
     packed_bins, settled, weighted_bin, BlockFigures, Tables, PACK, SQ_MAX, SQ_MIN,
 };
 use super::JACOBIAN_EDGES;
-#[cfg(any(test, doc))]
-use super::angle_deg;
 use super::{cell_metrics, fold, MetricSummary, QualityMetrics};
 use super::{
     ANGLE_ACCEPTABLE, ASPECT_ACCEPTABLE, EDGE_RATIO_ACCEPTABLE, SCALED_JACOBIAN_ACCEPTABLE,
