@@ -416,20 +416,20 @@ impl Domain {
     /// The same domain with its holes in `order` (`order[k]` the hole that comes `k`-th; a
     /// permutation of the hole ids, [`crate::spatial_order`]): no check is made again.
     pub(crate) fn reordered(&self, order: &[u32]) -> Domain {
-        let mut d = Domain::unchecked(
-            self.bounding,
-            order.iter().map(|&i| self.holes[i as usize]).collect(),
-        );
         // A hole's nearest gap is the same value in any order of the holes (the minimum over
         // the others); the tree is built again for the new order when asked for.
-        if let Some(g) = self.index.gaps.get() {
-            let moved: Vec<Option<f64>> = order.iter().map(|&i| g[i as usize]).collect();
-            d.index = Arc::new(DomainIndex {
+        let gaps = match self.index.gaps.get() {
+            Some(g) => OnceLock::from(order.iter().map(|&i| g[i as usize]).collect::<Vec<_>>()),
+            None => OnceLock::new(),
+        };
+        Domain {
+            bounding: self.bounding,
+            holes: order.iter().map(|&i| self.holes[i as usize]).collect(),
+            index: Arc::new(DomainIndex {
                 tree: OnceLock::new(),
-                gaps: OnceLock::from(moved),
-            });
+                gaps,
+            }),
         }
-        d
     }
 
     /// A domain of these circles, not checked (the caller knows them valid); its index is
