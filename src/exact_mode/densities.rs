@@ -1,5 +1,16 @@
-//! The sub-step densities of one arc piece (`ARC_SUBSTEPS + 1` points of the conic), the
-//! inner loop of exact mode (issue 8).
+//! The sub-step densities of one arc piece (`k + 1` points of the conic), the inner loop of
+//! exact mode (issue 8).
+//!
+//! The sub-steps adapt to the arc (`ArcGeometry::densities_into`): first
+//! [`COARSE_SUBSTEPS`] (64); when both densities change by at most [`SMOOTH_CHANGE`] (5%)
+//! from one sub-step to the next (`smooth`) they are kept, else the arc takes all
+//! [`ARC_SUBSTEPS`] (256), as does every blended arc. On bubble layouts about nine arcs in ten
+//! are smooth; a narrow gap's peak of the length density is not, and keeps every sub-step.
+//! Kept coarse sub-steps stand for the fine ones: count targets within 1e-3 relative (the
+//! coarse chords of a curved spoke mid-curve are that much shorter), node parameters within a
+//! small part of a cell, the same lower bounds (`tests/perf_densities.rs`, against the plain
+//! formula at all sub-steps on real layouts). The choice depends on the values only, which are
+//! the same bits in every build, so every build chooses alike.
 //!
 //! `ArcGeometry::densities_into` computes the same quantities as the plain formula
 //! (`ArcGeometry::densities_plain`: every point from `ArcGeometry::at`, both wall turns by
@@ -25,6 +36,27 @@ use crate::lanes::Lanes;
 
 /// Sub-steps between exact restarts of the rotation recurrence.
 pub const RESTART: usize = 16;
+
+/// The sub-steps an arc is first sampled with (`ArcGeometry::densities_into`); kept where
+/// the densities are smooth, else [`ARC_SUBSTEPS`].
+pub const COARSE_SUBSTEPS: usize = ARC_SUBSTEPS / 4;
+
+/// Largest change of the length density `sq` between neighbouring coarse sub-steps, relative
+/// to the larger of the two, for the coarse sub-steps to be kept (`smooth`).
+pub const SMOOTH_CHANGE: f64 = 0.05;
+
+/// Whether the densities `x` (`sq` or `ang`) of the coarse sub-steps are smooth enough to
+/// stand for the fine ones: every value positive and finite, and neighbours within
+/// [`SMOOTH_CHANGE`] of the larger. Within a coarse sub-step the fine densities then vary by
+/// about as much, so the equidistributed parameters move by a small fraction of one coarse
+/// sub-step and the sums (the count targets) by its square; the wall-angle density, the larger
+/// of two walls' turns, can gain at most about [`SMOOTH_CHANGE`] of one coarse sub-step's turn
+/// where the two walls' turns cross.
+pub(crate) fn smooth(x: &[f64]) -> bool {
+    x.iter().all(|v| v.is_finite() && *v > 0.0)
+        && x.windows(2)
+            .all(|w| (w[0] - w[1]).abs() <= SMOOTH_CHANGE * w[0].max(w[1]))
+}
 
 /// `|a - b|` as `sqrt`, without `hypot`'s overflow guard.
 fn len(a: Point, b: Point) -> f64 {
@@ -64,8 +96,8 @@ fn rotate(u: Point, cd: f64, sd: f64) -> Point {
     [u[0] * cd - u[1] * sd, u[1] * cd + u[0] * sd]
 }
 
-/// Chains of the rotation recurrence between restarts: sub-steps `1..RESTART`, then one
-/// chain per further `RESTART` sub-steps.
+/// Chains of the rotation recurrence between restarts at most (at [`ARC_SUBSTEPS`]): sub-steps
+/// `1..RESTART`, then one chain per further `RESTART` sub-steps.
 const CHAINS: usize = ARC_SUBSTEPS / RESTART;
 
 /// The arrays of the batched densities' passes (`ArcGeometry::densities_into`): 32 KB, kept
@@ -127,17 +159,18 @@ fn bisector_point(wp: &Wall, wq: &Wall, neg: bool, u0: f64, u1: f64) -> (Point, 
     ([a0, a1], rho, [a0 + rho * n0, a1 + rho * n1])
 }
 
-/// Every point's two spoke mid-points (`mid(m, t[wall])`): `h[k][wall][s]` from the centres
-/// `m[k][s]` and the touching points `t[k][wall][s]` (`k` the coordinate).
+/// The first `n` points' two spoke mid-points (`mid(m, t[wall])`): `h[k][wall][s]` from the
+/// centres `m[k][s]` and the touching points `t[k][wall][s]` (`k` the coordinate).
 #[inline(always)]
 fn spoke_midpoints(
     m: [&[f64; ARC_SUBSTEPS + 1]; 2],
     t: [&[[f64; ARC_SUBSTEPS + 1]; 2]; 2],
     h: [&mut [[f64; ARC_SUBSTEPS + 1]; 2]; 2],
+    n: usize,
 ) {
     for (k, hk) in h.into_iter().enumerate() {
         for (hw, tw) in hk.iter_mut().zip(t[k]) {
-            for ((x, &mc), &tc) in hw.iter_mut().zip(m[k]).zip(tw) {
+            for ((x, &mc), &tc) in hw[..n].iter_mut().zip(&m[k][..n]).zip(&tw[..n]) {
                 *x = 0.5 * (mc + tc);
             }
         }
@@ -173,37 +206,38 @@ thread_local! {
 }
 
 impl ArcGeometry {
-    /// The unit vector of interior sub-step `s` on the parametrised wall, from `u` (that of
-    /// `s - 1`) by the rotation `(cd, sd)` of one step, or computed afresh at `s = 1` and every
-    /// [`RESTART`] sub-steps from the same angle as `at(s / ARC_SUBSTEPS)`.
-    fn next_unit(&self, s: usize, u: Point, cd: f64, sd: f64) -> Point {
+    /// The unit vector of interior sub-step `s` of `k` on the parametrised wall, from `u`
+    /// (that of `s - 1`) by the rotation `(cd, sd)` of one step, or computed afresh at `s = 1`
+    /// and every [`RESTART`] sub-steps from the same angle as `at(s / k)`.
+    fn next_unit(&self, s: usize, k: usize, u: Point, cd: f64, sd: f64) -> Point {
         if s == 1 || s.is_multiple_of(RESTART) {
-            self.restart_unit(s)
+            self.restart_unit(s, k)
         } else {
             rotate(u, cd, sd)
         }
     }
 
-    /// The unit vector of sub-step `s` computed afresh, from the same angle as
-    /// `at(s / ARC_SUBSTEPS)`.
+    /// The unit vector of sub-step `s` of `k` computed afresh, from the same angle as
+    /// `at(s / k)`.
     #[inline(always)]
-    fn restart_unit(&self, s: usize) -> Point {
+    fn restart_unit(&self, s: usize, k: usize) -> Point {
         let p = self.param;
-        let theta = self.start[p] + (s as f64 / ARC_SUBSTEPS as f64) * self.sweep[p];
+        let theta = self.start[p] + (s as f64 / k as f64) * self.sweep[p];
         [theta.cos(), theta.sin()]
     }
 
-    /// The exact end points (`at(0)`, `at(1)`) into slots 0 and `ARC_SUBSTEPS` of the
+    /// The exact end points (`at(0)`, `at(1)`) into slots 0 and `k` (the sub-steps) of the
     /// centres and radii `mr` and the touching points `t` of the batched passes.
     #[inline(always)]
     fn put_ends(
         &self,
+        k: usize,
         mr: [&mut [f64; ARC_SUBSTEPS + 1]; 3],
         t: [&mut [[f64; ARC_SUBSTEPS + 1]; 2]; 2],
     ) -> Option<()> {
         let ([mx, my, r], [tx, ty]) = (mr, t);
-        for (s, k) in [(0, 0.0), (ARC_SUBSTEPS, 1.0)] {
-            let (m, a, rho) = self.at(k)?;
+        for (s, at) in [(0, 0.0), (k, 1.0)] {
+            let (m, a, rho) = self.at(at)?;
             (mx[s], my[s], r[s]) = (m[0], m[1], rho);
             for w in 0..2 {
                 (tx[w][s], ty[w][s]) = (a[w][0], a[w][1]);
@@ -236,7 +270,8 @@ impl ArcGeometry {
     }
 
     /// [`ArcGeometry::densities_into`] in the build `lanes` (the baseline when the CPU lacks
-    /// it): the test hook that compares the builds.
+    /// it): the test hook that compares the builds. The sub-steps are chosen by
+    /// [`ArcGeometry::adaptive`].
     pub(crate) fn densities_with(
         &self,
         lanes: Lanes,
@@ -244,18 +279,48 @@ impl ArcGeometry {
         ang: &mut Vec<f64>,
     ) -> Option<()> {
         PASSES.with(|b| match b.try_borrow_mut() {
-            Ok(mut b) => self.densities_on(lanes, &mut b, sq, ang),
+            Ok(mut b) => self.adaptive(sq, ang, |k, sq, ang| {
+                self.densities_on(lanes, &mut b, k, sq, ang)
+            }),
             // Never reentered; a fresh set of buffers if it were.
-            Err(_) => self.densities_on(lanes, &mut Box::default(), sq, ang),
+            Err(_) => {
+                let mut b = Box::default();
+                self.adaptive(sq, ang, |k, sq, ang| {
+                    self.densities_on(lanes, &mut b, k, sq, ang)
+                })
+            }
         })
     }
 
-    /// [`ArcGeometry::densities_with`] on the buffers `b` (the dispatch happens once the
-    /// buffers are borrowed, so the whole body is compiled in each build).
+    /// The sub-steps of an arc's densities (see the module docs): first [`COARSE_SUBSTEPS`]
+    /// with `at(k, sq, ang)` (the densities of `k` sub-steps), kept when both densities are
+    /// [`smooth`], else [`ARC_SUBSTEPS`]. A blended arc always takes [`ARC_SUBSTEPS`].
+    #[inline(always)]
+    fn adaptive(
+        &self,
+        sq: &mut Vec<f64>,
+        ang: &mut Vec<f64>,
+        mut at: impl FnMut(usize, &mut Vec<f64>, &mut Vec<f64>) -> Option<()>,
+    ) -> Option<()> {
+        if !self.blended() && at(COARSE_SUBSTEPS, sq, ang).is_some() && smooth(sq) && smooth(ang) {
+            return Some(());
+        }
+        at(ARC_SUBSTEPS, sq, ang)
+    }
+
+    /// The sub-steps [`ArcGeometry::adaptive`] chooses for this arc (a test hook: the plain
+    /// formula is compared at the same sub-steps); [`ARC_SUBSTEPS`] when undefined.
+    pub(crate) fn substeps(&self) -> usize {
+        self.densities().map_or(ARC_SUBSTEPS, |(sq, _)| sq.len())
+    }
+
+    /// [`ArcGeometry::densities_with`] of `k` sub-steps on the buffers `b` (the dispatch
+    /// happens once the buffers are borrowed, so the whole body is compiled in each build).
     fn densities_on(
         &self,
         lanes: Lanes,
         b: &mut Passes,
+        k: usize,
         sq: &mut Vec<f64>,
         ang: &mut Vec<f64>,
     ) -> Option<()> {
@@ -263,13 +328,15 @@ impl ArcGeometry {
         match lanes {
             // SAFETY: `Lanes::available` checked the CPU's features.
             Lanes::Avx512 if lanes.available() => {
-                return unsafe { self.densities_avx512(b, sq, ang) }
+                return unsafe { self.densities_avx512(b, k, sq, ang) }
             }
             // SAFETY: as above.
-            Lanes::Avx2 if lanes.available() => return unsafe { self.densities_avx2(b, sq, ang) },
+            Lanes::Avx2 if lanes.available() => {
+                return unsafe { self.densities_avx2(b, k, sq, ang) }
+            }
             _ => {}
         }
-        self.densities_batched(b, sq, ang)
+        self.densities_batched(b, k, sq, ang)
     }
 
     /// [`ArcGeometry::densities_batched`] compiled for AVX-512 (8-lane vectors).
@@ -278,34 +345,44 @@ impl ArcGeometry {
     fn densities_avx512(
         &self,
         b: &mut Passes,
+        k: usize,
         sq: &mut Vec<f64>,
         ang: &mut Vec<f64>,
     ) -> Option<()> {
-        self.densities_batched(b, sq, ang)
+        self.densities_batched(b, k, sq, ang)
     }
 
     /// [`ArcGeometry::densities_batched`] compiled for AVX2 (4-lane vectors).
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2")]
-    fn densities_avx2(&self, b: &mut Passes, sq: &mut Vec<f64>, ang: &mut Vec<f64>) -> Option<()> {
-        self.densities_batched(b, sq, ang)
+    fn densities_avx2(
+        &self,
+        b: &mut Passes,
+        k: usize,
+        sq: &mut Vec<f64>,
+        ang: &mut Vec<f64>,
+    ) -> Option<()> {
+        self.densities_batched(b, k, sq, ang)
     }
 
-    /// The body of [`ArcGeometry::densities_into`], inlined into each build, on this thread's
+    /// The body of [`ArcGeometry::densities_into`] for `k` sub-steps (a multiple of
+    /// [`RESTART`], at most [`ARC_SUBSTEPS`]), inlined into each build, on this thread's
     /// [`Passes`] buffers `b` (every entry read is written first in the same call: nothing of
-    /// an earlier call is seen).
+    /// an earlier call is seen). A blended arc always has [`ARC_SUBSTEPS`].
     #[inline(always)]
     fn densities_batched(
         &self,
         b: &mut Passes,
+        k: usize,
         sq: &mut Vec<f64>,
         ang: &mut Vec<f64>,
     ) -> Option<()> {
         if self.blended() {
             return self.densities_blended(b, sq, ang);
         }
-        const K: usize = ARC_SUBSTEPS;
-        const N: usize = K + 1;
+        debug_assert!(k.is_multiple_of(RESTART) && k <= ARC_SUBSTEPS);
+        let k = k.clamp(RESTART, ARC_SUBSTEPS);
+        let (kk, n) = (k, k + 1);
         let Passes {
             ux,
             uy,
@@ -326,10 +403,11 @@ impl ArcGeometry {
         let p = self.param;
         let q = 1 - p;
         let (wp, wq) = (&self.walls[p], &self.walls[q]);
-        let step = self.sweep[p] / K as f64;
+        let step = self.sweep[p] / kk as f64;
         let (sd, cd) = step.sin_cos();
         let turn_p = step.abs();
         let tan_p = turn_p.tan() / (1.0 + 1e-9);
+        let chains = kk / RESTART;
         // Pass 1: the unit vectors of the interior points, as `densities_into_scalar` makes
         // them one after the other. The recurrence restarts exactly at sub-step 1 and every
         // `RESTART` sub-steps, so it is `CHAINS` independent chains (chain `k` from sub-step
@@ -337,13 +415,13 @@ impl ArcGeometry {
         // vector is the same rotation of the same predecessor, so the same bits, without
         // waiting on one long chain of dependent multiplications.
         let (mut cx, mut cy) = ([0.0; CHAINS], [0.0; CHAINS]);
-        for k in 0..CHAINS {
+        for k in 0..chains {
             let s = (k * RESTART).max(1);
-            [cx[k], cy[k]] = self.restart_unit(s);
+            [cx[k], cy[k]] = self.restart_unit(s, kk);
             (ux[s], uy[s]) = (cx[k], cy[k]);
         }
         for r in 1..RESTART {
-            for k in 0..CHAINS {
+            for k in 0..chains {
                 [cx[k], cy[k]] = rotate([cx[k], cy[k]], cd, sd);
             }
             // Chain 0 starts one sub-step late: its last rotation (sub-step `RESTART`,
@@ -351,13 +429,13 @@ impl ArcGeometry {
             if r + 1 < RESTART {
                 (ux[r + 1], uy[r + 1]) = (cx[0], cy[0]);
             }
-            for k in 1..CHAINS {
+            for k in 1..chains {
                 (ux[k * RESTART + r], uy[k * RESTART + r]) = (cx[k], cy[k]);
             }
         }
         // Pass 2: every point: medial point `m`, radius `r`, touching points `t[wall]` (the
         // expressions of `medial_point_u` and `project`, written out).
-        self.put_ends([mx, my, r], [tx, ty])?;
+        self.put_ends(kk, [mx, my, r], [tx, ty])?;
         let neg = wp.s < 0.0;
         let mut ok = true;
         {
@@ -375,7 +453,7 @@ impl ArcGeometry {
                 let [b, a] = ty;
                 [a, b]
             };
-            for s in 1..K {
+            for s in 1..kk {
                 let (u0, u1) = (ux[s], uy[s]);
                 let ([a0, a1], rho, [m0, m1]) = bisector_point(wp, wq, neg, u0, u1);
                 let e0 = m0 - wq.c[0];
@@ -398,25 +476,26 @@ impl ArcGeometry {
         }
         // Pass 3: every point's spoke mid-points, then every sub-step's length density and
         // the other wall's turn parts.
-        spoke_midpoints([mx, my], [tx, ty], [hx, hy]);
+        spoke_midpoints([mx, my], [tx, ty], [hx, hy], n);
         let cq = wq.c;
-        for s in 1..N {
+        for s in 1..n {
             (sqa[s - 1], _) = length_density([hx, hy], r, s);
             (ca[s - 1], da[s - 1]) =
                 turn_parts(cq, [tx[q][s - 1], ty[q][s - 1]], [tx[q][s], ty[q][s]]);
         }
-        sq.extend_from_slice(&sqa[..]);
+        sq.extend_from_slice(&sqa[..kk]);
         // `larger_of_turns(c, d, turn_p, tan_p) / MAX_WALL_ANGLE`: first its common case (the
         // parametrised wall's turn, no `atan2`) for every sub-step side by side, then the
         // sub-steps that need the `atan2` one by one (the same operations on each value).
         let clear = |c: f64, d: f64| d > 0.0 && c.abs() < tan_p * d;
         let common = turn_p / MAX_WALL_ANGLE;
         ang.extend(
-            ca.iter()
-                .zip(da.iter())
+            ca[..kk]
+                .iter()
+                .zip(&da[..kk])
                 .map(|(&c, &d)| if clear(c, d) { common } else { 0.0 }),
         );
-        for ((a, &c), &d) in ang.iter_mut().zip(ca.iter()).zip(da.iter()) {
+        for ((a, &c), &d) in ang.iter_mut().zip(&ca[..kk]).zip(&da[..kk]) {
             if !clear(c, d) {
                 *a = larger_of_turns(c, d, turn_p, tan_p) / MAX_WALL_ANGLE;
             }
@@ -479,7 +558,7 @@ impl ArcGeometry {
         // Pass 2: every point, as `at`: the ends exactly, the interior points from the
         // bisector point (`medial_point_u`) moved by the faded offsets and projected on both
         // walls (`Wall::project`), the radius the mean of the two spokes (`dist`).
-        self.put_ends([mx, my, r], [tx, ty])?;
+        self.put_ends(K, [mx, my, r], [tx, ty])?;
         let neg = wp.s < 0.0;
         let (mut ok, mut fits) = (true, true);
         {
@@ -506,14 +585,14 @@ impl ArcGeometry {
             }
         }
         if !fits {
-            return self.densities_plain_into(sq, ang);
+            return self.densities_plain_into(K, sq, ang);
         }
         if !ok {
             return None;
         }
         // Pass 3: the spoke mid-points (`mid`), then every sub-step's length density (`dist`
         // of consecutive mid-points) and both walls' turn parts (`turn_parts`).
-        spoke_midpoints([mx, my], [tx, ty], [hx, hy]);
+        spoke_midpoints([mx, my], [tx, ty], [hx, hy], N);
         for s in 1..N {
             let (d, [l0, l1]) = length_density([hx, hy], r, s);
             sqa[s - 1] = d;
@@ -524,24 +603,29 @@ impl ArcGeometry {
             (cb[s - 1], db[s - 1]) = turn_parts(w1.c, a, b);
         }
         if !fits {
-            return self.densities_plain_into(sq, ang);
+            return self.densities_plain_into(K, sq, ang);
         }
         sq.extend_from_slice(&sqa[..]);
         ang.extend((0..K).map(|s| larger_turn(ca[s], da[s], cb[s], db[s]) / MAX_WALL_ANGLE));
         Some(())
     }
 
-    /// The densities point by point, one sub-step after the other (see the module docs): the
-    /// reference [`ArcGeometry::densities_into`] is tested against, bit for bit.
+    /// The densities point by point, one sub-step after the other (see the module docs), with
+    /// the same choice of sub-steps ([`ArcGeometry::adaptive`]): the reference
+    /// [`ArcGeometry::densities_into`] is tested against, bit for bit.
     pub(crate) fn densities_into_scalar(
         &self,
         sq: &mut Vec<f64>,
         ang: &mut Vec<f64>,
     ) -> Option<()> {
+        self.adaptive(sq, ang, |k, sq, ang| self.densities_scalar_at(k, sq, ang))
+    }
+
+    /// [`ArcGeometry::densities_into_scalar`] of `k` sub-steps.
+    fn densities_scalar_at(&self, k: usize, sq: &mut Vec<f64>, ang: &mut Vec<f64>) -> Option<()> {
         if self.blended() {
-            return self.densities_plain_into(sq, ang);
+            return self.densities_plain_into(ARC_SUBSTEPS, sq, ang);
         }
-        let k = ARC_SUBSTEPS;
         sq.clear();
         ang.clear();
         let p = self.param;
@@ -557,7 +641,7 @@ impl ArcGeometry {
             let (m1, a1, r1) = if s == k {
                 self.at(1.0)?
             } else {
-                u = self.next_unit(s, u, cd, sd);
+                u = self.next_unit(s, k, u, cd, sd);
                 let (a, m, rho) = medial_point_u(wp, wq, u)?;
                 let b = project(wq, m);
                 if !(b[0].is_finite() && b[1].is_finite()) {
@@ -580,11 +664,17 @@ impl ArcGeometry {
 
     /// The plain formula the fast [`ArcGeometry::densities_into`] stands for: every point from
     /// [`ArcGeometry::at`], `ds` between the spoke mid-points (`super::dist`), both wall turns by
-    /// `atan2` ([`larger_turn`] takes the larger). The reference of the tests.
+    /// `atan2` ([`larger_turn`] takes the larger), at the sub-steps the fast densities chose
+    /// ([`ArcGeometry::substeps`]). The reference of the tests.
     pub(crate) fn densities_plain(&self) -> Option<(Vec<f64>, Vec<f64>)> {
-        let mut sq = Vec::with_capacity(ARC_SUBSTEPS);
-        let mut ang = Vec::with_capacity(ARC_SUBSTEPS);
-        self.densities_plain_into(&mut sq, &mut ang)?;
+        self.densities_plain_of(self.substeps())
+    }
+
+    /// [`ArcGeometry::densities_plain`] of `k` sub-steps.
+    pub(crate) fn densities_plain_of(&self, k: usize) -> Option<(Vec<f64>, Vec<f64>)> {
+        let mut sq = Vec::with_capacity(k);
+        let mut ang = Vec::with_capacity(k);
+        self.densities_plain_into(k, &mut sq, &mut ang)?;
         Some((sq, ang))
     }
 
@@ -592,8 +682,12 @@ impl ArcGeometry {
     /// of the densities gives for an arc with an end off the bisector (every point of such an
     /// arc is off the bisector, [`super::blend`]), there computed in passes over arrays
     /// ([`ArcGeometry::densities_blended`]), here point by point.
-    pub(crate) fn densities_plain_into(&self, sq: &mut Vec<f64>, ang: &mut Vec<f64>) -> Option<()> {
-        let k = ARC_SUBSTEPS;
+    pub(crate) fn densities_plain_into(
+        &self,
+        k: usize,
+        sq: &mut Vec<f64>,
+        ang: &mut Vec<f64>,
+    ) -> Option<()> {
         sq.clear();
         ang.clear();
         let (mut m0, mut a0, mut r0) = self.at(0.0)?;
@@ -628,6 +722,19 @@ pub struct Deviation {
     /// Arcs whose fast densities (the batched passes) differ in any bit, or in being defined,
     /// from the point-by-point ones (`ArcGeometry::densities_into_scalar`): must be 0.
     pub batched_bits: usize,
+    /// Arcs whose densities kept the [`COARSE_SUBSTEPS`] (see [`ArcGeometry::adaptive`]).
+    pub coarse: usize,
+    /// Over those, the largest difference of an arc's count target (the sum of its weights,
+    /// for a mean wall-normal count `nbar` of 1, 4 and 16) from the plain formula's at
+    /// [`ARC_SUBSTEPS`], relative to the latter.
+    pub coarse_target: f64,
+    /// Over those, the largest difference of the node parameters of 8 and 32 cells
+    /// (`equidistribution::arc_params_into` of those weights) from the plain formula's at
+    /// [`ARC_SUBSTEPS`] (parameters run over `[0, 1]`).
+    pub coarse_params: f64,
+    /// Over those, the arcs whose lower bound `ceil(sum ang)` differs from the plain formula's
+    /// at [`ARC_SUBSTEPS`].
+    pub coarse_bounds: usize,
 }
 
 impl Deviation {
@@ -671,16 +778,46 @@ impl Deviation {
         };
         self.sq = self.sq.max(rel(&fs, &ps));
         self.ang = self.ang.max(rel(&fa, &pa));
-        let bound = |sq, ang| {
-            ArcTarget {
-                circles: [0, 0],
-                sq,
-                ang,
-                known: None,
-            }
-            .min_cells()
+        let target = |sq: &[f64], ang: &[f64]| ArcTarget {
+            circles: [0, 0],
+            sq: sq.to_vec(),
+            ang: ang.to_vec(),
+            known: None,
         };
-        self.mismatches += usize::from(bound(fs, fa) != bound(ps, pa));
+        self.mismatches +=
+            usize::from(target(&fs, &fa).min_cells() != target(&ps, &pa).min_cells());
+        if fs.len() != COARSE_SUBSTEPS {
+            return;
+        }
+        // The coarse sub-steps against the plain formula at all of them.
+        self.coarse += 1;
+        let Some((ws, wa)) = g.densities_plain_of(ARC_SUBSTEPS) else {
+            self.mismatches += 1;
+            return;
+        };
+        let (coarse, fine) = (target(&fs, &fa), target(&ws, &wa));
+        self.coarse_bounds += usize::from(coarse.min_cells() != fine.min_cells());
+        for nbar in [1.0, 4.0, 16.0] {
+            let (c, f) = (coarse.target(nbar), fine.target(nbar));
+            self.coarse_target = self.coarse_target.max((c - f).abs() / f);
+            let weights = |sq: &[f64], ang: &[f64]| -> Vec<f64> {
+                sq.iter()
+                    .zip(ang)
+                    .map(|(&s, &a)| super::counts::weight(nbar, s, a))
+                    .collect()
+            };
+            for n in [8, 32] {
+                let params = |sq: &[f64], ang: &[f64]| {
+                    let (mut t, mut prefix) = (Vec::new(), Vec::new());
+                    let mut w = weights(sq, ang);
+                    super::equidistribution::arc_params_into(&mut w, ang, n, &mut t, &mut prefix);
+                    t
+                };
+                let (tc, tf) = (params(&fs, &fa), params(&ws, &wa));
+                let worst = tc.iter().zip(&tf).map(|(a, b)| (a - b).abs());
+                self.coarse_params = worst.fold(self.coarse_params, f64::max);
+            }
+        }
     }
 }
 

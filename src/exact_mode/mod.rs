@@ -74,7 +74,8 @@ use piece_cache::{GeomKey, GridKey, Params, Payload};
 use rayon::prelude::*;
 use std::f64::consts::{PI, TAU};
 
-/// Sub-steps used to sample each medial arc for the node distribution.
+/// Sub-steps used to sample each medial arc for the node distribution: all of them where the
+/// densities are not smooth, else [`densities::COARSE_SUBSTEPS`] (see [`densities`]).
 pub const ARC_SUBSTEPS: usize = 256;
 
 /// The largest wall angle one cell should span (15 degrees, as in paper mode).
@@ -2175,7 +2176,9 @@ mod tests {
                 f.iter().zip(p).all(|(a, b)| (a - b).abs() <= 1e-9 * mean)
             };
             assert!(close(&fsq, &sq) && close(&fang, &ang));
-            let k = ARC_SUBSTEPS;
+            // The sub-steps the densities chose (`densities::COARSE_SUBSTEPS` or all).
+            let k = sq.len();
+            assert!(k == ARC_SUBSTEPS || k == densities::COARSE_SUBSTEPS, "{k}");
             let pts: Vec<_> = (0..=k)
                 .map(|s| g.at(s as f64 / k as f64).unwrap())
                 .collect();
@@ -2187,6 +2190,43 @@ mod tests {
             tested += 1;
         }
         assert!(tested > 100, "{tested}");
+    }
+
+    /// The adaptive sub-steps ([`densities::COARSE_SUBSTEPS`] where the densities are smooth):
+    /// an arc across a gap of 1e-6 of the radius (the length density peaks there) keeps every
+    /// sub-step, an arc between far holes takes the coarse ones, and those stand for the fine
+    /// ones (the plain formula at [`ARC_SUBSTEPS`]): the same total turn, the length density's
+    /// sum within 1e-3.
+    #[test]
+    fn densities_take_coarse_substeps_only_where_smooth() {
+        let arc = |p: Wall, q: Wall, t0: f64, t1: f64| {
+            let (a0, m0, _) = medial_point(&p, &q, t0).unwrap();
+            let (a1, m1, _) = medial_point(&p, &q, t1).unwrap();
+            let ends_a = [[a0, q.project(m0)], [a1, q.project(m1)]];
+            let hints = [t1 - t0, turn(q.c, ends_a[0][1], ends_a[1][1])];
+            ArcGeometry::new([p, q], [m0, m1], ends_a, hints)
+        };
+        let narrow = arc(hole(0.0, 0.0, 1.0), hole(2.0 + 1e-6, 0.0, 1.0), -1.0, 1.0);
+        let (sq, _) = narrow.densities().unwrap();
+        assert_eq!(sq.len(), ARC_SUBSTEPS);
+        assert!(!densities::smooth(
+            &narrow.densities_plain_of(64).unwrap().0
+        ));
+        for (q, sweep) in [(hole(4.0, 0.0, 1.0), 0.3), (hole(3.0, 1.0, 0.4), 0.5)] {
+            let g = arc(hole(0.0, 0.0, 1.0), q, -sweep, sweep);
+            let (sq, ang) = g.densities().unwrap();
+            assert_eq!(sq.len(), densities::COARSE_SUBSTEPS);
+            let (fsq, fang) = g.densities_plain_of(ARC_SUBSTEPS).unwrap();
+            let sum = |x: &[f64]| x.iter().sum::<f64>();
+            assert!((sum(&ang) - sum(&fang)).abs() <= 1e-9 * sum(&fang));
+            assert!((sum(&sq) - sum(&fsq)).abs() <= 1e-3 * sum(&fsq));
+        }
+        // The test itself: gentle changes pass, a jump, a zero or a non-number do not.
+        assert!(densities::smooth(&[1.0, 1.04, 1.0, 0.97]));
+        assert!(!densities::smooth(&[1.0, 1.06]));
+        assert!(!densities::smooth(&[1.0, 0.0, 1.0]));
+        assert!(!densities::smooth(&[1.0, f64::NAN]));
+        assert!(!densities::smooth(&[f64::INFINITY, f64::INFINITY]));
     }
 
     /// [`spoke_column`] (one distance buffer for every spoke, written in place) against the
