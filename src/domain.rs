@@ -432,6 +432,93 @@ impl Domain {
         }
     }
 
+    /// This domain with the holes `added` after its own (their ids from the hole count up):
+    /// what [`Domain::bounded`] of all the holes gives, its nearest gaps included, without
+    /// checking the kept holes again (issue 8: the refinement adds a few holes to as many as
+    /// 1e5 at a time, and `bounded` answered every hole's nearest-gap query anew).
+    ///
+    /// The kept holes were checked and stay valid among themselves, so only the added holes
+    /// can make `bounded` fail: each gets `bounded`'s own checks (finite, inside the bounding
+    /// circle, not below the precision of the coordinates), and every hole's nearest gap is
+    /// the exact minimum over the others as `bounded` finds it (the same expression
+    /// [`gap`]`(hole, other)`): a kept hole's is its known one or its gap to an added hole,
+    /// whichever is smaller; an added hole's the least over the kept holes (from the tree,
+    /// [`HoleIndex::nearest_gap_to`]) and the other added ones. When any check fails (or more
+    /// than [`Domain::ADDED_AT_MOST`] holes are added, or the kept holes' gaps are not known)
+    /// `bounded` of all the holes gives the answer, and so the same error.
+    pub fn with_holes_added(&self, added: &[Circle]) -> Result<Domain, DomainError> {
+        let full = || {
+            let mut holes = self.holes.clone();
+            holes.extend_from_slice(added);
+            Domain::bounded(self.bounding, holes)
+        };
+        let Some(kept) = self.index.gaps.get() else {
+            return full();
+        };
+        let (b, n) = (self.bounding, self.holes.len());
+        if added.len() > Self::ADDED_AT_MOST || n + added.len() > Self::MAX_HOLES {
+            return full();
+        }
+        // `bounded`'s checks of one circle, its gap to the bounding circle and its radius
+        // against the precision (`check_circle`, `HoleNotInside`, `check_precision`).
+        let tol = Self::tolerance_for(b.radius);
+        let unit = precision_unit(Self::coordinate_magnitude(&b));
+        let (min_radius, min_gap) = (Self::MIN_RADIUS_ULPS * unit, Self::MIN_GAP_ULPS * unit);
+        let precise = min_gap > tol;
+        // A nearest gap `bounded` accepts (neither overlapping nor below the precision).
+        let fine = |g: f64| g > tol && (!precise || g >= min_gap);
+        let own = added.iter().enumerate().all(|(j, h)| {
+            let inside = b.radius - dist(h.center, b.center) - h.radius;
+            check_circle((n + j) as CircleId, h).is_ok()
+                && inside > tol
+                && h.radius >= min_radius
+                && (!precise || inside >= min_gap)
+        });
+        if !own {
+            return full();
+        }
+        let index = self.hole_index();
+        let mut gaps: Vec<Option<f64>> = kept
+            .par_iter()
+            .zip(self.holes.par_iter())
+            .with_min_len(4096)
+            .map(|(&g, h)| {
+                added
+                    .iter()
+                    .map(|a| gap(h, a))
+                    .fold(g, |m, x| Some(m.map_or(x, |m| m.min(x))))
+            })
+            .collect();
+        gaps.extend(added.iter().enumerate().map(|(j, h)| {
+            let others = added
+                .iter()
+                .enumerate()
+                .filter(|&(k, _)| k != j)
+                .map(|(_, a)| gap(h, a));
+            others.fold(index.nearest_gap_to(h), |m, x| {
+                Some(m.map_or(x, |m| m.min(x)))
+            })
+        }));
+        if !gaps.iter().all(|g| g.is_none_or(fine)) {
+            return full();
+        }
+        let mut holes = Vec::with_capacity(n + added.len());
+        holes.extend_from_slice(&self.holes);
+        holes.extend_from_slice(added);
+        Ok(Domain {
+            bounding: b,
+            holes,
+            index: Arc::new(DomainIndex {
+                tree: OnceLock::new(),
+                gaps: OnceLock::from(gaps),
+            }),
+        })
+    }
+
+    /// The most holes [`Domain::with_holes_added`] adds at once by itself (each kept hole's
+    /// gap is compared with every added hole's); more go through [`Domain::bounded`].
+    pub const ADDED_AT_MOST: usize = 64;
+
     /// A domain of these circles, not checked (the caller knows them valid); its index is
     /// built when first asked for.
     fn unchecked(bounding: Circle, holes: Vec<Circle>) -> Domain {
@@ -992,7 +1079,22 @@ impl<'a> HoleIndex<'a> {
         if self.holes.len() < 2 {
             return None;
         }
-        let q = self.holes[i];
+        self.nearest_of(&self.holes[i], Some(i))
+    }
+
+    /// The least gap [`gap`]`(q, hole)` over every hole of the index (`q` need not be one of
+    /// them): the exact floating-point minimum, as [`HoleIndex::nearest_gap`] finds it for a
+    /// hole of the index. `None` when the index is empty.
+    pub fn nearest_gap_to(&self, q: &Circle) -> Option<f64> {
+        self.nearest_of(q, None).map(|(_, g)| g)
+    }
+
+    /// The hole nearest to `q` by gap, hole `skip` left out (ties to the smaller index).
+    fn nearest_of(&self, q: &Circle, skip: Option<usize>) -> Option<(usize, f64)> {
+        if self.nodes.is_empty() {
+            return None;
+        }
+        let q = *q;
         let mut best: Option<(usize, f64)> = None;
         // Safety margin on the lower bound, so floating-point rounding never prunes the
         // true minimum.
@@ -1018,7 +1120,7 @@ impl<'a> HoleIndex<'a> {
                     let (s, e) = (node.start as usize, node.end as usize);
                     for (&k, c) in self.order[s..e].iter().zip(&self.sorted[s..e]) {
                         let j = k as usize;
-                        if j == i {
+                        if Some(j) == skip {
                             continue;
                         }
                         let g = gap(&q, c);
@@ -1379,6 +1481,115 @@ mod tests {
                 assert_eq!(idx.within_gap(i, g), want, "hole {i} gap {g}");
             }
         }
+    }
+
+    /// [`Domain::with_holes_added`] against [`Domain::bounded`] of all the holes: the same
+    /// result (holes, every nearest gap bit for bit, against brute force too) for valid
+    /// additions (near and far, one and many, to an empty and a one-hole domain), and the
+    /// same error for each kind of bad addition (overlapping a kept or an added hole, a
+    /// duplicate, outside, touching the bounding circle, NaN, negative or tiny radius, too
+    /// many at once: those through `bounded` itself).
+    #[test]
+    fn holes_added_give_the_domain_of_all_the_holes() {
+        let check = |d: &Domain, added: &[Circle]| {
+            let mut all = d.holes().to_vec();
+            all.extend_from_slice(added);
+            let want = Domain::bounded(d.bounding(), all);
+            let got = d.with_holes_added(added);
+            match (&got, &want) {
+                (Ok(g), Ok(w)) => {
+                    assert_eq!(g, w);
+                    // The incremental path when it applies (`bounded` builds the tree).
+                    let fast = d.index.gaps.get().is_some() && added.len() <= Domain::ADDED_AT_MOST;
+                    assert_eq!(g.index.tree.get().is_none(), fast);
+                    let bits = |x: &[Option<f64>]| -> Vec<Option<u64>> {
+                        x.iter().map(|g| g.map(f64::to_bits)).collect()
+                    };
+                    assert_eq!(bits(g.nearest_hole_gaps()), bits(w.nearest_hole_gaps()));
+                    let h = g.holes();
+                    for i in (0..h.len()).step_by(1 + h.len() / 50) {
+                        let brute = (0..h.len())
+                            .filter(|&j| j != i)
+                            .map(|j| gap(&h[i], &h[j]))
+                            .fold(None, |m: Option<f64>, x| Some(m.map_or(x, |m| m.min(x))));
+                        assert_eq!(
+                            brute.map(f64::to_bits),
+                            g.nearest_hole_gaps()[i].map(f64::to_bits)
+                        );
+                    }
+                    for i in h.len().saturating_sub(added.len())..h.len() {
+                        assert_eq!(g.hole_index().nearest_gap(i), w.hole_index().nearest_gap(i));
+                    }
+                }
+                // As text: a NaN in an error is not `==` itself.
+                (Err(g), Err(w)) => assert_eq!(format!("{g:?}"), format!("{w:?}")),
+                _ => panic!("{got:?} against {want:?}"),
+            }
+            got.is_ok()
+        };
+        let d = crate::layouts::bubbles(300, 9).expect("bubbles");
+        let b = d.bounding();
+        let mut rng = crate::layouts::SplitMix64(5);
+        let mut valid = 0;
+        for round in 0..60 {
+            // Holes dropped at random, tiny to large: many overlap, some fit.
+            let k = 1 + round % 7;
+            let added: Vec<Circle> = (0..k)
+                .map(|_| {
+                    let a = std::f64::consts::TAU * rng.next_f64();
+                    let r = b.radius * rng.next_f64();
+                    let c = [b.center[0] + r * a.cos(), b.center[1] + r * a.sin()];
+                    Circle::new(c[0], c[1], 1e-3 * b.radius * (1.0 + 20.0 * rng.next_f64()))
+                })
+                .collect();
+            valid += usize::from(check(&d, &added));
+            // One of them alone, when the batch failed.
+            valid += usize::from(check(&d, &added[..1]));
+        }
+        assert!(valid > 10, "{valid}");
+        // A hole in the widest gap of the layout is valid, close to its neighbours.
+        let h = d.holes()[0];
+        let near = Circle::new(h.center[0], h.center[1] + h.radius + 1e-4, 1e-5);
+        assert!(check(&d, &[near]));
+        // Bad additions: each the error `bounded` gives.
+        let bad = [
+            Circle::new(h.center[0], h.center[1], h.radius),
+            Circle::new(h.center[0] + 0.5 * h.radius, h.center[1], h.radius),
+            Circle::new(b.center[0] + b.radius, b.center[1], 0.01),
+            Circle::new(b.center[0] + b.radius - 0.01, b.center[1], 0.01),
+            Circle::new(f64::NAN, 0.0, 0.1),
+            Circle::new(0.0, 0.0, -0.1),
+            Circle::new(near.center[0], near.center[1], 1e-300),
+        ];
+        for c in bad {
+            assert!(!check(&d, &[c]), "{c:?}");
+            assert!(!check(&d, &[near, c]), "{c:?}");
+        }
+        // Two added holes overlapping each other; more than ADDED_AT_MOST at once.
+        let twin = Circle::new(near.center[0] + 1e-6, near.center[1], 1e-5);
+        assert!(!check(&d, &[near, twin]));
+        let many: Vec<Circle> = (0..Domain::ADDED_AT_MOST + 1)
+            .map(|i| {
+                Circle::new(
+                    h.center[0],
+                    h.center[1] + h.radius + 1e-4 * (1.0 + i as f64),
+                    1e-6,
+                )
+            })
+            .collect();
+        check(&d, &many);
+        // To a domain with no hole, and with one.
+        let empty = Domain::bounded(b, Vec::new()).unwrap();
+        assert!(check(&empty, &[near]));
+        assert!(check(
+            &empty,
+            &[near, Circle::new(0.5 * b.radius, 0.0, 0.01)]
+        ));
+        let one = Domain::bounded(b, vec![h]).unwrap();
+        assert!(check(&one, &[near]));
+        // Gaps not known (a domain never validated): through `bounded`.
+        let unchecked = Domain::unchecked(b, d.holes().to_vec());
+        assert!(check(&unchecked, &[near]));
     }
 
     #[test]

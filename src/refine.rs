@@ -122,9 +122,8 @@ pub fn refine_seeded(
     let mut current = domain.clone();
     let mut inserted: Vec<Circle> = seed.to_vec();
     if !seed.is_empty() {
-        let mut holes = current.holes().to_vec();
-        holes.extend_from_slice(seed);
-        current = Domain::bounded(current.bounding(), holes)
+        current = current
+            .with_holes_added(seed)
             .map_err(|e| MeshError::Internal(format!("a seeded hole broke the domain: {e}")))?;
     }
     let mut min_gaps = Vec::new();
@@ -249,10 +248,10 @@ pub fn refine_seeded(
                 limit: max_inserted,
             });
         }
-        let mut holes = current.holes().to_vec();
-        holes.extend_from_slice(&batch);
         inserted.extend_from_slice(&batch);
-        current = Domain::bounded(current.bounding(), holes)
+        // Only the inserted holes are checked again (and the gaps they change).
+        current = current
+            .with_holes_added(&batch)
             .map_err(|e| MeshError::Internal(format!("an inserted hole broke the domain: {e}")))?;
         previous = Some((sampled, circles));
     }
