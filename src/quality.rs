@@ -34,7 +34,7 @@ mod rows;
 mod sides;
 
 pub use atan::angle_deg;
-pub(crate) use measured::{measure_blocks, ChunkFigures, Measurer};
+pub(crate) use measured::{measure_templates_and_drop, ChunkFigures, Measurer};
 pub use measured::{measured_all, Measured};
 
 /// Angles (degrees) and Jacobians of the four corners of one quadrilateral `[p0, p1, p2, p3]`

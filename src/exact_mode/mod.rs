@@ -1971,13 +1971,16 @@ pub fn assemble_cached(
         match &measurer {
             Some(m) => {
                 // Measured (the inverted cells among the figures), then every node dropped.
-                let (figures, bad) =
-                    crate::quality::measure_blocks(m, &layout, &t, split, MERGED_MIN_ANGLE_DEG);
+                let (figures, bad) = crate::quality::measure_templates_and_drop(
+                    m,
+                    &layout,
+                    &mut t,
+                    &mut grids,
+                    split,
+                    MERGED_MIN_ANGLE_DEG,
+                );
                 more = figures;
                 inverted.extend(bad);
-                t.par_iter_mut()
-                    .chain(grids.par_iter_mut())
-                    .for_each(|g| g.nodes = Vec::new());
             }
             None => inverted.extend(t.iter().map(has_inverted_cell)),
         }

@@ -869,23 +869,28 @@ fn build_checking(
     if let Some((classes, first, filled)) = &templated {
         template_blocks = *filled;
         let mut t = super::inserted::template_grids(&layout, classes, &grids, *first, cell)?;
-        if let Some(f) = flag {
-            let first = grids.len();
-            flagged.extend(
-                t.iter()
-                    .enumerate()
-                    .filter(|(_, g)| f.flags(g))
-                    .map(|(k, _)| first + k),
-            );
-        }
+        // Which templates `flag` flags: their inverted cells are counted by the measurement
+        // when there is one, other flags are read from the nodes before they go.
+        let counted = matches!(flag, Some(Flag::Inverted)) && measurer.is_some();
+        let mut marks: Vec<bool> = match flag {
+            Some(f) if !counted => t.iter().map(|g| f.flags(g)).collect(),
+            _ => Vec::new(),
+        };
         if let Some(m) = &measurer {
-            // Measured, then every node dropped (the medial blocks on the inserted holes kept
-            // theirs for the templates).
-            more = crate::quality::measure_blocks(m, &layout, &t, split, MERGED_MIN_ANGLE_DEG).0;
-            t.par_iter_mut()
-                .chain(grids.par_iter_mut())
-                .for_each(|g| g.nodes = Vec::new());
+            let (figures, inverted) = crate::quality::measure_templates_and_drop(
+                m,
+                &layout,
+                &mut t,
+                &mut grids,
+                split,
+                MERGED_MIN_ANGLE_DEG,
+            );
+            more = figures;
+            if counted {
+                marks = inverted;
+            }
         }
+        flagged.extend((0..marks.len()).filter(|&k| marks[k]).map(|k| split + k));
         grids.extend(t);
     }
     let measured =

@@ -262,6 +262,29 @@ impl Measured {
     }
 }
 
+/// [`measure_blocks`] of the inserted holes' template grids `templates` (blocks `first..` of
+/// `layout`), then every node of them and of the medial blocks' `grids` dropped: the medial
+/// blocks on inserted holes kept theirs until the templates were made from them, and nothing
+/// reads a node once measured. The one ending of bounded and periodic exact mode's grids when
+/// they are measured as made (issue 8). Returns the templates' figures and which of them have
+/// an inverted cell.
+pub(crate) fn measure_templates_and_drop(
+    m: &Measurer,
+    layout: &BlockLayout,
+    templates: &mut [BlockGrid],
+    grids: &mut [BlockGrid],
+    first: usize,
+    below_deg: f64,
+) -> (Vec<ChunkFigures>, Vec<bool>) {
+    use rayon::prelude::*;
+    let measured = measure_blocks(m, layout, templates, first, below_deg);
+    templates
+        .par_iter_mut()
+        .chain(grids.par_iter_mut())
+        .for_each(|g| g.nodes = Vec::new());
+    measured
+}
+
 /// Measure `grids`, blocks `first..` of `layout` (their wall sides from it), in chunks of
 /// [`CHUNK`] blocks in parallel, each block's corner-angle flag against `below_deg`: the
 /// second run of [`Measured::new`] (the templates' blocks, made after the medial ones).
