@@ -278,17 +278,22 @@ impl ArcGeometry {
         sq: &mut Vec<f64>,
         ang: &mut Vec<f64>,
     ) -> Option<()> {
-        PASSES.with(|b| match b.try_borrow_mut() {
-            Ok(mut b) => self.adaptive(sq, ang, |k, sq, ang| {
-                self.densities_on(lanes, &mut b, k, sq, ang)
-            }),
-            // Never reentered; a fresh set of buffers if it were.
-            Err(_) => {
-                let mut b = Box::default();
-                self.adaptive(sq, ang, |k, sq, ang| {
-                    self.densities_on(lanes, &mut b, k, sq, ang)
-                })
-            }
+        PASSES.with(|cell| {
+            let (mut held, mut fresh);
+            let b: &mut Passes = match cell.try_borrow_mut() {
+                Ok(g) => {
+                    held = g;
+                    &mut held
+                }
+                // Never reentered; a fresh set of buffers if it were.
+                Err(_) => {
+                    fresh = Box::<Passes>::default();
+                    &mut fresh
+                }
+            };
+            self.adaptive(sq, ang, |k, sq, ang| {
+                self.densities_on(lanes, b, k, sq, ang)
+            })
         })
     }
 
