@@ -41,8 +41,8 @@ pub const RESTART: usize = 16;
 /// the densities are smooth, else [`ARC_SUBSTEPS`].
 pub const COARSE_SUBSTEPS: usize = ARC_SUBSTEPS / 4;
 
-/// Largest change of the length density `sq` between neighbouring coarse sub-steps, relative
-/// to the larger of the two, for the coarse sub-steps to be kept (`smooth`).
+/// Largest change of either density (`sq`, `ang`) between neighbouring coarse sub-steps,
+/// relative to the larger of the two, for the coarse sub-steps to be kept (`smooth`).
 pub const SMOOTH_CHANGE: f64 = 0.05;
 
 /// Whether the densities `x` (`sq` or `ang`) of the coarse sub-steps are smooth enough to
