@@ -387,7 +387,7 @@ impl ArcGeometry {
         }
         debug_assert!(k.is_multiple_of(RESTART) && k <= ARC_SUBSTEPS);
         let k = k.clamp(RESTART, ARC_SUBSTEPS);
-        let (kk, n) = (k, k + 1);
+        let n = k + 1;
         let Passes {
             ux,
             uy,
@@ -408,39 +408,39 @@ impl ArcGeometry {
         let p = self.param;
         let q = 1 - p;
         let (wp, wq) = (&self.walls[p], &self.walls[q]);
-        let step = self.sweep[p] / kk as f64;
+        let step = self.sweep[p] / k as f64;
         let (sd, cd) = step.sin_cos();
         let turn_p = step.abs();
         let tan_p = turn_p.tan() / (1.0 + 1e-9);
-        let chains = kk / RESTART;
+        let chains = k / RESTART;
         // Pass 1: the unit vectors of the interior points, as `densities_into_scalar` makes
         // them one after the other. The recurrence restarts exactly at sub-step 1 and every
-        // `RESTART` sub-steps, so it is `CHAINS` independent chains (chain `k` from sub-step
-        // `max(1, k RESTART)` to `(k + 1) RESTART - 1`), run side by side here: each unit
+        // `RESTART` sub-steps, so it is `k / RESTART` independent chains (chain `c` from
+        // sub-step `max(1, c RESTART)` to `(c + 1) RESTART - 1`), run side by side here: each unit
         // vector is the same rotation of the same predecessor, so the same bits, without
         // waiting on one long chain of dependent multiplications.
         let (mut cx, mut cy) = ([0.0; CHAINS], [0.0; CHAINS]);
-        for k in 0..chains {
-            let s = (k * RESTART).max(1);
-            [cx[k], cy[k]] = self.restart_unit(s, kk);
-            (ux[s], uy[s]) = (cx[k], cy[k]);
+        for c in 0..chains {
+            let s = (c * RESTART).max(1);
+            [cx[c], cy[c]] = self.restart_unit(s, k);
+            (ux[s], uy[s]) = (cx[c], cy[c]);
         }
         for r in 1..RESTART {
-            for k in 0..chains {
-                [cx[k], cy[k]] = rotate([cx[k], cy[k]], cd, sd);
+            for c in 0..chains {
+                [cx[c], cy[c]] = rotate([cx[c], cy[c]], cd, sd);
             }
             // Chain 0 starts one sub-step late: its last rotation (sub-step `RESTART`,
             // a restart) is not used.
             if r + 1 < RESTART {
                 (ux[r + 1], uy[r + 1]) = (cx[0], cy[0]);
             }
-            for k in 1..chains {
-                (ux[k * RESTART + r], uy[k * RESTART + r]) = (cx[k], cy[k]);
+            for c in 1..chains {
+                (ux[c * RESTART + r], uy[c * RESTART + r]) = (cx[c], cy[c]);
             }
         }
         // Pass 2: every point: medial point `m`, radius `r`, touching points `t[wall]` (the
         // expressions of `medial_point_u` and `project`, written out).
-        self.put_ends(kk, [mx, my, r], [tx, ty])?;
+        self.put_ends(k, [mx, my, r], [tx, ty])?;
         let neg = wp.s < 0.0;
         let mut ok = true;
         {
@@ -458,7 +458,7 @@ impl ArcGeometry {
                 let [b, a] = ty;
                 [a, b]
             };
-            for s in 1..kk {
+            for s in 1..k {
                 let (u0, u1) = (ux[s], uy[s]);
                 let ([a0, a1], rho, [m0, m1]) = bisector_point(wp, wq, neg, u0, u1);
                 let e0 = m0 - wq.c[0];
@@ -488,19 +488,19 @@ impl ArcGeometry {
             (ca[s - 1], da[s - 1]) =
                 turn_parts(cq, [tx[q][s - 1], ty[q][s - 1]], [tx[q][s], ty[q][s]]);
         }
-        sq.extend_from_slice(&sqa[..kk]);
+        sq.extend_from_slice(&sqa[..k]);
         // `larger_of_turns(c, d, turn_p, tan_p) / MAX_WALL_ANGLE`: first its common case (the
         // parametrised wall's turn, no `atan2`) for every sub-step side by side, then the
         // sub-steps that need the `atan2` one by one (the same operations on each value).
         let clear = |c: f64, d: f64| d > 0.0 && c.abs() < tan_p * d;
         let common = turn_p / MAX_WALL_ANGLE;
         ang.extend(
-            ca[..kk]
+            ca[..k]
                 .iter()
-                .zip(&da[..kk])
+                .zip(&da[..k])
                 .map(|(&c, &d)| if clear(c, d) { common } else { 0.0 }),
         );
-        for ((a, &c), &d) in ang.iter_mut().zip(&ca[..kk]).zip(&da[..kk]) {
+        for ((a, &c), &d) in ang.iter_mut().zip(&ca[..k]).zip(&da[..k]) {
             if !clear(c, d) {
                 *a = larger_of_turns(c, d, turn_p, tan_p) / MAX_WALL_ANGLE;
             }
