@@ -459,35 +459,28 @@ impl Domain {
         if added.len() > Self::ADDED_AT_MOST || n + added.len() > Self::MAX_HOLES {
             return full();
         }
-        // `bounded`'s checks of one circle, its gap to the bounding circle and its radius
-        // against the precision (`check_circle`, `HoleNotInside`, `check_precision`).
-        let tol = Self::tolerance_for(b.radius);
-        let unit = precision_unit(Self::coordinate_magnitude(&b));
-        let (min_radius, min_gap) = (Self::MIN_RADIUS_ULPS * unit, Self::MIN_GAP_ULPS * unit);
-        let precise = min_gap > tol;
-        // A nearest gap `bounded` accepts (neither overlapping nor below the precision).
-        let fine = |g: f64| g > tol && (!precise || g >= min_gap);
+        // A gap `bounded` accepts, to the bounding circle or the nearest hole: above the
+        // tolerance (else `HoleNotInside` or `HolesOverlap`), and at least the precision's
+        // least gap where that is the larger (else `GapBelowPrecision`, `check_precision`).
+        let (tol, min_gap) = (Self::tolerance_for(b.radius), Self::min_gap_for(&b));
+        let fine = |g: f64| if min_gap > tol { g >= min_gap } else { g > tol };
+        let min_radius = Self::min_radius_for(&b);
         let own = added.iter().enumerate().all(|(j, h)| {
-            let inside = b.radius - dist(h.center, b.center) - h.radius;
             check_circle((n + j) as CircleId, h).is_ok()
-                && inside > tol
                 && h.radius >= min_radius
-                && (!precise || inside >= min_gap)
+                && fine(b.radius - dist(h.center, b.center) - h.radius)
         });
         if !own {
             return full();
         }
+        // The least of a known gap (if any) and one more.
+        let least = |m: Option<f64>, x: f64| Some(m.map_or(x, |m: f64| m.min(x)));
         let index = self.hole_index();
         let mut gaps: Vec<Option<f64>> = kept
             .par_iter()
             .zip(self.holes.par_iter())
             .with_min_len(4096)
-            .map(|(&g, h)| {
-                added
-                    .iter()
-                    .map(|a| gap(h, a))
-                    .fold(g, |m, x| Some(m.map_or(x, |m| m.min(x))))
-            })
+            .map(|(&g, h)| added.iter().map(|a| gap(h, a)).fold(g, least))
             .collect();
         gaps.extend(added.iter().enumerate().map(|(j, h)| {
             let others = added
@@ -495,9 +488,7 @@ impl Domain {
                 .enumerate()
                 .filter(|&(k, _)| k != j)
                 .map(|(_, a)| gap(h, a));
-            others.fold(index.nearest_gap_to(h), |m, x| {
-                Some(m.map_or(x, |m| m.min(x)))
-            })
+            others.fold(index.nearest_gap_to(h), least)
         }));
         if !gaps.iter().all(|g| g.is_none_or(fine)) {
             return full();
