@@ -397,17 +397,18 @@ fn arcs_in_walk_order_par<E>(
     if 2 * total as usize != 3 * n {
         return None;
     }
-    let mut all: Vec<MedialArc> = Vec::with_capacity(total as usize);
-    for chunk in chunks {
-        all.extend(chunk?);
-    }
-    let mut arcs = Vec::with_capacity(all.len());
+    // The kept arcs in start-slot order: the place of each (by its flat index), then the
+    // arcs moved there in parallel.
+    let mut dest = vec![0u32; total as usize];
+    let mut next = 0;
     for slots in &start {
         for &at in slots.iter().filter(|&&at| at != 0) {
-            arcs.push(std::mem::take(&mut all[at as usize - 1]));
+            dest[at as usize - 1] = next;
+            next += 1;
         }
     }
-    Some(arcs)
+    let parts: Vec<Vec<MedialArc>> = chunks.into_iter().collect::<Option<_>>()?;
+    crate::tasks::scatter(parts, &dest)
 }
 
 /// Points cut into the cells of a square grid over their bounding box, about `per_cell` a

@@ -1412,6 +1412,34 @@ pub fn assemble_cached(
         None => circle_problem(h).circle_counts(),
     };
     let keys: Vec<GeomKey> = pieces.par_iter().map(|p| GeomKey::of(&p.geom)).collect();
+    // Into the rejected mesh's vectors when there is one ([`PieceCache::keep`]).
+    let mut spare = cache.spare_layout();
+    let fluid_walls: usize = pieces
+        .iter()
+        .map(|p| p.circles.iter().filter(|&&c| fluid(c)).count())
+        .sum();
+    // Where holes were inserted, their templates change the counts (ties) and the node
+    // budget, so the layout skeleton with the templates and its conformity classes come
+    // before the grids: built beside the summaries below, which they do not read (issue 8:
+    // at 1e5 bubbles 100 ms, much of it on one CPU, while the other waited). Their error, if
+    // any, is returned where it was met before: after the summaries' and the counts'.
+    let first_template = 2 * pieces.len();
+    let templated = || {
+        let layout = std::mem::take(&mut spare);
+        let (mut layout, medial_edges) = skeleton_layout(layout, &vertices, &pieces, fluid_walls);
+        let holes: Vec<(CircleId, crate::domain::Circle)> =
+            sk.fluid.iter().map(|&c| (c, domain.circle(c))).collect();
+        crate::templates::fill_inserted_holes(&mut layout, &holes)
+            .map_err(|(c, m)| internal(format!("inserted hole {c}: {m}")))?;
+        let template_blocks = layout.blocks.len() - first_template;
+        // The conformity classes, once: the edges and blocks do not change from here on.
+        let classes = if template_blocks > 0 {
+            crate::grid::edge_classes(&layout)
+        } else {
+            (Vec::new(), 0)
+        };
+        Ok::<_, MeshError>((layout, medial_edges, template_blocks, classes))
+    };
     // The latest build's piece of each geometry, looked up once for the summaries and grids.
     let found = cache.find_all(&keys);
     type Summary = (ArcTarget, Option<Params>);
@@ -1421,42 +1449,50 @@ pub fn assemble_cached(
         ang: Vec::with_capacity(ARC_SUBSTEPS),
         known: None,
     };
-    let mut summaries: Vec<Option<Summary>> = pieces
-        .par_iter()
-        .zip(&found)
-        .with_max_len(crate::tasks::PIECES)
-        .map_init(scratch, |scratch, (p, &at)| {
-            let circles = p.circles.map(cidx);
-            if let Some(known) = cache.known(at) {
+    let summarized = || -> Vec<Option<Summary>> {
+        pieces
+            .par_iter()
+            .zip(&found)
+            .with_max_len(crate::tasks::PIECES)
+            .map_init(scratch, |scratch, (p, &at)| {
+                let circles = p.circles.map(cidx);
+                if let Some(known) = cache.known(at) {
+                    let t = ArcTarget {
+                        circles,
+                        sq: Vec::new(),
+                        ang: Vec::new(),
+                        known: Some(known),
+                    };
+                    return Some((t, None));
+                }
+                if cache.is_reference() {
+                    let (sq, ang) = p.geom.densities()?;
+                    let t = ArcTarget {
+                        circles,
+                        sq,
+                        ang,
+                        known: None,
+                    };
+                    return Some((t, None));
+                }
+                let nbar = 0.5 * (first_circle[circles[0]] + first_circle[circles[1]]) as f64;
+                let (known, params) = summarize(&p.geom, nbar, uniform_n, scratch)?;
                 let t = ArcTarget {
                     circles,
                     sq: Vec::new(),
                     ang: Vec::new(),
                     known: Some(known),
                 };
-                return Some((t, None));
-            }
-            if cache.is_reference() {
-                let (sq, ang) = p.geom.densities()?;
-                let t = ArcTarget {
-                    circles,
-                    sq,
-                    ang,
-                    known: None,
-                };
-                return Some((t, None));
-            }
-            let nbar = 0.5 * (first_circle[circles[0]] + first_circle[circles[1]]) as f64;
-            let (known, params) = summarize(&p.geom, nbar, uniform_n, scratch)?;
-            let t = ArcTarget {
-                circles,
-                sq: Vec::new(),
-                ang: Vec::new(),
-                known: Some(known),
-            };
-            Some((t, Some(params)))
-        })
-        .collect();
+                Some((t, Some(params)))
+            })
+            .collect()
+    };
+    let (mut summaries, templated) = if sk.fluid.is_empty() {
+        (summarized(), None)
+    } else {
+        let (s, t) = rayon::join(summarized, templated);
+        (s, Some(t))
+    };
     let reused = summaries
         .iter()
         .filter(|s| {
@@ -1539,32 +1575,19 @@ pub fn assemble_cached(
 
     // Layout skeleton and grids (stage "grids" until the end).
     let _grids = crate::timings::enter("grids");
-    // Into the rejected mesh's vectors when there is one ([`PieceCache::keep`]).
-    let mut spare = cache.spare_layout();
-    let fluid_walls: usize = pieces
-        .iter()
-        .map(|p| p.circles.iter().filter(|&&c| fluid(c)).count())
-        .sum();
-    // The skeleton is built first where inserted holes need it (their templates change the
-    // counts and the node budget), else beside the grids (below), which do not read it: its
-    // serial loop then overlaps their parallel work (issue 8: 0.8 ms at 1e3 bubbles).
+    // The skeleton was built beside the summaries where inserted holes need it (above), else
+    // it is built beside the grids (below), which do not read it: its serial loop then
+    // overlaps their parallel work (issue 8: 0.8 ms at 1e3 bubbles).
     let mut built: Option<(BlockLayout, Vec<u32>)> = None;
 
     // Templates in the inserted holes, and the count ties they bring.
-    let first_template = 2 * pieces.len();
     let mut template_blocks = 0;
     let mut classes = (Vec::new(), 0);
-    if !sk.fluid.is_empty() {
-        let layout = std::mem::take(&mut spare);
-        let (mut layout, medial_edges) = skeleton_layout(layout, &vertices, &pieces, fluid_walls);
-        let holes: Vec<(CircleId, crate::domain::Circle)> =
-            sk.fluid.iter().map(|&c| (c, domain.circle(c))).collect();
-        crate::templates::fill_inserted_holes(&mut layout, &holes)
-            .map_err(|(c, m)| internal(format!("inserted hole {c}: {m}")))?;
-        template_blocks = layout.blocks.len() - first_template;
-        // The conformity classes, once: the edges and blocks do not change from here on.
+    if let Some(templated) = templated {
+        let (layout, medial_edges, blocks, cls) = templated?;
+        template_blocks = blocks;
         if template_blocks > 0 {
-            classes = crate::grid::edge_classes(&layout);
+            classes = cls;
             inserted::tie_counts(&classes, &medial_edges, &mut counts.arc);
         }
         built = Some((layout, medial_edges));
@@ -1890,11 +1913,7 @@ pub fn assemble_cached(
                 (out, m.finish())
             })
             .unzip();
-        Ok((
-            grid_keys,
-            per_chunk.into_iter().flatten().collect(),
-            figures,
-        ))
+        Ok((grid_keys, crate::tasks::concat(per_chunk), figures))
     };
     let ((mut layout, medial_edges), work) = match built {
         Some(built) => (built, work()),
