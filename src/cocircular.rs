@@ -125,19 +125,41 @@ pub fn vertex_circles_reusing(
 /// For each vertex of `medial`, the vertex of `previous` with the same [`solve_key`] (the
 /// last one when several share it), if any.
 fn matching_vertices(medial: &MedialGraph, previous: &MedialGraph) -> Vec<Option<u32>> {
+    use std::hash::BuildHasher;
+    type Key = ([CircleId; 3], [u64; 2]);
     // Looked up, never iterated: a fixed fast hasher (SipHash made this serial build ~15 ms
-    // at 1e5 particles' 200 000 vertices).
-    let mut known: HashMap<([CircleId; 3], [u64; 2]), u32, foldhash::fast::FixedState> =
-        HashMap::with_capacity_and_hasher(previous.vertices.len(), Default::default());
-    for (i, v) in previous.vertices.iter().enumerate() {
-        known.insert(solve_key(v), i as u32);
-    }
+    // at 1e5 particles' 200 000 vertices). The keys are cut into shards by their hash, each
+    // shard's map built by its own task from every vertex of its shard in vertex order (the
+    // last one of a key wins, as in one map), in parallel (issue 8: one map took 30-50 ms on
+    // one CPU at 1e5 bubbles while the other waited).
+    let state = foldhash::fast::FixedState::default();
+    let shard = |k: &Key| (state.hash_one(k) >> 32) as usize % MATCH_SHARDS;
+    let per_shard = previous.vertices.len() / MATCH_SHARDS + 16;
+    let known: Vec<HashMap<Key, u32, foldhash::fast::FixedState>> = (0..MATCH_SHARDS)
+        .into_par_iter()
+        .map(|s| {
+            let mut known = HashMap::with_capacity_and_hasher(per_shard, state.clone());
+            for (i, v) in previous.vertices.iter().enumerate() {
+                let k = solve_key(v);
+                if shard(&k) == s {
+                    known.insert(k, i as u32);
+                }
+            }
+            known
+        })
+        .collect();
     medial
         .vertices
         .par_iter()
-        .map(|v| known.get(&solve_key(v)).copied())
+        .map(|v| {
+            let k = solve_key(v);
+            known[shard(&k)].get(&k).copied()
+        })
         .collect()
 }
+
+/// Shards of [`matching_vertices`]'s map (a few per thread; the matches do not depend on it).
+const MATCH_SHARDS: usize = 4;
 
 /// [`vertex_circles_reusing`], taking the answers out of `previous` instead of cloning them
 /// (refinement drops the previous round right after; a clone copies every exact big-integer
@@ -156,20 +178,26 @@ pub fn vertex_circles_taking(
     for &i in matched.iter().flatten() {
         uses[i as usize] = uses[i as usize].saturating_add(1);
     }
-    let mut out: Vec<Option<Apollonius>> = medial
-        .vertices
-        .par_iter()
-        .zip(matched.par_iter())
-        .map(|(v, m)| match *m {
-            Some(i) if uses[i as usize] > 1 => circles[i as usize].clone(),
-            Some(_) => None,
-            None => vertex_circle(domain, v),
-        })
-        .collect();
+    // The answers used once are moved in the parallel pass (each claimed by its one user:
+    // issue 8, a serial pass of moves took 15 ms at 1e5 bubbles), those used more often are
+    // cloned after it.
+    let mut out: Vec<Option<Apollonius>> = {
+        let claims = crate::tasks::Claims::new(&mut circles);
+        medial
+            .vertices
+            .par_iter()
+            .zip(matched.par_iter())
+            .map(|(v, m)| match *m {
+                Some(i) if uses[i as usize] == 1 => claims.take(i as usize).flatten(),
+                Some(_) => None,
+                None => vertex_circle(domain, v),
+            })
+            .collect()
+    };
     for (slot, m) in out.iter_mut().zip(&matched) {
         if let Some(i) = *m {
-            if uses[i as usize] == 1 {
-                *slot = circles[i as usize].take();
+            if uses[i as usize] > 1 {
+                *slot = circles[i as usize].clone();
             }
         }
     }

@@ -1263,28 +1263,42 @@ fn push_missing_edges(
 /// two adjacent interior triangles (empty chain) breaks it too, unless the two triangles are
 /// exactly co-circular (a true degeneracy of the layout, paper section 4.2, left to arc
 /// collapsing: resampling cannot remove it). Returns one violation per offending side.
+///
+/// The arcs are checked in parallel (issue 8: one pass over the 300 000 arcs of 1e5 bubbles
+/// took 11-14 ms on one CPU, twice per run), the violations collected in arc order.
 pub fn thin_walls(tri: &Triangulation, medial: &MedialGraph) -> Vec<Violation> {
-    let mut out = Vec::new();
-    for (e, arc) in medial.arcs.iter().enumerate() {
-        if arc.triangles.is_empty() {
-            let Some(v0) = medial.vertices.get(arc.ends[0] as usize) else {
-                continue;
-            };
-            if tri.is_cocircular_edge(v0.triangle as usize, arc.end_slots[0] as usize) {
-                continue;
+    medial
+        .arcs
+        .par_iter()
+        .enumerate()
+        .with_min_len(THIN_WALL_ARCS)
+        .fold(Vec::new, |mut out, (e, arc)| {
+            if arc.triangles.is_empty() {
+                let Some(v0) = medial.vertices.get(arc.ends[0] as usize) else {
+                    return out;
+                };
+                if tri.is_cocircular_edge(v0.triangle as usize, arc.end_slots[0] as usize) {
+                    return out;
+                }
             }
-        }
-        for (side, chain) in [&arc.c1, &arc.c2].into_iter().enumerate() {
-            if chain.len() < 2 {
-                out.push(Violation {
-                    circle: arc.circles[side],
-                    kind: ViolationKind::SingleSampleWall { arc: e as u32 },
-                });
+            for (side, chain) in [&arc.c1, &arc.c2].into_iter().enumerate() {
+                if chain.len() < 2 {
+                    out.push(Violation {
+                        circle: arc.circles[side],
+                        kind: ViolationKind::SingleSampleWall { arc: e as u32 },
+                    });
+                }
             }
-        }
-    }
-    out
+            out
+        })
+        .reduce(Vec::new, |mut a, mut b| {
+            a.append(&mut b);
+            a
+        })
 }
+
+/// Arcs per leaf of [`thin_walls`] at least (a few microseconds' work).
+const THIN_WALL_ARCS: usize = 4096;
 
 /// How many doublings (1 to 4, or 0 for "do not refine") circle `circle` with `n` samples needs so that the wall of
 /// `arc` on it spans at least two sample steps: the exact normal feet of the arc's two medial

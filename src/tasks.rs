@@ -19,6 +19,10 @@ pub(crate) const PIECES: usize = 128;
 /// Circles per leaf of the sampling's per-circle plans.
 pub(crate) const CIRCLES: usize = 256;
 
+/// Triangles per leaf, at least, of loops that cost some nanoseconds per triangle (a class
+/// looked up or computed).
+pub(crate) const TRIANGLES: usize = 16_384;
+
 /// The parts' items in order, in one vector, moved in parallel: each part into its own
 /// range of the result. rayon's `collect` of a flattened iterator (and the serial
 /// `into_iter().flatten().collect()`) append the parts on one thread, into fresh pages: at
@@ -102,9 +106,81 @@ impl<T> Places<T> {
     }
 }
 
+/// Items of a slice that parallel tasks take out (each at most once, whoever asks first),
+/// leaving `T::default()` in their place: for a gather whose sources are distinct by
+/// construction (an earlier result's parts moved into a new one) but not split into disjoint
+/// ranges. A second take of an item gives `None`.
+pub(crate) struct Claims<'a, T> {
+    items: *mut T,
+    claimed: Vec<std::sync::atomic::AtomicBool>,
+    _items: std::marker::PhantomData<&'a mut [T]>,
+}
+
+// SAFETY: an item is reached only by the one `take` that flips its flag (an atomic swap), so
+// no two threads touch the same item, and the items are `T: Send` moved to the taker; the
+// slice is borrowed exclusively for `'a`, so nothing else reads it meanwhile.
+unsafe impl<T: Send> Sync for Claims<'_, T> {}
+// SAFETY: as above (the `Claims` only holds the exclusive borrow).
+unsafe impl<T: Send> Send for Claims<'_, T> {}
+
+impl<'a, T: Default> Claims<'a, T> {
+    pub(crate) fn new(items: &'a mut [T]) -> Claims<'a, T> {
+        Claims {
+            claimed: (0..items.len())
+                .map(|_| std::sync::atomic::AtomicBool::new(false))
+                .collect(),
+            items: items.as_mut_ptr(),
+            _items: std::marker::PhantomData,
+        }
+    }
+
+    /// Item `i`, moved out; `None` when `i` is out of range or was taken before.
+    pub(crate) fn take(&self, i: usize) -> Option<T> {
+        let flag = self.claimed.get(i)?;
+        if flag.swap(true, std::sync::atomic::Ordering::AcqRel) {
+            return None;
+        }
+        // SAFETY: `i` is in range (it has a flag) and this call is the only one that flipped
+        // its flag, so no other reference to the item exists (see the `Sync` impl).
+        Some(std::mem::take(unsafe { &mut *self.items.add(i) }))
+    }
+}
+
 #[cfg(test)]
 mod tests {
-    use super::{concat, scatter};
+    use super::{concat, scatter, Claims};
+
+    /// [`Claims::take`] from many tasks at once: every item reaches exactly one taker (the
+    /// others get `None`), out-of-range indices give `None`, and the slice is left with the
+    /// defaults in place of the taken items and the others untouched.
+    #[test]
+    fn claims_give_each_item_once() {
+        use rayon::prelude::*;
+        for threads in 1..=4 {
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap();
+            let mut items: Vec<String> = (0..500).map(|i| format!("item {i}")).collect();
+            let taken: Vec<Option<String>> = {
+                let claims = Claims::new(&mut items[..400]);
+                // Every index asked three times, out of order, plus some out of range.
+                pool.install(|| {
+                    (0..1300usize)
+                        .into_par_iter()
+                        .map(|k| claims.take((k * 7919) % 1300 % 410))
+                        .collect()
+                })
+            };
+            let mut got: Vec<String> = taken.into_iter().flatten().collect();
+            got.sort();
+            let mut want: Vec<String> = (0..400).map(|i| format!("item {i}")).collect();
+            want.sort();
+            assert_eq!(got, want, "{threads} threads");
+            assert!(items[..400].iter().all(String::is_empty));
+            assert!((400..500).all(|i| items[i] == format!("item {i}")));
+        }
+    }
 
     /// [`scatter`] against placing the flattened items one by one: random permutations,
     /// uneven and empty parts, items that own memory, pools of 1 to 3 threads; and `None`
