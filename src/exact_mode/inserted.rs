@@ -317,20 +317,32 @@ fn free_counts(
     first: usize,
     h: f64,
 ) -> Vec<usize> {
-    let (class, ncls) = (&classes.0, classes.1);
+    free_counts_at(layout, classes, first, h, classes.1, Some)
+}
+
+/// [`free_counts`] of the classes `k` with an entry `at(k)` below `n` only, in that entry.
+fn free_counts_at(
+    layout: &BlockLayout,
+    classes: &(Vec<usize>, usize),
+    first: usize,
+    h: f64,
+    n: usize,
+    at: impl Fn(usize) -> Option<usize>,
+) -> Vec<usize> {
+    let class = &classes.0;
     let vertex = |i: u32| layout.vertices.get(i as usize).copied().unwrap_or([0.0; 2]);
     let length = |e: usize| {
         let [a, b] = layout.edges[e].ends.map(vertex);
         (a[0] - b[0]).hypot(a[1] - b[1])
     };
-    let mut free = vec![1usize; ncls];
+    let mut free = vec![1usize; n];
     for block in layout.blocks.iter().skip(first) {
         for side in block.sides {
             let e = side.edge as usize;
             let want = (length(e) / h).round();
             if want.is_finite() && want >= 1.0 {
                 let want = (want as usize).min(crate::grid::MAX_CELLS_PER_SIDE);
-                if let Some(f) = class.get(e).and_then(|&k| free.get_mut(k)) {
+                if let Some(f) = class.get(e).and_then(|&k| free.get_mut(at(k)?)) {
                     *f = (*f).max(want);
                 }
             }
@@ -339,12 +351,114 @@ fn free_counts(
     free
 }
 
+/// Medial blocks per leaf of [`TemplateSides::new`]'s parallel scan.
+const SCAN_BLOCKS: usize = 8192;
+
+/// What [`template_nodes`] reads of a layout besides the counts, found once per layout (the
+/// counts change with the target size; this does not): the conformity classes of the
+/// templates' sides 0 and 1 (the only ones whose counts it reads), and the last medial block
+/// side in each, in block then side order (whose count fixes the class's, as
+/// [`template_grids`] reads them).
+#[derive(Debug, Clone, Default, PartialEq)]
+pub(crate) struct TemplateSides {
+    /// The classes, sorted.
+    needed: Vec<usize>,
+    /// Per class of `needed`: the last medial (block, side) in it.
+    last: Vec<Option<(usize, usize)>>,
+}
+
+impl TemplateSides {
+    /// The template sides of `layout` (`classes` its [`crate::grid::edge_classes`]), whose
+    /// blocks from `first` on are templates. The medial blocks are scanned in parallel
+    /// (issue 8: a table over every class, filled from every medial block on one CPU, took
+    /// 22 ms at 1e5 bubbles, at each target size tried).
+    pub(crate) fn new(
+        layout: &BlockLayout,
+        classes: &(Vec<usize>, usize),
+        first: usize,
+    ) -> TemplateSides {
+        let (class, ncls) = (&classes.0, classes.1);
+        let class_of = |e: u32| class.get(e as usize).copied().filter(|&x| x < ncls);
+        let mut needed: Vec<usize> = layout
+            .blocks
+            .get(first..)
+            .unwrap_or(&[])
+            .iter()
+            .flat_map(|b| [b.sides[0].edge, b.sides[1].edge])
+            .filter_map(class_of)
+            .collect();
+        needed.sort_unstable();
+        needed.dedup();
+        let mut wanted = vec![0u64; ncls.div_ceil(64)];
+        for &x in &needed {
+            wanted[x / 64] |= 1 << (x % 64);
+        }
+        let medial = &layout.blocks[..first.min(layout.blocks.len())];
+        // The medial sides in a needed class, in block then side order: (its entry in
+        // `needed`, block, side).
+        let hits: Vec<(usize, usize, usize)> = medial
+            .par_chunks(SCAN_BLOCKS)
+            .enumerate()
+            .flat_map_iter(|(c, chunk)| {
+                let (wanted, needed) = (&wanted, &needed);
+                chunk.iter().enumerate().flat_map(move |(j, block)| {
+                    block.sides.iter().enumerate().filter_map(move |(k, side)| {
+                        let x = class_of(side.edge)?;
+                        if wanted[x / 64] >> (x % 64) & 1 == 0 {
+                            return None;
+                        }
+                        Some((needed.binary_search(&x).ok()?, c * SCAN_BLOCKS + j, k))
+                    })
+                })
+            })
+            .collect();
+        let mut last = vec![None; needed.len()];
+        for (i, b, k) in hits {
+            last[i] = Some((b, k));
+        }
+        TemplateSides { needed, last }
+    }
+}
+
 /// The grid nodes [`template_grids`] will make for the template blocks `layout.blocks[first..]`
 /// (saturating), before any grid exists: `side_count(b, k)` is the cell count of side `k` of
-/// medial block `b < first`, which fixes the count of its class; the other classes get
+/// medial block `b < first`, which fixes the count of its class (`sides`, found by
+/// [`TemplateSides::new`] from the same layout, classes and `first`); the other classes get
 /// their free count ([`free_counts`]). For the node limit of exact mode (the templates of a
-/// tiny target size can outweigh every other block).
+/// tiny target size can outweigh every other block). The same count as filling a table over
+/// every class ([`template_nodes_reference`], tested).
 pub(crate) fn template_nodes(
+    layout: &BlockLayout,
+    classes: &(Vec<usize>, usize),
+    sides: &TemplateSides,
+    first: usize,
+    h: f64,
+    side_count: impl Fn(usize, usize) -> usize,
+) -> usize {
+    let (class, ncls) = (&classes.0, classes.1);
+    let needed = &sides.needed;
+    let at = |x: usize| needed.binary_search(&x).ok();
+    let free = free_counts_at(layout, classes, first, h, needed.len(), at);
+    let cells = |e: u32| {
+        let x = class.get(e as usize).copied().filter(|&x| x < ncls);
+        x.map_or(1, |x| match at(x) {
+            Some(i) => sides.last[i].map_or(free[i], |(b, k)| side_count(b, k)),
+            None => 1,
+        })
+    };
+    layout
+        .blocks
+        .get(first..)
+        .unwrap_or(&[])
+        .iter()
+        .map(|b| (cells(b.sides[0].edge) + 1).saturating_mul(cells(b.sides[1].edge) + 1))
+        .fold(0usize, usize::saturating_add)
+}
+
+/// [`template_nodes`] with a table over every class, filled from every medial block in order
+/// (the tests' reference).
+#[cfg(test)]
+fn template_nodes_reference(
     layout: &BlockLayout,
     classes: &(Vec<usize>, usize),
     first: usize,
@@ -614,8 +728,14 @@ mod tests {
         for h in [1e3, 1.0, 0.05, 1e-3, 1e-5] {
             let made = template_grids(&m.layout, &classes, &m.grids, first, h).unwrap();
             let nodes: usize = made.iter().map(|g| g.nodes.len()).sum();
+            let sides = TemplateSides::new(&m.layout, &classes, first);
             assert_eq!(
-                template_nodes(&m.layout, &classes, first, h, side_count),
+                template_nodes(&m.layout, &classes, &sides, first, h, side_count),
+                nodes,
+                "h = {h}"
+            );
+            assert_eq!(
+                template_nodes_reference(&m.layout, &classes, first, h, side_count),
                 nodes,
                 "h = {h}"
             );

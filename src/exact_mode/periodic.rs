@@ -734,8 +734,9 @@ fn build_checking(
             let filled = crate::templates::fill_inserted_holes(&mut a.layout, &holes)
                 .map_err(|(c, m)| internal(format!("inserted hole {c}: {m}")))?;
             let classes = crate::grid::edge_classes(&a.layout);
+            let sides = super::inserted::TemplateSides::new(&a.layout, &classes, first);
             let medial_edge: Vec<u32> = a.medial_edges.iter().map(|e| e[0]).collect();
-            Ok(Some((a, classes, medial_edge, first, filled)))
+            Ok(Some((a, classes, medial_edge, first, filled, sides)))
         },
     );
     let (mut counts, keys) = made?;
@@ -743,7 +744,7 @@ fn build_checking(
     // Inserted holes: the template layout's conformity classes tie arc counts in pairs
     // around every hole.
     let tie = |counts: &mut Counts| {
-        if let Some((_, classes, medial_edge, _, _)) = &templates {
+        if let Some((_, classes, medial_edge, _, _, _)) = &templates {
             super::inserted::tie_counts(classes, medial_edge, &mut counts.arc);
         }
     };
@@ -768,7 +769,7 @@ fn build_checking(
                 total = total.saturating_add((counts.arc[o] + 1).saturating_mul(nj + 1));
             }
         }
-        if let Some((a, classes, _, first, _)) = &templates {
+        if let Some((a, classes, _, first, _, sides)) = &templates {
             let layout = &a.layout;
             // Medial block `2o + s`: sides 0 and 2 along arc orbit `o`, 1 and 3 along spokes.
             let side_count = |b: usize, k: usize| {
@@ -780,7 +781,7 @@ fn build_checking(
                 }
             };
             total = total.saturating_add(super::inserted::template_nodes(
-                layout, classes, *first, cell, side_count,
+                layout, classes, sides, *first, cell, side_count,
             ));
         }
         total
@@ -838,7 +839,7 @@ fn build_checking(
     // The nodes of the arcs, and without templates the layout beside them (a serial pass:
     // issue 8, it left a core idle); the layout's medial polylines are set from the nodes.
     let (nodes, (mut a, templated)) = match templates {
-        Some((a, classes, _, first, filled)) => (
+        Some((a, classes, _, first, filled, _)) => (
             arc_nodes(&parts, &counts)?,
             (a, Some((classes, first, filled))),
         ),
@@ -1215,9 +1216,17 @@ struct Parts<'a> {
 }
 
 /// The layout with the inserted holes' templates, before the counts: the assembled layout,
-/// its conformity classes, each arc orbit's first medial edge, the number of medial blocks
-/// and the number of template blocks.
-type Templated = (Assembled, (Vec<usize>, usize), Vec<u32>, usize, usize);
+/// its conformity classes, each arc orbit's first medial edge, the number of medial blocks,
+/// the number of template blocks and the template sides' classes
+/// ([`super::inserted::TemplateSides`]).
+type Templated = (
+    Assembled,
+    (Vec<usize>, usize),
+    Vec<u32>,
+    usize,
+    usize,
+    super::inserted::TemplateSides,
+);
 
 /// Per arc orbit: its medial nodes and the nodes of its two walls.
 type ArcNodes = (Vec<Point>, [Vec<Point>; 2]);
