@@ -426,7 +426,7 @@ impl TemplateSides {
 /// [`TemplateSides::new`] from the same layout, classes and `first`); the other classes get
 /// their free count ([`free_counts`]). For the node limit of exact mode (the templates of a
 /// tiny target size can outweigh every other block). The same count as filling a table over
-/// every class ([`template_nodes_reference`], tested).
+/// every class (`template_nodes_reference`, the tests' reference).
 pub(crate) fn template_nodes(
     layout: &BlockLayout,
     classes: &(Vec<usize>, usize),
