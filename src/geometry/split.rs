@@ -43,6 +43,9 @@ use std::mem::MaybeUninit;
 /// `tests/reliability_numbering.rs` for why that holds).
 pub(super) const SPLIT_MIN: usize = 1 << 13;
 
+/// Triangles per leaf, at least, of a half's parallel certification.
+const CERTIFY_SLOTS: usize = 16_384;
+
 /// One half: its triangulation in its own ids, the global id of each of its points, and which
 /// of its triangles are certified.
 struct Half {
@@ -97,10 +100,16 @@ fn half(
         return Ok(None);
     };
     let inf = local.len() as u32;
-    let certified: Vec<bool> =
-        b.tv.iter()
+    // In parallel (collected in slot order): when one half is built first, its thread
+    // helps certify the other's (issue 8: at 1e5 particles the later half's certification
+    // kept one CPU busy for some 50 ms while the other waited).
+    let certified: Vec<bool> = {
+        use rayon::prelude::*;
+        b.tv.par_iter()
+            .with_min_len(CERTIFY_SLOTS)
             .map(|v| !v.contains(&inf) && disk_clear(&local, *v, split, on_left))
-            .collect();
+            .collect()
+    };
     // The half's share of the seam side's scans, here on its own thread.
     let mut seam = Vec::new();
     let mut barriers = Vec::new();
