@@ -150,6 +150,32 @@ impl<'a, T: Default> Claims<'a, T> {
 mod tests {
     use super::{concat, scatter, Claims};
 
+    /// Up to `parts` parts of owned items (empty, single and longer ones), for case `case`.
+    fn random_parts(
+        rng: &mut crate::layouts::SplitMix64,
+        case: usize,
+        parts: usize,
+        longest: f64,
+    ) -> Vec<Vec<String>> {
+        (0..case % parts)
+            .map(|p| {
+                let n = match (case + p) % 4 {
+                    0 => 0,
+                    1 => 1,
+                    _ => (rng.next_f64() * longest) as usize,
+                };
+                (0..n).map(|i| format!("{case}:{p}:{i}")).collect()
+            })
+            .collect()
+    }
+
+    fn pool(threads: usize) -> rayon::ThreadPool {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap()
+    }
+
     /// [`Claims::take`] from many tasks at once: every item reaches exactly one taker (the
     /// others get `None`), out-of-range indices give `None`, and the slice is left with the
     /// defaults in place of the taken items and the others untouched.
@@ -157,10 +183,7 @@ mod tests {
     fn claims_give_each_item_once() {
         use rayon::prelude::*;
         for threads in 1..=4 {
-            let pool = rayon::ThreadPoolBuilder::new()
-                .num_threads(threads)
-                .build()
-                .unwrap();
+            let pool = pool(threads);
             let mut items: Vec<String> = (0..500).map(|i| format!("item {i}")).collect();
             let taken: Vec<Option<String>> = {
                 let claims = Claims::new(&mut items[..400]);
@@ -190,16 +213,7 @@ mod tests {
     fn scatter_places_every_item_once() {
         let mut rng = crate::layouts::SplitMix64(12);
         for case in 0..60usize {
-            let parts: Vec<Vec<String>> = (0..case % 13)
-                .map(|p| {
-                    let n = match (case + p) % 4 {
-                        0 => 0,
-                        1 => 1,
-                        _ => (rng.next_f64() * 40.0) as usize,
-                    };
-                    (0..n).map(|i| format!("{case}:{p}:{i}")).collect()
-                })
-                .collect();
+            let parts = random_parts(&mut rng, case, 13, 40.0);
             let flat: Vec<String> = parts.iter().flatten().cloned().collect();
             let n = flat.len();
             // A random permutation (Fisher-Yates).
@@ -213,11 +227,7 @@ mod tests {
                 want[dest[f] as usize] = item.clone();
             }
             for threads in 1..=3 {
-                let pool = rayon::ThreadPoolBuilder::new()
-                    .num_threads(threads)
-                    .build()
-                    .unwrap();
-                let got = pool.install(|| scatter(parts.clone(), &dest));
+                let got = pool(threads).install(|| scatter(parts.clone(), &dest));
                 assert_eq!(got.as_ref(), Some(&want), "case {case}, {threads} threads");
             }
             if n >= 2 {
@@ -244,23 +254,10 @@ mod tests {
     fn concat_is_the_serial_flatten() {
         let mut rng = crate::layouts::SplitMix64(11);
         for case in 0..60usize {
-            let parts: Vec<Vec<String>> = (0..case % 17)
-                .map(|p| {
-                    let n = match (case + p) % 4 {
-                        0 => 0,
-                        1 => 1,
-                        _ => (rng.next_f64() * 50.0) as usize,
-                    };
-                    (0..n).map(|i| format!("{case}:{p}:{i}")).collect()
-                })
-                .collect();
+            let parts = random_parts(&mut rng, case, 17, 50.0);
             let want: Vec<String> = parts.iter().flatten().cloned().collect();
             for threads in 1..=3 {
-                let pool = rayon::ThreadPoolBuilder::new()
-                    .num_threads(threads)
-                    .build()
-                    .unwrap();
-                let got = pool.install(|| concat(parts.clone()));
+                let got = pool(threads).install(|| concat(parts.clone()));
                 assert_eq!(got, want, "case {case}, {threads} threads");
             }
         }
