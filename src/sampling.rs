@@ -1271,7 +1271,7 @@ pub fn thin_walls(tri: &Triangulation, medial: &MedialGraph) -> Vec<Violation> {
         .arcs
         .par_iter()
         .enumerate()
-        .with_min_len(THIN_WALL_ARCS)
+        .with_min_len(crate::tasks::ARCS)
         .fold(Vec::new, |mut out, (e, arc)| {
             if arc.triangles.is_empty() {
                 let Some(v0) = medial.vertices.get(arc.ends[0] as usize) else {
@@ -1296,9 +1296,6 @@ pub fn thin_walls(tri: &Triangulation, medial: &MedialGraph) -> Vec<Violation> {
             a
         })
 }
-
-/// Arcs per leaf of [`thin_walls`] at least (a few microseconds' work).
-const THIN_WALL_ARCS: usize = 4096;
 
 /// How many doublings (1 to 4, or 0 for "do not refine") circle `circle` with `n` samples needs so that the wall of
 /// `arc` on it spans at least two sample steps: the exact normal feet of the arc's two medial

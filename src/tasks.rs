@@ -23,6 +23,10 @@ pub(crate) const CIRCLES: usize = 256;
 /// looked up or computed).
 pub(crate) const TRIANGLES: usize = 16_384;
 
+/// Medial arcs (or exact mode's pieces, one per arc) per leaf, at least, of loops that cost
+/// some nanoseconds per arc (a check of its chains or triangles, a product of its counts).
+pub(crate) const ARCS: usize = 4096;
+
 /// The parts' items in order, in one vector, moved in parallel: each part into its own
 /// range of the result. rayon's `collect` of a flattened iterator (and the serial
 /// `into_iter().flatten().collect()`) append the parts on one thread, into fresh pages: at

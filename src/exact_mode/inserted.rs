@@ -725,10 +725,11 @@ mod tests {
                 g.nj
             }
         };
+        // Found once per layout, whatever the target size.
+        let sides = TemplateSides::new(&m.layout, &classes, first);
         for h in [1e3, 1.0, 0.05, 1e-3, 1e-5] {
             let made = template_grids(&m.layout, &classes, &m.grids, first, h).unwrap();
             let nodes: usize = made.iter().map(|g| g.nodes.len()).sum();
-            let sides = TemplateSides::new(&m.layout, &classes, first);
             assert_eq!(
                 template_nodes(&m.layout, &classes, &sides, first, h, side_count),
                 nodes,

@@ -1614,7 +1614,7 @@ pub fn assemble_cached(
         let mut total: usize = pieces
             .par_iter()
             .enumerate()
-            .with_min_len(crate::tasks::BLOCKS)
+            .with_min_len(crate::tasks::ARCS)
             .map(|(e, p)| {
                 let n = counts.arc[e];
                 p.circles

@@ -22,9 +22,6 @@ use crate::sampling::{SampledDomain, Samples, Violation};
 use rayon::prelude::*;
 use std::collections::HashSet;
 
-/// Earlier arcs per leaf, at least, of [`reusing`]'s parallel check of the kept arcs.
-const ARCS_PER_TASK: usize = 4096;
-
 /// The triangles of `after` that are those of `before` (same id, same vertices in the same
 /// order), as a bit set, and the others in increasing id order; with what is read of `before`
 /// afterwards (the earlier triangle and neighbours of each changed earlier slot, whether it
@@ -348,7 +345,7 @@ fn reusing(
     let starts: Vec<Option<(u32, u8)>> = old_arcs
         .all()
         .par_iter()
-        .with_min_len(ARCS_PER_TASK)
+        .with_min_len(crate::tasks::ARCS)
         .map(|arc| {
             let ends = arc.ends.map(|v| new_of_old[v as usize]);
             let kept = !ends.contains(&u32::MAX)
