@@ -331,6 +331,153 @@ pub(super) fn first_where(pred: impl Fn(f64) -> bool) -> f64 {
     float(hi)
 }
 
+/// The number of ascending thresholds `t[0] < t[1] < ... < t[n - 1]` that `x` reaches
+/// (`x >= t[k]` in the order of [`f64::total_cmp`]; NaN reaches none), for thresholds close to
+/// the multiples of a step, by one product instead of one comparison per threshold (issue 8:
+/// the skewness's and the scaled Jacobian's bins took twenty of the cell loop's operations
+/// each): `clamp(floor(x · scale) + offset, 0, n)`, plus `delta` (±1) at the single float
+/// `fix` where the rounded product falls on the wrong side of a threshold.
+///
+/// Why it is the count: `f(x) = clamp(floor(fl(x · scale)) + offset, 0, n)` is monotone in
+/// `x` (each step is a rounded monotone operation, overflow to infinity included) and so is
+/// the count `c(x)`, which is `k` from `t[k - 1]` to `pred(t[k])` (`pred`: the float below).
+/// The tests' constructor `StepBins::new` checks `f(t[k - 1]) >= k` and
+/// `f(pred(t[k - 1])) <= k - 1` for every `k`; then from `t[k - 1]` to `pred(t[k])`,
+/// `k <= f(t[k - 1]) <= f(x) <= f(pred(t[k])) <= k`, and below `t[0]` (where `f >= 0`) and
+/// from `t[n - 1]` on (where `f <= n`) the clamp gives 0 and `n`. Where one of those checks
+/// fails by one at a single float (the check then holds at its neighbour: `f(succ(t)) >= k`,
+/// or `f(pred(pred(t))) <= k - 1`), that float is `fix` and the same argument holds for `f`
+/// corrected there. NaN: `floor` gives NaN, the clamp 0.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(super) struct StepBins {
+    scale: f64,
+    offset: f64,
+    n: f64,
+    /// The float where `f` is off by `delta`'s opposite (NaN when there is none: no `x`
+    /// equals it).
+    fix: f64,
+    delta: f64,
+}
+
+impl StepBins {
+    /// The skewness's bin from its dividend `D` (see [`SkewThresholds`]): the number of its
+    /// thresholds `D` reaches (the multiples of 9 from 9 to 90, but 63 less one unit in the
+    /// last place), as `StepBins::new` finds it (a unit test). A constant, so that the cell
+    /// loop holds no register for it.
+    pub const SKEW: StepBins = StepBins {
+        scale: 1.0 / 9.0,
+        offset: 0.0,
+        n: 10.0,
+        fix: 62.999_999_999_999_99,
+        delta: 1.0,
+    };
+
+    /// The scaled Jacobian's bin: the number of inner edges of [`super::JACOBIAN_EDGES`] (0,
+    /// 0.1, ..., 0.9) at or below it, `floor(10 x) + 1` but at the float below 0.9, as
+    /// `StepBins::new` finds it (a unit test).
+    pub const JACOBIAN: StepBins = StepBins {
+        scale: 10.0,
+        offset: 1.0,
+        n: 10.0,
+        fix: 0.899_999_999_999_999_9,
+        delta: -1.0,
+    };
+
+    /// The counting rule for `thresholds` (ascending) with `scale` and `offset`, checked at
+    /// every threshold (see the type's doc), or `None` when the rule does not give the count
+    /// (a threshold where it fails by more than one float, or more than one such float).
+    #[cfg(test)]
+    pub fn new(thresholds: &[f64], scale: f64, offset: f64) -> Option<StepBins> {
+        let n = thresholds.len() as f64;
+        let ordered = thresholds.windows(2).all(|w| w[0].total_cmp(&w[1]).is_lt());
+        if !ordered || thresholds.iter().any(|t| t.is_nan()) || !(scale.is_finite()) {
+            return None;
+        }
+        let mut rule = StepBins {
+            scale,
+            offset,
+            n,
+            fix: f64::NAN,
+            delta: 0.0,
+        };
+        let mut fixes = Vec::new();
+        for (k, &t) in thresholds.iter().enumerate() {
+            let k = (k + 1) as f64;
+            let f = |x: f64| rule.count(x);
+            if f(t) < k {
+                if f(t) != k - 1.0 || f(next_up(t)) < k {
+                    return None;
+                }
+                fixes.push((t, 1.0));
+            }
+            let p = next_down(t);
+            if f(p) > k - 1.0 {
+                if f(p) != k || f(next_down(p)) > k - 1.0 {
+                    return None;
+                }
+                fixes.push((p, -1.0));
+            }
+        }
+        match fixes[..] {
+            [] => {}
+            [(fix, delta)] => {
+                rule.fix = fix;
+                rule.delta = delta;
+            }
+            _ => return None,
+        }
+        // The fix's own interval holds its float and its neighbour (checked above), so the
+        // corrected rule is the count; confirm it at every threshold and its neighbours.
+        let exact = thresholds.iter().enumerate().all(|(k, &t)| {
+            let k = (k + 1) as f64;
+            rule.count(t) == k && rule.count(next_down(t)) == k - 1.0
+        });
+        exact.then_some(rule)
+    }
+
+    /// The number of thresholds `x` reaches, as a float (see the type's doc).
+    #[inline(always)]
+    pub fn count(&self, x: f64) -> f64 {
+        let q = (x * self.scale).floor() + self.offset;
+        let q = if q > 0.0 { q } else { 0.0 };
+        let q = if q < self.n { q } else { self.n };
+        if x == self.fix {
+            q + self.delta
+        } else {
+            q
+        }
+    }
+}
+
+/// The float after `x` in the order of [`f64::total_cmp`] (`-0.0` then `+0.0`; infinities and
+/// NaN unchanged).
+#[cfg(test)]
+fn next_up(x: f64) -> f64 {
+    if x.is_nan() || x == f64::INFINITY {
+        x
+    } else if x.to_bits() == (-0.0f64).to_bits() {
+        0.0
+    } else if x.is_sign_negative() {
+        f64::from_bits(x.to_bits() - 1)
+    } else {
+        f64::from_bits(x.to_bits() + 1)
+    }
+}
+
+/// The float before `x` in the order of [`f64::total_cmp`], see [`next_up`].
+#[cfg(test)]
+fn next_down(x: f64) -> f64 {
+    if x.is_nan() || x == f64::NEG_INFINITY {
+        x
+    } else if x.to_bits() == 0 {
+        -0.0
+    } else if x.is_sign_negative() {
+        f64::from_bits(x.to_bits() + 1)
+    } else {
+        f64::from_bits(x.to_bits() - 1)
+    }
+}
+
 /// The skewness figures as thresholds on `D = max(θmax - 90, 90 - θmin)`, the dividend of
 /// [`skewness`]: `D / 90` is a correctly rounded division by a positive constant, so it is
 /// monotone in `D`, and `D / 90 >= e` holds exactly from the first `D` where it holds
@@ -338,9 +485,6 @@ pub(super) fn first_where(pred: impl Fn(f64) -> bool) -> f64 {
 /// and the acceptance of the skewness without dividing, and the extremes of the skewness are
 /// the quotients of the extremes of `D` (monotone: `min(D) / 90 = min(D / 90)`).
 pub(super) struct SkewThresholds {
-    /// Per inner edge `e` of [`super::SKEWNESS_EDGES`] (0.1 to 1.0): the least `D` with
-    /// `D / 90 >= e`.
-    pub bins: [f64; 10],
     /// The least `D` with `D / 90 >= 0` (the acceptable range's low end).
     pub lo: f64,
     /// The least `D` with `D / 90 > 0.5` (above the acceptable range's high end).
@@ -352,11 +496,28 @@ impl SkewThresholds {
         let at_least = |e: f64| first_where(|d| d / 90.0 >= e);
         let [lo, hi] = super::SKEWNESS_ACCEPTABLE;
         SkewThresholds {
-            bins: std::array::from_fn(|k| at_least(super::SKEWNESS_EDGES[k + 1])),
             lo: at_least(lo),
             above: first_where(|d| d / 90.0 > hi),
         }
     }
+}
+
+/// Per inner edge `e` of [`super::SKEWNESS_EDGES`] (0.1 to 1.0): the least `D` with `D / 90 >=
+/// e` (the skewness's bins as thresholds on its dividend, see [`SkewThresholds`]).
+#[cfg(test)]
+pub(super) fn skew_bin_thresholds() -> [f64; 10] {
+    std::array::from_fn(|k| first_where(|d| d / 90.0 >= super::SKEWNESS_EDGES[k + 1]))
+}
+
+/// The thresholds of [`StepBins::JACOBIAN`]: the inner edges of [`super::JACOBIAN_EDGES`]
+/// as the least `x` with `x >= e` (`-0.0` for the edge 0).
+#[cfg(test)]
+pub(super) fn jacobian_bin_thresholds() -> Vec<f64> {
+    let edges = &super::JACOBIAN_EDGES;
+    edges[1..edges.len() - 1]
+        .iter()
+        .map(|&e| first_where(|x| x >= e))
+        .collect()
 }
 
 /// The vector builds the CPU can run, detected once per measurement.

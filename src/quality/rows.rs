@@ -12,7 +12,8 @@
 //!    products, the four corner angles (differences of edge directions,
 //!    [`super::kernel::corner_candidates`]), the extreme angles and every length figure,
 //!    whether the cell takes this path, the histogram bins (by arithmetic and comparisons with
-//!    the edges, [`super::kernel::angle_bin_unsigned`], [`super::kernel::weighted_bin`]; the
+//!    the edges, [`super::kernel::angle_bin_unsigned`], [`super::kernel::StepBins`] for the
+//!    skewness and the scaled Jacobian (one product each); the
 //!    ratio bins from a table in the 8-lane and portable builds, by comparisons in the 4-lane
 //!    one, where the table load is a gather: [`super::kernel::RatioBins`]; summed
 //!    into one packed word, [`super::kernel::PACK`]), and as
@@ -50,7 +51,7 @@ use super::angle_deg;
 use super::atan::angle_deg_bounded;
 use super::kernel::{
     angle_bin_unsigned, cell_products, corner_candidates, corner_products, least_scaled_jacobian,
-    packed_bins, settled, weighted_bin, BlockFigures, Tables, PACK, SQ_MAX, SQ_MIN,
+    packed_bins, settled, weighted_bin, BlockFigures, StepBins, Tables, PACK, SQ_MAX, SQ_MIN,
 };
 use super::JACOBIAN_EDGES;
 use super::{cell_metrics, fold, MetricSummary, QualityMetrics};
@@ -457,17 +458,10 @@ fn row_figures<const TABLE: bool>(
         // The eight bins packed in one float sum (see `PACK`), in four independent parts.
         let angles = (angle_bin_unsigned(a[0]) + angle_bin_unsigned(a[1]) * PACK[1])
             + (angle_bin_unsigned(a[2]) * PACK[2] + angle_bin_unsigned(a[3]) * PACK[3]);
-        // The thresholds ascend: the last one `sd` reaches gives the count (as in
-        // `weighted_bin`).
-        let mut skew = 0.0;
-        for (k, &e) in th.skew.bins.iter().enumerate() {
-            skew = if sd >= e {
-                (k + 1) as f64 * PACK[4]
-            } else {
-                skew
-            };
-        }
-        let sj_bin = weighted_bin(sj, &JACOBIAN_EDGES, PACK[5]);
+        // The bins of the skewness (from its dividend) and the scaled Jacobian by one
+        // product each (`StepBins`), weighted for their fields.
+        let skew = StepBins::SKEW.count(sd) * PACK[4];
+        let sj_bin = StepBins::JACOBIAN.count(sj) * PACK[5];
         let ratios = if TABLE {
             rb[0].bin(er) + rb[1].bin(ar)
         } else {

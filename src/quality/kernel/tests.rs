@@ -192,6 +192,7 @@ fn ratio_bins_from_the_table_equal_the_counted_ones() {
 fn skew_thresholds_equal_the_division() {
     use crate::quality::{SKEWNESS_ACCEPTABLE, SKEWNESS_EDGES};
     let th = SkewThresholds::new();
+    let bins = skew_bin_thresholds();
     let below = |x: f64| {
         if x == 0.0 {
             -f64::from_bits(1)
@@ -201,14 +202,14 @@ fn skew_thresholds_equal_the_division() {
             f64::from_bits(x.to_bits() + 1)
         }
     };
-    for (k, &t) in th.bins.iter().enumerate() {
+    for (k, &t) in bins.iter().enumerate() {
         let e = SKEWNESS_EDGES[k + 1];
         assert!(t / 90.0 >= e && below(t) / 90.0 < e, "{t:e} for {e}");
     }
     assert!(th.lo / 90.0 >= 0.0 && below(th.lo) / 90.0 < 0.0);
     assert!(th.above / 90.0 > 0.5 && below(th.above) / 90.0 <= 0.5);
     let mut ds = vec![0.0, -0.0, 1e-310, -1e-310, -1.0, 400.0, 1e300, -1e300];
-    for &t in th.bins.iter().chain([&th.lo, &th.above]) {
+    for &t in bins.iter().chain([&th.lo, &th.above]) {
         let mut x = t;
         for _ in 0..4 {
             x = below(x);
@@ -226,8 +227,9 @@ fn skew_thresholds_equal_the_division() {
     }
     for d in ds {
         let sk = d / 90.0;
-        let by_threshold = th.bins.iter().filter(|&&t| d >= t).count();
+        let by_threshold = bins.iter().filter(|&&t| d >= t).count();
         assert_eq!(by_threshold, bin(&SKEWNESS_EDGES, sk), "{d:e}");
+        assert_eq!(StepBins::SKEW.count(d), by_threshold as f64, "{d:e}");
         let [lo, hi] = SKEWNESS_ACCEPTABLE;
         assert_eq!(
             (d >= th.lo) & (d < th.above),
@@ -235,6 +237,119 @@ fn skew_thresholds_equal_the_division() {
             "{d:e}"
         );
     }
+}
+
+/// The one-product bin rules ([`StepBins`]) count the thresholds a value reaches, as the
+/// comparisons they replace: on every threshold and the 40 floats either side (walked in
+/// the total order, so through `-0.0` and `+0.0`), signed zeros, subnormals, infinities,
+/// NaN, huge values and sweeps across each range.
+#[test]
+fn step_bins_count_the_thresholds() {
+    let jacobian_inner: Vec<f64> = JACOBIAN_EDGES[1..JACOBIAN_EDGES.len() - 1].to_vec();
+    let rules: [(StepBins, Vec<f64>); 2] = [
+        (StepBins::SKEW, skew_bin_thresholds().to_vec()),
+        (StepBins::JACOBIAN, jacobian_inner),
+    ];
+    for (rule, thresholds) in &rules {
+        let mut xs = vec![
+            0.0,
+            -0.0,
+            f64::from_bits(1),
+            -f64::from_bits(1),
+            f64::MIN_POSITIVE,
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+            f64::NAN,
+            -f64::NAN,
+            1e300,
+            -1e300,
+            f64::MAX,
+            f64::MIN,
+        ];
+        for &t in thresholds {
+            let mut x = t;
+            for _ in 0..40 {
+                x = next_down(x);
+            }
+            for _ in 0..81 {
+                xs.push(x);
+                x = next_up(x);
+            }
+        }
+        let (lo, hi) = (
+            thresholds[0] - 3.0,
+            thresholds[thresholds.len() - 1] * 3.0 + 3.0,
+        );
+        for k in 0..200_000 {
+            xs.push(lo + (hi - lo) * k as f64 / 200_000.0);
+        }
+        for x in xs {
+            let want = thresholds.iter().filter(|&&t| x >= t).count();
+            assert_eq!(rule.count(x), want as f64, "{x:e} against {thresholds:?}");
+        }
+    }
+    // The scaled Jacobian's rule is the loop's former comparisons, and the oracle's bin.
+    let rule = StepBins::JACOBIAN;
+    for k in -30_000..30_000 {
+        let x = k as f64 * 4.1e-5;
+        assert_eq!(
+            rule.count(x),
+            weighted_bin(x, &JACOBIAN_EDGES, 1.0),
+            "{x:e}"
+        );
+        assert_eq!(rule.count(x), bin(&JACOBIAN_EDGES, x) as f64, "{x:e}");
+    }
+}
+
+/// The cell loop's constant rules are those [`StepBins::new`] finds and checks; each needs
+/// its one correction (the plain product misses one float, which is the correction's); and
+/// rules that do not count their thresholds are refused.
+#[test]
+fn step_bins_refuse_rules_that_miss() {
+    let skew = skew_bin_thresholds();
+    assert_eq!(StepBins::new(&skew, 1.0 / 9.0, 0.0), Some(StepBins::SKEW));
+    let inner = jacobian_bin_thresholds();
+    assert_eq!(StepBins::new(&inner, 10.0, 1.0), Some(StepBins::JACOBIAN));
+    let plain =
+        |x: f64, scale: f64, offset: f64, n: f64| ((x * scale).floor() + offset).clamp(0.0, n);
+    let missed: Vec<f64> = skew
+        .iter()
+        .flat_map(|&t| [t, next_down(t)])
+        .filter(|&x| {
+            plain(x, 1.0 / 9.0, 0.0, 10.0) != skew.iter().filter(|&&t| x >= t).count() as f64
+        })
+        .collect();
+    assert_eq!(missed.len(), 1, "{missed:?}");
+    assert_eq!(StepBins::SKEW.fix, missed[0]);
+    let missed: Vec<f64> = inner
+        .iter()
+        .flat_map(|&t| [t, next_down(t)])
+        .filter(|&x| {
+            plain(x, 10.0, 1.0, 9.0 + 1.0) != inner.iter().filter(|&&t| x >= t).count() as f64
+        })
+        .collect();
+    assert_eq!(missed.len(), 1, "{missed:?}");
+    assert_eq!(StepBins::JACOBIAN.fix, missed[0]);
+    // Wrong scales, offsets, unordered or NaN thresholds.
+    assert!(StepBins::new(&skew, 1.0 / 8.0, 0.0).is_none());
+    assert!(StepBins::new(&skew, 1.0 / 9.0, 1.0).is_none());
+    assert!(StepBins::new(&[2.0, 1.0], 1.0, 0.0).is_none());
+    assert!(StepBins::new(&[1.0, 1.0], 1.0, 0.0).is_none());
+    assert!(StepBins::new(&[1.0, f64::NAN], 1.0, 0.0).is_none());
+    assert!(StepBins::new(&[1.0, 2.0], f64::NAN, 0.0).is_none());
+    // Integers counted by a product a little off: the plain rule holds.
+    let ok = StepBins::new(&[1.0, 2.0, 3.0], 1.0, 0.0).unwrap();
+    assert!(ok.fix.is_nan());
+    assert_eq!(
+        [0.5, 1.0, 2.9, 3.0, 7.0].map(|x| ok.count(x)),
+        [0.0, 1.0, 2.0, 3.0, 3.0]
+    );
+    // Two floats to correct (each threshold one below an integer): refused; one: taken.
+    assert!(StepBins::new(&[next_down(1.0), next_down(2.0)], 1.0, 0.0).is_none());
+    let one = StepBins::new(&[1.0, next_down(2.0)], 1.0, 0.0).unwrap();
+    assert_eq!((one.fix, one.delta), (next_down(2.0), 1.0));
+    // Off by more than one float: refused.
+    assert!(StepBins::new(&[next_down(next_down(1.0))], 1.0, 0.0).is_none());
 }
 
 /// Corners of cells that tie or nearly tie: exact squares and rectangles (axis-aligned,
