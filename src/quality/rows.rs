@@ -430,15 +430,19 @@ fn row_figures<const TABLE: bool>(
         let sd = more(amax - 90.0, 90.0 - amin);
         k.fast += u64::from(fine);
         k.inverted += u64::from(fine & inverted);
-        k.outside[ANGLE] +=
-            u64::from(fine & (outside(amin, ANGLE_ACCEPTABLE) | outside(amax, ANGLE_ACCEPTABLE)));
+        // `amin <= amax` (folds of the same four numbers), so only these two ends can be
+        // outside.
+        let [a_lo, a_hi] = ANGLE_ACCEPTABLE;
+        k.outside[ANGLE] += u64::from(fine & ((amin < a_lo) | (amax > a_hi)));
         k.outside[SKEW] += u64::from(fine & !((sd >= th.skew.lo) & (sd < th.skew.above)));
         // A cell whose scaled Jacobian pick is not certain ([`REDO`]) counts it in loop 2;
         // its keys below are the extremes' neutral values (a float select: an integer one
         // kept the compiler from vectorising the loop).
         k.outside[SJ] += u64::from(exact & outside(sj, SCALED_JACOBIAN_ACCEPTABLE));
-        k.outside[ER] += u64::from(fine & outside(er, EDGE_RATIO_ACCEPTABLE));
-        k.outside[AR] += u64::from(fine & outside(ar, ASPECT_ACCEPTABLE));
+        // Both ratios are at least 1 (a quotient of a larger by a smaller positive number,
+        // rounded), the ranges' low end: only the high end can be passed.
+        k.outside[ER] += u64::from(fine & (er > EDGE_RATIO_ACCEPTABLE[1]));
+        k.outside[AR] += u64::from(fine & (ar > ASPECT_ACCEPTABLE[1]));
         // Angles, edge and aspect ratios are `>= +0` (see the module doc): their keys are
         // their bits.
         let keys = [
@@ -583,6 +587,9 @@ const SKEW: usize = 1;
 const SJ: usize = 2;
 const ER: usize = 3;
 const AR: usize = 4;
+
+// The cell loop counts a ratio outside its range by the high end alone (see `row_figures`).
+const _: () = assert!(EDGE_RATIO_ACCEPTABLE[0] <= 1.0 && ASPECT_ACCEPTABLE[0] <= 1.0);
 
 /// True when `x` is outside `acc` (or not a number).
 #[inline(always)]
