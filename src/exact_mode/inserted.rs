@@ -351,6 +351,16 @@ fn free_counts_at(
     free
 }
 
+/// The conformity class of edge `e` (`classes` as [`crate::grid::edge_classes`] gives them),
+/// if it has one in range.
+fn class_of(classes: &(Vec<usize>, usize), e: u32) -> Option<usize> {
+    classes
+        .0
+        .get(e as usize)
+        .copied()
+        .filter(|&x| x < classes.1)
+}
+
 /// Medial blocks per leaf of [`TemplateSides::new`]'s parallel scan.
 const SCAN_BLOCKS: usize = 8192;
 
@@ -377,8 +387,8 @@ impl TemplateSides {
         classes: &(Vec<usize>, usize),
         first: usize,
     ) -> TemplateSides {
-        let (class, ncls) = (&classes.0, classes.1);
-        let class_of = |e: u32| class.get(e as usize).copied().filter(|&x| x < ncls);
+        let ncls = classes.1;
+        let class_of = |e: u32| class_of(classes, e);
         let mut needed: Vec<usize> = layout
             .blocks
             .get(first..)
@@ -435,16 +445,12 @@ pub(crate) fn template_nodes(
     h: f64,
     side_count: impl Fn(usize, usize) -> usize,
 ) -> usize {
-    let (class, ncls) = (&classes.0, classes.1);
     let needed = &sides.needed;
     let at = |x: usize| needed.binary_search(&x).ok();
     let free = free_counts_at(layout, classes, first, h, needed.len(), at);
-    let cells = |e: u32| {
-        let x = class.get(e as usize).copied().filter(|&x| x < ncls);
-        x.map_or(1, |x| match at(x) {
-            Some(i) => sides.last[i].map_or(free[i], |(b, k)| side_count(b, k)),
-            None => 1,
-        })
+    let cells = |e: u32| match class_of(classes, e).and_then(at) {
+        Some(i) => sides.last[i].map_or(free[i], |(b, k)| side_count(b, k)),
+        None => 1,
     };
     layout
         .blocks

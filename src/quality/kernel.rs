@@ -332,7 +332,7 @@ pub(super) fn first_where(pred: impl Fn(f64) -> bool) -> f64 {
 }
 
 /// The number of ascending thresholds `t[0] < t[1] < ... < t[n - 1]` that `x` reaches
-/// (`x >= t[k]` in the order of [`f64::total_cmp`]; NaN reaches none), for thresholds close to
+/// (`x >= t[k]`; NaN reaches none), for thresholds close to
 /// the multiples of a step, by one product instead of one comparison per threshold (issue 8:
 /// the skewness's and the scaled Jacobian's bins took twenty of the cell loop's operations
 /// each): `clamp(floor(x · scale) + offset, 0, n)`, plus `delta` (±1) at the single float
@@ -389,8 +389,8 @@ impl StepBins {
     #[cfg(test)]
     pub fn new(thresholds: &[f64], scale: f64, offset: f64) -> Option<StepBins> {
         let n = thresholds.len() as f64;
-        let ordered = thresholds.windows(2).all(|w| w[0].total_cmp(&w[1]).is_lt());
-        if !ordered || thresholds.iter().any(|t| t.is_nan()) || !(scale.is_finite()) {
+        let ordered = thresholds.windows(2).all(|w| w[0] < w[1]);
+        if !ordered || thresholds.iter().any(|t| t.is_nan()) || !scale.is_finite() {
             return None;
         }
         let mut rule = StepBins {
@@ -405,14 +405,14 @@ impl StepBins {
             let k = (k + 1) as f64;
             let f = |x: f64| rule.count(x);
             if f(t) < k {
-                if f(t) != k - 1.0 || f(next_up(t)) < k {
+                if f(t) != k - 1.0 || f(t.next_up()) < k {
                     return None;
                 }
                 fixes.push((t, 1.0));
             }
-            let p = next_down(t);
+            let p = t.next_down();
             if f(p) > k - 1.0 {
-                if f(p) != k || f(next_down(p)) > k - 1.0 {
+                if f(p) != k || f(p.next_down()) > k - 1.0 {
                     return None;
                 }
                 fixes.push((p, -1.0));
@@ -430,7 +430,7 @@ impl StepBins {
         // corrected rule is the count; confirm it at every threshold and its neighbours.
         let exact = thresholds.iter().enumerate().all(|(k, &t)| {
             let k = (k + 1) as f64;
-            rule.count(t) == k && rule.count(next_down(t)) == k - 1.0
+            rule.count(t) == k && rule.count(t.next_down()) == k - 1.0
         });
         exact.then_some(rule)
     }
@@ -449,41 +449,13 @@ impl StepBins {
     }
 }
 
-/// The float after `x` in the order of [`f64::total_cmp`] (`-0.0` then `+0.0`; infinities and
-/// NaN unchanged).
-#[cfg(test)]
-fn next_up(x: f64) -> f64 {
-    if x.is_nan() || x == f64::INFINITY {
-        x
-    } else if x.to_bits() == (-0.0f64).to_bits() {
-        0.0
-    } else if x.is_sign_negative() {
-        f64::from_bits(x.to_bits() - 1)
-    } else {
-        f64::from_bits(x.to_bits() + 1)
-    }
-}
-
-/// The float before `x` in the order of [`f64::total_cmp`], see [`next_up`].
-#[cfg(test)]
-fn next_down(x: f64) -> f64 {
-    if x.is_nan() || x == f64::NEG_INFINITY {
-        x
-    } else if x.to_bits() == 0 {
-        -0.0
-    } else if x.is_sign_negative() {
-        f64::from_bits(x.to_bits() + 1)
-    } else {
-        f64::from_bits(x.to_bits() - 1)
-    }
-}
-
 /// The skewness figures as thresholds on `D = max(θmax - 90, 90 - θmin)`, the dividend of
 /// [`skewness`]: `D / 90` is a correctly rounded division by a positive constant, so it is
 /// monotone in `D`, and `D / 90 >= e` holds exactly from the first `D` where it holds
-/// ([`first_where`] of the very expression). Comparing `D` with these thresholds gives the bins
-/// and the acceptance of the skewness without dividing, and the extremes of the skewness are
-/// the quotients of the extremes of `D` (monotone: `min(D) / 90 = min(D / 90)`).
+/// ([`first_where`] of the very expression). Comparing `D` with these thresholds gives the
+/// acceptance of the skewness without dividing (its bins: [`StepBins::SKEW`], a rule on the
+/// same kind of thresholds), and the extremes of the skewness are the quotients of the
+/// extremes of `D` (monotone: `min(D) / 90 = min(D / 90)`).
 pub(super) struct SkewThresholds {
     /// The least `D` with `D / 90 >= 0` (the acceptable range's low end).
     pub lo: f64,

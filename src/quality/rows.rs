@@ -51,9 +51,8 @@ use super::angle_deg;
 use super::atan::angle_deg_bounded;
 use super::kernel::{
     angle_bin_unsigned, cell_products, corner_candidates, corner_products, least_scaled_jacobian,
-    packed_bins, settled, weighted_bin, BlockFigures, StepBins, Tables, PACK, SQ_MAX, SQ_MIN,
+    packed_bins, settled, BlockFigures, StepBins, Tables, PACK, SQ_MAX, SQ_MIN,
 };
-use super::JACOBIAN_EDGES;
 use super::{cell_metrics, fold, MetricSummary, QualityMetrics};
 use super::{
     ANGLE_ACCEPTABLE, ASPECT_ACCEPTABLE, EDGE_RATIO_ACCEPTABLE, SCALED_JACOBIAN_ACCEPTABLE,
@@ -785,7 +784,7 @@ impl Chunk {
         self.outside[SJ] += u64::from(outside(sj, SCALED_JACOBIAN_ACCEPTABLE));
         self.extremes(SJ, sj, sj);
         min_sj(f, sj);
-        (weighted_bin(sj, &JACOBIAN_EDGES, 1.0) as u64) << 25
+        (StepBins::JACOBIAN.count(sj) as u64) << 25
     }
 
     /// Everything the reference computes from one cell, with the reference formulas.

@@ -193,15 +193,7 @@ fn skew_thresholds_equal_the_division() {
     use crate::quality::{SKEWNESS_ACCEPTABLE, SKEWNESS_EDGES};
     let th = SkewThresholds::new();
     let bins = skew_bin_thresholds();
-    let below = |x: f64| {
-        if x == 0.0 {
-            -f64::from_bits(1)
-        } else if x > 0.0 {
-            f64::from_bits(x.to_bits() - 1)
-        } else {
-            f64::from_bits(x.to_bits() + 1)
-        }
-    };
+    let below = f64::next_down;
     for (k, &t) in bins.iter().enumerate() {
         let e = SKEWNESS_EDGES[k + 1];
         assert!(t / 90.0 >= e && below(t) / 90.0 < e, "{t:e} for {e}");
@@ -216,7 +208,7 @@ fn skew_thresholds_equal_the_division() {
         }
         for _ in 0..9 {
             ds.push(x);
-            x = -below(-x);
+            x = x.next_up();
         }
     }
     for &e in &SKEWNESS_EDGES {
@@ -240,8 +232,7 @@ fn skew_thresholds_equal_the_division() {
 }
 
 /// The one-product bin rules ([`StepBins`]) count the thresholds a value reaches, as the
-/// comparisons they replace: on every threshold and the 40 floats either side (walked in
-/// the total order, so through `-0.0` and `+0.0`), signed zeros, subnormals, infinities,
+/// comparisons they replace: on every threshold and the 40 floats either side, signed zeros, subnormals, infinities,
 /// NaN, huge values and sweeps across each range.
 #[test]
 fn step_bins_count_the_thresholds() {
@@ -269,11 +260,11 @@ fn step_bins_count_the_thresholds() {
         for &t in thresholds {
             let mut x = t;
             for _ in 0..40 {
-                x = next_down(x);
+                x = x.next_down();
             }
             for _ in 0..81 {
                 xs.push(x);
-                x = next_up(x);
+                x = x.next_up();
             }
         }
         let (lo, hi) = (
@@ -314,7 +305,7 @@ fn step_bins_refuse_rules_that_miss() {
         |x: f64, scale: f64, offset: f64, n: f64| ((x * scale).floor() + offset).clamp(0.0, n);
     let missed: Vec<f64> = skew
         .iter()
-        .flat_map(|&t| [t, next_down(t)])
+        .flat_map(|&t| [t, t.next_down()])
         .filter(|&x| {
             plain(x, 1.0 / 9.0, 0.0, 10.0) != skew.iter().filter(|&&t| x >= t).count() as f64
         })
@@ -323,7 +314,7 @@ fn step_bins_refuse_rules_that_miss() {
     assert_eq!(StepBins::SKEW.fix, missed[0]);
     let missed: Vec<f64> = inner
         .iter()
-        .flat_map(|&t| [t, next_down(t)])
+        .flat_map(|&t| [t, t.next_down()])
         .filter(|&x| {
             plain(x, 10.0, 1.0, 9.0 + 1.0) != inner.iter().filter(|&&t| x >= t).count() as f64
         })
@@ -345,11 +336,11 @@ fn step_bins_refuse_rules_that_miss() {
         [0.0, 1.0, 2.0, 3.0, 3.0]
     );
     // Two floats to correct (each threshold one below an integer): refused; one: taken.
-    assert!(StepBins::new(&[next_down(1.0), next_down(2.0)], 1.0, 0.0).is_none());
-    let one = StepBins::new(&[1.0, next_down(2.0)], 1.0, 0.0).unwrap();
-    assert_eq!((one.fix, one.delta), (next_down(2.0), 1.0));
+    assert!(StepBins::new(&[1.0f64.next_down(), 2.0f64.next_down()], 1.0, 0.0).is_none());
+    let one = StepBins::new(&[1.0, 2.0f64.next_down()], 1.0, 0.0).unwrap();
+    assert_eq!((one.fix, one.delta), (2.0f64.next_down(), 1.0));
     // Off by more than one float: refused.
-    assert!(StepBins::new(&[next_down(next_down(1.0))], 1.0, 0.0).is_none());
+    assert!(StepBins::new(&[1.0f64.next_down().next_down()], 1.0, 0.0).is_none());
 }
 
 /// Corners of cells that tie or nearly tie: exact squares and rectangles (axis-aligned,
