@@ -499,6 +499,7 @@ impl<'a> Builder<'a> {
             mark: self.mark,
             start_at: self.start_at,
             dups: self.dups,
+            certified: None,
         }
     }
 }
@@ -513,4 +514,9 @@ pub(crate) struct Parts {
     pub(crate) mark: Vec<u32>,
     pub(crate) start_at: Vec<u32>,
     pub(crate) dups: Vec<(u32, u32)>,
+    /// A stitched triangulation's (`super::split`) certified slots `[left, kept]`: slots
+    /// `0..left` are the left half's certified triangles and `left..kept` the right half's,
+    /// all finite, the two groups without a common vertex (each half's triangles have only
+    /// that half's points); the seam's slots follow. `None` for a builder's arrays.
+    pub(crate) certified: Option<[u32; 2]>,
 }

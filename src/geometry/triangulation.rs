@@ -667,6 +667,9 @@ impl Triangulation {
     /// scratch or the slot map again, the input indices are `order` itself and the points are
     /// copied into `spare` (the working copy of the points, no longer needed; may be empty).
     fn finish(points: &[Point], order: Option<Vec<u32>>, parts: Parts, spare: Vec<Point>) -> Self {
+        if let (Some(ranges), true) = (parts.certified, parts.dups.is_empty()) {
+            return Self::finish_stitched(points, order, parts, ranges, spare);
+        }
         let Parts {
             inf,
             tv: mut tris,
@@ -674,6 +677,7 @@ impl Triangulation {
             mark: mut map,
             start_at: mut scratch,
             dups,
+            certified: _,
         } = parts;
         // Input index of each vertex (empty: the identity); for a duplicate group, its smallest
         // input index.
@@ -778,6 +782,135 @@ impl Triangulation {
             tris,
             adj,
             duplicates,
+            vertex_tri,
+        }
+    }
+
+    /// [`Self::finish`] of a stitched triangulation without duplicates (`ranges`, see
+    /// [`Parts::certified`]), the same arrays (issue 8: the serial loop took 60-80 ms at 1e5
+    /// particles while the other thread waited). Its certified slots are all finite and come
+    /// first, so the compaction moves only the seam's slots (serial, after); the certified
+    /// slots are mapped in place, the two halves' on two threads. Each slot records itself as
+    /// its vertices' triangle: a half's certified triangles have only that half's points, so
+    /// the two threads write different entries, each in ascending slot order, and the seam's
+    /// slots, numbered after every certified one, overwrite them after: every vertex ends with
+    /// the last (highest) triangle having it, as in the serial loop.
+    fn finish_stitched(
+        points: &[Point],
+        order: Option<Vec<u32>>,
+        parts: Parts,
+        ranges: [u32; 2],
+        spare: Vec<Point>,
+    ) -> Self {
+        use rayon::prelude::*;
+        use std::sync::atomic::{AtomicU32, Ordering::Relaxed};
+        let Parts {
+            inf,
+            tv: mut tris,
+            mut adj,
+            mark: mut map,
+            start_at: mut scratch,
+            ..
+        } = parts;
+        let [left, kept] = ranges.map(|x| x as usize);
+        let input: Vec<u32> = order.unwrap_or_default();
+        let identity = input.is_empty();
+        // The slot map, needed only on the seam's slots (the certified ones keep theirs).
+        let mut count = kept as u32;
+        for t in kept..tris.len() {
+            map[t] = if tris[t].contains(&inf) {
+                NONE
+            } else {
+                count += 1;
+                count - 1
+            };
+        }
+        let slots = &map[..];
+        let new_of = |s: u32| {
+            if (s as usize) < kept {
+                s
+            } else {
+                slots[s as usize]
+            }
+        };
+        scratch.truncate(points.len());
+        scratch.par_chunks_mut(1 << 16).for_each(|c| c.fill(NONE));
+        {
+            // SAFETY: `AtomicU32` has the size, alignment and bit validity of `u32`, and the
+            // exclusive borrow of `scratch` is held for the view's whole life.
+            let vt: &[AtomicU32] =
+                unsafe { &*(&mut scratch[..] as *mut [u32] as *const [AtomicU32]) };
+            let input = &input[..];
+            let run = |tris: &mut [[u32; 3]], adj: &mut [[u32; 3]], base: usize| {
+                for (k, (v, a)) in tris.iter_mut().zip(adj.iter_mut()).enumerate() {
+                    let t = (base + k) as u32;
+                    for x in v.iter_mut() {
+                        vt[*x as usize].store(t, Relaxed);
+                        if !identity {
+                            *x = input[*x as usize];
+                        }
+                    }
+                    *a = a.map(|h| new_of(h / 3));
+                }
+            };
+            let (tl, tr) = tris[..kept].split_at_mut(left);
+            let (al, ar) = adj[..kept].split_at_mut(left);
+            rayon::join(|| run(tl, al, 0), || run(tr, ar, left));
+        }
+        // The seam's slots, compacted as in `finish` (slot `t` moves to `map[t] <= t`).
+        for t in kept..tris.len() {
+            let m = slots[t];
+            if m == NONE {
+                continue;
+            }
+            let mut v = tris[t];
+            for x in &mut v {
+                scratch[*x as usize] = m;
+                if !identity {
+                    *x = input[*x as usize];
+                }
+            }
+            let half = adj[t];
+            tris[m as usize] = v;
+            adj[m as usize] = half.map(|h| new_of(h / 3));
+        }
+        let vertex_tri = if identity {
+            scratch
+        } else {
+            // Input `input[v]` of builder vertex `v` (a permutation: one writer per entry).
+            let by_vertex = scratch;
+            map.clear();
+            map.resize(points.len(), NONE);
+            {
+                // SAFETY: as above.
+                let vt: &[AtomicU32] =
+                    unsafe { &*(&mut map[..] as *mut [u32] as *const [AtomicU32]) };
+                by_vertex
+                    .par_iter()
+                    .zip(input.par_iter())
+                    .with_min_len(1 << 16)
+                    .for_each(|(&m, &i)| {
+                        if m != NONE {
+                            vt[i as usize].store(m, Relaxed);
+                        }
+                    });
+            }
+            map
+        };
+        let mut vertex_tri = vertex_tri;
+        vertex_tri.shrink_to_fit();
+        tris.truncate(count as usize);
+        tris.shrink_to_fit();
+        adj.truncate(count as usize);
+        adj.shrink_to_fit();
+        let mut pts = spare;
+        pts.clear();
+        pts.par_extend(points.par_iter().copied());
+        Triangulation {
+            points: pts,
+            tris,
+            adj,
+            duplicates: Vec::new(),
             vertex_tri,
         }
     }
@@ -940,7 +1073,73 @@ fn count_distinct(points: &[Point]) -> usize {
 
 #[cfg(test)]
 mod tests {
-    use super::{magnitude_range, Point};
+    use super::{magnitude_range, Point, Triangulation};
+
+    /// The stitched triangulation's parallel `finish` gives the serial one's arrays bit for
+    /// bit (triangles, neighbours, vertex triangles, points), with the identity order and
+    /// with a shuffled one, on sampled circles (the pipeline's points, co-circular groups on
+    /// the split line), uniform points, and a thin band (every disk crosses the line: a
+    /// large seam).
+    #[test]
+    fn stitched_finish_equals_the_serial_one() {
+        let mut r = crate::layouts::SplitMix64(0x5eed_f1a1_5eed_f1a1);
+        let mut circles = Vec::new();
+        for k in 0..700 {
+            let (cx, cy) = (
+                (k % 25) as f64 * 3.0 + r.next_f64(),
+                (k / 25) as f64 * 3.0 + r.next_f64(),
+            );
+            let rad = 0.5 + r.next_f64();
+            for m in 0..36 {
+                let a = m as f64 * std::f64::consts::TAU / 36.0;
+                circles.push([cx + rad * a.cos(), cy + rad * a.sin()]);
+            }
+        }
+        let uniform: Vec<Point> = (0..30_000).map(|_| [r.next_f64(), r.next_f64()]).collect();
+        let band: Vec<Point> = (0..20_000)
+            .map(|_| [1e-6 * r.next_f64(), r.next_f64()])
+            .collect();
+        for (name, pts) in [("circles", circles), ("uniform", uniform), ("band", band)] {
+            let n = pts.len();
+            // A permutation (input index of each builder vertex), as the insertion order is.
+            let mut order: Vec<u32> = (0..n as u32).collect();
+            for i in (1..n).rev() {
+                order.swap(i, (r.next_u64() % (i as u64 + 1)) as usize);
+            }
+            let inputs: Vec<Point> = {
+                let mut v = vec![[0.0; 2]; n];
+                for (b, &i) in order.iter().enumerate() {
+                    v[i as usize] = pts[b];
+                }
+                v
+            };
+            for ord in [None, Some(order)] {
+                let input = if ord.is_some() { &inputs } else { &pts };
+                let finish = |serial: bool| {
+                    let mut parts = super::super::split::build_split(&pts)
+                        .unwrap()
+                        .expect("the split applies");
+                    assert!(parts.dups.is_empty() && parts.certified.is_some());
+                    if serial {
+                        parts.certified = None;
+                    }
+                    Triangulation::finish(input, ord.clone(), parts, pts.clone())
+                };
+                let (a, b) = (finish(false), finish(true));
+                let what = format!("{name}, order {}", ord.is_some());
+                assert_eq!(a.tris, b.tris, "{what}");
+                assert_eq!(a.adj, b.adj, "{what}");
+                assert_eq!(a.vertex_tri, b.vertex_tri, "{what}");
+                assert_eq!(a.duplicates, b.duplicates, "{what}");
+                let bits = |t: &Triangulation| -> Vec<[u64; 2]> {
+                    t.points.iter().map(|p| p.map(f64::to_bits)).collect()
+                };
+                assert_eq!(bits(&a), bits(&b), "{what}");
+                assert!(a.tris.len() < n * 2 && !a.tris.is_empty(), "{what}");
+                super::super::verify::verify_exact(&a).unwrap_or_else(|e| panic!("{what}: {e}"));
+            }
+        }
+    }
 
     /// The float loop [`magnitude_range`] replaced.
     fn reference(points: &[Point]) -> (f64, f64) {
