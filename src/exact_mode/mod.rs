@@ -1358,7 +1358,6 @@ pub fn assemble_cached(
     };
     // The median radius of the vertices touching each circle ([`radii_by_circle`] and
     // [`median`] of each list, in one array: `near_median::near_medians`).
-    let near_median: Vec<Option<f64>> = near_median::near_medians(&vertices, ncirc);
     let mut circle_fixed = vec![None; ncirc];
     for (c, n) in &options.wall_cells {
         if *c >= -1 && ((*c + 1) as usize) < ncirc && !fluid(*c) {
@@ -1367,16 +1366,22 @@ pub fn assemble_cached(
     }
     // Circles facing each other across a medial arc, both equally spaced along their spokes
     // (no first height): their counts stay within `counts::MAX_COUNT_RATIO` of each other, so
-    // the cells facing each other across the arc do too.
-    let equally_spaced: Vec<bool> = (0..ncirc)
-        .map(|slot| {
-            let id = slot as CircleId - 1;
-            cluster(id).first_height(domain.circle(id).radius).is_none()
-        })
-        .collect();
-    let neighbours = counts::facing_pairs(pieces.iter().map(|p| p.circles.map(cidx)), |c| {
-        equally_spaced[c]
-    });
+    // the cells facing each other across the arc do too. Beside the medians (issue 8: two
+    // serial passes of 15-20 ms each at 1e5 particles, one CPU idle).
+    let (near_median, neighbours) = rayon::join(
+        || near_median::near_medians(&vertices, ncirc),
+        || {
+            let equally_spaced: Vec<bool> = (0..ncirc)
+                .map(|slot| {
+                    let id = slot as CircleId - 1;
+                    cluster(id).first_height(domain.circle(id).radius).is_none()
+                })
+                .collect();
+            counts::facing_pairs(pieces.iter().map(|p| p.circles.map(cidx)), |c| {
+                equally_spaced[c]
+            })
+        },
+    );
     // The count problem for target cell size `h`, without its arcs.
     let circle_problem = |h: f64| {
         let mut circle_target = vec![1.0; ncirc];
@@ -1451,71 +1456,77 @@ pub fn assemble_cached(
         ang: Vec::with_capacity(ARC_SUBSTEPS),
         known: None,
     };
-    let summarized = || -> Vec<Option<Summary>> {
+    // Per piece its target, its node parameters when computed and whether its exact arc is
+    // defined, unzipped in place (issue 8: a vector of the pairs, then two copies of it, were
+    // 50 MB of fresh pages and 30 ms on one CPU at 1e5 particles).
+    let empty_target = || ArcTarget {
+        circles: [0, 0],
+        sq: Vec::new(),
+        ang: Vec::new(),
+        known: None,
+    };
+    type Summaries = (Vec<ArcTarget>, (Vec<Option<Params>>, Vec<bool>));
+    let summarized = || -> Summaries {
         pieces
             .par_iter()
             .zip(&found)
             .with_max_len(crate::tasks::PIECES)
             .map_init(scratch, |scratch, (p, &at)| {
-                let circles = p.circles.map(cidx);
-                if let Some(known) = cache.known(at) {
+                let mut summary = || -> Option<Summary> {
+                    let circles = p.circles.map(cidx);
+                    if let Some(known) = cache.known(at) {
+                        let t = ArcTarget {
+                            circles,
+                            sq: Vec::new(),
+                            ang: Vec::new(),
+                            known: Some(known),
+                        };
+                        return Some((t, None));
+                    }
+                    if cache.is_reference() {
+                        let (sq, ang) = p.geom.densities()?;
+                        let t = ArcTarget {
+                            circles,
+                            sq,
+                            ang,
+                            known: None,
+                        };
+                        return Some((t, None));
+                    }
+                    let nbar = 0.5 * (first_circle[circles[0]] + first_circle[circles[1]]) as f64;
+                    let (known, params) = summarize(&p.geom, nbar, uniform_n, scratch)?;
                     let t = ArcTarget {
                         circles,
                         sq: Vec::new(),
                         ang: Vec::new(),
                         known: Some(known),
                     };
-                    return Some((t, None));
-                }
-                if cache.is_reference() {
-                    let (sq, ang) = p.geom.densities()?;
-                    let t = ArcTarget {
-                        circles,
-                        sq,
-                        ang,
-                        known: None,
-                    };
-                    return Some((t, None));
-                }
-                let nbar = 0.5 * (first_circle[circles[0]] + first_circle[circles[1]]) as f64;
-                let (known, params) = summarize(&p.geom, nbar, uniform_n, scratch)?;
-                let t = ArcTarget {
-                    circles,
-                    sq: Vec::new(),
-                    ang: Vec::new(),
-                    known: Some(known),
+                    Some((t, Some(params)))
                 };
-                Some((t, Some(params)))
+                // A piece whose exact arc is not defined: flagged, with an empty target.
+                match summary() {
+                    Some((t, params)) => (t, (params, true)),
+                    None => (empty_target(), (None, false)),
+                }
             })
-            .collect()
+            .unzip()
     };
-    let (mut summaries, templated) = if sk.fluid.is_empty() {
+    let ((mut targets, (first_params, defined)), templated) = if sk.fluid.is_empty() {
         (summarized(), None)
     } else {
         let (s, t) = rayon::join(summarized, templated);
         (s, Some(t))
     };
-    let reused = summaries
-        .iter()
-        .filter(|s| {
-            s.as_ref()
-                .is_some_and(|s| s.1.is_none() && !s.0.holds_densities())
-        })
-        .count();
-    if let Some(e) = summaries.iter().position(Option::is_none) {
+    if let Some(e) = defined.par_iter().position_first(|&d| !d) {
         return Err(internal(format!(
             "arc {e}: the exact medial arc is not defined"
         )));
     }
-    // The parameters taken out, then the targets in place (no second vector of all targets).
-    let first_params: Vec<Option<Params>> = summaries
-        .iter_mut()
-        .map(|s| s.as_mut().and_then(|s| s.1.take()))
-        .collect();
-    let mut targets: Vec<ArcTarget> = summaries
-        .into_iter()
-        .filter_map(|s| s.map(|s| s.0))
-        .collect();
+    let reused = targets
+        .par_iter()
+        .zip(&first_params)
+        .filter(|(t, p)| p.is_none() && !t.holds_densities())
+        .count();
 
     // The node counts for target cell size `h`.
     // The arc targets are lent to each count problem and given back (no copy: an arc whose
