@@ -149,6 +149,46 @@ pub(crate) struct Previous<'a> {
     pub contracted: &'a mut Contracted,
 }
 
+/// The block ending a sector walk and the samples met ([`sector_run`]).
+type SectorRun = (usize, Vec<u32>);
+
+/// The sector walk from a block whose successor is `b` (its corner sample `first`): the
+/// block `q` that ends it (the first one not collapsed) and the samples met, `first` and
+/// then each collapsed block's wall without its first sample.
+fn sector_run(
+    medial: &MedialGraph,
+    collapse: &[bool],
+    next: &[u32],
+    first: u32,
+    mut b: u32,
+) -> Result<SectorRun, MeshError> {
+    let m = medial.arcs.len();
+    let mut run = vec![first];
+    let mut steps = 0;
+    let q = loop {
+        if b == NONE {
+            return Err(internal("no block starts at a corner"));
+        }
+        let bu = b as usize;
+        if !collapse[bu / 2] {
+            break bu;
+        }
+        steps += 1;
+        if steps > 2 * m {
+            return Err(internal("a sector does not end"));
+        }
+        // The wall of block `bu` without its first sample.
+        let arc = &medial.arcs[bu / 2];
+        if bu.is_multiple_of(2) {
+            run.extend_from_slice(&arc.c1[1..]);
+        } else {
+            run.extend(arc.c2.iter().rev().skip(1));
+        }
+        b = next[bu];
+    };
+    Ok((q, run))
+}
+
 /// [`super::contract`] with the [`successors`] of `medial` when known (`None`: computed here),
 /// taking over from `previous` the arcs its flags cannot have changed. Besides the
 /// contraction, for each of its arcs the index of the previous contraction's arc taken over
@@ -212,36 +252,30 @@ pub(super) fn contract_with(
     let mut ext_end: Vec<(u32, u32)> = vec![(0, 0); 2 * m];
     let mut ext_start: Vec<(u32, u32)> = vec![(0, 0); 2 * m];
     let mut pool: Vec<u32> = Vec::new();
-    let mut run: Vec<u32> = Vec::new();
-    for p in 0..2 * m {
-        if collapse[p / 2] {
-            continue;
-        }
-        run.clear();
-        run.push(corners(medial, p)[1].1);
-        let mut b = next[p];
-        let mut steps = 0;
-        let q = loop {
-            if b == NONE {
-                return Err(internal("no block starts at a corner"));
-            }
-            let bu = b as usize;
-            if !collapse[bu / 2] {
-                break bu;
-            }
-            steps += 1;
-            if steps > 2 * m {
-                return Err(internal("a sector does not end"));
-            }
-            // The wall of block `bu` without its first sample.
-            let arc = &medial.arcs[bu / 2];
-            if bu.is_multiple_of(2) {
-                run.extend_from_slice(&arc.c1[1..]);
-            } else {
-                run.extend(arc.c2.iter().rev().skip(1));
-            }
-            b = next[bu];
-        };
+    // The sector walks on the pool (issue 8: this loop over every block took 13-20 ms on one
+    // CPU at 1e5 particles); only a block whose successor is collapsed has a run longer than
+    // its corner sample, and those (with any error) come back in block order, so the pool
+    // and the first error are those of the loop over the blocks in order.
+    let walks: Vec<(usize, Result<SectorRun, MeshError>)> = {
+        use rayon::prelude::*;
+        (0..2 * m)
+            .into_par_iter()
+            .with_min_len(1024)
+            .filter_map(|p| {
+                if collapse[p / 2] {
+                    return None;
+                }
+                let first = corners(medial, p)[1].1;
+                let b = next[p];
+                if b != NONE && !collapse[b as usize / 2] {
+                    return None;
+                }
+                Some((p, sector_run(medial, collapse, next, first, b)))
+            })
+            .collect()
+    };
+    for (p, walk) in walks {
+        let (q, run) = walk?;
         if run.len() > 1 {
             let mid = (run.len() - 1) / 2;
             ext_end[p] = (pool.len() as u32, mid as u32);
@@ -250,7 +284,6 @@ pub(super) fn contract_with(
             pool.extend_from_slice(&run[mid..run.len() - 1]);
         }
     }
-    drop(run);
     let ext = |(at, len): (u32, u32)| &pool[at as usize..(at + len) as usize];
 
     // Per sampled arc, the previous contraction's arc to take over (NONE: build it).
@@ -284,58 +317,74 @@ pub(super) fn contract_with(
     // extensions alone) into their places.
     let mut kept: Vec<u32> = Vec::with_capacity(collapse.iter().filter(|&&c| !c).count());
     kept.extend((0..m as u32).filter(|&e| !collapse[e as usize]));
-    let mut arcs: Vec<MedialArc> = Vec::with_capacity(kept.len());
-    let mut build = vec![false; kept.len()];
-    for (at_kept, &e) in kept.iter().enumerate() {
-        let arc = &medial.arcs[e as usize];
+    // A kept arc built afresh: a function of its arc, the clusters and the extensions alone.
+    let build_arc = |e: u32| {
+        let (e, arc) = (e as usize, &medial.arcs[e as usize]);
         let [v0, v1] = arc.ends.map(|v| cluster_of[v as usize]);
-        if v0 == v1 {
+        // Block 2e: extension before, C1, extension after.
+        let (before, after) = (ext(ext_start[2 * e]), ext(ext_end[2 * e]));
+        let mut c1 = Vec::with_capacity(before.len() + arc.c1.len() + after.len());
+        c1.extend_from_slice(before);
+        c1.extend_from_slice(&arc.c1);
+        c1.extend_from_slice(after);
+        // Block 2e + 1 runs along C2 backwards: C2 is its wall reversed, with the
+        // reversed extensions swapped.
+        let (before, after) = (ext(ext_start[2 * e + 1]), ext(ext_end[2 * e + 1]));
+        let mut c2 = Vec::with_capacity(before.len() + arc.c2.len() + after.len());
+        c2.extend(after.iter().rev());
+        c2.extend_from_slice(&arc.c2);
+        c2.extend(before.iter().rev());
+        let merged = [v0, v1].map(|v| cluster_size[v as usize] > 1);
+        kept_arc(arc, [v0, v1], merged, &vertices, c1, c2)
+    };
+    let is_loop = |e: u32| {
+        let [v0, v1] = medial.arcs[e as usize].ends.map(|v| cluster_of[v as usize]);
+        v0 == v1
+    };
+    let mut arcs: Vec<MedialArc> = Vec::with_capacity(kept.len());
+    if previous.is_none() {
+        // Nothing to take over: every kept arc built on the pool straight into its place
+        // (issue 8: the serial pass that reserved the places took 10-12 ms at 1e5).
+        use rayon::prelude::*;
+        if kept.par_iter().any(|&e| is_loop(e)) {
             return Err(internal("a kept arc became a loop"));
         }
-        if let (Some(p), Some(&at)) = (previous.as_mut(), take_from.get(e as usize)) {
-            let old = p.contracted.graph.arcs.get_mut(at as usize);
-            if let Some(old) = old.filter(|o| !o.c1.is_empty() && !o.c2.is_empty()) {
-                arcs.push(MedialArc {
-                    ends: [v0, v1],
-                    end_slots: arc.end_slots,
-                    triangles: std::mem::take(&mut old.triangles),
-                    polyline: std::mem::take(&mut old.polyline),
-                    circles: arc.circles,
-                    c1: std::mem::take(&mut old.c1),
-                    c2: std::mem::take(&mut old.c2),
-                });
-                continue;
+        kept.par_iter()
+            .with_min_len(256)
+            .map(|&e| build_arc(e))
+            .collect_into_vec(&mut arcs);
+    } else {
+        let mut build = vec![false; kept.len()];
+        for (at_kept, &e) in kept.iter().enumerate() {
+            let arc = &medial.arcs[e as usize];
+            if is_loop(e) {
+                return Err(internal("a kept arc became a loop"));
             }
+            let [v0, v1] = arc.ends.map(|v| cluster_of[v as usize]);
+            if let (Some(p), Some(&at)) = (previous.as_mut(), take_from.get(e as usize)) {
+                let old = p.contracted.graph.arcs.get_mut(at as usize);
+                if let Some(old) = old.filter(|o| !o.c1.is_empty() && !o.c2.is_empty()) {
+                    arcs.push(MedialArc {
+                        ends: [v0, v1],
+                        end_slots: arc.end_slots,
+                        triangles: std::mem::take(&mut old.triangles),
+                        polyline: std::mem::take(&mut old.polyline),
+                        circles: arc.circles,
+                        c1: std::mem::take(&mut old.c1),
+                        c2: std::mem::take(&mut old.c2),
+                    });
+                    continue;
+                }
+            }
+            arcs.push(MedialArc::default());
+            build[at_kept] = true;
         }
-        arcs.push(MedialArc::default());
-        build[at_kept] = true;
-    }
-    {
         use rayon::prelude::*;
-        let (vertices, cluster_of, cluster_size) = (&vertices, &cluster_of, &cluster_size);
         arcs.par_iter_mut()
             .zip(kept.par_iter().zip(build.par_iter()))
             .with_min_len(256)
             .filter(|(_, (_, &b))| b)
-            .for_each(|(slot, (&e, _))| {
-                let (e, arc) = (e as usize, &medial.arcs[e as usize]);
-                let [v0, v1] = arc.ends.map(|v| cluster_of[v as usize]);
-                // Block 2e: extension before, C1, extension after.
-                let (before, after) = (ext(ext_start[2 * e]), ext(ext_end[2 * e]));
-                let mut c1 = Vec::with_capacity(before.len() + arc.c1.len() + after.len());
-                c1.extend_from_slice(before);
-                c1.extend_from_slice(&arc.c1);
-                c1.extend_from_slice(after);
-                // Block 2e + 1 runs along C2 backwards: C2 is its wall reversed, with the
-                // reversed extensions swapped.
-                let (before, after) = (ext(ext_start[2 * e + 1]), ext(ext_end[2 * e + 1]));
-                let mut c2 = Vec::with_capacity(before.len() + arc.c2.len() + after.len());
-                c2.extend(after.iter().rev());
-                c2.extend_from_slice(&arc.c2);
-                c2.extend(before.iter().rev());
-                let merged = [v0, v1].map(|v| cluster_size[v as usize] > 1);
-                *slot = kept_arc(arc, [v0, v1], merged, vertices, c1, c2);
-            });
+            .for_each(|(slot, (&e, _))| *slot = build_arc(e));
     }
     // Per arc of the result, the previous arc taken over.
     let taken: Vec<u32> = if take_from.is_empty() {
