@@ -9,6 +9,7 @@
 use super::{find, internal, union_collapsed, Contracted};
 use crate::medial::{MedialArc, MedialGraph, MedialVertex};
 use crate::mesher::MeshError;
+use std::sync::atomic::{AtomicBool, Ordering::Relaxed};
 
 /// No block starts at that corner.
 pub(super) const NONE: u32 = u32::MAX;
@@ -154,20 +155,30 @@ type SectorRun = (usize, Vec<u32>);
 
 /// The sector walk from a block whose successor is `b` (its corner sample `first`): the
 /// block `q` that ends it (the first one not collapsed) and the samples met, `first` and
-/// then each collapsed block's wall without its first sample.
+/// then each collapsed block's wall without its first sample. It gives up (an error) once
+/// `stop` is set, and sets it when it fails: a walk that does not end costs `2 m` steps, and
+/// on the pool every walk into the same cycle would pay them.
 fn sector_run(
     medial: &MedialGraph,
     collapse: &[bool],
     next: &[u32],
     first: u32,
     mut b: u32,
+    stop: &AtomicBool,
 ) -> Result<SectorRun, MeshError> {
     let m = medial.arcs.len();
     let mut run = vec![first];
     let mut steps = 0;
+    let fail = |message: &str| {
+        stop.store(true, Relaxed);
+        Err(internal(message))
+    };
     let q = loop {
+        if stop.load(Relaxed) {
+            return Err(internal("a sector walk was given up"));
+        }
         if b == NONE {
-            return Err(internal("no block starts at a corner"));
+            return fail("no block starts at a corner");
         }
         let bu = b as usize;
         if !collapse[bu / 2] {
@@ -175,7 +186,7 @@ fn sector_run(
         }
         steps += 1;
         if steps > 2 * m {
-            return Err(internal("a sector does not end"));
+            return fail("a sector does not end");
         }
         // The wall of block `bu` without its first sample.
         let arc = &medial.arcs[bu / 2];
@@ -256,24 +267,37 @@ pub(super) fn contract_with(
     // CPU at 1e5 particles); only a block whose successor is collapsed has a run longer than
     // its corner sample, and those (with any error) come back in block order, so the pool
     // and the first error are those of the loop over the blocks in order.
+    // A failed walk stops the others; the walks are then taken again in block order, which
+    // returns the first failure as the loop over the blocks did.
+    let walk_from = |p: usize, stop: &AtomicBool| {
+        if collapse[p / 2] {
+            return None;
+        }
+        let first = corners(medial, p)[1].1;
+        let b = next[p];
+        if b != NONE && !collapse[b as usize / 2] {
+            return None;
+        }
+        Some((p, sector_run(medial, collapse, next, first, b, stop)))
+    };
+    let stop = AtomicBool::new(false);
     let walks: Vec<(usize, Result<SectorRun, MeshError>)> = {
         use rayon::prelude::*;
         (0..2 * m)
             .into_par_iter()
             .with_min_len(1024)
-            .filter_map(|p| {
-                if collapse[p / 2] {
-                    return None;
-                }
-                let first = corners(medial, p)[1].1;
-                let b = next[p];
-                if b != NONE && !collapse[b as usize / 2] {
-                    return None;
-                }
-                Some((p, sector_run(medial, collapse, next, first, b)))
-            })
+            .filter_map(|p| walk_from(p, &stop))
             .collect()
     };
+    if stop.load(Relaxed) {
+        let stop = AtomicBool::new(false);
+        for p in 0..2 * m {
+            if let Some((_, Err(e))) = walk_from(p, &stop) {
+                return Err(e);
+            }
+        }
+        return Err(internal("a sector walk failed on the pool only"));
+    }
     for (p, walk) in walks {
         let (q, run) = walk?;
         if run.len() > 1 {
@@ -406,6 +430,38 @@ pub(super) fn contract_with(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Sector walks that never end (a successor table tampered into a cycle of collapsed
+    /// blocks, entered from every kept block) fail with the error of the first block in
+    /// order, as the walk block by block did, and stop early on the pool (each walk would
+    /// otherwise take `2 m` steps).
+    #[test]
+    fn endless_sector_walks_fail_with_the_first_error() {
+        let d = crate::layouts::bubbles(60, 4).unwrap();
+        let s = crate::sampling::sample_and_triangulate(&d, &Default::default()).unwrap();
+        let g = &s.medial;
+        let m = g.arcs.len();
+        assert!(m > 10);
+        let mut collapse = vec![false; m];
+        collapse[0] = true;
+        collapse[1] = true;
+        let mut next = successors(g).unwrap();
+        // Blocks 0 -> 2 -> 0 (both collapsed) and every kept block's successor into it.
+        next[0] = 2;
+        next[2] = 0;
+        next[4..].fill(0);
+        let e = contract_with(g, &collapse, Some(&next), None).unwrap_err();
+        assert!(e.to_string().contains("a sector does not end"), "{e}");
+        // A missing successor met first (block 4's, the first kept block in order) is the
+        // error, whatever the later walks give.
+        next[4] = NONE;
+        let e = contract_with(g, &collapse, Some(&next), None).unwrap_err();
+        assert!(e.to_string().contains("no block starts at a corner"), "{e}");
+        // Block 4 fine again (its successor kept): the cycle's error once more.
+        next[4] = 6;
+        let e = contract_with(g, &collapse, Some(&next), None).unwrap_err();
+        assert!(e.to_string().contains("a sector does not end"), "{e}");
+    }
 
     /// The corner table gives what the sorted search gives, on bubbles and on graphs whose
     /// corners were tampered with (a sample not of the vertex, two blocks at one corner).

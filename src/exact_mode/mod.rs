@@ -1356,8 +1356,6 @@ pub fn assemble_cached(
             clustering_of(options, id)
         }
     };
-    // The median radius of the vertices touching each circle ([`radii_by_circle`] and
-    // [`median`] of each list, in one array: `near_median::near_medians`).
     let mut circle_fixed = vec![None; ncirc];
     for (c, n) in &options.wall_cells {
         if *c >= -1 && ((*c + 1) as usize) < ncirc && !fluid(*c) {
@@ -1369,6 +1367,8 @@ pub fn assemble_cached(
     // the cells facing each other across the arc do too. Beside the medians (issue 8: two
     // serial passes of 15-20 ms each at 1e5 particles, one CPU idle).
     let (near_median, neighbours) = rayon::join(
+        // The median radius of the vertices touching each circle ([`radii_by_circle`] and
+        // [`median`] of each list, in one array: `near_median::near_medians`).
         || near_median::near_medians(&vertices, ncirc),
         || {
             let equally_spaced: Vec<bool> = (0..ncirc)
@@ -1458,7 +1458,7 @@ pub fn assemble_cached(
     };
     // Per piece its target, its node parameters when computed and whether its exact arc is
     // defined, unzipped in place (issue 8: a vector of the pairs, then two copies of it, were
-    // 50 MB of fresh pages and 30 ms on one CPU at 1e5 particles).
+    // 50 MB of fresh pages and about 25 ms on one CPU at 1e5 particles).
     let empty_target = || ArcTarget {
         circles: [0, 0],
         sq: Vec::new(),

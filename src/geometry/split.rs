@@ -509,9 +509,32 @@ fn seam_side(pts: &[Point], halves: &[&Half; 2], new_id: &[Vec<u32>; 2]) -> Resu
 }
 
 #[cfg(test)]
-mod tests {
+pub(super) mod tests {
     use super::*;
     use crate::geometry::{verify, Triangulation};
+
+    /// `count` circles of radius 0.5-1.5 in a jittered grid of `columns` columns (spacing 3),
+    /// each sampled at `per` equal angles: the pipeline's kind of input.
+    pub(in crate::geometry) fn sampled_circles(
+        r: &mut crate::layouts::SplitMix64,
+        count: usize,
+        columns: usize,
+        per: usize,
+    ) -> Vec<Point> {
+        let mut circles = Vec::new();
+        for k in 0..count {
+            let (cx, cy) = (
+                (k % columns) as f64 * 3.0 + r.next_f64(),
+                (k / columns) as f64 * 3.0 + r.next_f64(),
+            );
+            let rad = 0.5 + r.next_f64();
+            for m in 0..per {
+                let a = m as f64 * std::f64::consts::TAU / per as f64;
+                circles.push([cx + rad * a.cos(), cy + rad * a.sin()]);
+            }
+        }
+        circles
+    }
 
     /// Finite triangles as sorted rotations (smallest id first), sorted.
     fn canonical(tv: &[[u32; 3]], inf: u32) -> Vec<[u32; 3]> {
@@ -542,18 +565,7 @@ mod tests {
                 }
             }
         }
-        let mut circles = Vec::new();
-        for k in 0..900 {
-            let (cx, cy) = (
-                (k % 30) as f64 * 3.0 + r.next_f64(),
-                (k / 30) as f64 * 3.0 + r.next_f64(),
-            );
-            let rad = 0.5 + r.next_f64();
-            for m in 0..40 {
-                let a = m as f64 * std::f64::consts::TAU / 40.0;
-                circles.push([cx + rad * a.cos(), cy + rad * a.sin()]);
-            }
-        }
+        let circles = sampled_circles(&mut r, 900, 30, 40);
         let band: Vec<Point> = (0..36_000)
             .map(|_| [1e-6 * r.next_f64(), r.next_f64()])
             .collect();

@@ -730,60 +730,21 @@ impl Triangulation {
         // The per-vertex scratch is the identity's table, or the builder-order one.
         scratch.truncate(points.len());
         scratch.fill(NONE);
-        let identity = input.is_empty();
-        for t in 0..tris.len() {
-            let m = map[t];
-            if m == NONE {
-                continue;
-            }
-            let mut v = tris[t];
-            if identity {
-                for &x in &v {
-                    scratch[x as usize] = m;
-                }
-            } else {
-                for x in &mut v {
-                    scratch[*x as usize] = m;
-                    *x = input[*x as usize];
-                }
-            }
-            let half = adj[t];
-            tris[m as usize] = v;
-            adj[m as usize] = half.map(|h| map[(h / 3) as usize]);
-        }
-        let mut vertex_tri = if identity {
-            scratch
-        } else {
-            // The slot map is no longer needed: it becomes the input-order table (as long, but
-            // for many duplicates: there are about two slots per vertex).
-            let by_vertex = scratch;
-            map.clear();
-            map.resize(points.len(), NONE);
-            for (v, &m) in by_vertex.iter().enumerate() {
-                if m != NONE {
-                    map[input[v] as usize] = m;
-                }
-            }
-            map
-        };
-        vertex_tri.shrink_to_fit();
-        tris.truncate(count as usize);
-        tris.shrink_to_fit();
-        adj.truncate(count as usize);
-        adj.shrink_to_fit();
+        compact_slots(
+            0..tris.len(),
+            |s| map[s as usize],
+            &mut tris,
+            &mut adj,
+            &mut scratch,
+            &input,
+        );
+        // The slot map is no longer needed: it becomes the input-order table (as long, but
+        // for many duplicates: there are about two slots per vertex).
+        let mut vertex_tri = by_input(scratch, &input, map, points.len());
         for &(first, d) in &duplicates {
             vertex_tri[d as usize] = vertex_tri[first as usize];
         }
-        let mut pts = spare;
-        pts.clear();
-        pts.extend_from_slice(points);
-        Triangulation {
-            points: pts,
-            tris,
-            adj,
-            duplicates,
-            vertex_tri,
-        }
+        Self::assembled(points, spare, tris, adj, count, vertex_tri, duplicates)
     }
 
     /// [`Self::finish`] of a stitched triangulation without duplicates (`ranges`, see
@@ -858,46 +819,30 @@ impl Triangulation {
             rayon::join(|| run(tl, al, 0), || run(tr, ar, left));
         }
         // The seam's slots, compacted as in `finish` (slot `t` moves to `map[t] <= t`).
-        for t in kept..tris.len() {
-            let m = slots[t];
-            if m == NONE {
-                continue;
-            }
-            let mut v = tris[t];
-            for x in &mut v {
-                scratch[*x as usize] = m;
-                if !identity {
-                    *x = input[*x as usize];
-                }
-            }
-            let half = adj[t];
-            tris[m as usize] = v;
-            adj[m as usize] = half.map(|h| new_of(h / 3));
-        }
-        let vertex_tri = if identity {
-            scratch
-        } else {
-            // Input `input[v]` of builder vertex `v` (a permutation: one writer per entry).
-            let by_vertex = scratch;
-            map.clear();
-            map.resize(points.len(), NONE);
-            {
-                // SAFETY: as above.
-                let vt: &[AtomicU32] =
-                    unsafe { &*(&mut map[..] as *mut [u32] as *const [AtomicU32]) };
-                by_vertex
-                    .par_iter()
-                    .zip(input.par_iter())
-                    .with_min_len(1 << 16)
-                    .for_each(|(&m, &i)| {
-                        if m != NONE {
-                            vt[i as usize].store(m, Relaxed);
-                        }
-                    });
-            }
-            map
-        };
-        let mut vertex_tri = vertex_tri;
+        compact_slots(
+            kept..tris.len(),
+            new_of,
+            &mut tris,
+            &mut adj,
+            &mut scratch,
+            &input,
+        );
+        let vertex_tri = by_input(scratch, &input, map, points.len());
+        Self::assembled(points, spare, tris, adj, count, vertex_tri, Vec::new())
+    }
+
+    /// The triangulation from its compacted arrays (the first `count` slots of `tris` and
+    /// `adj`), its vertex table and duplicates, the points copied into `spare`.
+    fn assembled(
+        points: &[Point],
+        spare: Vec<Point>,
+        mut tris: Vec<[u32; 3]>,
+        mut adj: Vec<[u32; 3]>,
+        count: u32,
+        mut vertex_tri: Vec<u32>,
+        duplicates: Vec<(u32, u32)>,
+    ) -> Self {
+        use rayon::prelude::*;
         vertex_tri.shrink_to_fit();
         tris.truncate(count as usize);
         tris.shrink_to_fit();
@@ -910,7 +855,7 @@ impl Triangulation {
             points: pts,
             tris,
             adj,
-            duplicates: Vec::new(),
+            duplicates,
             vertex_tri,
         }
     }
@@ -1071,6 +1016,62 @@ fn count_distinct(points: &[Point]) -> usize {
     v.len()
 }
 
+/// Compact the slots `range` of a finished build's `tris` and `adj` in order: slot `t` moves
+/// to `new_of(t) <= t` (`NONE`: an infinite triangle, dropped), its vertices record it in `vt`
+/// (builder ids: a later slot overwrites) and become input ids (`input`, empty for the
+/// identity), its neighbours the triangles `new_of` of the slots across.
+fn compact_slots(
+    range: std::ops::Range<usize>,
+    new_of: impl Fn(u32) -> u32,
+    tris: &mut [[u32; 3]],
+    adj: &mut [[u32; 3]],
+    vt: &mut [u32],
+    input: &[u32],
+) {
+    for t in range {
+        let m = new_of(t as u32);
+        if m == NONE {
+            continue;
+        }
+        let mut v = tris[t];
+        for x in &mut v {
+            vt[*x as usize] = m;
+            if !input.is_empty() {
+                *x = input[*x as usize];
+            }
+        }
+        let half = adj[t];
+        tris[m as usize] = v;
+        adj[m as usize] = half.map(|h| new_of(h / 3));
+    }
+}
+
+/// The vertex table by input index from `by_vertex` (per builder vertex), into `table`'s
+/// memory (`n` entries; `by_vertex` itself for the identity, `input` empty). Vertices map to
+/// distinct input indices, so the writes on the pool never meet.
+fn by_input(by_vertex: Vec<u32>, input: &[u32], mut table: Vec<u32>, n: usize) -> Vec<u32> {
+    use rayon::prelude::*;
+    use std::sync::atomic::{AtomicU32, Ordering::Relaxed};
+    if input.is_empty() {
+        return by_vertex;
+    }
+    table.clear();
+    table.resize(n, NONE);
+    // SAFETY: `AtomicU32` has the size, alignment and bit validity of `u32`, and the
+    // exclusive borrow of `table` is held for the view's whole life.
+    let vt: &[AtomicU32] = unsafe { &*(&mut table[..] as *mut [u32] as *const [AtomicU32]) };
+    by_vertex
+        .par_iter()
+        .zip(input.par_iter())
+        .with_min_len(1 << 16)
+        .for_each(|(&m, &i)| {
+            if m != NONE {
+                vt[i as usize].store(m, Relaxed);
+            }
+        });
+    table
+}
+
 #[cfg(test)]
 mod tests {
     use super::{magnitude_range, Point, Triangulation};
@@ -1083,18 +1084,7 @@ mod tests {
     #[test]
     fn stitched_finish_equals_the_serial_one() {
         let mut r = crate::layouts::SplitMix64(0x5eed_f1a1_5eed_f1a1);
-        let mut circles = Vec::new();
-        for k in 0..700 {
-            let (cx, cy) = (
-                (k % 25) as f64 * 3.0 + r.next_f64(),
-                (k / 25) as f64 * 3.0 + r.next_f64(),
-            );
-            let rad = 0.5 + r.next_f64();
-            for m in 0..36 {
-                let a = m as f64 * std::f64::consts::TAU / 36.0;
-                circles.push([cx + rad * a.cos(), cy + rad * a.sin()]);
-            }
-        }
+        let circles = super::super::split::tests::sampled_circles(&mut r, 700, 25, 36);
         let uniform: Vec<Point> = (0..30_000).map(|_| [r.next_f64(), r.next_f64()]).collect();
         let band: Vec<Point> = (0..20_000)
             .map(|_| [1e-6 * r.next_f64(), r.next_f64()])
