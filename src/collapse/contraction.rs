@@ -264,11 +264,10 @@ pub(super) fn contract_with(
     let mut ext_start: Vec<(u32, u32)> = vec![(0, 0); 2 * m];
     let mut pool: Vec<u32> = Vec::new();
     // The sector walks on the pool (issue 8: this loop over every block took 13-20 ms on one
-    // CPU at 1e5 particles); only a block whose successor is collapsed has a run longer than
-    // its corner sample, and those (with any error) come back in block order, so the pool
-    // and the first error are those of the loop over the blocks in order.
-    // A failed walk stops the others; the walks are then taken again in block order, which
-    // returns the first failure as the loop over the blocks did.
+    // CPU at 1e5 particles): only a block whose successor is collapsed has a run longer than
+    // its corner sample, and those come back in block order, so the pool is that of the loop
+    // over the blocks. A failed walk stops the others, and the walks are then taken again in
+    // block order for the loop's first error.
     let walk_from = |p: usize, stop: &AtomicBool| {
         if collapse[p / 2] {
             return None;
@@ -361,16 +360,16 @@ pub(super) fn contract_with(
         let merged = [v0, v1].map(|v| cluster_size[v as usize] > 1);
         kept_arc(arc, [v0, v1], merged, &vertices, c1, c2)
     };
-    let is_loop = |e: u32| {
-        let [v0, v1] = medial.arcs[e as usize].ends.map(|v| cluster_of[v as usize]);
-        v0 == v1
-    };
     let mut arcs: Vec<MedialArc> = Vec::with_capacity(kept.len());
     if previous.is_none() {
         // Nothing to take over: every kept arc built on the pool straight into its place
         // (issue 8: the serial pass that reserved the places took 10-12 ms at 1e5).
         use rayon::prelude::*;
-        if kept.par_iter().any(|&e| is_loop(e)) {
+        let is_loop = |&e: &u32| {
+            let [v0, v1] = medial.arcs[e as usize].ends.map(|v| cluster_of[v as usize]);
+            v0 == v1
+        };
+        if kept.par_iter().any(is_loop) {
             return Err(internal("a kept arc became a loop"));
         }
         kept.par_iter()
@@ -381,10 +380,10 @@ pub(super) fn contract_with(
         let mut build = vec![false; kept.len()];
         for (at_kept, &e) in kept.iter().enumerate() {
             let arc = &medial.arcs[e as usize];
-            if is_loop(e) {
+            let [v0, v1] = arc.ends.map(|v| cluster_of[v as usize]);
+            if v0 == v1 {
                 return Err(internal("a kept arc became a loop"));
             }
-            let [v0, v1] = arc.ends.map(|v| cluster_of[v as usize]);
             if let (Some(p), Some(&at)) = (previous.as_mut(), take_from.get(e as usize)) {
                 let old = p.contracted.graph.arcs.get_mut(at as usize);
                 if let Some(old) = old.filter(|o| !o.c1.is_empty() && !o.c2.is_empty()) {

@@ -31,8 +31,9 @@
 //! several paths interact, always feasible when every component has a non-template circle or
 //! an even number of odd template circles.
 
-/// One medial arc's data for the count problem.
-#[derive(Debug, Clone, PartialEq)]
+/// One medial arc's data for the count problem (`Default`: no circles, no densities, nothing
+/// known).
+#[derive(Debug, Clone, PartialEq, Default)]
 pub struct ArcTarget {
     /// The two circles' indices into the circle arrays.
     pub circles: [usize; 2],

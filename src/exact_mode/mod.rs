@@ -1459,12 +1459,6 @@ pub fn assemble_cached(
     // Per piece its target, its node parameters when computed and whether its exact arc is
     // defined, unzipped in place (issue 8: a vector of the pairs, then two copies of it, were
     // 50 MB of fresh pages and about 25 ms on one CPU at 1e5 particles).
-    let empty_target = || ArcTarget {
-        circles: [0, 0],
-        sq: Vec::new(),
-        ang: Vec::new(),
-        known: None,
-    };
     type Summaries = (Vec<ArcTarget>, (Vec<Option<Params>>, Vec<bool>));
     let summarized = || -> Summaries {
         pieces
@@ -1506,7 +1500,7 @@ pub fn assemble_cached(
                 // A piece whose exact arc is not defined: flagged, with an empty target.
                 match summary() {
                     Some((t, params)) => (t, (params, true)),
-                    None => (empty_target(), (None, false)),
+                    None => (ArcTarget::default(), (None, false)),
                 }
             })
             .unzip()

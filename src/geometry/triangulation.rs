@@ -731,12 +731,12 @@ impl Triangulation {
         scratch.truncate(points.len());
         scratch.fill(NONE);
         compact_slots(
-            0..tris.len(),
-            |s| map[s as usize],
+            0,
             &mut tris,
             &mut adj,
-            &mut scratch,
+            |s| map[s as usize],
             &input,
+            |x, m| scratch[x as usize] = m,
         );
         // The slot map is no longer needed: it becomes the input-order table (as long, but
         // for many duplicates: there are about two slots per vertex).
@@ -764,7 +764,7 @@ impl Triangulation {
         spare: Vec<Point>,
     ) -> Self {
         use rayon::prelude::*;
-        use std::sync::atomic::{AtomicU32, Ordering::Relaxed};
+        use std::sync::atomic::Ordering::Relaxed;
         let Parts {
             inf,
             tv: mut tris,
@@ -775,7 +775,6 @@ impl Triangulation {
         } = parts;
         let [left, kept] = ranges.map(|x| x as usize);
         let input: Vec<u32> = order.unwrap_or_default();
-        let identity = input.is_empty();
         // The slot map, needed only on the seam's slots (the certified ones keep theirs).
         let mut count = kept as u32;
         for t in kept..tris.len() {
@@ -797,35 +796,23 @@ impl Triangulation {
         scratch.truncate(points.len());
         scratch.par_chunks_mut(1 << 16).for_each(|c| c.fill(NONE));
         {
-            // SAFETY: `AtomicU32` has the size, alignment and bit validity of `u32`, and the
-            // exclusive borrow of `scratch` is held for the view's whole life.
-            let vt: &[AtomicU32] =
-                unsafe { &*(&mut scratch[..] as *mut [u32] as *const [AtomicU32]) };
-            let input = &input[..];
-            let run = |tris: &mut [[u32; 3]], adj: &mut [[u32; 3]], base: usize| {
-                for (k, (v, a)) in tris.iter_mut().zip(adj.iter_mut()).enumerate() {
-                    let t = (base + k) as u32;
-                    for x in v.iter_mut() {
-                        vt[*x as usize].store(t, Relaxed);
-                        if !identity {
-                            *x = input[*x as usize];
-                        }
-                    }
-                    *a = a.map(|h| new_of(h / 3));
-                }
-            };
+            let vt = atomic_view(&mut scratch);
+            let record = |x: u32, t: u32| vt[x as usize].store(t, Relaxed);
             let (tl, tr) = tris[..kept].split_at_mut(left);
             let (al, ar) = adj[..kept].split_at_mut(left);
-            rayon::join(|| run(tl, al, 0), || run(tr, ar, left));
+            rayon::join(
+                || compact_slots(0, tl, al, new_of, &input, record),
+                || compact_slots(left, tr, ar, new_of, &input, record),
+            );
         }
-        // The seam's slots, compacted as in `finish` (slot `t` moves to `map[t] <= t`).
+        // The seam's slots, compacted as in `finish`.
         compact_slots(
-            kept..tris.len(),
+            kept,
+            &mut tris[kept..],
+            &mut adj[kept..],
             new_of,
-            &mut tris,
-            &mut adj,
-            &mut scratch,
             &input,
+            |x, m| scratch[x as usize] = m,
         );
         let vertex_tri = by_input(scratch, &input, map, points.len());
         Self::assembled(points, spare, tris, adj, count, vertex_tri, Vec::new())
@@ -1016,34 +1003,43 @@ fn count_distinct(points: &[Point]) -> usize {
     v.len()
 }
 
-/// Compact the slots `range` of a finished build's `tris` and `adj` in order: slot `t` moves
-/// to `new_of(t) <= t` (`NONE`: an infinite triangle, dropped), its vertices record it in `vt`
-/// (builder ids: a later slot overwrites) and become input ids (`input`, empty for the
-/// identity), its neighbours the triangles `new_of` of the slots across.
+/// Compact the slots `base..base + tris.len()` of a finished build (`tris` and `adj` are
+/// that range of its arrays) in order: slot `t` moves to `new_of(t)`, with `base <= new_of(t)
+/// <= t` (`NONE`: an infinite triangle, dropped); each of its vertices `x` is recorded by
+/// `record(x, new_of(t))` (builder ids; a later slot records over an earlier one) and becomes
+/// its input id (`input`, empty for the identity), its neighbours the triangles `new_of` of
+/// the slots across.
 fn compact_slots(
-    range: std::ops::Range<usize>,
-    new_of: impl Fn(u32) -> u32,
+    base: usize,
     tris: &mut [[u32; 3]],
     adj: &mut [[u32; 3]],
-    vt: &mut [u32],
+    new_of: impl Fn(u32) -> u32,
     input: &[u32],
+    mut record: impl FnMut(u32, u32),
 ) {
-    for t in range {
-        let m = new_of(t as u32);
+    for k in 0..tris.len() {
+        let m = new_of((base + k) as u32);
         if m == NONE {
             continue;
         }
-        let mut v = tris[t];
+        let mut v = tris[k];
         for x in &mut v {
-            vt[*x as usize] = m;
+            record(*x, m);
             if !input.is_empty() {
                 *x = input[*x as usize];
             }
         }
-        let half = adj[t];
-        tris[m as usize] = v;
-        adj[m as usize] = half.map(|h| new_of(h / 3));
+        let half = adj[k];
+        tris[m as usize - base] = v;
+        adj[m as usize - base] = half.map(|h| new_of(h / 3));
     }
+}
+
+/// `table` as atomics, for writes from several threads that never meet.
+fn atomic_view(table: &mut [u32]) -> &[std::sync::atomic::AtomicU32] {
+    // SAFETY: `AtomicU32` has the size, alignment and bit validity of `u32`, and the
+    // exclusive borrow of `table` is held for the view's whole life.
+    unsafe { &*(table as *mut [u32] as *const [std::sync::atomic::AtomicU32]) }
 }
 
 /// The vertex table by input index from `by_vertex` (per builder vertex), into `table`'s
@@ -1051,15 +1047,13 @@ fn compact_slots(
 /// distinct input indices, so the writes on the pool never meet.
 fn by_input(by_vertex: Vec<u32>, input: &[u32], mut table: Vec<u32>, n: usize) -> Vec<u32> {
     use rayon::prelude::*;
-    use std::sync::atomic::{AtomicU32, Ordering::Relaxed};
+    use std::sync::atomic::Ordering::Relaxed;
     if input.is_empty() {
         return by_vertex;
     }
     table.clear();
     table.resize(n, NONE);
-    // SAFETY: `AtomicU32` has the size, alignment and bit validity of `u32`, and the
-    // exclusive borrow of `table` is held for the view's whole life.
-    let vt: &[AtomicU32] = unsafe { &*(&mut table[..] as *mut [u32] as *const [AtomicU32]) };
+    let vt = atomic_view(&mut table);
     by_vertex
         .par_iter()
         .zip(input.par_iter())
