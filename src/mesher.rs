@@ -114,6 +114,15 @@ pub struct Options {
     /// them (and has no [`Mesh::measured`]): one hole, paper mode, transitions, sequences.
     /// The writers of grids refuse a mesh without nodes.
     pub keep_nodes: bool,
+    /// The caller's process exits once this mesh is written (default `false`): exact mode
+    /// then leaves the working memory of the attempt that gave the mesh (the sampling,
+    /// triangulation, medial graph and blocking it was built from, and its per-piece cache;
+    /// millions of small vectors) to the operating system instead of freeing it, as the
+    /// CLI's `mesh` does with the mesh itself (issue 8: at 1e5 particles those frees took
+    /// 0.16 s of CPU while the report and the connectivity were made). The mesh is the same.
+    /// A caller that meshes more than once in a process must leave it `false`, or it keeps
+    /// every mesh's working memory until it exits.
+    pub exits_after_mesh: bool,
 }
 
 /// Default of [`Options::collapse_fraction`].
@@ -139,6 +148,7 @@ impl Default for Options {
             block_cells: None,
             imposed_counts: None,
             keep_nodes: true,
+            exits_after_mesh: false,
         }
     }
 }
@@ -512,14 +522,17 @@ fn mesh_exact_seeded(
         })
         .and_then(|mut cb| {
             let outcome = exact_on_sampling(domain, options, &mut cb, &mut given_up, &mut cache);
-            // Freed on the pool, off this thread: the front end's many small vectors took
-            // 0.6 ms here at 1e3 bubbles and 160 ms at 1e5 (issue 8).
-            rayon::spawn(move || drop(cb));
+            // The front end's many small vectors took 0.6 ms to free at 1e3 bubbles and
+            // 160 ms at 1e5 (issue 8).
+            match outcome {
+                Ok(Attempt::Done(_)) => let_go(options, cb),
+                _ => rayon::spawn(move || drop(cb)),
+            }
             outcome
         });
         let refine = match outcome {
             Ok(Attempt::Done(m)) => {
-                rayon::spawn(move || drop(cache));
+                let_go(options, cache);
                 return Ok(Some(*m));
             }
             Ok(Attempt::Retry(circles)) => circles,
@@ -546,6 +559,17 @@ fn mesh_exact_seeded(
         }
     }
     Ok(None)
+}
+
+/// Let go of working memory that the mesh being returned does not need: freed on the pool,
+/// off this thread, or never with [`Options::exits_after_mesh`] (the process exits soon and
+/// the kernel takes its whole address space back at once).
+pub(crate) fn let_go<T: Send + 'static>(options: &Options, x: T) {
+    if options.exits_after_mesh {
+        std::mem::forget(x);
+    } else {
+        rayon::spawn(move || drop(x));
+    }
 }
 
 /// The outcome of exact mode on one sampling.

@@ -301,6 +301,80 @@ fn cli_json_alone_writes_what_it_writes_beside_a_node_writer() {
     }
 }
 
+/// `Options::exits_after_mesh` (the CLI's: the working memory of the attempt that gave the
+/// mesh is never freed) changes nothing in the mesh: the same layout, nodes and report as the
+/// default, with and without nodes, on bounded layouts (one of them resampled after its first
+/// attempt, whose working memory is still freed) and on periodic boxes (one resampled, one fixed
+/// on its sampling).
+#[test]
+fn leaving_working_memory_to_the_exit_gives_the_same_mesh() {
+    use medial_blocks::mesher::mesh_timed;
+    use medial_blocks::{mesh_periodic, timings};
+    let _turn = common::turn();
+    let same = |a: &Mesh, b: &Mesh| {
+        assert_eq!(a.layout, b.layout);
+        assert_eq!(common::node_bits(a), common::node_bits(b));
+        assert_eq!(report_json(a), report_json(b));
+        assert_eq!(a.inserted_holes, b.inserted_holes);
+        assert_eq!(a.geometry, b.geometry);
+    };
+    let exiting = |o: &Options| Options {
+        exits_after_mesh: true,
+        ..o.clone()
+    };
+    let bounded = [
+        Domain::from_json_str(include_str!("data/inserted_narrow_arc.json")).expect("layout"),
+        Domain::from_json_str(include_str!("data/mixed_sizes_sharp_corner_a.json"))
+            .expect("layout"),
+        layouts::bubbles(80, 11).expect("layout"),
+    ];
+    let mut resampled = 0;
+    for d in &bounded {
+        for o in [
+            Options::default(),
+            Options {
+                block_cells: Some(4),
+                keep_nodes: false,
+                ..Options::default()
+            },
+        ] {
+            let (freed, t) = mesh_timed(d, &o).expect("mesh");
+            let (kept, u) = mesh_timed(d, &exiting(&o)).expect("mesh");
+            same(&freed, &kept);
+            assert_eq!(t.calls, u.calls, "the same attempts");
+            // One `blocking` span per attempt.
+            let attempts = t
+                .calls
+                .iter()
+                .find(|(s, _)| s == "blocking")
+                .map_or(0, |c| c.1);
+            resampled += usize::from(attempts > 1);
+        }
+    }
+    assert!(resampled > 0, "no bounded layout took a second attempt");
+    for json in [
+        include_str!("data/periodic_resampled_60.json"),
+        include_str!("data/periodic_backwards_100.json"),
+    ] {
+        let pd = match medial_blocks::AnyDomain::from_json_str(json).expect("layout") {
+            medial_blocks::AnyDomain::Periodic(pd) => pd,
+            other => panic!("not a periodic domain: {other:?}"),
+        };
+        let o = Options {
+            block_cells: Some(4),
+            ..Options::default()
+        };
+        let rec = timings::Recording::start();
+        let freed = mesh_periodic(&pd, &o).expect("mesh");
+        let t = rec.finish();
+        let rec = timings::Recording::start();
+        let kept = mesh_periodic(&pd, &exiting(&o)).expect("mesh");
+        let u = rec.finish();
+        same(&freed, &kept);
+        assert_eq!(t.calls, u.calls, "the same attempts");
+    }
+}
+
 proptest! {
     #![proptest_config(ProptestConfig { cases: 12, ..ProptestConfig::default() })]
 

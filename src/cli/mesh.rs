@@ -624,6 +624,9 @@ pub fn run(args: Args, global: Global) -> Result<(), Failure> {
     options.keep_nodes = !(formats.iter().all(|f| *f == Format::Json)
         && args.transition.is_none()
         && !args.compare_modes);
+    // One mesh, then the process exits: its working memory is left to the kernel (as the
+    // mesh itself is, at the end of this function).
+    options.exits_after_mesh = true;
     let bar = progress(global);
     let holes = match &domain {
         AnyDomain::Bounded(d) => d.hole_count(),

@@ -3338,8 +3338,12 @@ fn exact_frame(
 ) -> Result<Framed, MeshError> {
     let framed = frame_of(pd, &mut p, options, fluid, strict, keys);
     // What is left of the layout (its tiling, blocking and arc keys; a rejected mesh's grids)
-    // is freed on the pool, off this thread (issue 8: 0.2 s at 1e5 holes).
-    rayon::spawn(move || drop(p));
+    // is freed on the pool, off this thread (issue 8: 0.2 s at 1e5 holes), or left to the
+    // exit when this frame is the mesh ([`Options::exits_after_mesh`]).
+    match framed {
+        Ok(Framed::Done(_)) => crate::mesher::let_go(options, p),
+        _ => rayon::spawn(move || drop(p)),
+    }
     framed
 }
 
