@@ -260,6 +260,16 @@ impl Measured {
         let before: usize = (0..s).map(cells).sum();
         &c.heights[from + before..from + before + cells(s)]
     }
+
+    /// Ask for what [`Measured::heights`] of block `b` reads before the heights (its
+    /// chunk's offsets and side mask); a hint only.
+    fn prefetch_place(&self, b: usize) {
+        let (c, k) = self.chunk_of(b);
+        if let Some(c) = self.sides.get(c) {
+            crate::prefetch::read(c.start.as_ptr().wrapping_add(k));
+            crate::prefetch::read(c.mask.as_ptr().wrapping_add(k));
+        }
+    }
 }
 
 /// [`measure_blocks`] of the inserted holes' template grids `templates` (blocks `first..` of
@@ -334,16 +344,27 @@ pub fn measured_all(
 ) -> (Quality, QualityMetrics) {
     let same = layout.blocks.len() == grids.len() && measured.blocks() == grids.len();
     let conn = conn.filter(|c| same && c.len() == grids.len());
-    let (q, mut m) = reduce(&measured.cells);
-    if let Some(conn) = conn {
-        let heights = |b: usize, s: usize| -> &[f64] {
-            match grids.get(b) {
-                Some(g) => measured.heights(b, s, g),
-                None => &[],
-            }
-        };
-        m.interface_growth_ratio
-            .merge(&sides::pair_measured(conn, grids, &heights));
+    // The blocks' figures reduced in block order (serial: 10-20 ms at 1e5 particles) beside
+    // the growth ratios of the interfaces, which it does not touch (issue 8).
+    let ((q, mut m), growth) = rayon::join(
+        || reduce(&measured.cells),
+        || {
+            let conn = conn?;
+            let heights = |b: usize, s: usize| -> &[f64] {
+                match grids.get(b) {
+                    Some(g) => measured.heights(b, s, g),
+                    None => &[],
+                }
+            };
+            let ahead = |b: usize| {
+                crate::prefetch::read(grids.as_ptr().wrapping_add(b));
+                measured.prefetch_place(b);
+            };
+            Some(sides::pair_measured(conn, grids, &heights, &ahead))
+        },
+    );
+    if let Some(g) = growth {
+        m.interface_growth_ratio.merge(&g);
     }
     if same {
         m.max_wall_orthogonality_deviation_deg = measured.wall;
