@@ -776,7 +776,7 @@ fn exact_on_sampling(
             && inverted.is_empty()
             && (poor.is_empty() || fixes >= EXACT_LOCAL_FIXES)
         {
-            return Ok(done(cb, m, holes));
+            return Ok(done(cb, m, holes, options));
         }
         let mut bad: Vec<usize> = inverted;
         for &e in &m.inconsistent_arcs {
@@ -841,7 +841,7 @@ fn exact_on_sampling(
         }
         if bad.is_empty() {
             // Only nearly flat cells, and nothing left to give up for them.
-            return Ok(done(cb, m, holes));
+            return Ok(done(cb, m, holes, options));
         }
         let circles = circles_around(&m.layout, &bad, holes);
         cache.keep(m);
@@ -849,23 +849,46 @@ fn exact_on_sampling(
     }
 }
 
-/// The exact mesh of `cb` as the mesher's result.
-fn done(cb: &blocking::CollapsedBlocking, m: exact_mode::ExactMesh, holes: usize) -> Attempt {
+/// The exact mesh of `cb` as the mesher's result; what the mesh does not keep of `m` (its
+/// exact vertices and counts) is let go ([`let_go`]).
+fn done(
+    cb: &blocking::CollapsedBlocking,
+    m: exact_mode::ExactMesh,
+    holes: usize,
+    options: &Options,
+) -> Attempt {
     let medial = &cb.refined.sampled.medial;
+    let exact_mode::ExactMesh {
+        layout,
+        grids,
+        vertices,
+        counts,
+        cell_size,
+        coarsened_from,
+        inconsistent_arcs,
+        split_arcs,
+        template_blocks,
+        inverted_blocks,
+        measured,
+    } = m;
+    let_go(
+        options,
+        (vertices, counts, inconsistent_arcs, inverted_blocks),
+    );
     Attempt::Done(Box::new(Mesh {
-        layout: m.layout,
-        grids: m.grids,
+        layout,
+        grids,
         medial_vertices: medial.vertex_count(),
         medial_arcs: medial.arc_count(),
         holes,
         cocircular_groups: cb.groups.clone(),
         collapsed_arcs: cb.collapsed,
         inserted_holes: cb.refined.inserted.clone(),
-        split_arcs: m.split_arcs,
-        template_blocks: m.template_blocks,
+        split_arcs,
+        template_blocks,
         geometry: Geometry::Exact,
-        coarsened_cell_size: m.coarsened_from.map(|from| [from, m.cell_size]),
-        measured: m.measured,
+        coarsened_cell_size: coarsened_from.map(|from| [from, cell_size]),
+        measured,
     }))
 }
 
