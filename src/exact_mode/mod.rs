@@ -1912,11 +1912,11 @@ pub fn assemble_cached(
                                 // An inserted hole's arcs are interfaces with its template's
                                 // blocks, which are made from these nodes (kept until then).
                                 if fluid(c) {
-                                    bad[side] = m.block(g, &[], MERGED_MIN_ANGLE_DEG);
+                                    bad[side] = m.piece_block(g, &[], MERGED_MIN_ANGLE_DEG, side);
                                     continue;
                                 }
                                 let wall = [(0, p.geom.walls[side].c, c < 0)];
-                                bad[side] = m.block(g, &wall, MERGED_MIN_ANGLE_DEG);
+                                bad[side] = m.piece_block(g, &wall, MERGED_MIN_ANGLE_DEG, side);
                                 g.nodes = Vec::new();
                             }
                             // The cell pass counts the cells `has_inverted_cell` finds.

@@ -659,6 +659,12 @@ fn pair(ha: &[f64], hb: &[f64], same_direction: bool, m: &mut MetricSummary) {
     }
 }
 
+/// [`pair`] of two sides facing each other in opposite directions (the medial sides of a
+/// piece's two blocks, [`super::measured::ChunkMeasure::piece_block`]).
+pub(super) fn pair_opposite(ha: &[f64], hb: &[f64], m: &mut MetricSummary) {
+    pair(ha, hb, false, m);
+}
+
 /// Scratch of the fused pass for one chunk: the heights of the sides paired within the chunk.
 pub(super) struct Sides {
     heights: Vec<f64>,
