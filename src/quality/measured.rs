@@ -10,7 +10,9 @@
 //! block's figures are the same values reduced in the same order ([`super::reduce`]); each
 //! block's side-cell heights and wall deviations are taken as the fused pass takes them
 //! ([`super::sides`]) and the heights paired once the connectivity is known
-//! ([`super::sides::pair_measured`]; counts and extremes, the same in any order). Tested
+//! ([`super::sides::pair_measured`]; counts and extremes, the same in any order), but for
+//! the medial sides of exact mode's pieces, whose two blocks face each other across them:
+//! those are paired as the piece is measured ([`ChunkMeasure::piece_block`]). Tested
 //! against the pass over kept nodes in `tests/perf_measured.rs`.
 //!
 //! The makers: bounded exact mode (`exact_mode::assemble_cached`: the medial blocks piece by
