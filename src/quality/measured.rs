@@ -64,7 +64,6 @@ impl Measurer {
             },
             wall: None,
             medial: [Vec::new(), Vec::new()],
-            medial_set: [false; 2],
         }
     }
 }
@@ -82,9 +81,8 @@ pub(crate) struct ChunkMeasure<'m> {
     sides: ChunkSides,
     wall: Option<f64>,
     /// The medial-arc side heights of the two blocks of the piece being measured
-    /// ([`ChunkMeasure::piece_block`]), and whether they were measured.
+    /// ([`ChunkMeasure::piece_block`]; empty when not measured: a measured side has cells).
     medial: [Vec<f64>; 2],
-    medial_set: [bool; 2],
 }
 
 /// Bit of [`ChunkSides::mask`]: the block's side 2 was paired with that of the other block of
@@ -137,9 +135,9 @@ impl ChunkMeasure<'_> {
         sd.start.push(sd.heights.len());
         let mut mask = 0u8;
         if let Some(h) = half {
-            self.medial_set[h] = false;
-            if h == 0 {
-                self.medial_set[1] = false;
+            // A new piece forgets the last one's sides.
+            for m in &mut self.medial[h..] {
+                m.clear();
             }
         }
         if super::well_formed(g) && g.ni > 0 && g.nj > 0 {
@@ -148,7 +146,6 @@ impl ChunkMeasure<'_> {
                     let out = &mut self.medial[h];
                     out.resize(sides::side_cells(g, s), 0.0);
                     sides::side_heights(g, s, out, &mut self.lines, lanes);
-                    self.medial_set[h] = true;
                     continue;
                 }
                 mask |= 1 << s;
@@ -159,10 +156,11 @@ impl ChunkMeasure<'_> {
         }
         sd.mask.push(mask);
         if half == Some(1)
-            && self.medial_set == [true; 2]
+            && !self.medial[0].is_empty()
             && self.medial[0].len() == self.medial[1].len()
         {
-            sides::pair_opposite(&self.medial[0], &self.medial[1], self.acc.growth());
+            // Facing each other in opposite directions.
+            sides::pair(&self.medial[0], &self.medial[1], false, self.acc.growth());
             let n = sd.mask.len();
             sd.mask[n - 2] |= PAIRED_IN_PIECE;
             sd.mask[n - 1] |= PAIRED_IN_PIECE;

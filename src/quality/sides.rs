@@ -639,25 +639,13 @@ pub(super) fn side_cells(grid: &BlockGrid, s: usize) -> usize {
 /// (issue 8: the increments of consecutive ratios, which mostly fall in one bin, chained
 /// through memory).
 #[inline]
-fn pair(ha: &[f64], hb: &[f64], same_direction: bool, m: &mut MetricSummary) {
+pub(super) fn pair(ha: &[f64], hb: &[f64], same_direction: bool, m: &mut MetricSummary) {
     if same_direction {
         pair_in::<true>(ha, hb, m)
     } else {
         pair_in::<false>(ha, hb, m)
     }
 }
-
-/// The inner edges of the growth histogram below its last bin (which takes every ratio from
-/// its first edge on).
-const GROWTH_INNER: [f64; GROWTH_BINS - 1] = {
-    let mut e = [0.0; GROWTH_BINS - 1];
-    let mut k = 0;
-    while k < GROWTH_BINS - 1 {
-        e[k] = super::GROWTH_EDGES[k + 1];
-        k += 1;
-    }
-    e
-};
 
 /// Bins of the growth histogram ([`super::Histogram::new`] of its edges).
 const GROWTH_BINS: usize = super::GROWTH_EDGES.len() - 1;
@@ -688,7 +676,8 @@ fn pair_in<const SAME: bool>(ha: &[f64], hb: &[f64], m: &mut MetricSummary) {
             1.0
         };
         debug_assert!(!r.is_nan());
-        for (g, &e) in ge.iter_mut().zip(&GROWTH_INNER) {
+        // The inner edges below the last bin (which takes every ratio from its first edge on).
+        for (g, &e) in ge.iter_mut().zip(&super::GROWTH_EDGES[1..]) {
             *g += u64::from(e <= r);
         }
         outside += u64::from(!(r >= lo && r <= hi));
@@ -709,12 +698,6 @@ fn pair_in<const SAME: bool>(ha: &[f64], hb: &[f64], m: &mut MetricSummary) {
         m.min = Some(m.min.map_or(min, |v| v.min(min)));
         m.max = Some(m.max.map_or(max, |v| v.max(max)));
     }
-}
-
-/// [`pair`] of two sides facing each other in opposite directions (the medial sides of a
-/// piece's two blocks, [`super::measured::ChunkMeasure::piece_block`]).
-pub(super) fn pair_opposite(ha: &[f64], hb: &[f64], m: &mut MetricSummary) {
-    pair(ha, hb, false, m);
 }
 
 /// Scratch of the fused pass for one chunk: the heights of the sides paired within the chunk.
