@@ -223,8 +223,8 @@ impl Ball {
         if h.abs() < f64::MIN_POSITIVE || !self.finite() {
             return None;
         }
-        let up = super::interval::next_up(h) - h;
-        let down = h - super::interval::next_down(h);
+        let up = h.next_up() - h;
+        let down = h - h.next_down();
         if !up.is_finite() {
             return None;
         }

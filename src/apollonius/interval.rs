@@ -1,34 +1,14 @@
 //! Minimal interval arithmetic on `f64` for the predicate's floating-point filter.
 //!
 //! Directed rounding is emulated: every operation is done in round-to-nearest and the result is
-//! widened outwards by one ulp (`next_down` / `next_up`). Round-to-nearest makes an error of at
-//! most half an ulp, so the widened interval contains the exact result of the operation on the
-//! interval endpoints; by induction every interval contains the exact value of the expression.
+//! widened outwards by one ulp (`f64::next_down` / `f64::next_up`). Round-to-nearest makes an
+//! error of at most half an ulp, so the widened interval contains the exact result of the
+//! operation on the interval endpoints; by induction every interval contains the exact value of
+//! the expression.
 //! Overflow gives infinite endpoints (still valid bounds); `inf - inf` gives `NaN`, and an
 //! interval with a `NaN` endpoint decides nothing.
 
 use super::exact::Sign;
-
-/// The next `f64` above `x` (`x` itself for `+inf` and `NaN`).
-pub(crate) fn next_up(x: f64) -> f64 {
-    if x.is_nan() || x == f64::INFINITY {
-        return x;
-    }
-    if x == 0.0 {
-        return f64::from_bits(1);
-    }
-    let bits = x.to_bits();
-    if x > 0.0 {
-        f64::from_bits(bits + 1)
-    } else {
-        f64::from_bits(bits - 1)
-    }
-}
-
-/// The next `f64` below `x`.
-pub(crate) fn next_down(x: f64) -> f64 {
-    -next_up(-x)
-}
 
 /// A closed interval `[lo, hi]` known to contain an exact real value.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -44,18 +24,18 @@ impl Interval {
     }
 
     /// An interval containing every real whose nearest `f64` is `x` (or that `x` brackets within
-    /// one ulp): `[next_down(x), next_up(x)]`.
+    /// one ulp): `[x.next_down(), x.next_up()]`.
     pub fn around(x: f64) -> Interval {
         Interval {
-            lo: next_down(x),
-            hi: next_up(x),
+            lo: x.next_down(),
+            hi: x.next_up(),
         }
     }
 
     fn widen(lo: f64, hi: f64) -> Interval {
         Interval {
-            lo: next_down(lo),
-            hi: next_up(hi),
+            lo: lo.next_down(),
+            hi: hi.next_up(),
         }
     }
 
@@ -125,8 +105,8 @@ impl Interval {
             return Interval::undecided();
         }
         Interval {
-            lo: next_down(self.lo.max(0.0).sqrt()).max(0.0),
-            hi: next_up(self.hi.sqrt()),
+            lo: self.lo.max(0.0).sqrt().next_down().max(0.0),
+            hi: self.hi.sqrt().next_up(),
         }
     }
 
@@ -137,11 +117,11 @@ impl Interval {
         let lo = if self.lo <= 0.0 && self.hi >= 0.0 {
             0.0
         } else {
-            next_down(small * small).max(0.0)
+            (small * small).next_down().max(0.0)
         };
         Interval {
             lo,
-            hi: next_up(big * big),
+            hi: (big * big).next_up(),
         }
     }
 
@@ -163,14 +143,17 @@ mod tests {
     use super::*;
 
     #[test]
-    fn next_up_down() {
-        assert_eq!(next_up(1.0), 1.0 + f64::EPSILON);
-        assert_eq!(next_down(1.0), 1.0 - f64::EPSILON / 2.0);
-        assert_eq!(next_up(-0.0), f64::from_bits(1));
-        assert_eq!(next_down(0.0), -f64::from_bits(1));
-        assert_eq!(next_up(f64::MAX), f64::INFINITY);
-        assert_eq!(next_down(f64::INFINITY), f64::MAX);
-        assert!(next_up(f64::NAN).is_nan());
+    fn around_widens_by_one_ulp_each_way() {
+        let one = Interval::around(1.0);
+        assert_eq!(
+            (one.lo, one.hi),
+            (1.0 - f64::EPSILON / 2.0, 1.0 + f64::EPSILON)
+        );
+        let zero = Interval::around(-0.0);
+        assert_eq!((zero.lo, zero.hi), (-f64::from_bits(1), f64::from_bits(1)));
+        assert_eq!(Interval::around(f64::MAX).hi, f64::INFINITY);
+        assert_eq!(Interval::around(f64::INFINITY).lo, f64::MAX);
+        assert!(Interval::around(f64::NAN).hi.is_nan());
     }
 
     #[test]

@@ -17,7 +17,7 @@
 //!
 //! ## Filter
 //! The root caches correctly rounded `f64` values of `x`, `y`, `rho`, so each exact value lies in
-//! `[next_down(v), next_up(v)]`. `f` (and `sigma`) are evaluated in interval arithmetic with every
+//! `[v.next_down(), v.next_up()]`. `f` (and `sigma`) are evaluated in interval arithmetic with every
 //! operation widened outward by one ulp (see `interval.rs`): the resulting interval provably
 //! contains the exact value, so a sign decided by the interval is the exact sign. Only when the
 //! interval contains 0 (or overflowed to `NaN`) is the exact `Q(sqrt D)` evaluation run. The
@@ -25,7 +25,7 @@
 //! on random input the exact path essentially never runs.
 
 use super::exact::{eq_across, QSqrt, Sign, ZSqrt};
-use super::interval::{next_down, next_up, Interval};
+use super::interval::Interval;
 use super::solve::{apollonius_roots, ApolloniusError, ExactApollonius};
 use super::Site;
 use rug::Integer;
@@ -136,7 +136,7 @@ pub fn same_circle(x: &ExactApollonius, y: &ExactApollonius) -> bool {
     // Cheap rejection on the rounded values: equal reals round to equal floats (to within one
     // ulp even if a conversion hit its precision cap). Before any exact value is read: a root
     // of the fast path builds its exact frame only when asked.
-    let near = |a: f64, b: f64| a == b || next_up(a) == b || next_down(a) == b;
+    let near = |a: f64, b: f64| a == b || a.next_up() == b || a.next_down() == b;
     let (cx, cy) = (x.center_f64(), y.center_f64());
     if !(near(cx[0], cy[0]) && near(cx[1], cy[1]) && near(x.radius_f64(), y.radius_f64())) {
         return false;
