@@ -58,6 +58,7 @@ pub mod geometry;
 
 pub mod apollonius;
 pub mod blocking;
+mod buckets;
 pub mod cocircular;
 pub mod collapse;
 pub mod connectivity;

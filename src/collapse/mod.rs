@@ -415,33 +415,20 @@ fn accept(order: impl Iterator<Item = (u32, bool)>, ends: &[[u32; 2]], n: usize)
     let valid = |e: usize| ends[e].iter().all(|&v| (v as usize) < n);
     let mut parent: Vec<u32> = (0..n as u32).collect();
     // The arcs incident to vertex `v`: `arcs[at[v]..at[v + 1]]` (a loop once).
-    let mut at = vec![0u32; n + 1];
-    for (e, &[a, b]) in ends.iter().enumerate() {
-        if valid(e) {
-            at[a as usize + 1] += 1;
-            if b != a {
-                at[b as usize + 1] += 1;
-            }
-        }
-    }
-    for v in 0..n {
-        at[v + 1] += at[v];
-    }
-    let mut fill = at.clone();
-    let mut arcs = vec![0u32; at[n] as usize];
-    for (e, &[a, b]) in ends.iter().enumerate() {
-        if valid(e) {
-            let ends_of = [a, b];
-            for &v in &ends_of[..if b != a { 2 } else { 1 }] {
-                arcs[fill[v as usize] as usize] = e as u32;
-                fill[v as usize] += 1;
-            }
-        }
-    }
-    drop(fill);
+    let (at, arcs) = crate::buckets::group(n, || {
+        ends.iter()
+            .enumerate()
+            .filter(|&(e, _)| valid(e))
+            .flat_map(|(e, &[a, b])| {
+                let e = e as u32;
+                [(a as usize, e), (b as usize, e)]
+                    .into_iter()
+                    .take(if b != a { 2 } else { 1 })
+            })
+    });
     // Per cluster root: its incidences (the sum of its vertices' degrees); per vertex: the
     // next vertex of its cluster (a cycle).
-    let mut size: Vec<u32> = (0..n).map(|v| at[v + 1] - at[v]).collect();
+    let mut size: Vec<usize> = (0..n).map(|v| at[v + 1] - at[v]).collect();
     let mut next: Vec<u32> = (0..n as u32).collect();
     let mut taken = vec![false; ends.len()];
     let mut out = Vec::new();
@@ -462,7 +449,7 @@ fn accept(order: impl Iterator<Item = (u32, bool)>, ends: &[[u32; 2]], n: usize)
         let mut parallel = false;
         let mut v = small;
         'scan: loop {
-            for &f in &arcs[at[v as usize] as usize..at[v as usize + 1] as usize] {
+            for &f in &arcs[at[v as usize]..at[v as usize + 1]] {
                 if f == e || taken[f as usize] {
                     continue;
                 }

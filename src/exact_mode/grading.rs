@@ -320,27 +320,15 @@ fn reach(n: usize) -> f64 {
 pub(crate) fn end_ratios(inputs: &[EndInput], vertex_count: usize) -> Vec<[f64; 2]> {
     use rayon::prelude::*;
     // Piece ends by vertex (counting sort: piece order within a vertex).
-    let mut start = vec![0usize; vertex_count + 1];
-    for p in inputs {
-        for &v in &p.ends {
-            if v < vertex_count {
-                start[v + 1] += 1;
-            }
-        }
-    }
-    for v in 0..vertex_count {
-        start[v + 1] += start[v];
-    }
-    let mut fill = start.clone();
-    let mut at = vec![(0u32, 0u8); start[vertex_count]];
-    for (e, p) in inputs.iter().enumerate() {
-        for (k, &v) in p.ends.iter().enumerate() {
-            if v < vertex_count {
-                at[fill[v]] = (e as u32, k as u8);
-                fill[v] += 1;
-            }
-        }
-    }
+    let (start, at) = crate::buckets::group(vertex_count, || {
+        inputs.iter().enumerate().flat_map(|(e, p)| {
+            p.ends
+                .iter()
+                .enumerate()
+                .filter(|&(_, &v)| v < vertex_count)
+                .map(move |(k, &v)| (v, (e as u32, k as u8)))
+        })
+    });
     let solved: Vec<Vec<f64>> = (0..vertex_count)
         .into_par_iter()
         .map(|v| solve_vertex(inputs, &at[start[v]..start[v + 1]]))

@@ -3,10 +3,10 @@
 //!
 //! [`near_medians`] is `radii_by_circle(vertices, ncirc)` with `median` applied to each list
 //! (see `super::radii_by_circle` and `super::median`), without a vector per circle: the radii
-//! are bucketed by circle into one array (counted, then placed) and each bucket's median is
-//! selected in place. The median is the element a sort by `f64::total_cmp` of the bucket's
-//! finite radii puts at `len / 2`: a total order, so the same value, bit for bit, whatever
-//! the order of the bucket. Tested against the per-circle lists below.
+//! are bucketed by circle into one array (counted, then placed: [`crate::buckets::group`])
+//! and each bucket's median is selected in place. The median is the element a sort by
+//! `f64::total_cmp` of the bucket's finite radii puts at `len / 2`: a total order, so the same
+//! value, bit for bit, whatever the order of the bucket. Tested against the per-circle lists below.
 
 use super::ExactVertex;
 use crate::domain::CircleId;
@@ -17,31 +17,15 @@ use crate::domain::CircleId;
 pub(crate) fn near_medians(vertices: &[ExactVertex], ncirc: usize) -> Vec<Option<f64>> {
     let slot = |c: CircleId| usize::try_from(c + 1).ok().filter(|&i| i < ncirc);
     // Each vertex's circles once, in the order `radii_by_circle` lists them.
-    let each = |v: &ExactVertex, f: &mut dyn FnMut(usize)| {
-        for (k, &c) in v.circles.iter().enumerate() {
-            if !v.circles[..k].contains(&c) {
-                if let Some(i) = slot(c) {
-                    f(i);
-                }
-            }
-        }
-    };
-    let mut start = vec![0usize; ncirc + 1];
-    for v in vertices {
-        each(v, &mut |i| start[i + 1] += 1);
-    }
-    for i in 0..ncirc {
-        start[i + 1] += start[i];
-    }
-    let mut next = start.clone();
-    let mut radii = vec![0.0; start[ncirc]];
-    for v in vertices {
-        each(v, &mut |i| {
-            radii[next[i]] = v.radius;
-            next[i] += 1;
-        });
-    }
-    drop(next);
+    let (start, mut radii) = crate::buckets::group(ncirc, || {
+        vertices.iter().flat_map(|v| {
+            v.circles
+                .iter()
+                .enumerate()
+                .filter(|&(k, c)| !v.circles[..k].contains(c))
+                .filter_map(move |(_, &c)| slot(c).map(|i| (i, v.radius)))
+        })
+    });
     (0..ncirc)
         .map(|i| median_in_place(&mut radii[start[i]..start[i + 1]]))
         .collect()
